@@ -1,0 +1,1 @@
+"""Scene files (TOML), one per published setting: data only, read by `mechopt.scene`."""

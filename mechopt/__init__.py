@@ -1,0 +1,1 @@
+"""mechopt: formal optimisation models for machine mechanisms, from published studies."""

@@ -1,0 +1,106 @@
+"""The case registry: every scene under cases/, run one, check it against what its source says."""
+import difflib
+from dataclasses import dataclass, field
+from functools import lru_cache
+from importlib.resources import files
+from pathlib import Path
+from typing import Any
+
+from mechopt.models.errors import SceneError
+from mechopt.scene import Scene, load
+from mechopt.solvers.result import Result
+
+
+@dataclass(frozen=True)
+class Check:
+    name: str
+    expected: str            # as the scene states it: "59.45 ± 0.005", "<= 0.0724", "INFEASIBLE"
+    got: Any                 # float, status word, or None when the solver did not produce it
+    tol: float | None
+    ok: bool
+    kind: str                # published | experimental | derived
+    where: str
+
+    def as_dict(self):
+        return {"name": self.name, "expected": self.expected, "got": self.got, "tol": self.tol,
+                "ok": self.ok, "kind": self.kind, "where": self.where}
+
+
+@dataclass(frozen=True)
+class Run:
+    """One solved scene: the solver's result and its checks (none when parameters were overridden:
+    a source's figures hold for the source's parameters only)."""
+    scene: Scene
+    result: Result
+    checks: list[Check]
+    overrides: dict = field(default_factory=dict)
+
+    @property
+    def ok(self) -> bool:
+        return all(c.ok for c in self.checks)
+
+    def as_dict(self):
+        r = self.result
+        return {"case": self.scene.id, "status": r.status.value, "message": r.message,
+                "values": {k: float(v) for k, v in r.values.items()},
+                "checks": [c.as_dict() for c in self.checks],
+                "timing": {"build_s": r.timing.build_s, "solve_s": r.timing.solve_s},
+                "violated": list(r.violated), "overrides": self.overrides,
+                "diagnostics": _plain(r.diagnostics)}
+
+
+def cases_dir() -> Path:
+    return Path(str(files("mechopt.cases")))
+
+
+@lru_cache(maxsize=1)
+def all_scenes() -> tuple[Scene, ...]:
+    """Every scene in the registry, validated, in id order; a bad file stops the whole load."""
+    scenes = [load(p) for p in sorted(cases_dir().glob("*/*.toml"))]
+    ids = [s.id for s in scenes]
+    twice = {i for i in ids if ids.count(i) > 1}
+    if twice:
+        raise SceneError(f"{cases_dir()}: scene ids used twice: {', '.join(sorted(twice))}")
+    return tuple(sorted(scenes, key=lambda s: s.id))
+
+
+def find(case_id: str) -> Scene:
+    for scene in all_scenes():
+        if scene.id == case_id:
+            return scene
+    ids = [s.id for s in all_scenes()]
+    near = difflib.get_close_matches(case_id, ids, n=3)
+    raise SceneError(f"unknown case {case_id!r}" + (f"; did you mean {', '.join(near)}?" if near else "")
+                     + f" (known: {', '.join(ids)}; `mechopt cases` lists them)")
+
+
+def run(scene: Scene, overrides: dict | None = None) -> Run:
+    """Solve a scene (with `--set` overrides, validated like the file) and check its expectations."""
+    overrides = dict(overrides or {})
+    task, settings = scene.build(overrides)
+    result = scene.solver(task, **settings)
+    params_changed = bool(scene.split_overrides(overrides)[0])
+    checks = [] if params_changed else check(scene, result)
+    return Run(scene, result, checks, overrides)
+
+
+def check(scene: Scene, result: Result) -> list[Check]:
+    """Each expectation of the scene against the result."""
+    out = []
+    for name, exp in scene.spec.expect.items():
+        got = result.status.value if name == "status" else result.values.get(name)
+        tol = None if isinstance(exp.value, str) or exp.value is None else max(exp.abs or 0.0, (exp.rel or 0.0) * abs(exp.value))
+        out.append(Check(name, exp.describe(), None if got is None else (got if isinstance(got, str) else float(got)),
+                         tol, exp.check(got), exp.kind, exp.where))
+    return out
+
+
+def _plain(value):
+    """Diagnostics as JSON-ready values (numpy scalars to Python numbers)."""
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if hasattr(value, "item"):
+        return value.item()
+    return value

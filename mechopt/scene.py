@@ -1,0 +1,261 @@
+"""Scene files: load, validate, build the model's task, apply `--set` overrides.
+
+A scene names a task (`models/<module>.<Class>`), the effects it switches on, parameters with
+units in their names, a solver (`solvers/<module>.<function>`) with its settings, and what a
+source says should come out. Nothing from a scene runs before all of that validated.
+"""
+import dataclasses
+import importlib
+import inspect
+import tomllib
+from pathlib import Path
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from mechopt.models.errors import MechoptError, SceneError
+
+Number = int | float
+
+
+class Param(BaseModel):
+    """A parameter with its provenance; a bare number in the file means `given` by the source."""
+    model_config = ConfigDict(extra="forbid")
+    value: Number | str | bool
+    mark: Literal["given", "assumed", "calibrated"]
+    why: str = ""          # required for assumed and calibrated: the reasoning, or the figure fitted
+    where: str = ""        # for given: where in the source
+
+    @model_validator(mode="after")
+    def _explained(self):
+        if self.mark != "given" and not self.why.strip():
+            raise ValueError(f"a parameter marked '{self.mark}' needs a 'why' (the reasoning or the figure fitted)")
+        return self
+
+
+class Expectation(BaseModel):
+    """What should come out: `value` within `abs`/`rel`, or a bound `max`/`min`, or a status word."""
+    model_config = ConfigDict(extra="forbid")
+    value: Number | str | None = None
+    abs: float | None = Field(default=None, gt=0)
+    rel: float | None = Field(default=None, gt=0)
+    max: Number | None = None
+    min: Number | None = None
+    kind: Literal["published", "experimental", "derived"]
+    where: str
+
+    @model_validator(mode="after")
+    def _one_form(self):
+        if isinstance(self.value, str):
+            return self
+        if self.value is not None and self.abs is None and self.rel is None:
+            raise ValueError("a numeric 'value' needs a tolerance 'abs' or 'rel' (> 0)")
+        if self.value is None and self.max is None and self.min is None:
+            raise ValueError("give 'value' with 'abs' or 'rel', or a bound 'max' / 'min'")
+        if self.max is not None and self.min is not None and self.min > self.max:
+            raise ValueError(f"bounds reversed: min={self.min} > max={self.max}")
+        return self
+
+    def check(self, got) -> bool:
+        if isinstance(self.value, str):
+            return got == self.value
+        if got is None:
+            return False
+        ok = True
+        if self.value is not None:
+            tol = max(self.abs or 0.0, (self.rel or 0.0) * abs(self.value))
+            ok = abs(got - self.value) <= tol
+        if self.max is not None:
+            ok = ok and got <= self.max
+        if self.min is not None:
+            ok = ok and got >= self.min
+        return ok
+
+    def describe(self) -> str:
+        if isinstance(self.value, str):
+            return self.value
+        parts = []
+        if self.value is not None:
+            parts.append(f"{self.value:g} ± " + (f"{self.abs:g}" if self.abs else f"{self.rel:g} rel"))
+        if self.min is not None:
+            parts.append(f">= {self.min:g}")
+        if self.max is not None:
+            parts.append(f"<= {self.max:g}")
+        return ", ".join(parts)
+
+
+class SceneFile(BaseModel):
+    """The TOML layout of a scene (see cases/)."""
+    model_config = ConfigDict(extra="forbid")
+    id: str
+    title: str
+    source: str
+    task: str
+    solver: str
+    effects: list[str] = []
+    params: dict[str, Number | str | bool | Param]
+    solver_settings: dict[str, Number | str | bool] = {}
+    method: dict[str, Number | str] = {}     # the source's own method, when it matters to the numbers
+    expect: dict[str, Expectation] = {}
+
+
+@dataclasses.dataclass(frozen=True)
+class Scene:
+    """A validated scene: the file's content plus the task class and solver it names."""
+    path: Path
+    spec: SceneFile
+    task_class: type
+    solver: Any
+
+    @property
+    def id(self) -> str:
+        return self.spec.id
+
+    def params(self) -> dict[str, Any]:
+        return {k: (v.value if isinstance(v, Param) else v) for k, v in self.spec.params.items()}
+
+    def marks(self) -> dict[str, str]:
+        return {k: (v.mark if isinstance(v, Param) else "given") for k, v in self.spec.params.items()}
+
+    def settings(self) -> dict[str, Any]:
+        return dict(self.spec.solver_settings)
+
+    def split_overrides(self, overrides: dict[str, Any]) -> tuple[dict, dict]:
+        """Sort `--set` pairs into parameters and solver settings; unknown keys are refused."""
+        fields = _task_fields(self.task_class)
+        options = _solver_options(self.solver)
+        params, settings = {}, {}
+        for key, value in overrides.items():
+            if key in fields:
+                params[key] = value
+            elif key in options:
+                settings[key] = value
+            else:
+                raise SceneError(f"{self.path}: --set {key}: unknown key; parameters: {', '.join(fields)}; "
+                                 f"solver settings: {', '.join(options) or 'none'}", key=key)
+        return params, settings
+
+    def build(self, overrides: dict[str, Any] | None = None):
+        """The task instance and solver settings, overrides applied and validated like the file."""
+        params, settings = self.split_overrides(overrides or {})
+        return (_build_task(self.path, self.task_class, self.spec.effects, self.params() | params),
+                _check_settings(self.path, self.solver, self.settings() | settings))
+
+
+def load(path: Path) -> Scene:
+    """Read and validate one scene file; raise SceneError naming the file, the key and what is allowed."""
+    path = Path(path)
+    try:
+        raw = tomllib.loads(path.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(f"{path}: not valid TOML: {exc}") from None
+    try:
+        spec = SceneFile.model_validate(raw)
+    except ValidationError as exc:
+        raise SceneError(f"{path}: " + "; ".join(_explain(e) for e in exc.errors())) from None
+    task_class = _resolve(path, "task", spec.task, "mechopt.models")
+    solver = _resolve(path, "solver", spec.solver, "mechopt.solvers")
+    scene = Scene(path, spec, task_class, solver)
+    scene.build()       # parameters, effects and settings must all be valid before anything runs
+    return scene
+
+
+def parse_overrides(pairs: list[str]) -> dict[str, Any]:
+    """`KEY=VALUE` strings as typed values: TOML literals (3, 0.5, true, "x"), else plain text."""
+    out = {}
+    for pair in pairs:
+        key, sep, text = pair.partition("=")
+        if not sep or not key.strip():
+            raise SceneError(f"--set {pair!r}: expected KEY=VALUE, e.g. --set a_mm=40")
+        try:
+            out[key.strip()] = tomllib.loads(f"v = {text.strip()}")["v"]
+        except tomllib.TOMLDecodeError:
+            out[key.strip()] = text.strip()
+    return out
+
+
+def _resolve(path, field, dotted, package):
+    module_name, _, name = dotted.rpartition(".")
+    if not module_name:
+        raise SceneError(f"{path}: {field} = {dotted!r}: expected '<module>.<name>'", key=field)
+    try:
+        module = importlib.import_module(f"{package}.{module_name}")
+    except ModuleNotFoundError:
+        raise SceneError(f"{path}: {field} = {dotted!r}: no module {package}.{module_name}", key=field) from None
+    if not hasattr(module, name):
+        known = getattr(module, "__all__", [n for n, v in vars(module).items()
+                                            if inspect.isclass(v) and dataclasses.is_dataclass(v)])
+        raise SceneError(f"{path}: unknown {field} {dotted!r}; known: "
+                         + ", ".join(f"{module_name}.{n}" for n in known), key=field)
+    return getattr(module, name)
+
+
+def _task_fields(task_class):
+    return {f.name: f for f in dataclasses.fields(task_class)}
+
+
+def _build_task(path, task_class, effects, params):
+    known_effects = getattr(task_class, "EFFECTS", {})
+    unknown = [e for e in effects if e not in known_effects]
+    if unknown:
+        raise SceneError(f"{path}: effects: unknown {unknown}; {task_class.__name__} knows "
+                         f"{', '.join(known_effects) or 'none'}", key="effects")
+    fields = _task_fields(task_class)
+    for key, value in params.items():
+        if key not in fields:
+            raise SceneError(f"{path}: params.{key}: unknown parameter; allowed: {', '.join(fields)}", key=key)
+        owner = next((e for e, spec in known_effects.items() if key in spec.params), None)
+        if owner is not None and owner not in effects:
+            raise SceneError(f"{path}: params.{key} belongs to effect '{owner}', which this scene does "
+                             f"not call for; add it to effects or drop the parameter", key=key)
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise SceneError(f"{path}: params.{key} = {value!r}: expected a number", key=key)
+    missing = [name for name, f in fields.items()
+               if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING and name not in params]
+    if missing:
+        raise SceneError(f"{path}: params: missing {', '.join(missing)}", key=missing[0])
+    try:
+        return task_class(**{k: float(v) for k, v in params.items()})
+    except MechoptError as exc:
+        raise SceneError(f"{path}: params.{exc.key}: {exc}" if exc.key else f"{path}: {exc}", key=exc.key) from None
+
+
+def _solver_options(solver):
+    return {name: p for name, p in inspect.signature(solver).parameters.items() if p.kind is p.KEYWORD_ONLY}
+
+
+def _check_settings(path, solver, settings):
+    options = _solver_options(solver)
+    for key, value in settings.items():
+        if key not in options:
+            raise SceneError(f"{path}: solver_settings.{key}: unknown setting of {solver.__name__}; "
+                             f"allowed: {', '.join(options) or 'none'}", key=key)
+        default = options[key].default
+        expected = type(default)
+        ok = (isinstance(value, (int, float)) and not isinstance(value, bool) if expected is float
+              else type(value) is expected)
+        if not ok:
+            raise SceneError(f"{path}: solver_settings.{key} = {value!r}: expected {expected.__name__} "
+                             f"(default {default!r})", key=key)
+    return {k: (float(v) if type(options[k].default) is float else v) for k, v in settings.items()}
+
+
+def _explain(error) -> str:
+    loc = ".".join(str(p) for p in error["loc"] if not str(p).startswith(("function-after", "union")))
+    if error["type"] == "extra_forbidden":
+        allowed = _allowed_at(error["loc"])
+        return f"{loc}: unknown key" + (f"; allowed: {', '.join(allowed)}" if allowed else "")
+    if error["type"] == "missing":
+        return f"{loc}: missing"
+    return f"{loc}: {error['msg']} (got {error.get('input')!r})"
+
+
+def _allowed_at(loc):
+    head = loc[0] if loc else None
+    if len(loc) == 1:
+        return list(SceneFile.model_fields)
+    if head == "expect":
+        return list(Expectation.model_fields)
+    if head == "params":
+        return list(Param.model_fields)
+    return []

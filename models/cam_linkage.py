@@ -1,0 +1,163 @@
+"""Torch-guiding linkage for cardioid cams (paper 000: Podchasov 2021, Secs. III-IV).
+
+The torch centre should run on the ideal path: the cardioid (1), or its parallel curve at the
+kerf offset h (2)-(3), shifted so that t = 0 sits at the origin (9). The linkage moves it on a
+limaçon (Pascal's snail) (7), shifted the same way (10); its link lengths H, L are the unknowns.
+
+Lengths are in mm (the names say so: the geometry is scale-free and the paper states mm), angles
+in rad. Every function takes ``m=np`` or ``m=casadi`` so the same line serves numbers and symbols.
+
+Effects a scene may call for:
+
+============  ==========================================================  ==========
+effect        adds                                                        paper
+============  ==========================================================  ==========
+torch_offset  kerf offset h: the path is the parallel curve at distance   eqs. (2)-(3)
+              h outside the cam profile; without it, the plain cardioid
+============  ==========================================================  ==========
+"""
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+from scipy.optimize import brentq
+
+from mechopt.models.effects import Effect
+from mechopt.models.errors import ModelError
+
+
+def ideal_point(t, a, h=0.0, m=np):
+    """Torch centre on the ideal path, eq. (9) [mm]: cardioid of size `a` plus offset `h` (3)."""
+    x = a * (2 * m.cos(t) + m.cos(2 * t) - 3) + h * (m.cos(1.5 * t) - 1)
+    y = a * (2 * m.sin(t) + m.sin(2 * t)) + h * m.sin(1.5 * t)
+    return x, y
+
+
+def ideal_normal(t, m=np):
+    """Outward unit normal of the ideal path at t in [0, pi) (the same for every offset h).
+
+    From eq. (2): the cardioid's y', -x' over its speed 4a cos(t/2) reduce, with
+    cos t + cos 2t = 2 cos(3t/2) cos(t/2), to (cos 3t/2, sin 3t/2); that is how (3) arises.
+    """
+    return m.cos(1.5 * t), m.sin(1.5 * t)
+
+
+def real_point(s, H, L, m=np):
+    """Torch centre moved by the linkage (H, L) at crank parameter s, eq. (10) [mm]."""
+    return L * (m.cos(s) - 1) + 0.5 * H * (m.cos(2 * s) - 1), L * m.sin(s) + 0.5 * H * m.sin(2 * s)
+
+
+def real_velocity(s, H, L, m=np):
+    """d/ds of `real_point` [mm/rad]."""
+    return -L * m.sin(s) - H * m.sin(2 * s), L * m.cos(s) + H * m.cos(2 * s)
+
+
+def real_acceleration(s, H, L, m=np):
+    """d2/ds2 of `real_point` [mm/rad2]."""
+    return -L * m.cos(s) - 2 * H * m.cos(2 * s), -L * m.sin(s) - 2 * H * m.sin(2 * s)
+
+
+def limacon_implicit(x, y, H, L):
+    """Implicit form of the closed real path [mm^4]: negative inside, zero on it, positive outside.
+
+    About its pole (-(L+H), 0) the limaçon r = L + H cos s satisfies (r^2 - H u)^2 = L^2 r^2 with
+    u the abscissa from the pole. "Inside" is the region between the loops (winding number one);
+    the inner loop, when L < H, counts as outside, as an even-odd point-in-curve test would say.
+    """
+    u = x + L + H
+    r2 = u * u + y * y
+    return (r2 - H * u) ** 2 - (L * L) * r2
+
+
+def finish_angle(a, h=0.0):
+    """Exact t on (0, pi] where the ideal path meets the x axis (Y of eq. (9) = 0) [rad]."""
+    def y(t):
+        return ideal_point(t, a, h)[1]
+    if y(np.pi) >= -1e-12 * a:      # plain cardioid: it meets the axis only at its cusp, t = pi
+        return float(np.pi)
+    t = np.linspace(0.0, np.pi, 721)[1:]
+    below = np.flatnonzero(y(t) <= 0.0)[0]      # first sample on or under the axis
+    return float(brentq(y, t[below - 1], t[below], xtol=1e-15))
+
+
+def decimal_reading(f, root, tol):
+    """The paper's iterative reading of a root of f: the lattice step shrinks tenfold until both
+    ends of the bracket give |f| <= tol; the lower end is the reading (2.7329 for eq. (9))."""
+    for k in range(1, 16):
+        lo = np.floor(root * 10**k) / 10**k
+        if max(abs(f(lo)), abs(f(lo + 10.0**-k))) <= tol:
+            return round(float(lo), k)
+    return float(root)
+
+
+def matched_linkage(a, h=0.0):
+    """(H, L) [mm] of the limaçon whose double point -(L+H) and vertex radius of curvature
+    (L+H)^2 / (L+2H) equal the ideal path's axis crossing and its radius 8a/3 + h at t = 0.
+    Exact (H = L = 2a) for the plain cardioid; within 0.2 mm of the optimum for the paper's case."""
+    span = -float(ideal_point(finish_angle(a, h), a, h)[0])
+    H = span**2 / (8 * a / 3 + h) - span
+    return H, span - H
+
+
+@dataclass(frozen=True)
+class LinkageFit:
+    """Link lengths H, L so that the limaçon (10) stays within `err_width_mm` of the ideal path (9).
+
+    Parameters [mm]: `a_mm` cardioid size (1); `err_width_mm` allowed deviation either side of
+    the path (the paper's ERRSHIFT, Δd); `step_mm` manufacturing precision of H and L (STEP);
+    `h_mm` kerf offset (effect torch_offset); `y_tol_mm` accuracy in Y of t_FINISH; `H_min_mm` ...
+    `L_max_mm` the search box (LOW_H ... HIGH_L); a bound not given is the matched linkage
+    (`matched_linkage`, exact for h = 0) +- a/2.
+    """
+    a_mm: float
+    err_width_mm: float
+    step_mm: float = 0.01
+    h_mm: float = 0.0
+    y_tol_mm: float = 0.001
+    H_min_mm: float | None = None
+    H_max_mm: float | None = None
+    L_min_mm: float | None = None
+    L_max_mm: float | None = None
+
+    EFFECTS: ClassVar[dict[str, Effect]] = {
+        "torch_offset": Effect(adds="kerf offset h: the torch runs on the parallel curve at distance h",
+                               equation="(2)-(3)", params=("h_mm",)),
+    }
+
+    def __post_init__(self):
+        for key in ("a_mm", "err_width_mm", "step_mm", "y_tol_mm"):
+            _require(self, key, getattr(self, key) > 0, "must be > 0")
+        _require(self, "h_mm", self.h_mm >= 0, "must be >= 0 (the torch runs outside the cam)")
+        _require(self, "h_mm", self.h_mm < self.a_mm,
+                 f"must be < a_mm={self.a_mm} (a wider kerf than the cardioid has no cam left)")
+        for key in ("H_min_mm", "H_max_mm", "L_min_mm", "L_max_mm"):
+            value = getattr(self, key)
+            _require(self, key, value is None or value > 0, "must be > 0 (a link length)")
+        for lo, hi in (("H_min_mm", "H_max_mm"), ("L_min_mm", "L_max_mm")):
+            vlo, vhi = getattr(self, lo), getattr(self, hi)
+            if vlo is not None and vhi is not None and vlo > vhi:
+                raise ModelError(f"bounds reversed: {lo}={vlo} > {hi}={vhi}", key=lo)
+
+    @property
+    def t_finish_rad(self) -> float:
+        """Exact end of the ideal path in the upper half-plane [rad]."""
+        return finish_angle(self.a_mm, self.h_mm)
+
+    @property
+    def t_finish_read_rad(self) -> float:
+        """t_FINISH as the paper reads it, to `y_tol_mm` in Y (see `decimal_reading`) [rad]."""
+        return decimal_reading(lambda t: ideal_point(t, self.a_mm, self.h_mm)[1],
+                               self.t_finish_rad, self.y_tol_mm)
+
+    def bounds(self) -> tuple[float, float, float, float]:
+        """(H_min, H_max, L_min, L_max) [mm]: the given box, gaps filled around the matched linkage."""
+        H0, L0 = matched_linkage(self.a_mm, self.h_mm)
+        pad = self.a_mm / 2
+        given = (self.H_min_mm, self.H_max_mm, self.L_min_mm, self.L_max_mm)
+        derived = (H0 - pad, H0 + pad, L0 - pad, L0 + pad)
+        return tuple(float(g) if g is not None else max(d, self.step_mm) for g, d in zip(given, derived))
+
+
+def _require(task, key, ok, what):
+    if not ok:
+        raise ModelError(f"{key}={getattr(task, key)} {what}", key=key)

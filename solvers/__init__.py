@@ -1,0 +1,1 @@
+"""Numerics: turn a model's question into a formal problem, solve it, return a `Result`."""

@@ -1,0 +1,114 @@
+"""How far the linkage's limaçon lies from the ideal torch path: two independent measures.
+
+* `normal_deviation`: along each node's normal, the nearest crossing of the closed limaçon (the
+  paper's criterion, Sec. IV). Substituting the normal line into the limaçon's implicit form gives
+  the quartic the paper found "laborious"; its roots, for every node at once, are the eigenvalues
+  of stacked 4x4 companion matrices. The minimax NLP and differential evolution use this measure.
+* `path_distance` / `verified_deviation`: Euclidean distance to the closed limaçon (foot point),
+  found by a KD-tree over a fine polyline and Newton on the foot condition, and maximised over the
+  continuous path. It shares no code with the first and is the figure reported as
+  `max_deviation_mm`. Both agree to second order in the angle between the two paths' normals.
+
+Neither restricts crossings to the upper half-plane: the torch runs the whole closed limaçon and
+the lower half cuts the mirror image, so a crossing just below the axis is a real cut point.
+"""
+from functools import lru_cache
+
+import numpy as np
+from scipy.optimize import minimize_scalar
+from scipy.spatial import cKDTree
+
+from mechopt.models.cam_linkage import (ideal_normal, ideal_point, real_acceleration, real_point,
+                                        real_velocity)
+
+
+def normal_crossings(px, py, nx, ny, H, L):
+    """Signed distances d [mm] at which P + d n meets the closed limaçon: the four roots of
+    F(P + d n) = 0, complex where there is no crossing. Arrays broadcast; the result has a
+    trailing axis of 4."""
+    u0 = px + L + H                       # node abscissa from the limaçon's pole
+    r0 = u0 * u0 + py * py
+    r1 = 2 * (u0 * nx + py * ny)
+    g0 = r0 - H * u0
+    g1 = r1 - H * nx
+    # F(d) = (d^2 + g1 d + g0)^2 - L^2 (d^2 + r1 d + r0), monic because |n| = 1
+    c3, c2 = 2 * g1, g1 * g1 + 2 * g0 - L * L
+    c1, c0 = 2 * g0 * g1 - L * L * r1, g0 * g0 - L * L * r0
+    c0, c1, c2, c3 = np.broadcast_arrays(c0, c1, c2, c3)
+    companion = np.zeros(c0.shape + (4, 4))
+    companion[..., 1, 0] = companion[..., 2, 1] = companion[..., 3, 2] = 1.0
+    companion[..., :, 3] = -np.stack([c0, c1, c2, c3], axis=-1)
+    return np.linalg.eigvals(companion)
+
+
+def normal_deviation(px, py, nx, ny, H, L):
+    """Signed distance [mm] along the outward normal to the nearest crossing; +inf where the normal
+    misses the limaçon. A crossing at the pole counts only when the pole is on the curve (L <= H:
+    for L > H it is an isolated point of the implicit quartic, not a point the torch visits)."""
+    roots = normal_crossings(px, py, nx, ny, H, L)
+    scale = 1.0 + np.abs(roots.real)
+    d = np.where(np.abs(roots.imag) <= 1e-7 * scale, roots.real, np.inf)
+    H, L = np.asarray(H)[..., None], np.asarray(L)[..., None]
+    finite = np.where(np.isfinite(d), d, 0.0)
+    at_pole = np.hypot(px[..., None] + finite * nx[..., None] + L + H, py[..., None] + finite * ny[..., None])
+    d = np.where((L > H) & (at_pole < 1e-6 * (L + H)), np.inf, d)
+    nearest = np.argmin(np.abs(d), axis=-1)
+    return np.take_along_axis(d, nearest[..., None], axis=-1)[..., 0]
+
+
+@lru_cache(maxsize=8)
+def _polyline(H, L, vertices):
+    s = np.linspace(0.0, 2 * np.pi, vertices, endpoint=False)
+    return s, cKDTree(np.column_stack(real_point(s, H, L)))
+
+
+def path_distance(px, py, H, L, *, vertices=2**14, newton_steps=4):
+    """Euclidean distance [mm] from points to the closed limaçon (H, L): nearest polyline vertex,
+    then Newton on the foot condition (R - P).R' = 0, each step kept only if it brings R closer."""
+    return foot_points(px, py, H, L, vertices=vertices, newton_steps=newton_steps)[0]
+
+
+def foot_points(px, py, H, L, *, vertices=2**14, newton_steps=4):
+    """(distance [mm], crank parameter s [rad]) of each point's nearest point on the limaçon."""
+    s_grid, tree = _polyline(float(H), float(L), vertices)
+    best, index = tree.query(np.column_stack([np.ravel(px), np.ravel(py)]))
+    s = s_grid[index]
+    px, py = np.ravel(px), np.ravel(py)
+    spacing = 2 * np.pi / vertices
+    for _ in range(newton_steps):
+        x, y = real_point(s, H, L)
+        vx, vy = real_velocity(s, H, L)
+        ax, ay = real_acceleration(s, H, L)
+        ex, ey = x - px, y - py
+        slope = vx * vx + vy * vy + ex * ax + ey * ay
+        step = np.clip(-(ex * vx + ey * vy) / np.where(slope > 0, slope, np.inf), -spacing, spacing)
+        trial = s + step
+        tx, ty = real_point(trial, H, L)
+        dist = np.hypot(tx - px, ty - py)
+        closer = dist < best
+        s, best = np.where(closer, trial, s), np.where(closer, dist, best)
+    return best, s
+
+
+def verified_deviation(a, h, H, L, t_end, *, samples=4096):
+    """Largest Euclidean distance [mm] from the ideal path t in [0, t_end] to the limaçon, and
+    the t where it occurs: sampled, then each leading local maximum refined by a bounded search."""
+    t = np.linspace(0.0, t_end, samples)
+    dist = path_distance(*ideal_point(t, a, h), H, L)
+    def distance_at(tau):
+        return float(path_distance(*ideal_point(np.array([tau]), a, h), H, L)[0])
+    padded = np.r_[-np.inf, dist, -np.inf]
+    peaks = np.flatnonzero((padded[1:-1] >= padded[:-2]) & (padded[1:-1] >= padded[2:]))
+    worst_value, worst_t = float(dist.max()), float(t[dist.argmax()])
+    for k in peaks[np.argsort(dist[peaks])[::-1][:6]]:
+        lo, hi = t[max(k - 1, 0)], t[min(k + 1, samples - 1)]
+        found = minimize_scalar(lambda tau: -distance_at(tau), bounds=(lo, hi), method="bounded",
+                                options={"xatol": 1e-12})
+        if -found.fun > worst_value:
+            worst_value, worst_t = -found.fun, float(found.x)
+    return worst_value, worst_t
+
+
+def nodes_and_normals(t, a, h):
+    """Ideal-path nodes and their outward normals at parameters t: (px, py, nx, ny)."""
+    return (*ideal_point(t, a, h), *ideal_normal(t))

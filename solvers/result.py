@@ -1,0 +1,54 @@
+"""The one result every solver returns, and the only code that knows back ends' status words."""
+import math
+from dataclasses import dataclass, field
+from enum import Enum
+
+from mechopt.models.errors import SolverError
+
+
+class Status(str, Enum):
+    SOLVED = "SOLVED"
+    INACCURATE = "INACCURATE"      # the back end stopped short of its tolerance: not an answer to trust
+    INFEASIBLE = "INFEASIBLE"      # no point meets the limits; `values` hold the best achievable
+    UNBOUNDED = "UNBOUNDED"
+    LIMIT = "LIMIT"                # iteration, round or size limit reached
+    FAILED = "FAILED"
+
+
+@dataclass(frozen=True)
+class Timing:
+    build_s: float       # problem construction (0 when a cached build was reused)
+    solve_s: float
+
+
+@dataclass(frozen=True)
+class Result:
+    """What a solver found. `values` are named with their unit (`H_mm`) and are always finite:
+    a quantity the solver could not determine is left out, never NaN."""
+    status: Status
+    values: dict[str, float]
+    timing: Timing
+    message: str = ""
+    violated: tuple[str, ...] = ()              # physical names of broken limits
+    diagnostics: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        bad = {k: v for k, v in self.values.items() if not math.isfinite(v)}
+        if bad:
+            raise SolverError(f"solver produced non-finite values {bad} (status {self.status.value})")
+
+
+_IPOPT = {
+    "Solve_Succeeded": Status.SOLVED,
+    "Solved_To_Acceptable_Level": Status.INACCURATE,   # CasADi counts this as success; we do not
+    "Infeasible_Problem_Detected": Status.INFEASIBLE,
+    "Diverging_Iterates": Status.UNBOUNDED,
+    "Maximum_Iterations_Exceeded": Status.LIMIT,
+    "Maximum_CpuTime_Exceeded": Status.LIMIT,
+    "Maximum_WallTime_Exceeded": Status.LIMIT,
+}
+
+
+def from_ipopt(return_status: str) -> Status:
+    """IPOPT's return_status (via CasADi's stats()) as a Status; anything unknown is FAILED."""
+    return _IPOPT.get(return_status, Status.FAILED)

@@ -1,0 +1,356 @@
+"""Link lengths H, L for the torch-guiding linkage (paper 000): the paper's grid scan and ours.
+
+* `grid_scan`: the published algorithm (Sec. IV), answer unchanged, made fast by filtering.
+* `minimax`:   the exact criterion the paper called too laborious, as a CasADi/IPOPT NLP.
+* `robust`:    the grid point whose worst deviation over the manufacturing box is smallest.
+* `evolve`:    scipy's differential evolution on the minimax objective: the peer a user would try.
+
+Every answer's `max_deviation_mm` is the independent Euclidean check of `path_deviation`.
+"""
+import time
+import casadi as ca
+import numpy as np
+from scipy.optimize import differential_evolution
+
+from mechopt.models.cam_linkage import (LinkageFit, ideal_normal, matched_linkage, ideal_point, limacon_implicit,
+                                        real_point, real_velocity)
+from mechopt.models.errors import ModelError
+from mechopt.solvers.path_deviation import (foot_points, nodes_and_normals, normal_crossings, normal_deviation,
+                                            path_distance, verified_deviation)
+from mechopt.solvers.result import Result, Status, Timing, from_ipopt
+
+__all__ = ["grid_scan", "minimax", "robust", "evolve"]
+
+NODE_RULES = {
+    # name: (first index, last index + 1) of t_i = i * t_FINISH / COUNT
+    "half_open": (0, 0),    # i = 0 .. COUNT-1: t_FINISH itself is no node; reproduces the paper
+    "closed": (0, 1),       # i = 0 .. COUNT
+    "open_start": (1, 1),   # i = 1 .. COUNT
+}
+GRID_POINT_LIMIT = 50_000_000
+
+
+def grid_scan(task: LinkageFit, *, count: int = 1000, nodes: str = "half_open") -> Result:
+    """The paper's grid scan (Sec. IV): the first (H, L), H ascending then L ascending, on the
+    STEP lattice of the box, at which every node's error segment is crossed by the limaçon.
+
+    At node t_i the segment runs +-err_width_mm along the ideal path's normal; an end below the
+    x axis is pulled back to the axis; the node passes when exactly one end lies inside the closed
+    limaçon (`limacon_implicit` < 0). Nodes t_i = i t_FINISH / COUNT with t_FINISH read to
+    y_tol_mm (2.7329 for the paper); `nodes` picks which i (see NODE_RULES).
+
+    Exact and fast: a point must pass every node, so the nodes are applied one at a time, in an
+    order spread over the path, to the points that survived the previous ones; after a few nodes
+    only the neighbourhood of the answer is left. The answer is the scan's, order and all.
+
+    Near t_FINISH the limaçon passes its double point, and its crossing with the normal drops
+    below the axis just before the ideal path does: the node at t = t_FINISH ("closed",
+    "open_start") then fails everywhere at the paper's width. `diagnostics` reports this.
+    """
+    _check_count(count)
+    if nodes not in NODE_RULES:
+        raise ModelError(f"nodes={nodes!r} is not a node rule; known: {', '.join(NODE_RULES)}", key="nodes")
+    start = time.perf_counter()
+    t_finish = task.t_finish_read_rad
+    first, extra = NODE_RULES[nodes]
+    t = np.arange(first, count + extra) * (t_finish / count)
+    ends = _segment_ends(t, task)
+    H_grid, L_grid = _lattice(task)
+    build = time.perf_counter() - start
+
+    # golden-ratio spread from the far end: early nodes pass nearly every point, late ones ~3 %
+    order = np.argsort((np.arange(t.size)[::-1] * 0.6180339887498949) % 1.0)
+    passing = []
+    for rows in np.array_split(np.arange(H_grid.size), max(1, H_grid.size * L_grid.size // 2_000_000)):
+        H, L = (g.ravel() for g in np.meshgrid(H_grid[rows], L_grid, indexing="ij"))
+        for i in order:
+            inner = limacon_implicit(ends[0][i], ends[1][i], H, L) < 0
+            outer = limacon_implicit(ends[2][i], ends[3][i], H, L) < 0
+            keep = inner != outer
+            H, L = H[keep], L[keep]
+            if H.size == 0:
+                break
+        passing.append(np.column_stack([H, L]))
+    passing = np.concatenate(passing)
+    solve = time.perf_counter() - start - build
+
+    diagnostics = {"nodes": int(t.size), "node_rule": nodes, "t_finish_exact_rad": task.t_finish_rad,
+                   "grid_points": int(H_grid.size * L_grid.size)}
+    values = {"t_finish_rad": t_finish, "n_passing": float(len(passing))}
+    if len(passing) == 0:
+        best = minimax(task, count=count)
+        values |= {k: best.values[k] for k in ("H_mm", "L_mm", "max_deviation_mm") if k in best.values}
+        return Result(Status.INFEASIBLE, values, Timing(build, solve + best.timing.solve_s),
+                      message=f"no grid point keeps every node within err_width_mm={task.err_width_mm}; "
+                              f"best achievable (minimax NLP): {best.values.get('max_deviation_mm', float('nan')):.4g} mm",
+                      violated=("err_width",), diagnostics=diagnostics)
+    H, L = (float(v) for v in passing[0])
+    deviation, where = verified_deviation(task.a_mm, task.h_mm, H, L, task.t_finish_rad)
+    diagnostics |= {
+        "passing_box_mm": [float(passing[:, 0].min()), float(passing[:, 0].max()),
+                           float(passing[:, 1].min()), float(passing[:, 1].max())],
+        "finish_node": _finish_node_report(task, H, L, t_finish),
+        "segments_crossed_twice": _even_crossings(t, task, H, L),
+        "max_deviation_at_rad": where,
+    }
+    values |= {"H_mm": H, "L_mm": L, "max_deviation_mm": deviation}
+    return Result(Status.SOLVED, values, Timing(build, solve), diagnostics=diagnostics,
+                  message=f"first of {len(passing)} passing grid points, H ascending then L ascending")
+
+
+def minimax(task: LinkageFit, *, count: int = 1000, slots: int = 8, max_rounds: int = 40) -> Result:
+    """(H, L) in the box minimising the largest distance from COUNT nodes of the ideal path to
+    the limaçon, as a CasADi NLP (IPOPT):
+
+        minimise delta over H, L, delta, s_k   subject to, for each node P_k in the working set,
+            (R(s_k) - P_k) . R'(s_k) = 0                     s_k is a foot point on the limaçon (10)
+            -delta <= (R(s_k) - P_k) x R'(s_k) / |R'(s_k)| <= delta    signed distance to it
+
+    The signed distance along the limaçon's own normal is exact at a foot point and smooth; the
+    squared distance misleads IPOPT, and a distance measured along the ideal path's normal jumps
+    where that normal grazes the limaçon near its double point (it pinned IPOPT at 0.073 mm).
+
+    Only a handful of nodes are active at a minimax optimum, so the NLP carries `slots` nodes
+    (built once per slot count and cached; the nodes are parameters). After each solve every node
+    is measured by `foot_points`; the worst joins the kept set, and the round repeats, each s_k
+    restarted on its nearest foot point, until the worst node is kept and no foot point IPOPT
+    followed has stopped being the nearest. The start matches the limaçon's double point and
+    vertex curvature to the ideal path (`matched_linkage`), exact for h = 0.
+    """
+    _check_count(count)
+    start = time.perf_counter()
+    t_end = task.t_finish_rad
+    t = np.linspace(0.0, t_end, count)
+    px, py = ideal_point(t, task.a_mm, task.h_mm)
+    H_lo, H_hi, L_lo, L_hi = task.bounds()
+    H, L = (float(v) for v in np.clip(matched_linkage(task.a_mm, task.h_mm), (H_lo, L_lo), (H_hi, L_hi)))
+    kept: list[int] = []           # nodes that were ever active or worst: they never leave
+    build_s, status_word = 0.0, "not_run"
+    for rounds in range(1, max_rounds + 1):
+        k = min(_slot_count(len(kept), slots), count)
+        solver, built_s = _minimax_nlp(k)
+        build_s += built_s
+        chosen = np.array(_pad(kept, k, count))
+        dist, s0 = foot_points(px[chosen], py[chosen], H, L)
+        sol = solver(x0=np.r_[H, L, dist.max(), s0], p=np.r_[px[chosen], py[chosen], task.a_mm],
+                     lbx=np.r_[H_lo, L_lo, 0.0, np.full(k, -np.inf)],
+                     ubx=np.r_[H_hi, L_hi, np.inf, np.full(k, np.inf)],
+                     lbg=np.zeros(3 * k), ubg=np.r_[np.zeros(k), np.full(2 * k, np.inf)])
+        status_word = solver.stats()["return_status"]
+        x = np.asarray(sol["x"]).ravel()
+        if not np.all(np.isfinite(x)):
+            break
+        H, L = float(x[0]), float(x[1])
+        followed = np.hypot(*(np.subtract(real_point(x[3:], H, L), (px[chosen], py[chosen]))))
+        every = path_distance(px, py, H, L)
+        worst = int(np.argmax(every))
+        stale = followed > every[chosen] + 1e-9 * (1 + followed)
+        active = chosen[every[chosen] >= every[chosen].max() - 1e-7]
+        kept = list(dict.fromkeys(kept + [int(i) for i in active] + [worst]))
+        if not stale.any() and every[worst] <= every[chosen].max() + 1e-9:
+            break
+    else:
+        status_word = "exchange_round_limit"
+    solve_s = time.perf_counter() - start - build_s
+    status = Status.LIMIT if status_word == "exchange_round_limit" else from_ipopt(status_word)
+    if not np.all(np.isfinite([H, L])) or status is Status.FAILED:
+        return Result(Status.FAILED, {"t_finish_rad": task.t_finish_read_rad}, Timing(build_s, solve_s),
+                      message=f"IPOPT failed ({status_word}) after {rounds} round(s)")
+    deviation, where = verified_deviation(task.a_mm, task.h_mm, H, L, t_end)
+    active_bounds = [name for name, hit in (("H_min_mm", H <= H_lo + 1e-7), ("H_max_mm", H >= H_hi - 1e-7),
+                                            ("L_min_mm", L <= L_lo + 1e-7), ("L_max_mm", L >= L_hi - 1e-7)) if hit]
+    message = f"IPOPT {status_word} after {rounds} exchange round(s), {len(chosen)} nodes in the NLP"
+    violated = ()
+    if status is Status.SOLVED and every.max() > task.err_width_mm:
+        status, violated = Status.INFEASIBLE, ("err_width",)
+        message = (f"no linkage in the box keeps the path within err_width_mm={task.err_width_mm}; best "
+                   f"achievable {deviation:.4g} mm" + (f" (on {', '.join(active_bounds)})" if active_bounds else ""))
+    elif status is Status.SOLVED and deviation > task.err_width_mm:
+        # within the band at every node, outside it between them: the nodes are too sparse
+        status, violated = Status.INACCURATE, ("err_width",)
+        message = (f"within err_width_mm={task.err_width_mm} at the {count} nodes ({every.max():.4g} mm) but "
+                   f"{deviation:.4g} mm between them: raise count")
+    return Result(status, {"H_mm": H, "L_mm": L, "max_deviation_mm": deviation,
+                           "t_finish_rad": task.t_finish_read_rad},
+                  Timing(build_s, solve_s), message=message, violated=violated,
+                  diagnostics={"nodes_max_deviation_mm": float(every.max()), "nlp_nodes": len(chosen),
+                               "kept_nodes": len(kept), "exchange_rounds": rounds,
+                               "ipopt_status": status_word, "active_bounds": active_bounds,
+                               "max_deviation_at_rad": where, "t_finish_exact_rad": t_end})
+
+
+def robust(task: LinkageFit, *, count: int = 1000, max_moves: int = 200) -> Result:
+    """The STEP-lattice point whose worst node deviation over its manufacturing box
+    (H +- STEP, L +- STEP) is smallest; reports that worst case, Euclidean-verified.
+
+    The box is checked at its 3 x 3 lattice points (corners, edge midpoints, centre): on a box
+    this small each node's deviation is close to linear in H and L, so its extremes sit at the
+    corners (a test bounds what a finer box sampling adds). The search is a descent over lattice
+    points from the minimax optimum; lattice deviations are memoised, neighbours share them.
+    """
+    start = time.perf_counter()
+    best = minimax(task, count=count)
+    if best.status not in (Status.SOLVED, Status.INFEASIBLE):
+        return best
+    step = task.step_mm
+    t = np.linspace(0.0, task.t_finish_rad, count)
+    px, py = ideal_point(t, task.a_mm, task.h_mm)
+    memo = {}
+
+    def deviation(i, j):
+        if (i, j) not in memo:
+            memo[i, j] = float(path_distance(px, py, i * step, j * step).max())
+        return memo[i, j]
+
+    def worst_case(i, j):
+        return max(deviation(i + di, j + dj) for di in (-1, 0, 1) for dj in (-1, 0, 1))
+
+    here = (round(best.values["H_mm"] / step), round(best.values["L_mm"] / step))
+    for _ in range(max_moves):
+        around = [(here[0] + di, here[1] + dj) for di in (-1, 0, 1) for dj in (-1, 0, 1)]
+        step_to = min(around, key=lambda g: worst_case(*g))
+        if step_to == here:
+            break
+        here = step_to
+    H, L = here[0] * step, here[1] * step
+    verified = max(verified_deviation(task.a_mm, task.h_mm, (here[0] + di) * step, (here[1] + dj) * step,
+                                      task.t_finish_rad)[0] for di in (-1, 0, 1) for dj in (-1, 0, 1))
+    nominal = verified_deviation(task.a_mm, task.h_mm, H, L, task.t_finish_rad)[0]
+    status, violated, message = Status.SOLVED, (), f"lattice descent from the minimax optimum, {len(memo)} lattice points measured"
+    if verified > task.err_width_mm:
+        status, violated = Status.INFEASIBLE, ("err_width",)
+        message = f"worst case over the manufacturing box {verified:.4g} mm exceeds err_width_mm={task.err_width_mm}"
+    return Result(status, {"H_mm": H, "L_mm": L, "max_deviation_mm": nominal, "worst_deviation_mm": verified,
+                           "t_finish_rad": task.t_finish_read_rad},
+                  Timing(best.timing.build_s, time.perf_counter() - start - best.timing.build_s),
+                  message=message, violated=violated,
+                  diagnostics={"minimax_H_mm": best.values["H_mm"], "minimax_L_mm": best.values["L_mm"],
+                               "minimax_deviation_mm": best.values["max_deviation_mm"],
+                               "lattice_points": len(memo)})
+
+
+def evolve(task: LinkageFit, *, count: int = 1000, popsize: int = 15, tol: float = 1e-8,
+           maxiter: int = 1000, seed: int = 1) -> Result:
+    """scipy's differential evolution on the minimax objective (largest `normal_deviation` over
+    the nodes), the whole population per call through the same quartic kernel. No polish: the
+    objective is a maximum, not smooth, and L-BFGS-B would stall on its kinks."""
+    _check_count(count)
+    start = time.perf_counter()
+    t = np.linspace(0.0, task.t_finish_rad, count)
+    px, py, nx, ny = nodes_and_normals(t, task.a_mm, task.h_mm)
+    H_lo, H_hi, L_lo, L_hi = task.bounds()
+
+    def objective(x):
+        H, L = np.atleast_2d(x.T).T if x.ndim == 1 else x
+        worst = np.abs(normal_deviation(px, py, nx, ny, H[:, None], L[:, None])).max(axis=-1)
+        return np.where(np.isfinite(worst), worst, 1e9)
+
+    found = differential_evolution(lambda x: objective(np.asarray(x)), [(H_lo, H_hi), (L_lo, L_hi)],
+                                   popsize=popsize, tol=tol, atol=0.0, maxiter=maxiter, seed=seed,
+                                   polish=False, vectorized=True, updating="deferred")
+    solve = time.perf_counter() - start
+    H, L = (float(v) for v in found.x)
+    deviation, _ = verified_deviation(task.a_mm, task.h_mm, H, L, task.t_finish_rad)
+    status = Status.SOLVED if found.success else Status.LIMIT
+    return Result(status, {"H_mm": H, "L_mm": L, "max_deviation_mm": deviation,
+                           "t_finish_rad": task.t_finish_read_rad}, Timing(0.0, solve),
+                  message=str(found.message), diagnostics={"generations": int(found.nit),
+                                                           "evaluations": int(found.nfev)})
+
+
+_NLP_BUILDS: dict = {}
+
+
+def _minimax_nlp(k: int):
+    """The minimax NLP with k node slots and the seconds its build took now (0 when cached):
+    nodes are parameters, so each slot count is built once per process."""
+    if k in _NLP_BUILDS:
+        return _NLP_BUILDS[k], 0.0
+    start = time.perf_counter()
+    H, L, delta, s = ca.SX.sym("H"), ca.SX.sym("L"), ca.SX.sym("delta"), ca.SX.sym("s", k)
+    p = ca.SX.sym("p", 2 * k + 1)
+    px, py, a = p[:k], p[k:2 * k], p[2 * k]
+    rx, ry = real_point(s, H, L, m=ca)
+    vx, vy = real_velocity(s, H, L, m=ca)
+    ex, ey = rx - px, ry - py
+    # |R'| vanishes only at the plain cardioid's cusp, where the cross product does too
+    signed = (ex * vy - ey * vx) / ca.sqrt(vx * vx + vy * vy + (1e-9 * a) ** 2)
+    g = ca.vertcat(ex * vx + ey * vy, delta + signed, delta - signed)
+    _NLP_BUILDS[k] = ca.nlpsol("cam_minimax", "ipopt", {"x": ca.vertcat(H, L, delta, s), "p": p, "f": delta, "g": g},
+                               {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes",
+                                "ipopt.tol": 1e-10, "ipopt.max_iter": 300})
+    return _NLP_BUILDS[k], time.perf_counter() - start
+
+
+def _slot_count(needed, minimum):
+    k = max(minimum, 1)
+    while k < needed:
+        k *= 2
+    return k
+
+
+def _pad(working, k, count):
+    """The working nodes plus spread nodes not yet in it, k in all (never a duplicate)."""
+    chosen = list(dict.fromkeys(working))
+    for i in np.linspace(0, count - 1, k + len(chosen)).round().astype(int):
+        if len(chosen) >= min(k, count):
+            break
+        if i not in chosen:
+            chosen.append(int(i))
+    return chosen
+
+
+def _check_count(count):
+    if not isinstance(count, (int, np.integer)) or count < 1:
+        raise ModelError(f"count={count!r} must be a whole number >= 1 (nodes on the ideal path)", key="count")
+
+
+def _lattice(task):
+    """H and L on the STEP lattice of the box, as integer multiples so no rounding drifts [mm]."""
+    H_lo, H_hi, L_lo, L_hi = task.bounds()
+    step = task.step_mm
+    H = np.arange(np.ceil(H_lo / step - 1e-9), np.floor(H_hi / step + 1e-9) + 1) * step
+    L = np.arange(np.ceil(L_lo / step - 1e-9), np.floor(L_hi / step + 1e-9) + 1) * step
+    if H.size * L.size > GRID_POINT_LIMIT:
+        raise ModelError(f"the box H {H_lo:g}..{H_hi:g} mm, L {L_lo:g}..{L_hi:g} mm has {H.size * L.size:.3g} "
+                         f"points at step_mm={step}; the scan allows {GRID_POINT_LIMIT:.0e}: narrow "
+                         "H_min_mm .. L_max_mm or coarsen step_mm", key="step_mm")
+    return np.round(H, 9), np.round(L, 9)
+
+
+def _segment_ends(t, task):
+    """(x_in, y_in, x_out, y_out) of each node's error segment, ends below the x axis pulled back
+    along the segment to the axis (the paper's trimming)."""
+    px, py = ideal_point(t, task.a_mm, task.h_mm)
+    nx, ny = ideal_normal(t)
+    ends = []
+    for side in (-1.0, 1.0):
+        reach = np.full(t.shape, task.err_width_mm)
+        down = py + side * reach * ny < 0
+        reach = np.where(down, -py / np.where(down, side * ny, 1.0), reach)
+        ends += [px + side * reach * nx, py + side * reach * ny]
+    ends[1], ends[3] = np.maximum(ends[1], 0.0), np.maximum(ends[3], 0.0)
+    return ends
+
+
+def _finish_node_report(task, H, L, t_finish):
+    """Whether the node at t_FINISH itself would pass for (H, L), and the nearest crossing of its
+    normal above and below the axis: the reason the node rule matters."""
+    px, py, nx, ny = nodes_and_normals(np.array([t_finish]), task.a_mm, task.h_mm)
+    roots = normal_crossings(px, py, nx, ny, H, L)[0]
+    d = roots.real[np.abs(roots.imag) < 1e-7]
+    above = d[py[0] + d * ny[0] >= 0]
+    ends = _segment_ends(np.array([t_finish]), task)
+    passes = bool((limacon_implicit(ends[0], ends[1], H, L) < 0) != (limacon_implicit(ends[2], ends[3], H, L) < 0))
+    return {"passes": passes,
+            "nearest_crossing_mm": float(d[np.argmin(np.abs(d))]) if d.size else None,
+            "nearest_crossing_above_axis_mm": float(above[np.argmin(np.abs(above))]) if above.size else None}
+
+
+def _even_crossings(t, task, H, L):
+    """Nodes whose (untrimmed) error segment the limaçon crosses twice or more: there the
+    paper's one-end-in, one-end-out test is blind (wide error widths, Sec. IV)."""
+    px, py, nx, ny = nodes_and_normals(t, task.a_mm, task.h_mm)
+    roots = normal_crossings(px, py, nx, ny, H, L)
+    inside = (np.abs(roots.imag) < 1e-7) & (np.abs(roots.real) <= task.err_width_mm)
+    return int(np.count_nonzero(inside.sum(axis=-1) >= 2))
