@@ -9,7 +9,7 @@ import importlib
 import inspect
 import tomllib
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Literal, get_args, get_origin
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
@@ -25,6 +25,11 @@ class Param(BaseModel):
     mark: Literal["given", "assumed", "calibrated"]
     why: str = ""          # required for assumed and calibrated: the reasoning, or the figure fitted
     where: str = ""        # for given: where in the source
+
+    @model_validator(mode="before")
+    @classmethod
+    def _bare_number_is_given(cls, data):
+        return data if isinstance(data, dict) else {"value": data, "mark": "given"}
 
     @model_validator(mode="after")
     def _explained(self):
@@ -64,11 +69,11 @@ class Expectation(BaseModel):
         ok = True
         if self.value is not None:
             tol = max(self.abs or 0.0, (self.rel or 0.0) * abs(self.value))
-            ok = abs(got - self.value) <= tol
+            ok = bool(abs(got - self.value) <= tol)
         if self.max is not None:
-            ok = ok and got <= self.max
+            ok = ok and bool(got <= self.max)
         if self.min is not None:
-            ok = ok and got >= self.min
+            ok = ok and bool(got >= self.min)
         return ok
 
     def describe(self) -> str:
@@ -93,7 +98,7 @@ class SceneFile(BaseModel):
     task: str
     solver: str
     effects: list[str] = []
-    params: dict[str, Number | str | bool | Param]
+    params: dict[str, Param]
     solver_settings: dict[str, Number | str | bool] = {}
     method: dict[str, Number | str] = {}     # the source's own method, when it matters to the numbers
     expect: dict[str, Expectation] = {}
@@ -112,10 +117,10 @@ class Scene:
         return self.spec.id
 
     def params(self) -> dict[str, Any]:
-        return {k: (v.value if isinstance(v, Param) else v) for k, v in self.spec.params.items()}
+        return {k: v.value for k, v in self.spec.params.items()}
 
     def marks(self) -> dict[str, str]:
-        return {k: (v.mark if isinstance(v, Param) else "given") for k, v in self.spec.params.items()}
+        return {k: v.mark for k, v in self.spec.params.items()}
 
     def settings(self) -> dict[str, Any]:
         return dict(self.spec.solver_settings)
@@ -183,8 +188,8 @@ def _resolve(path, field, dotted, package):
     except ModuleNotFoundError:
         raise SceneError(f"{path}: {field} = {dotted!r}: no module {package}.{module_name}", key=field) from None
     if not hasattr(module, name):
-        known = getattr(module, "__all__", [n for n, v in vars(module).items()
-                                            if inspect.isclass(v) and dataclasses.is_dataclass(v)])
+        known = getattr(module, "__all__", [n for n, v in vars(module).items() if inspect.isclass(v)
+                                            and dataclasses.is_dataclass(v) and v.__module__ == module.__name__])
         raise SceneError(f"{path}: unknown {field} {dotted!r}; known: "
                          + ", ".join(f"{module_name}.{n}" for n in known), key=field)
     return getattr(module, name)
@@ -230,7 +235,12 @@ def _check_settings(path, solver, settings):
         if key not in options:
             raise SceneError(f"{path}: solver_settings.{key}: unknown setting of {solver.__name__}; "
                              f"allowed: {', '.join(options) or 'none'}", key=key)
-        default = options[key].default
+        default, choices = options[key].default, get_args(options[key].annotation)
+        if get_origin(options[key].annotation) is Literal:
+            if value not in choices:
+                raise SceneError(f"{path}: solver_settings.{key} = {value!r}: allowed "
+                                 f"{', '.join(map(str, choices))}", key=key)
+            continue
         expected = type(default)
         ok = (isinstance(value, (int, float)) and not isinstance(value, bool) if expected is float
               else type(value) is expected)

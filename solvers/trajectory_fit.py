@@ -8,6 +8,7 @@
 Every answer's `max_deviation_mm` is the independent Euclidean check of `path_deviation`.
 """
 import time
+from typing import Literal
 import casadi as ca
 import numpy as np
 from scipy.optimize import differential_evolution
@@ -30,7 +31,8 @@ NODE_RULES = {
 GRID_POINT_LIMIT = 50_000_000
 
 
-def grid_scan(task: LinkageFit, *, count: int = 1000, nodes: str = "half_open") -> Result:
+def grid_scan(task: LinkageFit, *, count: int = 1000,
+              nodes: Literal["half_open", "closed", "open_start"] = "half_open") -> Result:
     """The paper's grid scan (Sec. IV): the first (H, L), H ascending then L ascending, on the
     STEP lattice of the box, at which every node's error segment is crossed by the limaçon.
 
@@ -78,11 +80,14 @@ def grid_scan(task: LinkageFit, *, count: int = 1000, nodes: str = "half_open") 
                    "grid_points": int(H_grid.size * L_grid.size)}
     values = {"t_finish_rad": t_finish, "n_passing": float(len(passing))}
     if len(passing) == 0:
-        best = minimax(task, count=count)
-        values |= {k: best.values[k] for k in ("H_mm", "L_mm", "max_deviation_mm") if k in best.values}
+        best = minimax(task, count=count)      # the grid has no answer: say what is achievable
+        if "max_deviation_mm" in best.values:
+            values["best_deviation_mm"] = best.values["max_deviation_mm"]
+            diagnostics |= {"best_H_mm": best.values["H_mm"], "best_L_mm": best.values["L_mm"]}
         return Result(Status.INFEASIBLE, values, Timing(build, solve + best.timing.solve_s),
-                      message=f"no grid point keeps every node within err_width_mm={task.err_width_mm}; "
-                              f"best achievable (minimax NLP): {best.values.get('max_deviation_mm', float('nan')):.4g} mm",
+                      message=f"no grid point keeps every node within err_width_mm={task.err_width_mm}; best "
+                              f"achievable (minimax NLP, {best.status.value}): "
+                              f"{best.values.get('max_deviation_mm', float('nan')):.4g} mm",
                       violated=("err_width",), diagnostics=diagnostics)
     H, L = (float(v) for v in passing[0])
     deviation, where = verified_deviation(task.a_mm, task.h_mm, H, L, task.t_finish_rad)

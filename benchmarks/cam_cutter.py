@@ -1,0 +1,174 @@
+"""Accuracy costs time: the cam-cutting linkage (paper 000) solved at rising node counts.
+
+COUNT, the number of nodes on the ideal path, is the accuracy knob every method shares. For each
+COUNT and method this measures the wall time around the call (`time.perf_counter`), the build and
+solve seconds the Result reports (`Result.timing`) and the answer's `max_deviation_mm`: the
+independent, dense Euclidean check over the continuous path, so it does not depend on COUNT and
+compares methods fairly. The methods, all on the paper's task (`PAPER_TASK`):
+
+* ``grid_scan (paper)``      the published STEP-lattice scan;
+* ``minimax NLP (cold)``     CasADi/IPOPT with its build cache cleared before every call;
+* ``minimax NLP (warm)``     the same with the build cached (the normal case in a session);
+* ``differential evolution`` scipy's DE on the minimax objective, well configured, and slow.
+
+Timings are measured here and only here; tests never assert them (they depend on the machine
+and its load). `grid_box_timing` measures the headline numbers against their targets.
+"""
+import statistics
+import time
+
+from mechopt.models.cam_linkage import LinkageFit
+from mechopt.solvers import trajectory_fit
+
+__all__ = ["run", "table", "ratios", "plot", "grid_box_timing", "targets_table", "PAPER_TASK", "TARGETS"]
+
+PAPER_TASK = LinkageFit(a_mm=25, h_mm=2, err_width_mm=0.075, step_mm=0.01,
+                        H_min_mm=55, H_max_mm=65, L_min_mm=45, L_max_mm=50)
+COUNTS = (20, 50, 100, 200, 500, 1000, 2000, 5000)
+GRID, COLD, WARM, DE = "grid_scan (paper)", "minimax NLP (cold)", "minimax NLP (warm)", "differential evolution"
+TARGETS = {"grid_scan_1000_s": 0.1, "minimax_1000_cold_s": 0.05, "minimax_1000_warm_s": 0.05,
+           "minimax_10000_cold_s": 0.5}
+
+
+def _cold_minimax(task, count):
+    trajectory_fit._NLP_BUILDS.clear()
+    return trajectory_fit.minimax(task, count=count)
+
+
+def _measure(method, count, call, repeats, progress):
+    """One row: `call()` run `repeats` times; medians of wall, build and solve seconds."""
+    walls, results = [], []
+    for k in range(repeats):
+        start = time.perf_counter()
+        results.append(call())
+        walls.append(time.perf_counter() - start)
+        if progress:
+            progress(f"{method:<24} count={count:<6} run {k + 1}/{repeats}: {walls[-1]:.4f} s")
+    last = results[-1]
+    return {"method": method, "count": count,
+            "wall_s_median": statistics.median(walls), "wall_s_min": min(walls),
+            "build_s": statistics.median(r.timing.build_s for r in results),
+            "solve_s": statistics.median(r.timing.solve_s for r in results), "runs": repeats,
+            "max_deviation_mm": float(last.values.get("max_deviation_mm", float("nan"))),
+            "H_mm": float(last.values.get("H_mm", float("nan"))),
+            "L_mm": float(last.values.get("L_mm", float("nan"))), "status": last.status.value}
+
+
+def run(counts=COUNTS, repeats=5, *, task=PAPER_TASK, de_counts=None, de_repeats=1, de_popsize=10,
+        de_tol=1e-7, de_maxiter=1000, de_seed=1, progress=None):
+    """Measure every method at every COUNT.
+
+    Parameters
+    ----------
+    counts : node counts for grid_scan and minimax.
+    repeats : runs per (method, COUNT); the row holds their medians.
+    de_counts : counts for differential evolution (default: those of `counts` <= 1000).
+    de_repeats, de_popsize, de_tol, de_maxiter, de_seed : DE's runs and settings.
+    progress : callable taking one short string per measurement, or None.
+
+    Returns
+    -------
+    list of dict, one per (method, COUNT), keys as in `table`.
+    """
+    if de_counts is None:
+        de_counts = tuple(c for c in counts if c <= 1000)
+    rows = []
+    for c in counts:
+        rows.append(_measure(GRID, c, lambda: trajectory_fit.grid_scan(task, count=c), repeats, progress))
+        rows.append(_measure(COLD, c, lambda: _cold_minimax(task, c), repeats, progress))
+        rows.append(_measure(WARM, c, lambda: trajectory_fit.minimax(task, count=c), repeats, progress))
+    for c in de_counts:
+        rows.append(_measure(DE, c, lambda: trajectory_fit.evolve(task, count=c, popsize=de_popsize, tol=de_tol,
+                                                                  maxiter=de_maxiter, seed=de_seed),
+                             de_repeats, progress))
+    return rows
+
+
+def ratios(rows):
+    """Per COUNT with both: DE wall over warm minimax wall (medians), and DE's deviation minus
+    minimax's [mm] (positive: DE's answer is worse)."""
+    by = {(r["method"], r["count"]): r for r in rows}
+    return [{"count": c, "de_over_minimax_warm": by[DE, c]["wall_s_median"] / by[WARM, c]["wall_s_median"],
+             "de_minus_minimax_mm": by[DE, c]["max_deviation_mm"] - by[WARM, c]["max_deviation_mm"]}
+            for (m, c) in sorted(by, key=lambda k: k[1]) if m == DE and (WARM, c) in by]
+
+
+def table(rows):
+    """The rows as a fixed-width text table, then the "ratios" section."""
+    head = (f"{'method':<24}{'count':>7}{'wall med s':>12}{'wall min s':>12}{'build s':>10}{'solve s':>10}"
+            f"{'runs':>6}{'max dev mm':>13}{'H mm':>10}{'L mm':>10}  status")
+    lines = [head, "-" * len(head)]
+    for r in rows:
+        lines.append(f"{r['method']:<24}{r['count']:>7}{r['wall_s_median']:>12.4f}{r['wall_s_min']:>12.4f}"
+                     f"{r['build_s']:>10.4f}{r['solve_s']:>10.4f}{r['runs']:>6}{r['max_deviation_mm']:>13.7f}"
+                     f"{r['H_mm']:>10.4f}{r['L_mm']:>10.4f}  {r['status']}")
+    found = ratios(rows)
+    if found:
+        lines += ["", "ratios (differential evolution vs minimax NLP warm, same COUNT)",
+                  f"{'count':>7}{'DE wall / minimax wall':>24}{'DE dev - minimax dev mm':>26}"]
+        lines += [f"{q['count']:>7}{q['de_over_minimax_warm']:>24.1f}{q['de_minus_minimax_mm']:>26.2e}" for q in found]
+    return "\n".join(lines)
+
+
+def grid_box_timing(repeats=5, *, task=PAPER_TASK, progress=None):
+    """Median wall seconds of the headline cases on the paper box (targets in `TARGETS`):
+    grid_scan at COUNT 1000, minimax at COUNT 1000 cold and warm, minimax at COUNT 10 000 cold."""
+    cases = {"grid_scan_1000_s": (GRID, 1000, lambda: trajectory_fit.grid_scan(task, count=1000)),
+             "minimax_1000_cold_s": (COLD, 1000, lambda: _cold_minimax(task, 1000)),
+             "minimax_1000_warm_s": (WARM, 1000, lambda: trajectory_fit.minimax(task, count=1000)),
+             "minimax_10000_cold_s": (COLD, 10_000, lambda: _cold_minimax(task, 10_000))}
+    return {key: _measure(method, count, call, repeats, progress)["wall_s_median"]
+            for key, (method, count, call) in cases.items()}
+
+
+def targets_table(d):
+    """The `grid_box_timing` medians beside their targets, as fixed-width text."""
+    lines = [f"{'case':<24}{'median s':>10}{'target s':>10}  verdict", "-" * 53]
+    for key, target in TARGETS.items():
+        if key in d:
+            lines.append(f"{key:<24}{d[key]:>10.4f}{'< ' + format(target, 'g'):>10}  "
+                         f"{'met' if d[key] < target else 'MISSED'}")
+    return "\n".join(lines)
+
+
+def plot(rows, out_dir):
+    """Write "cam_cutter_work_precision.png" to `out_dir`: work-precision (wall time against excess
+    deviation over the best minimax answer) and wall time against COUNT. Returns [path]."""
+    import pathlib
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out = pathlib.Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    best = min((r["max_deviation_mm"] for r in rows if r["method"] in (COLD, WARM)),
+               default=min(r["max_deviation_mm"] for r in rows))
+    style = {GRID: ("s", "-"), COLD: ("o", "--"), WARM: ("o", "-"), DE: ("^", "-")}
+    # COUNT labels: cold right of its points, warm left, grid above and below by turns
+    nudge = {COLD: ((5, -3), "left"), WARM: ((-5, -3), "right")}
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(13, 5.5))
+    for method in dict.fromkeys(r["method"] for r in rows):
+        mine = sorted((r for r in rows if r["method"] == method), key=lambda r: r["count"])
+        wall = [r["wall_s_median"] for r in mine]
+        excess = [max(r["max_deviation_mm"] - best, 0.0) + 1e-7 for r in mine]
+        marker, line = style.get(method, ("x", "-"))
+        ax1.plot(wall, excess, marker=marker, linestyle=line, label=method)
+        for k, (r, x, y) in enumerate(zip(mine, wall, excess)):
+            offset, ha = nudge.get(method, ((0, 6 if k % 2 == 0 or method != GRID else -11), "center"))
+            ax1.annotate(str(r["count"]), (x, y), textcoords="offset points", xytext=offset, ha=ha, fontsize=7)
+        ax2.plot([r["count"] for r in mine], wall, marker=marker, linestyle=line, label=method)
+    ax1.set(xscale="log", yscale="log", xlabel="wall time per call, median [s]",
+            ylabel="max_deviation_mm - best minimax + 1e-7 [mm]",
+            title=f"Work-precision (labels: COUNT); best minimax deviation {best:.6f} mm\n"
+                  "deviation Euclidean-verified on the continuous path")
+    ax2.set(xscale="log", yscale="log", xlabel="COUNT (nodes on the ideal path)",
+            ylabel="wall time per call, median [s]", title="Wall time against COUNT")
+    for ax, where in ((ax1, "lower right"), (ax2, "best")):
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=8, loc=where)
+    fig.suptitle("Cam-cutting linkage (paper 000): accuracy costs time")
+    fig.tight_layout()
+    path = out / "cam_cutter_work_precision.png"
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return [str(path)]

@@ -1,0 +1,133 @@
+"""The `mechopt` command: list, run, validate and benchmark the registry's scenes."""
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from mechopt import registry
+from mechopt.models.errors import MechoptError
+from mechopt.scene import parse_overrides
+from mechopt.solvers.result import Status
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="mechopt", description=__doc__)
+    sub = parser.add_subparsers(dest="command", required=True)
+    sub.add_parser("cases", help="list scene ids and titles")
+    run = sub.add_parser("run", help="solve one scene and check it against its source")
+    run.add_argument("case")
+    run.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                     help="override a parameter or solver setting (what-if); repeatable")
+    run.add_argument("--json", type=Path, metavar="FILE", help="write the result as JSON")
+    run.add_argument("--plot", type=Path, metavar="DIR", help="write figures into DIR")
+    validate = sub.add_parser("validate", help="run every scene; non-zero exit when any expectation fails")
+    validate.add_argument("--json", type=Path, metavar="FILE")
+    bench = sub.add_parser("bench", help="accuracy against time for a mechanism's solvers")
+    bench.add_argument("mechanism", choices=["cam-cutter"])
+    bench.add_argument("--counts", type=int, nargs="+", default=[20, 50, 100, 200, 500, 1000, 2000, 5000],
+                       help="node counts (the accuracy knob)")
+    bench.add_argument("--repeats", type=int, default=5, help="runs per point; medians are reported")
+    bench.add_argument("--plot", type=Path, default=Path("out/bench"), metavar="DIR")
+    args = parser.parse_args(argv)
+    try:
+        return {"cases": _cases, "run": _run, "validate": _validate, "bench": _bench}[args.command](args)
+    except MechoptError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+
+
+def _cases(args) -> int:
+    scenes = registry.all_scenes()
+    width = max(len(s.id) for s in scenes)
+    for scene in scenes:
+        print(f"{scene.id:<{width}}  {scene.spec.title}")
+    return 0
+
+
+def _run(args) -> int:
+    scene = registry.find(args.case)
+    result = registry.run(scene, parse_overrides(args.set))
+    _print_run(result)
+    if args.json:
+        _write_json(args.json, result.as_dict())
+    if args.plot:
+        from mechopt.plots import plot_run
+        for path in plot_run(result, args.plot):
+            print(f"plot: {path}")
+    return 0 if result.ok and result.result.status is not Status.FAILED else 1
+
+
+def _validate(args) -> int:
+    rows, runs = [], []
+    for scene in registry.all_scenes():
+        print(f"running {scene.id} ...", file=sys.stderr, flush=True)
+        result = registry.run(scene)
+        runs.append(result)
+        marks = scene.marks()
+        fitted = sorted(k for k, m in marks.items() if m == "calibrated")
+        for c in result.checks:
+            rows.append((scene.id, c.name, c.kind, c.expected, _fmt(c.got), "ok" if c.ok else "FAIL",
+                         f"{result.result.timing.build_s + result.result.timing.solve_s:.3f}"))
+        if fitted:
+            rows.append((scene.id, "calibrated on", "", ", ".join(fitted), "", "", ""))
+    _print_table(("case", "quantity", "kind", "expected", "got", "check", "time [s]"), rows)
+    failed = [r for r in rows if r[5] == "FAIL"]
+    print(f"\n{len(rows) - len(failed)} passed, {len(failed)} failed")
+    if args.json:
+        _write_json(args.json, [r.as_dict() for r in runs])
+    return 1 if failed else 0
+
+
+def _bench(args) -> int:
+    from mechopt.benchmarks import cam_cutter
+    def progress(line):
+        print(line, file=sys.stderr, flush=True)
+    rows = cam_cutter.run(counts=tuple(args.counts), repeats=args.repeats, progress=progress)
+    print(cam_cutter.table(rows))
+    print(cam_cutter.targets_table(cam_cutter.grid_box_timing(repeats=args.repeats)))
+    for path in cam_cutter.plot(rows, args.plot):
+        print(f"plot: {path}")
+    return 0
+
+
+def _print_run(run):
+    r = run.result
+    print(f"{run.scene.id}: {run.scene.spec.title}")
+    print(f"source: {run.scene.spec.source}")
+    if run.overrides:
+        print(f"what-if: {', '.join(f'{k}={v}' for k, v in run.overrides.items())}")
+    print(f"status: {r.status.value}  ({r.message})" if r.message else f"status: {r.status.value}")
+    if r.violated:
+        print(f"violated: {', '.join(r.violated)}")
+    _print_table(("value", "got"), [(k, _fmt(v)) for k, v in r.values.items()])
+    if run.checks:
+        _print_table(("check", "expected", "got", "kind", "where", ""),
+                     [(c.name, c.expected, _fmt(c.got), c.kind, c.where, "ok" if c.ok else "FAIL") for c in run.checks])
+    elif run.scene.spec.expect:
+        print("checks: skipped (parameters overridden; the source's figures hold for its own parameters)")
+    print(f"timing: build {r.timing.build_s:.4f} s, solve {r.timing.solve_s:.4f} s")
+
+
+def _print_table(header, rows):
+    widths = [max(len(str(x)) for x in col) for col in zip(header, *rows)]
+    print()
+    for row in (header, *rows):
+        print("  ".join(str(x).ljust(w) for x, w in zip(row, widths)).rstrip())
+
+
+def _fmt(value):
+    if value is None:
+        return "-"
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    return str(value)
+
+
+def _write_json(path, payload):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(payload, indent=2))
+    print(f"json: {path}")
+
+
+if __name__ == "__main__":
+    sys.exit(main())

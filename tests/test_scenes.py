@@ -1,0 +1,144 @@
+"""The registry: every scene reproduces its source, bad scenes are refused by name, the CLI speaks JSON."""
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from mechopt import registry
+from mechopt.cli import main
+from mechopt.models.errors import SceneError
+from mechopt.scene import load, parse_overrides
+from mechopt.solvers.path_deviation import verified_deviation
+from mechopt.solvers.result import Status
+
+GOOD = registry.cases_dir() / "cam-cutter" / "paper-grid.toml"
+
+
+@pytest.mark.parametrize("scene", registry.all_scenes(), ids=lambda s: s.id)
+def test_scene_reproduces_its_expectations(scene):
+    run = registry.run(scene)
+    failed = [f"{c.name}: got {c.got}, expected {c.expected} ({c.kind}, {c.where})" for c in run.checks if not c.ok]
+    assert not failed, f"{scene.id} ({scene.spec.source}): " + "; ".join(failed)
+    assert run.checks, f"{scene.id} checks nothing"
+
+
+def test_minimax_bound_is_the_paper_linkages_own_deviation():
+    # the scene's bound must be the published linkage measured by the same dense check
+    bound = registry.find("cam-cutter/minimax").spec.expect["max_deviation_mm"].max
+    task, _ = registry.find("cam-cutter/minimax").build()
+    paper, _ = verified_deviation(task.a_mm, task.h_mm, 59.45, 47.52, task.t_finish_rad)
+    assert paper == pytest.approx(bound, abs=1e-7)
+
+
+def _edited(tmp_path, old, new, name="bad.toml"):
+    text = GOOD.read_text()
+    assert old in text, old
+    path = tmp_path / name
+    path.write_text(text.replace(old, new, 1))
+    return path
+
+
+@pytest.mark.parametrize("old, new, match", [
+    ('title = ', 'colour = "red"\ntitle = ', r"bad\.toml: colour: unknown key; allowed: id, title"),
+    ('a_mm = { value = 25.0,', 'a_mm = { value = "x",', r"bad\.toml: params\.a_mm = 'x': expected a number"),
+    ('a_mm = { value = 25.0, mark = "given", where = "Sec. IV: a = 25 mm" }\n', '', r"bad\.toml: params: missing a_mm"),
+    ('a_mm = { value = 25.0,', 'a_mm = { value = -25.0,', r"bad\.toml: params\.a_mm: a_mm=-25\.0 must be > 0"),
+    ('H_max_mm = { value = 65.0,', 'H_max_mm = { value = 50.0,', r"params\.H_min_mm: bounds reversed: H_min_mm=55\.0 > H_max_mm=50\.0"),
+    ('H_min_mm = { value = 55.0,', 'H_min_mm = { value = -5.0,', r"params\.H_min_mm: H_min_mm=-5\.0 must be > 0"),
+    ('abs = 0.005', 'abs = 0.0', r"expect\.H_mm\.abs: Input should be greater than 0"),
+    ('abs = 0.005', 'rel = -1.0', r"expect\.H_mm\.rel: Input should be greater than 0"),
+    ('value = 59.45\nabs = 0.005', 'value = 59.45', r"expect\.H_mm: .*needs a tolerance"),
+    ('kind = "published"', 'kind = "rumoured"', r"expect\.H_mm\.kind: Input should be 'published', 'experimental' or 'derived'"),
+    ('effects = ["torch_offset"]', 'effects = ["torch_offset", "wind"]', r"effects: unknown \['wind'\]; LinkageFit knows torch_offset"),
+    ('effects = ["torch_offset"]', 'effects = []', r"params\.h_mm belongs to effect 'torch_offset'"),
+    ('solver = "trajectory_fit.grid_scan"', 'solver = "trajectory_fit.grid_scna"',
+     r"unknown solver 'trajectory_fit\.grid_scna'; known: trajectory_fit\.grid_scan, trajectory_fit\.minimax"),
+    ('task = "cam_linkage.LinkageFit"', 'task = "cam_linkage.LinkageFix"', r"unknown task 'cam_linkage\.LinkageFix'; known: cam_linkage\.LinkageFit"),
+    ('task = "cam_linkage.LinkageFit"', 'task = "nowhere.LinkageFit"', r"no module mechopt\.models\.nowhere"),
+    ('count = 1000 ', 'count = "many" ', r"solver_settings\.count = 'many': expected int"),
+    ('count = 1000 ', 'cuont = 1000 ', r"solver_settings\.cuont: unknown setting of grid_scan; allowed: count, nodes"),
+    ('nodes = "half_open"', 'nodes = "both"', r"solver_settings\.nodes = 'both': allowed half_open, closed, open_start"),
+    ('mark = "assumed", why = "LOW_H is an input the paper does not print; a 10 mm box around its answer"',
+     'mark = "assumed"', r"params\.H_min_mm: Value error, a parameter marked 'assumed' needs a 'why'"),
+    ('id = ', 'id = = ', r"bad\.toml: not valid TOML"),
+])
+def test_bad_scene_is_refused_naming_file_key_and_what_is_allowed(tmp_path, old, new, match):
+    with pytest.raises(SceneError, match=match):
+        load(_edited(tmp_path, old, new))
+
+
+def test_duplicate_ids_are_refused(tmp_path, monkeypatch):
+    for name in ("a", "b"):
+        (tmp_path / name).mkdir()
+        shutil.copy(GOOD, tmp_path / name / "x.toml")
+    monkeypatch.setattr(registry, "cases_dir", lambda: tmp_path)
+    registry.all_scenes.cache_clear()
+    try:
+        with pytest.raises(SceneError, match=r"scene ids used twice: cam-cutter/paper-grid"):
+            registry.all_scenes()
+    finally:
+        registry.all_scenes.cache_clear()
+
+
+def test_override_is_validated_like_the_file_and_changes_nothing():
+    scene = registry.find("cam-cutter/minimax")
+    before = scene.params()
+    with pytest.raises(SceneError, match=r"--set colour: unknown key; parameters: a_mm, .*; solver settings: count"):
+        registry.run(scene, {"colour": 1})
+    with pytest.raises(SceneError, match=r"params\.err_width_mm: err_width_mm=-1\.0 must be > 0"):
+        registry.run(scene, {"err_width_mm": -1})
+    with pytest.raises(SceneError, match=r"solver_settings\.count = 2\.5: expected int"):
+        registry.run(scene, {"count": 2.5})
+    assert scene.params() == before
+
+
+def test_parameter_override_skips_the_sources_checks_but_a_setting_override_keeps_them():
+    what_if = registry.run(registry.find("cam-cutter/minimax"), {"a_mm": 40.0, "h_mm": 3.0})
+    assert what_if.checks == [] and what_if.result.values["H_mm"] > 80      # a different cardioid
+    coarse = registry.run(registry.find("cam-cutter/paper-grid"), {"count": 100})
+    assert coarse.checks and coarse.ok                                      # COUNT 100 still gives 59.45/47.52
+
+
+def test_parse_overrides_reads_toml_literals_else_text():
+    assert parse_overrides(["a_mm=40", "h_mm=3.5", "nodes=closed", "x=true"]) == \
+        {"a_mm": 40, "h_mm": 3.5, "nodes": "closed", "x": True}
+    with pytest.raises(SceneError, match=r"expected KEY=VALUE"):
+        parse_overrides(["a_mm"])
+
+
+def test_cli_run_writes_the_documented_json(tmp_path):
+    out = tmp_path / "r.json"
+    assert main(["run", "cam-cutter/paper-grid", "--json", str(out), "--plot", str(tmp_path)]) == 0
+    data = json.loads(out.read_text())
+    assert {"case", "status", "values", "checks", "timing"} <= data.keys()
+    assert data["values"]["H_mm"] == pytest.approx(59.45) and data["status"] == "SOLVED"
+    assert {"name", "expected", "got", "tol", "ok"} <= data["checks"][0].keys()
+    assert {"build_s", "solve_s"} == data["timing"].keys()
+    assert (tmp_path / "cam-cutter_paper-grid.png").stat().st_size > 10_000
+
+
+def test_cli_validate_passes_and_reports_every_check(tmp_path, capsys):
+    out = tmp_path / "v.json"
+    assert main(["validate", "--json", str(out)]) == 0
+    runs = json.loads(out.read_text())
+    assert {r["case"] for r in runs} == {s.id for s in registry.all_scenes()}
+    assert f"{sum(len(r['checks']) for r in runs)} passed, 0 failed" in capsys.readouterr().out
+
+
+def test_cli_names_an_unknown_case_and_exits_2(capsys):
+    assert main(["run", "cam-cutter/minimx"]) == 2
+    assert "did you mean cam-cutter/minimax" in capsys.readouterr().err
+
+
+def test_infeasible_grid_scan_reports_the_best_achievable_not_a_grid_point():
+    run = registry.run(registry.find("cam-cutter/paper-grid"), {"nodes": "closed"})
+    assert run.result.status is Status.INFEASIBLE and "H_mm" not in run.result.values
+    assert 0.05 < run.result.values["best_deviation_mm"] < 0.075
+    assert not run.ok      # the published H, L are not reproduced under this node rule
+
+
+def test_ci_runs_exactly_the_readme_test_command():
+    root = Path(__file__).resolve().parents[1]
+    readme_test_line = (root / "README.md").read_text().split("```bash\n", 1)[1].splitlines()[1]
+    assert readme_test_line in (root / ".ci" / "run").read_text().splitlines()
