@@ -133,10 +133,13 @@ class LinkageFit:
         for key in ("H_min_mm", "H_max_mm", "L_min_mm", "L_max_mm"):
             value = getattr(self, key)
             _require(self, key, value is None or value > 0, "must be > 0 (a link length)")
-        for lo, hi in (("H_min_mm", "H_max_mm"), ("L_min_mm", "L_max_mm")):
-            vlo, vhi = getattr(self, lo), getattr(self, hi)
-            if vlo is not None and vhi is not None and vlo > vhi:
-                raise ModelError(f"bounds reversed: {lo}={vlo} > {hi}={vhi}", key=lo)
+        box = self.bounds()
+        for k, (lo, hi) in enumerate((("H_min_mm", "H_max_mm"), ("L_min_mm", "L_max_mm"))):
+            if box[2 * k] > box[2 * k + 1]:
+                given = getattr(self, lo) is not None and getattr(self, hi) is not None
+                raise ModelError(f"bounds reversed: {lo}={box[2 * k]} > {hi}={box[2 * k + 1]}"
+                                 + ("" if given else " (the one not given is the matched linkage +- a/2: give both)"),
+                                 key=lo if getattr(self, lo) is not None else hi)
 
     @property
     def t_finish_rad(self) -> float:

@@ -100,8 +100,13 @@ def grid_scan(task: LinkageFit, *, count: int = 1000,
     }
     solve = time.perf_counter() - start - build       # the checks above are part of the answer
     values |= {"H_mm": H, "L_mm": L, "max_deviation_mm": deviation}
-    return Result(Status.SOLVED, values, Timing(build, solve), diagnostics=diagnostics,
-                  message=f"first of {len(passing)} passing grid points, H ascending then L ascending")
+    status, violated = Status.SOLVED, ()
+    message = f"first of {len(passing)} passing grid points, H ascending then L ascending"
+    if deviation > task.err_width_mm:       # every node passes, yet the path leaves the band between them
+        status, violated = Status.INACCURATE, ("err_width",)
+        message += f"; between the {t.size} nodes the path is {deviation:.4g} mm off: raise count"
+    return Result(status, values, Timing(build, solve), message=message, violated=violated,
+                  diagnostics=diagnostics)
 
 
 def minimax(task: LinkageFit, *, count: int = 1000, slots: int = 8, max_rounds: int = 40) -> Result:
@@ -212,9 +217,21 @@ def robust(task: LinkageFit, *, count: int = 1000, max_moves: int = 200) -> Resu
     def worst_case(i, j):
         return max(deviation(i + di, j + dj) for di in (-1, 0, 1) for dj in (-1, 0, 1))
 
-    here = (round(best.values["H_mm"] / step), round(best.values["L_mm"] / step))
+    H_lo, H_hi, L_lo, L_hi = task.bounds()
+    lattice = (int(np.ceil(H_lo / step - 1e-9)), int(np.floor(H_hi / step + 1e-9)),
+               int(np.ceil(L_lo / step - 1e-9)), int(np.floor(L_hi / step + 1e-9)))
+    if lattice[0] > lattice[1] or lattice[2] > lattice[3]:
+        raise ModelError(f"the box H {H_lo:g}..{H_hi:g}, L {L_lo:g}..{L_hi:g} mm holds no multiple of "
+                         f"step_mm={step}", key="step_mm")
+
+    def inside(i, j):
+        return lattice[0] <= i <= lattice[1] and lattice[2] <= j <= lattice[3]
+
+    here = (int(np.clip(round(best.values["H_mm"] / step), lattice[0], lattice[1])),
+            int(np.clip(round(best.values["L_mm"] / step), lattice[2], lattice[3])))
     for _ in range(max_moves):
-        around = [(here[0] + di, here[1] + dj) for di in (-1, 0, 1) for dj in (-1, 0, 1)]
+        around = [(here[0] + di, here[1] + dj) for di in (-1, 0, 1) for dj in (-1, 0, 1)
+                  if inside(here[0] + di, here[1] + dj)]
         step_to = min(around, key=lambda g: worst_case(*g))
         if step_to == here:
             break
@@ -322,8 +339,8 @@ def _lattice(task):
     H = np.arange(np.ceil(H_lo / step - 1e-9), np.floor(H_hi / step + 1e-9) + 1) * step
     L = np.arange(np.ceil(L_lo / step - 1e-9), np.floor(L_hi / step + 1e-9) + 1) * step
     if H.size * L.size > GRID_POINT_LIMIT:
-        raise ModelError(f"the box H {H_lo:g}..{H_hi:g} mm, L {L_lo:g}..{L_hi:g} mm has {H.size * L.size:.3g} "
-                         f"points at step_mm={step}; the scan allows {GRID_POINT_LIMIT:.0e}: narrow "
+        raise ModelError(f"the box H {H_lo:g}..{H_hi:g} mm, L {L_lo:g}..{L_hi:g} mm has {H.size * L.size:,} "
+                         f"points at step_mm={step}; the scan allows {GRID_POINT_LIMIT:,}: narrow "
                          "H_min_mm .. L_max_mm or coarsen step_mm", key="step_mm")
     return np.round(H, 9), np.round(L, 9)
 

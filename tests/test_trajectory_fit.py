@@ -1,0 +1,437 @@
+"""Solvers for the cam-cutting linkage (paper 000, Podchasov 2021, Sec. IV): grid scan, minimax NLP,
+robust lattice point, differential evolution, and the two deviation measures they rest on.
+
+Published numbers: H = 59.45 mm, L = 47.52 mm, t_FINISH = 2.7329 rad (Sec. IV). Cross-checks
+re-implement the paper's segment test and the distance to the limaçon by brute force in the test.
+"""
+import dataclasses
+import math
+import re
+
+import numpy as np
+import pytest
+from hypothesis import assume, given, settings, strategies as st
+
+from mechopt.models.cam_linkage import LinkageFit, ideal_normal, ideal_point, limacon_implicit
+from mechopt.models.errors import ModelError, SolverError
+from mechopt.solvers.path_deviation import normal_deviation, path_distance, verified_deviation
+from mechopt.solvers.result import Result, Status, Timing, from_ipopt
+from mechopt.solvers.trajectory_fit import evolve, grid_scan, minimax, robust
+
+PROPERTY = settings(max_examples=30, deadline=None)
+H_PUBLISHED_MM, L_PUBLISHED_MM = 59.45, 47.52     # Podchasov (2021), Sec. IV
+T_FINISH_PUBLISHED_RAD = 2.7329                   # Podchasov (2021), Sec. IV
+STEP_MM = 0.01
+
+
+@pytest.fixture(scope="module")
+def task():
+    """The paper's task (Sec. IV); the box is not printed there, this one holds its answer."""
+    return LinkageFit(a_mm=25, h_mm=2, err_width_mm=0.075, step_mm=0.01,
+                      H_min_mm=55, H_max_mm=65, L_min_mm=45, L_max_mm=50)
+
+
+@pytest.fixture(scope="module")
+def scan(task):
+    return grid_scan(task, nodes="half_open")
+
+
+@pytest.fixture(scope="module")
+def best(task):
+    return minimax(task, count=1000)
+
+
+def deviation(task, H, L):
+    """Dense Euclidean deviation of the linkage (H, L) from the ideal path [mm]."""
+    return verified_deviation(task.a_mm, task.h_mm, H, L, task.t_finish_rad)[0]
+
+
+# ---------------------------------------------------------------- independent re-implementations
+
+def limacon_eq10(s, H, L):
+    """Eq. (10) of the paper, written out."""
+    return L * np.cos(s) + H / 2 * np.cos(2 * s) + H / 2 - (L + H), L * np.sin(s) + H / 2 * np.sin(2 * s)
+
+
+def brute_distance(px, py, H, L, samples=200_000):
+    """Distance from (px, py) to the closed limaçon: 200k samples, then the four best local minima
+    resampled twice on a 1000x finer grid around them."""
+    s = np.linspace(0.0, 2 * np.pi, samples, endpoint=False)
+    x, y = limacon_eq10(s, H, L)
+    d = np.hypot(x - px, y - py)
+    minima = np.flatnonzero((d <= np.roll(d, 1)) & (d <= np.roll(d, -1)))
+    found = []
+    for k in minima[np.argsort(d[minima])[:4]]:
+        centre, half = s[k], 2 * np.pi / samples
+        for _ in range(2):
+            fine = np.linspace(centre - 2 * half, centre + 2 * half, 2001)
+            x, y = limacon_eq10(fine, H, L)
+            dist = np.hypot(x - px, y - py)
+            centre, half = fine[dist.argmin()], half / 500
+        found.append(dist.min())
+    return min(found)
+
+
+def segment_ends(t, a, h, width):
+    """Paper, Sec. IV: segment +-width along the ideal normal at each node; an end below the x axis
+    is replaced by the segment's own crossing of the axis. Returns inner and outer ends."""
+    px, py = ideal_point(t, a, h)
+    nx, ny = ideal_normal(t)
+    ends = []
+    for side in (-1.0, 1.0):
+        ex, ey = px + side * width * nx, py + side * width * ny
+        below = ey < 0
+        frac = np.where(below, py / np.where(below, py - ey, 1.0), 1.0)   # P + frac (E - P) is on the axis
+        ends.append((px + frac * (ex - px), np.where(below, 0.0, py + frac * (ey - py))))
+    return ends
+
+
+def brute_force_scan(H_values, L_values, t, a, h, width):
+    """Every lattice point against every node, H ascending then L ascending: the passing points."""
+    (xi, yi), (xo, yo) = segment_ends(t, a, h, width)
+    passing = []
+    for H in H_values:
+        for L in L_values:
+            if np.all((limacon_implicit(xi, yi, H, L) < 0) != (limacon_implicit(xo, yo, H, L) < 0)):
+                passing.append((H, L))
+    return passing
+
+
+# ---------------------------------------------------------------- grid scan: the paper's algorithm
+
+def test_grid_scan_reproduces_published_linkage(scan):
+    assert scan.status is Status.SOLVED
+    assert scan.values["H_mm"] == pytest.approx(H_PUBLISHED_MM, abs=1e-9)
+    assert scan.values["L_mm"] == pytest.approx(L_PUBLISHED_MM, abs=1e-9)
+    assert scan.values["t_finish_rad"] == T_FINISH_PUBLISHED_RAD
+    assert scan.values["n_passing"] >= 1
+
+
+def test_grid_scan_reports_dense_deviation_of_its_answer(task, scan):
+    assert scan.values["max_deviation_mm"] == pytest.approx(deviation(task, H_PUBLISHED_MM, L_PUBLISHED_MM),
+                                                            abs=1e-12)
+
+
+def test_grid_scan_answer_fails_the_node_at_t_finish(scan):
+    assert scan.diagnostics["finish_node"]["passes"] is False
+
+
+def test_grid_scan_with_node_at_t_finish_is_infeasible(task):
+    closed = grid_scan(task, nodes="closed")
+    assert closed.status is Status.INFEASIBLE
+    assert closed.values["n_passing"] == 0
+    assert closed.violated == ("err_width",)
+
+
+@pytest.mark.parametrize("count, nodes", [(200, "half_open"), (1000, "half_open"), (1000, "closed")])
+def test_grid_scan_equals_brute_force_on_small_box(task, count, nodes):
+    # at 1000 nodes the trimming decides: untrimmed segments would pass 6 points here, not 42
+    small = dataclasses.replace(task, H_min_mm=59.40, H_max_mm=59.70, L_min_mm=47.30, L_max_mm=47.60)
+    got = grid_scan(small, count=count, nodes=nodes)
+    H_values = [round(59.40 + STEP_MM * i, 2) for i in range(31)]
+    L_values = [round(47.30 + STEP_MM * j, 2) for j in range(31)]
+    last = count + (nodes == "closed")                                # t_i = i t_FINISH / COUNT, Sec. IV
+    t = np.arange(last) * (T_FINISH_PUBLISHED_RAD / count)
+    passing = brute_force_scan(H_values, L_values, t, 25.0, 2.0, 0.075)
+    assert got.values["n_passing"] == len(passing)
+    if not passing:
+        assert got.status is Status.INFEASIBLE
+        return
+    assert got.status is Status.SOLVED
+    assert (got.values["H_mm"], got.values["L_mm"]) == pytest.approx(passing[0], abs=1e-9)
+    H, L = np.array(passing).T
+    assert got.diagnostics["passing_box_mm"] == pytest.approx([H.min(), H.max(), L.min(), L.max()], abs=1e-9)
+
+
+def test_grid_scan_counts_doubly_crossed_segments_like_brute_force(task):
+    # near t_FINISH the limaçon passes its double point and some segments cross both branches;
+    # count sign changes of "inside" along each untrimmed segment, 301 samples
+    small = dataclasses.replace(task, H_min_mm=59.40, H_max_mm=59.50, L_min_mm=47.45, L_max_mm=47.55)
+    count = 5000
+    got = grid_scan(small, count=count)
+    t = np.arange(count) * (T_FINISH_PUBLISHED_RAD / count)
+    px, py = ideal_point(t, 25.0, 2.0)
+    nx, ny = ideal_normal(t)
+    lam = np.linspace(-0.075, 0.075, 301)
+    inside = limacon_implicit(px[:, None] + lam * nx[:, None], py[:, None] + lam * ny[:, None],
+                              got.values["H_mm"], got.values["L_mm"]) < 0
+    twice = int(np.count_nonzero(np.count_nonzero(np.diff(inside, axis=1), axis=1) >= 2))
+    assert twice > 0
+    assert got.diagnostics["segments_crossed_twice"] == twice
+
+
+@pytest.mark.parametrize("nodes", ["open_start", "closed"])
+def test_grid_scan_rules_with_finish_node_find_nothing_at_paper_width(task, nodes):
+    assert grid_scan(task, count=200, nodes=nodes).status is Status.INFEASIBLE
+
+
+def test_grid_scan_with_many_nodes_keeps_published_linkage(task):
+    many = grid_scan(task, count=100_000)
+    assert many.status is Status.SOLVED
+    assert (many.values["H_mm"], many.values["L_mm"]) == pytest.approx((H_PUBLISHED_MM, L_PUBLISHED_MM), abs=1e-9)
+
+
+def test_grid_scan_with_too_narrow_width_names_best_achievable(task):
+    narrow = dataclasses.replace(task, err_width_mm=0.01)
+    got = grid_scan(narrow)
+    assert got.status is Status.INFEASIBLE
+    assert got.violated == ("err_width",)
+    assert got.values["n_passing"] == 0
+    stated = float(re.search(r"best achievable.*?([0-9.]+(?:e[-+]?\d+)?) mm", got.message).group(1))
+    achievable = minimax(narrow).values["max_deviation_mm"]
+    assert stated == pytest.approx(achievable, rel=1e-3)      # printed to 4 significant digits
+    assert stated > 0.01
+
+
+def test_grid_scan_with_width_wider_than_cam_reports_double_crossings(task):
+    # the paper warns (Sec. IV) that its test goes blind for widths beyond a; it must still run
+    wide = dataclasses.replace(task, err_width_mm=30.0)
+    got = grid_scan(wide, count=50)
+    assert got.status is Status.SOLVED
+    assert isinstance(got.diagnostics["segments_crossed_twice"], int)
+    t = np.arange(50) * (T_FINISH_PUBLISHED_RAD / 50)
+    px, py = ideal_point(t, 25.0, 2.0)
+    nx, ny = ideal_normal(t)
+    lam = np.linspace(-30.0, 30.0, 20001)
+    inside = limacon_implicit(px[:, None] + lam * nx[:, None], py[:, None] + lam * ny[:, None],
+                              got.values["H_mm"], got.values["L_mm"]) < 0
+    changes = np.count_nonzero(np.diff(inside, axis=1), axis=1)
+    assert got.diagnostics["segments_crossed_twice"] == int(np.count_nonzero(changes >= 2))
+    assert all(math.isfinite(v) for v in got.values.values())
+
+
+def test_grid_scan_with_one_node_returns_finite_values(task):
+    got = grid_scan(task, count=1)
+    assert got.status in (Status.SOLVED, Status.INACCURATE)
+    assert all(math.isfinite(v) for v in got.values.values())
+    assert got.values["max_deviation_mm"] == pytest.approx(deviation(task, got.values["H_mm"], got.values["L_mm"]),
+                                                           abs=1e-12)
+
+
+def test_grid_scan_does_not_call_an_answer_outside_the_width_solved(task):
+    got = grid_scan(task, count=1)
+    assert got.values["max_deviation_mm"] > task.err_width_mm        # the situation itself
+    assert got.status is not Status.SOLVED
+    assert got.violated == ("err_width",)
+
+
+# ---------------------------------------------------------------- minimax NLP
+
+def test_minimax_beats_published_linkage(task, best):
+    assert best.status is Status.SOLVED
+    assert best.values["max_deviation_mm"] < deviation(task, H_PUBLISHED_MM, L_PUBLISHED_MM)
+    assert best.values["max_deviation_mm"] <= task.err_width_mm
+
+
+def test_minimax_reports_dense_deviation_of_its_answer(task, best):
+    assert best.values["max_deviation_mm"] == pytest.approx(deviation(task, best.values["H_mm"], best.values["L_mm"]),
+                                                            abs=1e-12)
+
+
+def test_minimax_beats_every_lattice_point_around_it(task, best):
+    i0, j0 = round(best.values["H_mm"] / STEP_MM), round(best.values["L_mm"] / STEP_MM)
+    lattice = [deviation(task, (i0 + di) * STEP_MM, (j0 + dj) * STEP_MM)
+               for di in range(-3, 4) for dj in range(-3, 4)]
+    assert best.values["max_deviation_mm"] < min(lattice)
+
+
+@pytest.mark.parametrize("angle", np.arange(8) * np.pi / 4)
+def test_minimax_is_a_local_minimum_of_dense_deviation(task, best, angle):
+    H, L = best.values["H_mm"], best.values["L_mm"]
+    moved = deviation(task, H + 1e-3 * np.cos(angle), L + 1e-3 * np.sin(angle))
+    assert moved >= best.values["max_deviation_mm"] - 1e-9
+
+
+@pytest.mark.parametrize("a", [25.0, 40.0])
+def test_minimax_for_plain_cardioid_is_2a_2a(a):
+    got = minimax(LinkageFit(a_mm=a, err_width_mm=0.075))
+    assert got.status is Status.SOLVED
+    assert got.values["H_mm"] == pytest.approx(2 * a, abs=1e-6)
+    assert got.values["L_mm"] == pytest.approx(2 * a, abs=1e-6)
+    assert got.values["max_deviation_mm"] < 1e-6
+
+
+def test_minimax_on_larger_cam_with_default_box_is_interior():
+    other = LinkageFit(a_mm=40, h_mm=3, err_width_mm=0.2)
+    got = minimax(other)
+    assert got.status is Status.SOLVED
+    assert all(math.isfinite(v) for v in got.values.values())
+    assert got.values["max_deviation_mm"] < 0.2
+    assert got.diagnostics["active_bounds"] == []
+    H_lo, H_hi, L_lo, L_hi = other.bounds()
+    assert H_lo < got.values["H_mm"] < H_hi and L_lo < got.values["L_mm"] < L_hi
+
+
+def test_minimax_with_too_narrow_width_is_infeasible_and_keeps_best(task, best):
+    got = minimax(dataclasses.replace(task, err_width_mm=0.01))
+    assert got.status is Status.INFEASIBLE
+    assert got.violated == ("err_width",)
+    assert got.values["max_deviation_mm"] > 0.01
+    # the width plays no part in the NLP: the best achievable is the paper task's optimum
+    assert got.values["max_deviation_mm"] == pytest.approx(best.values["max_deviation_mm"], abs=1e-9)
+
+
+def test_minimax_reports_bound_that_stops_it(task):
+    got = minimax(dataclasses.replace(task, H_max_mm=58.0))
+    assert "H_max_mm" in got.diagnostics["active_bounds"]
+    assert got.values["H_mm"] == pytest.approx(58.0, abs=1e-6)
+    assert got.status is Status.INFEASIBLE       # 58 mm is too far from 59.6 mm for 0.075 mm
+    assert got.values["max_deviation_mm"] == pytest.approx(deviation(task, got.values["H_mm"], got.values["L_mm"]),
+                                                           abs=1e-12)
+
+
+def test_minimax_with_one_node_returns_finite_values(task):
+    got = minimax(task, count=1)
+    assert all(math.isfinite(v) for v in got.values.values())
+    assert {"H_mm", "L_mm", "max_deviation_mm"} <= got.values.keys()
+
+
+def test_one_sided_bound_past_derived_box_is_a_model_error():
+    with pytest.raises(ModelError, match="H_min_mm"):
+        minimax(LinkageFit(a_mm=25, h_mm=2, err_width_mm=0.075, H_min_mm=100))
+
+
+# ---------------------------------------------------------------- robust lattice point
+
+@pytest.fixture(scope="module")
+def sturdy(task):
+    return robust(task)
+
+
+def test_robust_worst_case_exceeds_paper_width(task, sturdy):
+    assert sturdy.status is Status.INFEASIBLE
+    assert sturdy.violated == ("err_width",)
+    assert sturdy.values["worst_deviation_mm"] > task.err_width_mm
+    assert sturdy.values["worst_deviation_mm"] >= sturdy.values["max_deviation_mm"]
+
+
+def test_robust_answer_is_on_the_lattice(sturdy):
+    for key in ("H_mm", "L_mm"):
+        assert sturdy.values[key] / STEP_MM == pytest.approx(round(sturdy.values[key] / STEP_MM), abs=1e-9)
+
+
+def test_robust_worst_case_is_max_over_its_3x3_box(task, sturdy):
+    H, L = sturdy.values["H_mm"], sturdy.values["L_mm"]
+    box = [deviation(task, H + di * STEP_MM, L + dj * STEP_MM) for di in (-1, 0, 1) for dj in (-1, 0, 1)]
+    assert sturdy.values["worst_deviation_mm"] == pytest.approx(max(box), abs=1e-9)
+    assert sturdy.values["max_deviation_mm"] == pytest.approx(deviation(task, H, L), abs=1e-9)
+
+
+def test_robust_box_corners_hold_its_worst_case(task, sturdy):
+    # the docstring's claim: on a +-STEP box the extremes sit at the 3 x 3 lattice points
+    H, L = sturdy.values["H_mm"], sturdy.values["L_mm"]
+    offsets = np.linspace(-STEP_MM, STEP_MM, 11)
+    fine = max(deviation(task, H + dH, L + dL) for dH in offsets for dL in offsets)
+    assert fine <= sturdy.values["worst_deviation_mm"] + 1e-4
+
+
+def test_robust_worst_case_is_no_worse_than_minimax_point_rounded(task, best, sturdy):
+    # the descent starts at the rounded minimax optimum, so it can only improve on its box
+    i0, j0 = round(best.values["H_mm"] / STEP_MM), round(best.values["L_mm"] / STEP_MM)
+    start = max(deviation(task, (i0 + di) * STEP_MM, (j0 + dj) * STEP_MM) for di in (-1, 0, 1) for dj in (-1, 0, 1))
+    assert sturdy.values["worst_deviation_mm"] <= start + 1e-6
+
+
+def test_robust_stays_in_the_search_box(task):
+    got = robust(dataclasses.replace(task, H_max_mm=58.0))
+    assert got.values["H_mm"] <= 58.0 + 1e-9
+
+
+# ---------------------------------------------------------------- differential evolution
+
+def test_evolve_agrees_with_minimax(task, best):
+    peer = evolve(task, count=100, popsize=8, seed=1)
+    assert peer.status is Status.SOLVED
+    exact = minimax(task, count=100)
+    assert peer.values["max_deviation_mm"] == pytest.approx(exact.values["max_deviation_mm"], abs=1e-3)
+    # no linkage beats the minimax optimum at 1000 nodes on the dense measure (see the local-minimum test)
+    assert peer.values["max_deviation_mm"] >= best.values["max_deviation_mm"] - 1e-6
+
+
+# ---------------------------------------------------------------- the deviation measures
+
+@PROPERTY
+@given(t=st.floats(0.0, 2.7), offset=st.floats(-3.0, 3.0), H=st.floats(50.0, 70.0), L=st.floats(40.0, 55.0))
+def test_path_distance_matches_brute_force(t, offset, H, L):
+    px, py = ideal_point(t, 25.0, 2.0)
+    nx, ny = ideal_normal(t)
+    px, py = px + offset * nx, py + offset * ny
+    got = path_distance(np.array([px]), np.array([py]), H, L)[0]
+    assert got == pytest.approx(brute_distance(px, py, H, L), abs=1e-6)
+
+
+@PROPERTY
+@given(x=st.floats(-150.0, 30.0), y=st.floats(-80.0, 80.0), H=st.floats(20.0, 80.0), L=st.floats(20.0, 80.0))
+def test_path_distance_matches_brute_force_anywhere(x, y, H, L):
+    got = path_distance(np.array([x]), np.array([y]), H, L)[0]
+    assert got == pytest.approx(brute_distance(x, y, H, L), abs=1e-6)
+
+
+@PROPERTY
+@given(t=st.floats(0.0, 2.7), offset=st.floats(-2.0, 2.0), H=st.floats(55.0, 65.0), L=st.floats(45.0, 50.0))
+def test_normal_deviation_lands_on_limacon_and_is_never_nearer_than_foot_point(t, offset, H, L):
+    px, py = ideal_point(t, 25.0, 2.0)
+    nx, ny = ideal_normal(t)
+    px, py = np.array([px + offset * nx]), np.array([py + offset * ny])
+    d = normal_deviation(px, py, np.array([nx]), np.array([ny]), H, L)[0]
+    assume(np.isfinite(d))
+    assert abs(limacon_implicit(px[0] + d * nx, py[0] + d * ny, H, L)) <= 1e-9 * (L + H) ** 4
+    assert abs(d) >= path_distance(px, py, H, L)[0] - 1e-9
+
+
+def test_verified_deviation_is_at_least_node_maximum(task):
+    t = np.linspace(0.0, task.t_finish_rad, 1000)
+    nodes = path_distance(*ideal_point(t, 25.0, 2.0), H_PUBLISHED_MM, L_PUBLISHED_MM).max()
+    dense, where = verified_deviation(25.0, 2.0, H_PUBLISHED_MM, L_PUBLISHED_MM, task.t_finish_rad)
+    assert nodes - 1e-12 <= dense <= nodes + 1e-4
+    at = ideal_point(np.array([where]), 25.0, 2.0)
+    assert brute_distance(at[0][0], at[1][0], H_PUBLISHED_MM, L_PUBLISHED_MM) == pytest.approx(dense, abs=1e-6)
+
+
+# ---------------------------------------------------------------- input errors
+
+@pytest.mark.parametrize("solver", [grid_scan, minimax, evolve, robust])
+@pytest.mark.parametrize("count", [0, -5, 2.5, 1000.0])
+def test_bad_count_is_rejected(task, solver, count):
+    with pytest.raises(ModelError, match=rf"count={count!r} must be a whole number >= 1") as err:
+        solver(task, count=count)
+    assert err.value.key == "count"
+
+
+def test_unknown_node_rule_is_rejected(task):
+    with pytest.raises(ModelError, match=r"nodes='middle' is not a node rule; known: half_open, closed, "
+                                         r"open_start") as err:
+        grid_scan(task, nodes="middle")
+    assert err.value.key == "nodes"
+
+
+def test_grid_box_too_large_for_step_is_rejected(task):
+    fine = dataclasses.replace(task, step_mm=0.001)              # 10001 x 5001 lattice points > 5e7
+    with pytest.raises(ModelError, match=r"the box H 55\.\.65 mm, L 45\.\.50 mm has 50,015,001 points at "
+                                         r"step_mm=0\.001; the scan allows 50,000,000: narrow") as err:
+        grid_scan(fine)
+    assert err.value.key == "step_mm"
+
+
+# ---------------------------------------------------------------- Result
+
+def test_result_refuses_nan_values():
+    with pytest.raises(SolverError, match=r"non-finite values \{'H_mm': nan\} \(status SOLVED\)"):
+        Result(Status.SOLVED, {"H_mm": float("nan"), "L_mm": 47.52}, Timing(0.0, 0.0))
+
+
+def test_result_refuses_infinite_values():
+    with pytest.raises(SolverError, match="non-finite"):
+        Result(Status.INFEASIBLE, {"max_deviation_mm": float("inf")}, Timing(0.0, 0.0))
+
+
+@pytest.mark.parametrize("word, status", [
+    ("Solve_Succeeded", Status.SOLVED),
+    ("Solved_To_Acceptable_Level", Status.INACCURATE),
+    ("Infeasible_Problem_Detected", Status.INFEASIBLE),
+    ("Maximum_Iterations_Exceeded", Status.LIMIT),
+    ("Something_Else_Entirely", Status.FAILED),
+    ("", Status.FAILED),
+])
+def test_from_ipopt_maps_status_words(word, status):
+    assert from_ipopt(word) is status
