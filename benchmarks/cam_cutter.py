@@ -17,13 +17,12 @@ and its load). `grid_box_timing` measures the headline numbers against their tar
 import statistics
 import time
 
-from mechopt.models.cam_linkage import LinkageFit
+from mechopt import registry
 from mechopt.solvers import trajectory_fit
 
-__all__ = ["run", "table", "ratios", "plot", "grid_box_timing", "targets_table", "PAPER_TASK", "TARGETS"]
+__all__ = ["cli", "run", "table", "ratios", "plot", "grid_box_timing", "targets_table", "PAPER_TASK", "TARGETS"]
 
-PAPER_TASK = LinkageFit(a_mm=25, h_mm=2, err_width_mm=0.075, step_mm=0.01,
-                        H_min_mm=55, H_max_mm=65, L_min_mm=45, L_max_mm=50)
+PAPER_TASK, _ = registry.find("cam-cutter/paper-grid").build()   # the paper's cardioid, band and box
 COUNTS = (20, 50, 100, 200, 500, 1000, 2000, 5000)
 GRID, COLD, WARM, DE = "grid_scan (paper)", "minimax NLP (cold)", "minimax NLP (warm)", "differential evolution"
 TARGETS = {"grid_scan_1000_s": 0.1, "minimax_1000_cold_s": 0.05, "minimax_1000_warm_s": 0.05,
@@ -172,3 +171,11 @@ def plot(rows, out_dir):
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return [str(path)]
+
+
+def cli(repeats, out_dir, progress=None) -> str:
+    """What `mechopt bench cam-cutter` prints: the work-precision table, the targets, the plot."""
+    rows = run(repeats=repeats, progress=progress)
+    paths = plot(rows, out_dir)
+    return "\n".join([table(rows), targets_table(grid_box_timing(repeats=repeats, progress=progress)),
+                      *(f"plot: {p}" for p in paths)])

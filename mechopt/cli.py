@@ -1,6 +1,8 @@
 """The `mechopt` command: list, run, validate and benchmark the registry's scenes."""
 import argparse
+import importlib
 import json
+import pkgutil
 import sys
 from pathlib import Path
 
@@ -23,9 +25,7 @@ def main(argv=None) -> int:
     validate = sub.add_parser("validate", help="run every scene; non-zero exit when any expectation fails")
     validate.add_argument("--json", type=Path, metavar="FILE")
     bench = sub.add_parser("bench", help="accuracy against time for a mechanism's solvers")
-    bench.add_argument("mechanism", choices=["cam-cutter"])
-    bench.add_argument("--counts", type=int, nargs="+", default=[20, 50, 100, 200, 500, 1000, 2000, 5000],
-                       help="node counts (the accuracy knob)")
+    bench.add_argument("study", choices=_benchmarks(), help="benchmarks/<study>.py")
     bench.add_argument("--repeats", type=int, default=5, help="runs per point; medians are reported")
     bench.add_argument("--plot", type=Path, default=Path("out/bench"), metavar="DIR")
     args = parser.parse_args(argv)
@@ -79,15 +79,15 @@ def _validate(args) -> int:
 
 
 def _bench(args) -> int:
-    from mechopt.benchmarks import cam_cutter
-    def progress(line):
-        print(line, file=sys.stderr, flush=True)
-    rows = cam_cutter.run(counts=tuple(args.counts), repeats=args.repeats, progress=progress)
-    print(cam_cutter.table(rows))
-    print(cam_cutter.targets_table(cam_cutter.grid_box_timing(repeats=args.repeats)))
-    for path in cam_cutter.plot(rows, args.plot):
-        print(f"plot: {path}")
+    study = importlib.import_module(f"mechopt.benchmarks.{args.study.replace('-', '_')}")
+    print(study.cli(args.repeats, args.plot, progress=lambda line: print(line, file=sys.stderr, flush=True)))
     return 0
+
+
+def _benchmarks():
+    """Studies in benchmarks/, by file name with '-' for '_' (cam_cutter.py -> cam-cutter)."""
+    import mechopt.benchmarks
+    return sorted(m.name.replace("_", "-") for m in pkgutil.iter_modules(mechopt.benchmarks.__path__))
 
 
 def _print_run(run):

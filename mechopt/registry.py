@@ -14,7 +14,7 @@ from mechopt.solvers.result import Result
 @dataclass(frozen=True)
 class Check:
     name: str
-    expected: str            # as the scene states it: "59.45 ± 0.005", "<= 0.0724", "INFEASIBLE"
+    expected: str            # as the scene states it: "1.5 ± 0.01", "<= 0.2", "INFEASIBLE"
     got: Any                 # float, status word, or None when the solver did not produce it
     tol: float | None
     ok: bool

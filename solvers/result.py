@@ -52,3 +52,19 @@ _IPOPT = {
 def from_ipopt(return_status: str) -> Status:
     """IPOPT's return_status (via CasADi's stats()) as a Status; anything unknown is FAILED."""
     return _IPOPT.get(return_status, Status.FAILED)
+
+
+_CVXPY = {
+    "optimal": Status.SOLVED,
+    "optimal_inaccurate": Status.INACCURATE,       # never passed on as optimal
+    "infeasible": Status.INFEASIBLE,
+    "infeasible_inaccurate": Status.INACCURATE,
+    "unbounded": Status.UNBOUNDED,
+    "unbounded_inaccurate": Status.INACCURATE,
+    "user_limit": Status.LIMIT,
+}
+
+
+def from_cvxpy(status: str) -> Status:
+    """cvxpy's problem.status as a Status; a solver error or anything unknown is FAILED."""
+    return _CVXPY.get(status, Status.FAILED)

@@ -40,7 +40,7 @@ def grid_scan(task: LinkageFit, *, count: int = 1000,
     At node t_i the segment runs +-err_width_mm along the ideal path's normal; an end below the
     x axis is pulled back to the axis; the node passes when exactly one end lies inside the closed
     limaçon (`limacon_implicit` < 0). Nodes t_i = i t_FINISH / COUNT with t_FINISH read to
-    y_tol_mm (2.7329 for the paper); `nodes` picks which i (see NODE_RULES).
+    y_tol_mm as the paper read it (`t_finish_read_rad`); `nodes` picks which i (see NODE_RULES).
 
     Exact and fast: a point must pass every node, so the nodes are applied one at a time, in an
     order spread over the path, to the points that survived the previous ones; after a few nodes

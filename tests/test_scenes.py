@@ -142,3 +142,10 @@ def test_ci_runs_exactly_the_readme_test_command():
     root = Path(__file__).resolve().parents[1]
     readme_test_line = (root / "README.md").read_text().split("```bash\n", 1)[1].splitlines()[1]
     assert readme_test_line in (root / ".ci" / "run").read_text().splitlines()
+
+
+def test_cvxpy_status_words_map_without_passing_inaccurate_as_optimal():
+    from mechopt.solvers.result import from_cvxpy
+    assert from_cvxpy("optimal") is Status.SOLVED
+    assert from_cvxpy("optimal_inaccurate") is Status.INACCURATE
+    assert from_cvxpy("infeasible") is Status.INFEASIBLE and from_cvxpy("solver_error") is Status.FAILED

@@ -1,0 +1,41 @@
+"""Figures for the cam-cutting linkage scenes (models/cam_linkage.py)."""
+import numpy as np
+
+
+def plot(run, out_dir):
+    """The two paths and the deviation along the ideal path, with the band."""
+    import matplotlib.pyplot as plt
+    if not {"H_mm", "L_mm"} <= run.result.values.keys():
+        return []             # no linkage found (an infeasible grid scan): nothing to draw
+
+    from mechopt.models.cam_linkage import ideal_point, real_point
+    from mechopt.solvers.path_deviation import path_distance
+
+    task, _ = run.scene.build(run.overrides)
+    H, L = run.result.values["H_mm"], run.result.values["L_mm"]
+    t = np.linspace(0.0, task.t_finish_rad, 2000)
+    ix, iy = ideal_point(t, task.a_mm, task.h_mm)
+    rx, ry = real_point(np.linspace(0, 2 * np.pi, 4000), H, L)
+    dist = path_distance(ix, iy, H, L)
+
+    fig, (left, right) = plt.subplots(1, 2, figsize=(12, 5), gridspec_kw={"width_ratios": [1, 1.3]})
+    left.plot(rx, ry, lw=1.0, color="tab:orange", label=f"real path: limaçon H={H:.3f}, L={L:.3f} mm")
+    left.plot(ix, iy, lw=1.0, ls="--", color="tab:blue", label="ideal path (upper half) and its mirror")
+    left.plot(ix, -iy, lw=1.0, ls="--", color="tab:blue")
+    left.set_aspect("equal")
+    left.set_xlabel("x [mm]")
+    left.set_ylabel("y [mm]")
+    left.legend(loc="upper left", fontsize=8)
+    left.set_title(run.scene.id)
+
+    right.plot(t, dist * 1000, color="tab:orange", label="distance ideal -> real path")
+    right.axhline(task.err_width_mm * 1000, color="tab:red", ls=":", label=f"err_width_mm = {task.err_width_mm:g}")
+    right.set_xlabel("ideal path parameter t [rad]")
+    right.set_ylabel("deviation [µm]")
+    right.set_title(f"max {run.result.values['max_deviation_mm'] * 1000:.2f} µm ({run.result.status.value})")
+    right.legend(fontsize=8)
+    fig.tight_layout()
+    path = out_dir / f"{run.scene.id.replace('/', '_')}.png"
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return [path]
