@@ -99,6 +99,8 @@ class SceneFile(BaseModel):
     solver: str
     effects: list[str] = []
     params: dict[str, Param]
+    structure: dict[str, Any] = {}           # non-numeric inputs (a network's events, a list of speeds),
+                                             # handed to the task as they are; it validates them
     solver_settings: dict[str, Number | str | bool] = {}
     method: dict[str, Number | str] = {}     # the source's own method, when it matters to the numbers
     expect: dict[str, Expectation] = {}
@@ -143,7 +145,8 @@ class Scene:
     def build(self, overrides: dict[str, Any] | None = None):
         """The task instance and solver settings, overrides applied and validated like the file."""
         params, settings = self.split_overrides(overrides or {})
-        return (_build_task(self.path, self.task_class, self.spec.effects, self.params() | params),
+        return (_build_task(self.path, self.task_class, self.spec.effects, self.params() | params,
+                            self.spec.structure),
                 _check_settings(self.path, self.solver, self.settings() | settings))
 
 
@@ -199,7 +202,7 @@ def _task_fields(task_class):
     return {f.name: f for f in dataclasses.fields(task_class)}
 
 
-def _build_task(path, task_class, effects, params):
+def _build_task(path, task_class, effects, params, structure=None):
     known_effects = getattr(task_class, "EFFECTS", {})
     unknown = [e for e in effects if e not in known_effects]
     if unknown:
@@ -215,12 +218,17 @@ def _build_task(path, task_class, effects, params):
                              f"not call for; add it to effects or drop the parameter", key=key)
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise SceneError(f"{path}: params.{key} = {value!r}: expected a number", key=key)
-    missing = [name for name, f in fields.items()
-               if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING and name not in params]
+    structure = structure or {}
+    for key in structure:
+        if key not in fields or key in params:
+            raise SceneError(f"{path}: structure.{key}: unknown or given twice; {task_class.__name__} takes "
+                             f"{', '.join(k for k in fields if k not in params)}", key=key)
+    missing = [name for name, f in fields.items() if f.default is dataclasses.MISSING
+               and f.default_factory is dataclasses.MISSING and name not in params and name not in structure]
     if missing:
         raise SceneError(f"{path}: params: missing {', '.join(missing)}", key=missing[0])
     try:
-        return task_class(**{k: float(v) for k, v in params.items()})
+        return task_class(**{k: float(v) for k, v in params.items()}, **structure)
     except MechoptError as exc:
         raise SceneError(f"{path}: params.{exc.key}: {exc}" if exc.key else f"{path}: {exc}", key=exc.key) from None
 
