@@ -221,8 +221,9 @@ def _build_task(path, task_class, effects, params, structure=None):
     structure = structure or {}
     for key in structure:
         if key not in fields or key in params:
+            free = [k for k in fields if k not in params]
             raise SceneError(f"{path}: structure.{key}: unknown or given twice; {task_class.__name__} takes "
-                             f"{', '.join(k for k in fields if k not in params)}", key=key)
+                             + (", ".join(free) if free else "nothing more (all its inputs are in params)"), key=key)
     missing = [name for name, f in fields.items() if f.default is dataclasses.MISSING
                and f.default_factory is dataclasses.MISSING and name not in params and name not in structure]
     if missing:

@@ -63,7 +63,7 @@ def _edited(tmp_path, old, new, name="bad.toml"):
      'mark = "assumed"', r"params\.H_min_mm: Value error, a parameter marked 'assumed' needs a 'why'"),
     ('id = ', 'id = = ', r"bad\.toml: not valid TOML"),
     ('[solver_settings]', '[structure]\nnetwork = []\n\n[solver_settings]',
-     r"bad\.toml: structure\.network: unknown or given twice; LinkageFit takes y_tol_mm"),
+     r"bad\.toml: structure\.network: unknown or given twice; LinkageFit takes nothing more"),
 ])
 def test_bad_scene_is_refused_naming_file_key_and_what_is_allowed(tmp_path, old, new, match):
     with pytest.raises(SceneError, match=match):
