@@ -22,6 +22,18 @@ def plot(run, out_dir):
     left.plot(rx, ry, lw=1.0, color="tab:orange", label=f"real path: limaçon H={H:.3f}, L={L:.3f} mm")
     left.plot(ix, iy, lw=1.0, ls="--", color="tab:blue", label="ideal path (upper half) and its mirror")
     left.plot(ix, -iy, lw=1.0, ls="--", color="tab:blue")
+    # the double point, where the paper's test is ill-posed, is invisible at full scale: zoom on it
+    zoom = left.inset_axes([0.55, 0.06, 0.42, 0.42])
+    zoom.plot(rx, ry, lw=1.0, color="tab:orange")
+    zoom.plot(ix, iy, lw=1.0, ls="--", color="tab:blue")
+    zoom.plot(ix, -iy, lw=1.0, ls="--", color="tab:blue")
+    cx, span = -(H + L), 0.6
+    zoom.set_xlim(cx - span, cx + span)
+    zoom.set_ylim(-span, span)
+    zoom.set_title("double point ±0.6 mm", fontsize=7)
+    zoom.tick_params(labelsize=6)
+    zoom.locator_params(nbins=3)
+    left.indicate_inset_zoom(zoom, edgecolor="grey")
     left.set_aspect("equal")
     left.set_xlabel("x [mm]")
     left.set_ylabel("y [mm]")
