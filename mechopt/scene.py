@@ -218,7 +218,9 @@ def _build_task(path, task_class, effects, params, structure=None):
                              f"not call for; add it to effects or drop the parameter", key=key)
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise SceneError(f"{path}: params.{key} = {value!r}: expected a number", key=key)
-    structure = structure or {}
+    structure = dict(structure or {})
+    if "effects" in fields:             # a task assembled from its effects is told which ones
+        structure["effects"] = tuple(effects)
     for key in structure:
         if key not in fields or key in params:
             free = [k for k in fields if k not in params]

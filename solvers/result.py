@@ -68,3 +68,50 @@ _CVXPY = {
 def from_cvxpy(status: str) -> Status:
     """cvxpy's problem.status as a Status; a solver error or anything unknown is FAILED."""
     return _CVXPY.get(status, Status.FAILED)
+
+
+def from_ivp(status: int) -> Status:
+    """scipy's solve_ivp `status` as a Status: 0 reached the end, 1 stopped at a terminal event
+    (both answers); -1 the step size fell below what the method can take: FAILED."""
+    return {0: Status.SOLVED, 1: Status.SOLVED}.get(status, Status.FAILED)
+
+
+_ROOTFINDER = {
+    "success": Status.SOLVED,
+    "max_iteration_reached": Status.LIMIT,
+}
+
+
+def from_rootfinder(return_status: str) -> Status:
+    """CasADi rootfinder's stats()["return_status"] ("newton" plugin) as a Status; anything else FAILED."""
+    return _ROOTFINDER.get(return_status, Status.FAILED)
+
+
+_QUADPACK = (                                       # scipy.integrate.quad's messages (full_output=1)
+    ("maximum number of subdivisions", Status.LIMIT),
+    ("roundoff error", Status.INACCURATE),           # ier 2 and 4: the tolerance was not reached
+    ("bad integrand behavior", Status.INACCURATE),
+    ("does not converge", Status.INACCURATE),
+    ("divergent", Status.FAILED),
+    ("input is invalid", Status.FAILED),
+)
+
+
+def from_quadpack(message: str | None) -> Status:
+    """scipy's quad message (returned instead of warned with full_output=1) as a Status;
+    None means no message: converged. Anything unknown is FAILED."""
+    if message is None:
+        return Status.SOLVED
+    return next((status for words, status in _QUADPACK if words in message), Status.FAILED)
+
+
+_CVODES_LIMIT = ("CV_TOO_MUCH_WORK", "max_num_steps")
+
+
+def from_casadi_integrator(error: str | None) -> Status:
+    """A CasADi integrator call's outcome as a Status: it raises instead of returning a status,
+    so this takes the error text (None: the call returned). Too many steps is LIMIT, any other
+    failure (CV_CONV_FAILURE, CV_ERR_FAILURE, ...) FAILED."""
+    if error is None:
+        return Status.SOLVED
+    return Status.LIMIT if any(word in error for word in _CVODES_LIMIT) else Status.FAILED

@@ -1,0 +1,56 @@
+"""Figures for the crank press scenes (models/crank_press.py), after the paper's Figs. 8-10."""
+from pathlib import Path
+
+import numpy as np
+
+
+def plot(run, out_dir) -> list[Path]:
+    """Force F and load Q against tool travel and crank angle (Figs. 8-10), crank speed and belt
+    torque against time; one PNG per scene."""
+    import matplotlib.pyplot as plt
+
+    from mechopt.models.crank_press import Dynamics
+    from mechopt.solvers import press_dynamics
+
+    task, settings = run.scene.build(run.overrides)
+    solve = getattr(run.scene.solver, "with_trace", None)
+    if solve is None:
+        return []
+    _, trace = solve(task, **settings)
+    if not trace.t:
+        return []
+    t, x, mode = trace.arrays()
+    dyn = press_dynamics._dynamics(task)
+    out = dict(zip(Dynamics.OUTPUT_NAMES, np.asarray(dyn.outputs.map(len(t))(x.T, mode.T))))
+    phi_deg = np.degrees(x[:, task.state_names.index("phi_rad")]) % 360
+    w = x[:, task.state_names.index("omega_rad_s")]
+    cutting = mode[:, 0] > 0
+
+    fig, ax = plt.subplots(2, 2, figsize=(12, 8))
+    if cutting.any():
+        pen = out["penetration_mm"]
+        ax[0, 0].plot(pen[cutting], out["force_N"][cutting], ".", ms=3, label="F, eq. (1) (Fig. 8)")
+        ax[0, 0].plot(pen[cutting], out["Q_N"][cutting], ".", ms=3, label="Q = F + m (X'' - g) (Fig. 9)")
+        ax[0, 0].set_xlabel("tool penetration X - (H - Z - delta) [mm]")
+        ax[0, 0].legend(fontsize=8)
+        ax[0, 1].plot(phi_deg[cutting], out["force_N"][cutting], ".", ms=3, label="F")
+        ax[0, 1].plot(phi_deg[cutting], out["Q_N"][cutting], ".", ms=3, label="Q (Fig. 10)")
+        ax[0, 1].set_xlabel("crank angle [deg]")
+        ax[0, 1].legend(fontsize=8)
+    ax[0, 0].set_ylabel("force [N]")
+    ax[0, 0].set_title("cutting force and load against tool travel")
+    ax[0, 1].set_title("against crank angle, during the cut")
+    ax[1, 0].plot(t, w, lw=1)
+    ax[1, 0].set_xlabel("t [s]")
+    ax[1, 0].set_ylabel("crank speed omega_k [rad/s]")
+    ax[1, 1].plot(t, out["belt_torque_Nm"], lw=1)
+    ax[1, 1].set_xlabel("t [s]")
+    ax[1, 1].set_ylabel("belt torque [N m]" if task.belt else "motor torque, reduced [N m]")
+    for a in ax.ravel():
+        a.grid(alpha=0.3)
+    fig.suptitle(f"{run.scene.id}: {run.result.status.value}", fontsize=10)
+    fig.tight_layout()
+    path = Path(out_dir) / f"{run.scene.id.replace('/', '_')}.png"
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return [path]

@@ -1,0 +1,393 @@
+"""Crank press cutting expanded-graphite gaskets (paper 001: Kobityansky, Beloborodov 2021).
+
+A motor and its pulley (J_p) drive, through an elastic belt (C_p, h_p), the crank shaft with its
+flywheel, connecting rod and tool (J_k(phi)); eqs. (2) and the table of coefficients. The tool
+cuts the blank with the force of eq. (1), switched on by U while the tool travels through the
+blank and dropping to zero at the end of the cut (the "jump").
+
+SI units inside (m, rad, s, kg); the force law (1) is written in mm of penetration, as published.
+Every function takes ``m=np`` or ``m=casadi`` so one line serves numbers and symbols.
+
+Readings the paper leaves open (each pinned by a test):
+
+* Tool travel X(phi) is the paper's lambda << 1 form (``kinematics="paper"``) or the exact
+  crank-slider (``"exact"``); the dynamics use whichever the task names.
+* J_k(phi) is built from the kinetic energy (rod as a point mass at its middle, crank mass at
+  the pin, tool on the slider) and differentiated by CasADi: with the paper's X this is row 1 of
+  the table exactly, with its d read as the rod middle's vertical velocity ratio
+  sin(phi)(1 + lambda/2 cos(phi)) (the printed "sin phi + lambda/2 cos phi" lacks a factor sin phi).
+* Weights enter through their potential energy (moment = -dV/dphi): both weights help on the way
+  down (the table's signs, +G_i b and -G_sh d, disagree; we take the consistent one). The crank
+  is balanced by its counterweight (no crank weight moment).
+* Q, the "resulting cutting force" of Figs. 9-10, is the force the rod exerts on the tool along
+  the stroke: Q = F U + m_tool (X'' - g) (the tool's own equation of motion).
+* Motor: the Kloss static characteristic of an induction motor, M = 2 M_k s s_k / (s^2 + s_k^2),
+  s = 1 - omega_motor / omega_sync: it holds from standstill (s = 1, start-up) to idle (s = 0),
+  where a linear characteristic overstates the starting torque several times.
+
+Effects a scene may call for (the model is assembled from these only):
+
+====================  ========================================================  ==============
+effect                adds                                                      paper
+====================  ========================================================  ==============
+belt_elasticity       belt twist and the pulley's speed as states; without it    eq. (2), C_p, h_p
+                      motor and crank shaft are one rigid body (two states)
+variable_inertia      J_k(phi) and the term 1/2 dJ_k/dphi omega^2; without it    table row 1
+                      the constant mean of J_k over a revolution
+gravity               weights of the tool and the rod                           table row 2
+friction              Coulomb torque -M_tr sign(omega) on the crank shaft        table row 2
+cutting_force         F(X) of eq. (1), switched by U with the die's shortfall   eq. (1), U
+motor_characteristic  Kloss torque of the motor, reduced by i; without it the   table rows 3-4
+                      pulley turns at the nominal speed (an ideal drive)
+====================  ========================================================  ==============
+"""
+from dataclasses import dataclass, field
+from typing import ClassVar
+
+import casadi as ca
+import numpy as np
+from scipy.optimize import brentq
+
+from mechopt.models.effects import Effect
+from mechopt.models.errors import ModelError
+
+KINEMATICS = ("paper", "exact")
+FORCE_KEYS = ("force_c1_N_mm", "force_c2_N_mm2", "force_c3_N_mm3", "force_c4_N_mm4")
+WORK_NAMES = ("motor_work_J", "cut_work_J", "friction_work_J", "damping_work_J")
+
+
+# --- kinematics -------------------------------------------------------------------------------
+
+def travel_m(phi, r_m, lam, kinematics="paper", m=np):
+    """Tool travel X from top dead centre, downwards [m].
+
+    ``"paper"``: X = r [1 - cos phi + lambda/4 (1 - cos 2 phi)] (text after U, lambda << 1);
+    ``"exact"``: X = r (1 - cos phi) + l (1 - sqrt(1 - lambda^2 sin^2 phi)), l = r / lambda.
+    """
+    if kinematics == "paper":
+        return r_m * (1 - m.cos(phi) + lam / 4 * (1 - m.cos(2 * phi)))
+    return r_m * (1 - m.cos(phi)) + r_m / lam * (1 - m.sqrt(1 - (lam * m.sin(phi)) ** 2))
+
+
+def rod_middle_m(phi, r_m, lam, kinematics="paper", m=np):
+    """(horizontal, vertical-down) position of the rod's middle [m]: half-way from pin to tool."""
+    return 0.5 * r_m * m.sin(phi), 0.5 * (r_m * (1 - m.cos(phi)) + travel_m(phi, r_m, lam, kinematics, m))
+
+
+def coefficient_b(phi, lam, m=np):
+    """Table row 5: b = (1 + lambda cos phi) sin phi = dX/dphi / r of the paper's X [-]."""
+    return (1 + lam * m.cos(phi)) * m.sin(phi)
+
+
+def coefficient_d(phi, lam, m=np):
+    """Table row 6 as read here: d = sin phi (1 + lambda/2 cos phi), the rod middle's vertical
+    velocity ratio (the printed sin phi + lambda/2 cos phi is not dimensionally a velocity ratio
+    of anything in the mechanism and gives d(0) != 0 at top dead centre)."""
+    return m.sin(phi) * (1 + lam / 2 * m.cos(phi))
+
+
+def coefficient_k(phi, lam, m=np):
+    """Table row 7: k = lambda^2 cos^2 phi, the squared rod angular-velocity ratio [-]."""
+    return lam**2 * m.cos(phi) ** 2
+
+
+def cutting_force_N(penetration_mm, c1, c2, c3, c4):
+    """Cutting force, eq. (1) [N], for the tool's penetration into the blank [mm]."""
+    x = penetration_mm
+    return ((c4 * x + c3) * x + c2) * x * x + c1 * x
+
+
+def kloss_torque_Nm(slip, breakdown_torque_Nm, breakdown_slip):
+    """Static characteristic of an induction motor (Kloss): torque at a slip [N m]."""
+    return 2 * breakdown_torque_Nm * breakdown_slip * slip / (slip**2 + breakdown_slip**2)
+
+
+# --- the task ----------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class PressDrive:
+    """A crank press cutting a blank: drive, belt, crank-slider and cutting force (paper 001).
+
+    Geometry: `crank_radius_mm` r (stroke H = 2r), `rod_ratio` lambda = r/l. Masses [kg]: crank
+    (reduced to the pin), tool with slider, rod; `flywheel_inertia_kgm2` J (flywheel and
+    counterweight). Drive: `motor_inertia_kgm2` J_0 + J_shk on the motor shaft, `gear_ratio`
+    i (motor speed / crank speed), `nominal_speed_rad_s` omega of the crank. Effects' own
+    parameters: see `EFFECTS`. `effects` lists the effects the scene calls for; `kinematics`
+    picks X(phi) (see `travel_m`).
+    """
+    crank_radius_mm: float
+    rod_ratio: float
+    nominal_speed_rad_s: float
+    flywheel_inertia_kgm2: float
+    crank_mass_kg: float
+    tool_mass_kg: float
+    rod_mass_kg: float
+    motor_inertia_kgm2: float = 0.0
+    gear_ratio: float = 1.0
+    belt_stiffness_Nm_rad: float | None = None
+    belt_damping_Nms_rad: float | None = None
+    gravity_m_s2: float | None = None
+    friction_torque_Nm: float | None = None
+    force_c1_N_mm: float | None = None
+    force_c2_N_mm2: float | None = None
+    force_c3_N_mm3: float | None = None
+    force_c4_N_mm4: float | None = None
+    blank_thickness_mm: float | None = None
+    shortfall_mm: float | None = None
+    motor_sync_speed_rad_s: float | None = None
+    motor_breakdown_torque_Nm: float | None = None
+    motor_breakdown_slip: float | None = None
+    effects: tuple[str, ...] = field(default=())
+    kinematics: str = "paper"
+
+    EFFECTS: ClassVar[dict[str, Effect]] = {
+        "belt_elasticity": Effect(adds="elastic belt between pulley and crank shaft: twist and pulley speed states",
+                                  equation="(2)", params=("belt_stiffness_Nm_rad", "belt_damping_Nms_rad")),
+        "variable_inertia": Effect(adds="J_k(phi) and 1/2 dJ_k/dphi omega^2 instead of the mean J_k",
+                                   equation="(2), table row 1"),
+        "gravity": Effect(adds="weights of tool and rod", equation="table row 2", params=("gravity_m_s2",)),
+        "friction": Effect(adds="Coulomb torque on the crank shaft", equation="table row 2",
+                           params=("friction_torque_Nm",)),
+        "cutting_force": Effect(adds="cutting force (1) switched by U with shortfall delta", equation="(1), U",
+                                params=FORCE_KEYS + ("blank_thickness_mm", "shortfall_mm")),
+        "motor_characteristic": Effect(adds="Kloss static characteristic of the motor",
+                                       equation="table rows 3-4",
+                                       params=("motor_sync_speed_rad_s", "motor_breakdown_torque_Nm",
+                                               "motor_breakdown_slip")),
+    }
+
+    def __post_init__(self):
+        object.__setattr__(self, "effects", tuple(self.effects))
+        unknown = [e for e in self.effects if e not in self.EFFECTS]
+        if unknown:
+            raise ModelError(f"effects={list(self.effects)}: unknown {unknown}; known: {', '.join(self.EFFECTS)}",
+                             key="effects")
+        if self.kinematics not in KINEMATICS:
+            raise ModelError(f"kinematics={self.kinematics!r}; allowed: {', '.join(KINEMATICS)}", key="kinematics")
+        for name, spec in self.EFFECTS.items():
+            for key in spec.params:
+                given = getattr(self, key) is not None
+                if given and name not in self.effects:
+                    raise ModelError(f"{key}={getattr(self, key)} belongs to effect '{name}', which is not "
+                                     f"listed in effects", key=key)
+                if not given and name in self.effects:
+                    raise ModelError(f"{key} missing: effect '{name}' needs it", key=key)
+        for key in ("crank_radius_mm", "nominal_speed_rad_s", "gear_ratio"):
+            _require(self, key, getattr(self, key) > 0, "must be > 0")
+        for key in ("flywheel_inertia_kgm2", "crank_mass_kg", "tool_mass_kg", "rod_mass_kg", "motor_inertia_kgm2",
+                    "belt_stiffness_Nm_rad", "belt_damping_Nms_rad", "gravity_m_s2", "friction_torque_Nm",
+                    "blank_thickness_mm", "shortfall_mm"):
+            value = getattr(self, key)
+            _require(self, key, value is None or value >= 0, "must be >= 0")
+        _require(self, "rod_ratio", 0 < self.rod_ratio < 1,
+                 "must be in (0, 1): with lambda = r/l >= 1 the crank-slider cannot pass its dead centres")
+        _require(self, "flywheel_inertia_kgm2", self.flywheel_inertia_kgm2 > 0 or self.crank_mass_kg > 0,
+                 "and crank_mass_kg are both 0: the crank shaft would have no inertia")
+        if self.belt:
+            _require(self, "belt_stiffness_Nm_rad", self.belt_stiffness_Nm_rad > 0, "must be > 0 (an elastic belt)")
+            if self.motor:
+                _require(self, "motor_inertia_kgm2", self.motor_inertia_kgm2 > 0,
+                         "must be > 0 with an elastic belt (the pulley side needs inertia)")
+        elif not self.motor:
+            raise ModelError("effects lack both 'belt_elasticity' and 'motor_characteristic': a rigid ideal drive "
+                             "leaves no motion to compute; add one of them", key="effects")
+        if self.motor:
+            _require(self, "motor_sync_speed_rad_s", self.motor_sync_speed_rad_s > 0, "must be > 0")
+            _require(self, "motor_breakdown_torque_Nm", self.motor_breakdown_torque_Nm > 0, "must be > 0")
+            _require(self, "motor_breakdown_slip", 0 < self.motor_breakdown_slip < 1, "must be in (0, 1)")
+        if self.cutting:
+            need = self.blank_thickness_mm + self.shortfall_mm
+            _require(self, "blank_thickness_mm", need <= 2 * self.crank_radius_mm,
+                     f"plus shortfall_mm={self.shortfall_mm} is {need} mm, more than the stroke "
+                     f"H = 2 crank_radius_mm = {2 * self.crank_radius_mm} mm: the tool never reaches the blank")
+
+    # which effects are on
+    @property
+    def belt(self) -> bool:
+        return "belt_elasticity" in self.effects
+
+    @property
+    def motor(self) -> bool:
+        return "motor_characteristic" in self.effects
+
+    @property
+    def cutting(self) -> bool:
+        return "cutting_force" in self.effects
+
+    @property
+    def friction(self) -> bool:
+        return "friction" in self.effects
+
+    @property
+    def r_m(self) -> float:
+        return self.crank_radius_mm / 1000
+
+    @property
+    def stroke_mm(self) -> float:
+        """H = 2 r [mm]."""
+        return 2 * self.crank_radius_mm
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        """The physical states, in order (only those the listed effects call for)."""
+        if self.belt and self.motor:
+            return ("twist_rad", "omega_p_rad_s", "phi_rad", "omega_rad_s")
+        if self.belt:
+            return ("twist_rad", "phi_rad", "omega_rad_s")
+        return ("phi_rad", "omega_rad_s")
+
+    def travel(self, phi, m=np):
+        """Tool travel X [m] (see `travel_m`)."""
+        return travel_m(phi, self.r_m, self.rod_ratio, self.kinematics, m)
+
+    def cut_window_rad(self) -> tuple[float, float] | None:
+        """Crank angles (in (0, pi)) where U switches on and where the cut ends (the jump) [rad]:
+        X = H - Z - delta and X = H - delta on the way down. None without a cutting force."""
+        if not self.cutting:
+            return None
+        H = self.stroke_mm / 1000
+        top, bottom = H - (self.blank_thickness_mm + self.shortfall_mm) / 1000, H - self.shortfall_mm / 1000
+        return tuple(_angle_at_travel(self, x) for x in (top, bottom))
+
+    def reduced_motor_inertia_kgm2(self) -> float:
+        """J_p = (J_0 + J_shk) i^2, table row 4 [kg m2]."""
+        return self.motor_inertia_kgm2 * self.gear_ratio**2
+
+
+def _angle_at_travel(task, x_m):
+    """The crank angle in [0, pi] at which the tool has travelled x_m [m] (X is monotone there)."""
+    if x_m <= 0:
+        return 0.0
+    if x_m >= task.stroke_mm / 1000:
+        return float(np.pi)
+    return float(brentq(lambda p: task.travel(p) - x_m, 0.0, np.pi, xtol=1e-15, rtol=1e-15))
+
+
+def _require(task, key, ok, what):
+    if not ok:
+        raise ModelError(f"{key}={getattr(task, key)} {what}", key=key)
+
+
+# --- reduced inertia and moments (CasADi) -------------------------------------------------------
+
+def crank_inertia(task: PressDrive):
+    """J_k(phi) and dJ_k/dphi as CasADi Functions [kg m2], table row 1, from the kinetic energy:
+    J_k = J + r^2 m_k + m_tool X'^2 + m_rod (x_mid'^2 + y_mid'^2); derivative by AD."""
+    phi = ca.SX.sym("phi")
+    r, lam, kin = task.r_m, task.rod_ratio, task.kinematics
+    X = travel_m(phi, r, lam, kin, ca)
+    xm, ym = rod_middle_m(phi, r, lam, kin, ca)
+    J = (task.flywheel_inertia_kgm2 + r**2 * task.crank_mass_kg + task.tool_mass_kg * ca.jacobian(X, phi) ** 2
+         + task.rod_mass_kg * (ca.jacobian(xm, phi) ** 2 + ca.jacobian(ym, phi) ** 2))
+    return ca.Function("J_k", [phi], [J]), ca.Function("dJ_k", [phi], [ca.jacobian(J, phi)])
+
+
+def mean_crank_inertia_kgm2(task: PressDrive) -> float:
+    """The mean of J_k over a revolution [kg m2] (J_k without the effect variable_inertia)."""
+    J, _ = crank_inertia(task)
+    phi = np.linspace(0, 2 * np.pi, 720, endpoint=False)     # exact for the paper's trigonometric J_k
+    return float(np.mean(np.asarray(J(phi.reshape(1, -1))).ravel()))
+
+
+@dataclass(frozen=True)
+class Dynamics:
+    """Equations (2) assembled from the listed effects, as CasADi Functions of the state x
+    (`task.state_names` followed by the work integrals `WORK_NAMES`).
+
+    * ``rhs(x, mode) -> dx/dt`` with mode = [U, friction sign, stuck]: U the switching function's
+      value, the friction sign, and stuck = 1 when the crank is held by static friction.
+    * ``switched(x) -> dx/dt`` with U and sign(omega) evaluated from the state (the paper's U).
+    * ``outputs(x, mode) -> [belt torque, motor torque, F, Q, X_mm, penetration_mm, E_kin, E_pot,
+      crank torque without friction]`` (`OUTPUT_NAMES`).
+    """
+    task: PressDrive
+    rhs: ca.Function
+    switched: ca.Function
+    outputs: ca.Function
+    n_states: int
+
+    OUTPUT_NAMES: ClassVar[tuple[str, ...]] = ("belt_torque_Nm", "motor_torque_Nm", "force_N", "Q_N", "travel_mm",
+                                               "penetration_mm", "kinetic_J", "potential_J", "drive_torque_Nm")
+
+
+def dynamics(task: PressDrive) -> Dynamics:
+    """Build eqs. (2) for `task` from its listed effects only (see the module's effect table)."""
+    n = len(task.state_names)
+    x = ca.SX.sym("x", n + len(WORK_NAMES))
+    mode = ca.SX.sym("mode", 3)
+    U, sgn, stuck = mode[0], mode[1], mode[2]
+    s = dict(zip(task.state_names, ca.vertsplit(x[:n])))
+    phi, w = s["phi_rad"], s["omega_rad_s"]
+    r, lam, kin = task.r_m, task.rod_ratio, task.kinematics
+
+    J_fun, dJ_fun = crank_inertia(task)
+    if "variable_inertia" in task.effects:
+        J, dJ = J_fun(phi), dJ_fun(phi)
+    else:
+        J, dJ = mean_crank_inertia_kgm2(task), 0.0
+
+    X = travel_m(phi, r, lam, kin, ca)
+    dX = ca.jacobian(X, phi)
+    ddX = ca.jacobian(dX, phi)
+    potential = 0.0
+    if "gravity" in task.effects:       # both weights do work on the way down: V = -g (m_tool X + m_rod y_mid)
+        rod_drop = rod_middle_m(phi, r, lam, kin, ca)[1]
+        potential = -task.gravity_m_s2 * (task.tool_mass_kg * X + task.rod_mass_kg * rod_drop)
+    gravity_moment = -ca.jacobian(potential, phi) if "gravity" in task.effects else 0.0
+
+    penetration_mm = 0.0 * phi
+    force = 0.0 * phi
+    U_paper = 0.0 * phi
+    if task.cutting:
+        penetration_mm = X * 1000 - (task.stroke_mm - task.blank_thickness_mm - task.shortfall_mm)
+        force = U * cutting_force_N(penetration_mm, *(getattr(task, k) for k in FORCE_KEYS))
+        # the paper's U: on while the tool is inside the blank and moving down
+        U_paper = ca.logic_and(ca.logic_and(penetration_mm >= 0, penetration_mm <= task.blank_thickness_mm),
+                               w * dX > 0)
+    friction = task.friction_torque_Nm if task.friction else 0.0
+
+    # motor side
+    if task.motor:
+        w_p = s["omega_p_rad_s"] if task.belt else w
+        slip = 1 - task.gear_ratio * w_p / task.motor_sync_speed_rad_s
+        motor_torque = task.gear_ratio * kloss_torque_Nm(slip, task.motor_breakdown_torque_Nm,
+                                                        task.motor_breakdown_slip)
+    else:
+        w_p, motor_torque = task.nominal_speed_rad_s, 0.0 * phi
+    if task.belt:
+        twist = s["twist_rad"]
+        belt_torque = task.belt_stiffness_Nm_rad * twist + task.belt_damping_Nms_rad * (w_p - w)
+        damping_power = task.belt_damping_Nms_rad * (w_p - w) ** 2
+        drive = belt_torque
+        J_total = J
+        belt_energy = 0.5 * task.belt_stiffness_Nm_rad * twist**2
+    else:
+        belt_torque, damping_power, drive = motor_torque, 0.0 * phi, motor_torque
+        J_total = J + task.reduced_motor_inertia_kgm2()
+        belt_energy = 0.0
+
+    load = gravity_moment - force * dX          # M_pc without friction, table row 2
+    drive_torque = drive + load                 # what static friction must hold when stuck
+    free_acc = (drive_torque - sgn * friction - 0.5 * dJ * w**2) / J_total
+    acc = (1 - stuck) * free_acc
+    dphi = (1 - stuck) * w
+
+    derivs = {"phi_rad": dphi, "omega_rad_s": acc}
+    if task.belt:
+        derivs["twist_rad"] = w_p - dphi
+        if task.motor:
+            derivs["omega_p_rad_s"] = (motor_torque - belt_torque) / task.reduced_motor_inertia_kgm2()
+    motor_power = motor_torque * w_p if task.motor else belt_torque * w_p
+    works = [motor_power, force * dX * dphi, sgn * friction * dphi, damping_power]
+    xdot = ca.vertcat(*[derivs[k] for k in task.state_names], *works)
+
+    kinetic = 0.5 * J * w**2 + (0.5 * task.reduced_motor_inertia_kgm2() * w_p**2 if task.motor else 0.0)
+    Q = force + task.tool_mass_kg * (ddX * dphi**2 + dX * acc - (task.gravity_m_s2 or 0.0))
+    outputs = ca.vertcat(belt_torque, motor_torque, force, Q, X * 1000, penetration_mm, kinetic,
+                         potential + belt_energy, drive_torque)
+
+    switched_mode = ca.vertcat(U_paper, ca.sign(w), 0)
+    rhs = ca.Function("rhs", [x, mode], [xdot])
+    switched = ca.Function("switched", [x], [rhs(x, switched_mode)])
+    out = ca.Function("outputs", [x, mode], [outputs])
+    return Dynamics(task, rhs, switched, out, n)

@@ -1,0 +1,258 @@
+"""Lever striking a stop: stiffness, impact and the inputs of the rebound equation (paper 004:
+Podgorny, Maximchuk, Kirillov, Skeeba 2018, Sec. "Results and discussion", Figs. 5-8).
+
+The microshuttle lift's lever (pivot A, cam roller, end C carrying the lift) is pressed against
+a limit plate at the end of its travel. It strikes the plate, rebounds and rings; the first
+rebound must stay within the weft-transfer accuracy, which gives the LP its amplitude limit.
+
+Readings taken where the paper is silent or inconsistent (each pinned by a test):
+
+* Stiffness, Fig. 5/6: c = 3 E J_x / ((a + b) b^2), the end deflection of a beam on two supports
+  a apart with an overhang b. Fig. 5 (moving, no contact): arms `a_mm`, `b_mm`, and the lever
+  length l = a + b (pivot A to end C). Fig. 6 (on the plate, extra support): the same formula
+  with the arms `a_stop_mm`, `b_stop_mm` (the figure's dimensions are not printed).
+* Contact time: tau = half the natural period of the lever *on the plate* (Fig. 6). During the
+  contact the plate's support is engaged, and Panovko's rule [25] for an impact on an elastic
+  support is half the natural period of the mass on that support.
+* Eq. (2) is the single-mass response *on the plate*: omega_c = omega_stop (the paper studies
+  "vibrations at the natural frequency after the contact with the stop", Fig. 8); q is the
+  displacement of C from the plate, positive away from it; q0 = 0, q0' = omega_0 l as the paper
+  computes (both the arrested approach and the plate's push throw C back).
+* The Duhamel term runs over the whole pulse Q_F (rise to F at tau, fall to zero at 2 tau): its
+  impulse is then F tau = S_C, as the paper's S_C = F tau says. The printed upper limit tau of
+  the integral (half the pulse, half the impulse) is read as a misprint.
+* Approach velocity: omega_0 l = v0 = velocity_factor * stroke * Omega / t, Omega = 2 pi n / 60
+  the main shaft's speed, t the phase angle of the lift's travel; for a given motion law the
+  velocity scales as n / t.
+* Preload (effect `preload`): the cam drives the lever `preload_mm` past the plate; the moving
+  lever (Fig. 5) holds that as a constant force P = c_free * preload pressing C onto the plate,
+  a constant -P added to Q_F in eq. (2).
+
+Effects a scene may call for (an effect not listed is not computed):
+
+================  ============================================================  ===============
+effect            adds                                                          paper
+================  ============================================================  ===============
+initial_velocity  q0' = omega_0 l: the arrested approach velocity of C           eq. (2), q0'
+impact_pulse      the triangular force Q_F of peak F = J_A omega_0 (1+k)/(l tau)  S_C, F_ud, Fig. 7
+damping           viscous damping n = zeta omega_c                               eq. (1)-(2), n
+preload           constant force -c_free * preload_mm pressing C on the plate    Sec. Results (177 rpm)
+================  ============================================================  ===============
+
+Units: the names say so (mm, GPa, kg, rpm, deg); the functions return SI (m, s, N, rad/s).
+"""
+import math
+from dataclasses import dataclass
+from typing import ClassVar
+
+from mechopt.models.effects import Effect
+from mechopt.models.errors import ModelError
+
+
+def reduced_stiffness_N_per_m(E_GPa, J_x_mm4, a_mm, b_mm):
+    """Reduced stiffness at the lever's end, c = 3 E J_x / ((a + b) b^2) [N/m] (Sec. Results).
+
+    Parameters
+    ----------
+    E_GPa : Young's modulus [GPa].
+    J_x_mm4 : second moment of area of the lever's section [mm^4].
+    a_mm, b_mm : span between the supports and the overhang to the loaded end [mm].
+
+    Examples
+    --------
+    >>> round(reduced_stiffness_N_per_m(210.0, 13021.0, 80.0, 120.0))
+    2848344
+    """
+    return 3.0 * E_GPa * 1e9 * J_x_mm4 * 1e-12 / ((a_mm + b_mm) * b_mm**2 * 1e-9)
+
+
+@dataclass(frozen=True)
+class Impact:
+    """The inputs of eq. (2) for one approach, SI: q'' + 2 n q' + omega^2 q = (Q_F(t) - P) / m,
+    q(0) = 0, q'(0) = v0; Q_F rises to `force_N` at `tau_s` and falls to zero at 2 tau."""
+    omega_rad_s: float      # omega_c, natural circular frequency on the plate
+    damping_rad_s: float    # n (may exceed omega: overdamped)
+    mass_kg: float
+    v0_m_s: float           # q0'
+    force_N: float          # F_ud, peak of the triangular pulse
+    tau_s: float            # contact time; the pulse lasts 2 tau
+    preload_N: float = 0.0  # P
+
+    @property
+    def window_s(self) -> float:
+        """Where the first rebound is sought: the pulse and one undamped period after it [s]."""
+        return 2.0 * self.tau_s + 2.0 * math.pi / self.omega_rad_s
+
+
+@dataclass(frozen=True)
+class LeverStop:
+    """The lift lever striking its plate (paper 004, Figs. 3, 5-8).
+
+    Parameters (units in the names): `E_GPa`, `J_x_mm4` material and section; `a_mm`, `b_mm`
+    arms of the moving lever (Fig. 5); `a_stop_mm`, `b_stop_mm` arms on the plate (Fig. 6);
+    `mass_kg` reduced mass at C; `stroke_mm` travel of C over the phase angle; `velocity_factor`
+    the approach velocity over stroke * Omega / t; `t_deg` the phase angle of the lift's travel
+    t(3,7) at which rebounds are computed; `speeds_rpm` main-shaft speeds to report (structure);
+    `speed_nominal_rpm`, `amplitude_limit_mm` where the amplitude law is linearised and the limit
+    it must keep; `inertia_A_kgm2` J_A and `restitution` k (effect impact_pulse); `damping_ratio`
+    zeta (effect damping); `preload_mm` (effect preload); `effects` the effects the scene calls
+    for (structure: the scene's own list, repeated, until the spine hands it to the task).
+    """
+    E_GPa: float
+    J_x_mm4: float
+    a_mm: float
+    b_mm: float
+    a_stop_mm: float
+    b_stop_mm: float
+    mass_kg: float
+    stroke_mm: float | None = None
+    velocity_factor: float | None = None
+    t_deg: float | None = None
+    speed_nominal_rpm: float | None = None
+    amplitude_limit_mm: float | None = None
+    inertia_A_kgm2: float | None = None
+    restitution: float | None = None
+    damping_ratio: float | None = None
+    preload_mm: float | None = None
+    speeds_rpm: tuple = ()
+    effects: tuple = ()
+
+    EFFECTS: ClassVar[dict[str, Effect]] = {
+        "initial_velocity": Effect(adds="q0' = omega_0 l, the approach velocity of C", equation="(2)"),
+        "impact_pulse": Effect(adds="triangular pulse Q_F, peak F = J_A omega_0 (1+k)/(l tau)",
+                               equation="S_C, F_ud, Fig. 7, (2)", params=("inertia_A_kgm2", "restitution")),
+        "damping": Effect(adds="viscous damping n = zeta omega_c", equation="(1)-(2)", params=("damping_ratio",)),
+        "preload": Effect(adds="constant force c_free * preload_mm pressing C onto the plate",
+                          equation="Sec. Results, 177 rpm", params=("preload_mm",)),
+    }
+
+    def __post_init__(self):
+        object.__setattr__(self, "speeds_rpm", _names_or_numbers(self, "speeds_rpm", number=True))
+        object.__setattr__(self, "effects", _names_or_numbers(self, "effects", number=False))
+        unknown = [e for e in self.effects if e not in self.EFFECTS]
+        if unknown:
+            raise ModelError(f"effects={list(self.effects)}: unknown {unknown}; known: {', '.join(self.EFFECTS)}",
+                             key="effects")
+        for effect, spec in self.EFFECTS.items():
+            for key in spec.params:
+                if (getattr(self, key) is None) == (effect in self.effects):
+                    raise ModelError(f"{key}={getattr(self, key)}: effect '{effect}' is "
+                                     + ("listed, give its parameter" if effect in self.effects
+                                        else "not listed in effects, drop the parameter or list the effect"),
+                                     key=key)
+        for key in ("E_GPa", "J_x_mm4", "a_mm", "b_mm", "a_stop_mm", "b_stop_mm", "mass_kg"):
+            _require(self, key, getattr(self, key) > 0, "must be > 0")
+        for key in ("stroke_mm", "velocity_factor", "t_deg", "speed_nominal_rpm", "amplitude_limit_mm",
+                    "inertia_A_kgm2"):
+            _require(self, key, getattr(self, key) is None or getattr(self, key) > 0, "must be > 0 when given")
+        _require(self, "t_deg", self.t_deg is None or self.t_deg < 360, "must be < 360 (a phase angle of one cycle)")
+        _require(self, "restitution", self.restitution is None or 0 <= self.restitution <= 1,
+                 "must be in [0, 1] (a coefficient of restitution)")
+        _require(self, "damping_ratio", self.damping_ratio is None or self.damping_ratio >= 0, "must be >= 0")
+        _require(self, "preload_mm", self.preload_mm is None or self.preload_mm >= 0, "must be >= 0")
+        bad = [s for s in self.speeds_rpm if not s > 0]
+        if bad:
+            raise ModelError(f"speeds_rpm={list(self.speeds_rpm)}: every speed must be > 0 (got {bad})",
+                             key="speeds_rpm")
+
+    # ---------------------------------------------------------------- stiffness and frequencies
+
+    @property
+    def lever_length_m(self) -> float:
+        """l: pivot A to end C, a + b of the moving lever (Fig. 5) [m]."""
+        return (self.a_mm + self.b_mm) * 1e-3
+
+    @property
+    def c_free_N_per_m(self) -> float:
+        """Reduced stiffness of the moving lever, Fig. 5 [N/m]."""
+        return reduced_stiffness_N_per_m(self.E_GPa, self.J_x_mm4, self.a_mm, self.b_mm)
+
+    @property
+    def c_stop_N_per_m(self) -> float:
+        """Reduced stiffness on the plate, Fig. 6 (the extra support) [N/m]."""
+        return reduced_stiffness_N_per_m(self.E_GPa, self.J_x_mm4, self.a_stop_mm, self.b_stop_mm)
+
+    @property
+    def omega_free_rad_s(self) -> float:
+        return math.sqrt(self.c_free_N_per_m / self.mass_kg)
+
+    @property
+    def omega_stop_rad_s(self) -> float:
+        return math.sqrt(self.c_stop_N_per_m / self.mass_kg)
+
+    @property
+    def f_free_Hz(self) -> float:
+        """Natural frequency of the moving lever, sqrt(c/m)/(2 pi) [Hz] (published 297 Hz)."""
+        return self.omega_free_rad_s / (2 * math.pi)
+
+    @property
+    def f_stop_Hz(self) -> float:
+        """Natural frequency on the plate [Hz] (published 768 Hz)."""
+        return self.omega_stop_rad_s / (2 * math.pi)
+
+    @property
+    def contact_time_s(self) -> float:
+        """tau: half the natural period on the plate, pi / omega_stop [s] (Panovko's rule [25])."""
+        return math.pi / self.omega_stop_rad_s
+
+    # ---------------------------------------------------------------- impact
+
+    def approach_velocity_m_s(self, speed_rpm, t_deg=None):
+        """v0 = omega_0 l = velocity_factor * stroke * Omega / t [m/s], Omega = 2 pi n / 60 (arrays allowed)."""
+        t_deg = self.t_deg if t_deg is None else t_deg
+        self.need("velocity_factor", "stroke_mm", "t_deg" if t_deg is None else None)
+        omega_shaft = 2 * math.pi * speed_rpm / 60.0
+        return self.velocity_factor * self.stroke_mm * 1e-3 * omega_shaft / (t_deg * math.pi / 180.0)
+
+    def impact_force_N(self, v0_m_s):
+        """F_ud = J_A omega_0 (1 + k) / (l tau), omega_0 = v0 / l [N] (Sec. Results; S_C = F tau)."""
+        self.need_effect("impact_pulse")
+        l = self.lever_length_m
+        return self.inertia_A_kgm2 * (v0_m_s / l) * (1 + self.restitution) / (l * self.contact_time_s)
+
+    @property
+    def preload_N(self) -> float:
+        """P = c_free * preload: the cam's interference held by the moving lever [N]; 0 without the effect."""
+        return self.c_free_N_per_m * self.preload_mm * 1e-3 if "preload" in self.effects else 0.0
+
+    def impact(self, speed_rpm, t_deg=None) -> Impact:
+        """The inputs of eq. (2) at one speed and phase angle, with only the listed effects."""
+        v0 = self.approach_velocity_m_s(speed_rpm, t_deg)
+        omega = self.omega_stop_rad_s
+        return Impact(omega_rad_s=omega,
+                      damping_rad_s=self.damping_ratio * omega if "damping" in self.effects else 0.0,
+                      mass_kg=self.mass_kg,
+                      v0_m_s=v0 if "initial_velocity" in self.effects else 0.0,
+                      force_N=self.impact_force_N(v0) if "impact_pulse" in self.effects else 0.0,
+                      tau_s=self.contact_time_s, preload_N=self.preload_N)
+
+    # ---------------------------------------------------------------- checks for solvers
+
+    def need(self, *keys):
+        """Raise ModelError naming the first parameter a computation needs and the task lacks."""
+        for key in keys:
+            if key is not None and getattr(self, key) is None:
+                raise ModelError(f"{key} is not given; this computation needs it", key=key)
+
+    def need_effect(self, effect):
+        if effect not in self.effects:
+            raise ModelError(f"effects={list(self.effects)}: this computation needs the effect '{effect}'",
+                             key="effects")
+
+
+def _names_or_numbers(task, key, *, number):
+    value = getattr(task, key)
+    if isinstance(value, (str, bytes)) or not isinstance(value, (list, tuple)):
+        raise ModelError(f"{key}={value!r}: expected a list of " + ("numbers" if number else "effect names"),
+                         key=key)
+    for v in value:
+        ok = (isinstance(v, (int, float)) and not isinstance(v, bool)) if number else isinstance(v, str)
+        if not ok:
+            raise ModelError(f"{key}={list(value)}: {v!r} is not " + ("a number" if number else "an effect name"),
+                             key=key)
+    return tuple(float(v) for v in value) if number else tuple(value)
+
+
+def _require(task, key, ok, what):
+    if not ok:
+        raise ModelError(f"{key}={getattr(task, key)} {what}", key=key)

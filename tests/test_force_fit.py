@@ -1,0 +1,115 @@
+"""Polynomial force law from load-travel data (paper 001, eq. (1)).
+
+The data here are a TEST FIXTURE generated from eq. (1) with seeded noise, not the paper's
+Instron experiment (its 60 readings are not published).
+"""
+import numpy as np
+import pytest
+
+from mechopt.models.crank_press import cutting_force_N
+from mechopt.models.errors import ModelError
+from mechopt.force_data import read_force_csv
+from mechopt.solvers.force_fit import fit_force
+from mechopt.solvers.result import Status
+
+EQ1 = {"c1_N_per_mm1": 1075.68, "c2_N_per_mm2": -406.8, "c3_N_per_mm3": -4.0, "c4_N_per_mm4": 90.93}
+
+
+def _fixture(points=60, noise=0.0, seed=5):
+    """60 readings on X in (0, 3] mm from eq. (1), with relative Gaussian noise: a fixture, not the experiment."""
+    x = np.linspace(0.05, 3.0, points)
+    f = cutting_force_N(x, *EQ1.values())
+    return x, f * (1 + noise * np.random.default_rng(seed).standard_normal(points))
+
+
+def test_quartic_recovers_eq1_from_clean_data():
+    r = fit_force(*_fixture(), 4)
+    assert r.status is Status.SOLVED
+    for key, value in EQ1.items():
+        assert r.values[key] == pytest.approx(value, rel=1e-9)
+    assert r.values["max_rel_error"] < 1e-10
+
+
+def test_quartic_on_noisy_data_is_close_and_lower_degrees_err_more():
+    x, f = _fixture(noise=0.01)
+    quartic = fit_force(x, f, 4)
+    assert quartic.values["c1_N_per_mm1"] == pytest.approx(1075.68, rel=0.05)
+    assert quartic.values["max_rel_error"] < 0.05                 # 1 % noise, 60 points: a few per cent at worst
+    assert {"max_rel_error_seg1", "max_rel_error_seg2"} <= quartic.values.keys()
+    linear = fit_force(x, f, 1)
+    assert linear.values["max_rel_error"] > 3 * quartic.values["max_rel_error"]
+
+
+def test_fit_with_intercept_matches_numpy_polyfit():
+    x, f = _fixture(noise=0.02)
+    r = fit_force(x, f, 3, through_origin=False)
+    ref = np.polynomial.polynomial.polyfit(x, f, 3)
+    got = [r.values["c0_N"]] + [r.values[f"c{k}_N_per_mm{k}"] for k in (1, 2, 3)]
+    assert np.allclose(got, ref, rtol=1e-9, atol=1e-9)
+
+
+def test_errors_per_segment_are_the_largest_relative_misfits_inside_each():
+    x = np.array([1.0, 2.0, 3.0, 4.0])
+    f = np.array([1.0, 2.0, 3.0, 5.0])
+    r = fit_force(x, f, 1, segments=2)
+    c = r.values["c1_N_per_mm1"]
+    assert c == pytest.approx(np.dot(x, f) / np.dot(x, x))       # least squares through the origin
+    rel = np.abs(c * x - f) / f
+    assert r.values["max_rel_error_seg1"] == pytest.approx(rel[:2].max())   # edges 1, 2.5, 4
+    assert r.values["max_rel_error_seg2"] == pytest.approx(rel[2:].max())
+
+
+def test_csv_with_units_in_the_header(tmp_path):
+    x, f = _fixture(noise=0.01)
+    mm = tmp_path / "mm.csv"
+    mm.write_text("travel_mm,load_N\n" + "".join(f"{a},{b}\n" for a, b in zip(x, f)))
+    si = tmp_path / "si.csv"
+    si.write_text("load_kN,travel_m\n" + "".join(f"{float(b) / 1000!r},{float(a) / 1000!r}\n" for a, b in zip(x, f)))
+    a, b = fit_force(*read_force_csv(mm), 4), fit_force(*read_force_csv(si), 4)
+    for key in EQ1:
+        assert a.values[key] == pytest.approx(b.values[key], rel=1e-9)
+    assert a.values["c4_N_per_mm4"] == pytest.approx(fit_force(x, f, 4).values["c4_N_per_mm4"], rel=1e-12)
+
+
+def test_too_few_distinct_travels_is_inaccurate_not_a_fit():
+    r = fit_force([1.0, 1.0, 1.0], [2.0, 2.1, 1.9], 2)
+    assert r.status is Status.INACCURATE and "rank 1 < 2" in r.message
+
+
+@pytest.mark.parametrize("args, kwargs, match", [
+    (([1.0, 2.0], [1.0, 2.0], 0), {}, r"degree=0: allowed 1, 2, 3, 4, 5 or 6"),
+    (([1.0, 2.0], [1.0, 2.0], 7), {}, r"degree=7: allowed 1, 2, 3, 4, 5 or 6"),
+    (([1.0, 2.0], [1.0, 2.0], 2.5), {}, r"degree=2\.5: allowed"),
+    (([1.0, 2.0], [1.0, 2.0], 1), {"segments": 0}, r"segments=0: must be an integer >= 1"),
+    (([1.0, 2.0], [1.0], 1), {}, r"travel_mm has 2 values but load_N has 1"),
+    (([1.0, 2.0], [1.0, np.nan], 1), {}, r"must be finite numbers"),
+    (([1.0, 2.0], [1.0, 2.0], 4), {}, r"2 points cannot fix 4 coefficients of degree 4; give at least 4"),
+])
+def test_bad_fit_input_is_refused(args, kwargs, match):
+    with pytest.raises(ModelError, match=match):
+        fit_force(*args, **kwargs)
+
+
+@pytest.mark.parametrize("text, match", [
+    ("travel_in,load_N\n1,2\n", r"column 'travel_in': unit 'in' unknown; allowed travel_mm, travel_m, travel_um"),
+    ("travel_mm,force_N\n1,2\n", r"no 'load_<unit>' column in header \['travel_mm', 'force_N'\]"),
+    ("travel_mm,load_N\n1,abc\n", r"line 2: \['1', 'abc'\] is not a number in every column"),
+    ("", r"empty file; expected a header such as travel_mm,load_N"),
+])
+def test_bad_csv_is_refused_naming_what_is_allowed(tmp_path, text, match):
+    path = tmp_path / "d.csv"
+    path.write_text(text)
+    with pytest.raises(ModelError, match=match):
+        read_force_csv(path)
+
+
+def test_cli_fit_force_prints_the_coefficients_and_segment_errors(tmp_path, capsys):
+    from mechopt.cli import main
+    x, f = _fixture(noise=0.01)
+    path = tmp_path / "instron.csv"
+    path.write_text("travel_mm,load_N\n" + "".join(f"{a},{b}\n" for a, b in zip(x, f)))
+    assert main(["fit-force", str(path), "--degree", "4"]) == 0
+    out = capsys.readouterr().out
+    expected = fit_force(x, f, 4)
+    assert f"{expected.values['c4_N_per_mm4']:.6g}" in out and "max_rel_error_seg2" in out
+    assert main(["fit-force", str(tmp_path / "missing.csv")]) == 2

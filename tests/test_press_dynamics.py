@@ -1,0 +1,243 @@
+"""Press dynamics solvers: cross-checks against an independent reference, energy, events, hard cases."""
+import dataclasses
+
+import numpy as np
+import pytest
+
+from mechopt import registry
+from mechopt.models.crank_press import PressDrive
+from mechopt.models.errors import ModelError
+from mechopt.solvers import press_dynamics as pd
+from mechopt.solvers.result import Status, from_ivp, from_rootfinder
+
+PAPER, _ = registry.find("press/kd2322").build()
+CUT_WORK_J = (90.93 * 3**5 / 5 - 4 * 3**4 / 4 - 406.8 * 3**3 / 3 + 1075.68 * 3**2 / 2) / 1000   # integral of eq. (1)
+
+
+def _task(**changes):
+    return dataclasses.replace(PAPER, **changes)
+
+
+RIGID = _task(effects=tuple(e for e in PAPER.effects if e != "belt_elasticity"), belt_stiffness_Nm_rad=None,
+              belt_damping_Nms_rad=None)
+
+
+@pytest.fixture(scope="module")
+def reference():
+    """One revolution's time by scipy's DOP853 at rtol 1e-13 with its own event location: independent of CVODES."""
+    result = pd.ivp(PAPER, method="DOP853", rtol=1e-13, atol=1e-13, duration_s=0.25)
+    assert result.status is Status.SOLVED
+    return result
+
+
+def test_events_agree_with_the_independent_reference_to_1e_8(reference):
+    got = pd.events(PAPER, tol=1e-12, duration_s=0.25)
+    assert got.status is Status.SOLVED
+    assert got.values["final_phi_rad"] == pytest.approx(reference.values["final_phi_rad"], abs=1e-8)
+    assert got.values["final_omega_rad_s"] == pytest.approx(reference.values["final_omega_rad_s"], abs=1e-8)
+    assert got.values["cut_work_J"] == pytest.approx(CUT_WORK_J, rel=1e-8)     # one whole cut, once
+
+
+def test_every_solver_balances_energy_to_1e_6():
+    for result in (pd.events(PAPER, duration_s=0.3), pd.steady_state(PAPER), pd.events(RIGID, duration_s=0.3)):
+        assert result.status is Status.SOLVED, result.message
+        v = result.values
+        assert v["energy_residual"] < 1e-6
+        # the terms themselves, independently: friction work = M_tr x angle turned
+        turned = v["final_phi_rad"]          # every run starts at phi = 0
+        assert v["friction_work_J"] == pytest.approx(PAPER.friction_torque_Nm * turned, rel=1e-8)
+
+
+def test_rk4_stalls_at_first_order_across_the_jump_but_is_fourth_order_without_a_cut(reference):
+    errors = []
+    for step in (1e-3, 5e-4, 2.5e-4):
+        r = pd.rk4(PAPER, step_s=step, duration_s=0.25, refine_tol_rad=0.0)
+        errors.append(abs(r.values["final_phi_rad"] - reference.values["final_phi_rad"]))
+    rates = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
+    assert np.all(rates < 2.5), rates                     # first order (noisy: where the jump falls in a step)
+    smooth = _task(effects=tuple(e for e in PAPER.effects if e != "cutting_force"),
+                   **{k: None for k in PressDrive.EFFECTS["cutting_force"].params})
+    ref = pd.ivp(smooth, method="DOP853", rtol=1e-13, atol=1e-13, duration_s=0.25).values["final_phi_rad"]
+    err = [abs(pd.rk4(smooth, step_s=s, duration_s=0.25, refine_tol_rad=0.0).values["final_phi_rad"] - ref)
+           for s in (2e-3, 1e-3)]
+    assert err[0] / err[1] == pytest.approx(16, rel=0.15)     # O(h^4) when nothing jumps
+
+
+def test_rk4_refines_its_step_until_two_runs_agree():
+    r = pd.rk4(PAPER, step_s=1e-3, duration_s=0.25, refine_tol_rad=1e-5, max_halvings=6)
+    assert r.diagnostics["last_change_rad"] <= 1e-5 and r.values["step_s"] < 1e-3
+    # phi has settled, yet the step across the jump still mis-counts the cutting work: that is flagged
+    if abs(r.values["cuts"] - 1) > 1e-3:
+        assert r.status is Status.INACCURATE and r.violated == ("cut_work",)
+    else:
+        assert r.status is Status.SOLVED
+    short = pd.rk4(PAPER, step_s=1e-3, duration_s=0.25, refine_tol_rad=1e-12, max_halvings=1)
+    assert short.status is Status.INACCURATE and "still moved phi" in short.message
+
+
+def test_steady_state_is_the_limit_of_the_start_up():
+    steady = pd.steady_state(PAPER)
+    run = registry.run(registry.find("press/start-up")).result
+    for key in ("omega_mean_rad_s", "speed_fluctuation", "peak_belt_torque_Nm"):
+        if key == "peak_belt_torque_Nm":
+            assert run.values[key] > steady.values[key]          # start-up torque exceeds the running one
+        else:
+            assert run.values[key] == pytest.approx(steady.values[key], rel=1e-5), key
+    assert steady.values["periodicity_residual"] < 1e-8
+
+
+def test_events_are_located_on_the_cut_window_angles():
+    r = pd.events(PAPER, duration_s=0.6)
+    start, end = np.degrees(PAPER.cut_window_rad())
+    kinds = [e[0] for e in r.diagnostics["events"]]
+    assert kinds[:3] == ["cut_start", "cut_end", "revolution"]
+    for kind, _, deg in r.diagnostics["events"]:
+        expect = {"cut_start": start, "cut_end": end, "revolution": 0.0}[kind]
+        assert (deg - expect) % 360 == pytest.approx(0.0, abs=1e-9) or (deg - expect) % 360 == pytest.approx(360.0)
+    assert r.values["cuts"] == pytest.approx(r.values["cut_windows"], abs=1e-6)
+
+
+# --- a missed cut must be caught -------------------------------------------------------------------
+
+def test_a_loose_adaptive_solver_that_steps_over_the_cut_is_caught():
+    missed = pd.ivp(PAPER, method="BDF", rtol=0.1, atol=1e-2, duration_s=1.0, locate_events=False)
+    assert missed.values["cuts"] < 0.5 and missed.values["cut_windows"] == 4     # it never saw the ~12 ms pulse
+    assert missed.status is Status.INACCURATE and missed.violated == ("cut_work",)
+    assert "a cut was missed" in missed.message
+
+
+def test_events_cannot_step_over_the_cut_even_with_one_long_piece():
+    r = pd.events(PAPER, tol=1e-6, duration_s=1.0, max_step_s=1.0)
+    assert r.values["cut_windows"] == 4 and r.values["cuts"] == pytest.approx(4, abs=1e-3)
+    assert [e[0] for e in r.diagnostics["events"]].count("cut_end") == 4
+
+
+# --- hard cases ----------------------------------------------------------------------------------
+
+def test_a_belt_a_million_times_stiffer_behaves_as_the_rigid_drive():
+    stiff = _task(belt_stiffness_Nm_rad=PAPER.belt_stiffness_Nm_rad * 1e6)
+    a, b = pd.events(stiff, duration_s=0.3), pd.events(RIGID, duration_s=0.3)
+    assert a.status is Status.SOLVED and a.values["energy_residual"] < 1e-6
+    assert a.values["final_phi_rad"] == pytest.approx(b.values["final_phi_rad"], abs=1e-7)
+    assert a.values["final_omega_rad_s"] == pytest.approx(b.values["final_omega_rad_s"], abs=1e-5)
+    unstable = pd.rk4(stiff, step_s=1e-4, duration_s=0.25, refine_tol_rad=0.0)
+    assert unstable.status is Status.FAILED and "stability limit" in unstable.message
+
+
+def test_zero_belt_damping_has_a_periodic_motion_with_no_damping_work():
+    r = pd.steady_state(_task(belt_damping_Nms_rad=0.0))
+    assert r.status is Status.SOLVED and r.values["damping_work_J"] == 0.0
+    assert r.values["energy_residual"] < 1e-6
+    assert r.values["cut_work_J"] == pytest.approx(CUT_WORK_J, rel=1e-6)
+
+
+def test_start_up_breaks_away_once_without_chattering():
+    r = pd.events(PAPER, start="rest", duration_s=0.5)
+    kinds = [e[0] for e in r.diagnostics["events"]]
+    assert kinds[0] == "slip" and kinds.count("slip") == 1 and "stop" not in kinds and "stick" not in kinds
+    # it breaks away when the belt torque first exceeds friction (at TDC the weights give no moment)
+    t_slip = r.diagnostics["events"][0][1]
+    assert 0 < t_slip < 0.01 and r.values["energy_residual"] < 1e-6
+
+
+def test_a_motor_too_weak_to_cut_stalls_as_a_status():
+    weak = _task(flywheel_inertia_kgm2=1e-4, crank_mass_kg=0.0, motor_breakdown_torque_Nm=1.0, motor_inertia_kgm2=1e-4)
+    r = pd.events(weak, duration_s=0.5)
+    assert r.status is Status.INFEASIBLE and r.violated == ("stall",)
+    assert "stalls in the cut" in r.message
+    start, end = np.degrees(PAPER.cut_window_rad())
+    assert start < r.diagnostics["events"][-1][2] < end and r.diagnostics["events"][-1][0] == "stop"
+
+
+def test_a_motor_below_friction_never_turns_the_crank():
+    r = pd.events(_task(motor_breakdown_torque_Nm=0.3), start="rest", duration_s=0.3)
+    assert r.status is Status.INFEASIBLE and r.violated == ("stall",) and "never turned" in r.message
+    assert r.values["final_phi_rad"] == 0.0 and r.values["friction_work_J"] == 0.0
+
+
+def test_a_run_ending_exactly_on_the_jump_counts_the_cut_once():
+    first = pd.events(PAPER, duration_s=0.2)
+    t_end = next(t for kind, t, _ in first.diagnostics["events"] if kind == "cut_end")
+    r = pd.events(PAPER, duration_s=t_end)
+    assert r.values["cuts"] == pytest.approx(1.0, abs=1e-7) and r.values["cut_windows"] == 1
+    assert r.values["peak_force_N"] == pytest.approx(6823.17, rel=1e-9)     # F(Z) just before the jump
+    assert [e[0] for e in r.diagnostics["events"]] == ["cut_start", "cut_end"]
+
+
+def test_the_papers_switching_function_is_closed_at_the_end_of_the_cut():
+    _, end = PAPER.cut_window_rad()
+    x = pd.initial_state(PAPER, "nominal")
+    at = x.copy()
+    at[2] = end
+    after = x.copy()
+    after[2] = end + 1e-9
+    assert pd._paper_U(PAPER, np.vstack([at, after])).tolist() == [1.0, 0.0]
+
+
+def test_a_blank_of_zero_thickness_gives_a_cycle_with_no_cut():
+    r = pd.events(_task(blank_thickness_mm=0.0), duration_s=0.3)
+    assert r.status is Status.SOLVED and r.values["cut_work_J"] == 0.0 and r.values["peak_force_N"] == 0.0
+    assert r.values["energy_residual"] < 1e-6
+
+
+def test_blank_thicker_than_the_stroke_allows_is_refused():
+    with pytest.raises(ModelError, match=r"blank_thickness_mm=50\.0 plus shortfall_mm=1\.0 is 51\.0 mm, more than"):
+        _task(blank_thickness_mm=50.0)
+
+
+# --- settings and status words --------------------------------------------------------------------
+
+@pytest.mark.parametrize("call, match", [
+    (lambda: pd.rk4(PAPER, step_s=3e-4, duration_s=0.25), r"step_s=0\.0003 does not divide duration_s=0\.25"),
+    (lambda: pd.rk4(PAPER, step_s=0.0), r"step_s=0\.0 must be > 0"),
+    (lambda: pd.events(PAPER, tol=0.0), r"tol=0\.0 must be > 0"),
+    (lambda: pd.events(PAPER, max_step_s=-1.0), r"max_step_s=-1\.0 must be > 0"),
+    (lambda: pd.events(PAPER, samples=0), r"samples=0 must be >= 1"),
+    (lambda: pd.events(PAPER, duration_s=0.0), r"duration_s=0\.0 must be > 0"),
+    (lambda: pd.steady_state(PAPER, tol=-1.0), r"tol=-1\.0 must be > 0"),
+    (lambda: pd.events("press"), r"task=str: expected a PressDrive"),
+])
+def test_bad_settings_are_refused(call, match):
+    with pytest.raises(ModelError, match=match):
+        call()
+
+
+def test_too_many_events_is_a_limit_not_a_crash():
+    r = pd.events(PAPER, duration_s=1.0, max_events=2)
+    assert r.status is Status.LIMIT and "max_events=2" in r.message
+
+
+def test_status_words_map_without_passing_failure_as_success():
+    assert from_ivp(0) is Status.SOLVED and from_ivp(1) is Status.SOLVED and from_ivp(-1) is Status.FAILED
+    assert from_rootfinder("success") is Status.SOLVED
+    assert from_rootfinder("max_iteration_reached") is Status.LIMIT and from_rootfinder("x") is Status.FAILED
+
+
+# --- figure and benchmark helpers -------------------------------------------------------------------
+
+def test_figure_of_a_press_scene_is_written(tmp_path):
+    from mechopt.plots import plot_run
+    paths = plot_run(registry.run(registry.find("press/kd2322-rigid-belt")), tmp_path)
+    assert [p.name for p in paths] == ["press_kd2322-rigid-belt.png"] and paths[0].stat().st_size > 20_000
+
+
+def test_benchmark_interpolates_time_to_accuracy_in_log_log():
+    from mechopt.benchmarks.press import at_accuracy, observed_order
+    rows = [{"method": "m", "knob": k, "phi_error_rad": e, "wall_s_median": w}
+            for k, e, w in ((1e-4, 1e-6, 0.01), (1e-6, 1e-10, 0.04))]
+    seconds, extrapolated = at_accuracy(rows)["m"]
+    assert seconds == pytest.approx(0.02, rel=1e-12) and not extrapolated      # half-way in log error -> sqrt(0.01*0.04)
+    first = [{"method": "rk4 (paper)", "knob": h, "phi_error_rad": 3 * h, "wall_s_median": 1e-6 / h}
+             for h in (1e-3, 1e-4, 1e-5)]
+    assert observed_order(first) == pytest.approx(1.0)
+    seconds, extrapolated = at_accuracy(first)["rk4 (paper)"]
+    assert extrapolated and seconds == pytest.approx(1e-6 / (1e-8 / 3), rel=1e-9)
+
+
+def test_cvodes_running_out_of_steps_is_a_limit_not_a_crash(monkeypatch):
+    def exhausted(*args, **kwargs):
+        raise RuntimeError("Error in Function::call for 'piece' [IntegratorInternal]: CV_TOO_MUCH_WORK")
+    monkeypatch.setattr(pd, "_run", exhausted)
+    r = pd.events(PAPER, duration_s=0.1)
+    assert r.status is Status.LIMIT and "CV_TOO_MUCH_WORK" in r.message
+    assert r.values["duration_s"] == 0.0          # what was integrated before the failure: nothing
