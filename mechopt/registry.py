@@ -20,10 +20,11 @@ class Check:
     ok: bool
     kind: str                # published | experimental | derived
     where: str
+    calibrated: bool = False  # a parameter was fitted to this value: agreement is by construction
 
     def as_dict(self):
         return {"name": self.name, "expected": self.expected, "got": self.got, "tol": self.tol,
-                "ok": self.ok, "kind": self.kind, "where": self.where}
+                "ok": self.ok, "kind": self.kind, "where": self.where, "calibrated": self.calibrated}
 
 
 @dataclass(frozen=True)
@@ -91,7 +92,7 @@ def check(scene: Scene, result: Result) -> list[Check]:
         got = result.status.value if name == "status" else result.values.get(name)
         tol = None if isinstance(exp.value, str) or exp.value is None else max(exp.abs or 0.0, (exp.rel or 0.0) * abs(exp.value))
         out.append(Check(name, exp.describe(), None if got is None else (got if isinstance(got, str) else float(got)),
-                         tol, exp.check(got), exp.kind, exp.where))
+                         tol, exp.check(got), exp.kind, exp.where, name in scene.calibrated_on()))
     return out
 
 

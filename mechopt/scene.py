@@ -25,6 +25,7 @@ class Param(BaseModel):
     mark: Literal["given", "assumed", "calibrated"]
     why: str = ""          # required for assumed and calibrated: the reasoning, or the figure fitted
     where: str = ""        # for given: where in the source
+    on: str = ""           # for calibrated: the value fitted to (a check of it is no reproduction)
 
     @model_validator(mode="before")
     @classmethod
@@ -35,6 +36,8 @@ class Param(BaseModel):
     def _explained(self):
         if self.mark != "given" and not self.why.strip():
             raise ValueError(f"a parameter marked '{self.mark}' needs a 'why' (the reasoning or the figure fitted)")
+        if (self.mark == "calibrated") != bool(self.on.strip()):
+            raise ValueError("'on' (the value a parameter was fitted to) goes with mark = 'calibrated', and only there")
         return self
 
 
@@ -123,6 +126,10 @@ class Scene:
 
     def marks(self) -> dict[str, str]:
         return {k: v.mark for k, v in self.spec.params.items()}
+
+    def calibrated_on(self) -> set[str]:
+        """Values some parameter was fitted to: their checks are calibrations, not reproductions."""
+        return {v.on for v in self.spec.params.values() if v.mark == "calibrated"}
 
     def settings(self) -> dict[str, Any]:
         return dict(self.spec.solver_settings)

@@ -151,3 +151,11 @@ def test_cvxpy_status_words_map_without_passing_inaccurate_as_optimal():
     assert from_cvxpy("optimal") is Status.SOLVED
     assert from_cvxpy("optimal_inaccurate") is Status.INACCURATE
     assert from_cvxpy("infeasible") is Status.INFEASIBLE and from_cvxpy("solver_error") is Status.FAILED
+
+
+def test_a_calibrated_parameter_names_its_figure_and_that_check_is_marked(tmp_path):
+    with pytest.raises(SceneError, match=r"params\.H_min_mm: Value error, 'on' \(the value a parameter was fitted to\)"):
+        load(_edited(tmp_path, 'mark = "assumed", why = "LOW_H', 'mark = "calibrated", why = "LOW_H'))
+    fitted = load(_edited(tmp_path, 'mark = "assumed", why = "LOW_H', 'mark = "calibrated", on = "H_mm", why = "LOW_H'))
+    checks = {c.name: c for c in registry.check(fitted, registry.run(fitted).result)}
+    assert checks["H_mm"].calibrated and not checks["L_mm"].calibrated
