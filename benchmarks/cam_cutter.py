@@ -18,6 +18,7 @@ import statistics
 import time
 
 from mechopt import registry
+from mechopt.plots import save_figure
 from mechopt.solvers import trajectory_fit
 
 __all__ = ["cli", "run", "table", "ratios", "plot", "grid_box_timing", "targets_table", "PAPER_TASK", "TARGETS"]
@@ -166,10 +167,8 @@ def plot(rows, out_dir):
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=8, loc=where)
     fig.suptitle("Cam-cutting linkage (paper 000): accuracy costs time")
-    fig.tight_layout()
     path = out / "cam_cutter_work_precision.png"
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_figure(fig, path, dpi=120)
     return [str(path)]
 
 

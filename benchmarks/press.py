@@ -22,6 +22,7 @@ import time
 import numpy as np
 
 from mechopt import registry
+from mechopt.plots import save_figure
 from mechopt.solvers import press_dynamics as pd
 
 __all__ = ["cli", "run", "table", "at_accuracy", "observed_order", "plot", "cycle_timing", "PAPER_TASK", "DURATION_S"]
@@ -148,9 +149,7 @@ def plot(rows, out_dir):
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
     path = out_dir / "press_work_precision.png"
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
     return [path]
 
 

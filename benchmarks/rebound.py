@@ -18,6 +18,7 @@ import time
 import numpy as np
 
 from mechopt import registry
+from mechopt.plots import save_figure
 from mechopt.solvers import rebound as rb
 
 __all__ = ["cli", "evaluations", "sweep", "table", "sweep_table", "plot", "SCENES", "SWEEP_TARGET_S"]
@@ -130,10 +131,8 @@ def plot(rows, out_dir):
     np.atleast_1d(axes)[0].set_ylabel("relative error vs closed form (floor 1e-17)")
     np.atleast_1d(axes)[0].legend(fontsize=8)
     fig.suptitle("Lever rebound (paper 004, eq. (2)): closed form, quadrature, ODE")
-    fig.tight_layout()
     path = out / "rebound_work_precision.png"
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_figure(fig, path, dpi=120)
     return [str(path)]
 
 

@@ -19,3 +19,12 @@ def plot_run(run, out_dir) -> list[Path]:
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     return figures.plot(run, out_dir)
+
+
+def save_figure(fig, path, *, dpi=110) -> Path:
+    """Lay out, write and close a matplotlib figure (closing frees it: sweeps draw many)."""
+    import matplotlib.pyplot as plt
+    fig.tight_layout()
+    fig.savefig(path, dpi=dpi)
+    plt.close(fig)
+    return Path(path)

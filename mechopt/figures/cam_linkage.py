@@ -1,6 +1,8 @@
 """Figures for the cam-cutting linkage scenes (models/cam_linkage.py)."""
 import numpy as np
 
+from mechopt.plots import save_figure
+
 
 def plot(run, out_dir):
     """The two paths and the deviation along the ideal path, with the band."""
@@ -46,8 +48,6 @@ def plot(run, out_dir):
     right.set_ylabel("deviation [µm]")
     right.set_title(f"max {run.result.values['max_deviation_mm'] * 1000:.2f} µm ({run.result.status.value})")
     right.legend(fontsize=8)
-    fig.tight_layout()
     path = out_dir / f"{run.scene.id.replace('/', '_')}.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
     return [path]

@@ -3,6 +3,8 @@ from pathlib import Path
 
 import numpy as np
 
+from mechopt.plots import save_figure
+
 
 def plot(run, out_dir) -> list[Path]:
     """Force F and load Q against tool travel and crank angle (Figs. 8-10), crank speed and belt
@@ -49,8 +51,6 @@ def plot(run, out_dir) -> list[Path]:
     for a in ax.ravel():
         a.grid(alpha=0.3)
     fig.suptitle(f"{run.scene.id}: {run.result.status.value}", fontsize=10)
-    fig.tight_layout()
     path = Path(out_dir) / f"{run.scene.id.replace('/', '_')}.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
     return [path]

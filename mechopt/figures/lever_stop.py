@@ -6,6 +6,8 @@ expectations. The amplitude-law scene: the exact a(t) beside its tangent and the
 """
 import numpy as np
 
+from mechopt.plots import save_figure
+
 
 def plot(run, out_dir):
     """Write this scene's figures into out_dir; returns their paths ([] for scenes without any)."""
@@ -36,10 +38,8 @@ def _histories(run, out_dir):
     ax.set(xlabel="time after contact [ms]", ylabel="q: C off the plate [mm]",
            title=f"{run.scene.id}: rebound after contact, eq. (2) (cf. paper's Fig. 8)")
     ax.legend(fontsize=8)
-    fig.tight_layout()
     path = out_dir / _name(run, "histories")
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
     return path
 
 
@@ -65,10 +65,8 @@ def _amplitude_vs_speed(run, out_dir):
                 label="event-driven contact (stiffness switch)")
     ax.set(xlabel="main shaft speed n [rpm]", ylabel="first rebound [mm]", title=f"{run.scene.id}")
     ax.legend(fontsize=8)
-    fig.tight_layout()
     path = out_dir / _name(run, "amplitude")
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
     return path
 
 
@@ -88,8 +86,6 @@ def _law(run, out_dir):
     ax.set(xlabel="phase angle t(3,7) [deg]", ylabel="first rebound a [mm]",
            title=f"{run.scene.id}: n = {task.speed_nominal_rpm:g} rpm")
     ax.legend(fontsize=8)
-    fig.tight_layout()
     path = out_dir / _name(run, "law")
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
     return path
