@@ -1,0 +1,251 @@
+"""Scale and what-if speed of the event-time LP (paper 004, problem (1)).
+
+Random layered networks of 10^3, 10^4 and 10^5 events (about three arcs each; event 0 first,
+the last event last) are solved by
+
+* ``networkx longest path``  graph build + dag_longest_path_length: the floor (the LP's answer
+  when only precedence and lower bounds act);
+* ``cvxpy + HiGHS``          `build_event_time_lp` (incidence matrix, DPP) compiled, then solved;
+* ``cvxpy + Clarabel``       the same problem through an interior-point conic solver;
+* ``scipy linprog``          HiGHS through scipy with the sparse constraint matrix built directly.
+
+Build (construction and cvxpy compilation) and solve are timed apart; every span is compared
+with the networkx floor (agreement to 1e-6 deg is required). The what-if study re-solves after a
+parameter change through the compiled problem (DPP) against a fresh build, with cvxpy's warm
+start off and on (with HiGHS it can make re-solves slower). Timings live here only; tests never
+assert them.
+"""
+import dataclasses
+import statistics
+import time
+
+import networkx as nx
+import numpy as np
+import scipy.sparse as sp
+from scipy.optimize import linprog
+
+from mechopt import registry
+from mechopt.solvers import cyclogram_lp
+from mechopt.solvers.cyclogram_lp import build_event_time_lp, incidence, plan_cyclogram
+
+__all__ = ["cli", "layered", "scale", "what_if", "TARGETS"]
+
+SIZES = (1_000, 10_000, 100_000)
+CLARABEL_MAX_EVENTS = 10_000      # at 10^5 one Clarabel solve took ~4 min on the 2-core machine
+WARM_MAX_EVENTS = 10_000          # at 10^5 one warm-started HiGHS re-solve took ~5 min
+TARGETS = {"cvxpy_highs_1e5_s": 1.5, "cvxpy_over_networkx_1e5": 2.0,
+           "group1_fresh_over_resolve": 5.0}     # LP only: build + compile + solve against a DPP re-solve
+
+
+def layered(n, per=3, width=100, seed=0):
+    """Random layered DAG: event 0 first and n-1 last; each inner event is fed by `per` random
+    events of the layer before (layers of `width`); events without a successor feed the last.
+    Returns tails, heads (int arrays) and angles U(0, 30) deg."""
+    rng = np.random.default_rng(seed)
+    inner = np.arange(1, n - 1)
+    layer = (inner - 1) // width
+    tails = [np.where(layer == 0, 0, (layer - 1) * width + 1 + rng.integers(0, width, inner.size))
+             for _ in range(per)]
+    pairs = np.unique(np.column_stack([np.concatenate(tails), np.tile(inner, per)]), axis=0)
+    leaves = np.setdiff1d(np.arange(n - 1), pairs[:, 0])
+    pairs = np.vstack([pairs, np.column_stack([leaves, np.full(leaves.size, n - 1)])])
+    return pairs[:, 0], pairs[:, 1], rng.uniform(0, 30, len(pairs))
+
+
+def _networkx(n, tails, heads, w):
+    start = time.perf_counter()
+    g = nx.DiGraph()
+    g.add_weighted_edges_from(zip(tails.tolist(), heads.tolist(), w.tolist()))
+    build = time.perf_counter() - start
+    span = nx.dag_longest_path_length(g)
+    return build, time.perf_counter() - start - build, span
+
+
+def _cvxpy(backend):
+    def run(n, tails, heads, w):
+        start = time.perf_counter()
+        lp = build_event_time_lp(n, tails, heads, first=0, last=n - 1)
+        lp.params["min_deg"].value = w
+        lp.problem.get_problem_data(backend)
+        build = time.perf_counter() - start
+        lp.problem.solve(solver=backend, warm_start=False)
+        if lp.problem.status != "optimal":
+            raise RuntimeError(f"{backend}: {lp.problem.status}")
+        return build, time.perf_counter() - start - build, float(lp.p.value[n - 1] - lp.p.value[0])
+    return run
+
+
+def _linprog(n, tails, heads, w):
+    start = time.perf_counter()
+    D = incidence(n, tails, heads)
+    c = np.zeros(n)
+    c[n - 1], c[0] = 1.0, -1.0
+    a_eq = sp.csr_matrix(([1.0], ([0], [0])), shape=(1, n))       # anchor p(first) = 0
+    build = time.perf_counter() - start
+    res = linprog(c, A_ub=-D, b_ub=-w, A_eq=a_eq, b_eq=[0.0], bounds=(None, None), method="highs")
+    if res.status != 0:
+        raise RuntimeError(f"linprog: {res.message}")
+    return build, time.perf_counter() - start - build, float(res.x[n - 1] - res.x[0])
+
+
+METHODS = {"networkx longest path": _networkx, "cvxpy + HiGHS": _cvxpy("HIGHS"),
+           "cvxpy + Clarabel": _cvxpy("CLARABEL"), "scipy linprog (HiGHS)": _linprog}
+
+
+def scale(sizes=SIZES, repeats=3, progress=None):
+    """Median build, solve and total seconds of every method at every size, and the span error
+    against the networkx floor [deg]."""
+    rows = []
+    for n in sizes:
+        tails, heads, w = layered(n)
+        floor = None
+        for method, call in METHODS.items():
+            if method == "cvxpy + Clarabel" and n > CLARABEL_MAX_EVENTS:
+                continue
+            runs = []
+            for k in range(repeats):
+                runs.append(call(n, tails, heads, w))
+                if progress:
+                    progress(f"{method:<24} n={n:<7} run {k + 1}/{repeats}: {sum(runs[-1][:2]):.3f} s")
+            floor = runs[0][2] if floor is None else floor
+            rows.append({"method": method, "events": n, "arcs": len(tails),
+                         "build_s": statistics.median(r[0] for r in runs),
+                         "solve_s": statistics.median(r[1] for r in runs),
+                         "total_s": statistics.median(r[0] + r[1] for r in runs),
+                         "span_deg": runs[-1][2], "span_error_deg": abs(runs[-1][2] - floor)})
+    return rows
+
+
+def _median_time(call, repeats):
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        call()
+        times.append(time.perf_counter() - start)
+    return statistics.median(times)
+
+
+def what_if(repeats=5, progress=None):
+    """Median seconds: a fresh build+solve against a DPP re-solve after a parameter change, for
+    loom/group1 (amplitude limit) and random networks (every [phi] scaled), warm start off / on."""
+    out = []
+    task, _ = registry.find("loom/group1").build()
+    limits = iter(np.linspace(0.08, 0.12, 10_000))
+
+    def fresh():
+        cyclogram_lp._BUILDS.clear()
+        plan_cyclogram(task)
+
+    def resolve(warm):
+        return lambda: plan_cyclogram(dataclasses.replace(task, amplitude_limit_mm=float(next(limits))),
+                                      warm_start=warm)
+    plan_cyclogram(task)
+    row = {"case": "loom/group1 (plan_cyclogram, full report)", "fresh_s": _median_time(fresh, repeats)}
+    plan_cyclogram(task)
+    row["resolve_cold_s"] = _median_time(resolve(False), repeats)
+    row["resolve_warm_s"] = _median_time(resolve(True), repeats)
+    out.append(row)
+    net = cyclogram_lp._Net(task, "exact")
+
+    def build_group1():
+        lp = build_event_time_lp(len(net.names), net.tails, net.heads, first=net.first, last=net.last,
+                                 stress_rows=net.stress_rows, stress_ref=net.stress_ref,
+                                 amplitude_rows=net.amp_rows)
+        cyclogram_lp.set_parameters(lp, task, net)
+        lp.problem.solve(solver="HIGHS", warm_start=False)
+        return lp
+    lp = build_group1()
+
+    def resolve_group1(warm):
+        def call():
+            lp.params["amplitude_limit_mm"].value = float(next(limits))
+            lp.problem.solve(solver="HIGHS", warm_start=warm)
+        return call
+    out.append({"case": "loom/group1 (LP only)", "fresh_s": _median_time(build_group1, repeats),
+                "resolve_cold_s": _median_time(resolve_group1(False), repeats),
+                "resolve_warm_s": _median_time(resolve_group1(True), repeats)})
+    if progress:
+        progress(f"what-if loom/group1: {out[-2:]}")
+    for n in (1_000, 10_000):
+        tails, heads, w = layered(n)
+        scales = iter(np.linspace(0.9, 1.1, 1000))
+
+        def build():
+            lp = build_event_time_lp(n, tails, heads, first=0, last=n - 1)
+            lp.params["min_deg"].value = w
+            lp.problem.solve(solver="HIGHS", warm_start=False)
+            return lp
+        lp = build()
+
+        def resolve_lp(warm):
+            def call():
+                lp.params["min_deg"].value = w * next(scales)
+                lp.problem.solve(solver="HIGHS", warm_start=warm)
+            return call
+        row = {"case": f"layered n={n} (LP only)", "fresh_s": _median_time(build, repeats),
+               "resolve_cold_s": _median_time(resolve_lp(False), repeats)}
+        row["resolve_warm_s"] = _median_time(resolve_lp(True), repeats) if n <= WARM_MAX_EVENTS else float("nan")
+        out.append(row)
+        if progress:
+            progress(f"what-if n={n}: {row}")
+    return out
+
+
+def table(rows, whatif):
+    """The scale rows, the what-if rows and the targets as fixed-width text."""
+    head = (f"{'method':<24}{'events':>8}{'arcs':>8}{'build s':>10}{'solve s':>10}{'total s':>10}"
+            f"{'span deg':>14}{'|err| deg':>11}")
+    lines = [head, "-" * len(head)]
+    for r in rows:
+        lines.append(f"{r['method']:<24}{r['events']:>8}{r['arcs']:>8}{r['build_s']:>10.4f}{r['solve_s']:>10.4f}"
+                     f"{r['total_s']:>10.4f}{r['span_deg']:>14.6f}{r['span_error_deg']:>11.1e}")
+    lines += ["", f"{'what-if':<44}{'fresh s':>10}{'re-solve s':>12}{'warm s':>10}{'fresh/re-solve':>16}"]
+    for r in whatif:
+        lines.append(f"{r['case']:<44}{r['fresh_s']:>10.4f}{r['resolve_cold_s']:>12.4f}{r['resolve_warm_s']:>10.4f}"
+                     f"{r['fresh_s'] / r['resolve_cold_s']:>16.1f}")
+    by = {(r["method"], r["events"]): r for r in rows}
+    verdicts = []
+    big = max(r["events"] for r in rows)
+    if ("cvxpy + HiGHS", big) in by:
+        cv, nxr = by["cvxpy + HiGHS", big]["total_s"], by["networkx longest path", big]["total_s"]
+        verdicts += [("cvxpy_highs_1e5_s", cv), ("cvxpy_over_networkx_1e5", cv / nxr)]
+    verdicts.append(("group1_fresh_over_resolve", whatif[1]["fresh_s"] / whatif[1]["resolve_cold_s"]))
+    lines += ["", f"{'target':<28}{'measured':>10}{'target':>10}  verdict"]
+    for key, got in verdicts:
+        want = TARGETS[key]
+        ok = got >= want if key.endswith("resolve") else got <= want
+        lines.append(f"{key:<28}{got:>10.3f}{('>= ' if key.endswith('resolve') else '<= ') + format(want, 'g'):>10}  "
+                     f"{'met' if ok else 'MISSED'}" + ("" if key.startswith("group1") else f" (n={big})"))
+    worst = max(r["span_error_deg"] for r in rows)
+    lines.append(f"largest span disagreement with networkx: {worst:.2e} deg ({'ok' if worst <= 1e-6 else 'OVER 1e-6'})")
+    return "\n".join(lines)
+
+
+def plot(rows, out_dir):
+    """Write "loom_scale.png": total seconds against events per method. Returns [path]."""
+    import pathlib
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    out = pathlib.Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    fig, ax = plt.subplots(figsize=(7, 5))
+    for method in dict.fromkeys(r["method"] for r in rows):
+        mine = [r for r in rows if r["method"] == method]
+        ax.plot([r["events"] for r in mine], [r["total_s"] for r in mine], marker="o", label=method)
+    ax.set(xscale="log", yscale="log", xlabel="events (about 3 arcs each)", ylabel="build + solve, median [s]",
+           title="Event-time LP on random layered networks")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    path = out / "loom_scale.png"
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return [str(path)]
+
+
+def cli(repeats, out_dir, progress=None) -> str:
+    """What `mechopt bench loom` prints: the scale table, the what-if table, the targets."""
+    rows = scale(repeats=repeats, progress=progress)
+    whatif = what_if(repeats=max(repeats, 5), progress=progress)
+    return "\n".join([table(rows, whatif), *(f"plot: {p}" for p in plot(rows, out_dir))])

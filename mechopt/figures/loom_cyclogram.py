@@ -1,0 +1,48 @@
+"""Figures for the loom cyclogram scenes (models/loom_cyclogram.py): the cyclogram as a Gantt chart."""
+
+
+def plot(run, out_dir):
+    """One bar per operation from p(from) to p(to) over the machine angle, a row per operation,
+    labelled by the mechanism whose event starts it (or the operation's name) and sorted by it;
+    the critical chain in red, every other operation's total float as a light tail."""
+    import matplotlib.pyplot as plt
+    values = run.result.values
+    if "span_deg" not in values:
+        return []             # infeasible or unbounded: there are no event times to draw
+
+    task, _ = run.scene.build(run.overrides)
+    diag = run.result.diagnostics
+    critical = set(diag.get("critical_ops", []))
+    floats = diag.get("float_deg", {}) if isinstance(diag.get("float_deg"), dict) else {}
+    mechanism = dict(task.graph.nodes(data="mechanism"))
+    label = {(x, y): d["name"] or mechanism[x] or "-" for x, y, d in task.graph.edges(data=True)}
+    arcs = sorted(task.arcs, key=lambda a: (label[a], values[f"p_{a[0]}_deg"]))
+
+    fig, ax = plt.subplots(figsize=(11, 0.35 * len(arcs) + 1.8))
+    for row, (x, y) in enumerate(arcs):
+        start, angle = values[f"p_{x}_deg"], values[f"t_{x}_{y}_deg"]
+        key = f"{x}->{y}"
+        hot = key in critical
+        ax.barh(row, angle, left=start, height=0.6, color="tab:red" if hot else "tab:blue",
+                edgecolor="black", linewidth=0.5)
+        slack = floats.get(key, 0.0)
+        if slack > 1e-9 and not hot:
+            ax.barh(row, slack, left=start + angle, height=0.25, color="tab:blue", alpha=0.25)
+        ax.text(start + angle / 2, row, f"{x}-{y}", ha="center", va="center", fontsize=7,
+                color="white" if angle > 0.05 * max(values["span_deg"], 1e-9) else "black")
+    ax.set_yticks(range(len(arcs)))
+    ax.set_yticklabels([f"{label[x, y]} ({x}-{y})" for x, y in arcs], fontsize=7)
+    ax.invert_yaxis()
+    end = task.cycle_deg or values["span_deg"]
+    ax.set_xlim(0, end * 1.02 if end > 0 else 1.0)
+    ax.set_xlabel("main shaft angle [deg]")
+    chain = diag.get("critical_chain") or []
+    headline = (f"limiting op {values['limiting_op_deg']:.2f} deg" if "limiting_op_deg" in values
+                else f"span {values['span_deg']:.2f} deg")
+    ax.set_title(f"{run.scene.id}: {headline}; critical chain (red) {' - '.join(chain)}", fontsize=9)
+    ax.grid(True, axis="x", alpha=0.3)
+    fig.tight_layout()
+    path = out_dir / f"{run.scene.id.replace('/', '_')}.png"
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return [path]

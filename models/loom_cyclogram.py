@@ -1,0 +1,359 @@
+"""Network cyclogram of a machine: events, operations and their limits (paper 004: Podgorny et al. 2018).
+
+Vertices are events (characteristic positions of mechanisms) with times p; arcs are operations
+(x, y) with phase angle t(x, y) = p(y) - p(x) (the paper: "the difference of the event times").
+Each operation carries a minimum angle [phi], optionally a contact-stress model of its cam pair
+and an amplitude model of its working member. Angles are machine degrees of the main shaft, not
+radians: the paper's coefficients (mm/deg) and every cyclogram are in degrees.
+
+Every limit is a lower bound on the phase angle, so the cyclogram is a system of difference
+constraints p(y) - p(x) >= lb(x, y); windows (p(y) - p(x) <= w) and synchronisations
+(p(x) = p(y)) add arcs of the other sign. `lower_bounds_deg` gives lb for any limit values.
+
+Effects a scene may call for:
+
+==============  =====================================================  =====================
+effect          adds                                                   paper
+==============  =====================================================  =====================
+contact_stress  sigma_max(t) <= [sigma_H] on operations naming a       constraint after (1)
+                stress model; sigma_max = sigma_ref t_ref / t
+stop_vibration  a(t) = slope t + intercept <= amplitude limit on       linearised a(3,7) (Results
+                operations with amplitude = "linear"                   and discussion, last formula)
+==============  =====================================================  =====================
+
+Contact stress (our reading; the paper gives no law): a cam pair under inertial load carries
+F = m h omega^2 C / t^2 (lift h over phase angle t, C the law's acceleration coefficient), and
+the Hertz line-contact stress grows as sqrt(F), so sigma_max(t) = sigma_ref t_ref / t: one
+reference point (t_ref, sigma_ref) per cam pair fixes the curve. sigma_max <= [sigma_H] is then
+exactly t >= sigma_ref t_ref / [sigma_H] ("turned into a bound on the phase angle"); its tangent
+at t_ref, `stress_bound_deg(..., form="linear")`, is the linearisation a linear design asks for.
+"""
+import math
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import ClassVar
+
+import networkx as nx
+import numpy as np
+
+from mechopt.models.effects import Effect
+from mechopt.models.errors import ModelError
+
+STRESS_FORMS = ("exact", "linear")
+AMPLITUDE_LAWS = ("linear",)
+_NOTE_KEYS = {"mark", "why", "where", "what"}         # provenance and description, not physics
+_EVENT_KEYS = {"mechanism", "group"} | _NOTE_KEYS
+_OP_KEYS = {"from", "to", "min_deg", "stress", "amplitude", "name"} | _NOTE_KEYS
+_STRESS_KEYS = {"sigma_ref_MPa", "t_ref_deg"} | _NOTE_KEYS
+_WINDOW_KEYS = {"from", "to", "max_deg"} | _NOTE_KEYS
+_SYNC_KEYS = {"events"} | _NOTE_KEYS
+
+
+def stress_MPa(sigma_ref_MPa, t_ref_deg, t_deg):
+    """Maximum contact stress of a cam pair moved over phase angle t [MPa]: sigma_ref t_ref / t
+    (Hertz sigma ~ sqrt(inertial load), load ~ 1/t^2; see the module docstring)."""
+    return sigma_ref_MPa * t_ref_deg / t_deg
+
+
+def stress_bound_deg(sigma_ref_MPa, t_ref_deg, sigma_H_MPa, form="exact"):
+    """Smallest phase angle with sigma_max(t) <= [sigma_H] [deg].
+
+    ``exact``: t >= sigma_ref t_ref / [sigma_H]. ``linear``: the tangent of sigma_max at t_ref,
+    sigma_ref (2 - t / t_ref) <= [sigma_H], i.e. t >= t_ref (2 - [sigma_H] / sigma_ref). The
+    curve is convex, so the tangent lies under it: the linear bound is never above the exact one.
+    """
+    if form == "exact":
+        return sigma_ref_MPa * t_ref_deg / sigma_H_MPa
+    if form == "linear":
+        return t_ref_deg * (2.0 - sigma_H_MPa / sigma_ref_MPa)
+    raise ModelError(f"stress_form={form!r}: allowed {', '.join(STRESS_FORMS)}", key="stress_form")
+
+
+def amplitude_mm(slope_mm_per_deg, intercept_mm, t_deg):
+    """Vibration amplitude of the working member after its stop, linearised in t [mm]:
+    a(3,7) = slope t(3,7) + intercept (paper 004, the law before Conclusions)."""
+    return slope_mm_per_deg * t_deg + intercept_mm
+
+
+def amplitude_bound_deg(slope_mm_per_deg, intercept_mm, limit_mm):
+    """Smallest phase angle with a(t) <= limit [deg] (slope < 0): (intercept - limit) / -slope."""
+    return (limit_mm - intercept_mm) / slope_mm_per_deg
+
+
+@dataclass(frozen=True)
+class Cyclogram:
+    """A machine's network cyclogram and the question asked of it.
+
+    Structure (from the scene's ``[structure]``): `events` {name: {mechanism, group}};
+    `operations` [{from, to, min_deg, stress?, amplitude?}] (min_deg is [phi] in deg);
+    `stress_models` {name: {sigma_ref_MPa, t_ref_deg}}; `windows` [{from, to, max_deg}]:
+    p(to) - p(from) <= max_deg; `syncs` [{events = [a, b, ...]}]: equal times;
+    `limiting_op` [x, y]: maximise t(x, y) inside `cycle_deg` instead of minimising the span.
+    Every entry may carry provenance notes: mark (given / assumed / calibrated), why, where, what.
+
+    Parameters: `cycle_deg` machine cycle [deg] (p(last) - p(first) <= cycle_deg);
+    `sigma_H_limit_MPa` allowable contact stress [sigma_H] (effect contact_stress);
+    `amplitude_slope_mm_per_deg`, `amplitude_intercept_mm`, `amplitude_limit_mm` the amplitude
+    law and its limit (effect stop_vibration).
+    """
+    events: dict
+    operations: list
+    stress_models: dict = field(default_factory=dict)
+    windows: list = field(default_factory=list)
+    syncs: list = field(default_factory=list)
+    limiting_op: list | None = None
+    cycle_deg: float | None = None
+    sigma_H_limit_MPa: float | None = None
+    amplitude_slope_mm_per_deg: float | None = None
+    amplitude_intercept_mm: float | None = None
+    amplitude_limit_mm: float | None = None
+
+    EFFECTS: ClassVar[dict[str, Effect]] = {
+        "contact_stress": Effect(adds="sigma_max(t) <= [sigma_H] on operations naming a stress model",
+                                 equation="constraint after (1)", params=("sigma_H_limit_MPa",)),
+        "stop_vibration": Effect(adds="a(t) = slope t + intercept <= limit on amplitude operations",
+                                 equation="linearised a(3,7), Results and discussion",
+                                 params=("amplitude_slope_mm_per_deg", "amplitude_intercept_mm",
+                                         "amplitude_limit_mm")),
+    }
+
+    def __post_init__(self):
+        _check_numbers(self)
+        self.graph          # builds and validates the network (cached)
+
+    # ------------------------------------------------------------------ the network
+
+    @cached_property
+    def graph(self) -> nx.DiGraph:
+        """Events as nodes (mechanism, group), operations as arcs (min_deg, stress, amplitude)."""
+        _table(self.events, "events", dict)
+        g = nx.DiGraph()
+        for name, attrs in self.events.items():
+            _entry(attrs, f"events.{name}", _EVENT_KEYS, required=())
+            g.add_node(str(name), mechanism=str(attrs.get("mechanism", "")), group=str(attrs.get("group", "")))
+        _table(self.operations, "operations", list)
+        for k, op in enumerate(self.operations):
+            key = f"operations[{k}]"
+            _entry(op, key, _OP_KEYS, required=("from", "to", "min_deg"))
+            x, y = str(op["from"]), str(op["to"])
+            key = f"operations[{x}->{y}]"
+            for end in (x, y):
+                _known_event(g, end, key)
+            if x == y:
+                raise ModelError(f"{key}: an operation must join two different events", key=key)
+            if g.has_edge(x, y):
+                raise ModelError(f"{key}: given twice; one operation per pair of events", key=key)
+            phi = _number(op["min_deg"], f"{key}.min_deg")
+            if phi < 0:
+                raise ModelError(f"{key}.min_deg={phi}: a minimum phase angle must be >= 0", key=f"{key}.min_deg")
+            stress, amplitude = op.get("stress"), op.get("amplitude")
+            if stress is not None:
+                self._check_stress_ref(stress, key)
+            if amplitude is not None:
+                self._check_amplitude_ref(amplitude, key)
+            g.add_edge(x, y, min_deg=phi, stress=stress, amplitude=amplitude, name=str(op.get("name", "")))
+        if not nx.is_directed_acyclic_graph(g):
+            cycle = nx.find_cycle(g)
+            chain = " -> ".join([cycle[0][0]] + [v for _, v in cycle])
+            raise ModelError(f"operations: precedence cycle {chain}: an event cannot precede itself", key="operations")
+        self._check_ends(g)
+        return g
+
+    def _check_stress_ref(self, name, key):
+        _table(self.stress_models, "stress_models", dict)
+        if name not in self.stress_models:
+            raise ModelError(f"{key}.stress={name!r}: no such stress model; defined: "
+                             f"{', '.join(self.stress_models) or 'none'}", key=f"{key}.stress")
+        if self.sigma_H_limit_MPa is None:
+            raise ModelError(f"{key}.stress={name!r} needs sigma_H_limit_MPa (effect contact_stress)",
+                             key="sigma_H_limit_MPa")
+        model = self.stress_models[name]
+        _entry(model, f"stress_models.{name}", _STRESS_KEYS, required=("sigma_ref_MPa", "t_ref_deg"))
+        for k in ("sigma_ref_MPa", "t_ref_deg"):
+            if _number(model[k], f"stress_models.{name}.{k}") <= 0:
+                raise ModelError(f"stress_models.{name}.{k}={model[k]} must be > 0", key=f"stress_models.{name}.{k}")
+
+    def _check_amplitude_ref(self, law, key):
+        if law not in AMPLITUDE_LAWS:
+            raise ModelError(f"{key}.amplitude={law!r}: no such amplitude model; known: "
+                             f"{', '.join(AMPLITUDE_LAWS)}", key=f"{key}.amplitude")
+        missing = [k for k in ("amplitude_slope_mm_per_deg", "amplitude_intercept_mm", "amplitude_limit_mm")
+                   if getattr(self, k) is None]
+        if missing:
+            raise ModelError(f"{key}.amplitude={law!r} needs {', '.join(missing)} (effect stop_vibration)",
+                             key=missing[0])
+
+    def _check_ends(self, g):
+        linked = [v for v in g if g.degree(v) > 0]
+        starts = [v for v in linked if g.in_degree(v) == 0]
+        ends = [v for v in linked if g.out_degree(v) == 0]
+        if len(starts) != 1 or len(ends) != 1:
+            raise ModelError(f"operations: a cyclogram needs one first and one last event; found first "
+                             f"{starts} and last {ends} (join them with zero-angle operations)", key="operations")
+        for k, w in enumerate(self.windows):
+            key = f"windows[{k}]"
+            _entry(w, key, _WINDOW_KEYS, required=("from", "to", "max_deg"))
+            for end in (w["from"], w["to"]):
+                _linked_event(g, str(end), key)
+            _number(w["max_deg"], f"{key}.max_deg")
+        for k, s in enumerate(self.syncs):
+            key = f"syncs[{k}]"
+            _entry(s, key, _SYNC_KEYS, required=("events",))
+            if not isinstance(s["events"], list) or len(s["events"]) < 2:
+                raise ModelError(f"{key}.events={s['events']!r}: give a list of two or more events", key=key)
+            for end in s["events"]:
+                _linked_event(g, str(end), key)
+        if self.limiting_op is not None:
+            if not isinstance(self.limiting_op, list) or len(self.limiting_op) != 2 \
+                    or not g.has_edge(str(self.limiting_op[0]), str(self.limiting_op[1])):
+                raise ModelError(f"limiting_op={self.limiting_op!r}: must name an operation [from, to]",
+                                 key="limiting_op")
+
+    # ------------------------------------------------------------------ views
+
+    @property
+    def event_names(self) -> list[str]:
+        return list(self.graph.nodes)
+
+    @cached_property
+    def arcs(self) -> list[tuple[str, str]]:
+        """Operations as (from, to), in the order every per-arc array uses."""
+        return list(self.graph.edges)
+
+    @property
+    def first_event(self) -> str:
+        return next(v for v in self.graph if self.graph.in_degree(v) == 0 and self.graph.out_degree(v) > 0)
+
+    @property
+    def last_event(self) -> str:
+        return next(v for v in self.graph if self.graph.out_degree(v) == 0 and self.graph.in_degree(v) > 0)
+
+    @property
+    def isolated_events(self) -> list[str]:
+        return [v for v in self.graph if self.graph.degree(v) == 0]
+
+    @property
+    def groups(self) -> dict[str, list[str]]:
+        """Group name -> its events (events without a group are left out)."""
+        out: dict[str, list[str]] = {}
+        for v, group in self.graph.nodes(data="group"):
+            if group:
+                out.setdefault(group, []).append(v)
+        return out
+
+    def group_graph(self, group: str) -> nx.DiGraph:
+        """The subgraph of one group's events and the operations between them."""
+        if group not in self.groups:
+            raise ModelError(f"group={group!r}: no such group; known: {', '.join(self.groups) or 'none'}", key="group")
+        return self.graph.subgraph(self.groups[group])
+
+    def sync_pairs(self) -> list[tuple[str, str]]:
+        """Each synchronisation as consecutive equal pairs (a, b): p(a) = p(b)."""
+        return [(str(s["events"][i]), str(s["events"][i + 1])) for s in self.syncs for i in range(len(s["events"]) - 1)]
+
+    def window_arcs(self) -> list[tuple[str, str, float]]:
+        """(from, to, max_deg) of every window: p(to) - p(from) <= max_deg."""
+        return [(str(w["from"]), str(w["to"]), float(w["max_deg"])) for w in self.windows]
+
+    def min_angles_deg(self) -> np.ndarray:
+        """[phi] of every arc, in `arcs` order [deg] (a copy)."""
+        return self._min_angles.copy()
+
+    @cached_property
+    def _min_angles(self) -> np.ndarray:
+        return np.fromiter((phi for _, _, phi in self.graph.edges(data="min_deg")), dtype=float,
+                           count=self.graph.number_of_edges())
+
+    def stress_arcs(self) -> list[int]:
+        """Indices (in `arcs` order) of the operations with a contact-stress model."""
+        return list(self._model_arcs[0])
+
+    def amplitude_arcs(self) -> list[int]:
+        """Indices (in `arcs` order) of the operations with an amplitude model."""
+        return list(self._model_arcs[1])
+
+    @cached_property
+    def _model_arcs(self):
+        edges = self.graph.edges
+        return ([k for k, e in enumerate(self.arcs) if edges[e]["stress"] is not None],
+                [k for k, e in enumerate(self.arcs) if edges[e]["amplitude"] is not None])
+
+    def stress_reference(self, k: int) -> tuple[float, float]:
+        """(sigma_ref_MPa, t_ref_deg) of arc k's cam pair."""
+        model = self.stress_models[self.arc_data(k)["stress"]]
+        return float(model["sigma_ref_MPa"]), float(model["t_ref_deg"])
+
+    def arc_data(self, k: int) -> dict:
+        x, y = self.arcs[k]
+        return self.graph.edges[x, y]
+
+    def lower_bounds_deg(self, stress_form: str = "exact") -> tuple[np.ndarray, list[str]]:
+        """Each arc's smallest phase angle [deg] under every limit, and which limit sets it
+        ("min_angle", "contact_stress" or "amplitude")."""
+        lb = self.min_angles_deg()
+        why = ["min_angle"] * lb.size
+        for k in self.stress_arcs():
+            bound = stress_bound_deg(*self.stress_reference(k), self.sigma_H_limit_MPa, stress_form)
+            if bound > lb[k]:
+                lb[k], why[k] = bound, "contact_stress"
+        for k in self.amplitude_arcs():
+            bound = amplitude_bound_deg(self.amplitude_slope_mm_per_deg, self.amplitude_intercept_mm,
+                                        self.amplitude_limit_mm)
+            if bound > lb[k]:
+                lb[k], why[k] = bound, "amplitude"
+        return lb, why
+
+
+def _check_numbers(task):
+    for key in ("cycle_deg", "sigma_H_limit_MPa", "amplitude_limit_mm"):
+        value = getattr(task, key)
+        if value is not None and not (math.isfinite(value) and value > 0):
+            raise ModelError(f"{key}={value} must be a finite number > 0", key=key)
+    slope = task.amplitude_slope_mm_per_deg
+    if slope is not None and not (math.isfinite(slope) and slope < 0):
+        raise ModelError(f"amplitude_slope_mm_per_deg={slope} must be < 0: the rebound amplitude falls as "
+                         f"the approach to the stop slows (a larger phase angle)", key="amplitude_slope_mm_per_deg")
+    intercept = task.amplitude_intercept_mm
+    if intercept is not None and not math.isfinite(intercept):
+        raise ModelError(f"amplitude_intercept_mm={intercept} must be finite", key="amplitude_intercept_mm")
+
+
+def _table(value, key, kind):
+    if not isinstance(value, kind):
+        raise ModelError(f"{key}: expected a {'table' if kind is dict else 'list of tables'}, got {value!r}", key=key)
+
+
+def _entry(entry, key, allowed, required):
+    if not isinstance(entry, dict):
+        raise ModelError(f"{key}: expected a table, got {entry!r}", key=key)
+    if entry.keys() <= allowed and all(k in entry for k in required) and "mark" not in entry:
+        return                  # the common case, checked fast: 10^5-event networks pass through here
+    unknown = sorted(set(entry) - allowed)
+    if unknown:
+        raise ModelError(f"{key}: unknown {', '.join(unknown)}; allowed: {', '.join(sorted(allowed))}", key=key)
+    missing = [k for k in required if k not in entry]
+    if missing:
+        raise ModelError(f"{key}: missing {', '.join(missing)}", key=key)
+    mark = entry.get("mark", "given")
+    if mark not in ("given", "assumed", "calibrated"):
+        raise ModelError(f"{key}.mark={mark!r}: allowed given, assumed, calibrated", key=key)
+    if mark != "given" and not str(entry.get("why", "")).strip():
+        raise ModelError(f"{key}: marked '{mark}' needs a 'why' (the reasoning or the figure fitted)", key=key)
+
+
+def _known_event(g, name, key):
+    if name not in g:
+        raise ModelError(f"{key}: unknown event {name!r}; events: {', '.join(g.nodes)}", key=key)
+
+
+def _linked_event(g, name, key):
+    _known_event(g, name, key)
+    if g.degree(name) == 0:
+        raise ModelError(f"{key}: event {name!r} has no operation; a window or sync needs events of the network",
+                         key=key)
+
+
+def _number(value, key):
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ModelError(f"{key}={value!r}: expected a finite number", key=key)
+    return float(value)

@@ -1,0 +1,476 @@
+"""Event times of a network cyclogram as a linear program in cvxpy (paper 004, problem (1)).
+
+    minimise p(N) - p(1)   subject to   p(y) - p(x) >= [phi(x, y)]                 every operation
+                                        p(y) - p(x) >= sigma-bound(x, y; [sigma_H])  cam pairs
+                                        slope (p(7) - p(3)) + intercept <= a_lim    amplitude law
+                                        p(y) - p(x) <= w,  p(a) = p(b)             windows, syncs
+                                        p(1) = 0                                     anchor
+
+or, for a machine with a limiting operation (x*, y*), maximise p(y*) - p(x*) with p(N) - p(1) <=
+cycle. Constraints are built from the incidence matrix (one vectorised row block per kind); every
+limit is a cvxpy Parameter, so a what-if re-solve reuses the compiled problem (DPP). The anchor
+p(1) = 0 removes the shift invariance that otherwise slows HiGHS a hundredfold.
+
+Sensitivities are reported in user terms with one sign convention: d(objective)/d(limit), the
+change of the objective (span_deg, or limiting_op_deg on a machine) per unit *increase* of the
+limit. Raising [sigma_H] or the amplitude limit loosens a bound: the span falls (<= 0); raising a
+critical [phi] lengthens it (+1 deg/deg).
+"""
+import time
+from dataclasses import dataclass
+from typing import Literal
+
+import cvxpy as cp
+import networkx as nx
+import numpy as np
+import scipy.sparse as sp
+
+from mechopt.models.errors import SolverError
+from mechopt.models.loom_cyclogram import Cyclogram, amplitude_mm, stress_bound_deg, stress_MPa
+from mechopt.solvers.result import Result, Status, Timing, from_cvxpy
+
+__all__ = ["plan_cyclogram"]
+
+SENSITIVITY_CONVENTION = ("sens_* = d(objective)/d(limit): change of the objective [deg] per unit increase "
+                          "of the limit; negative means a looser limit shortens the span")
+
+
+@dataclass
+class EventTimeLP:
+    """A built, DPP-compiled event-time LP: the problem, its Parameters and its constraint blocks."""
+    problem: cp.Problem
+    p: cp.Variable
+    params: dict            # name -> cp.Parameter
+    blocks: dict            # name -> cvxpy constraint (vector rows) or None
+    stress_coeffs: tuple    # linear: (c0, c1) with rhs = c0 + c1 sigma_H; exact: (K,) with rhs = K / sigma_H
+    sign: float             # +1 minimise, -1 maximise: d(objective)/d(rhs) = sign * dual
+
+
+def incidence(n: int, tails: np.ndarray, heads: np.ndarray) -> sp.csr_matrix:
+    """Arc-by-event incidence D with (D p)_e = p(head_e) - p(tail_e)."""
+    m = len(tails)
+    rows = np.repeat(np.arange(m), 2)
+    cols = np.column_stack([heads, tails]).ravel()
+    vals = np.tile([1.0, -1.0], m)
+    return sp.csr_matrix((vals, (rows, cols)), shape=(m, n))
+
+
+def build_event_time_lp(n, tails, heads, *, first, last, stress_rows=(), stress_ref=None,
+                        stress_form="exact", amplitude_rows=(), window_arcs=(), sync_arcs=(),
+                        limiting=None, with_cycle=False) -> EventTimeLP:
+    """The event-time LP over n events, arcs tails[k] -> heads[k] (indices), Parameters unset.
+
+    stress_ref : (sigma_ref_MPa, t_ref_deg) arrays for `stress_rows`.
+    window_arcs, sync_arcs : (from, to) index pairs; limiting : (x, y) index pair to maximise.
+    Parameters: min_deg (per arc), sigma_H_MPa or inv_sigma_H_per_MPa, amplitude slope,
+    intercept and limit, window_deg, cycle_deg.
+    """
+    tails, heads = np.asarray(tails, dtype=np.int64), np.asarray(heads, dtype=np.int64)
+    D = incidence(n, tails, heads)
+    p = cp.Variable(n, name="p_deg")
+    params = {"min_deg": cp.Parameter(len(tails), name="min_deg")}
+    blocks = {"min_angle": D @ p >= params["min_deg"], "anchor": p[first] == 0}
+    coeffs = ()
+    if len(stress_rows):
+        rows = np.asarray(stress_rows)
+        sigma_ref, t_ref = (np.asarray(a, dtype=float) for a in stress_ref)
+        if stress_form == "linear":     # tangent at t_ref: t >= 2 t_ref - (t_ref / sigma_ref) sigma_H
+            params["sigma_H_MPa"] = cp.Parameter(nonneg=True, name="sigma_H_MPa")
+            coeffs = (2.0 * t_ref, -t_ref / sigma_ref)
+            rhs = coeffs[0] + coeffs[1] * params["sigma_H_MPa"]
+        else:                            # exact: t >= K / sigma_H, with 1/sigma_H the Parameter (DPP)
+            params["inv_sigma_H_per_MPa"] = cp.Parameter(nonneg=True, name="inv_sigma_H_per_MPa")
+            coeffs = (sigma_ref * t_ref,)
+            rhs = coeffs[0] * params["inv_sigma_H_per_MPa"]
+        blocks["contact_stress"] = D[rows] @ p >= rhs
+    if len(amplitude_rows):
+        for name in ("slope_mm_per_deg", "intercept_mm", "amplitude_limit_mm"):
+            params[name] = cp.Parameter(name=name)
+        t = D[np.asarray(amplitude_rows)] @ p
+        blocks["amplitude"] = (params["slope_mm_per_deg"] * t + params["intercept_mm"]
+                               <= params["amplitude_limit_mm"])
+    if len(window_arcs):
+        w = np.asarray(window_arcs)
+        params["window_deg"] = cp.Parameter(len(w), name="window_deg")
+        blocks["window"] = incidence(n, w[:, 0], w[:, 1]) @ p <= params["window_deg"]
+    if len(sync_arcs):
+        s = np.asarray(sync_arcs)
+        blocks["sync"] = incidence(n, s[:, 0], s[:, 1]) @ p == 0
+    if with_cycle:
+        params["cycle_deg"] = cp.Parameter(nonneg=True, name="cycle_deg")
+        blocks["cycle"] = p[last] - p[first] <= params["cycle_deg"]
+    if limiting is None:
+        objective, sign = cp.Minimize(p[last] - p[first]), 1.0
+    else:
+        objective, sign = cp.Maximize(p[limiting[1]] - p[limiting[0]]), -1.0
+    problem = cp.Problem(objective, list(blocks.values()))
+    if not problem.is_dpp():       # a re-solve would recompile: a bug in this builder, not in the input
+        raise SolverError("event-time LP is not DPP; what-if re-solves would recompile")
+    return EventTimeLP(problem, p, params, blocks, coeffs, sign)
+
+
+_BUILDS: dict = {}      # structural signature -> EventTimeLP (compiled once, re-solved with new Parameters)
+_BUILDS_KEPT = 8        # the newest few: a 10^5-event build holds ~100 MB
+
+
+def plan_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] = "HIGHS",
+                   stress_form: Literal["exact", "linear"] = "exact", warm_start: bool = False,
+                   tol_deg: float = 1e-6) -> Result:
+    """Event times minimising the span p(N) - p(1) of a cyclogram (paper 004, problem (1)), or
+    maximising the machine's limiting operation inside its cycle.
+
+    Parameters
+    ----------
+    task : the network and its limits (models/loom_cyclogram.py).
+    backend : LP solver behind cvxpy.
+    stress_form : "exact" sigma_max(t) <= [sigma_H] as t >= K/[sigma_H]; "linear" its tangent at t_ref.
+    warm_start : pass cvxpy's warm start to the back end (with HiGHS it can slow re-solves).
+    tol_deg : tolerance [deg] for float = 0 (critical), binding constraints and the cross-check.
+
+    Returns
+    -------
+    Result with values span_deg, longest_path_deg (networkx / Bellman-Ford cross-check),
+    p_<event>_deg, t_<x>_<y>_deg, amplitude_<x>_<y>_mm, sigma_<x>_<y>_MPa, span_<group>_deg,
+    limiting_op_deg (machines) and sens_* sensitivities (see SENSITIVITY_CONVENTION);
+    diagnostics: float_deg, critical_ops, critical_chain, binding (with duals), sens_min_deg.
+    An infeasible problem names its conflicting chain (a positive cycle of the difference
+    constraints) in `message` and `violated`.
+
+    Examples
+    --------
+    >>> from mechopt import registry
+    >>> r = plan_cyclogram(registry.find("loom/group1").build()[0])
+    >>> r.status.value, r.diagnostics["critical_chain"][:3]                             # doctest: +SKIP
+    ('SOLVED', ['1', '3', '7'])
+    """
+    start = time.perf_counter()
+    net = _Net(task, stress_form)
+    key = (backend, *net.signature())       # cvxpy caches one compiled chain per problem and solver
+    lp = _BUILDS.get(key)
+    fresh = lp is None
+    if fresh:
+        lp = build_event_time_lp(len(net.names), net.tails, net.heads, first=net.first, last=net.last,
+                                 stress_rows=net.stress_rows, stress_ref=net.stress_ref, stress_form=stress_form,
+                                 amplitude_rows=net.amp_rows, window_arcs=net.window_idx, sync_arcs=net.sync_idx,
+                                 limiting=net.limiting, with_cycle=task.cycle_deg is not None)
+    set_parameters(lp, task, net)
+    if fresh:
+        lp.problem.get_problem_data(backend)      # compile now, so build and solve time separate
+        while len(_BUILDS) >= _BUILDS_KEPT:
+            _BUILDS.pop(next(iter(_BUILDS)))
+        _BUILDS[key] = lp
+    build_s = time.perf_counter() - start
+    try:
+        lp.problem.solve(solver=backend, warm_start=warm_start)
+    except cp.error.SolverError as exc:
+        return Result(Status.FAILED, {}, Timing(build_s, time.perf_counter() - start - build_s),
+                      message=f"{backend} failed: {exc}")
+    status = from_cvxpy(lp.problem.status)
+    diagnostics = {"backend": backend, "stress_form": stress_form, "compiled_now": fresh,
+                   "events": len(net.names), "operations": len(net.tails), "isolated_events": task.isolated_events,
+                   "solver_status": lp.problem.status, "solve_time_backend_s": lp.problem.solver_stats.solve_time}
+    if status is not Status.SOLVED:
+        message, violated = f"{backend}: {lp.problem.status}", ()
+        if status is Status.INFEASIBLE:
+            chain = conflict_chain(net)
+            if chain:
+                violated = tuple(label for _, label in chain)
+                message = "infeasible: conflicting chain " + "; ".join(f"{label}" for _, label in chain)
+                diagnostics["conflict_events"] = [v for v, _ in chain]
+            else:
+                message += " (no positive cycle among the difference constraints: a numerical failure?)"
+        return Result(status, {}, Timing(build_s, time.perf_counter() - start - build_s),
+                      message=message, violated=violated, diagnostics=diagnostics)
+    values, more, overstressed = _report(task, net, lp, tol_deg)
+    diagnostics |= more
+    solve_s = time.perf_counter() - start - build_s
+    objective = "limiting_op_deg" if net.limiting else "span_deg"
+    message = (f"{objective} = {values[objective]:.6g} ({backend}, {stress_form} stress, "
+               f"{'compiled' if fresh else 'DPP re-solve'}); {SENSITIVITY_CONVENTION}")
+    if overstressed:      # the tangent under-estimates sigma_max: the linearised optimum breaks the true limit
+        message += f"; the linearised stress limit lets sigma_max exceed [sigma_H] on {', '.join(overstressed)}"
+    return Result(Status.SOLVED, values, Timing(build_s, solve_s), message=message, violated=overstressed,
+                  diagnostics=diagnostics)
+
+
+def set_parameters(lp: EventTimeLP, task: Cyclogram, net) -> None:
+    """Write the task's limits into the LP's Parameters (no recompilation)."""
+    prm = lp.params
+    prm["min_deg"].value = task.min_angles_deg()
+    if "sigma_H_MPa" in prm:
+        prm["sigma_H_MPa"].value = task.sigma_H_limit_MPa
+    if "inv_sigma_H_per_MPa" in prm:
+        prm["inv_sigma_H_per_MPa"].value = 1.0 / task.sigma_H_limit_MPa
+    if "slope_mm_per_deg" in prm:
+        prm["slope_mm_per_deg"].value = task.amplitude_slope_mm_per_deg
+        prm["intercept_mm"].value = task.amplitude_intercept_mm
+        prm["amplitude_limit_mm"].value = task.amplitude_limit_mm
+    if "window_deg" in prm:
+        prm["window_deg"].value = np.array([w for _, _, w in task.window_arcs()])
+    if "cycle_deg" in prm:
+        prm["cycle_deg"].value = task.cycle_deg
+
+
+class _Net:
+    """The task as index arrays (events in graph order, isolated events left out)."""
+
+    def __init__(self, task: Cyclogram, stress_form: str):
+        self.task, self.stress_form = task, stress_form
+        isolated = set(task.isolated_events)
+        self.names = [v for v in task.event_names if v not in isolated]
+        index = {v: i for i, v in enumerate(self.names)}
+        self.index = index
+        arcs = task.arcs
+        self.arcs = arcs
+        self.tails = np.fromiter((index[x] for x, _ in arcs), dtype=np.int64, count=len(arcs))
+        self.heads = np.fromiter((index[y] for _, y in arcs), dtype=np.int64, count=len(arcs))
+        self.first, self.last = index[task.first_event], index[task.last_event]
+        self.stress_rows = task.stress_arcs()
+        refs = [task.stress_reference(k) for k in self.stress_rows]
+        self.stress_ref = (np.array([r[0] for r in refs]), np.array([r[1] for r in refs]))
+        self.amp_rows = task.amplitude_arcs()
+        self.window_idx = [(index[a], index[b]) for a, b, _ in task.window_arcs()]
+        self.sync_idx = [(index[a], index[b]) for a, b in task.sync_pairs()]
+        lim = task.limiting_op
+        self.limiting = None if lim is None else (index[str(lim[0])], index[str(lim[1])])
+        self.lb, self.lb_why = task.lower_bounds_deg(stress_form)
+
+    def signature(self):
+        """What the compiled problem depends on (everything except the Parameters' values)."""
+        return (self.stress_form, len(self.names), self.tails.tobytes(), self.heads.tobytes(), self.first,
+                self.last, tuple(self.stress_rows), self.stress_ref[0].tobytes(), self.stress_ref[1].tobytes(),
+                tuple(self.amp_rows), tuple(self.window_idx), tuple(self.sync_idx), self.limiting,
+                self.task.cycle_deg is not None)
+
+    def arc_label(self, k):
+        x, y = self.arcs[k]
+        return f"t({x}->{y}) >= {self.lb[k]:.6g} deg ({self.lb_why[k]})"
+
+
+def conflict_chain(net) -> list[tuple[str, str]]:
+    """A positive cycle of the difference constraints, as [(event, label of the arc leaving it)];
+    empty when there is none. Found by Bellman-Ford on the negated weights (networkx)."""
+    g = nx.DiGraph()
+
+    def add(u, v, weight, label):          # keep the tightest constraint per ordered pair
+        if not g.has_edge(u, v) or weight < g.edges[u, v]["weight"]:
+            g.add_edge(u, v, weight=weight, label=label)
+
+    for k, (x, y) in enumerate(net.arcs):
+        add(x, y, -net.lb[k], net.arc_label(k))
+    for a, b, w in net.task.window_arcs():
+        add(b, a, w, f"window p({b}) - p({a}) <= {w:.6g} deg")
+    for a, b in net.task.sync_pairs():
+        add(a, b, 0.0, f"sync p({a}) = p({b})")
+        add(b, a, 0.0, f"sync p({b}) = p({a})")
+    if net.task.cycle_deg is not None:
+        first, last = net.names[net.first], net.names[net.last]
+        add(last, first, net.task.cycle_deg, f"cycle p({last}) - p({first}) <= {net.task.cycle_deg:.6g} deg")
+    root = object()
+    g.add_edges_from(((root, v) for v in list(g.nodes)), weight=0.0, label="")
+    try:
+        cycle = nx.find_negative_cycle(g, root)
+    except nx.NetworkXError:
+        return []
+    return [(u, g.edges[u, v]["label"]) for u, v in zip(cycle[:-1], cycle[1:])]
+
+
+def _report(task, net, lp, tol):
+    """Values and diagnostics of a solved LP: times, angles, floats, duals, the cross-check."""
+    p = lp.p.value
+    p = p - p[net.first]                      # the anchor holds to solver precision; make it exact
+    t = p[net.heads] - p[net.tails]
+    span = float(p[net.last] - p[net.first])
+    values = {"span_deg": span}
+    if net.limiting:
+        values["limiting_op_deg"] = float(p[net.limiting[1]] - p[net.limiting[0]])
+    values |= {f"p_{v}_deg": float(p[i]) for i, v in enumerate(net.names)}
+    values |= {f"t_{x}_{y}_deg": float(t[k]) for k, (x, y) in enumerate(net.arcs)}
+    for k in net.amp_rows:
+        x, y = net.arcs[k]
+        values[f"amplitude_{x}_{y}_mm"] = float(amplitude_mm(task.amplitude_slope_mm_per_deg,
+                                                              task.amplitude_intercept_mm, t[k]))
+    for k in net.stress_rows:
+        x, y = net.arcs[k]
+        values[f"sigma_{x}_{y}_MPa"] = float(stress_MPa(*task.stress_reference(k), t[k]))
+    for group, members in task.groups.items():
+        times = [p[net.index[v]] for v in members if v in net.index]
+        if times:
+            values[f"span_{group}_deg"] = float(max(times) - min(times))
+    overstressed = [f"contact_stress[{x}->{y}]" for k, (x, y) in ((k, net.arcs[k]) for k in net.stress_rows)
+                    if values[f"sigma_{x}_{y}_MPa"] > task.sigma_H_limit_MPa * (1 + 1e-9)]
+
+    values["longest_path_deg"] = _cross_check(task, net, values, tol)
+    sens, binding, sens_min = _sensitivities(task, net, lp, t, tol)
+    values |= sens
+    floats = _floats(task, net, p, values, tol)
+    diagnostics = {"binding": binding, "sens_min_deg": sens_min, "sensitivity_convention": SENSITIVITY_CONVENTION,
+                   "bound_source": {f"{x}->{y}": net.lb_why[k] for k, (x, y) in enumerate(net.arcs)},
+                   "stress_gap_deg": {f"{x}->{y}": _stress_gap(task, k) for k, (x, y) in
+                                      ((k, net.arcs[k]) for k in net.stress_rows)}}
+    diagnostics |= floats
+    return values, diagnostics, tuple(overstressed)
+
+
+def _stress_gap(task, k):
+    """Exact minus linearised stress bound of arc k [deg]: >= 0, the tangent lies under sigma_max."""
+    ref = task.stress_reference(k)
+    return float(stress_bound_deg(*ref, task.sigma_H_limit_MPa, "exact")
+                 - stress_bound_deg(*ref, task.sigma_H_limit_MPa, "linear"))
+
+
+def _cross_check(task, net, values, tol):
+    """Longest path by networkx (no windows/syncs) or Bellman-Ford; raise if the LP disagrees."""
+    lb = net.lb
+    if np.array_equal(lb, task.min_angles_deg()):      # no stress or amplitude bound: the model's graph as it is
+        g, weight = task.graph, "min_deg"
+    else:
+        g, weight = nx.DiGraph(), "weight"
+        g.add_weighted_edges_from((x, y, lb[k]) for k, (x, y) in enumerate(net.arcs))
+    if task.windows or task.syncs:
+        try:
+            longest = _longest(_constraint_arcs(net, lb), net.names[net.first])[net.names[net.last]]
+        except nx.NetworkXUnbounded:
+            raise SolverError("cross-check failed: the LP reports an optimum but the difference constraints "
+                              "hold a positive cycle (no feasible times exist)") from None
+        route = "Bellman-Ford on the difference constraints"
+    else:
+        longest = nx.dag_longest_path_length(g, weight=weight)
+        route = "networkx dag_longest_path_length"
+    if net.limiting:
+        x, y = net.names[net.limiting[0]], net.names[net.limiting[1]]
+        before = nx.dag_longest_path_length(g.subgraph(nx.ancestors(g, x) | {x}), weight=weight)
+        after = nx.dag_longest_path_length(g.subgraph(nx.descendants(g, y) | {y}), weight=weight)
+        expected, got, what = task.cycle_deg - before - after, values["limiting_op_deg"], "limiting_op_deg"
+        if task.windows or task.syncs:
+            return float(longest)             # windows may cut the limiting op further: no closed form
+    else:
+        expected, got, what = longest, values["span_deg"], "span_deg"
+    if abs(expected - got) > tol * max(1.0, abs(expected)):
+        raise SolverError(f"cross-check failed: LP {what} = {got!r} but {route} gives {expected!r}")
+    return float(longest)
+
+
+def _constraint_arcs(net, lb):
+    """Every difference constraint as (u, v, w): p(v) - p(u) >= w [deg]."""
+    arcs = [(x, y, float(lb[k])) for k, (x, y) in enumerate(net.arcs)]
+    arcs += [(b, a, -w) for a, b, w in net.task.window_arcs()]
+    arcs += [arc for a, b in net.task.sync_pairs() for arc in ((a, b, 0.0), (b, a, 0.0))]
+    return arcs
+
+
+def _longest(arcs, source, reverse=False):
+    """Longest distances from `source` over difference constraints (u, v, w) by Bellman-Ford on
+    negated weights [deg]; `reverse` follows the arcs backwards (distances *to* source)."""
+    g = nx.DiGraph()
+    for u, v, w in arcs:
+        u, v = (v, u) if reverse else (u, v)
+        if not g.has_edge(u, v) or g.edges[u, v]["weight"] > -w:      # keep the tightest
+            g.add_edge(u, v, weight=-w)
+    return {v: -d for v, d in nx.single_source_bellman_ford_path_length(g, source).items()}
+
+
+def _sensitivities(task, net, lp, t, tol):
+    """d(objective)/d(limit) from the duals, and the binding constraints by name."""
+    s, blocks = lp.sign, lp.blocks
+    sens, binding = {}, []
+    dual_phi = np.asarray(blocks["min_angle"].dual_value, dtype=float).ravel()
+    sens_min, phi = {}, task.min_angles_deg()
+    for k, (x, y) in enumerate(net.arcs):
+        if t[k] - phi[k] <= tol:
+            binding.append({"constraint": f"min_angle[{x}->{y}]", "dual_deg_per_deg": float(s * dual_phi[k]) + 0.0})
+        if abs(dual_phi[k]) > tol:
+            sens_min[f"{x}->{y}"] = float(s * dual_phi[k])
+    if "contact_stress" in blocks:
+        dual = np.asarray(blocks["contact_stress"].dual_value, dtype=float).ravel()
+        sigma = task.sigma_H_limit_MPa
+        if "sigma_H_MPa" in lp.params:
+            drhs = lp.stress_coeffs[1]                       # d(rhs)/d(sigma_H), tangent form
+        else:
+            drhs = -lp.stress_coeffs[0] / sigma**2           # d(K / sigma_H)/d(sigma_H)
+        sens["sens_sigma_H_deg_per_MPa"] = float(s * np.dot(dual, drhs))
+        rhs = (lp.stress_coeffs[0] + lp.stress_coeffs[1] * sigma if len(lp.stress_coeffs) == 2
+               else lp.stress_coeffs[0] / sigma)
+        for j, k in enumerate(net.stress_rows):
+            if t[k] - rhs[j] <= tol:
+                x, y = net.arcs[k]
+                binding.append({"constraint": f"contact_stress[{x}->{y}]",
+                                "dual_deg_per_MPa": float(s * dual[j] * drhs[j])})
+    if "amplitude" in blocks:
+        dual = np.asarray(blocks["amplitude"].dual_value, dtype=float).ravel()
+        sens["sens_amplitude_limit_deg_per_mm"] = float(-s * dual.sum())     # <= form: d/d(limit) = -dual
+        for j, k in enumerate(net.amp_rows):
+            a = amplitude_mm(task.amplitude_slope_mm_per_deg, task.amplitude_intercept_mm, t[k])
+            if task.amplitude_limit_mm - a <= tol * abs(task.amplitude_slope_mm_per_deg):
+                x, y = net.arcs[k]
+                binding.append({"constraint": f"amplitude[{x}->{y}]", "dual_deg_per_mm": float(-s * dual[j])})
+    if "window" in blocks:
+        dual = np.asarray(blocks["window"].dual_value, dtype=float).ravel()
+        for j, (a, b, w) in enumerate(task.window_arcs()):
+            sens[f"sens_window_{a}_{b}_deg_per_deg"] = float(-s * dual[j])
+            if w - (lp.p.value[net.index[b]] - lp.p.value[net.index[a]]) <= tol:
+                binding.append({"constraint": f"window[{a}->{b}]", "dual_deg_per_deg": float(-s * dual[j])})
+    if "cycle" in blocks:
+        dual = float(np.asarray(blocks["cycle"].dual_value))
+        sens["sens_cycle_deg_per_deg"] = -s * dual
+        binding.append({"constraint": "cycle", "dual_deg_per_deg": -s * dual}) if abs(dual) > tol else None
+    return sens, binding, sens_min
+
+
+def _floats(task, net, p, values, tol):
+    """Total float of every operation, LS(y) - ES(x) - lb, for the found span (a machine: with the
+    limiting operation held at its optimum); critical = float <= tol."""
+    names, lb = net.names, net.lb.copy()
+    if net.limiting:
+        k = next(k for k, (x, y) in enumerate(net.arcs) if (net.index[x], net.index[y]) == net.limiting)
+        lb[k] = values["limiting_op_deg"] - tol / 10      # held at its optimum (a hair under: no 0+ cycle)
+    first, last = names[net.first], names[net.last]
+    span = values["span_deg"]
+    try:
+        if task.windows or task.syncs:
+            arcs = _constraint_arcs(net, lb)
+            early = _longest(arcs, first)
+            to_last, to_first = _longest(arcs, last, reverse=True), _longest(arcs, first, reverse=True)
+            late = {v: min(span - to_last.get(v, -np.inf), -to_first.get(v, -np.inf)) for v in names}
+        else:
+            e, l = _dag_times(len(names), net.tails, net.heads, lb, net.first, net.last, span)
+            early, late = dict(zip(names, e.tolist())), dict(zip(names, l.tolist()))
+    except nx.NetworkXUnbounded:
+        return {"floats": "not available: round-off made a zero cycle positive"}
+    floats = {f"{x}->{y}": float(late[y] - early[x] - lb[k]) for k, (x, y) in enumerate(net.arcs)}
+    critical = [k for k, v in floats.items() if v <= tol]
+    crit = nx.DiGraph([tuple(k.split("->")) for k in critical])
+    linked = first in crit and last in crit and nx.has_path(crit, first, last)
+    chain = nx.shortest_path(crit, first, last) if linked else []     # one of the critical chains
+    return {"float_deg": floats, "critical_ops": critical, "critical_chain": chain}
+
+
+def _dag_times(n, tails, heads, lb, first, last, span):
+    """Earliest and latest event times of a DAG (arcs tails -> heads, durations lb) [deg], by
+    Kahn's topological order on index arrays: no graph objects, linear in the arcs."""
+    out_start = np.r_[0, np.cumsum(np.bincount(tails, minlength=n))]
+    by_tail = np.argsort(tails, kind="stable")
+    indeg = np.bincount(heads, minlength=n)
+    order, stack = [], [v for v in range(n) if indeg[v] == 0]
+    succ, lbl, hl = by_tail.tolist(), lb.tolist(), heads.tolist()
+    bounds = out_start.tolist()
+    indeg = indeg.tolist()
+    while stack:
+        u = stack.pop()
+        order.append(u)
+        for k in succ[bounds[u]:bounds[u + 1]]:
+            v = hl[k]
+            indeg[v] -= 1
+            if indeg[v] == 0:
+                stack.append(v)
+    early, late = [-np.inf] * n, [np.inf] * n
+    early[first], late[last] = 0.0, span
+    for u in order:
+        for k in succ[bounds[u]:bounds[u + 1]]:
+            if early[u] + lbl[k] > early[hl[k]]:
+                early[hl[k]] = early[u] + lbl[k]
+    for u in reversed(order):
+        for k in succ[bounds[u]:bounds[u + 1]]:
+            if late[hl[k]] - lbl[k] < late[u]:
+                late[u] = late[hl[k]] - lbl[k]
+    return np.array(early), np.array(late)

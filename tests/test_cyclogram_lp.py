@@ -1,0 +1,320 @@
+"""The event-time LP of a network cyclogram (paper 004, problem (1)): published and derived values,
+duals against finite differences, the LP certificate, DPP re-solves and the hard cases.
+
+Published: a(3,7) = -0.003 t(3,7) + 0.208 mm and the +-0.1 mm transfer accuracy (Podgorny et al.
+2018, Results and discussion; Research methodology), so t(3,7) >= (0.208 - 0.1) / 0.003 = 36 deg."""
+import dataclasses
+
+import cvxpy as cp
+import numpy as np
+import pytest
+
+from mechopt import registry
+from mechopt.models.errors import SolverError
+from mechopt.models.loom_cyclogram import Cyclogram
+from mechopt.solvers import cyclogram_lp
+from mechopt.solvers.cyclogram_lp import plan_cyclogram
+from mechopt.solvers.result import Status
+
+T_3_7_MIN_DEG = (0.208 - 0.1) / 0.003          # from the published law and limit
+
+
+def scene_task(case):
+    return registry.find(case).build()[0]
+
+
+def longest_path(task, lb=None):
+    """Independent longest path first -> last by relaxing arcs in topological order (no networkx)."""
+    lb = task.lower_bounds_deg()[0] if lb is None else lb
+    arcs = task.arcs
+    dist = {task.first_event: 0.0}
+    for _ in range(len(arcs)):                  # Bellman-Ford style: enough passes for any DAG
+        changed = False
+        for (x, y), w in zip(arcs, lb):
+            if x in dist and dist[x] + w > dist.get(y, -np.inf):
+                dist[y], changed = dist[x] + w, True
+        if not changed:
+            break
+    return dist[task.last_event]
+
+
+def net(edges, **kw):
+    """A Cyclogram from (from, to, min_deg) triples."""
+    names = dict.fromkeys(str(v) for e in edges for v in e[:2])
+    return Cyclogram(events={v: {} for v in names} | kw.pop("extra_events", {}),
+                     operations=[{"from": str(x), "to": str(y), "min_deg": float(w)} for x, y, w in edges], **kw)
+
+
+# ---------------------------------------------------------------- scenes
+
+def test_group1_meets_the_published_amplitude_limit_exactly():
+    r = plan_cyclogram(scene_task("loom/group1"))
+    assert r.status is Status.SOLVED
+    assert r.values["t_3_7_deg"] == pytest.approx(T_3_7_MIN_DEG, abs=1e-7)
+    assert r.values["amplitude_3_7_mm"] == pytest.approx(0.1, abs=1e-10)
+    assert r.values["span_deg"] == pytest.approx(longest_path(scene_task("loom/group1")), abs=1e-7)
+    assert r.diagnostics["critical_chain"] == ["1", "3", "7", "8", "9", "10"]
+    # the returner's cam sits on [sigma_H] = 800 MPa (assumed): sigma_max at the optimum is the limit
+    assert r.values["sigma_9_10_MPa"] == pytest.approx(800.0)
+
+
+def test_event_times_satisfy_every_operation_and_angles_are_time_differences():
+    task = scene_task("loom/group1")
+    r = plan_cyclogram(task)
+    lb, _ = task.lower_bounds_deg()
+    for (x, y), w in zip(task.arcs, lb):
+        t = r.values[f"p_{y}_deg"] - r.values[f"p_{x}_deg"]
+        assert t == pytest.approx(r.values[f"t_{x}_{y}_deg"]) and t >= w - 1e-7
+    assert r.values["p_1_deg"] == 0.0
+
+
+def test_float_is_latest_minus_earliest_minus_duration():
+    r = plan_cyclogram(scene_task("loom/group1"))
+    fl = r.diagnostics["float_deg"]
+    # by hand: 1-2-6-8 needs 10 + 40 + 5 = 55 of the 66 deg to event 8; 3-4-5-8 needs 5 + 20 + 15 of 46
+    assert fl["1->2"] == pytest.approx(11.0) and fl["2->6"] == pytest.approx(11.0)
+    assert fl["3->4"] == pytest.approx(6.0) and fl["5->8"] == pytest.approx(6.0)
+    assert set(r.diagnostics["critical_ops"]) == {"1->3", "3->7", "7->8", "8->9", "9->10"}
+
+
+def test_machine_gives_the_cycle_left_by_the_compressed_groups_to_the_limiting_operation():
+    task = scene_task("loom/machine")
+    r = plan_cyclogram(task)
+    lb, _ = task.lower_bounds_deg()
+    before = 20 + T_3_7_MIN_DEG + 10 + 15 + 900 * 30 / 800 + 5      # group 1 and the pick (scene's numbers)
+    after = 20 + 15 + 25 + 0
+    assert r.values["limiting_op_deg"] == pytest.approx(task.cycle_deg - before - after, abs=1e-7)
+    assert r.values["span_group1_deg"] == pytest.approx(plan_cyclogram(scene_task("loom/group1")).values["span_deg"])
+    assert r.values["span_deg"] == pytest.approx(360.0) and r.values["sens_cycle_deg_per_deg"] == pytest.approx(1.0)
+    assert ["10.1", "10.2"] == r.diagnostics["critical_chain"][6:8]
+
+
+def test_exact_and_linearised_stress_differ_by_the_tangent_gap_and_the_linear_optimum_is_overstressed():
+    exact = plan_cyclogram(scene_task("loom/group1"), stress_form="exact")
+    linear = plan_cyclogram(scene_task("loom/group1"), stress_form="linear")
+    gap = 900 * 30 / 800 - 30 * (2 - 800 / 900)             # on the critical returner stroke (9, 10)
+    assert exact.values["span_deg"] - linear.values["span_deg"] == pytest.approx(gap, abs=1e-7)
+    assert linear.violated == ("contact_stress[9->10]",) and exact.violated == ()
+    assert linear.values["sigma_9_10_MPa"] > 800.0 and "exceed [sigma_H]" in linear.message
+
+
+@pytest.mark.parametrize("case", ["loom/group1", "loom/machine"])
+def test_clarabel_agrees_with_highs(case):
+    a = plan_cyclogram(scene_task(case), backend="HIGHS")
+    b = plan_cyclogram(scene_task(case), backend="CLARABEL")
+    key = "limiting_op_deg" if case.endswith("machine") else "span_deg"
+    assert b.status is Status.SOLVED and b.values[key] == pytest.approx(a.values[key], abs=1e-6)
+
+
+# ---------------------------------------------------------------- duals against finite differences
+
+def _objective(task, **change):
+    r = plan_cyclogram(dataclasses.replace(task, **change))
+    assert r.status is Status.SOLVED
+    return r.values.get("limiting_op_deg", r.values["span_deg"])
+
+
+@pytest.mark.parametrize("case", ["loom/group1", "loom/machine"])
+def test_sensitivities_match_a_finite_difference_re_solve(case):
+    task = scene_task(case)
+    r = plan_cyclogram(task)
+    h = 1e-3
+    for key, sens in (("sigma_H_limit_MPa", "sens_sigma_H_deg_per_MPa"),
+                      ("amplitude_limit_mm", "sens_amplitude_limit_deg_per_mm")):
+        base = getattr(task, key)
+        h_key = h * base
+        fd = (_objective(task, **{key: base + h_key}) - _objective(task, **{key: base - h_key})) / (2 * h_key)
+        assert r.values[sens] == pytest.approx(fd, rel=1e-3), key
+    # one degree more [phi] on the critical (7, 8) moves the objective by the dual (+1 span, -1 limiting op)
+    ops = [dict(op, min_deg=op["min_deg"] + 1.0) if (op["from"], op["to"]) == ("7", "8") else op
+           for op in task.operations]
+    fd = _objective(task, operations=ops) - _objective(task)
+    assert r.diagnostics["sens_min_deg"]["7->8"] == pytest.approx(fd, abs=1e-7) == (-1.0 if "machine" in case else 1.0)
+
+
+def test_sign_convention_looser_limits_shorten_the_span():
+    r = plan_cyclogram(scene_task("loom/group1"))
+    assert r.values["sens_sigma_H_deg_per_MPa"] == pytest.approx(-900 * 30 / 800**2)     # d(K/sigma)/d(sigma)
+    assert r.values["sens_amplitude_limit_deg_per_mm"] == pytest.approx(1 / -0.003)
+
+
+def test_lp_certificate_primal_feasible_dual_nonnegative_complementary():
+    task = scene_task("loom/group1")
+    r = plan_cyclogram(task)
+    lp = next(v for v in cyclogram_lp._BUILDS.values() if v.problem.value == pytest.approx(r.values["span_deg"]))
+    for name in ("min_angle", "contact_stress", "amplitude"):
+        con = lp.blocks[name]
+        dual = np.asarray(con.dual_value).ravel()
+        slack = np.abs(np.asarray(con.expr.value).ravel())     # cvxpy keeps each as expr <= 0 (or >= rearranged)
+        assert (dual >= -1e-9).all(), name
+        assert np.max(np.asarray(con.violation()).ravel()) <= 1e-7, name
+        assert np.max(np.abs(dual * slack)) <= 1e-6, name
+
+
+# ---------------------------------------------------------------- DPP re-solve
+
+def test_a_limit_change_reuses_the_compiled_problem_and_gives_the_fresh_answer():
+    task = scene_task("loom/group1")
+    plan_cyclogram(task)
+    tighter = dataclasses.replace(task, amplitude_limit_mm=0.05)
+    again = plan_cyclogram(tighter)
+    assert again.diagnostics["compiled_now"] is False and again.timing.build_s < 0.05
+    assert again.values["t_3_7_deg"] == pytest.approx((0.208 - 0.05) / 0.003, abs=1e-7)
+    cyclogram_lp._BUILDS.clear()
+    fresh = plan_cyclogram(tighter)
+    assert fresh.diagnostics["compiled_now"] is True
+    assert fresh.values["span_deg"] == pytest.approx(again.values["span_deg"], abs=1e-9)
+
+
+def test_scene_override_of_a_limit_is_a_what_if():
+    run = registry.run(registry.find("loom/group1"), {"amplitude_limit_mm": 0.13})
+    # amplitude needs only 26 deg now; the lift cam's stress bound 700 * 36 / 800 = 31.5 deg takes over
+    assert run.checks == [] and run.result.values["t_3_7_deg"] == pytest.approx(31.5, abs=1e-7)
+    assert run.result.diagnostics["bound_source"]["3->7"] == "contact_stress"
+
+
+# ---------------------------------------------------------------- infeasible, unbounded, failures
+
+def test_window_conflict_names_the_positive_cycle():
+    run = registry.run(registry.find("loom/group1-window-conflict"))
+    r = run.result
+    assert r.status is Status.INFEASIBLE and r.values == {} and run.ok
+    assert "window p(8) - p(3) <= 40 deg" in r.message and "t(3->7) >= 36 deg (amplitude)" in r.message
+    assert "t(7->8) >= 10 deg (min_angle)" in r.message and sorted(r.diagnostics["conflict_events"]) == ["3", "7", "8"]
+
+
+def test_an_amplitude_limit_the_cycle_cannot_hold_is_infeasible_and_says_so():
+    task = net([(1, 2, 10), (2, 3, 20)], cycle_deg=60.0, amplitude_slope_mm_per_deg=-0.003,
+               amplitude_intercept_mm=0.208, amplitude_limit_mm=0.01)
+    task = dataclasses.replace(task, operations=[dict(task.operations[0], amplitude="linear"), task.operations[1]])
+    r = plan_cyclogram(task)
+    need = (0.208 - 0.01) / 0.003                          # 66 deg for the amplitude alone, cycle 60
+    assert r.status is Status.INFEASIBLE and not r.values
+    assert f"t(1->2) >= {need:.6g} deg (amplitude)" in r.message and "cycle p(3) - p(1) <= 60 deg" in r.message
+
+
+def test_synchronised_events_and_a_window_shape_the_times():
+    task = net([(1, 2, 10), (1, 3, 25), (2, 4, 10), (3, 4, 1)],
+               syncs=[{"events": ["2", "3"]}], windows=[{"from": "1", "to": "4", "max_deg": 40.0}])
+    r = plan_cyclogram(task)          # without the sync the span would be 26; with it 25 + 10
+    assert r.values["p_2_deg"] == pytest.approx(r.values["p_3_deg"]) == pytest.approx(25.0)
+    assert r.values["span_deg"] == pytest.approx(35.0) == r.values["longest_path_deg"]
+    tight = plan_cyclogram(dataclasses.replace(task, windows=[{"from": "1", "to": "4", "max_deg": 30.0}]))
+    assert tight.status is Status.INFEASIBLE and "sync p(3) = p(2)" in tight.message
+    assert "window p(4) - p(1) <= 30 deg" in tight.message
+
+
+def test_limiting_operation_without_a_cycle_is_unbounded_not_a_number():
+    r = plan_cyclogram(net([(1, 2, 10), (2, 3, 20)], limiting_op=["2", "3"]))
+    assert r.status is Status.UNBOUNDED and r.values == {} and "unbounded" in r.message
+
+
+def test_cross_check_failure_is_loud(monkeypatch):
+    monkeypatch.setattr(cyclogram_lp.nx, "dag_longest_path_length", lambda g, **kw: -1.0)
+    with pytest.raises(SolverError, match=r"cross-check failed: LP span_deg = 30\.0 but networkx dag_longest_path_length gives -1\.0"):
+        plan_cyclogram(net([(1, 2, 10), (2, 3, 20)]))
+
+
+def test_a_problem_that_would_recompile_is_refused(monkeypatch):
+    cyclogram_lp._BUILDS.clear()
+    monkeypatch.setattr(cp.Problem, "is_dpp", lambda self, *a, **k: False)
+    with pytest.raises(SolverError, match=r"event-time LP is not DPP; what-if re-solves would recompile"):
+        plan_cyclogram(net([(1, 2, 10), (2, 3, 20)]))
+
+
+def test_back_end_crash_is_failed_and_inaccurate_is_not_passed_on(monkeypatch):
+    task = net([(1, 2, 10), (2, 3, 20)])
+    plan_cyclogram(task)
+
+    def crash(self, *a, **k):
+        raise cp.error.SolverError("HiGHS exploded")
+    with monkeypatch.context() as m:
+        m.setattr(cp.Problem, "solve", crash)
+        r = plan_cyclogram(task)
+    assert r.status is Status.FAILED and r.values == {} and "HiGHS exploded" in r.message
+    monkeypatch.setattr(cyclogram_lp, "from_cvxpy", lambda status: Status.INACCURATE)
+    r = plan_cyclogram(task)
+    assert r.status is Status.INACCURATE and r.values == {}
+
+
+# ---------------------------------------------------------------- hard cases
+
+def test_degenerate_ties_mark_every_critical_chain():
+    task = net([(1, 2, 10), (1, 3, 10), (2, 4, 20), (3, 4, 20), (1, 4, 5)])
+    r = plan_cyclogram(task)
+    assert r.values["span_deg"] == pytest.approx(30.0)
+    assert set(r.diagnostics["critical_ops"]) == {"1->2", "1->3", "2->4", "3->4"}
+    assert r.diagnostics["float_deg"]["1->4"] == pytest.approx(25.0)
+
+
+def test_zero_angle_operations_give_zero_span():
+    r = plan_cyclogram(net([(1, 2, 0), (2, 3, 0), (1, 3, 0)]))
+    assert r.status is Status.SOLVED and r.values["span_deg"] == 0.0 and r.values["t_1_2_deg"] == 0.0
+
+
+def test_huge_and_tiny_angles_in_one_network():
+    edges = [(1, 2, 1e-6), (2, 4, 1e4), (1, 3, 1e4), (3, 4, 2e-6)]
+    task = net(edges)
+    r = plan_cyclogram(task)
+    assert r.values["span_deg"] == pytest.approx(1e4 + 2e-6, rel=1e-12, abs=1e-9)
+    assert r.values["span_deg"] == pytest.approx(longest_path(task), abs=1e-9)
+    assert r.diagnostics["critical_chain"] == ["1", "3", "4"]
+
+
+def test_an_isolated_event_is_reported_and_left_out():
+    task = net([(1, 2, 10), (2, 3, 20)], extra_events={"spare": {}})
+    r = plan_cyclogram(task)
+    assert r.values["span_deg"] == pytest.approx(30.0)
+    assert r.diagnostics["isolated_events"] == ["spare"] and "p_spare_deg" not in r.values
+
+
+def layered(n, per=3, width=100, seed=0):
+    """Random layered network: event 0 first, n-1 last, each inner event fed from `per` events of
+    the layer before; angles U(0, 30) deg."""
+    rng = np.random.default_rng(seed)
+    inner = np.arange(1, n - 1)
+    layer = (inner - 1) // width
+    tails = [np.where(layer == 0, 0, (layer - 1) * width + 1 + rng.integers(0, width, inner.size))
+             for _ in range(per)]
+    pairs = np.unique(np.column_stack([np.concatenate(tails), np.tile(inner, per)]), axis=0)
+    leaves = np.setdiff1d(np.arange(n - 1), pairs[:, 0])
+    pairs = np.vstack([pairs, np.column_stack([leaves, np.full(leaves.size, n - 1)])])
+    return pairs[:, 0], pairs[:, 1], rng.uniform(0, 30, len(pairs))
+
+
+@pytest.mark.slow
+def test_a_hundred_thousand_events_solve_once_to_the_longest_path():
+    tails, heads, w = layered(100_000)
+    task = Cyclogram(events={str(v): {} for v in range(100_000)},
+                     operations=[{"from": str(a), "to": str(b), "min_deg": float(c)} for a, b, c in zip(tails, heads, w)])
+    r = plan_cyclogram(task)
+    # independent longest path in numpy, layer by layer (the arcs only go to the next layer or the sink)
+    dist = np.full(100_000, -np.inf)
+    dist[0] = 0.0
+    order = np.argsort(heads, kind="stable")      # heads ascend with the layers
+    for a, b, c in zip(tails[order], heads[order], w[order]):
+        dist[b] = max(dist[b], dist[a] + c)
+    assert r.status is Status.SOLVED and r.values["span_deg"] == pytest.approx(dist[-1], abs=1e-6)
+    assert len(tails) > 250_000
+
+
+def test_gantt_figure_is_written_for_a_solved_scene_and_skipped_for_an_infeasible_one(tmp_path):
+    from mechopt.plots import plot_run
+    paths = plot_run(registry.run(registry.find("loom/group1")), tmp_path)
+    assert [p.name for p in paths] == ["loom_group1.png"] and paths[0].stat().st_size > 10_000
+    assert plot_run(registry.run(registry.find("loom/group1-window-conflict")), tmp_path) == []
+
+
+def test_an_optimum_contradicting_a_positive_cycle_is_refused(monkeypatch):
+    task = net([(1, 2, 10), (2, 3, 20)], windows=[{"from": "1", "to": "3", "max_deg": 40.0}])
+    monkeypatch.setattr(cyclogram_lp, "_constraint_arcs", lambda net, lb: [("1", "2", 10.0), ("2", "1", 0.0)])
+    with pytest.raises(SolverError, match=r"cross-check failed: the LP reports an optimum but the difference "
+                                          r"constraints hold a positive cycle"):
+        plan_cyclogram(task)
+
+
+def test_infeasible_without_a_positive_cycle_says_it_may_be_numerical(monkeypatch):
+    monkeypatch.setattr(cyclogram_lp, "conflict_chain", lambda net: [])
+    r = plan_cyclogram(scene_task("loom/group1-window-conflict"))
+    assert r.status is Status.INFEASIBLE and r.values == {}
+    assert r.message == "HIGHS: infeasible (no positive cycle among the difference constraints: a numerical failure?)"
