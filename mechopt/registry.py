@@ -8,7 +8,7 @@ from typing import Any
 
 from mechopt.models.errors import SceneError
 from mechopt.scene import Scene, load
-from mechopt.solvers.result import Result
+from mechopt.solvers.result import Result, Status
 
 
 @dataclass(frozen=True)
@@ -78,11 +78,28 @@ def find(case_id: str) -> Scene:
 def run(scene: Scene, overrides: dict | None = None) -> Run:
     """Solve a scene (with `--set` overrides, validated like the file) and check its expectations."""
     overrides = dict(overrides or {})
-    task, settings = scene.build(overrides)
+    task, settings = scene.build(_derived_params(scene) | overrides)
     result = scene.solver(task, **settings)
     params_changed = bool(scene.split_overrides(overrides)[0])
     checks = [] if params_changed else check(scene, result)
     return Run(scene, result, checks, overrides)
+
+
+def _derived_params(scene: Scene, chain: tuple[str, ...] = ()) -> dict:
+    """Values of the parameters a scene takes from other scenes' results (run as their files say)."""
+    out = {}
+    for key, (source_id, name) in scene.derived().items():
+        if source_id in chain + (scene.id,):
+            raise SceneError(f"{scene.path}: derive.{key}: {' -> '.join(chain + (scene.id, source_id))} is a loop")
+        source = find(source_id)
+        task, settings = source.build(_derived_params(source, chain + (scene.id,)))
+        result = source.solver(task, **settings)
+        if result.status is not Status.SOLVED or name not in result.values:
+            raise SceneError(f"{scene.path}: derive.{key}: scene {source_id} gave status {result.status.value}"
+                             + ("" if name in result.values else f" and no value {name!r}; it has "
+                                + ", ".join(result.values)), key=key)
+        out[key] = result.values[name]
+    return out
 
 
 def check(scene: Scene, result: Result) -> list[Check]:

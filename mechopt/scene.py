@@ -104,6 +104,7 @@ class SceneFile(BaseModel):
     params: dict[str, Param]
     structure: dict[str, Any] = {}           # non-numeric inputs (a network's events, a list of speeds),
                                              # handed to the task as they are; it validates them
+    derive: dict[str, str] = {}              # param = "other-scene-id:value_name": a chain of models
     solver_settings: dict[str, Number | str | bool] = {}
     method: dict[str, Number | str] = {}     # the source's own method, when it matters to the numbers
     expect: dict[str, Expectation] = {}
@@ -133,6 +134,10 @@ class Scene:
 
     def settings(self) -> dict[str, Any]:
         return dict(self.spec.solver_settings)
+
+    def derived(self) -> dict[str, tuple[str, str]]:
+        """Parameters taken from another scene's result: {param: (scene id, value name)}."""
+        return {k: tuple(v.split(":", 1)) for k, v in self.spec.derive.items()}
 
     def split_overrides(self, overrides: dict[str, Any]) -> tuple[dict, dict]:
         """Sort `--set` pairs into parameters and solver settings; unknown keys are refused."""
@@ -170,8 +175,15 @@ def load(path: Path) -> Scene:
         raise SceneError(f"{path}: " + "; ".join(_explain(e) for e in exc.errors())) from None
     task_class = _resolve(path, "task", spec.task, "mechopt.models")
     solver = _resolve(path, "solver", spec.solver, "mechopt.solvers")
+    fields = _task_fields(task_class)
+    for key, ref in spec.derive.items():
+        source, sep, value = ref.partition(":")
+        if key not in fields or key in spec.params or not sep or not source or not value:
+            raise SceneError(f"{path}: derive.{key} = {ref!r}: expected a parameter of {task_class.__name__} "
+                             "that params does not give, set to 'scene-id:value_name'", key=key)
     scene = Scene(path, spec, task_class, solver)
-    scene.build()       # parameters, effects and settings must all be valid before anything runs
+    if not spec.derive:     # a derived scene is checked when its sources have run (registry.run)
+        scene.build()       # parameters, effects and settings must all be valid before anything runs
     return scene
 
 

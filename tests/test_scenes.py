@@ -159,3 +159,26 @@ def test_a_calibrated_parameter_names_its_figure_and_that_check_is_marked(tmp_pa
     fitted = load(_edited(tmp_path, 'mark = "assumed", why = "LOW_H', 'mark = "calibrated", on = "H_mm", why = "LOW_H'))
     checks = {c.name: c for c in registry.check(fitted, registry.run(fitted).result)}
     assert checks["H_mm"].calibrated and not checks["L_mm"].calibrated
+
+
+def test_a_derived_parameter_is_the_other_scenes_value():
+    chained = registry.run(registry.find("loom/group1-stop-model"))
+    law = registry.run(registry.find("stop-impact/amplitude-law")).result.values
+    published = registry.run(registry.find("loom/group1")).result.values
+    bound = (law["intercept_mm"] - 0.1) / -law["slope_mm_per_deg"]          # a(t) = 0.1 mm on the tangent
+    assert chained.result.values["t_3_7_deg"] == pytest.approx(bound, abs=1e-7)
+    assert chained.result.values["span_deg"] - published["span_deg"] == pytest.approx(bound - 36.0, abs=1e-7)
+
+
+@pytest.mark.parametrize("ref, match", [
+    ('"nowhere/scene:x"', r"unknown case 'nowhere/scene'"),
+    ('"stop-impact/amplitude-law:nothing"', r"derive\.amplitude_slope_mm_per_deg: scene stop-impact/amplitude-law gave "
+                                            r"status SOLVED and no value 'nothing'; it has slope_mm_per_deg"),
+    ('"no-colon"', r"derive\.amplitude_slope_mm_per_deg = 'no-colon': expected a parameter of Cyclogram"),
+])
+def test_a_bad_derivation_is_refused_by_name(tmp_path, ref, match):
+    text = (registry.cases_dir() / "loom" / "group1-stop-model.toml").read_text()
+    path = tmp_path / "chain.toml"
+    path.write_text(text.replace('"stop-impact/amplitude-law:slope_mm_per_deg"', ref))
+    with pytest.raises(SceneError, match=match):
+        registry.run(load(path))
