@@ -26,6 +26,7 @@ from scipy.optimize import linprog
 
 from mechopt import registry
 from mechopt.solvers import cyclogram_lp
+from mechopt.plots import save_figure
 from mechopt.solvers.cyclogram_lp import build_event_time_lp, incidence, plan_cyclogram
 
 __all__ = ["cli", "layered", "scale", "what_if", "TARGETS"]
@@ -237,11 +238,7 @@ def plot(rows, out_dir):
            title="Event-time LP on random layered networks")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
-    path = out / "loom_scale.png"
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return [str(path)]
+    return [str(save_figure(fig, out / "loom_scale.png"))]
 
 
 def cli(repeats, out_dir, progress=None) -> str:

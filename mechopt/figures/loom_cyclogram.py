@@ -1,4 +1,5 @@
 """Figures for the loom cyclogram scenes (models/loom_cyclogram.py): the cyclogram as a Gantt chart."""
+from mechopt.plots import save_figure
 
 
 def plot(run, out_dir):
@@ -41,8 +42,4 @@ def plot(run, out_dir):
                 else f"span {values['span_deg']:.2f} deg")
     ax.set_title(f"{run.scene.id}: {headline}; critical chain (red) {' - '.join(chain)}", fontsize=9)
     ax.grid(True, axis="x", alpha=0.3)
-    fig.tight_layout()
-    path = out_dir / f"{run.scene.id.replace('/', '_')}.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return [path]
+    return [save_figure(fig, out_dir / f"{run.scene.id.replace('/', '_')}.png")]
