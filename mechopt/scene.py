@@ -51,6 +51,7 @@ class Expectation(BaseModel):
     min: Number | None = None
     kind: Literal["published", "experimental", "derived"]
     where: str
+    follows: str = ""      # why agreement is by construction (it follows from a calibration): not a reproduction
 
     @model_validator(mode="after")
     def _one_form(self):

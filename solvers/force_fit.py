@@ -49,6 +49,8 @@ def fit_force(travel_mm, load_N, degree: int, *, segments: int = 2, through_orig
                          key="load_N")
     if not (np.all(np.isfinite(x)) and np.all(np.isfinite(f))):
         raise ModelError("travel_mm and load_N must be finite numbers (found NaN or inf)", key="load_N")
+    if not np.any(f):
+        raise ModelError("load_N is zero everywhere: there is no force law to fit", key="load_N")
     powers = np.arange(1 if through_origin else 0, degree + 1)
     if x.size < powers.size:
         raise ModelError(f"{x.size} points cannot fix {powers.size} coefficients of degree {degree}; "

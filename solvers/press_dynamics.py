@@ -30,7 +30,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from mechopt.models.crank_press import FORCE_KEYS, WORK_NAMES, Dynamics, PressDrive, dynamics
-from mechopt.models.errors import ModelError
+from mechopt.models.errors import MechoptError, ModelError
 from mechopt.solvers.result import Result, Status, Timing, from_casadi_integrator, from_ivp, from_rootfinder
 
 __all__ = ["rk4", "events", "steady_state", "ivp"]
@@ -163,9 +163,11 @@ def _extreme(t, w, pick):
 
 
 def _checked(status, message, violated, diagnostics):
-    """A SOLVED run whose cutting work disagrees with the cut windows it crossed is INACCURATE."""
-    if status is Status.SOLVED and diagnostics.get("cut_work_mismatch"):
-        return Status.INACCURATE, f"{message}; {diagnostics['cut_work_mismatch']}", violated + ("cut_work",)
+    """A run whose cutting work disagrees with the cut windows it crossed says so, and is at best
+    INACCURATE."""
+    if diagnostics.get("cut_work_mismatch"):
+        return (Status.INACCURATE if status is Status.SOLVED else status,
+                f"{message}; {diagnostics['cut_work_mismatch']}", violated + ("cut_work",))
     return status, message, violated
 
 
@@ -255,8 +257,11 @@ def rk4(task: PressDrive, *, step_s: float = 1e-4, duration_s: float = 1.0, star
     values["step_s"] = h
     diagnostics |= {"halvings": halvings, "last_change_rad": float(change) if np.isfinite(change) else None}
     ok = refine_tol_rad <= 0 or change <= refine_tol_rad
+    diagnostics["switches_stepped_over"] = True      # fixed steps: first order across the jump
     status, message, violated = _checked(Status.SOLVED if ok else Status.INACCURATE,
-                                         f"RK4, step {h:.3g} s after {halvings} halvings"
+                                         f"RK4, step {h:.3g} s after {halvings} halvings; fixed steps cross "
+                                         "the jump at the end of the cut and the friction sign change "
+                                         "(first order there: the paper's method as published)"
                                          + ("" if ok else f"; last halving still moved phi by {change:.3g} rad > "
                                                           f"{refine_tol_rad:g}"), (), diagnostics)
     timing = Timing(build, time.perf_counter() - t_start - build)
@@ -321,6 +326,8 @@ def events(task: PressDrive, *, tol: float = 1e-10, duration_s: float = 1.0, sta
     except _Limit as limit:
         status, message = Status.LIMIT, str(limit)
     except RuntimeError as exc:        # CVODES gave up (e.g. too much work): a status, not a crash
+        if isinstance(exc, MechoptError):
+            raise
         status, message = from_casadi_integrator(str(exc)), f"CVODES failed: {exc}"
     if not trace.t:
         return Result(status, {}, Timing(build, time.perf_counter() - t_start - build), message, violated), trace
@@ -489,7 +496,8 @@ def _locate(piece, x, mode, lo, hi, g):
             side = -1
         if abs(g_mid) < 1e-12:
             return mid, state
-    return mid, state
+    raise _Limit(f"an event was not located to 1e-12 in 200 false-position steps (bracket {hi - lo:.3g} s, "
+                 f"g = {g_mid:.3g})")
 
 
 # --- steady_state: the periodic motion over one revolution, solved directly ------------------------
@@ -556,14 +564,16 @@ def steady_state(task: PressDrive, *, tol: float = 1e-10, samples: int = 60, max
     if task.motor:      # start near the motor's idle speed rather than the nominal one
         guess[[i for i, k in enumerate(np.delete(np.array(task.state_names), task.state_names.index("phi_rad")))
                if k.startswith("omega")]] = task.motor_sync_speed_rad_s / task.gear_ratio * 0.99
-    try:
+    try:                # the re-integration of the found orbit can fail as well as the Newton solve
         solution = np.asarray(rf(guess)).ravel()
         status = from_rootfinder(rf.stats()["return_status"])
+        trace = _revolution_trace(task, pieces, n, solution)
+        miss = float(np.max(np.abs(np.asarray(residual(solution)).ravel())))
     except RuntimeError as exc:
-        return Result(Status.FAILED, {}, Timing(build, time.perf_counter() - t_start - build),
+        if isinstance(exc, MechoptError):
+            raise
+        return Result(from_casadi_integrator(str(exc)), {}, Timing(build, time.perf_counter() - t_start - build),
                       message=f"CVODES failed inside the periodic Newton solve: {exc}"), Trace()
-    trace = _revolution_trace(task, pieces, n, solution)
-    miss = float(np.max(np.abs(np.asarray(residual(solution)).ravel())))
     values, diagnostics = summarise(task, trace, cut_angles=task.cut_window_rad())
     values["periodicity_residual"] = miss
     diagnostics |= {"newton_iterations": rf.stats()["iter_count"], "initial_state": solution.tolist()}
@@ -633,7 +643,13 @@ def ivp(task: PressDrive, *, method: Literal["Radau", "LSODA", "DOP853", "RK45",
             trace.mode = [np.column_stack([_paper_U(task, sol.y.T), np.ones(sol.t.size), np.zeros(sol.t.size)])]
         values, diagnostics = summarise(task, trace)
         diagnostics["rhs_calls"] = int(sol.nfev)
-        status, message, violated = _checked(status, sol.message, (), diagnostics)
+        diagnostics["switches_stepped_over"] = bool(task.cutting or "friction" in task.effects)
+        if status is Status.SOLVED and diagnostics["switches_stepped_over"]:
+            # the cut's jump and sign(omega) lie inside steps: the error there is uncontrolled
+            status = Status.INACCURATE
+        status, message, violated = _checked(status, sol.message + (
+            "; switched right-hand side integrated without event location: the cut's jump and the "
+            "friction sign change were stepped over" if diagnostics["switches_stepped_over"] else ""), (), diagnostics)
         timing = Timing(0.0, time.perf_counter() - t_start)
         return Result(status, values, timing, message, violated, diagnostics), trace
     mode = _mode_at(task, dyn, x, 1.0)

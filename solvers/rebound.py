@@ -26,7 +26,7 @@ import numpy as np
 from scipy.integrate import quad, solve_ivp
 from scipy.optimize import brentq, minimize_scalar
 
-from mechopt.models.errors import ModelError
+from mechopt.models.errors import MechoptError, ModelError
 from mechopt.models.lever_stop import Impact, LeverStop
 from mechopt.solvers.result import (Result, Status, Timing, from_casadi_integrator, from_ivp,
                                     from_quadpack)
@@ -262,6 +262,8 @@ def ode_amplitude_m(imp: Impact, *, points=65, reltol=1e-13):
             best = max(best, float(nodes[0].max()))
             state = traj[:, -1]
     except RuntimeError as exc:       # CVODES gave up: a status, not an exception, for the caller
+        if isinstance(exc, MechoptError):
+            raise
         return float("nan"), from_casadi_integrator(str(exc)), build_s
     return best * L, from_casadi_integrator(None), build_s
 

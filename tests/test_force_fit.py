@@ -83,6 +83,7 @@ def test_too_few_distinct_travels_is_inaccurate_not_a_fit():
     (([1.0, 2.0], [1.0, 2.0], 1), {"segments": 0}, r"segments=0: must be an integer >= 1"),
     (([1.0, 2.0], [1.0], 1), {}, r"travel_mm has 2 values but load_N has 1"),
     (([1.0, 2.0], [1.0, np.nan], 1), {}, r"must be finite numbers"),
+    (([1.0, 2.0], [0.0, 0.0], 1), {}, r"load_N is zero everywhere: there is no force law to fit"),
     (([1.0, 2.0], [1.0, 2.0], 4), {}, r"2 points cannot fix 4 coefficients of degree 4; give at least 4"),
 ])
 def test_bad_fit_input_is_refused(args, kwargs, match):

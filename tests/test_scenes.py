@@ -182,3 +182,13 @@ def test_a_bad_derivation_is_refused_by_name(tmp_path, ref, match):
     path.write_text(text.replace('"stop-impact/amplitude-law:slope_mm_per_deg"', ref))
     with pytest.raises(SceneError, match=match):
         registry.run(load(path))
+
+
+def test_a_number_from_an_unexpected_status_does_not_pass():
+    scene = registry.find("cam-cutter/minimax")
+    from mechopt.solvers.result import Result, Timing
+    inaccurate = Result(Status.INACCURATE, {"max_deviation_mm": 0.06, "H_mm": 59.6, "L_mm": 47.4}, Timing(0.0, 0.0))
+    checks = {c.name: c for c in registry.check(scene, inaccurate)}
+    assert not checks["max_deviation_mm"].ok and not checks["status"].ok
+    robust = registry.run(registry.find("cam-cutter/robust"))       # INFEASIBLE is what that scene expects
+    assert robust.ok and robust.result.status is Status.INFEASIBLE
