@@ -141,25 +141,30 @@ class Scene:
         return {k: tuple(v.split(":", 1)) for k, v in self.spec.derive.items()}
 
     def split_overrides(self, overrides: dict[str, Any]) -> tuple[dict, dict]:
-        """Sort `--set` pairs into parameters and solver settings; unknown keys are refused."""
+        """Sort `--set` pairs into parameters (structure paths included) and solver settings;
+        unknown keys are refused."""
         fields = _task_fields(self.task_class)
         options = _solver_options(self.solver)
         params, settings = {}, {}
         for key, value in overrides.items():
-            if key in fields:
+            if key in fields or _path_head(key) in self.spec.structure:
                 params[key] = value
             elif key in options:
                 settings[key] = value
             else:
                 raise SceneError(f"{self.path}: --set {key}: unknown key; parameters: {', '.join(fields)}; "
-                                 f"solver settings: {', '.join(options) or 'none'}", key=key)
+                                 f"solver settings: {', '.join(options) or 'none'}"
+                                 + (f"; structure entries as PATH, e.g. {_path_example(self.spec.structure)}"
+                                    if self.spec.structure else ""), key=key)
         return params, settings
 
     def build(self, overrides: dict[str, Any] | None = None):
         """The task instance and solver settings, overrides applied and validated like the file."""
         params, settings = self.split_overrides(overrides or {})
+        paths = {k: v for k, v in params.items() if _path_head(k) in self.spec.structure and k not in self.spec.structure}
+        params = {k: v for k, v in params.items() if k not in paths}
         return (_build_task(self.path, self.task_class, self.spec.effects, self.params() | params,
-                            self.spec.structure),
+                            _set_paths(self.path, self.spec.structure, paths)),
                 _check_settings(self.path, self.solver, self.settings() | settings))
 
 
@@ -192,13 +197,64 @@ def parse_overrides(pairs: list[str]) -> dict[str, Any]:
     """`KEY=VALUE` strings as typed values: TOML literals (3, 0.5, true, "x"), else plain text."""
     out = {}
     for pair in pairs:
-        key, sep, text = pair.partition("=")
+        depth, cut = 0, -1
+        for i, ch in enumerate(pair):      # the first '=' outside a selector's brackets
+            depth += (ch == "[") - (ch == "]")
+            if ch == "=" and depth == 0:
+                cut = i
+                break
+        key, sep, text = (pair[:cut], "=", pair[cut + 1:]) if cut >= 0 else (pair, "", "")
         if not sep or not key.strip():
             raise SceneError(f"--set {pair!r}: expected KEY=VALUE, e.g. --set a_mm=40")
         try:
             out[key.strip()] = tomllib.loads(f"v = {text.strip()}")["v"]
         except tomllib.TOMLDecodeError:
             out[key.strip()] = text.strip()
+    return out
+
+
+def _path_head(key):
+    return key.split(".", 1)[0].split("[", 1)[0]
+
+
+def _path_example(structure):
+    for name, value in structure.items():
+        if isinstance(value, list) and value and isinstance(value[0], dict):
+            first = value[0]
+            keys = [k for k in first if isinstance(first[k], str)][:2]
+            number = next((k for k, v in first.items() if isinstance(v, (int, float)) and not isinstance(v, bool)), "x")
+            return f"'{name}[{','.join(f'{k}={first[k]}' for k in keys)}].{number}=...'"
+    return f"{next(iter(structure))}.<key>=..."
+
+
+def _set_paths(path, structure, assignments):
+    """A copy of the structure with `--set` paths applied: `a.b.c` walks tables, and
+    `list[k=v,k2=v2]` picks the one table of a list whose entries match."""
+    import copy
+    import re
+    out = copy.deepcopy(dict(structure))
+    for key, value in assignments.items():
+        node, parts = out, key.split(".")
+        for i, part in enumerate(parts):
+            name, _, selector = part.partition("[")
+            last = i == len(parts) - 1
+            if not isinstance(node, dict) or name not in node:
+                raise SceneError(f"{path}: --set {key}: no entry {name!r} here; there are "
+                                 f"{', '.join(node) if isinstance(node, dict) else 'none'}", key=key)
+            if selector:
+                pairs = dict(p.split("=", 1) for p in re.split(r",\s*", selector.rstrip("]")) if "=" in p)
+                matches = [item for item in node[name] if isinstance(item, dict)
+                           and all(str(item.get(k)) == v for k, v in pairs.items())]
+                if len(matches) != 1:
+                    raise SceneError(f"{path}: --set {key}: [{selector} matches {len(matches)} entries of "
+                                     f"{name!r}, not one", key=key)
+                if last:
+                    raise SceneError(f"{path}: --set {key}: name the entry to change after the selector", key=key)
+                node = matches[0]
+            elif last:
+                node[name] = value
+            else:
+                node = node[name]
     return out
 
 

@@ -192,3 +192,25 @@ def test_a_number_from_an_unexpected_status_does_not_pass():
     assert not checks["max_deviation_mm"].ok and not checks["status"].ok
     robust = registry.run(registry.find("cam-cutter/robust"))       # INFEASIBLE is what that scene expects
     assert robust.ok and robust.result.status is Status.INFEASIBLE
+
+
+def test_set_reaches_a_structure_entry_by_path_and_changes_nothing_else():
+    scene = registry.find("loom/group1")
+    base = registry.run(scene).result.values
+    longer = registry.run(scene, parse_overrides(["operations[from=3,to=7].min_deg=40"]))
+    assert longer.checks == []                                          # the source's figures no longer apply
+    assert longer.result.values["t_3_7_deg"] == pytest.approx(40.0, abs=1e-7)
+    assert longer.result.values["span_deg"] - base["span_deg"] == pytest.approx(4.0, abs=1e-7)   # (3,7) is critical
+    assert registry.run(scene).result.values["span_deg"] == pytest.approx(base["span_deg"])      # the file is intact
+
+
+@pytest.mark.parametrize("pair, match", [
+    ("operations[from=3,to=9].min_deg=40", r"\[from=3,to=9\] matches 0 entries of 'operations', not one"),
+    ("operations[from=3].min_deg=40", r"\[from=3\] matches 2 entries of 'operations', not one"),
+    ("operations[from=3,to=7]=40", r"name the entry to change after the selector"),
+    ("operations[from=3,to=7].min_deg=-4", r"operations\[3->7\]\.min_deg=-4\.0: a minimum phase angle must be >= 0"),
+    ("oprations.x=1", r"--set oprations\.x: unknown key; .*structure entries as PATH, e\.g\. 'operations\[from=1,to=2\]"),
+])
+def test_a_bad_structure_path_is_refused_by_name(pair, match):
+    with pytest.raises(SceneError, match=match):
+        registry.run(registry.find("loom/group1"), parse_overrides([pair]))
