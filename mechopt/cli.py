@@ -1,4 +1,4 @@
-"""The `mechopt` command: list, run, validate and benchmark the registry's scenes."""
+"""The `mechopt` command: list, run, validate, sweep, report and benchmark the registry's scenes."""
 import argparse
 import importlib
 import json
@@ -33,10 +33,27 @@ def main(argv=None) -> int:
     fit.add_argument("--degree", type=int, default=4, help="1 to 6 (the paper: 4)")
     fit.add_argument("--segments", type=int, default=2, help="spans of travel on which errors are reported")
     fit.add_argument("--with-intercept", action="store_true", help="allow a constant term (default: F(0) = 0)")
+    sweep = sub.add_parser("sweep", help="what-if study: every variant of a scene, one Parquet table")
+    sweep.add_argument("case")
+    sweep.add_argument("--grid", action="append", default=[], metavar="KEY=START:STOP:NUM",
+                       help="NUM evenly spaced values from START to STOP; repeatable (all combinations)")
+    sweep.add_argument("--random", action="append", default=[], metavar="KEY=LOW:HIGH",
+                       help="uniform draws (with --samples); repeatable")
+    sweep.add_argument("--samples", type=int, default=0, metavar="N", help="random draws per grid point")
+    sweep.add_argument("--seed", type=int, default=0, help="seed of the random draws")
+    sweep.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler, e.g. tcp://host:8786 (default: this process)")
+    sweep.add_argument("--chunk", type=int, default=100, metavar="N", help="variants per task")
+    sweep.add_argument("--out", type=Path, metavar="FILE", help="Parquet table (default out/sweep/<case>.parquet)")
+    sweep.add_argument("--plot", type=Path, metavar="DIR", help="write the sweep's figures into DIR")
+    report = sub.add_parser("report", help="one static HTML page: validation table, figures, bench plots")
+    report.add_argument("--out", type=Path, default=Path("out/report"), metavar="DIR")
+    report.add_argument("--bench", type=Path, default=Path("out/bench"), metavar="DIR",
+                        help="folder of `mechopt bench` outputs to include (not re-run)")
+    report.add_argument("--case", action="append", default=[], metavar="ID", help="only these scenes; repeatable")
     args = parser.parse_args(argv)
     try:
         return {"cases": _cases, "run": _run, "validate": _validate, "bench": _bench,
-                "fit-force": _fit_force}[args.command](args)
+                "fit-force": _fit_force, "sweep": _sweep, "report": _report}[args.command](args)
     except MechoptError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
@@ -77,7 +94,8 @@ def _validate(args) -> int:
     failed = sum(not c.ok for c in checks)
     fitted = sum(c.ok and c.calibrated for c in checks)
     print(f"\n{len(checks) - failed} passed, {failed} failed")
-    print(f"of the passed, {fitted} are calibrations (a parameter was fitted to them), not reproductions")
+    print(f"of the passed, {fitted} are calibrations (fitted, or following from a fit by construction), "
+          "not reproductions")
     if args.json:
         _write_json(args.json, [r.as_dict() for r in runs])
     return 1 if failed else 0
@@ -97,6 +115,33 @@ def _fit_force(args) -> int:
     print(f"{args.csv}: degree {args.degree}, status {result.status.value}" + (f" ({result.message})" if result.message else ""))
     _print_table(("value", "got"), [(k, _fmt(v)) for k, v in result.values.items()])
     return 0 if result.status is Status.SOLVED else 1
+
+
+def _sweep(args) -> int:
+    from collections import Counter
+    from mechopt import sweep
+    scene = registry.find(args.case)
+    out = args.out or Path("out/sweep") / f"{scene.id.replace('/', '_')}.parquet"
+    table = sweep.sweep(scene, [sweep.parse_grid(g) for g in args.grid],
+                        [sweep.parse_random(r) for r in args.random], samples=args.samples, seed=args.seed,
+                        out=out, scheduler=args.scheduler, chunk=args.chunk)
+    counts = Counter(table.column("status").to_pylist())
+    print(f"{scene.id}: {table.num_rows} variants ({', '.join(f'{n} {s}' for s, n in sorted(counts.items()))})")
+    print(f"table: {out}")
+    if args.plot:
+        from mechopt.figures.sweep import plot_sweep
+        for path in plot_sweep(table, args.plot, scene=scene):
+            print(f"plot: {path}")
+    return 0
+
+
+def _report(args) -> int:
+    from mechopt.report import write_report
+    scenes = [registry.find(c) for c in args.case] if args.case else None
+    path = write_report(args.out, scenes=scenes, bench_dir=args.bench,
+                        progress=lambda line: print(line, file=sys.stderr, flush=True))
+    print(f"report: {path}")
+    return 0
 
 
 def _benchmarks():

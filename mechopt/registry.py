@@ -35,6 +35,8 @@ class Run:
     result: Result
     checks: list[Check]
     overrides: dict = field(default_factory=dict)
+    task: Any = None              # the task as solved: overrides and derived parameters applied
+    settings: dict = field(default_factory=dict)
 
     @property
     def ok(self) -> bool:
@@ -82,7 +84,7 @@ def run(scene: Scene, overrides: dict | None = None) -> Run:
     result = scene.solver(task, **settings)
     params_changed = bool(scene.split_overrides(overrides)[0])
     checks = [] if params_changed else check(scene, result)
-    return Run(scene, result, checks, overrides)
+    return Run(scene, result, checks, overrides, task, settings)
 
 
 def _derived_params(scene: Scene, chain: tuple[str, ...] = ()) -> dict:

@@ -143,8 +143,8 @@ class Scene:
     def split_overrides(self, overrides: dict[str, Any]) -> tuple[dict, dict]:
         """Sort `--set` pairs into parameters (structure paths included) and solver settings;
         unknown keys are refused."""
-        fields = _task_fields(self.task_class)
-        options = _solver_options(self.solver)
+        fields = task_fields(self.task_class)
+        options = solver_options(self.solver)
         params, settings = {}, {}
         for key, value in overrides.items():
             if key in fields or _path_head(key) in self.spec.structure:
@@ -181,7 +181,7 @@ def load(path: Path) -> Scene:
         raise SceneError(f"{path}: " + "; ".join(_explain(e) for e in exc.errors())) from None
     task_class = _resolve(path, "task", spec.task, "mechopt.models")
     solver = _resolve(path, "solver", spec.solver, "mechopt.solvers")
-    fields = _task_fields(task_class)
+    fields = task_fields(task_class)
     for key, ref in spec.derive.items():
         source, sep, value = ref.partition(":")
         if key not in fields or key in spec.params or not sep or not source or not value:
@@ -274,7 +274,8 @@ def _resolve(path, field, dotted, package):
     return getattr(module, name)
 
 
-def _task_fields(task_class):
+def task_fields(task_class):
+    """The task dataclass's fields by name (its parameters and structure inputs)."""
     return {f.name: f for f in dataclasses.fields(task_class)}
 
 
@@ -284,7 +285,7 @@ def _build_task(path, task_class, effects, params, structure=None):
     if unknown:
         raise SceneError(f"{path}: effects: unknown {unknown}; {task_class.__name__} knows "
                          f"{', '.join(known_effects) or 'none'}", key="effects")
-    fields = _task_fields(task_class)
+    fields = task_fields(task_class)
     for key, value in params.items():
         if key not in fields:
             raise SceneError(f"{path}: params.{key}: unknown parameter; allowed: {', '.join(fields)}", key=key)
@@ -312,12 +313,13 @@ def _build_task(path, task_class, effects, params, structure=None):
         raise SceneError(f"{path}: params.{exc.key}: {exc}" if exc.key else f"{path}: {exc}", key=exc.key) from None
 
 
-def _solver_options(solver):
+def solver_options(solver):
+    """A solver's keyword-only settings by name (each with its default)."""
     return {name: p for name, p in inspect.signature(solver).parameters.items() if p.kind is p.KEYWORD_ONLY}
 
 
 def _check_settings(path, solver, settings):
-    options = _solver_options(solver)
+    options = solver_options(solver)
     for key, value in settings.items():
         if key not in options:
             raise SceneError(f"{path}: solver_settings.{key}: unknown setting of {solver.__name__}; "

@@ -13,7 +13,7 @@ def plot(run, out_dir):
     from mechopt.models.cam_linkage import ideal_point, real_point
     from mechopt.solvers.path_deviation import path_distance
 
-    task, _ = run.scene.build(run.overrides)
+    task = run.task
     H, L = run.result.values["H_mm"], run.result.values["L_mm"]
     t = np.linspace(0.0, task.t_finish_rad, 2000)
     ix, iy = ideal_point(t, task.a_mm, task.h_mm)

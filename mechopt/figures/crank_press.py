@@ -14,7 +14,7 @@ def plot(run, out_dir) -> list[Path]:
     from mechopt.models.crank_press import Dynamics
     from mechopt.solvers import press_dynamics
 
-    task, settings = run.scene.build(run.overrides)
+    task, settings = run.task, run.settings
     solve = getattr(run.scene.solver, "with_trace", None)
     if solve is None:
         return []

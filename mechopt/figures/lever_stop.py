@@ -27,7 +27,7 @@ def _histories(run, out_dir):
     import matplotlib.pyplot as plt
     from mechopt.solvers.rebound import closed_form_response
 
-    task, _ = run.scene.build(run.overrides)
+    task = run.task
     fig, ax = plt.subplots(figsize=(8, 4.5))
     for n in task.speeds_rpm:
         imp = task.impact(n)
@@ -47,7 +47,7 @@ def _amplitude_vs_speed(run, out_dir):
     import matplotlib.pyplot as plt
     from mechopt.solvers.rebound import rebound_amplitude_mm
 
-    task, _ = run.scene.build(run.overrides)
+    task = run.task
     speeds = np.linspace(0.5 * min(task.speeds_rpm), 1.2 * max(task.speeds_rpm), 200)
     fig, ax = plt.subplots(figsize=(7, 4.5))
     ax.plot(speeds, rebound_amplitude_mm(task, speeds, task.t_deg), label=f"eq. (2), t = {task.t_deg:g} deg")
@@ -74,7 +74,7 @@ def _law(run, out_dir):
     import matplotlib.pyplot as plt
     from mechopt.solvers.rebound import rebound_amplitude_mm
 
-    task, _ = run.scene.build(run.overrides)
+    task = run.task
     v = run.result.values
     t = np.linspace(0.5 * task.t_deg, 2.0 * task.t_deg, 300)
     fig, ax = plt.subplots(figsize=(7, 4.5))

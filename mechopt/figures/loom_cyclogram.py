@@ -11,7 +11,7 @@ def plot(run, out_dir):
     if "span_deg" not in values:
         return []             # infeasible or unbounded: there are no event times to draw
 
-    task, _ = run.scene.build(run.overrides)
+    task = run.task
     diag = run.result.diagnostics
     critical = set(diag.get("critical_ops", []))
     floats = diag.get("float_deg", {}) if isinstance(diag.get("float_deg"), dict) else {}

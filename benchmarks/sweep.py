@@ -1,0 +1,117 @@
+"""Sweep throughput (`mechopt sweep`): variants per second in-process, and the Dask path's overhead.
+
+* ``loom/group1``          a 100 x 100 grid of amplitude_limit_mm x sigma_H_limit_MPa (10^4 DPP re-solves
+                           of the event-time LP), in this process, Parquet parts written as they arrive;
+* ``cam-cutter/minimax``   a 100 x 100 grid of a_mm x h_mm (10^4 minimax NLPs, IPOPT, cached build),
+                           in this process;
+* ``Dask overhead``        the same loom sweep (2 000 variants) on a `distributed.LocalCluster` with
+                           ONE single-threaded worker process against in-process, for chunks of 100,
+                           500 and 2 000 variants: the ratio is the price of the Dask path per core
+                           (scheduling, pickling rows back); a 2-worker run shows what the second
+                           core buys. Workers are warmed up first (imports, the cached LP build), as
+                           the in-process engine is.
+
+Total wall time per sweep (including writing the table) is reported as the median of the runs.
+Timings live here only; tests never assert them.
+"""
+import logging
+import statistics
+import tempfile
+import time
+from pathlib import Path
+
+from mechopt import registry
+from mechopt.sweep import parse_grid, sweep
+
+__all__ = ["cli", "in_process", "dask_overhead", "TARGETS"]
+
+TARGETS = {"loom_1e4_s": 60.0, "cam_1e4_s": 120.0, "dask_over_in_process": 1.20}
+LOOM_GRID = ("amplitude_limit_mm=0.05:0.2:{n}", "sigma_H_limit_MPa=600:1000:{n}")
+CAM_GRID = ("a_mm=20:30:{n}", "h_mm=0:3:{n}")
+CAM_REPEATS_MAX = 1               # one 10^4 cam sweep takes minutes on the shared 2-core machine
+DASK_CHUNKS = (100, 500, 2000)
+DASK_SIDE = 45                   # 2 025 variants per Dask sweep
+
+
+def _grid(texts, side):
+    return [parse_grid(t.format(n=side)) for t in texts]
+
+
+def _timed(case, grid, chunk, scheduler=None):
+    """Seconds for one sweep to a fresh Parquet file, and its status counts."""
+    with tempfile.TemporaryDirectory() as folder:
+        start = time.perf_counter()
+        table = sweep(registry.find(case), grid, out=Path(folder) / "s.parquet", chunk=chunk,
+                      scheduler=scheduler, progress=False)
+        seconds = time.perf_counter() - start
+    statuses = table.column("status").to_pylist()
+    return seconds, {s: statuses.count(s) for s in sorted(set(statuses))}
+
+
+def in_process(case, texts, side, *, chunk=1000, repeats=3, progress=None):
+    """Median wall time [s] of a side x side sweep in this process (after one small warm-up sweep),
+    the status counts of the last run and the number of variants."""
+    _timed(case, _grid(texts, 2), chunk)
+    times, counts = [], {}
+    for r in range(repeats):
+        seconds, counts = _timed(case, _grid(texts, side), chunk)
+        times.append(seconds)
+        if progress:
+            progress(f"{case}: {side * side} variants in {seconds:.1f} s (run {r + 1}/{repeats})")
+    return statistics.median(times), counts, side * side
+
+
+def dask_overhead(*, side=DASK_SIDE, repeats=3, progress=None):
+    """Median wall time [s] per chunk size: in-process, Dask with 1 worker, Dask with 2 workers."""
+    from distributed import Client, LocalCluster
+    # dashboard_address ":0": any free port (the default 8787 is taken by the second cluster: a warning)
+    grid = _grid(LOOM_GRID, side)
+    out = {}
+    clusters = {w: LocalCluster(n_workers=w, processes=True, threads_per_worker=1, dashboard_address=":0",
+                                silence_logs=logging.ERROR)
+                for w in (1, 2)}
+    try:
+        for cluster in clusters.values():          # warm the workers: imports and the cached LP build
+            with Client(cluster.scheduler_address) as client:
+                client.wait_for_workers(len(cluster.workers))
+            _timed("loom/group1", _grid(LOOM_GRID, 10), 10, cluster.scheduler_address)
+        _timed("loom/group1", _grid(LOOM_GRID, 10), 10)
+        for chunk in DASK_CHUNKS:
+            row = {}
+            for name, scheduler in (("in_process", None), ("dask_1", clusters[1].scheduler_address),
+                                    ("dask_2", clusters[2].scheduler_address)):
+                row[name] = statistics.median(_timed("loom/group1", grid, chunk, scheduler)[0]
+                                              for _ in range(repeats))
+            out[chunk] = row
+            if progress:
+                progress(f"dask overhead, chunk {chunk}: " + ", ".join(f"{k} {v:.2f} s" for k, v in row.items()))
+    finally:
+        logging.getLogger("distributed").setLevel(logging.ERROR)     # closing logs at INFO otherwise
+        for cluster in clusters.values():
+            cluster.close()
+    return out
+
+
+def table(loom, cam, dask, dask_side=DASK_SIDE):
+    lines = ["sweep throughput (medians; wall time including the Parquet table)",
+             f"{'sweep':<34}{'variants':>9}{'median s':>10}{'variants/s':>12}{'target s':>10}  statuses"]
+    for name, (seconds, counts, n), target in (("loom/group1 in-process", loom, TARGETS["loom_1e4_s"]),
+                                            ("cam-cutter/minimax in-process", cam, TARGETS["cam_1e4_s"])):
+        lines.append(f"{name:<34}{n:>9}{seconds:>10.1f}{n / seconds:>12.0f}{target * n / 1e4:>10.0f}  {counts}")
+    lines += ["", f"Dask path on a LocalCluster, loom/group1, {dask_side * dask_side} variants (target: 1 worker / in-process "
+              f"< {TARGETS['dask_over_in_process']:.2f})",
+              f"{'chunk':>7}{'in-process s':>14}{'dask 1w s':>11}{'ratio':>7}{'dask 2w s':>11}{'ratio':>7}"]
+    for chunk, row in dask.items():
+        lines.append(f"{chunk:>7}{row['in_process']:>14.2f}{row['dask_1']:>11.2f}"
+                     f"{row['dask_1'] / row['in_process']:>7.2f}{row['dask_2']:>11.2f}"
+                     f"{row['dask_2'] / row['in_process']:>7.2f}")
+    return "\n".join(lines)
+
+
+def cli(repeats, out_dir, progress=None) -> str:
+    """What `mechopt bench sweep` prints. The 10^4 cam sweep runs once (minutes); loom `repeats` times."""
+    side = 100
+    loom = in_process("loom/group1", LOOM_GRID, side, repeats=repeats, progress=progress)
+    cam = in_process("cam-cutter/minimax", CAM_GRID, side, repeats=min(repeats, CAM_REPEATS_MAX), progress=progress)
+    dask = dask_overhead(repeats=repeats, progress=progress)
+    return table(loom, cam, dask)

@@ -1,0 +1,127 @@
+"""`mechopt report`: one static HTML page of what the registry reproduces, and how it looks.
+
+The page holds the validation table (every scene's expectations: published or derived value
+against the computed one, calibrations marked as such, not counted as reproductions), each scene's
+assumed and calibrated parameters with their reasons, each scene's figures (`mechopt.plots.plot_run`)
+and the accuracy-vs-time plots that `mechopt bench` left in a folder (benchmarks are not re-run
+here: some take minutes). Images sit beside the page and are linked relatively, so the folder
+opens from disk with no server.
+"""
+import html
+import shutil
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+from mechopt import registry
+from mechopt.plots import plot_run
+
+__all__ = ["write_report"]
+
+_STYLE = """body{font-family:sans-serif;max-width:1100px;margin:2em auto;color:#222}
+table{border-collapse:collapse;font-size:13px}td,th{border:1px solid #ccc;padding:3px 6px;text-align:left}
+th{background:#f0f0f0}.ok{color:#176117}.fail{color:#b00020;font-weight:bold}.cal{color:#8a5a00}
+img{max-width:520px;margin:4px;border:1px solid #ddd}details{margin:0.4em 0}"""
+
+
+def write_report(out_dir, *, scenes: Sequence | None = None, bench_dir=None,
+                 progress: Callable[[str], None] | None = None) -> Path:
+    """Run the scenes (all by default), draw their figures and write ``out_dir/index.html``.
+
+    Parameters
+    ----------
+    out_dir : folder for the page and its images (created; its figures/ and bench/ are replaced).
+    scenes : the scenes to include (``registry.find(id)`` each); default every scene.
+    bench_dir : folder of `mechopt bench` outputs; its PNG files are copied in when it exists.
+    progress : called with one line per scene run.
+
+    Returns
+    -------
+    Path of the HTML page.
+    """
+    out_dir = Path(out_dir)
+    for sub in ("figures", "bench"):
+        shutil.rmtree(out_dir / sub, ignore_errors=True)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    runs = []
+    for scene in scenes if scenes is not None else registry.all_scenes():
+        if progress:
+            progress(f"running {scene.id} ...")
+        runs.append(registry.run(scene))
+    parts = ["<h1>mechopt: validation report</h1>", _summary(runs), "<h2>Validation</h2>", _validation(runs),
+             "<h2>Scenes</h2>", *(_scene_section(run, out_dir) for run in runs), "<h2>Accuracy against time</h2>",
+             _bench(bench_dir, out_dir)]
+    page = out_dir / "index.html"
+    page.write_text("<!doctype html><html><head><meta charset='utf-8'><title>mechopt report</title>"
+                    f"<style>{_STYLE}</style></head><body>\n" + "\n".join(parts) + "\n</body></html>\n",
+                    encoding="utf-8")
+    return page
+
+
+def _summary(runs):
+    checks = [c for r in runs for c in r.checks]
+    failed = sum(not c.ok for c in checks)
+    fitted = sum(c.ok and c.calibrated for c in checks)
+    return (f"<p>{len(runs)} scenes, {len(checks)} checks: {len(checks) - failed - fitted} reproduced, "
+            f"{fitted} calibrated (a parameter was fitted to them: agreement by construction), "
+            f"{failed} failed.</p>")
+
+
+def _validation(runs):
+    rows = []
+    for run in runs:
+        marks = run.scene.marks()
+        assumed = sum(m == "assumed" for m in marks.values())
+        for c in run.checks:
+            verdict = ("<span class='cal'>ok (calibrated)</span>" if c.calibrated else "<span class='ok'>ok</span>") \
+                if c.ok else "<span class='fail'>FAIL</span>"
+            rows.append([_e(run.scene.id), _e(c.name), _e(c.kind), _e(c.expected), _e(_fmt(c.got)), verdict,
+                         _e(c.where), str(assumed)])
+    return _table(["case", "quantity", "kind", "expected (source)", "computed", "check", "where",
+                   "assumed params"], rows)
+
+
+def _scene_section(run, out_dir):
+    scene, r = run.scene, run.result
+    slug = scene.id.replace("/", "_")
+    marked = [(k, p.mark, p.why + (f" (fitted to {p.on})" if p.on else ""))
+              for k, p in scene.spec.params.items() if p.mark != "given"]
+    figures = plot_run(run, out_dir / "figures" / slug)
+    images = "".join(f"<img src='{_e(p.relative_to(out_dir).as_posix())}' alt='{_e(p.stem)}'>" for p in figures)
+    return (f"<h3 id='{_e(slug)}'>{_e(scene.id)}: {_e(scene.spec.title)}</h3>"
+            f"<p><i>{_e(scene.spec.source)}</i><br>status {_e(r.status.value)}"
+            f"{' (' + _e(r.message) + ')' if r.message else ''}; build {r.timing.build_s:.4f} s, "
+            f"solve {r.timing.solve_s:.4f} s</p>"
+            + (f"<details><summary>{len(marked)} assumed / calibrated parameters</summary>"
+               + _table(["parameter", "mark", "why"], [[_e(k), _e(m), _e(w)] for k, m, w in marked])
+               + "</details>" if marked else "<p>every parameter given by the source</p>")
+            + (images or "<p>no figures for this model</p>"))
+
+
+def _bench(bench_dir, out_dir):
+    pngs = sorted(Path(bench_dir).glob("*.png")) if bench_dir and Path(bench_dir).is_dir() else []
+    if not pngs:
+        return f"<p>no `mechopt bench` output found{' in ' + _e(str(bench_dir)) if bench_dir else ''}; " \
+               "run e.g. <code>mechopt bench cam-cutter --plot out/bench</code> first.</p>"
+    (out_dir / "bench").mkdir(parents=True, exist_ok=True)
+    images = []
+    for png in pngs:
+        shutil.copy2(png, out_dir / "bench" / png.name)
+        images.append(f"<figure><img src='bench/{_e(png.name)}' alt='{_e(png.stem)}'>"
+                      f"<figcaption>{_e(png.name)}</figcaption></figure>")
+    return "".join(images)
+
+
+def _table(header, rows):
+    head = "".join(f"<th>{h}</th>" for h in header)
+    body = "".join("<tr>" + "".join(f"<td>{x}</td>" for x in row) + "</tr>" for row in rows)
+    return f"<table><tr>{head}</tr>{body}</table>"
+
+
+def _fmt(value):
+    if value is None:
+        return "-"
+    return f"{value:.6g}" if isinstance(value, float) else str(value)
+
+
+def _e(text):
+    return html.escape(str(text), quote=True)
