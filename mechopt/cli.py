@@ -42,6 +42,8 @@ def main(argv=None) -> int:
     sweep.add_argument("--samples", type=int, default=0, metavar="N", help="random draws per grid point")
     sweep.add_argument("--seed", type=int, default=0, help="seed of the random draws")
     sweep.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler, e.g. tcp://host:8786 (default: this process)")
+    sweep.add_argument("--workers", type=int, default=1, metavar="N",
+                       help="local processes without --scheduler (1: this process)")
     sweep.add_argument("--chunk", type=int, default=100, metavar="N", help="variants per task")
     sweep.add_argument("--out", type=Path, metavar="FILE", help="Parquet table (default out/sweep/<case>.parquet)")
     sweep.add_argument("--plot", type=Path, metavar="DIR", help="write the sweep's figures into DIR")
@@ -124,7 +126,7 @@ def _sweep(args) -> int:
     out = args.out or Path("out/sweep") / f"{scene.id.replace('/', '_')}.parquet"
     table = sweep.sweep(scene, [sweep.parse_grid(g) for g in args.grid],
                         [sweep.parse_random(r) for r in args.random], samples=args.samples, seed=args.seed,
-                        out=out, scheduler=args.scheduler, chunk=args.chunk)
+                        out=out, scheduler=args.scheduler, workers=args.workers, chunk=args.chunk)
     counts = Counter(table.column("status").to_pylist())
     print(f"{scene.id}: {table.num_rows} variants ({', '.join(f'{n} {s}' for s, n in sorted(counts.items()))})")
     print(f"table: {out}")

@@ -157,7 +157,7 @@ def run_chunk(case_id: str, chunk: list[tuple[int, dict]], scene_sha256: str | N
 
 
 def sweep(scene: Scene, grid=(), random=(), *, samples: int = 0, seed: int = 0, out: Path | None = None,
-          scheduler: str | None = None, chunk: int = 100, progress: bool = True,
+          scheduler: str | None = None, workers: int = 1, chunk: int = 100, progress: bool = True,
           connect_timeout_s: float = 5.0, on_chunk: Callable[[list[dict]], None] | None = None) -> pa.Table:
     """Run every variant of a sweep and return (and write, when `out` is given) its table.
 
@@ -168,7 +168,9 @@ def sweep(scene: Scene, grid=(), random=(), *, samples: int = 0, seed: int = 0, 
     samples, seed : random draws per grid point and the seed of the generator.
     out : Parquet file; finished chunks go to ``<out>.parts/`` as they arrive and are merged into
         ``out`` at the end. Variants already in ``out`` or its parts are skipped.
-    scheduler : a Dask scheduler address (``tcp://host:8786``); None runs in this process.
+    scheduler : a Dask scheduler address (``tcp://host:8786``); None runs on this machine.
+    workers : without a scheduler, 1 runs in this process; more spreads the chunks over as many
+        local processes (spawned, each keeping its own solver builds).
     chunk : variants per task (>= 1); each task's worker re-solves its cached build.
     progress : draw a tqdm bar on stderr (rate and time remaining).
     connect_timeout_s : how long to try the scheduler before giving up [s].
@@ -185,6 +187,11 @@ def sweep(scene: Scene, grid=(), random=(), *, samples: int = 0, seed: int = 0, 
     """
     if isinstance(chunk, bool) or not isinstance(chunk, int) or chunk < 1:
         raise SceneError(f"chunk = {chunk!r}: expected a whole number of variants >= 1", key="chunk")
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise SceneError(f"workers = {workers!r}: expected a whole number of processes >= 1", key="workers")
+    if scheduler and workers > 1:
+        raise SceneError("give either --scheduler (the cluster's workers run it) or --workers, not both",
+                         key="workers")
     spec, variants = plan(scene, grid, random, samples=samples, seed=seed)
     meta = {"case": spec.case, "spec": json.loads(spec.as_json()), "scene_sha256": _scene_hash(scene)}
     store = _Store(Path(out), meta) if out is not None else None
@@ -199,6 +206,7 @@ def sweep(scene: Scene, grid=(), random=(), *, samples: int = 0, seed: int = 0, 
             store.open()
         bar = _bar(len(variants), len(done), progress)
         for got in (_on_dask(client, spec.case, chunks, meta["scene_sha256"], lost) if client
+                    else _on_pool(workers, spec.case, chunks) if workers > 1
                     else (run_chunk(spec.case, c) for c in chunks)):
             if store:
                 store.write_part(got)
@@ -300,6 +308,16 @@ def _on_dask(client, case_id, chunks, scene_sha256, lost):
         else:
             lost.append(f"{type(future.exception()).__name__}: {future.exception()}")
         future.release()
+
+
+def _on_pool(workers, case_id, chunks):
+    """Chunks on local processes, rows as they finish. Spawned, not forked: a child inherits no
+    half-initialised solver state from this process."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+        for future in as_completed([pool.submit(run_chunk, case_id, c) for c in chunks]):
+            yield future.result()
 
 
 def _connect(address, timeout_s):

@@ -272,6 +272,23 @@ def test_dask_table_equals_in_process_table(cluster, tmp_path):
 
 
 @pytest.mark.slow
+def test_local_processes_give_the_in_process_table():
+    scene, grid = registry.find(LOOM), _grid("amplitude_limit_mm=0.05:0.15:5", "sigma_H_limit_MPa=600:1000:4")
+    here = sw.sweep(scene, grid, chunk=3, progress=False)
+    pooled = sw.sweep(scene, grid, chunk=3, workers=2, progress=False)
+    assert _without_times(pooled).equals(_without_times(here))
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"workers": 0}, r"workers = 0: expected a whole number of processes >= 1"),
+    ({"workers": 2, "scheduler": "tcp://127.0.0.1:1"}, r"give either --scheduler .* or --workers, not both"),
+])
+def test_bad_worker_settings_are_refused(kwargs, match):
+    with pytest.raises(SceneError, match=match):
+        sw.sweep(registry.find(LOOM), _grid("amplitude_limit_mm=0.05:0.15:2"), progress=False, **kwargs)
+
+
+@pytest.mark.slow
 def test_worker_killed_mid_sweep_loses_no_variant(cluster):
     from distributed import Client
     with Client(cluster.scheduler_address) as client:
