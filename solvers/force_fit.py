@@ -36,7 +36,7 @@ def fit_force(travel_mm, load_N, degree: int, *, segments: int = 2, through_orig
     that the first touch does not divide by ~0), ``max_rel_error`` and ``rms_N``. INACCURATE when
     the normal equations are rank-deficient (too few distinct travels for the degree).
 
-    Example: ``fit_force(x, f, 4).values["c4_N_per_mm4"]`` ~ 90.93 on data from eq. (1).
+    Example: ``fit_force(x, f, 4).values["c4_N_per_mm4"]`` recovers eq. (1)'s X^4 coefficient from its data.
     """
     x = np.asarray(travel_mm, dtype=float).ravel()
     f = np.asarray(load_N, dtype=float).ravel()

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from mechopt import registry
+from mechopt.benchmarks.loom import layered
 from mechopt.models.errors import SolverError
 from mechopt.models.loom_cyclogram import Cyclogram
 from mechopt.solvers import cyclogram_lp
@@ -266,20 +267,6 @@ def test_an_isolated_event_is_reported_and_left_out():
     r = plan_cyclogram(task)
     assert r.values["span_deg"] == pytest.approx(30.0)
     assert r.diagnostics["isolated_events"] == ["spare"] and "p_spare_deg" not in r.values
-
-
-def layered(n, per=3, width=100, seed=0):
-    """Random layered network: event 0 first, n-1 last, each inner event fed from `per` events of
-    the layer before; angles U(0, 30) deg."""
-    rng = np.random.default_rng(seed)
-    inner = np.arange(1, n - 1)
-    layer = (inner - 1) // width
-    tails = [np.where(layer == 0, 0, (layer - 1) * width + 1 + rng.integers(0, width, inner.size))
-             for _ in range(per)]
-    pairs = np.unique(np.column_stack([np.concatenate(tails), np.tile(inner, per)]), axis=0)
-    leaves = np.setdiff1d(np.arange(n - 1), pairs[:, 0])
-    pairs = np.vstack([pairs, np.column_stack([leaves, np.full(leaves.size, n - 1)])])
-    return pairs[:, 0], pairs[:, 1], rng.uniform(0, 30, len(pairs))
 
 
 @pytest.mark.slow
