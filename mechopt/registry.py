@@ -64,7 +64,19 @@ def all_scenes() -> tuple[Scene, ...]:
     twice = {i for i in ids if ids.count(i) > 1}
     if twice:
         raise SceneError(f"{cases_dir()}: scene ids used twice: {', '.join(sorted(twice))}")
+    _check_calibration_targets(scenes)
     return tuple(sorted(scenes, key=lambda s: s.id))
+
+
+def _check_calibration_targets(scenes):
+    """A calibration names a figure some scene expects: a typo would silently make it a 'reproduction'."""
+    expected = {name for s in scenes for name in s.spec.expect}
+    for scene in scenes:
+        for key, param in scene.spec.params.items():
+            if param.mark == "calibrated" and param.on not in expected:
+                near = difflib.get_close_matches(param.on, sorted(expected), n=2)
+                raise SceneError(f"{scene.path}: params.{key}.on = {param.on!r}: no scene expects that value"
+                                 + (f"; did you mean {', '.join(near)}?" if near else ""), key=key)
 
 
 def find(case_id: str) -> Scene:

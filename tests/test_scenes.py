@@ -214,3 +214,15 @@ def test_set_reaches_a_structure_entry_by_path_and_changes_nothing_else():
 def test_a_bad_structure_path_is_refused_by_name(pair, match):
     with pytest.raises(SceneError, match=match):
         registry.run(registry.find("loom/group1"), parse_overrides([pair]))
+
+
+def test_a_calibration_target_no_scene_expects_is_refused(tmp_path, monkeypatch):
+    (tmp_path / "cam").mkdir()
+    _edited(tmp_path / "cam", 'mark = "assumed", why = "LOW_H', 'mark = "calibrated", on = "H_nm", why = "LOW_H', "x.toml")
+    monkeypatch.setattr(registry, "cases_dir", lambda: tmp_path)
+    registry.all_scenes.cache_clear()
+    try:
+        with pytest.raises(SceneError, match=r"params\.H_min_mm\.on = 'H_nm': no scene expects that value; did you mean H_mm"):
+            registry.all_scenes()
+    finally:
+        registry.all_scenes.cache_clear()
