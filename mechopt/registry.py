@@ -105,15 +105,22 @@ def _derived_params(scene: Scene, chain: tuple[str, ...] = ()) -> dict:
     for key, (source_id, name) in scene.derived().items():
         if source_id in chain + (scene.id,):
             raise SceneError(f"{scene.path}: derive.{key}: {' -> '.join(chain + (scene.id, source_id))} is a loop")
-        source = find(source_id)
-        task, settings = source.build(_derived_params(source, chain + (scene.id,)))
-        result = source.solver(task, **settings)
+        result = _source_result(source_id, chain + (scene.id,))
         if result.status is not Status.SOLVED or name not in result.values:
             raise SceneError(f"{scene.path}: derive.{key}: scene {source_id} gave status {result.status.value}"
                              + ("" if name in result.values else f" and no value {name!r}; it has "
                                 + ", ".join(result.values)), key=key)
         out[key] = result.values[name]
     return out
+
+
+@lru_cache(maxsize=None)
+def _source_result(source_id: str, chain: tuple[str, ...]) -> Result:
+    """A scene's result as its file says: depends on the file alone, so a sweep of a derived
+    scene solves its source once per process, not once per variant."""
+    source = find(source_id)
+    task, settings = source.build(_derived_params(source, chain))
+    return source.solver(task, **settings)
 
 
 def check(scene: Scene, result: Result) -> list[Check]:

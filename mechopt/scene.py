@@ -4,9 +4,11 @@ A scene names a task (`models/<module>.<Class>`), the effects it switches on, pa
 units in their names, a solver (`solvers/<module>.<function>`) with its settings, and what a
 source says should come out. Nothing from a scene runs before all of that validated.
 """
+import copy
 import dataclasses
 import importlib
 import inspect
+import re
 import tomllib
 from pathlib import Path
 from typing import Any, Literal, get_args, get_origin
@@ -230,8 +232,6 @@ def _path_example(structure):
 def _set_paths(path, structure, assignments):
     """A copy of the structure with `--set` paths applied: `a.b.c` walks tables, and
     `list[k=v,k2=v2]` picks the one table of a list whose entries match."""
-    import copy
-    import re
     out = copy.deepcopy(dict(structure))
     for key, value in assignments.items():
         node, parts = out, key.split(".")

@@ -17,6 +17,7 @@ torch_offset  kerf offset h: the path is the parallel curve at distance   eqs. (
 ============  ==========================================================  ==========
 """
 from dataclasses import dataclass
+from functools import cached_property
 from typing import ClassVar
 
 import numpy as np
@@ -141,20 +142,25 @@ class LinkageFit:
                                  + ("" if given else " (the one not given is the matched linkage +- a/2: give both)"),
                                  key=lo if getattr(self, lo) is not None else hi)
 
-    @property
+    @cached_property
     def t_finish_rad(self) -> float:
         """Exact end of the ideal path in the upper half-plane [rad]."""
         return finish_angle(self.a_mm, self.h_mm)
 
-    @property
+    @cached_property
     def t_finish_read_rad(self) -> float:
         """t_FINISH as the paper reads it, to `y_tol_mm` in Y (see `decimal_reading`) [rad]."""
         return decimal_reading(lambda t: ideal_point(t, self.a_mm, self.h_mm)[1],
                                self.t_finish_rad, self.y_tol_mm)
 
+    @cached_property
+    def matched(self) -> tuple[float, float]:
+        """`matched_linkage` of this cardioid (H, L) [mm]: the NLP's start and the default box's centre."""
+        return matched_linkage(self.a_mm, self.h_mm)
+
     def bounds(self) -> tuple[float, float, float, float]:
         """(H_min, H_max, L_min, L_max) [mm]: the given box, gaps filled around the matched linkage."""
-        H0, L0 = matched_linkage(self.a_mm, self.h_mm)
+        H0, L0 = self.matched
         pad = self.a_mm / 2
         given = (self.H_min_mm, self.H_max_mm, self.L_min_mm, self.L_max_mm)
         derived = (H0 - pad, H0 + pad, L0 - pad, L0 + pad)

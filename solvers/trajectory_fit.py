@@ -14,7 +14,7 @@ import casadi as ca
 import numpy as np
 from scipy.optimize import differential_evolution
 
-from mechopt.models.cam_linkage import (LinkageFit, ideal_normal, ideal_point, limacon_implicit, matched_linkage,
+from mechopt.models.cam_linkage import (LinkageFit, ideal_normal, ideal_point, limacon_implicit,
                                         real_point, real_velocity)
 from mechopt.models.errors import ModelError
 from mechopt.solvers.path_deviation import (foot_points, nodes_and_normals, normal_crossings, normal_deviation,
@@ -138,7 +138,7 @@ def minimax(task: LinkageFit, *, count: int = 1000, slots: int = 8, max_rounds: 
     t = np.linspace(0.0, t_end, count)
     px, py = ideal_point(t, task.a_mm, task.h_mm)
     H_lo, H_hi, L_lo, L_hi = task.bounds()
-    H, L = (float(v) for v in np.clip(matched_linkage(task.a_mm, task.h_mm), (H_lo, L_lo), (H_hi, L_hi)))
+    H, L = (float(v) for v in np.clip(task.matched, (H_lo, L_lo), (H_hi, L_hi)))
     kept: list[int] = []           # nodes that were ever active or worst: they never leave
     build_s, status_word = 0.0, "not_run"
     for rounds in range(1, max_rounds + 1):

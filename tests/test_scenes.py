@@ -70,17 +70,21 @@ def test_bad_scene_is_refused_naming_file_key_and_what_is_allowed(tmp_path, old,
         load(_edited(tmp_path, old, new))
 
 
-def test_duplicate_ids_are_refused(tmp_path, monkeypatch):
-    for name in ("a", "b"):
-        (tmp_path / name).mkdir()
-        shutil.copy(GOOD, tmp_path / name / "x.toml")
+@pytest.fixture
+def cases_in(tmp_path, monkeypatch):
+    """The registry reading its scenes from tmp_path (restored afterwards)."""
     monkeypatch.setattr(registry, "cases_dir", lambda: tmp_path)
     registry.all_scenes.cache_clear()
-    try:
-        with pytest.raises(SceneError, match=r"scene ids used twice: cam-cutter/paper-grid"):
-            registry.all_scenes()
-    finally:
-        registry.all_scenes.cache_clear()
+    yield tmp_path
+    registry.all_scenes.cache_clear()
+
+
+def test_duplicate_ids_are_refused(cases_in):
+    for name in ("a", "b"):
+        (cases_in / name).mkdir()
+        shutil.copy(GOOD, cases_in / name / "x.toml")
+    with pytest.raises(SceneError, match=r"scene ids used twice: cam-cutter/paper-grid"):
+        registry.all_scenes()
 
 
 def test_override_is_validated_like_the_file_and_changes_nothing():
@@ -216,13 +220,8 @@ def test_a_bad_structure_path_is_refused_by_name(pair, match):
         registry.run(registry.find("loom/group1"), parse_overrides([pair]))
 
 
-def test_a_calibration_target_no_scene_expects_is_refused(tmp_path, monkeypatch):
-    (tmp_path / "cam").mkdir()
-    _edited(tmp_path / "cam", 'mark = "assumed", why = "LOW_H', 'mark = "calibrated", on = "H_nm", why = "LOW_H', "x.toml")
-    monkeypatch.setattr(registry, "cases_dir", lambda: tmp_path)
-    registry.all_scenes.cache_clear()
-    try:
-        with pytest.raises(SceneError, match=r"params\.H_min_mm\.on = 'H_nm': no scene expects that value; did you mean H_mm"):
-            registry.all_scenes()
-    finally:
-        registry.all_scenes.cache_clear()
+def test_a_calibration_target_no_scene_expects_is_refused(cases_in):
+    (cases_in / "cam").mkdir()
+    _edited(cases_in / "cam", 'mark = "assumed", why = "LOW_H', 'mark = "calibrated", on = "H_nm", why = "LOW_H', "x.toml")
+    with pytest.raises(SceneError, match=r"params\.H_min_mm\.on = 'H_nm': no scene expects that value; did you mean H_mm"):
+        registry.all_scenes()

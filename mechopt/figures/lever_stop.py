@@ -38,9 +38,7 @@ def _histories(run, out_dir):
     ax.set(xlabel="time after contact [ms]", ylabel="q: C off the plate [mm]",
            title=f"{run.scene.id}: rebound after contact, eq. (2) (cf. paper's Fig. 8)")
     ax.legend(fontsize=8)
-    path = out_dir / _name(run, "histories")
-    save_figure(fig, path, dpi=110)
-    return path
+    return save_figure(fig, out_dir / _name(run, "histories"))
 
 
 def _amplitude_vs_speed(run, out_dir):
@@ -65,9 +63,7 @@ def _amplitude_vs_speed(run, out_dir):
                 label="event-driven contact (stiffness switch)")
     ax.set(xlabel="main shaft speed n [rpm]", ylabel="first rebound [mm]", title=f"{run.scene.id}")
     ax.legend(fontsize=8)
-    path = out_dir / _name(run, "amplitude")
-    save_figure(fig, path, dpi=110)
-    return path
+    return save_figure(fig, out_dir / _name(run, "amplitude"))
 
 
 def _law(run, out_dir):
@@ -86,6 +82,4 @@ def _law(run, out_dir):
     ax.set(xlabel="phase angle t(3,7) [deg]", ylabel="first rebound a [mm]",
            title=f"{run.scene.id}: n = {task.speed_nominal_rpm:g} rpm")
     ax.legend(fontsize=8)
-    path = out_dir / _name(run, "law")
-    save_figure(fig, path, dpi=110)
-    return path
+    return save_figure(fig, out_dir / _name(run, "law"))
