@@ -2,7 +2,7 @@
 
 * ``loom/group1``          a 100 x 100 grid of amplitude_limit_mm x sigma_H_limit_MPa (10^4 DPP re-solves
                            of the event-time LP), in this process, Parquet parts written as they arrive;
-* ``cam-cutter/minimax``   a 100 x 100 grid of a_mm x h_mm (10^4 minimax NLPs, IPOPT, cached build),
+* ``cam-cutter/minimax``   a 100 x 100 grid of a_mm x h_mm (10^4 minimax NLPs, SQP rounds, cached build),
                            in this process;
 * ``Dask overhead``        the same loom sweep (2 000 variants) on a `distributed.LocalCluster` with
                            ONE single-threaded worker process against in-process, for chunks of 100,

@@ -280,6 +280,26 @@ def test_minimax_reports_bound_that_stops_it(task):
                                                            abs=1e-12)
 
 
+@pytest.mark.parametrize("a, h", [(25.0, 2.0), (20.0, 3.0), (30.0, 0.5), (40.0, 3.0)])
+def test_minimax_sqp_and_ipopt_back_ends_find_the_same_linkage(a, h):
+    # two independent NLP back ends on the same exchange rounds: SQP (active set) and IPOPT
+    # (interior point) converge differently, so agreement pins the optimum, not the method
+    task = LinkageFit(a_mm=a, h_mm=h, err_width_mm=0.075)
+    sqp, ipopt = minimax(task, nlp="sqp"), minimax(task, nlp="ipopt")
+    assert sqp.status is ipopt.status
+    assert set(ipopt.diagnostics["nlp_back_ends"]) == {"ipopt"}
+    assert "sqp" in sqp.diagnostics["nlp_back_ends"]
+    for key in ("H_mm", "L_mm", "max_deviation_mm"):
+        assert sqp.values[key] == pytest.approx(ipopt.values[key], abs=1e-8)
+
+
+def test_minimax_round_the_sqp_cannot_converge_goes_to_ipopt():
+    # the plain cardioid is matched exactly at the start (delta = 0 at its bound): a degenerate QP
+    got = minimax(LinkageFit(a_mm=25.0, err_width_mm=0.075), nlp="sqp")
+    assert got.diagnostics["nlp_back_ends"] == ["ipopt"]
+    assert got.status is Status.SOLVED
+
+
 def test_minimax_with_one_node_returns_finite_values(task):
     got = minimax(task, count=1)
     assert all(math.isfinite(v) for v in got.values.values())
