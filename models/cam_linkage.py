@@ -100,8 +100,23 @@ def matched_linkage(a, h=0.0):
     return H, span - H
 
 
+class _OnIdealPath:
+    """What every task on the ideal path (`a_mm`, `h_mm`, `y_tol_mm`) knows of its end."""
+
+    @cached_property
+    def t_finish_rad(self) -> float:
+        """Exact end of the ideal path in the upper half-plane [rad]."""
+        return finish_angle(self.a_mm, self.h_mm)
+
+    @cached_property
+    def t_finish_read_rad(self) -> float:
+        """t_FINISH as the paper reads it, to `y_tol_mm` in Y (see `decimal_reading`) [rad]."""
+        return decimal_reading(lambda t: ideal_point(t, self.a_mm, self.h_mm)[1],
+                               self.t_finish_rad, self.y_tol_mm)
+
+
 @dataclass(frozen=True)
-class LinkageFit:
+class LinkageFit(_OnIdealPath):
     """Link lengths H, L so that the limaçon (10) stays within `err_width_mm` of the ideal path (9).
 
     Parameters [mm]: `a_mm` cardioid size (1); `err_width_mm` allowed deviation either side of
@@ -126,11 +141,8 @@ class LinkageFit:
     }
 
     def __post_init__(self):
-        for key in ("a_mm", "err_width_mm", "step_mm", "y_tol_mm"):
-            _require(self, key, getattr(self, key) > 0, "must be > 0")
-        _require(self, "h_mm", self.h_mm >= 0, "must be >= 0 (the torch runs outside the cam)")
-        _require(self, "h_mm", self.h_mm < self.a_mm,
-                 f"must be < a_mm={self.a_mm} (a wider kerf than the cardioid has no cam left)")
+        _check_path(self)
+        _require(self, "step_mm", self.step_mm > 0, "must be > 0")
         for key in ("H_min_mm", "H_max_mm", "L_min_mm", "L_max_mm"):
             value = getattr(self, key)
             _require(self, key, value is None or value > 0, "must be > 0 (a link length)")
@@ -141,17 +153,6 @@ class LinkageFit:
                 raise ModelError(f"bounds reversed: {lo}={box[2 * k]} > {hi}={box[2 * k + 1]}"
                                  + ("" if given else " (the one not given is the matched linkage +- a/2: give both)"),
                                  key=lo if getattr(self, lo) is not None else hi)
-
-    @cached_property
-    def t_finish_rad(self) -> float:
-        """Exact end of the ideal path in the upper half-plane [rad]."""
-        return finish_angle(self.a_mm, self.h_mm)
-
-    @cached_property
-    def t_finish_read_rad(self) -> float:
-        """t_FINISH as the paper reads it, to `y_tol_mm` in Y (see `decimal_reading`) [rad]."""
-        return decimal_reading(lambda t: ideal_point(t, self.a_mm, self.h_mm)[1],
-                               self.t_finish_rad, self.y_tol_mm)
 
     @cached_property
     def matched(self) -> tuple[float, float]:
@@ -165,6 +166,37 @@ class LinkageFit:
         given = (self.H_min_mm, self.H_max_mm, self.L_min_mm, self.L_max_mm)
         derived = (H0 - pad, H0 + pad, L0 - pad, L0 + pad)
         return tuple(float(g) if g is not None else max(d, self.step_mm) for g, d in zip(given, derived))
+
+
+@dataclass(frozen=True)
+class LinkageCheck(_OnIdealPath):
+    """A given linkage (H, L) against the ideal path: is its limaçon within `err_width_mm`?
+
+    The what-if counterpart of `LinkageFit`: sweep `H_mm` and `L_mm` (and `err_width_mm`) to map
+    where a linkage meets the band. Parameters [mm] as in `LinkageFit`; `H_mm`, `L_mm` the links.
+    """
+    a_mm: float
+    err_width_mm: float
+    H_mm: float
+    L_mm: float
+    h_mm: float = 0.0
+    y_tol_mm: float = 0.001
+
+    EFFECTS: ClassVar[dict[str, Effect]] = LinkageFit.EFFECTS
+
+    def __post_init__(self):
+        _check_path(self)
+        for key in ("H_mm", "L_mm"):
+            _require(self, key, getattr(self, key) > 0, "must be > 0 (a link length)")
+
+
+def _check_path(task):
+    """The ideal path's inputs, shared by every task on it."""
+    for key in ("a_mm", "err_width_mm", "y_tol_mm"):
+        _require(task, key, getattr(task, key) > 0, "must be > 0")
+    _require(task, "h_mm", task.h_mm >= 0, "must be >= 0 (the torch runs outside the cam)")
+    _require(task, "h_mm", task.h_mm < task.a_mm,
+             f"must be < a_mm={task.a_mm} (a wider kerf than the cardioid has no cam left)")
 
 
 def _require(task, key, ok, what):

@@ -64,8 +64,8 @@ def _circle(vertices):
 def _polyline(H, L, vertices):
     s, c, n = _circle(vertices)
     x, y = L * (c - 1) + H * (c * c - 1), n * (L + H * c)       # eq. (10), cos 2s and sin 2s expanded
-    # an unbalanced tree builds in half the time and queries as fast on a curve's vertices
-    return s, cKDTree(np.column_stack([x, y]), balanced_tree=False, compact_nodes=False)
+    # an unbalanced tree (median-free splits) builds in 2/3 the time and queries as fast
+    return s, cKDTree(np.column_stack([x, y]), balanced_tree=False)
 
 
 def path_distance(px, py, H, L, *, vertices=2**14, newton_steps=4):
@@ -96,7 +96,9 @@ def foot_points(px, py, H, L, *, vertices=2**14, newton_steps=4):
         closer = dist < best
         s, best = np.where(closer, trial, s), np.where(closer, dist, best)
         c, n = np.where(closer, tc, c), np.where(closer, tn, n)
-        if not np.any(np.abs(step) > 1e-14):        # converged: every step below rounding
+        # a refused step would be refused again (same s, same step); an accepted one below 1e-10
+        # rad leaves ~1e-20 rad by quadratic convergence: then the rest changes nothing
+        if not np.any(closer & (np.abs(step) > 1e-10)):
             break
     return best, s
 

@@ -4,6 +4,7 @@
 * `minimax`:   the exact criterion the paper called too laborious, as a CasADi NLP (SQP, IPOPT).
 * `robust`:    the grid point whose worst deviation over the manufacturing box is smallest.
 * `evolve`:    scipy's differential evolution on the minimax objective: the peer a user would try.
+* `check`:     a given (H, L) measured both ways, for what-if maps over the link lengths.
 
 Every answer's `max_deviation_mm` is the independent Euclidean check of `path_deviation`.
 """
@@ -14,14 +15,14 @@ import casadi as ca
 import numpy as np
 from scipy.optimize import differential_evolution
 
-from mechopt.models.cam_linkage import (LinkageFit, ideal_normal, ideal_point, limacon_implicit,
+from mechopt.models.cam_linkage import (LinkageCheck, LinkageFit, ideal_normal, ideal_point, limacon_implicit,
                                         real_point, real_velocity)
 from mechopt.models.errors import ModelError
 from mechopt.solvers.path_deviation import (foot_points, nodes_and_normals, normal_crossings, normal_deviation,
                                             path_distance, verified_deviation)
 from mechopt.solvers.result import Result, Status, Timing, from_ipopt
 
-__all__ = ["grid_scan", "minimax", "robust", "evolve"]
+__all__ = ["grid_scan", "minimax", "robust", "evolve", "check"]
 
 NODE_RULES = {
     # name: (first index, last index + 1) of t_i = i * t_FINISH / COUNT
@@ -293,6 +294,38 @@ def evolve(task: LinkageFit, *, count: int = 1000, popsize: int = 15, tol: float
                            "t_finish_rad": task.t_finish_read_rad}, Timing(0.0, solve),
                   message=str(found.message), diagnostics={"generations": int(found.nit),
                                                            "evaluations": int(found.nfev)})
+
+
+def check(task: LinkageCheck, *, count: int = 1000,
+          nodes: Literal["half_open", "closed", "open_start"] = "half_open") -> Result:
+    """A given linkage (H, L) measured both ways: the dense Euclidean deviation over the
+    continuous path (`max_deviation_mm`, the verdict) and the paper's segment test at COUNT nodes
+    (`nodes_failing`, as `grid_scan` applies it). SOLVED when the deviation is within
+    err_width_mm, INFEASIBLE (violated err_width) otherwise; `margin_mm` is the band left over
+    (negative when exceeded). Swept over H_mm x L_mm it maps where a linkage meets the band."""
+    _check_count(count)
+    if nodes not in NODE_RULES:
+        raise ModelError(f"nodes={nodes!r} is not a node rule; known: {', '.join(NODE_RULES)}", key="nodes")
+    start = time.perf_counter()
+    H, L = task.H_mm, task.L_mm
+    deviation, where = verified_deviation(task.a_mm, task.h_mm, H, L, task.t_finish_rad)
+    first, extra = NODE_RULES[nodes]
+    t = np.arange(first, count + extra) * (task.t_finish_read_rad / count)
+    ends = _segment_ends(t, task)
+    passing = (limacon_implicit(ends[0], ends[1], H, L) < 0) != (limacon_implicit(ends[2], ends[3], H, L) < 0)
+    failing = int(np.count_nonzero(~passing))
+    within = deviation <= task.err_width_mm
+    message = (f"{'within' if within else 'outside'} err_width_mm={task.err_width_mm}: {deviation:.4g} mm "
+               f"at t = {where:.4f} rad; the paper's test fails at {failing} of {t.size} nodes")
+    if within != (failing == 0):
+        message += (" (the nodes miss where the path leaves the band: raise count)" if failing == 0
+                    else " (its segment test is stricter than the distance near the double point)")
+    return Result(Status.SOLVED if within else Status.INFEASIBLE,
+                  {"max_deviation_mm": deviation, "margin_mm": task.err_width_mm - deviation,
+                   "nodes_failing": float(failing)},
+                  Timing(0.0, time.perf_counter() - start), message=message,
+                  violated=() if within else ("err_width",),
+                  diagnostics={"max_deviation_at_rad": where, "nodes": int(t.size), "node_rule": nodes})
 
 
 _NLP_BUILDS: dict = {}

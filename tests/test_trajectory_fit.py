@@ -12,11 +12,11 @@ import numpy as np
 import pytest
 from hypothesis import assume, given, settings, strategies as st
 
-from mechopt.models.cam_linkage import LinkageFit, ideal_normal, ideal_point, limacon_implicit
+from mechopt.models.cam_linkage import LinkageCheck, LinkageFit, ideal_normal, ideal_point, limacon_implicit
 from mechopt.models.errors import ModelError, SolverError
 from mechopt.solvers.path_deviation import normal_deviation, path_distance, verified_deviation
 from mechopt.solvers.result import Result, Status, Timing, from_ipopt
-from mechopt.solvers.trajectory_fit import evolve, grid_scan, minimax, robust
+from mechopt.solvers.trajectory_fit import check, evolve, grid_scan, minimax, robust
 
 PROPERTY = settings(max_examples=30, deadline=None)
 H_PUBLISHED_MM, L_PUBLISHED_MM = 59.45, 47.52     # Podchasov (2021), Sec. IV
@@ -366,6 +366,48 @@ def test_evolve_agrees_with_minimax(task, best):
     assert peer.values["max_deviation_mm"] == pytest.approx(exact.values["max_deviation_mm"], abs=1e-3)
     # no linkage beats the minimax optimum at 1000 nodes on the dense measure (see the local-minimum test)
     assert peer.values["max_deviation_mm"] >= best.values["max_deviation_mm"] - 1e-6
+
+
+# ---------------------------------------------------------------- a given linkage checked
+
+def paper_linkage(width=0.075):
+    return LinkageCheck(a_mm=25.0, h_mm=2.0, err_width_mm=width, H_mm=H_PUBLISHED_MM, L_mm=L_PUBLISHED_MM)
+
+
+@pytest.mark.parametrize("width", [0.075, 0.072, 0.07, 0.06])
+def test_check_counts_the_nodes_the_papers_test_fails(width):
+    got = check(paper_linkage(width))
+    t = np.arange(1000) * (T_FINISH_PUBLISHED_RAD / 1000)          # the half-open rule, published t_FINISH
+    (xi, yi), (xo, yo) = segment_ends(t, 25.0, 2.0, width)
+    failing = np.count_nonzero((limacon_implicit(xi, yi, H_PUBLISHED_MM, L_PUBLISHED_MM) < 0)
+                               == (limacon_implicit(xo, yo, H_PUBLISHED_MM, L_PUBLISHED_MM) < 0))
+    assert got.values["nodes_failing"] == failing
+    assert (failing == 0) == (width == 0.075)        # the paper's scan accepts its linkage at its width
+
+
+def test_check_reports_the_dense_deviation_and_its_verdict():
+    ok, narrow = check(paper_linkage()), check(paper_linkage(0.07))
+    at = ideal_point(np.array([ok.diagnostics["max_deviation_at_rad"]]), 25.0, 2.0)
+    assert brute_distance(at[0][0], at[1][0], H_PUBLISHED_MM, L_PUBLISHED_MM) == pytest.approx(
+        ok.values["max_deviation_mm"], abs=1e-6)
+    assert ok.status is Status.SOLVED and ok.values["margin_mm"] == pytest.approx(0.075 - ok.values["max_deviation_mm"])
+    assert narrow.status is Status.INFEASIBLE and narrow.violated == ("err_width",)
+    assert narrow.values["max_deviation_mm"] == ok.values["max_deviation_mm"]      # the width plays no part
+    assert narrow.values["margin_mm"] < 0
+
+
+def test_check_at_the_minimax_optimum_gives_the_minimax_deviation(best):
+    got = check(LinkageCheck(a_mm=25.0, h_mm=2.0, err_width_mm=0.075, H_mm=best.values["H_mm"], L_mm=best.values["L_mm"]))
+    assert got.values["max_deviation_mm"] == pytest.approx(best.values["max_deviation_mm"], abs=1e-12)
+
+
+@pytest.mark.parametrize("key", ["H_mm", "L_mm"])
+@pytest.mark.parametrize("value", [0.0, -47.52])
+def test_check_refuses_a_link_that_is_not_a_length(key, value):
+    fields = {"a_mm": 25.0, "err_width_mm": 0.075, "H_mm": 59.45, "L_mm": 47.52} | {key: value}
+    with pytest.raises(ModelError, match=rf"{key}={value} must be > 0 \(a link length\)") as err:
+        LinkageCheck(**fields)
+    assert err.value.key == key
 
 
 # ---------------------------------------------------------------- the deviation measures
