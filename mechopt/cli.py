@@ -52,6 +52,8 @@ def main(argv=None) -> int:
     report.add_argument("--bench", type=Path, default=Path("out/bench"), metavar="DIR",
                         help="folder of `mechopt bench` outputs to include (not re-run)")
     report.add_argument("--case", action="append", default=[], metavar="ID", help="only these scenes; repeatable")
+    report.add_argument("--sweep", action="append", default=[], type=Path, metavar="FILE",
+                        help="a `mechopt sweep --out` table whose maps to include; repeatable")
     args = parser.parse_args(argv)
     try:
         return {"cases": _cases, "run": _run, "validate": _validate, "bench": _bench,
@@ -140,7 +142,7 @@ def _sweep(args) -> int:
 def _report(args) -> int:
     from mechopt.report import write_report
     scenes = [registry.find(c) for c in args.case] if args.case else None
-    path = write_report(args.out, scenes=scenes, bench_dir=args.bench,
+    path = write_report(args.out, scenes=scenes, bench_dir=args.bench, sweeps=args.sweep,
                         progress=lambda line: print(line, file=sys.stderr, flush=True))
     print(f"report: {path}")
     return 0

@@ -2,13 +2,15 @@
 
 The page holds the validation table (every scene's expectations: published or derived value
 against the computed one, calibrations marked as such, not counted as reproductions), each scene's
-assumed and calibrated parameters with their reasons, each scene's figures (`mechopt.plots.plot_run`)
-and the accuracy-vs-time plots that `mechopt bench` left in a folder (benchmarks are not re-run
-here: some take minutes). Images sit beside the page and are linked relatively, so the folder
-opens from disk with no server.
+assumed and calibrated parameters with their reasons, each scene's figures (`mechopt.plots.plot_run`),
+the maps of any sweep tables given (`mechopt.figures.sweep`) and the accuracy-vs-time plots that
+`mechopt bench` left in a folder (benchmarks are not re-run here: some take minutes). Every image
+is embedded in the page (base64 PNG), so the one file opens from disk, or as a mail attachment,
+with no server and nothing beside it.
 """
+import base64
 import html
-import shutil
+import tempfile
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
@@ -20,36 +22,42 @@ __all__ = ["write_report"]
 _STYLE = """body{font-family:sans-serif;max-width:1100px;margin:2em auto;color:#222}
 table{border-collapse:collapse;font-size:13px}td,th{border:1px solid #ccc;padding:3px 6px;text-align:left}
 th{background:#f0f0f0}.ok{color:#176117}.fail{color:#b00020;font-weight:bold}.cal{color:#8a5a00}
-img{max-width:520px;margin:4px;border:1px solid #ddd}details{margin:0.4em 0}"""
+img{max-width:520px;border:1px solid #ddd}figure{display:inline-block;margin:4px;font-size:11px;color:#555}
+details{margin:0.4em 0}"""
 
 
-def write_report(out_dir, *, scenes: Sequence | None = None, bench_dir=None,
+def write_report(out_dir, *, scenes: Sequence | None = None, bench_dir=None, sweeps: Sequence = (),
                  progress: Callable[[str], None] | None = None) -> Path:
     """Run the scenes (all by default), draw their figures and write ``out_dir/index.html``.
 
     Parameters
     ----------
-    out_dir : folder for the page and its images (created; its figures/ and bench/ are replaced).
+    out_dir : folder for the page (created); the page is the only file written there.
     scenes : the scenes to include (``registry.find(id)`` each); default every scene.
-    bench_dir : folder of `mechopt bench` outputs; its PNG files are copied in when it exists.
+    bench_dir : folder of `mechopt bench` outputs; its PNG files are embedded when it exists.
+    sweeps : Parquet tables written by `mechopt sweep --out`; their maps are embedded.
     progress : called with one line per scene run.
 
     Returns
     -------
     Path of the HTML page.
     """
+    from mechopt.sweep import read_table
+    tables = [(Path(p), *read_table(p)) for p in sweeps]        # a file of no sweep fails before any work
     out_dir = Path(out_dir)
-    for sub in ("figures", "bench"):
-        shutil.rmtree(out_dir / sub, ignore_errors=True)
-    out_dir.mkdir(parents=True, exist_ok=True)
     runs = []
     for scene in scenes if scenes is not None else registry.all_scenes():
         if progress:
             progress(f"running {scene.id} ...")
         runs.append(registry.run(scene))
-    parts = ["<h1>mechopt: validation report</h1>", _summary(runs), "<h2>Validation</h2>", _validation(runs),
-             "<h2>Scenes</h2>", *(_scene_section(run, out_dir) for run in runs), "<h2>Accuracy against time</h2>",
-             _bench(bench_dir, out_dir)]
+    with tempfile.TemporaryDirectory() as scratch:
+        parts = ["<h1>mechopt: validation report</h1>", _summary(runs), "<h2>Validation</h2>", _validation(runs),
+                 "<h2>Scenes</h2>", *(_scene_section(run, Path(scratch)) for run in runs)]
+        if tables:
+            parts += ["<h2>What-if maps</h2>",
+                      *(_sweep_section(*t, Path(scratch) / f"sweep_{k}") for k, t in enumerate(tables))]
+        parts += ["<h2>Accuracy against time</h2>", _bench(bench_dir)]
+    out_dir.mkdir(parents=True, exist_ok=True)
     page = out_dir / "index.html"
     page.write_text("<!doctype html><html><head><meta charset='utf-8'><title>mechopt report</title>"
                     f"<style>{_STYLE}</style></head><body>\n" + "\n".join(parts) + "\n</body></html>\n",
@@ -80,13 +88,12 @@ def _validation(runs):
                    "assumed params"], rows)
 
 
-def _scene_section(run, out_dir):
+def _scene_section(run, scratch):
     scene, r = run.scene, run.result
     slug = scene.id.replace("/", "_")
     marked = [(k, p.mark, p.why + (f" (fitted to {p.on})" if p.on else ""))
               for k, p in scene.spec.params.items() if p.mark != "given"]
-    figures = plot_run(run, out_dir / "figures" / slug)
-    images = "".join(f"<img src='{_e(p.relative_to(out_dir).as_posix())}' alt='{_e(p.stem)}'>" for p in figures)
+    images = "".join(_image(p) for p in plot_run(run, scratch / slug))
     return (f"<h3 id='{_e(slug)}'>{_e(scene.id)}: {_e(scene.spec.title)}</h3>"
             f"<p><i>{_e(scene.spec.source)}</i><br>status {_e(r.status.value)}"
             f"{' (' + _e(r.message) + ')' if r.message else ''}; build {r.timing.build_s:.4f} s, "
@@ -97,18 +104,35 @@ def _scene_section(run, out_dir):
             + (images or "<p>no figures for this model</p>"))
 
 
-def _bench(bench_dir, out_dir):
+def _sweep_section(path, table, meta, folder):
+    from mechopt.figures.sweep import plot_sweep
+    statuses = table.column("status").to_pylist()
+    counts = ", ".join(f"{statuses.count(s)} {s}" for s in sorted(set(statuses)))
+    scene = next((s for s in registry.all_scenes() if s.id == meta["case"]), None)
+    figures = plot_sweep(table, folder, scene=scene)
+    return (f"<h3>{_e(meta['case'])}: {_e(path.name)}</h3><p>{table.num_rows} variants ({_e(counts)}); "
+            f"swept {_e(', '.join(_swept_axes(meta)))}</p>" + "".join(_image(p) for p in figures))
+
+
+def _swept_axes(meta):
+    spec = meta["spec"]
+    return ([f"{a['key']} = {a['low']:g} .. {a['high']:g} ({a['num']} points)" for a in spec["grid"]]
+            + [f"{a['key']} = {a['low']:g} .. {a['high']:g} (random, {spec['samples']} samples)" for a in spec["random"]])
+
+
+def _bench(bench_dir):
     pngs = sorted(Path(bench_dir).glob("*.png")) if bench_dir and Path(bench_dir).is_dir() else []
     if not pngs:
         return f"<p>no `mechopt bench` output found{' in ' + _e(str(bench_dir)) if bench_dir else ''}; " \
                "run e.g. <code>mechopt bench cam-cutter --plot out/bench</code> first.</p>"
-    (out_dir / "bench").mkdir(parents=True, exist_ok=True)
-    images = []
-    for png in pngs:
-        shutil.copy2(png, out_dir / "bench" / png.name)
-        images.append(f"<figure><img src='bench/{_e(png.name)}' alt='{_e(png.stem)}'>"
-                      f"<figcaption>{_e(png.name)}</figcaption></figure>")
-    return "".join(images)
+    return "".join(_image(png) for png in pngs)
+
+
+def _image(png):
+    """A PNG embedded in the page, captioned with its file name."""
+    data = base64.b64encode(Path(png).read_bytes()).decode("ascii")
+    return (f"<figure><img src='data:image/png;base64,{data}' alt='{_e(Path(png).stem)}'>"
+            f"<figcaption>{_e(Path(png).name)}</figcaption></figure>")
 
 
 def _table(header, rows):

@@ -1,5 +1,6 @@
 """The static HTML report: the validation table as `registry.run` computes it, calibrations and
-assumptions marked, figures and bench plots linked to files that exist beside the page."""
+assumptions marked, figures, sweep maps and bench plots embedded in the one page."""
+import base64
 import html
 import re
 
@@ -8,8 +9,10 @@ import pytest
 
 from mechopt import registry
 from mechopt.cli import main
+from mechopt.models.errors import SceneError
 from mechopt.plots import save_figure
 from mechopt.report import write_report
+from mechopt.sweep import parse_grid, sweep
 
 matplotlib.use("Agg")
 SCENES = ("loom/group1", "stop-impact/frequencies")
@@ -24,7 +27,9 @@ def page(tmp_path_factory):
     fig, ax = plt.subplots()
     ax.loglog([1e-3, 1e-2], [1e-2, 1e-6])
     save_figure(fig, bench / "demo_work_precision.png")
-    path = write_report(root / "site", scenes=[registry.find(s) for s in SCENES], bench_dir=bench)
+    table = root / "amplitude.parquet"
+    sweep(registry.find("loom/group1"), [parse_grid("amplitude_limit_mm=0.08:0.14:3")], out=table, progress=False)
+    path = write_report(root / "site", scenes=[registry.find(s) for s in SCENES], bench_dir=bench, sweeps=[table])
     return path, path.read_text(encoding="utf-8")
 
 
@@ -59,12 +64,23 @@ def test_calibrations_are_marked_and_not_counted_as_reproductions(page):
             assert f"<td>{html.escape(key)}</td><td>{param.mark}</td>" in text
 
 
-def test_figures_and_bench_plots_are_linked_files(page):
+def test_figures_sweep_maps_and_bench_plots_are_embedded_in_the_one_page(page):
     path, text = page
-    sources = re.findall(r"<img src='([^']+)'", text)
-    assert "bench/demo_work_precision.png" in sources
-    assert any(s.startswith("figures/loom_group1/") for s in sources)
-    assert all((path.parent / s).is_file() for s in sources)
+    images = re.findall(r"<img src='data:image/png;base64,([^']+)' alt='([^']+)'>", text)
+    assert len(images) == text.count("<img ")                     # every image is embedded
+    assert all(base64.b64decode(data)[:8] == b"\x89PNG\r\n\x1a\n" for data, _ in images)
+    names = [alt for _, alt in images]
+    assert {"loom_group1", "sweep_span_deg_vs_amplitude_limit_mm", "demo_work_precision"} <= set(names)
+    assert "3 variants (3 SOLVED)" in text
+    assert [p.name for p in path.parent.iterdir()] == ["index.html"]      # nothing beside the page
+
+
+def test_report_refuses_a_sweep_file_of_no_sweep_before_running_anything(tmp_path):
+    other = tmp_path / "not_a_sweep.parquet"
+    other.write_bytes(b"not parquet")
+    with pytest.raises(SceneError, match="not a readable Parquet file"):
+        write_report(tmp_path / "site", scenes=[registry.find("loom/group1")], sweeps=[other])
+    assert not (tmp_path / "site").exists()
 
 
 def test_report_without_bench_output_says_so(tmp_path):
