@@ -93,10 +93,11 @@ class LeverStop:
     `mass_kg` reduced mass at C; `stroke_mm` travel of C over the phase angle; `velocity_factor`
     the approach velocity over stroke * Omega / t; `t_deg` the phase angle of the lift's travel
     t(3,7) at which rebounds are computed; `speeds_rpm` main-shaft speeds to report (structure);
-    `speed_nominal_rpm`, `amplitude_limit_mm` where the amplitude law is linearised and the limit
-    it must keep; `inertia_A_kgm2` J_A and `restitution` k (effect impact_pulse); `damping_ratio`
-    zeta (effect damping); `preload_mm` (effect preload); `effects` the effects the scene calls
-    for (structure: the scene's own list, repeated, until the spine hands it to the task).
+    `speed_nominal_rpm`, `amplitude_limit_mm` the operating speed (where the amplitude law is
+    linearised, where `operating_point` is measured) and the limit the rebound must keep;
+    `inertia_A_kgm2` J_A and `restitution` k (effect impact_pulse); `damping_ratio` zeta (effect
+    damping); `preload_mm` (effect preload); `effects` the effects the scene calls for (structure:
+    the scene's own list, repeated, until the spine hands it to the task).
     """
     E_GPa: float
     J_x_mm4: float

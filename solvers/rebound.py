@@ -14,7 +14,7 @@ for every reading). The first rebound is the largest q in [0, 2 tau + 2 pi / ome
   integrator never steps over a kink of Q_F.
 
 Solvers (scene entry points): `natural_frequencies`, `impact_forces`, `rebound`,
-`linearise_amplitude`. For other code: `rebound_amplitude_mm` (the exact law a(t, n),
+`linearise_amplitude`, `operating_point` (one speed and phase angle against the limit: maps). For other code: `rebound_amplitude_mm` (the exact law a(t, n),
 vectorised), `amplitude_law` (its tangent for the LP), `simulate_contact` (event-driven).
 """
 import math
@@ -31,7 +31,7 @@ from mechopt.models.lever_stop import Impact, LeverStop
 from mechopt.solvers.result import (Result, Status, Timing, from_casadi_integrator, from_ivp,
                                     from_quadpack)
 
-__all__ = ["natural_frequencies", "impact_forces", "rebound", "linearise_amplitude"]
+__all__ = ["natural_frequencies", "impact_forces", "rebound", "linearise_amplitude", "operating_point"]
 
 AGREEMENT_REL = 1e-8            # the three methods must agree this well on every scene
 GRID_POINTS = 257               # coarse search for the first rebound before Newton polishes it
@@ -504,6 +504,38 @@ def linearise_amplitude(task: LeverStop) -> Result:
     return Result(Status.SOLVED, values, Timing(0.0, time.perf_counter() - start),
                   message=f"tangent at t = {task.t_deg:g} deg, n = {n:g} rpm; a(t) is convex, so the tangent's "
                           f"bound is looser than the exact one by span_gain_deg")
+
+
+def operating_point(task: LeverStop) -> Result:
+    """The first rebound at one operating point, main-shaft speed `speed_nominal_rpm` and phase
+    angle `t_deg`, against `amplitude_limit_mm`: swept over both, the map of where the lift meets
+    the weft-transfer limit. The exact law `rebound_amplitude_mm` is checked at the point by
+    CasADi/CVODES on eq. (2) itself (within 1e-8 relative, else INACCURATE). SOLVED when the
+    rebound keeps the limit, INFEASIBLE (violated amplitude) when it does not; `margin_mm` is
+    the limit left over (negative when exceeded)."""
+    task.need("speed_nominal_rpm", "t_deg", "amplitude_limit_mm")
+    start = time.perf_counter()
+    n, t, limit = task.speed_nominal_rpm, task.t_deg, task.amplitude_limit_mm
+    amplitude_mm = float(rebound_amplitude_mm(task, n, t))
+    ode_m, ode_status, build_s = ode_amplitude_m(task.impact(n))
+    values = {"rebound_mm": amplitude_mm, "margin_mm": limit - amplitude_mm,
+              "approach_velocity_m_s": float(task.approach_velocity_m_s(n)), "contact_time_s": task.contact_time_s}
+    if "impact_pulse" in task.effects:
+        values["impact_force_N"] = float(task.impact_force_N(values["approach_velocity_m_s"]))
+    timing = Timing(build_s, time.perf_counter() - start - build_s)
+    if ode_status is not Status.SOLVED:
+        return Result(Status.INACCURATE, values, timing,
+                      message=f"the ODE cross-check gave {ode_status.value}: the law's {amplitude_mm:.4g} mm is unconfirmed")
+    spread = abs(ode_m * 1e3 - amplitude_mm) / max(amplitude_mm, 1e-300)
+    values["methods_rel_diff"] = spread
+    if spread > AGREEMENT_REL:
+        return Result(Status.INACCURATE, values, timing,
+                      message=f"exact law and ODE differ by {spread:.2e} relative at {n:g} rpm, {t:g} deg")
+    within = amplitude_mm <= limit
+    return Result(Status.SOLVED if within else Status.INFEASIBLE, values, timing,
+                  violated=() if within else ("amplitude",),
+                  message=f"{amplitude_mm:.4g} mm at {n:g} rpm, t = {t:g} deg: "
+                          f"{'within' if within else 'above'} amplitude_limit_mm={limit:g}; the ODE agrees to {spread:.1e}")
 
 
 def _by_closed_form(imp):

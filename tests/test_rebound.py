@@ -268,3 +268,41 @@ def test_a_failed_cross_check_method_is_named_and_never_reported_as_a_number(pre
     assert result.status is Status.INACCURATE and "['ode'] not solved" in result.message
     assert result.values["rebound_mm_177"] == pytest.approx(REBOUND_177_MM, rel=0.05)
     assert result.diagnostics["methods_177"]["ode"]["status"] == "LIMIT"
+
+
+# ---------------------------------------------------------------- one operating point (maps)
+
+def at(speed_rpm, t_deg, scene_id="stop-impact/rebound-map"):
+    return rb.operating_point(task_of(scene_id, speed_nominal_rpm=speed_rpm, t_deg=t_deg))
+
+
+@pytest.mark.parametrize("speed_rpm, t_deg", [(280.0, 35.0), (420.0, 25.0), (177.0, 50.0)])
+def test_operating_point_is_the_quadrature_of_eq_2(speed_rpm, t_deg):
+    got = at(speed_rpm, t_deg)
+    task = task_of("stop-impact/rebound-map", t_deg=t_deg)
+    amplitude_m, status = rb.quadrature_amplitude_m(task.impact(speed_rpm))
+    assert status is Status.SOLVED
+    assert got.values["rebound_mm"] == pytest.approx(amplitude_m * 1e3, rel=1e-8)
+    assert got.values["margin_mm"] == pytest.approx(LIMIT_MM - got.values["rebound_mm"], abs=1e-15)
+
+
+def test_operating_point_meets_the_limit_where_the_published_rebound_scaled_by_n_over_t_does():
+    # without preload a = 0.07 mm (280 rpm, Conclusions item 4) * (n / 280) * (35 / t): 0.1 mm at 400 rpm
+    boundary_rpm = 280.0 * LIMIT_MM / 0.07
+    below, above = at(boundary_rpm * 0.99, 35.0), at(boundary_rpm * 1.01, 35.0)
+    assert below.status is Status.SOLVED and below.violated == ()
+    assert above.status is Status.INFEASIBLE and above.violated == ("amplitude",)
+    assert above.values["margin_mm"] < 0 < below.values["margin_mm"]
+    assert above.values["rebound_mm"] == pytest.approx(0.07 * 1.01 * boundary_rpm / 280.0, rel=0.05)
+
+
+def test_operating_point_without_a_limit_names_it():
+    with pytest.raises(ModelError, match="amplitude_limit_mm is not given; this computation needs it"):
+        rb.operating_point(task_of("stop-impact/rebound-280-420", speed_nominal_rpm=280.0))
+
+
+def test_operating_point_whose_ode_check_fails_is_inaccurate_not_solved(monkeypatch):
+    monkeypatch.setattr(rb, "ode_amplitude_m", lambda imp: (float("nan"), Status.LIMIT, 0.0))
+    got = at(280.0, 35.0)
+    assert got.status is Status.INACCURATE and "unconfirmed" in got.message
+    assert "methods_rel_diff" not in got.values
