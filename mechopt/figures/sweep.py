@@ -1,9 +1,10 @@
 """Figures of a sweep table (`mechopt.sweep`): what a designer reads at a glance.
 
 - one swept key: the output against it, a line through the solved variants;
-- two grid keys: a map, one cell per variant, coloured by the output where SOLVED; any other
-  status (infeasible, inaccurate, invalid, ...) is a grey hatched cell with a red cross, the
-  feasibility boundary (SOLVED | not) a solid black line, and a few labelled isolines of the output;
+- two grid keys: a map, one cell per variant, coloured by the output wherever the variant gave a
+  value; any status but SOLVED (infeasible, inaccurate, ...) is hatched over, a cell with no value
+  (invalid, failed) is grey with a red cross; the feasibility boundary (SOLVED | not) is a solid
+  black line, with a few labelled isolines of the output;
 - three grid keys, the third with at most 6 values: one such map per value of the third key on a
   shared colour scale, plus an overview of every value's boundary;
 - more values or keys: at most 6 values of the third key, the others held at their middle value,
@@ -14,6 +15,7 @@ A not-solved variant is drawn at its value when the solver gave one and on the a
 (line plot), so a designer sees where the answer stops being an answer.
 """
 import json
+import textwrap
 from math import ceil
 from pathlib import Path
 from typing import NamedTuple
@@ -213,7 +215,7 @@ def _panels(table, keys, output, case):
     fig = plt.figure(figsize=(1.0 + 4.6 * ncols, 0.9 + 3.9 * nrows))
     spec = fig.add_gridspec(nrows, ncols + 1, width_ratios=[1] * ncols + [0.05])
     axes = [fig.add_subplot(spec[i // ncols, i % ncols]) for i in range(total)]
-    coloured = np.concatenate([g.z[g.solved & np.isfinite(g.z)] for g in grids])
+    coloured = np.concatenate([g.z[np.isfinite(g.z)] for g in grids])
     scale = (coloured.min(), coloured.max()) if coloured.size else (0.0, 1.0)
     levels = _levels(*scale)
     mesh = None
@@ -227,29 +229,36 @@ def _panels(table, keys, output, case):
     spare = nrows * ncols > total          # an empty slot holds the legend, else it goes under the first map
     _legend(fig.add_subplot(spec[-1, -2]) if spare else axes[0], grids, lines, levels, output, spare)
     what = f"{output} over {x_key} × {y_key}" + (f", by {by}" if by else "")
-    fig.suptitle(f"{case}: {what}" + (f"\n{'; '.join(notes)}" if notes else ""), fontsize=11)
+    chars = int(fig.get_figwidth() * 10)          # ~10 characters an inch at 11 pt: wrap, never clip
+    fig.suptitle("\n".join(textwrap.wrap(f"{case}: {what}", chars) + textwrap.wrap("; ".join(notes), chars)),
+                 fontsize=11)
     return fig
 
 
 def _map(ax, grid, lines, scale, levels, x_key, y_key):
-    """One heat map: SOLVED cells coloured, others grey and hatched with a red cross, the boundary
-    black, isolines of the output thin and labelled."""
+    """One heat map: every cell with a value coloured by it (an infeasible variant's value is its
+    best achievable, worth seeing), the not-SOLVED ones hatched over, cells with no value grey with
+    a red cross; the boundary black, isolines of the output thin and labelled."""
     from matplotlib.collections import PatchCollection
     from matplotlib.patches import Rectangle
     xe, ye = _edges(grid.xs), _edges(grid.ys)
-    coloured = np.ma.masked_where(~grid.solved | ~np.isfinite(grid.z), grid.z)
-    mesh = ax.pcolormesh(xe, ye, coloured, cmap="viridis", vmin=scale[0], vmax=scale[1], shading="flat")
-    bad = np.argwhere((grid.status != None) & ~grid.solved)          # noqa: E711 -- elementwise
-    if len(bad):
-        cells = [Rectangle((xe[c], ye[r]), xe[c + 1] - xe[c], ye[r + 1] - ye[r]) for r, c in bad]
-        ax.add_collection(PatchCollection(cells, facecolor="0.85", edgecolor="0.6", hatch="///", linewidth=0.0))
+    valued = np.isfinite(grid.z)
+    mesh = ax.pcolormesh(xe, ye, np.ma.masked_where(~valued, grid.z), cmap="viridis", vmin=scale[0],
+                         vmax=scale[1], shading="flat")
+    present = grid.status != None                                    # noqa: E711 -- elementwise
+    for mask, face in ((present & ~grid.solved & valued, (1.0, 1.0, 1.0, 0.35)), (present & ~valued, "0.85")):
+        cells = [Rectangle((xe[c], ye[r]), xe[c + 1] - xe[c], ye[r + 1] - ye[r]) for r, c in np.argwhere(mask)]
+        if cells:
+            ax.add_collection(PatchCollection(cells, facecolor=face, edgecolor="0.45", hatch="///", linewidth=0.0))
+    empty = np.argwhere(present & ~valued)
+    if len(empty):
         size = float(np.clip(160 / max(len(grid.xs), len(grid.ys)), 3, 8))
-        ax.plot(grid.xs[bad[:, 1]], grid.ys[bad[:, 0]], "x", color="tab:red", ms=size, mew=1.2)
-    solved_z = np.ma.masked_invalid(np.where(grid.solved, grid.z, np.nan))
-    if len(levels) and min(len(grid.xs), len(grid.ys)) > 1 and solved_z.count() > 1:
-        inside = [v for v in levels if solved_z.min() < v < solved_z.max()]
+        ax.plot(grid.xs[empty[:, 1]], grid.ys[empty[:, 0]], "x", color="tab:red", ms=size, mew=1.2)
+    shown_z = np.ma.masked_invalid(grid.z)
+    if len(levels) and min(len(grid.xs), len(grid.ys)) > 1 and shown_z.count() > 1:
+        inside = [v for v in levels if shown_z.min() < v < shown_z.max()]
         if inside:
-            iso = ax.contour(grid.xs, grid.ys, solved_z, levels=inside, colors="white", linewidths=0.8)
+            iso = ax.contour(grid.xs, grid.ys, shown_z, levels=inside, colors="white", linewidths=0.8)
             iso.set(path_effects=_halo())
             for label in ax.clabel(iso, fmt="%g", fontsize=7):
                 label.set_path_effects(_halo())
@@ -289,8 +298,11 @@ def _legend(ax, grids, lines, levels, output, alone):
     bad = [s for g in grids for s in g.status[(g.status != None) & ~g.solved]]    # noqa: E711
     if bad:
         words = ", ".join(f"{w} ×{bad.count(w)}" for w in sorted(set(bad)))
-        handles.append(((Patch(facecolor="0.85", edgecolor="0.6", hatch="///"),
-                         Line2D([], [], ls="", marker="x", color="tab:red")), f"not solved: {words}"))
+        handles.append((Patch(facecolor=(1.0, 1.0, 1.0, 0.35), edgecolor="0.45", hatch="///"),
+                        f"not solved: {words} (coloured where the solver gave a value)"))
+    if any((~np.isfinite(g.z) & (g.status != None)).any() for g in grids):      # noqa: E711
+        handles.append(((Patch(facecolor="0.85", edgecolor="0.45", hatch="///"),
+                         Line2D([], [], ls="", marker="x", color="tab:red")), "no value"))
     if any(lines):
         handles.append((Line2D([], [], color="black", lw=2.0), "feasibility boundary (SOLVED | not)"))
     if len(levels):
