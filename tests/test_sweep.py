@@ -92,6 +92,16 @@ def test_loom_grid_equals_direct_runs_and_holds_the_published_point():
     assert middle["span_deg"] == pytest.approx(scene.spec.expect["span_deg"].value, abs=1e-6)
 
 
+def test_hl_map_on_the_step_lattice_finds_the_published_linkage_first():
+    # the paper's scan takes the first passing lattice point, H ascending then L ascending; the
+    # dense deviation, swept over the lattice around it, must pick out the same point
+    table = sw.sweep(registry.find("cam-cutter/linkage-check"), _grid("H_mm=59.43:59.47:5", "L_mm=47.45:47.59:15"),
+                     progress=False).to_pylist()
+    feasible = sorted((r["H_mm"], r["L_mm"]) for r in table if r["status"] == "SOLVED")
+    assert feasible[0] == pytest.approx((59.45, 47.52), abs=1e-9)       # Podchasov (2021), Sec. IV
+    assert all((r["nodes_failing"] == 0) == (r["status"] == "SOLVED") for r in table)
+
+
 def test_failed_variants_are_rows_and_the_sweep_goes_on():
     scene = registry.find(CAM)
     table = sw.sweep(scene, _grid("a_mm=30:30:1", "h_mm=-1:4:2"), progress=False)
