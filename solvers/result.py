@@ -115,3 +115,17 @@ def from_casadi_integrator(error: str | None) -> Status:
     if error is None:
         return Status.SOLVED
     return Status.LIMIT if any(word in error for word in _CVODES_LIMIT) else Status.FAILED
+
+
+_SQPMETHOD = {
+    "Solve_Succeeded": Status.SOLVED,
+    "Maximum_Iterations_Exceeded": Status.LIMIT,
+    "Search_Direction_Becomes_Too_Small": Status.INACCURATE,   # stopped short of its tolerances
+}
+
+
+def from_sqpmethod(return_status: str, success: bool) -> Status:
+    """CasADi sqpmethod's stats() ("return_status", "success") as a Status: SOLVED only when
+    CasADi calls it a success too; anything unknown is FAILED."""
+    status = _SQPMETHOD.get(return_status, Status.FAILED)
+    return status if success or status is not Status.SOLVED else Status.FAILED

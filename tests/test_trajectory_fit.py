@@ -15,7 +15,7 @@ from hypothesis import assume, given, settings, strategies as st
 from mechopt.models.cam_linkage import LinkageCheck, LinkageFit, ideal_normal, ideal_point, limacon_implicit
 from mechopt.models.errors import ModelError, SolverError
 from mechopt.solvers.path_deviation import normal_deviation, path_distance, verified_deviation
-from mechopt.solvers.result import Result, Status, Timing, from_ipopt
+from mechopt.solvers.result import Result, Status, Timing, from_ipopt, from_sqpmethod
 from mechopt.solvers.trajectory_fit import check, evolve, grid_scan, minimax, robust
 
 PROPERTY = settings(max_examples=30, deadline=None)
@@ -497,3 +497,14 @@ def test_result_refuses_infinite_values():
 ])
 def test_from_ipopt_maps_status_words(word, status):
     assert from_ipopt(word) is status
+
+
+@pytest.mark.parametrize("word, success, status", [
+    ("Solve_Succeeded", True, Status.SOLVED),
+    ("Solve_Succeeded", False, Status.FAILED),          # CasADi must call it a success too
+    ("Search_Direction_Becomes_Too_Small", False, Status.INACCURATE),
+    ("Maximum_Iterations_Exceeded", False, Status.LIMIT),
+    ("Something_Else_Entirely", False, Status.FAILED),
+])
+def test_from_sqpmethod_maps_status_words(word, success, status):
+    assert from_sqpmethod(word, success) is status
