@@ -15,7 +15,9 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from mechopt import registry
+from mechopt.figures.sweep import plot_sweep
 from mechopt.plots import plot_run
+from mechopt.sweep import read_table
 
 __all__ = ["write_report"]
 
@@ -42,7 +44,6 @@ def write_report(out_dir, *, scenes: Sequence | None = None, bench_dir=None, swe
     -------
     Path of the HTML page.
     """
-    from mechopt.sweep import read_table
     tables = [(Path(p), *read_table(p)) for p in sweeps]        # a file of no sweep fails before any work
     out_dir = Path(out_dir)
     runs = []
@@ -105,7 +106,6 @@ def _scene_section(run, scratch):
 
 
 def _sweep_section(path, table, meta, folder):
-    from mechopt.figures.sweep import plot_sweep
     statuses = table.column("status").to_pylist()
     counts = ", ".join(f"{statuses.count(s)} {s}" for s in sorted(set(statuses)))
     scene = next((s for s in registry.all_scenes() if s.id == meta["case"]), None)
@@ -117,7 +117,8 @@ def _sweep_section(path, table, meta, folder):
 def _swept_axes(meta):
     spec = meta["spec"]
     return ([f"{a['key']} = {a['low']:g} .. {a['high']:g} ({a['num']} points)" for a in spec["grid"]]
-            + [f"{a['key']} = {a['low']:g} .. {a['high']:g} (random, {spec['samples']} samples)" for a in spec["random"]])
+            + [f"{a['key']} = {a['low']:g} .. {a['high']:g} (random, {spec['samples']} samples)"
+               for a in spec["random"]])
 
 
 def _bench(bench_dir):

@@ -14,8 +14,9 @@ for every reading). The first rebound is the largest q in [0, 2 tau + 2 pi / ome
   integrator never steps over a kink of Q_F.
 
 Solvers (scene entry points): `natural_frequencies`, `impact_forces`, `rebound`,
-`linearise_amplitude`, `operating_point` (one speed and phase angle against the limit: maps). For other code: `rebound_amplitude_mm` (the exact law a(t, n),
-vectorised), `amplitude_law` (its tangent for the LP), `simulate_contact` (event-driven).
+`linearise_amplitude`, `operating_point` (one speed and phase angle against the limit: maps).
+For other code: `rebound_amplitude_mm` (the exact law a(t, n), vectorised), `amplitude_law`
+(its tangent for the LP), `simulate_contact` (event-driven).
 """
 import math
 import time
@@ -525,7 +526,8 @@ def operating_point(task: LeverStop) -> Result:
     timing = Timing(build_s, time.perf_counter() - start - build_s)
     if ode_status is not Status.SOLVED:
         return Result(Status.INACCURATE, values, timing,
-                      message=f"the ODE cross-check gave {ode_status.value}: the law's {amplitude_mm:.4g} mm is unconfirmed")
+                      message=f"the ODE cross-check gave {ode_status.value}: the law's "
+                              f"{amplitude_mm:.4g} mm is unconfirmed")
     spread = abs(ode_m * 1e3 - amplitude_mm) / max(amplitude_mm, 1e-300)
     values["methods_rel_diff"] = spread
     if spread > AGREEMENT_REL:
@@ -535,7 +537,8 @@ def operating_point(task: LeverStop) -> Result:
     return Result(Status.SOLVED if within else Status.INFEASIBLE, values, timing,
                   violated=() if within else ("amplitude",),
                   message=f"{amplitude_mm:.4g} mm at {n:g} rpm, t = {t:g} deg: "
-                          f"{'within' if within else 'above'} amplitude_limit_mm={limit:g}; the ODE agrees to {spread:.1e}")
+                          f"{'within' if within else 'above'} amplitude_limit_mm={limit:g}; "
+                          f"the ODE agrees to {spread:.1e}")
 
 
 def _by_closed_form(imp):
