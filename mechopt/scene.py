@@ -10,7 +10,9 @@ import importlib
 import inspect
 import re
 import tomllib
+from functools import lru_cache
 from pathlib import Path
+from types import MappingProxyType
 from typing import Any, Literal, get_args, get_origin
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
@@ -313,9 +315,12 @@ def _build_task(path, task_class, effects, params, structure=None):
         raise SceneError(f"{path}: params.{exc.key}: {exc}" if exc.key else f"{path}: {exc}", key=exc.key) from None
 
 
+@lru_cache(maxsize=None)
 def solver_options(solver):
-    """A solver's keyword-only settings by name (each with its default)."""
-    return {name: p for name, p in inspect.signature(solver).parameters.items() if p.kind is p.KEYWORD_ONLY}
+    """A solver's keyword-only settings by name (each with its default); read-only, cached: a
+    sweep asks for them with every variant and `inspect.signature` is slow."""
+    return MappingProxyType({name: p for name, p in inspect.signature(solver).parameters.items()
+                             if p.kind is p.KEYWORD_ONLY})
 
 
 def _check_settings(path, solver, settings):

@@ -17,7 +17,7 @@ torch_offset  kerf offset h: the path is the parallel curve at distance   eqs. (
 ============  ==========================================================  ==========
 """
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, lru_cache
 from typing import ClassVar
 
 import numpy as np
@@ -70,6 +70,7 @@ def limacon_implicit(x, y, H, L):
     return (r2 - H * u) ** 2 - (L * L) * r2
 
 
+@lru_cache(maxsize=64)      # pure in (a, h); a task asks twice (its end, its matched linkage)
 def finish_angle(a, h=0.0):
     """Exact t on (0, pi] where the ideal path meets the x axis (Y of eq. (9) = 0) [rad]."""
     def y(t):

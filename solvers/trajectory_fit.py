@@ -151,7 +151,10 @@ def minimax(task: LinkageFit, *, count: int = 1000, slots: int = 8, max_rounds: 
     for rounds in range(1, max_rounds + 1):
         k = min(_slot_count(len(kept), slots), count)
         chosen = np.array(_pad(kept, k, count))
-        dist, s0 = foot_points(px[chosen], py[chosen], H, L, vertices=ROUND_VERTICES)
+        if rounds == 1:
+            dist, s0 = foot_points(px[chosen], py[chosen], H, L, vertices=ROUND_VERTICES)
+        else:                      # the last round measured every node at this (H, L)
+            dist, s0 = every[chosen], feet[chosen]
         sol, status, status_word, used, built_s = _solve_round(k, nlp, dict(
             x0=np.r_[H, L, dist.max(), s0], p=np.r_[px[chosen], py[chosen], task.a_mm],
             lbx=np.r_[H_lo, L_lo, 0.0, np.full(k, -np.inf)], ubx=np.r_[H_hi, L_hi, np.inf, np.full(k, np.inf)],
@@ -163,7 +166,7 @@ def minimax(task: LinkageFit, *, count: int = 1000, slots: int = 8, max_rounds: 
             break
         H, L = float(x[0]), float(x[1])
         followed = np.hypot(*(np.subtract(real_point(x[3:], H, L), (px[chosen], py[chosen]))))
-        every = path_distance(px, py, H, L, vertices=ROUND_VERTICES)
+        every, feet = foot_points(px, py, H, L, vertices=ROUND_VERTICES)
         worst = int(np.argmax(every))
         stale = followed > every[chosen] + 1e-9 * (1 + followed)
         active = chosen[every[chosen] >= every[chosen].max() - 1e-7]
