@@ -158,6 +158,8 @@ def plot(rows, out_dir):
         marker, line = style.get(method, ("x", "-"))
         ax1.plot(wall, excess, marker=marker, linestyle=line, label=method)
         for k, (r, x, y) in enumerate(zip(mine, wall, excess)):
+            if method == IPOPT:           # same COUNTs as the SQP rows beside it: labels would collide
+                continue
             offset, ha = nudge.get(method, ((0, 6 if k % 2 == 0 or method != GRID else -11), "center"))
             ax1.annotate(str(r["count"]), (x, y), textcoords="offset points", xytext=offset, ha=ha, fontsize=7)
         ax2.plot([r["count"] for r in mine], wall, marker=marker, linestyle=line, label=method)
