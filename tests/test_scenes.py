@@ -8,6 +8,7 @@ import pytest
 from mechopt import registry
 from mechopt.cli import main
 from mechopt.models.errors import SceneError
+from mechopt.plots import plot_run
 from mechopt.scene import load, parse_overrides
 from mechopt.solvers.path_deviation import verified_deviation
 from mechopt.solvers.result import Status
@@ -225,3 +226,12 @@ def test_a_calibration_target_no_scene_expects_is_refused(cases_in):
     _edited(cases_in / "cam", 'mark = "assumed", why = "LOW_H', 'mark = "calibrated", on = "H_nm", why = "LOW_H', "x.toml")
     with pytest.raises(SceneError, match=r"params\.H_min_mm\.on = 'H_nm': no scene expects that value; did you mean H_mm"):
         registry.all_scenes()
+
+
+@pytest.mark.parametrize("case, name", [("cam-cutter/linkage-check", "cam-cutter_linkage-check.png"),
+                                        ("stop-impact/rebound-map", "stop-impact_rebound-map_histories.png")])
+def test_what_if_scenes_draw_their_operating_point(case, name, tmp_path):
+    # a checked linkage has no H_mm among its values (it is an input), an operating point no speeds_rpm
+    paths = plot_run(registry.run(registry.find(case)), tmp_path)
+    assert [p.name for p in paths] == [name]
+    assert paths[0].stat().st_size > 10_000

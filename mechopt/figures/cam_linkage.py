@@ -7,14 +7,16 @@ from mechopt.plots import save_figure
 def plot(run, out_dir):
     """The two paths and the deviation along the ideal path, with the band."""
     import matplotlib.pyplot as plt
-    if not {"H_mm", "L_mm"} <= run.result.values.keys():
+    task = run.task
+    # the linkage a solver found, or the one a check was given
+    H = run.result.values.get("H_mm", getattr(task, "H_mm", None))
+    L = run.result.values.get("L_mm", getattr(task, "L_mm", None))
+    if H is None or L is None:
         return []             # no linkage found (an infeasible grid scan): nothing to draw
 
     from mechopt.models.cam_linkage import ideal_point, real_point
     from mechopt.solvers.path_deviation import path_distance
 
-    task = run.task
-    H, L = run.result.values["H_mm"], run.result.values["L_mm"]
     t = np.linspace(0.0, task.t_finish_rad, 2000)
     ix, iy = ideal_point(t, task.a_mm, task.h_mm)
     rx, ry = real_point(np.linspace(0, 2 * np.pi, 4000), H, L)

@@ -2,7 +2,8 @@
 
 Rebound scenes: the time histories of eq. (2) at each speed (as the paper's Fig. 8) and the
 first-rebound amplitude against speed, with the source's points taken from the scene's own
-expectations. The amplitude-law scene: the exact a(t) beside its tangent and the limit.
+expectations. The amplitude-law scene: the exact a(t) beside its tangent and the limit. The
+operating-point scene: the history at its speed and phase angle against the limit.
 """
 import numpy as np
 
@@ -16,6 +17,8 @@ def plot(run, out_dir):
         return [_histories(run, out_dir), _amplitude_vs_speed(run, out_dir)]
     if solver == "linearise_amplitude" and "slope_mm_per_deg" in run.result.values:
         return [_law(run, out_dir)]
+    if solver == "operating_point" and "rebound_mm" in run.result.values:
+        return [_histories(run, out_dir, [run.task.speed_nominal_rpm], run.task.amplitude_limit_mm)]
     return []
 
 
@@ -23,16 +26,20 @@ def _name(run, what):
     return f"{run.scene.id.replace('/', '_')}_{what}.png"
 
 
-def _histories(run, out_dir):
+def _histories(run, out_dir, speeds=None, limit_mm=None):
+    """q(t) after contact at each speed (the scene's `speeds_rpm` by default), with the
+    amplitude limit when one is given."""
     import matplotlib.pyplot as plt
     from mechopt.solvers.rebound import closed_form_response
 
     task = run.task
     fig, ax = plt.subplots(figsize=(8, 4.5))
-    for n in task.speeds_rpm:
+    for n in task.speeds_rpm if speeds is None else speeds:
         imp = task.impact(n)
         t = np.linspace(0.0, 3 * imp.window_s, 1500)
-        ax.plot(t * 1e3, closed_form_response(imp, t)[0] * 1e3, lw=1.2, label=f"n = {n:g} rpm")
+        ax.plot(t * 1e3, closed_form_response(imp, t)[0] * 1e3, lw=1.2, label=f"n = {n:g} rpm, t = {task.t_deg:g} deg")
+    if limit_mm is not None:
+        ax.axhline(limit_mm, color="tab:red", ls=":", label=f"amplitude limit {limit_mm:g} mm")
     ax.axvspan(0, 2 * task.contact_time_s * 1e3, color="0.9", label="impact pulse (2 tau)")
     ax.axhline(0, color="k", lw=0.6)
     ax.set(xlabel="time after contact [ms]", ylabel="q: C off the plate [mm]",
