@@ -94,15 +94,14 @@ def _validate(args) -> int:
             rows.append((scene.id, c.name, c.kind, c.expected, _fmt(c.got), _verdict(c),
                          f"{result.result.timing.build_s + result.result.timing.solve_s:.3f}"))
     _print_table(("case", "quantity", "kind", "expected", "got", "check", "time [s]"), rows)
-    checks = [c for r in runs for c in r.checks]
-    failed = sum(not c.ok for c in checks)
-    fitted = sum(c.ok and c.calibrated for c in checks)
-    print(f"\n{len(checks) - failed} passed, {failed} failed")
-    print(f"of the passed, {fitted} are calibrations (fitted, or following from a fit by construction), "
-          "not reproductions")
+    counts = registry.tally(c for r in runs for c in r.checks)
+    print(f"\n{sum(counts.values()) - counts['failed']} passed, {counts['failed']} failed")
+    print(f"of the passed: {counts['reproduced']} reproduce a published value, {counts['calibrated']} are "
+          f"calibrations (fitted, or following from a fit by construction), {counts['consistent']} are "
+          "derived (independent computations, bounds, statuses)")
     if args.json:
         _write_json(args.json, [r.as_dict() for r in runs])
-    return 1 if failed else 0
+    return 1 if counts["failed"] else 0
 
 
 def _bench(args) -> int:

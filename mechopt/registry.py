@@ -26,6 +26,23 @@ class Check:
         return {"name": self.name, "expected": self.expected, "got": self.got, "tol": self.tol,
                 "ok": self.ok, "kind": self.kind, "where": self.where, "calibrated": self.calibrated}
 
+    @property
+    def verdict(self) -> str:
+        """What a passed check shows: "reproduced" (a value from the source, not fitted to it),
+        "calibrated" (agreement by construction), "consistent" (a derived value: an independent
+        computation, a bound or a status); or "failed"."""
+        if not self.ok:
+            return "failed"
+        if self.calibrated:
+            return "calibrated"
+        return "reproduced" if self.kind in ("published", "experimental") else "consistent"
+
+
+def tally(checks) -> dict[str, int]:
+    """How many checks are reproduced, calibrated, consistent and failed (see `Check.verdict`)."""
+    verdicts = [c.verdict for c in checks]
+    return {v: verdicts.count(v) for v in ("reproduced", "calibrated", "consistent", "failed")}
+
 
 @dataclass(frozen=True)
 class Run:

@@ -17,7 +17,7 @@ from pathlib import Path
 from mechopt import registry
 from mechopt.figures.sweep import plot_sweep
 from mechopt.plots import plot_run
-from mechopt.sweep import read_table
+from mechopt.sweep import describe_axes, read_table, scene_hash
 
 __all__ = ["write_report"]
 
@@ -67,12 +67,11 @@ def write_report(out_dir, *, scenes: Sequence | None = None, bench_dir=None, swe
 
 
 def _summary(runs):
-    checks = [c for r in runs for c in r.checks]
-    failed = sum(not c.ok for c in checks)
-    fitted = sum(c.ok and c.calibrated for c in checks)
-    return (f"<p>{len(runs)} scenes, {len(checks)} checks: {len(checks) - failed - fitted} reproduced, "
-            f"{fitted} calibrated (a parameter was fitted to them: agreement by construction), "
-            f"{failed} failed.</p>")
+    counts = registry.tally(c for r in runs for c in r.checks)
+    return (f"<p>{len(runs)} scenes, {sum(counts.values())} checks: {counts['reproduced']} published values "
+            f"reproduced, {counts['calibrated']} calibrated (a parameter was fitted to them: agreement by "
+            f"construction), {counts['consistent']} derived (independent computations, bounds and statuses, "
+            f"not values from the source), {counts['failed']} failed.</p>")
 
 
 def _validation(runs):
@@ -109,16 +108,15 @@ def _sweep_section(path, table, meta, folder):
     statuses = table.column("status").to_pylist()
     counts = ", ".join(f"{statuses.count(s)} {s}" for s in sorted(set(statuses)))
     scene = next((s for s in registry.all_scenes() if s.id == meta["case"]), None)
-    figures = plot_sweep(table, folder, scene=scene)
-    return (f"<h3>{_e(meta['case'])}: {_e(path.name)}</h3><p>{table.num_rows} variants ({_e(counts)}); "
-            f"swept {_e(', '.join(_swept_axes(meta)))}</p>" + "".join(_image(p) for p in figures))
-
-
-def _swept_axes(meta):
+    stale = ("<p class='fail'>this case is no longer in the registry</p>" if scene is None
+             else "<p class='fail'>swept an earlier version of the scene file (its sha256 differs): "
+                  "the maps may not match the validation above</p>" if scene_hash(scene) != meta["scene_sha256"]
+             else "")
     spec = meta["spec"]
-    return ([f"{a['key']} = {a['low']:g} .. {a['high']:g} ({a['num']} points)" for a in spec["grid"]]
-            + [f"{a['key']} = {a['low']:g} .. {a['high']:g} (random, {spec['samples']} samples)"
-               for a in spec["random"]])
+    drawn = "".join(_image(p) for p in plot_sweep(table, folder, scene=scene))
+    return (f"<h3>{_e(meta['case'])}: {_e(path.name)}</h3>{stale}<p>{table.num_rows} variants ({_e(counts)}); "
+            f"swept {_e(' '.join(describe_axes(spec)))}"
+            + (f", {spec['samples']} samples, seed {spec['seed']}" if spec["random"] else "") + "</p>" + drawn)
 
 
 def _bench(bench_dir):

@@ -39,7 +39,8 @@ from mechopt import registry
 from mechopt.models.errors import MechoptError, SceneError, SolverError
 from mechopt.scene import Scene, solver_options, task_fields
 
-__all__ = ["Axis", "SweepSpec", "parse_grid", "parse_random", "plan", "sweep", "run_chunk", "read_table"]
+__all__ = ["Axis", "SweepSpec", "parse_grid", "parse_random", "plan", "sweep", "run_chunk", "read_table",
+           "scene_hash", "describe_axes"]
 
 META_KEY = b"mechopt.sweep"
 FIXED_COLUMNS = ("variant", "status", "message", "build_s", "solve_s")
@@ -133,9 +134,9 @@ def run_chunk(case_id: str, chunk: list[tuple[int, dict]], scene_sha256: str | N
     (a cluster's workers read their own installation's cases/).
     """
     scene = registry.find(case_id)
-    if scene_sha256 is not None and _scene_hash(scene) != scene_sha256:
+    if scene_sha256 is not None and scene_hash(scene) != scene_sha256:
         raise SceneError(f"{scene.path}: this worker's scene file differs from the sweep's (sha256 "
-                         f"{_scene_hash(scene)[:12]} != {scene_sha256[:12]}); install the same mechopt on every worker")
+                         f"{scene_hash(scene)[:12]} != {scene_sha256[:12]}); install the same mechopt on every worker")
     rows = []
     for number, overrides in chunk:
         row = {**overrides, "variant": number, "build_s": None, "solve_s": None}
@@ -193,7 +194,7 @@ def sweep(scene: Scene, grid=(), random=(), *, samples: int = 0, seed: int = 0, 
         raise SceneError("give either --scheduler (the cluster's workers run it) or --workers, not both",
                          key="workers")
     spec, variants = plan(scene, grid, random, samples=samples, seed=seed)
-    meta = {"case": spec.case, "spec": json.loads(spec.as_json()), "scene_sha256": _scene_hash(scene)}
+    meta = {"case": spec.case, "spec": json.loads(spec.as_json()), "scene_sha256": scene_hash(scene)}
     store = _Store(Path(out), meta) if out is not None else None
     done = store.done() if store else set()
     todo = [(i, v) for i, v in enumerate(variants) if i not in done]
@@ -384,16 +385,22 @@ def _sweepable(scene):
     return params, settings
 
 
-def _scene_hash(scene):
+def scene_hash(scene) -> str:
+    """sha256 of a scene's file: a sweep table records it, so a table of another version shows."""
     return hashlib.sha256(Path(scene.path).read_bytes()).hexdigest()
+
+
+def describe_axes(spec: dict) -> list[str]:
+    """A stored sweep spec's axes as they were given: ``KEY=LOW:HIGH:NUM``, ``KEY=LOW:HIGH (random)``."""
+    return ([f"{a['key']}={a['low']:g}:{a['high']:g}:{a['num']}" for a in spec["grid"]]
+            + [f"{a['key']}={a['low']:g}:{a['high']:g} (random)" for a in spec["random"]])
 
 
 def _describe(meta):
     spec = meta["spec"]
-    axes = [f"{a['key']}={a['low']:g}:{a['high']:g}:{a['num']}" for a in spec["grid"]]
-    axes += [f"{a['key']}={a['low']:g}:{a['high']:g} (random)" for a in spec["random"]]
     extra = f", {spec['samples']} samples, seed {spec['seed']}" if spec["random"] else ""
-    return f"case {meta['case']}, {' '.join(axes)}{extra}, scene file sha256 {meta['scene_sha256'][:12]}"
+    return (f"case {meta['case']}, {' '.join(describe_axes(spec))}{extra}, "
+            f"scene file sha256 {meta['scene_sha256'][:12]}")
 
 
 def _split(text, flag, form, count):

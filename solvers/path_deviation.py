@@ -54,17 +54,29 @@ def normal_deviation(px, py, nx, ny, H, L):
     return np.take_along_axis(d, nearest[..., None], axis=-1)[..., 0]
 
 
+def _limacon(c, n, H, L):
+    """The point of eq. (10) where cos s = c and sin s = n [mm]: `real_point` with cos 2s and
+    sin 2s expanded, so a Newton step costs one cos and one sin."""
+    return L * (c - 1) + H * (c * c - 1), n * (L + H * c)
+
+
+def _frozen(*arrays):
+    for a in arrays:
+        a.flags.writeable = False        # cached and shared between callers
+    return arrays
+
+
 @lru_cache(maxsize=4)
 def _circle(vertices):
     s = np.linspace(0.0, 2 * np.pi, vertices, endpoint=False)
-    return s, np.cos(s), np.sin(s)
+    return _frozen(s, np.cos(s), np.sin(s))
 
 
 @lru_cache(maxsize=8)
 def _vertices(H, L, vertices):
-    """s and the points of eq. (10) on a polyline of the limaçon (cos 2s and sin 2s expanded)."""
+    """s and the points of eq. (10) on a polyline of the limaçon."""
     s, c, n = _circle(vertices)
-    return s, L * (c - 1) + H * (c * c - 1), n * (L + H * c)
+    return (s, *_frozen(*_limacon(c, n, H, L)))
 
 
 @lru_cache(maxsize=8)
@@ -103,14 +115,16 @@ def foot_points(px, py, H, L, *, vertices=2**14, newton_steps=4):
     for _ in range(newton_steps):
         # R, R', R'' of eq. (10) from cos s and sin s alone (cos 2s = 2c^2 - 1, sin 2s = 2nc)
         c2, n2 = 2 * c * c - 1, 2 * n * c
-        ex, ey = L * (c - 1) + 0.5 * H * (c2 - 1) - px, L * n + 0.5 * H * n2 - py
+        x, y = _limacon(c, n, H, L)
+        ex, ey = x - px, y - py
         vx, vy = -L * n - H * n2, L * c + H * c2
         ax, ay = -L * c - 2 * H * c2, -L * n - 2 * H * n2
         slope = vx * vx + vy * vy + ex * ax + ey * ay
         step = np.clip(-(ex * vx + ey * vy) / np.where(slope > 0, slope, np.inf), -spacing, spacing)
         trial = s + step
         tc, tn = np.cos(trial), np.sin(trial)
-        dist = np.hypot(L * (tc - 1) + H * (tc * tc - 1) - px, L * tn + H * tn * tc - py)
+        tx, ty = _limacon(tc, tn, H, L)
+        dist = np.hypot(tx - px, ty - py)
         closer = dist < best
         s, best = np.where(closer, trial, s), np.where(closer, dist, best)
         c, n = np.where(closer, tc, c), np.where(closer, tn, n)

@@ -55,13 +55,9 @@ def grid_scan(task: LinkageFit, *, count: int = 1000,
     below the axis just before the ideal path does: the node at t = t_FINISH ("closed",
     "open_start") then fails everywhere at the paper's width. `diagnostics` reports this.
     """
-    _check_count(count)
-    if nodes not in NODE_RULES:
-        raise ModelError(f"nodes={nodes!r} is not a node rule; known: {', '.join(NODE_RULES)}", key="nodes")
     start = time.perf_counter()
     t_finish = task.t_finish_read_rad
-    first, extra = NODE_RULES[nodes]
-    t = np.arange(first, count + extra) * (t_finish / count)
+    t = _node_times(task, count, nodes)
     ends = _segment_ends(t, task)
     H_grid, L_grid = _lattice(task)
     build = time.perf_counter() - start
@@ -139,6 +135,8 @@ def minimax(task: LinkageFit, *, count: int = 1000, slots: int = 8, max_rounds: 
     (H, L) to ~1e-9 mm; SQP is ~7x faster per round (`mechopt bench cam-cutter`).
     """
     _check_count(count)
+    if nlp not in _NLP_OPTIONS:
+        raise ModelError(f"nlp={nlp!r} is not an NLP back end; known: {', '.join(_NLP_OPTIONS)}", key="nlp")
     start = time.perf_counter()
     t_end = task.t_finish_rad
     t = np.linspace(0.0, t_end, count)
@@ -147,6 +145,7 @@ def minimax(task: LinkageFit, *, count: int = 1000, slots: int = 8, max_rounds: 
     H, L = (float(v) for v in np.clip(task.matched, (H_lo, L_lo), (H_hi, L_hi)))
     kept: list[int] = []           # nodes that were ever active or worst: they never leave
     back_ends: list[str] = []      # which NLP back end answered each round
+    unsolved: dict[int, str] = {}  # rounds whose NLP was not solved (the next one starts from it)
     build_s, status, status_word = 0.0, Status.FAILED, "not_run"
     for rounds in range(1, max_rounds + 1):
         k = min(_slot_count(len(kept), slots), count)
@@ -161,6 +160,8 @@ def minimax(task: LinkageFit, *, count: int = 1000, slots: int = 8, max_rounds: 
             lbg=np.zeros(3 * k), ubg=np.r_[np.zeros(k), np.full(2 * k, np.inf)]))
         build_s += built_s
         back_ends.append(used)
+        if status is not Status.SOLVED:
+            unsolved[rounds] = f"{used} {status_word}"
         x = np.asarray(sol["x"]).ravel()
         if not np.all(np.isfinite(x)):
             break
@@ -185,6 +186,9 @@ def minimax(task: LinkageFit, *, count: int = 1000, slots: int = 8, max_rounds: 
                                             ("L_min_mm", L <= L_lo + 1e-7), ("L_max_mm", L >= L_hi - 1e-7)) if hit]
     message = (f"{status_word} after {rounds} exchange round(s) ({', '.join(back_ends)}), "
                f"{len(chosen)} nodes in the NLP")
+    earlier = [f"round {r}: {word}" for r, word in unsolved.items() if r < rounds]
+    if earlier:             # a later round started from it; only the last round's answer counts
+        message += f"; earlier rounds not solved ({', '.join(earlier)})"
     violated = ()
     if status is Status.SOLVED and every.max() > task.err_width_mm:
         status, violated = Status.INFEASIBLE, ("err_width",)
@@ -200,7 +204,7 @@ def minimax(task: LinkageFit, *, count: int = 1000, slots: int = 8, max_rounds: 
                   Timing(build_s, solve_s), message=message, violated=violated,
                   diagnostics={"nodes_max_deviation_mm": float(every.max()), "nlp_nodes": len(chosen),
                                "kept_nodes": len(kept), "exchange_rounds": rounds,
-                               "nlp_status": status_word, "nlp_back_ends": back_ends, "active_bounds": active_bounds,
+                               "nlp_status": status_word, "nlp_back_ends": back_ends, "nlp_unsolved_rounds": {str(r): w for r, w in unsolved.items()}, "active_bounds": active_bounds,
                                "max_deviation_at_rad": where, "t_finish_exact_rad": t_end})
 
 
@@ -305,14 +309,10 @@ def check(task: LinkageCheck, *, count: int = 1000,
     (`nodes_failing`, as `grid_scan` applies it). SOLVED when the deviation is within
     err_width_mm, INFEASIBLE (violated err_width) otherwise; `margin_mm` is the band left over
     (negative when exceeded). Swept over H_mm x L_mm it maps where a linkage meets the band."""
-    _check_count(count)
-    if nodes not in NODE_RULES:
-        raise ModelError(f"nodes={nodes!r} is not a node rule; known: {', '.join(NODE_RULES)}", key="nodes")
+    t = _node_times(task, count, nodes)
     start = time.perf_counter()
     H, L = task.H_mm, task.L_mm
     deviation, where = verified_deviation(task.a_mm, task.h_mm, H, L, task.t_finish_rad)
-    first, extra = NODE_RULES[nodes]
-    t = np.arange(first, count + extra) * (task.t_finish_read_rad / count)
     ends = _segment_ends(t, task)
     passing = (limacon_implicit(ends[0], ends[1], H, L) < 0) != (limacon_implicit(ends[2], ends[3], H, L) < 0)
     failing = int(np.count_nonzero(~passing))
@@ -320,8 +320,10 @@ def check(task: LinkageCheck, *, count: int = 1000,
     message = (f"{'within' if within else 'outside'} err_width_mm={task.err_width_mm}: {deviation:.4g} mm "
                f"at t = {where:.4f} rad; the paper's test fails at {failing} of {t.size} nodes")
     if within != (failing == 0):
-        message += (" (the nodes miss where the path leaves the band: raise count)" if failing == 0
-                    else " (its segment test is stricter than the distance near the double point)")
+        message += (" (its segment test is stricter than the distance near the double point)" if failing
+                    else f" (the path leaves the band past the last node, t = {t[-1]:.4f} rad: nodes='{nodes}' "
+                         "leaves t_FINISH out)" if where > t[-1]
+                    else " (the path leaves the band between the nodes: raise count)")
     return Result(Status.SOLVED if within else Status.INFEASIBLE,
                   {"max_deviation_mm": deviation, "margin_mm": task.err_width_mm - deviation,
                    "nodes_failing": float(failing)},
@@ -347,7 +349,7 @@ _NLP_OPTIONS = {
 }
 
 
-def _minimax_nlp(k: int, method: str = "ipopt"):
+def _minimax_nlp(k: int, method: str):
     """The minimax NLP with k node slots for `method` ("ipopt" or "sqp") and the seconds its
     build took now (0 when cached): nodes are parameters, so each is built once per process."""
     if (k, method) in _NLP_BUILDS:
@@ -399,6 +401,16 @@ def _pad(working, k, count):
         if i not in chosen:
             chosen.append(int(i))
     return chosen
+
+
+def _node_times(task, count, nodes):
+    """The paper's nodes t_i = i t_FINISH / COUNT, t_FINISH as read (`t_finish_read_rad`), for
+    the i that the rule `nodes` names (NODE_RULES)."""
+    _check_count(count)
+    if nodes not in NODE_RULES:
+        raise ModelError(f"nodes={nodes!r} is not a node rule; known: {', '.join(NODE_RULES)}", key="nodes")
+    first, extra = NODE_RULES[nodes]
+    return np.arange(first, count + extra) * (task.t_finish_read_rad / count)
 
 
 def _check_count(count):

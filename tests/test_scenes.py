@@ -130,7 +130,11 @@ def test_cli_validate_passes_and_reports_every_check(tmp_path, capsys):
     assert main(["validate", "--json", str(out)]) == 0
     runs = json.loads(out.read_text())
     assert {r["case"] for r in runs} == {s.id for s in registry.all_scenes()}
-    assert f"{sum(len(r['checks']) for r in runs)} passed, 0 failed" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert f"{sum(len(r['checks']) for r in runs)} passed, 0 failed" in printed
+    checks = [c for r in runs for c in r["checks"]]
+    published = sum(not c["calibrated"] and c["kind"] in ("published", "experimental") for c in checks)
+    assert f"of the passed: {published} reproduce a published value, " in printed
 
 
 def test_cli_names_an_unknown_case_and_exits_2(capsys):

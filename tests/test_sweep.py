@@ -328,7 +328,7 @@ def test_worker_with_another_scene_file_refuses_its_chunk():
 
 @pytest.mark.slow
 def test_variants_lost_on_the_cluster_are_named_not_hidden(cluster, monkeypatch):
-    monkeypatch.setattr(sw, "_scene_hash", lambda scene: "f" * 64)     # the client's file "differs"
+    monkeypatch.setattr(sw, "scene_hash", lambda scene: "f" * 64)     # the client's file "differs"
     with pytest.raises(SolverError, match=r"3 of 3 variants were not computed \(SceneError: .*scene file differs"):
         sw.sweep(registry.find(LOOM), _grid("sigma_H_limit_MPa=700:900:3"), chunk=1,
                  scheduler=cluster.scheduler_address, progress=False)

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from hypothesis import assume, given, settings, strategies as st
 
+from mechopt import registry
 from mechopt.models.cam_linkage import LinkageCheck, LinkageFit, ideal_normal, ideal_point, limacon_implicit
 from mechopt.models.errors import ModelError, SolverError
 from mechopt.solvers.path_deviation import normal_deviation, path_distance, verified_deviation
@@ -396,9 +397,29 @@ def test_check_reports_the_dense_deviation_and_its_verdict():
     assert narrow.values["margin_mm"] < 0
 
 
-def test_check_at_the_minimax_optimum_gives_the_minimax_deviation(best):
-    got = check(LinkageCheck(a_mm=25.0, h_mm=2.0, err_width_mm=0.075, H_mm=best.values["H_mm"], L_mm=best.values["L_mm"]))
-    assert got.values["max_deviation_mm"] == pytest.approx(best.values["max_deviation_mm"], abs=1e-12)
+def test_papers_linkage_deviation_is_the_brute_force_maximum_over_the_path(task):
+    # the value cam-cutter/linkage-check expects: brute-force distances on a coarse scan of the
+    # whole path and a fine one around its peak, against the dense check's maximum
+    expected = registry.find("cam-cutter/linkage-check").spec.expect["max_deviation_mm"].value
+    got = check(paper_linkage())
+    where = got.diagnostics["max_deviation_at_rad"]
+    coarse = np.linspace(0.0, task.t_finish_rad, 60)
+    fine = np.clip(where + np.linspace(-2e-3, 2e-3, 41), 0.0, task.t_finish_rad)
+    brute = [brute_distance(*(float(v) for v in ideal_point(t, 25.0, 2.0)), H_PUBLISHED_MM, L_PUBLISHED_MM, samples=50_000)
+             for t in np.r_[coarse, fine]]
+    assert max(brute) == pytest.approx(got.values["max_deviation_mm"], abs=2e-7)
+    assert got.values["max_deviation_mm"] == pytest.approx(expected, abs=1e-6)
+
+
+def test_check_says_when_the_papers_nodes_miss_the_end_of_the_path():
+    # at 0.065 mm this linkage leaves the band only at t_FINISH itself, the node the paper's rule
+    # leaves out: its test accepts the linkage, the dense deviation does not
+    task = LinkageCheck(a_mm=25.0, h_mm=2.0, err_width_mm=0.065, H_mm=59.62, L_mm=47.42)
+    half_open, closed = check(task), check(task, nodes="closed")
+    assert half_open.status is Status.INFEASIBLE and half_open.values["nodes_failing"] == 0
+    assert half_open.diagnostics["max_deviation_at_rad"] > T_FINISH_PUBLISHED_RAD
+    assert "past the last node" in half_open.message and "nodes='half_open' leaves t_FINISH out" in half_open.message
+    assert closed.values["nodes_failing"] == 1
 
 
 @pytest.mark.parametrize("key", ["H_mm", "L_mm"])
@@ -452,19 +473,43 @@ def test_verified_deviation_is_at_least_node_maximum(task):
 
 # ---------------------------------------------------------------- input errors
 
-@pytest.mark.parametrize("solver", [grid_scan, minimax, evolve, robust])
+@pytest.mark.parametrize("solver", [grid_scan, minimax, evolve, robust, check])
 @pytest.mark.parametrize("count", [0, -5, 2.5, 1000.0])
 def test_bad_count_is_rejected(task, solver, count):
     with pytest.raises(ModelError, match=rf"count={count!r} must be a whole number >= 1") as err:
-        solver(task, count=count)
+        solver(paper_linkage() if solver is check else task, count=count)
     assert err.value.key == "count"
 
 
-def test_unknown_node_rule_is_rejected(task):
+@pytest.mark.parametrize("solver", [grid_scan, check])
+def test_unknown_node_rule_is_rejected(task, solver):
     with pytest.raises(ModelError, match=r"nodes='middle' is not a node rule; known: half_open, closed, "
                                          r"open_start") as err:
-        grid_scan(task, nodes="middle")
+        solver(paper_linkage() if solver is check else task, nodes="middle")
     assert err.value.key == "nodes"
+
+
+def test_unknown_nlp_back_end_is_rejected(task):
+    with pytest.raises(ModelError, match=r"nlp='SQP' is not an NLP back end; known: ipopt, sqp") as err:
+        minimax(task, nlp="SQP")
+    assert err.value.key == "nlp"
+
+
+def test_a_round_that_was_not_solved_is_named_even_when_a_later_one_is(task, monkeypatch):
+    import mechopt.solvers.trajectory_fit as tf
+    solve_round, calls = tf._solve_round, []
+
+    def first_stops_short(k, method, bounds):
+        sol, status, word, used, built = solve_round(k, method, bounds)
+        calls.append(word)
+        return (sol, Status.LIMIT, "Maximum_Iterations_Exceeded", used, built) if len(calls) == 1 else \
+            (sol, status, word, used, built)
+
+    monkeypatch.setattr(tf, "_solve_round", first_stops_short)
+    got = minimax(task)
+    assert len(calls) > 1 and got.status is Status.SOLVED
+    assert "earlier rounds not solved (round 1: sqp Maximum_Iterations_Exceeded)" in got.message
+    assert got.diagnostics["nlp_unsolved_rounds"] == {"1": "sqp Maximum_Iterations_Exceeded"}
 
 
 def test_grid_box_too_large_for_step_is_rejected(task):
