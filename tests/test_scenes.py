@@ -135,6 +135,11 @@ def test_cli_validate_passes_and_reports_every_check(tmp_path, capsys):
     checks = [c for r in runs for c in r["checks"]]
     published = sum(not c["calibrated"] and c["kind"] in ("published", "experimental") for c in checks)
     assert f"of the passed: {published} reproduce a published value, " in printed
+    # the README states the same counts: it must not drift from the registry
+    calibrated = sum(c["calibrated"] for c in checks)
+    readme = " ".join((Path(__file__).parents[1] / "README.md").read_text(encoding="utf-8").split())
+    assert (f"Today: {published} published values reproduced" in readme
+            and f"{calibrated} calibrations, {len(checks) - published - calibrated} derived checks" in readme)
 
 
 def test_cli_names_an_unknown_case_and_exits_2(capsys):
