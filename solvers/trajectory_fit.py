@@ -163,7 +163,8 @@ def minimax(task: LinkageFit, *, count: int = 1000, slots: int = 8, max_rounds: 
         if status is not Status.SOLVED:
             unsolved[rounds] = f"{used} {status_word}"
         x = np.asarray(sol["x"]).ravel()
-        if not np.all(np.isfinite(x)):
+        if not np.all(np.isfinite(x)):         # whatever the back end said, no answer
+            status, status_word = Status.FAILED, f"{status_word} with a non-finite point"
             break
         H, L = float(x[0]), float(x[1])
         followed = np.hypot(*(np.subtract(real_point(x[3:], H, L), (px[chosen], py[chosen]))))

@@ -553,3 +553,17 @@ def test_from_ipopt_maps_status_words(word, status):
 ])
 def test_from_sqpmethod_maps_status_words(word, success, status):
     assert from_sqpmethod(word, success) is status
+
+
+def test_a_round_returning_a_non_finite_point_fails_whatever_its_status_word(task, monkeypatch):
+    import mechopt.solvers.trajectory_fit as tf
+    solve_round = tf._solve_round
+
+    def nan_point(k, method, bounds):
+        sol, status, word, used, built = solve_round(k, method, bounds)
+        return {"x": np.full(np.asarray(sol["x"]).shape, np.nan)}, status, word, used, built
+
+    monkeypatch.setattr(tf, "_solve_round", nan_point)
+    got = minimax(task)
+    assert got.status is Status.FAILED and "non-finite point" in got.message
+    assert "H_mm" not in got.values
