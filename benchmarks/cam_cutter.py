@@ -21,7 +21,7 @@ import time
 
 from mechopt import registry
 from mechopt.plots import save_figure
-from mechopt.solvers import trajectory_fit
+from mechopt.solvers.cam_cutter import fit as trajectory_fit
 
 __all__ = ["cli", "run", "table", "ratios", "plot", "grid_box_timing", "targets_table", "PAPER_TASK", "TARGETS"]
 

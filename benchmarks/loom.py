@@ -25,9 +25,9 @@ import scipy.sparse as sp
 from scipy.optimize import linprog
 
 from mechopt import registry
-from mechopt.solvers import cyclogram_lp
+from mechopt.solvers import loom as cyclogram_lp
 from mechopt.plots import save_figure
-from mechopt.solvers.cyclogram_lp import build_event_time_lp, incidence, plan_cyclogram
+from mechopt.solvers.loom import build_event_time_lp, incidence, plan_cyclogram
 
 __all__ = ["cli", "layered", "scale", "what_if", "TARGETS"]
 

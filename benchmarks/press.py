@@ -9,7 +9,7 @@ build cached (a first warm-up call builds it). Methods:
 
 * ``rk4 (paper)``       fixed-step RK4 on the switched equations, step 1 ms ... 15.6 us: it steps
                          across the jump at the end of the cut, so its error falls only as O(h);
-* ``cvodes events``     `press_dynamics.events`, tolerance 1e-4 ... 1e-12;
+* ``cvodes events``     `press.events`, tolerance 1e-4 ... 1e-12;
 * ``Radau events``, ``LSODA events``  scipy's solve_ivp with terminal events and restarts.
 
 `at_accuracy` interpolates each method's time to reach 1e-8 on phi (log-log); for RK4 it
@@ -23,7 +23,7 @@ import numpy as np
 
 from mechopt import registry
 from mechopt.plots import save_figure
-from mechopt.solvers import press_dynamics as pd
+from mechopt.solvers.press import dynamics as pd
 
 __all__ = ["cli", "run", "table", "at_accuracy", "observed_order", "plot", "cycle_timing", "PAPER_TASK", "DURATION_S"]
 

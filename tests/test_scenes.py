@@ -10,7 +10,7 @@ from mechopt.cli import main
 from mechopt.models.errors import SceneError
 from mechopt.plots import plot_run
 from mechopt.scene import load, parse_overrides
-from mechopt.solvers.path_deviation import verified_deviation
+from mechopt.solvers.cam_cutter.deviation import verified_deviation
 from mechopt.solvers.result import Status
 
 GOOD = registry.cases_dir() / "cam-cutter" / "paper-grid.toml"
@@ -53,10 +53,10 @@ def _edited(tmp_path, old, new, name="bad.toml"):
     ('kind = "published"', 'kind = "rumoured"', r"expect\.H_mm\.kind: Input should be 'published', 'experimental' or 'derived'"),
     ('effects = ["torch_offset"]', 'effects = ["torch_offset", "wind"]', r"effects: unknown \['wind'\]; LinkageFit knows torch_offset"),
     ('effects = ["torch_offset"]', 'effects = []', r"params\.h_mm belongs to effect 'torch_offset'"),
-    ('solver = "trajectory_fit.grid_scan"', 'solver = "trajectory_fit.grid_scna"',
-     r"unknown solver 'trajectory_fit\.grid_scna'; known: trajectory_fit\.grid_scan, trajectory_fit\.minimax"),
-    ('task = "cam_linkage.LinkageFit"', 'task = "cam_linkage.LinkageFix"', r"unknown task 'cam_linkage\.LinkageFix'; known: cam_linkage\.LinkageFit"),
-    ('task = "cam_linkage.LinkageFit"', 'task = "nowhere.LinkageFit"', r"no module mechopt\.models\.nowhere"),
+    ('solver = "cam_cutter.grid_scan"', 'solver = "cam_cutter.grid_scna"',
+     r"unknown solver 'cam_cutter\.grid_scna'; known: cam_cutter\.grid_scan, cam_cutter\.minimax"),
+    ('task = "cam_cutter.LinkageFit"', 'task = "cam_cutter.LinkageFix"', r"unknown task 'cam_cutter\.LinkageFix'; known: cam_cutter\.LinkageFit"),
+    ('task = "cam_cutter.LinkageFit"', 'task = "nowhere.LinkageFit"', r"no module mechopt\.models\.nowhere"),
     ('count = 1000 ', 'count = "many" ', r"solver_settings\.count = 'many': expected int"),
     ('count = 1000 ', 'cuont = 1000 ', r"solver_settings\.cuont: unknown setting of grid_scan; allowed: count, nodes"),
     ('nodes = "half_open"', 'nodes = "both"', r"solver_settings\.nodes = 'both': allowed half_open, closed, open_start"),

@@ -112,7 +112,7 @@ def _bench(args) -> int:
 
 def _fit_force(args) -> int:
     from mechopt.force_data import read_force_csv
-    from mechopt.solvers.force_fit import fit_force
+    from mechopt.solvers.press.force_fit import fit_force
     result = fit_force(*read_force_csv(args.csv), args.degree, segments=args.segments,
                        through_origin=not args.with_intercept)
     print(f"{args.csv}: degree {args.degree}, status {result.status.value}" + (f" ({result.message})" if result.message else ""))

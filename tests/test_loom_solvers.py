@@ -12,9 +12,9 @@ import pytest
 from mechopt import registry
 from mechopt.benchmarks.loom import layered
 from mechopt.models.errors import SolverError
-from mechopt.models.loom_cyclogram import Cyclogram
-from mechopt.solvers import cyclogram_lp
-from mechopt.solvers.cyclogram_lp import plan_cyclogram
+from mechopt.models.loom import Cyclogram
+from mechopt.solvers import loom as cyclogram_lp
+from mechopt.solvers.loom import plan_cyclogram
 from mechopt.solvers.result import Status
 
 T_3_7_MIN_DEG = (0.208 - 0.1) / 0.003          # from the published law and limit

@@ -17,7 +17,7 @@ from functools import lru_cache
 import numpy as np
 from scipy.spatial import cKDTree
 
-from mechopt.models.cam_linkage import ideal_normal, ideal_point
+from mechopt.models.cam_cutter import ideal_normal, ideal_point
 
 
 def normal_crossings(px, py, nx, ny, H, L):

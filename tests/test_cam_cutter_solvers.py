@@ -13,11 +13,11 @@ import pytest
 from hypothesis import assume, given, settings, strategies as st
 
 from mechopt import registry
-from mechopt.models.cam_linkage import LinkageCheck, LinkageFit, ideal_normal, ideal_point, limacon_implicit
+from mechopt.models.cam_cutter import LinkageCheck, LinkageFit, ideal_normal, ideal_point, limacon_implicit
 from mechopt.models.errors import ModelError, SolverError
-from mechopt.solvers.path_deviation import normal_deviation, path_distance, verified_deviation
+from mechopt.solvers.cam_cutter.deviation import normal_deviation, path_distance, verified_deviation
 from mechopt.solvers.result import Result, Status, Timing, from_ipopt, from_sqpmethod
-from mechopt.solvers.trajectory_fit import check, evolve, grid_scan, minimax, robust
+from mechopt.solvers.cam_cutter.fit import check, evolve, grid_scan, minimax, robust
 
 PROPERTY = settings(max_examples=30, deadline=None)
 H_PUBLISHED_MM, L_PUBLISHED_MM = 59.45, 47.52     # Podchasov (2021), Sec. IV
@@ -496,7 +496,7 @@ def test_unknown_nlp_back_end_is_rejected(task):
 
 
 def test_a_round_that_was_not_solved_is_named_even_when_a_later_one_is(task, monkeypatch):
-    import mechopt.solvers.trajectory_fit as tf
+    import mechopt.solvers.cam_cutter.fit as tf
     solve_round, calls = tf._solve_round, []
 
     def first_stops_short(k, method, bounds):
@@ -556,7 +556,7 @@ def test_from_sqpmethod_maps_status_words(word, success, status):
 
 
 def test_a_round_returning_a_non_finite_point_fails_whatever_its_status_word(task, monkeypatch):
-    import mechopt.solvers.trajectory_fit as tf
+    import mechopt.solvers.cam_cutter.fit as tf
     solve_round = tf._solve_round
 
     def nan_point(k, method, bounds):

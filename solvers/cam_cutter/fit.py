@@ -6,7 +6,7 @@
 * `evolve`:    scipy's differential evolution on the minimax objective: the peer a user would try.
 * `check`:     a given (H, L) measured both ways, for what-if maps over the link lengths.
 
-Every answer's `max_deviation_mm` is the independent Euclidean check of `path_deviation`.
+Every answer's `max_deviation_mm` is the independent Euclidean check of `deviation`.
 """
 import time
 from typing import Literal
@@ -15,10 +15,10 @@ import casadi as ca
 import numpy as np
 from scipy.optimize import differential_evolution
 
-from mechopt.models.cam_linkage import (LinkageCheck, LinkageFit, ideal_normal, ideal_point, limacon_implicit,
+from mechopt.models.cam_cutter import (LinkageCheck, LinkageFit, ideal_normal, ideal_point, limacon_implicit,
                                         real_point, real_velocity)
 from mechopt.models.errors import ModelError
-from mechopt.solvers.path_deviation import (foot_points, nodes_and_normals, normal_crossings, normal_deviation,
+from mechopt.solvers.cam_cutter.deviation import (foot_points, nodes_and_normals, normal_crossings, normal_deviation,
                                             path_distance, verified_deviation)
 from mechopt.solvers.result import Result, Status, Timing, from_ipopt, from_sqpmethod
 

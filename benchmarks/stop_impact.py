@@ -19,7 +19,7 @@ import numpy as np
 
 from mechopt import registry
 from mechopt.plots import save_figure
-from mechopt.solvers import rebound as rb
+from mechopt.solvers.stop_impact import lever as rb
 
 __all__ = ["cli", "evaluations", "sweep", "table", "sweep_table", "plot", "SCENES", "SWEEP_TARGET_S"]
 

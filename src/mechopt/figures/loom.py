@@ -1,4 +1,4 @@
-"""Figures for the loom cyclogram scenes (models/loom_cyclogram.py): the cyclogram as a Gantt chart."""
+"""Figures for the loom cyclogram scenes (models/loom.py): the cyclogram as a Gantt chart."""
 from mechopt.plots import save_figure
 
 

@@ -26,7 +26,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from mechopt.models.errors import SolverError
-from mechopt.models.loom_cyclogram import Cyclogram, amplitude_mm, stress_bound_deg, stress_MPa
+from mechopt.models.loom import Cyclogram, amplitude_mm, stress_bound_deg, stress_MPa
 from mechopt.solvers.result import Result, Status, Timing, from_cvxpy
 
 __all__ = ["plan_cyclogram"]
@@ -121,7 +121,7 @@ def plan_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] = "
 
     Parameters
     ----------
-    task : the network and its limits (models/loom_cyclogram.py).
+    task : the network and its limits (models/loom.py).
     backend : LP solver behind cvxpy.
     stress_form : "exact" sigma_max(t) <= [sigma_H] as t >= K/[sigma_H]; "linear" its tangent at t_ref.
     warm_start : pass cvxpy's warm start to the back end (with HiGHS it can slow re-solves).

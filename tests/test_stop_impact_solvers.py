@@ -14,8 +14,8 @@ from hypothesis import given, settings, strategies as st
 
 from mechopt import registry
 from mechopt.models.errors import ModelError
-from mechopt.models.lever_stop import Impact
-from mechopt.solvers import rebound as rb
+from mechopt.models.stop_impact import Impact
+from mechopt.solvers.stop_impact import lever as rb
 from mechopt.solvers.result import Status, from_casadi_integrator, from_quadpack
 
 PROPERTY = settings(max_examples=25, deadline=None)

@@ -14,7 +14,7 @@ from scipy.integrate import cumulative_trapezoid
 
 from mechopt import registry
 from mechopt.models.errors import ModelError, SceneError
-from mechopt.models.lever_stop import LeverStop, reduced_stiffness_N_per_m
+from mechopt.models.stop_impact import LeverStop, reduced_stiffness_N_per_m
 
 PROPERTY = settings(max_examples=25, deadline=None)
 F_FREE_HZ, F_FREE_EXPERIMENT_HZ = 297.0, 268.0          # Sec. Results

@@ -7,7 +7,7 @@ from hypothesis import given, settings, strategies as st
 from mechopt import registry
 from mechopt.scene import load
 from mechopt.models.errors import ModelError, SceneError
-from mechopt.models.loom_cyclogram import (Cyclogram, amplitude_bound_deg, amplitude_mm, stress_bound_deg,
+from mechopt.models.loom import (Cyclogram, amplitude_bound_deg, amplitude_mm, stress_bound_deg,
                                            stress_MPa)
 
 SLOPE_MM_PER_DEG, INTERCEPT_MM, LIMIT_MM = -0.003, 0.208, 0.1      # Podgorny et al. (2018), Results and discussion; Research methodology

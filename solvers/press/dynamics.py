@@ -29,7 +29,7 @@ import casadi as ca
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from mechopt.models.crank_press import FORCE_KEYS, WORK_NAMES, Dynamics, PressDrive, dynamics
+from mechopt.models.press import FORCE_KEYS, WORK_NAMES, Dynamics, PressDrive, dynamics
 from mechopt.models.errors import MechoptError, ModelError
 from mechopt.solvers.result import Result, Status, Timing, from_casadi_integrator, from_ivp, from_rootfinder
 

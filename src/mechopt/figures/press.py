@@ -1,4 +1,4 @@
-"""Figures for the crank press scenes (models/crank_press.py), after the paper's Figs. 8-10."""
+"""Figures for the crank press scenes (models/press.py), after the paper's Figs. 8-10."""
 from pathlib import Path
 
 import numpy as np
@@ -11,8 +11,8 @@ def plot(run, out_dir) -> list[Path]:
     torque against time; one PNG per scene."""
     import matplotlib.pyplot as plt
 
-    from mechopt.models.crank_press import Dynamics
-    from mechopt.solvers import press_dynamics
+    from mechopt.models.press import Dynamics
+    from mechopt.solvers.press import dynamics as press_dynamics
 
     task, settings = run.task, run.settings
     solve = getattr(run.scene.solver, "with_trace", None)

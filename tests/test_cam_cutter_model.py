@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from mechopt.models.cam_linkage import (LinkageFit, decimal_reading, finish_angle, ideal_normal, ideal_point,
+from mechopt.models.cam_cutter import (LinkageFit, decimal_reading, finish_angle, ideal_normal, ideal_point,
                                         limacon_implicit, matched_linkage, real_acceleration, real_point,
                                         real_velocity)
 from mechopt.models.errors import ModelError

@@ -2,7 +2,7 @@
 the stiffness and impact figures around it, an event-driven check, and the LP's amplitude law.
 
 Eq. (2) is q'' + 2 n q' + omega^2 q = (Q_F(t) - P) / m, q(0) = 0, q'(0) = v0, with the
-triangular pulse Q_F (peak F at tau, zero at 2 tau) and the preload P (see models/lever_stop.py
+triangular pulse Q_F (peak F at tau, zero at 2 tau) and the preload P (see models/stop_impact.py
 for every reading). The first rebound is the largest q in [0, 2 tau + 2 pi / omega].
 
 * `closed_form_response`  the Duhamel integral of the triangle in closed form. It never divides
@@ -28,7 +28,7 @@ from scipy.integrate import quad, solve_ivp
 from scipy.optimize import brentq, minimize_scalar
 
 from mechopt.models.errors import MechoptError, ModelError
-from mechopt.models.lever_stop import Impact, LeverStop
+from mechopt.models.stop_impact import Impact, LeverStop
 from mechopt.solvers.result import (Result, Status, Timing, from_casadi_integrator, from_ivp,
                                     from_quadpack)
 

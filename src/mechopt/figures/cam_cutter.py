@@ -1,4 +1,4 @@
-"""Figures for the cam-cutting linkage scenes (models/cam_linkage.py)."""
+"""Figures for the cam-cutting linkage scenes (models/cam_cutter.py)."""
 import numpy as np
 
 from mechopt.plots import save_figure
@@ -14,8 +14,8 @@ def plot(run, out_dir):
     if H is None or L is None:
         return []             # no linkage found (an infeasible grid scan): nothing to draw
 
-    from mechopt.models.cam_linkage import ideal_point, real_point
-    from mechopt.solvers.path_deviation import path_distance
+    from mechopt.models.cam_cutter import ideal_point, real_point
+    from mechopt.solvers.cam_cutter.deviation import path_distance
 
     t = np.linspace(0.0, task.t_finish_rad, 2000)
     ix, iy = ideal_point(t, task.a_mm, task.h_mm)

@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 from mechopt import registry
-from mechopt.models.crank_press import PressDrive
+from mechopt.models.press import PressDrive
 from mechopt.models.errors import ModelError
-from mechopt.solvers import press_dynamics as pd
+from mechopt.solvers.press import dynamics as pd
 from mechopt.solvers.result import Status, from_ivp, from_rootfinder
 
 PAPER, _ = registry.find("press/kd2322").build()

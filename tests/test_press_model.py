@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from mechopt import registry
-from mechopt.models.crank_press import (PressDrive, coefficient_b, coefficient_d, coefficient_k, crank_inertia,
+from mechopt.models.press import (PressDrive, coefficient_b, coefficient_d, coefficient_k, crank_inertia,
                                         cutting_force_N, dynamics, kloss_torque_Nm, mean_crank_inertia_kgm2,
                                         rod_middle_m, travel_m)
 from mechopt.models.errors import ModelError
