@@ -24,6 +24,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.optimize import linprog
 
+from mechopt.models.cache import clear as clear_caches
 from mechopt import registry
 from mechopt.solvers import loom as cyclogram_lp
 from mechopt.plots import save_figure
@@ -134,7 +135,7 @@ def what_if(repeats=5, progress=None):
     limits = iter(np.linspace(0.08, 0.12, 10_000))
 
     def fresh():
-        cyclogram_lp._BUILDS.clear()
+        clear_caches()
         plan_cyclogram(task)
 
     def resolve(warm):

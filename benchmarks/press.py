@@ -23,7 +23,7 @@ import numpy as np
 
 from mechopt import registry
 from mechopt.plots import save_figure
-from mechopt.solvers.press import dynamics as pd
+from mechopt.solvers import press as pd
 
 __all__ = ["cli", "run", "table", "at_accuracy", "observed_order", "plot", "cycle_timing", "PAPER_TASK", "DURATION_S"]
 

@@ -19,7 +19,9 @@ import numpy as np
 
 from mechopt import registry
 from mechopt.plots import save_figure
-from mechopt.solvers.stop_impact import lever as rb
+from mechopt.solvers.stop_impact.entry_points import AGREEMENT_REL
+from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
+from mechopt.solvers.stop_impact.response import closed_form_amplitude_m, ode_amplitude_m, quadrature_amplitude_m
 
 __all__ = ["cli", "evaluations", "sweep", "table", "sweep_table", "plot", "SCENES", "SWEEP_TARGET_S"]
 
@@ -46,14 +48,14 @@ def evaluations(repeats=5, progress=None):
     for case, (scene_id, speed) in SCENES.items():
         task, _ = registry.find(scene_id).build()
         imp = task.impact(speed)
-        rb.ode_amplitude_m(imp)                        # build the CVODES functions outside the timing
-        base_s, (ref, _) = _median_time(lambda: rb.closed_form_amplitude_m(imp), repeats)
-        methods = [("closed form", "-", lambda: rb.closed_form_amplitude_m(imp)[0])]
-        methods += [("quadrature", f"epsrel={e:g}", lambda e=e: rb.quadrature_amplitude_m(imp, epsrel=e)[0])
+        ode_amplitude_m(imp)                        # build the CVODES functions outside the timing
+        base_s, (ref, _) = _median_time(lambda: closed_form_amplitude_m(imp), repeats)
+        methods = [("closed form", "-", lambda: closed_form_amplitude_m(imp)[0])]
+        methods += [("quadrature", f"epsrel={e:g}", lambda e=e: quadrature_amplitude_m(imp, epsrel=e)[0])
                     for e in QUAD_EPSREL]
         for r in ODE_RELTOL:
-            rb.ode_amplitude_m(imp, reltol=r)          # cached build
-            methods.append(("ODE (CVODES)", f"reltol={r:g}", lambda r=r: rb.ode_amplitude_m(imp, reltol=r)[0]))
+            ode_amplitude_m(imp, reltol=r)          # cached build
+            methods.append(("ODE (CVODES)", f"reltol={r:g}", lambda r=r: ode_amplitude_m(imp, reltol=r)[0]))
         for method, knob, call in methods:
             wall, amp = _median_time(call, repeats)
             rows.append({"case": case, "method": method, "knob": knob, "wall_s": wall, "amplitude_mm": amp * 1e3,
@@ -72,10 +74,10 @@ def sweep(repeats=3, progress=None, points=SWEEP_POINTS, sample=2000):
     rows = []
     for case, (scene_id, _) in SCENES.items():
         task, _ = registry.find(scene_id).build()
-        wall, swept = _median_time(lambda: rb.rebound_amplitude_mm(task, n, t), repeats)
+        wall, swept = _median_time(lambda: rebound_amplitude_mm(task, n, t), repeats)
         idx = rng.choice(points, sample, replace=False)
         start = time.perf_counter()
-        one = np.array([rb.closed_form_amplitude_m(task.impact(n[i], t[i]))[0] * 1e3 for i in idx])
+        one = np.array([closed_form_amplitude_m(task.impact(n[i], t[i]))[0] * 1e3 for i in idx])
         loop_s = (time.perf_counter() - start) * points / sample
         rows.append({"case": case, "points": points, "wall_s": wall, "loop_s_estimated": loop_s,
                      "speedup": loop_s / wall, "max_rel_diff": float(np.max(np.abs(swept[idx] - one) / one)),
@@ -125,7 +127,7 @@ def plot(rows, out_dir):
                 if r["knob"] != "-":
                     ax.annotate(r["knob"].split("=")[1], (r["wall_s"], max(r["rel_error"], 1e-17)),
                                 textcoords="offset points", xytext=(4, 3), fontsize=7)
-        ax.axhline(rb.AGREEMENT_REL, color="tab:red", ls=":", label="agreement required (1e-8)")
+        ax.axhline(AGREEMENT_REL, color="tab:red", ls=":", label="agreement required (1e-8)")
         ax.set(xscale="log", yscale="log", xlabel="time per amplitude, median [s]", title=case)
         ax.grid(True, which="both", alpha=0.3)
     np.atleast_1d(axes)[0].set_ylabel("relative error vs closed form (floor 1e-17)")

@@ -17,12 +17,13 @@ torch_offset  kerf offset h: the path is the parallel curve at distance   eqs. (
 ============  ==========================================================  ==========
 """
 from dataclasses import dataclass
-from functools import cached_property, lru_cache
+from functools import cached_property
 from typing import ClassVar
 
 import numpy as np
 from scipy.optimize import brentq
 
+from mechopt.models.cache import memoised
 from mechopt.models.effects import Effect
 from mechopt.models.errors import ModelError
 
@@ -70,7 +71,7 @@ def limacon_implicit(x, y, H, L):
     return (r2 - H * u) ** 2 - (L * L) * r2
 
 
-@lru_cache(maxsize=64)      # pure in (a, h); a task asks twice (its end, its matched linkage)
+@memoised(maxsize=64)       # pure in (a, h); a task asks twice (its end, its matched linkage)
 def finish_angle(a, h=0.0):
     """Exact t on (0, pi] where the ideal path meets the x axis (Y of eq. (9) = 0) [rad]."""
     def y(t):

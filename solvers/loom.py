@@ -25,6 +25,7 @@ import networkx as nx
 import numpy as np
 import scipy.sparse as sp
 
+from mechopt.models.cache import BuildCache
 from mechopt.models.errors import SolverError
 from mechopt.models.loom import Cyclogram, amplitude_mm, stress_bound_deg, stress_MPa
 from mechopt.solvers.result import Result, Status, Timing, from_cvxpy
@@ -109,8 +110,9 @@ def build_event_time_lp(n, tails, heads, *, first, last, stress_rows=(), stress_
     return EventTimeLP(problem, p, params, blocks, coeffs, sign)
 
 
-_BUILDS: dict = {}      # structural signature -> EventTimeLP (compiled once, re-solved with new Parameters)
-_BUILDS_KEPT = 8        # the newest few: a 10^5-event build holds ~100 MB
+# structural signature -> EventTimeLP, compiled once and re-solved with new Parameters; the newest
+# few only: a 10^5-event build holds ~100 MB
+_BUILDS = BuildCache("loom.event_time_lp", maxsize=8)
 
 
 def plan_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] = "HIGHS",
@@ -145,20 +147,19 @@ def plan_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] = "
     """
     start = time.perf_counter()
     net = _Net(task, stress_form)
-    key = (backend, *net.signature())       # cvxpy caches one compiled chain per problem and solver
-    lp = _BUILDS.get(key)
-    fresh = lp is None
-    if fresh:
+    def build():
         lp = build_event_time_lp(len(net.names), net.tails, net.heads, first=net.first, last=net.last,
                                  stress_rows=net.stress_rows, stress_ref=net.stress_ref, stress_form=stress_form,
                                  amplitude_rows=net.amp_rows, window_arcs=net.window_idx, sync_arcs=net.sync_idx,
                                  limiting=net.limiting, with_cycle=task.cycle_deg is not None)
-    set_parameters(lp, task, net)
-    if fresh:
+        set_parameters(lp, task, net)
         lp.problem.get_problem_data(backend)      # compile now, so build and solve time separate
-        while len(_BUILDS) >= _BUILDS_KEPT:
-            _BUILDS.pop(next(iter(_BUILDS)))
-        _BUILDS[key] = lp
+        return lp
+    # cvxpy caches one compiled chain per problem and solver
+    key = (backend, *net.signature())
+    fresh = key not in _BUILDS
+    lp, _ = _BUILDS.get(key, build)
+    set_parameters(lp, task, net)
     build_s = time.perf_counter() - start
     try:
         lp.problem.solve(solver=backend, warm_start=warm_start)

@@ -1,7 +1,10 @@
 """The one result every solver returns, and the only code that knows back ends' status words."""
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from enum import Enum
+
+import numpy as np
 
 from mechopt.models.errors import SolverError
 
@@ -31,11 +34,20 @@ class Result:
     message: str = ""
     violated: tuple[str, ...] = ()              # physical names of broken limits
     diagnostics: dict = field(default_factory=dict)
+    arrays: Mapping[str, np.ndarray] = field(default_factory=dict)
+    """What the solver computed along the way, named with units (a run's `t_s` and states, a
+    response's samples): what figures and notebooks read. The arrays are read-only copies."""
 
     def __post_init__(self):
         bad = {k: v for k, v in self.values.items() if not math.isfinite(v)}
         if bad:
             raise SolverError(f"solver produced non-finite values {bad} (status {self.status.value})")
+        arrays = {}
+        for name, array in self.arrays.items():
+            array = np.array(array, dtype=float)      # a copy: the caller's array stays writable
+            array.flags.writeable = False
+            arrays[name] = array
+        object.__setattr__(self, "arrays", arrays)
 
 
 _IPOPT = {

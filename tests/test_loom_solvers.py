@@ -9,6 +9,7 @@ import cvxpy as cp
 import numpy as np
 import pytest
 
+from mechopt.models.cache import clear as clear_caches
 from mechopt import registry
 from mechopt.benchmarks.loom import layered
 from mechopt.models.errors import SolverError
@@ -161,7 +162,7 @@ def test_a_limit_change_reuses_the_compiled_problem_and_gives_the_fresh_answer()
     again = plan_cyclogram(tighter)
     assert again.diagnostics["compiled_now"] is False      # re-solved, not rebuilt (speed is benched, not tested)
     assert again.values["t_3_7_deg"] == pytest.approx((0.208 - 0.05) / 0.003, abs=1e-7)
-    cyclogram_lp._BUILDS.clear()
+    clear_caches()
     fresh = plan_cyclogram(tighter)
     assert fresh.diagnostics["compiled_now"] is True
     assert fresh.values["span_deg"] == pytest.approx(again.values["span_deg"], abs=1e-9)
@@ -217,7 +218,7 @@ def test_cross_check_failure_is_loud(monkeypatch):
 
 
 def test_a_problem_that_would_recompile_is_refused(monkeypatch):
-    cyclogram_lp._BUILDS.clear()
+    clear_caches()
     monkeypatch.setattr(cp.Problem, "is_dpp", lambda self, *a, **k: False)
     with pytest.raises(SolverError, match=r"event-time LP is not DPP; what-if re-solves would recompile"):
         plan_cyclogram(net([(1, 2, 10), (2, 3, 20)]))

@@ -7,7 +7,9 @@ import pytest
 from mechopt import registry
 from mechopt.models.press import PressDrive
 from mechopt.models.errors import ModelError
-from mechopt.solvers.press import dynamics as pd
+from mechopt.solvers import press as pd
+from mechopt.solvers.press import event_driven
+from mechopt.solvers.press.common import initial_state, paper_U
 from mechopt.solvers.result import Status, from_ivp, from_rootfinder
 
 PAPER, _ = registry.find("press/kd2322").build()
@@ -166,12 +168,12 @@ def test_a_run_ending_exactly_on_the_jump_counts_the_cut_once():
 
 def test_the_papers_switching_function_is_closed_at_the_end_of_the_cut():
     _, end = PAPER.cut_window_rad()
-    x = pd.initial_state(PAPER, "nominal")
+    x = initial_state(PAPER, "nominal")
     at = x.copy()
     at[2] = end
     after = x.copy()
     after[2] = end + 1e-9
-    assert pd._paper_U(PAPER, np.vstack([at, after])).tolist() == [1.0, 0.0]
+    assert paper_U(PAPER, np.vstack([at, after])).tolist() == [1.0, 0.0]
 
 
 def test_a_blank_of_zero_thickness_gives_a_cycle_with_no_cut():
@@ -237,7 +239,7 @@ def test_benchmark_interpolates_time_to_accuracy_in_log_log():
 def test_cvodes_running_out_of_steps_is_a_limit_not_a_crash(monkeypatch):
     def exhausted(*args, **kwargs):
         raise RuntimeError("Error in Function::call for 'piece' [IntegratorInternal]: CV_TOO_MUCH_WORK")
-    monkeypatch.setattr(pd, "_run", exhausted)
+    monkeypatch.setattr(event_driven, "_run", exhausted)
     r = pd.events(PAPER, duration_s=0.1)
     assert r.status is Status.LIMIT and "CV_TOO_MUCH_WORK" in r.message
     assert r.values["duration_s"] == 0.0          # what was integrated before the failure: nothing

@@ -15,7 +15,11 @@ from hypothesis import given, settings, strategies as st
 from mechopt import registry
 from mechopt.models.errors import ModelError
 from mechopt.models.stop_impact import Impact
-from mechopt.solvers.stop_impact import lever as rb
+from mechopt.solvers.stop_impact import entry_points, response
+from mechopt.solvers.stop_impact.contact import simulate_contact
+from mechopt.solvers.stop_impact.entry_points import linearise_amplitude, operating_point, rebound
+from mechopt.solvers.stop_impact.law import amplitude_law, rebound_amplitude_mm
+from mechopt.solvers.stop_impact.response import closed_form_amplitude_m, closed_form_response, ode_amplitude_m, quadrature_amplitude_m, quadrature_response, response_scale_m
 from mechopt.solvers.result import Status, from_casadi_integrator, from_quadpack
 
 PROPERTY = settings(max_examples=25, deadline=None)
@@ -58,9 +62,9 @@ def test_three_methods_agree_on_every_rebound_scene(scene_id):
     task = task_of(scene_id)
     for n in task.speeds_rpm:
         imp = task.impact(n)
-        closed = rb.closed_form_amplitude_m(imp)[0]
-        quad, quad_status = rb.quadrature_amplitude_m(imp)
-        ode, ode_status, _ = rb.ode_amplitude_m(imp)
+        closed = closed_form_amplitude_m(imp)[0]
+        quad, quad_status = quadrature_amplitude_m(imp)
+        ode, ode_status, _ = ode_amplitude_m(imp)
         assert quad_status is Status.SOLVED and ode_status is Status.SOLVED
         assert quad == pytest.approx(closed, rel=1e-8) and ode == pytest.approx(closed, rel=1e-8)
 
@@ -68,14 +72,14 @@ def test_three_methods_agree_on_every_rebound_scene(scene_id):
 @pytest.mark.parametrize("zeta", [0.0, 0.3, 1 - 1e-9, 1.0, 1 + 1e-9, 1.5, 3.0, 100.0])
 def test_closed_form_holds_through_critical_and_heavy_damping(zeta):
     imp = impact(damping_ratio=zeta, preload_N=50.0)
-    closed = rb.closed_form_amplitude_m(imp)[0]
+    closed = closed_form_amplitude_m(imp)[0]
     assert math.isfinite(closed) and closed > 0
-    assert rb.quadrature_amplitude_m(imp)[0] == pytest.approx(closed, rel=1e-8)
-    assert rb.ode_amplitude_m(imp)[0] == pytest.approx(closed, rel=1e-8)
+    assert quadrature_amplitude_m(imp)[0] == pytest.approx(closed, rel=1e-8)
+    assert ode_amplitude_m(imp)[0] == pytest.approx(closed, rel=1e-8)
 
 
 def test_amplitude_is_continuous_across_critical_damping():
-    below, at, above = (rb.closed_form_amplitude_m(impact(damping_ratio=z))[0] for z in (1 - 1e-7, 1.0, 1 + 1e-7))
+    below, at, above = (closed_form_amplitude_m(impact(damping_ratio=z))[0] for z in (1 - 1e-7, 1.0, 1 + 1e-7))
     assert below > at > above
     assert (below - at) == pytest.approx(at - above, rel=1e-4)       # smooth: equal steps either side
 
@@ -85,10 +89,10 @@ def test_amplitude_is_continuous_across_critical_damping():
        t=st.floats(1e-6, 8e-3))
 def test_closed_form_solves_eq_2(zeta, tau, preload, t):
     imp = impact(damping_ratio=zeta, tau_s=tau, preload_N=preload)
-    q, qd, qdd = rb.closed_form_response(imp, np.array([t, 0.0]))
+    q, qd, qdd = closed_form_response(imp, np.array([t, 0.0]))
     n, w = imp.damping_rad_s, imp.omega_rad_s
     force = (pulse_N(imp, t) - preload) / imp.mass_kg
-    scale = w * w * rb._response_scale_m(imp) + abs(force)      # the size the terms have, not at a zero of q
+    scale = w * w * response_scale_m(imp) + abs(force)      # the size the terms have, not at a zero of q
     assert abs(qdd[0] + 2 * n * qd[0] + w * w * q[0] - force) <= 1e-9 * scale
     assert q[1] == 0.0 and qd[1] == pytest.approx(imp.v0_m_s, rel=1e-15)        # q0 = 0, q0' = v0
 
@@ -110,7 +114,7 @@ def test_short_pulse_gives_the_impulse_F_tau_the_paper_calls_S_C(tau):
     h = np.exp(-n * s) * np.sin(k1 * s) / k1
     h1 = np.exp(-n * s) * (np.cos(k1 * s) - n / k1 * np.sin(k1 * s))
     h2 = -2 * n * h1 - imp.omega_rad_s**2 * h
-    got = rb.closed_form_response(imp, t)[0]
+    got = closed_form_response(imp, t)[0]
     assert got == pytest.approx(S / imp.mass_kg * (h + tau**2 / 12 * h2), rel=1e-8)
     assert got == pytest.approx(impulse_response, rel=5e3 * tau * imp.omega_rad_s)
 
@@ -120,7 +124,7 @@ def test_closed_form_matches_quadrature_either_side_of_the_short_pulse_switch(om
     w = 2 * math.pi * 768.0
     imp = impact(tau_s=omega_tau / w, force_N=2.6e-3 * w / omega_tau)
     for t in (3 * imp.tau_s, 5e-4, 2e-3):
-        assert rb.closed_form_response(imp, t)[0] == pytest.approx(rb.quadrature_response(imp, t)[0], rel=1e-9)
+        assert closed_form_response(imp, t)[0] == pytest.approx(quadrature_response(imp, t)[0], rel=1e-9)
 
 
 def test_contact_on_the_plate_lasts_the_tau_the_model_takes(paper):
@@ -128,7 +132,7 @@ def test_contact_on_the_plate_lasts_the_tau_the_model_takes(paper):
     no preload) separates exactly then, and C leaves at the approach speed: its first rebound is
     v0 / omega_free, the single-mass eq. (2) on the plate gives a different number."""
     elastic = dataclasses.replace(paper, effects=("initial_velocity", "impact_pulse"), damping_ratio=None)
-    rebound_mm, contact_s, status, _ = rb.simulate_contact(elastic, 280.0)
+    rebound_mm, contact_s, status, _ = simulate_contact(elastic, 280.0)
     assert status is Status.SOLVED
     assert contact_s == pytest.approx(elastic.contact_time_s, rel=1e-8)
     v0 = elastic.approach_velocity_m_s(280.0)
@@ -136,16 +140,16 @@ def test_contact_on_the_plate_lasts_the_tau_the_model_takes(paper):
 
 
 def test_event_driven_contact_with_preload_reports_whether_c_leaves_the_plate(pressed):
-    rebound_mm, contact_s, status, message = rb.simulate_contact(pressed, 177.0)
-    assert status is Status.SOLVED and 0 < rebound_mm < rb.closed_form_amplitude_m(pressed.impact(177.0))[0] * 1e3
+    rebound_mm, contact_s, status, message = simulate_contact(pressed, 177.0)
+    assert status is Status.SOLVED and 0 < rebound_mm < closed_form_amplitude_m(pressed.impact(177.0))[0] * 1e3
     held = dataclasses.replace(pressed, preload_mm=5.0)
-    assert rb.simulate_contact(held, 177.0)[0::2] == (0.0, Status.SOLVED)
+    assert simulate_contact(held, 177.0)[0::2] == (0.0, Status.SOLVED)
 
 
 # ---------------------------------------------------------------- scenes' numbers
 
 def test_rebounds_at_320_to_420_rpm_are_predicted_from_the_280_rpm_calibration(paper):
-    got = rb.rebound(paper, cross_check=False).values
+    got = rebound(paper, cross_check=False).values
     assert got["rebound_mm_280"] == pytest.approx(0.07, rel=1e-4)          # calibration target
     for n, published in ((320, 0.078), (370, 0.092), (420, 0.105)):
         assert got[f"rebound_mm_{n}"] == pytest.approx(published, rel=0.05)
@@ -153,30 +157,30 @@ def test_rebounds_at_320_to_420_rpm_are_predicted_from_the_280_rpm_calibration(p
 
 
 def test_rebound_at_177_rpm_with_preload_is_predicted_and_10_percent_above_experiment(pressed):
-    got = rb.rebound(pressed, cross_check=False).values["rebound_mm_177"]
+    got = rebound(pressed, cross_check=False).values["rebound_mm_177"]
     assert got == pytest.approx(REBOUND_177_MM, rel=0.05)
     assert round(100 * (got - REBOUND_177_EXPERIMENT_MM) / REBOUND_177_EXPERIMENT_MM) == 10
 
 
 def test_preload_lowers_the_rebound(pressed):
     loose = dataclasses.replace(pressed, effects=("initial_velocity", "impact_pulse", "damping"), preload_mm=None)
-    assert rb.rebound(loose, cross_check=False).values["rebound_mm_177"] > \
-        2 * rb.rebound(pressed, cross_check=False).values["rebound_mm_177"]
+    assert rebound(loose, cross_check=False).values["rebound_mm_177"] > \
+        2 * rebound(pressed, cross_check=False).values["rebound_mm_177"]
 
 
 def test_rebound_solver_reports_agreement_and_the_event_driven_difference(pressed):
-    result = rb.rebound(pressed)
+    result = rebound(pressed)
     assert result.status is Status.SOLVED
     assert result.values["methods_max_rel_diff_177"] < 1e-8
     assert 0 < result.values["rebound_event_mm_177"] < result.values["rebound_mm_177"]
     for method in ("quadrature", "ode"):
-        other = rb.rebound(pressed, method=method, cross_check=False)
+        other = rebound(pressed, method=method, cross_check=False)
         assert other.values["rebound_mm_177"] == pytest.approx(result.values["rebound_mm_177"], rel=1e-8)
 
 
 def test_methods_that_disagree_make_the_result_inaccurate(pressed, monkeypatch):
-    monkeypatch.setattr(rb, "AGREEMENT_REL", 1e-17)
-    result = rb.rebound(pressed)
+    monkeypatch.setattr(entry_points, "AGREEMENT_REL", 1e-17)
+    result = rebound(pressed)
     assert result.status is Status.INACCURATE and "methods differ" in result.message
 
 
@@ -185,8 +189,8 @@ def test_an_integrator_out_of_steps_is_a_limit_status_not_a_number(pressed, monk
     y, p, s = ca.SX.sym("y", 2), ca.SX.sym("p", 4), ca.SX.sym("s")
     dae = {"x": y, "p": p, "t": s, "ode": p[3] * ca.vertcat(y[1], p[1] - y[0])}
     starved = ca.integrator("starved", "cvodes", dae, 0.0, 1.0, {"max_num_steps": 2})
-    monkeypatch.setattr(rb, "_ode_integrators", lambda points, reltol: ((starved, starved), 0.0))
-    result = rb.rebound(pressed, method="ode", cross_check=False)
+    monkeypatch.setattr(response, "_ode_integrators", lambda points, reltol: ((starved, starved), 0.0))
+    result = rebound(pressed, method="ode", cross_check=False)
     assert result.status is Status.LIMIT and "rebound_mm_177" not in result.values
 
 
@@ -207,22 +211,22 @@ def test_vectorised_law_is_the_scalar_closed_form(scene_id):
     task = task_of(scene_id)
     rng = np.random.default_rng(4)
     n, t = rng.uniform(100, 500, 40), rng.uniform(15, 90, 40)
-    swept = rb.rebound_amplitude_mm(task, n, t)
-    one_by_one = [rb.closed_form_amplitude_m(task.impact(a, b))[0] * 1e3 for a, b in zip(n, t)]
+    swept = rebound_amplitude_mm(task, n, t)
+    one_by_one = [closed_form_amplitude_m(task.impact(a, b))[0] * 1e3 for a, b in zip(n, t)]
     assert swept == pytest.approx(one_by_one, rel=1e-12, abs=1e-15)
 
 
 def test_tangent_is_the_derivative_of_the_exact_law_even_with_preload(pressed):
     task = dataclasses.replace(pressed, speed_nominal_rpm=177.0)
-    slope, intercept = rb.amplitude_law(task)
+    slope, intercept = amplitude_law(task)
     h = 1e-3
-    a = lambda t: float(rb.rebound_amplitude_mm(task, 177.0, t))      # noqa: E731
+    a = lambda t: float(rebound_amplitude_mm(task, 177.0, t))      # noqa: E731
     assert slope == pytest.approx((a(task.t_deg + h) - a(task.t_deg - h)) / (2 * h), rel=1e-6)
     assert intercept == pytest.approx(a(task.t_deg) - slope * task.t_deg, rel=1e-12)
 
 
 def test_amplitude_law_beside_the_published_one():
-    result = rb.linearise_amplitude(task_of("stop-impact/amplitude-law"))
+    result = linearise_amplitude(task_of("stop-impact/amplitude-law"))
     v = result.values
     assert v["slope_mm_per_deg"] == pytest.approx(SLOPE_MM_PER_DEG, rel=1e-3)     # calibration target of t_deg
     assert v["intercept_mm"] == pytest.approx(INTERCEPT_MM, rel=0.05)             # prediction: 0.210
@@ -239,8 +243,8 @@ def test_amplitude_law_beside_the_published_one():
 @given(t=st.floats(20.0, 80.0))
 def test_exact_law_lies_above_its_tangent(t):
     task = task_of("stop-impact/amplitude-law")
-    slope, intercept = rb.amplitude_law(task)
-    assert float(rb.rebound_amplitude_mm(task, task.speed_nominal_rpm, t)) >= slope * t + intercept - 1e-12
+    slope, intercept = amplitude_law(task)
+    assert float(rebound_amplitude_mm(task, task.speed_nominal_rpm, t)) >= slope * t + intercept - 1e-12
 
 
 def test_the_law_refuses_what_it_cannot_linearise(pressed):
@@ -248,14 +252,14 @@ def test_the_law_refuses_what_it_cannot_linearise(pressed):
     held = dataclasses.replace(pressed, effects=("damping", "preload"), inertia_A_kgm2=None, restitution=None,
                                speed_nominal_rpm=177.0)
     with pytest.raises(ModelError, match=r"the lever does not leave the plate \(amplitude 0\): no tangent"):
-        rb.amplitude_law(held)
+        amplitude_law(held)
     law = task_of("stop-impact/amplitude-law")
     with pytest.raises(ModelError, match=r"amplitude_limit_mm=5000\.0: a\(t\) at 420 rpm does not cross it"):
-        rb.linearise_amplitude(dataclasses.replace(law, amplitude_limit_mm=5000.0))
+        linearise_amplitude(dataclasses.replace(law, amplitude_limit_mm=5000.0))
     with pytest.raises(ModelError, match=r"speed_nominal_rpm is not given; this computation needs it"):
-        rb.amplitude_law(dataclasses.replace(pressed, speed_nominal_rpm=None))
+        amplitude_law(dataclasses.replace(pressed, speed_nominal_rpm=None))
     with pytest.raises(ModelError, match=r"speeds_rpm=\[\]: give the main-shaft speeds to report"):
-        rb.rebound(dataclasses.replace(pressed, speeds_rpm=()))
+        rebound(dataclasses.replace(pressed, speeds_rpm=()))
 
 
 def test_a_failed_cross_check_method_is_named_and_never_reported_as_a_number(pressed, monkeypatch):
@@ -263,8 +267,8 @@ def test_a_failed_cross_check_method_is_named_and_never_reported_as_a_number(pre
     y, p, s = ca.SX.sym("y", 2), ca.SX.sym("p", 4), ca.SX.sym("s")
     dae = {"x": y, "p": p, "t": s, "ode": p[3] * ca.vertcat(y[1], p[1] - y[0])}
     starved = ca.integrator("starved", "cvodes", dae, 0.0, 1.0, {"max_num_steps": 2})
-    monkeypatch.setattr(rb, "_ode_integrators", lambda points, reltol: ((starved, starved), 0.0))
-    result = rb.rebound(pressed)                   # closed form first, the ODE fails in the cross-check
+    monkeypatch.setattr(response, "_ode_integrators", lambda points, reltol: ((starved, starved), 0.0))
+    result = rebound(pressed)                   # closed form first, the ODE fails in the cross-check
     assert result.status is Status.INACCURATE and "['ode'] not solved" in result.message
     assert result.values["rebound_mm_177"] == pytest.approx(REBOUND_177_MM, rel=0.05)
     assert result.diagnostics["methods_177"]["ode"]["status"] == "LIMIT"
@@ -273,14 +277,14 @@ def test_a_failed_cross_check_method_is_named_and_never_reported_as_a_number(pre
 # ---------------------------------------------------------------- one operating point (maps)
 
 def at(speed_rpm, t_deg, scene_id="stop-impact/rebound-map"):
-    return rb.operating_point(task_of(scene_id, speed_nominal_rpm=speed_rpm, t_deg=t_deg))
+    return operating_point(task_of(scene_id, speed_nominal_rpm=speed_rpm, t_deg=t_deg))
 
 
 @pytest.mark.parametrize("speed_rpm, t_deg", [(280.0, 35.0), (420.0, 25.0), (177.0, 50.0)])
 def test_operating_point_is_the_quadrature_of_eq_2(speed_rpm, t_deg):
     got = at(speed_rpm, t_deg)
     task = task_of("stop-impact/rebound-map", t_deg=t_deg)
-    amplitude_m, status = rb.quadrature_amplitude_m(task.impact(speed_rpm))
+    amplitude_m, status = quadrature_amplitude_m(task.impact(speed_rpm))
     assert status is Status.SOLVED
     assert got.values["rebound_mm"] == pytest.approx(amplitude_m * 1e3, rel=1e-8)
     assert got.values["margin_mm"] == pytest.approx(LIMIT_MM - got.values["rebound_mm"], abs=1e-15)
@@ -298,11 +302,11 @@ def test_operating_point_meets_the_limit_where_the_published_rebound_scaled_by_n
 
 def test_operating_point_without_a_limit_names_it():
     with pytest.raises(ModelError, match="amplitude_limit_mm is not given; this computation needs it"):
-        rb.operating_point(task_of("stop-impact/rebound-280-420", speed_nominal_rpm=280.0))
+        operating_point(task_of("stop-impact/rebound-280-420", speed_nominal_rpm=280.0))
 
 
 def test_operating_point_whose_ode_check_fails_is_inaccurate_not_solved(monkeypatch):
-    monkeypatch.setattr(rb, "ode_amplitude_m", lambda imp: (float("nan"), Status.LIMIT, 0.0))
+    monkeypatch.setattr(entry_points, "ode_amplitude_m", lambda imp: (float("nan"), Status.LIMIT, 0.0))
     got = at(280.0, 35.0)
     assert got.status is Status.INACCURATE and "unconfirmed" in got.message
     assert "methods_rel_diff" not in got.values

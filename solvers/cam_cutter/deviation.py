@@ -12,11 +12,11 @@
 Neither restricts crossings to the upper half-plane: the torch runs the whole closed limaçon and
 the lower half cuts the mirror image, so a crossing just below the axis is a real cut point.
 """
-from functools import lru_cache
 
 import numpy as np
 from scipy.spatial import cKDTree
 
+from mechopt.models.cache import memoised
 from mechopt.models.cam_cutter import ideal_normal, ideal_point
 
 
@@ -66,20 +66,20 @@ def _frozen(*arrays):
     return arrays
 
 
-@lru_cache(maxsize=4)
+@memoised(maxsize=4)
 def _circle(vertices):
     s = np.linspace(0.0, 2 * np.pi, vertices, endpoint=False)
     return _frozen(s, np.cos(s), np.sin(s))
 
 
-@lru_cache(maxsize=8)
+@memoised(maxsize=8)
 def _vertices(H, L, vertices):
     """s and the points of eq. (10) on a polyline of the limaçon."""
     s, c, n = _circle(vertices)
     return (s, *_frozen(*_limacon(c, n, H, L)))
 
 
-@lru_cache(maxsize=8)
+@memoised(maxsize=8)
 def _tree(H, L, vertices):
     # an unbalanced tree (median-free splits) builds in 2/3 the time and queries as fast
     return cKDTree(np.column_stack(_vertices(H, L, vertices)[1:]), balanced_tree=False)

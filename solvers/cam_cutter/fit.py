@@ -17,6 +17,7 @@ from scipy.optimize import differential_evolution
 
 from mechopt.models.cam_cutter import (LinkageCheck, LinkageFit, ideal_normal, ideal_point, limacon_implicit,
                                         real_point, real_velocity)
+from mechopt.models.cache import BuildCache
 from mechopt.models.errors import ModelError
 from mechopt.solvers.cam_cutter.deviation import (foot_points, nodes_and_normals, normal_crossings, normal_deviation,
                                             path_distance, verified_deviation)
@@ -333,7 +334,7 @@ def check(task: LinkageCheck, *, count: int = 1000,
                   diagnostics={"max_deviation_at_rad": where, "nodes": int(t.size), "node_rule": nodes})
 
 
-_NLP_BUILDS: dict = {}
+_NLP_BUILDS = BuildCache("cam_cutter.minimax_nlp", maxsize=64)
 _NLP_OPTIONS = {
     "ipopt": {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.tol": 1e-10,
               "ipopt.max_iter": 300},
@@ -353,9 +354,10 @@ _NLP_OPTIONS = {
 def _minimax_nlp(k: int, method: str):
     """The minimax NLP with k node slots for `method` ("ipopt" or "sqp") and the seconds its
     build took now (0 when cached): nodes are parameters, so each is built once per process."""
-    if (k, method) in _NLP_BUILDS:
-        return _NLP_BUILDS[k, method], 0.0
-    start = time.perf_counter()
+    return _NLP_BUILDS.get((k, method), lambda: _build_minimax_nlp(k, method))
+
+
+def _build_minimax_nlp(k, method):
     H, L, delta, s = ca.SX.sym("H"), ca.SX.sym("L"), ca.SX.sym("delta"), ca.SX.sym("s", k)
     p = ca.SX.sym("p", 2 * k + 1)
     px, py, a = p[:k], p[k:2 * k], p[2 * k]
@@ -366,9 +368,7 @@ def _minimax_nlp(k: int, method: str):
     signed = (ex * vy - ey * vx) / ca.sqrt(vx * vx + vy * vy + (1e-9 * a) ** 2)
     g = ca.vertcat(ex * vx + ey * vy, delta + signed, delta - signed)
     nlp = {"x": ca.vertcat(H, L, delta, s), "p": p, "f": delta, "g": g}
-    _NLP_BUILDS[k, method] = ca.nlpsol("cam_minimax", "sqpmethod" if method == "sqp" else "ipopt", nlp,
-                                       _NLP_OPTIONS[method])
-    return _NLP_BUILDS[k, method], time.perf_counter() - start
+    return ca.nlpsol("cam_minimax", "sqpmethod" if method == "sqp" else "ipopt", nlp, _NLP_OPTIONS[method])
 
 
 def _solve_round(k, method, bounds):

@@ -1,5 +1,38 @@
-"""The crank press (paper 001): its motion by the paper's RK4, by located events, as a periodic
-steady state and by scipy's solve_ivp (`force_fit` fits the force law to load-travel data)."""
-from mechopt.solvers.press.dynamics import events, ivp, rk4, steady_state
+"""Motion of the crank press (paper 001, eqs. (1)-(2)): the paper's RK4, ours, and the peer.
 
-__all__ = ["rk4", "events", "steady_state", "ivp"]
+* `rk4` (fixed_step.py):       fixed-step classical Runge-Kutta on the switched equations, the
+                               paper's method with its step refinement; the baseline.
+* `events` (event_driven.py):  CVODES on each smooth piece, restarted at located events.
+* `steady_state` (periodic.py): the periodic steady motion over one revolution, solved directly.
+* `ivp` (scipy_peer.py):       scipy's solve_ivp, the peer a user would reach for.
+* `simulate(task, method=...)`: one door to all four, as `scipy.integrate.solve_ivp` has.
+
+Every result reports the energy balance over the run (motor work = cutting + friction + belt
+damping work + change of kinetic and potential energy; `energy_residual`, relative), the events
+located, the speed fluctuation coefficient and the peaks of force, Q and belt torque, and carries
+the run's samples in `Result.arrays` (`t_s`, the states, `cutting`, the outputs).
+`force_fit.fit_force` fits the force law (1) to load-travel data.
+"""
+from mechopt.solvers.press.event_driven import events
+from mechopt.solvers.press.fixed_step import rk4
+from mechopt.solvers.press.periodic import steady_state
+from mechopt.solvers.press.scipy_peer import ivp
+
+__all__ = ["rk4", "events", "steady_state", "ivp", "simulate", "METHODS"]
+
+METHODS = {"rk4": rk4, "events": events, "steady_state": steady_state, "ivp": ivp}
+
+
+def simulate(task, *, method="events", **options):
+    """Motion of the press by one of `METHODS` ("rk4", "events", "steady_state", "ivp"), with
+    that method's keyword options; returns its Result (values, status, `arrays` of the samples).
+
+    >>> from mechopt import load
+    >>> task = load("press/kd2322").task()
+    >>> simulate(task, method="steady_state").status.value
+    'SOLVED'
+    """
+    if method not in METHODS:
+        from mechopt.models.errors import SceneError
+        raise SceneError(f"method={method!r}: allowed {', '.join(METHODS)}", key="method")
+    return METHODS[method](task, **options)

@@ -1,5 +1,13 @@
-"""The lift lever striking its stop (paper 004): frequencies, impact, rebound, amplitude law."""
-from mechopt.solvers.stop_impact.lever import (impact_forces, linearise_amplitude,
-                                                 natural_frequencies, operating_point, rebound)
+"""The lift lever striking its stop (paper 004, eq. (2)).
+
+* `response`      the first rebound three independent ways: closed form, quadrature, CVODES.
+* `law`           the exact amplitude law a(t, n), vectorised, and its tangent for the LP.
+* `contact`       an event-driven check with the stiffness switching at the plate.
+* `entry_points`  what scenes name: `natural_frequencies`, `impact_forces`, `rebound`
+                  (method="closed_form" | "quadrature" | "ode"), `linearise_amplitude`,
+                  `operating_point`.
+"""
+from mechopt.solvers.stop_impact.entry_points import (impact_forces, linearise_amplitude, natural_frequencies,
+                                                      operating_point, rebound)
 
 __all__ = ["natural_frequencies", "impact_forces", "rebound", "linearise_amplitude", "operating_point"]

@@ -11,22 +11,13 @@ def plot(run, out_dir) -> list[Path]:
     torque against time; one PNG per scene."""
     import matplotlib.pyplot as plt
 
-    from mechopt.models.press import Dynamics
-    from mechopt.solvers.press import dynamics as press_dynamics
-
-    task, settings = run.task, run.settings
-    solve = getattr(run.scene.solver, "with_trace", None)
-    if solve is None:
+    arrays = run.result.arrays
+    if not len(arrays.get("t_s", ())):
         return []
-    _, trace = solve(task, **settings)
-    if not trace.t:
-        return []
-    t, x, mode = trace.arrays()
-    dyn = press_dynamics._dynamics(task)
-    out = dict(zip(Dynamics.OUTPUT_NAMES, np.asarray(dyn.outputs.map(len(t))(x.T, mode.T))))
-    phi_deg = np.degrees(x[:, task.state_names.index("phi_rad")]) % 360
-    w = x[:, task.state_names.index("omega_rad_s")]
-    cutting = mode[:, 0] > 0
+    t, w, out = arrays["t_s"], arrays["omega_rad_s"], arrays
+    phi_deg = np.degrees(arrays["phi_rad"]) % 360
+    cutting = arrays["cutting"] > 0
+    task = run.task
 
     fig, ax = plt.subplots(2, 2, figsize=(12, 8))
     if cutting.any():

@@ -30,7 +30,7 @@ def _histories(run, out_dir, speeds=None, limit_mm=None):
     """q(t) after contact at each speed (the scene's `speeds_rpm` by default), with the
     amplitude limit when one is given."""
     import matplotlib.pyplot as plt
-    from mechopt.solvers.stop_impact.lever import closed_form_response
+    from mechopt.solvers.stop_impact.response import closed_form_response
 
     task = run.task
     fig, ax = plt.subplots(figsize=(8, 4.5))
@@ -50,7 +50,7 @@ def _histories(run, out_dir, speeds=None, limit_mm=None):
 
 def _amplitude_vs_speed(run, out_dir):
     import matplotlib.pyplot as plt
-    from mechopt.solvers.stop_impact.lever import rebound_amplitude_mm
+    from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
 
     task = run.task
     speeds = np.linspace(0.5 * min(task.speeds_rpm), 1.2 * max(task.speeds_rpm), 200)
@@ -75,7 +75,7 @@ def _amplitude_vs_speed(run, out_dir):
 
 def _law(run, out_dir):
     import matplotlib.pyplot as plt
-    from mechopt.solvers.stop_impact.lever import rebound_amplitude_mm
+    from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
 
     task = run.task
     v = run.result.values

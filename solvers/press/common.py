@@ -1,0 +1,180 @@
+"""What the press solvers share: the assembled equations per task, the initial state, the trace
+of a run and its summary, and the switching logic (U, the next angle event, the mode)."""
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+
+from mechopt.models.cache import memoised
+from mechopt.models.errors import ModelError
+from mechopt.models.press import FORCE_KEYS, WORK_NAMES, Dynamics, PressDrive, dynamics
+from mechopt.solvers.result import Status
+
+TWO_PI = 2 * np.pi
+ANGLE_TOL_RAD = 1e-12          # events are located to this in crank angle (omega ~ 25: 4e-14 s)
+Start = Literal["nominal", "rest"]
+
+
+@memoised(maxsize=32)
+def dynamics_of(task: PressDrive) -> Dynamics:
+    return dynamics(task)
+
+
+def initial_state(task: PressDrive, start: str) -> np.ndarray:
+    """Physical states plus zero work integrals: at rest, or turning at the nominal speed with
+    the pulley at the speed that feeds it (omega i = motor speed) and the belt untwisted."""
+    w = 0.0 if start == "rest" else task.nominal_speed_rad_s
+    values = {"twist_rad": 0.0, "omega_p_rad_s": w, "phi_rad": 0.0, "omega_rad_s": w}
+    return np.r_[[values[k] for k in task.state_names], np.zeros(len(WORK_NAMES))]
+
+
+@dataclass
+class Trace:
+    """What a run produced: samples (time, states, mode) and the events located."""
+    t: list = field(default_factory=list)
+    x: list = field(default_factory=list)
+    mode: list = field(default_factory=list)
+    events: list = field(default_factory=list)       # (kind, t_s, phi_rad)
+
+    def add(self, t, x, mode):
+        self.t.append(np.atleast_1d(t))
+        self.x.append(np.atleast_2d(x).reshape(len(np.atleast_1d(t)), -1))
+        self.mode.append(np.tile(mode, (len(np.atleast_1d(t)), 1)))
+
+    def arrays(self):
+        return np.concatenate(self.t), np.concatenate(self.x), np.concatenate(self.mode)
+
+
+def check_task(task, duration_s=None):
+    """Refuse a task that is no PressDrive, or a duration that is not positive."""
+    if not isinstance(task, PressDrive):
+        raise ModelError(f"task={type(task).__name__}: expected a PressDrive", key="task")
+    if duration_s is not None and not duration_s > 0:
+        raise ModelError(f"duration_s={duration_s} must be > 0", key="duration_s")
+
+
+def summarise(task: PressDrive, trace: Trace, *, cut_angles=None) -> tuple[dict, dict, dict]:
+    """`values`, `diagnostics` and `arrays` of a run from its samples and events (see the package doc).
+
+    The arrays are what figures and notebooks read: time `t_s`, every state by name, `cutting`
+    (U, 0 or 1), the work integrals (`WORK_NAMES`) and the outputs of `Dynamics.OUTPUT_NAMES`."""
+    dyn = dynamics_of(task)
+    t, x, mode = trace.arrays()
+    out = np.asarray(dyn.outputs.map(len(t))(x.T, mode.T))
+    names = dict(zip(Dynamics.OUTPUT_NAMES, out))
+    n = dyn.n_states
+    iphi, iw = task.state_names.index("phi_rad"), task.state_names.index("omega_rad_s")
+    phi, w = x[:, iphi], x[:, iw]
+    works = x[-1, n:] - x[0, n:]
+    energy = (names["kinetic_J"][-1] + names["potential_J"][-1]) - (names["kinetic_J"][0] + names["potential_J"][0])
+    work = dict(zip(WORK_NAMES, map(float, works)))
+    motor, cut, fric, damp = (work[k] for k in ("motor_work_J", "cut_work_J", "friction_work_J", "damping_work_J"))
+    scale = max(abs(motor), abs(cut) + abs(fric) + abs(damp) + abs(energy), 1e-300)
+    residual = abs(motor - cut - fric - damp - energy) / scale
+    values = {"duration_s": float(t[-1] - t[0]), "energy_residual": float(residual), **work,
+              "energy_change_J": float(energy),
+              "peak_force_N": float(np.max(names["force_N"])), "peak_Q_N": float(np.max(np.abs(names["Q_N"]))),
+              "peak_belt_torque_Nm": float(np.max(np.abs(names["belt_torque_Nm"]))),
+              "final_phi_rad": float(phi[-1]), "final_omega_rad_s": float(w[-1]),
+              "revolutions": float(np.floor(phi[-1] / TWO_PI + 1e-9) - np.floor(phi[0] / TWO_PI + 1e-9))}
+    # the last full revolution: mean speed and fluctuation coefficient (omega_max - omega_min) / omega_mean
+    marks = np.arange(np.ceil(phi[0] / TWO_PI - 1e-9), np.floor(phi[-1] / TWO_PI + 1e-9) + 1) * TWO_PI
+    if len(marks) >= 2 and np.all(np.diff(phi) >= -1e-12):
+        t0, t1 = (np.interp(m, phi, t) for m in marks[-2:])
+        inside = (t >= t0 - 1e-12) & (t <= t1 + 1e-12)
+        mean = TWO_PI / (t1 - t0)
+        values |= {"omega_mean_rad_s": float(mean),
+                   "speed_fluctuation": float((_extreme(t[inside], w[inside], max)
+                                               - _extreme(t[inside], w[inside], min)) / mean),
+                   "period_s": float(t1 - t0)}
+    cuts_on = [e for e in trace.events if e[0] == "cut_start"]
+    cuts_off = [e for e in trace.events if e[0] == "cut_end"]
+    if cut_angles is not None:
+        values |= {"cut_start_deg": float(np.degrees(cut_angles[0])), "cut_end_deg": float(np.degrees(cut_angles[1]))}
+    elif cuts_on and cuts_off:
+        values |= {"cut_start_deg": float(np.degrees(cuts_on[-1][2] % TWO_PI)),
+                   "cut_end_deg": float(np.degrees(cuts_off[-1][2] % TWO_PI))}
+    diagnostics_cut = None
+    if task.cutting:
+        coeffs = [getattr(task, k) for k in FORCE_KEYS]
+        Z = task.blank_thickness_mm
+        antiderivative = [0, 0, *[c / (i + 2) for i, c in enumerate(coeffs)]]      # of eq. (1), N mm
+        per_cut_J = float(np.polynomial.polynomial.polyval(Z, antiderivative)) / 1000
+        values["cuts"] = float(cut / per_cut_J) if per_cut_J > 0 else 0.0
+        window = task.cut_window_rad()
+        turns = np.arange(np.floor(phi[0] / TWO_PI) - 1, np.floor(phi[-1] / TWO_PI) + 2) * TWO_PI
+        whole = int(np.sum((turns + window[0] >= phi[0] - 1e-9) & (turns + window[1] <= phi[-1] + 1e-9)))
+        partial = int(np.sum((turns + window[0] < phi[-1]) & (turns + window[1] > phi[-1] + 1e-9)))
+        values["cut_windows"] = float(whole)
+        if per_cut_J > 0 and not whole - 1e-3 <= values["cuts"] <= whole + partial + 1e-3:
+            diagnostics_cut = (f"the cutting work is {values['cuts']:.4g} cuts' worth over {whole} cut windows "
+                               f"crossed: a cut was missed or mis-integrated")
+    diagnostics = {"events": [(k, float(tt), float(np.degrees(p))) for k, tt, p in trace.events],
+                   "event_count": len(trace.events), "samples": int(len(t)),
+                   "min_omega_rad_s": float(w.min()), "states": list(task.state_names),
+                   "cut_work_mismatch": diagnostics_cut}
+    arrays = {"t_s": t, **{k: x[:, i] for i, k in enumerate(task.state_names)}, "cutting": mode[:, 0],
+              **{k: x[:, n + i] - x[0, n + i] for i, k in enumerate(WORK_NAMES)}, **names}
+    return values, diagnostics, arrays
+
+
+def _extreme(t, w, pick):
+    """The largest (pick=max) or smallest sample of w, refined by a parabola through it and its
+    neighbours when it lies between samples (a smooth extremum, not a kink at an event)."""
+    i = int(np.argmax(w) if pick is max else np.argmin(w))
+    if 0 < i < len(w) - 1 and t[i - 1] < t[i] < t[i + 1]:
+        c = np.polyfit(t[i - 1:i + 2] - t[i], w[i - 1:i + 2], 2)
+        if c[0] != 0:
+            vertex = -c[1] / (2 * c[0])
+            if t[i - 1] - t[i] < vertex < t[i + 1] - t[i]:
+                return pick(w[i], float(np.polyval(c, vertex)))
+    return float(w[i])
+
+
+def checked(status, message, violated, diagnostics):
+    """A run whose cutting work disagrees with the cut windows it crossed says so, and is at best
+    INACCURATE."""
+    if diagnostics.get("cut_work_mismatch"):
+        return (Status.INACCURATE if status is Status.SOLVED else status,
+                f"{message}; {diagnostics['cut_work_mismatch']}", violated + ("cut_work",))
+    return status, message, violated
+
+def paper_U(task, xs):
+    if not task.cutting:
+        return np.zeros(len(xs))
+    phi = xs[:, task.state_names.index("phi_rad")]
+    w = xs[:, task.state_names.index("omega_rad_s")]
+    pen = task.travel(phi) * 1000 - (task.stroke_mm - task.blank_thickness_mm - task.shortfall_mm)
+    down = w * np.sin(phi) > 0          # dX/dphi = r sin(phi) (1 + lambda cos(phi) ...) has the sign of sin(phi)
+    return ((pen >= 0) & (pen <= task.blank_thickness_mm) & down).astype(float)
+
+
+def angle_events(task, phi):
+    """The next angle event strictly after phi: (angle, kind)."""
+    base = np.floor(phi / TWO_PI) * TWO_PI
+    marks = [(0.0, "revolution")]
+    window = task.cut_window_rad()
+    if window is not None and window[0] < window[1]:
+        marks += [(window[0], "cut_start"), (window[1], "cut_end")]
+    for turn in (0, 1):
+        for angle, kind in sorted(marks):
+            a = base + turn * TWO_PI + angle
+            if a > phi + ANGLE_TOL_RAD:
+                return a, kind
+    raise AssertionError("unreachable")
+
+
+def mode_at(task, dyn, x, moving_sign):
+    """[U, friction sign, stuck] for a state: U from the crank angle (half-open window)."""
+    phi = x[task.state_names.index("phi_rad")]
+    window = task.cut_window_rad()
+    u = 0.0
+    if window is not None and moving_sign > 0:
+        a = phi % TWO_PI
+        u = float(window[0] - ANGLE_TOL_RAD <= a < window[1] - ANGLE_TOL_RAD)
+    return np.array([u, float(moving_sign), 0.0])
+
+
+def drive_torque(dyn, x, mode):
+    """The torque turning the crank before friction, at a state in a mode [N m]."""
+    return float(dyn.outputs(x, mode)[Dynamics.OUTPUT_NAMES.index("drive_torque_Nm")])

@@ -1,0 +1,97 @@
+"""The paper's method for the press: fixed-step classical Runge-Kutta on the switched equations,
+with its step refinement (halve until two runs agree); the baseline. It steps across the jump at
+the end of the cut, so it is first order there."""
+import time
+
+import casadi as ca
+import numpy as np
+
+from mechopt.models.cache import memoised
+from mechopt.models.errors import ModelError
+from mechopt.models.press import PressDrive
+from mechopt.solvers.press.common import Start, Trace, check_task, checked, dynamics_of, initial_state, paper_U, summarise
+from mechopt.solvers.result import Result, Status, Timing
+
+
+@memoised(maxsize=64)
+def _rk4_steps(task: PressDrive, step_s: float, count: int) -> ca.Function:
+    f = dynamics_of(task).switched
+    x = ca.SX.sym("x", f.size1_in(0))
+    k1 = f(x)
+    k2 = f(x + step_s / 2 * k1)
+    k3 = f(x + step_s / 2 * k2)
+    k4 = f(x + step_s * k3)
+    step = ca.Function("rk4", [x], [x + step_s / 6 * (k1 + 2 * k2 + 2 * k3 + k4)])
+    return step.mapaccum("rk4_run", count)
+
+
+def _rk4_trace(task, step_s, duration_s, start):
+    count = int(round(duration_s / step_s))
+    if abs(count * step_s - duration_s) > 1e-9 * duration_s or count < 1:
+        raise ModelError(f"step_s={step_s} does not divide duration_s={duration_s} into whole steps", key="step_s")
+    x0 = initial_state(task, start)
+    xs = np.asarray(_rk4_steps(task, step_s, count)(x0)).T
+    trace = Trace()
+    dyn = dynamics_of(task)
+    xs = np.vstack([x0, xs])
+    t = np.arange(count + 1) * step_s
+    # the mode each sample saw, as the paper's U and sign(omega) evaluate it (for the outputs)
+    u = paper_U(task, xs)
+    trace.add(t, xs, np.zeros(3))
+    trace.mode = [np.column_stack([u, np.sign(xs[:, task.state_names.index("omega_rad_s")]), np.zeros_like(u)])]
+    on = np.flatnonzero(np.diff(u) > 0) + 1
+    off = np.flatnonzero(np.diff(u) < 0) + 1
+    iphi = task.state_names.index("phi_rad")
+    trace.events = sorted([("cut_start", t[i], xs[i, iphi]) for i in on]
+                          + [("cut_end", t[i], xs[i, iphi]) for i in off], key=lambda e: e[1])
+    return trace, dyn
+
+
+def rk4(task: PressDrive, *, step_s: float = 1e-4, duration_s: float = 1.0, start: Start = "nominal",
+        refine_tol_rad: float = 1e-6, max_halvings: int = 4) -> Result:
+    """Fixed-step RK4 on eqs. (2) with the paper's switching function U (Sec. "DYNAM").
+
+    The step is halved (`max_halvings` at most) until two successive runs agree on the final
+    crank angle within `refine_tol_rad` (the paper's "refinement of the integration step");
+    0 disables refining.
+    U and sign(omega) are evaluated at every stage, so the step that contains the jump at the
+    end of the cut is only first-order accurate: the method's error is O(h), not O(h^4).
+
+    Parameters
+    ----------
+    step_s : first step [s]; must divide `duration_s`.
+    duration_s : simulated time [s].
+    start : "nominal" (turning at the nominal speed) or "rest".
+    Returns a Result: SOLVED, or INACCURATE when refinement did not reach `refine_tol_rad`.
+    """
+    check_task(task, duration_s)
+    if not step_s > 0:
+        raise ModelError(f"step_s={step_s} must be > 0", key="step_s")
+    t_start = time.perf_counter()
+    build = 0.0
+    trace, _ = _rk4_trace(task, step_s, duration_s, start)
+    iphi = task.state_names.index("phi_rad")
+    change, halvings, h = np.inf, 0, step_s
+    while refine_tol_rad > 0 and halvings < max_halvings and np.all(np.isfinite(trace.x[0])):
+        finer, _ = _rk4_trace(task, h / 2, duration_s, start)
+        change = abs(finer.x[0][-1, iphi] - trace.x[0][-1, iphi])
+        trace, h, halvings = finer, h / 2, halvings + 1
+        if change <= refine_tol_rad:
+            break
+    if not np.all(np.isfinite(trace.x[0])):     # explicit RK4 beyond its stability limit: say so, no NaN
+        return Result(Status.FAILED, {"step_s": h}, Timing(build, time.perf_counter() - t_start - build),
+                      message=f"RK4 diverged at step {h:.3g} s: the step exceeds the stability limit of the "
+                              f"stiffest mode (the belt); reduce step_s or use events")
+    values, diagnostics, arrays = summarise(task, trace)
+    values["step_s"] = h
+    diagnostics |= {"halvings": halvings, "last_change_rad": float(change) if np.isfinite(change) else None}
+    ok = refine_tol_rad <= 0 or change <= refine_tol_rad
+    diagnostics["switches_stepped_over"] = True      # fixed steps: first order across the jump
+    status, message, violated = checked(Status.SOLVED if ok else Status.INACCURATE,
+                                         f"RK4, step {h:.3g} s after {halvings} halvings; fixed steps cross "
+                                         "the jump at the end of the cut and the friction sign change "
+                                         "(first order there: the paper's method as published)"
+                                         + ("" if ok else f"; last halving still moved phi by {change:.3g} rad > "
+                                                          f"{refine_tol_rad:g}"), (), diagnostics)
+    timing = Timing(build, time.perf_counter() - t_start - build)
+    return Result(status, values, timing, message, violated, diagnostics, arrays)

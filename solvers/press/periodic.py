@@ -1,0 +1,119 @@
+"""The periodic steady motion of the press over one revolution, solved directly: in the crank
+angle as independent variable the cut starts and ends at fixed angles, so one revolution is three
+CVODES pieces composed symbolically, and CasADi's Newton rootfinder finds the initial state that
+the revolution reproduces."""
+import time
+
+import casadi as ca
+import numpy as np
+
+from mechopt.models.cache import memoised
+from mechopt.models.errors import MechoptError, ModelError
+from mechopt.models.press import WORK_NAMES, PressDrive
+from mechopt.solvers.press.common import TWO_PI, Trace, check_task, checked, dynamics_of, initial_state, summarise
+from mechopt.solvers.result import Result, Status, Timing, from_casadi_integrator, from_rootfinder
+
+
+@memoised(maxsize=16)
+def _revolution(task: PressDrive, tol: float, samples: int):
+    """The revolution as CVODES pieces in the crank angle (d/dphi = (d/dt) / omega): the states
+    other than phi, then time, then the work integrals. Returns (pieces, their angle spans, U)."""
+    dyn = dynamics_of(task)
+    n = dyn.n_states
+    iphi = task.state_names.index("phi_rad")
+    y = ca.SX.sym("y", n - 1 + 1 + len(WORK_NAMES))      # other states, time, works
+    phi = ca.SX.sym("phi")
+    u = ca.SX.sym("u")
+    states = ca.vertcat(y[:iphi], phi, y[iphi:n - 1])
+    xdot = dyn.rhs(ca.vertcat(states, y[n:]), ca.vertcat(u, 1, 0))
+    w = states[task.state_names.index("omega_rad_s")]
+    dy = ca.vertcat(xdot[:iphi], xdot[iphi + 1:n], 1, xdot[n:]) / w
+    window = task.cut_window_rad()
+    cuts = [0.0, window[0], window[1], TWO_PI] if window is not None and window[0] < window[1] else [0.0, TWO_PI]
+    pieces = []
+    for k, (a, b) in enumerate(zip(cuts[:-1], cuts[1:])):
+        grid = np.linspace(a, b, samples + 1)[1:]
+        pieces.append((ca.integrator(f"rev{k}", "cvodes", {"x": y, "t": phi, "p": u, "ode": dy}, a, grid,
+                                     {"abstol": tol, "reltol": tol, "max_num_steps": 100000}),
+                       grid, float(len(cuts) == 4 and k == 1)))
+    return pieces, n
+
+
+def steady_state(task: PressDrive, *, tol: float = 1e-10, samples: int = 60, max_iter: int = 30) -> Result:
+    """The periodic steady motion (the paper's assumption: the whole cut happens in steady
+    motion), found directly instead of integrating until transients die.
+
+    Unknowns: the states at phi = 0 other than phi (belt twist, pulley and crank speeds); the
+    revolution maps them, through three CVODES pieces in the crank angle (idle, cut, idle: the
+    cut's ends are fixed angles there, so no event location is needed), to the states at
+    phi = 2 pi. CasADi's Newton rootfinder, with CVODES sensitivities, makes the two equal.
+    Assumes the crank keeps turning forward (omega > 0); a solution that violates it is FAILED.
+    A belt far stiffer than the drive (1e6 times the KD2322 value) makes the CVODES
+    sensitivities very expensive (minutes, and Newton stalls at ~1e-7): use the rigid-belt
+    model there, which is the same motion to 1e-7 rad (a test pins that with `events`).
+
+    Parameters
+    ----------
+    tol : CVODES tolerance (relative and absolute); the periodicity residual is held to 100 tol.
+    samples : outputs per piece (peaks, plots).  max_iter : Newton iterations.
+    """
+    check_task(task)
+    if not tol > 0:
+        raise ModelError(f"tol={tol} must be > 0", key="tol")
+    t_start = time.perf_counter()
+    pieces, n = _revolution(task, tol, samples)
+    m = n - 1
+    y0 = ca.MX.sym("y0", m)
+    y = ca.vertcat(y0, ca.MX.zeros(1 + len(WORK_NAMES)))
+    for integ, _, u in pieces:
+        y = integ(x0=y, p=u)["xf"][:, -1]
+    residual = ca.Function("periodic", [y0], [y[:m] - y0])
+    rf = ca.rootfinder("rf", "newton", residual, {"max_iter": max_iter, "error_on_fail": False,
+                                                  "abstol": 100 * tol})
+    build = time.perf_counter() - t_start
+    guess = np.delete(initial_state(task, "nominal")[:n], task.state_names.index("phi_rad"))
+    if task.motor:      # start near the motor's idle speed rather than the nominal one
+        guess[[i for i, k in enumerate(np.delete(np.array(task.state_names), task.state_names.index("phi_rad")))
+               if k.startswith("omega")]] = task.motor_sync_speed_rad_s / task.gear_ratio * 0.99
+    try:                # the re-integration of the found orbit can fail as well as the Newton solve
+        solution = np.asarray(rf(guess)).ravel()
+        status = from_rootfinder(rf.stats()["return_status"])
+        trace = _revolution_trace(task, pieces, n, solution)
+        miss = float(np.max(np.abs(np.asarray(residual(solution)).ravel())))
+    except RuntimeError as exc:
+        if isinstance(exc, MechoptError):
+            raise
+        return Result(from_casadi_integrator(str(exc)), {}, Timing(build, time.perf_counter() - t_start - build),
+                      message=f"CVODES failed inside the periodic Newton solve: {exc}")
+    values, diagnostics, arrays = summarise(task, trace, cut_angles=task.cut_window_rad())
+    values["periodicity_residual"] = miss
+    diagnostics |= {"newton_iterations": rf.stats()["iter_count"], "initial_state": solution.tolist()}
+    message = f"periodic orbit by Newton shooting, {rf.stats()['iter_count']} iterations, residual {miss:.3g}"
+    if status is Status.SOLVED and diagnostics["min_omega_rad_s"] <= 0:
+        status, message = Status.FAILED, message + "; the crank does not keep turning forward: no such orbit"
+    if status is Status.SOLVED and miss > 1e3 * tol:
+        status = Status.INACCURATE
+    status, message, violated = checked(status, message, (), diagnostics)
+    return Result(status, values, Timing(build, time.perf_counter() - t_start - build), message, violated,
+                  diagnostics, arrays)
+
+
+def _revolution_trace(task, pieces, n, y0):
+    """Samples over the revolution from the initial states y0 (other than phi) [as a Trace]."""
+    iphi = task.state_names.index("phi_rad")
+    trace = Trace()
+    y = np.r_[y0, np.zeros(1 + len(WORK_NAMES))]
+
+    def full(ycol, phi):
+        return np.r_[ycol[:iphi], phi, ycol[iphi:n - 1], ycol[n:]], ycol[n - 1]
+
+    x, t = full(y, 0.0)
+    trace.add(t, x, np.array([0.0, 1.0, 0.0]))
+    for integ, grid, u in pieces:
+        ys = np.asarray(integ(x0=y, p=u)["xf"]).T
+        rows = [full(row, a) for row, a in zip(ys, grid)]
+        trace.add(np.array([r[1] for r in rows]), np.array([r[0] for r in rows]), np.array([u, 1.0, 0.0]))
+        kind = "cut_start" if u == 0 and grid[-1] < TWO_PI else ("cut_end" if u == 1 else "revolution")
+        trace.events.append((kind, float(rows[-1][1]), float(grid[-1])))
+        y = ys[-1]
+    return trace

@@ -1,0 +1,87 @@
+"""The press by scipy's solve_ivp (Radau, LSODA, DOP853, RK45, BDF), with or without event
+location: the peer a user would reach for, and the independent reference."""
+import time
+from typing import Literal
+
+import casadi as ca
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from mechopt.models.press import PressDrive
+from mechopt.solvers.press.common import (Trace, angle_events, check_task, checked, dynamics_of, initial_state,
+                                          mode_at, paper_U, summarise)
+from mechopt.solvers.result import Result, Status, Timing, from_ivp
+
+
+def ivp(task: PressDrive, *, method: Literal["Radau", "LSODA", "DOP853", "RK45", "BDF"] = "Radau",
+        rtol: float = 1e-8, atol: float = 1e-10, duration_s: float = 1.0, locate_events: bool = True,
+        max_step_s: float = 0.0) -> Result:
+    """scipy's solve_ivp from the nominal state, the peer a user would reach for.
+
+    With `locate_events`, each smooth piece ends at a terminal event (the next cut start, cut
+    end or revolution angle) and the integration restarts in the new mode, as `events` does.
+    Without it the paper's switched right-hand side is integrated in one go: at loose tolerance
+    and with no `max_step_s` (0 = unbounded) the adaptive step can jump over the whole cut, and
+    `values["cuts"]` then counts fewer cuts than revolutions (the test of a missed cut).
+    Friction sticking is not handled here (the crank must keep turning).
+    """
+    check_task(task, duration_s)
+    dyn = dynamics_of(task)
+    iphi, iw = task.state_names.index("phi_rad"), task.state_names.index("omega_rad_s")
+    t_start = time.perf_counter()
+    x = initial_state(task, "nominal")
+    x_sym, m_sym = ca.SX.sym("x", dyn.rhs.size1_in(0)), ca.SX.sym("m", 3)
+    jac = ca.Function("rhs_jacobian", [x_sym, m_sym], [ca.jacobian(dyn.rhs(x_sym, m_sym), x_sym)])
+    trace, t, calls = Trace(), 0.0, 0
+    options = {"method": method, "rtol": rtol, "atol": atol}
+    if max_step_s > 0:
+        options["max_step"] = max_step_s
+    if not locate_events:
+        sol = solve_ivp(lambda tt, xx: np.asarray(dyn.switched(xx)).ravel(), (0.0, duration_s), x,
+                        dense_output=False, **options)
+        status = from_ivp(sol.status)
+        if sol.t.size:
+            trace.add(sol.t, sol.y.T, np.zeros(3))
+            trace.mode = [np.column_stack([paper_U(task, sol.y.T), np.ones(sol.t.size), np.zeros(sol.t.size)])]
+        values, diagnostics, arrays = summarise(task, trace)
+        diagnostics["rhs_calls"] = int(sol.nfev)
+        diagnostics["switches_stepped_over"] = bool(task.cutting or "friction" in task.effects)
+        if status is Status.SOLVED and diagnostics["switches_stepped_over"]:
+            # the cut's jump and sign(omega) lie inside steps: the error there is uncontrolled
+            status = Status.INACCURATE
+        status, message, violated = checked(status, sol.message + (
+            "; switched right-hand side integrated without event location: the cut's jump and the "
+            "friction sign change were stepped over" if diagnostics["switches_stepped_over"] else ""), (), diagnostics)
+        timing = Timing(0.0, time.perf_counter() - t_start)
+        return Result(status, values, timing, message, violated, diagnostics, arrays)
+    mode = mode_at(task, dyn, x, 1.0)
+    trace.add(t, x, mode)
+    status, message = Status.SOLVED, ""
+    while t < duration_s * (1 - 1e-14):
+        target, kind = angle_events(task, x[iphi])
+        f = (lambda m: lambda tt, xx: np.asarray(dyn.rhs(xx, m)).ravel())(mode)
+        J = (lambda m: lambda tt, xx: np.asarray(jac(xx, m)))(mode)
+        hit = (lambda a: lambda tt, xx: xx[iphi] - a)(target)
+        hit.terminal, hit.direction = True, 1
+        stop = lambda tt, xx: xx[iw]
+        stop.terminal, stop.direction = True, -1
+        extra = {"jac": J} if method in ("Radau", "BDF", "LSODA") else {}
+        sol = solve_ivp(f, (t, duration_s), x, events=[hit, stop], **options, **extra)
+        calls += sol.nfev
+        if from_ivp(sol.status) is not Status.SOLVED:
+            status, message = Status.FAILED, sol.message
+            break
+        trace.add(sol.t[1:], sol.y.T[1:], mode)
+        t, x = float(sol.t[-1]), sol.y[:, -1].copy()
+        if sol.status == 1 and sol.t_events[1].size:
+            status, message = Status.INFEASIBLE, f"the crank stopped at t = {t:.6g} s (not handled by ivp)"
+            break
+        if sol.status == 1:
+            trace.events.append((kind, t, float(target)))
+            x[iphi] = target
+            mode = mode_at(task, dyn, x, 1.0)
+    values, diagnostics, arrays = summarise(task, trace)
+    diagnostics["rhs_calls"] = int(calls)
+    status, message, violated = checked(status, message or f"solve_ivp {method}", (), diagnostics)
+    timing = Timing(0.0, time.perf_counter() - t_start)
+    return Result(status, values, timing, message, violated, diagnostics, arrays)

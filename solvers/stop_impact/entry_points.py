@@ -1,0 +1,171 @@
+"""The stop-impact solvers a scene names: frequencies, impact forces, the first rebound by any of
+three methods with a cross-check, the amplitude law for the LP, and one operating point against
+the limit (for maps)."""
+import math
+import time
+from typing import Literal
+
+from scipy.optimize import brentq
+
+from mechopt.models.errors import ModelError
+from mechopt.models.stop_impact import LeverStop
+from mechopt.solvers.result import Result, Status, Timing
+from mechopt.solvers.stop_impact.contact import simulate_contact
+from mechopt.solvers.stop_impact.law import amplitude_law, rebound_amplitude_mm
+from mechopt.solvers.stop_impact.response import closed_form_amplitude_m, ode_amplitude_m, quadrature_amplitude_m
+
+__all__ = ["natural_frequencies", "impact_forces", "rebound", "linearise_amplitude", "operating_point"]
+
+AGREEMENT_REL = 1e-8            # the three methods must agree this well on every scene
+
+
+def natural_frequencies(task: LeverStop) -> Result:
+    """Reduced stiffness and natural frequencies of the lever moving (Fig. 5) and on the plate
+    (Fig. 6), and the contact time tau = half the period on the plate."""
+    start = time.perf_counter()
+    values = {"f_free_Hz": task.f_free_Hz, "f_stop_Hz": task.f_stop_Hz,
+              "c_free_N_per_mm": task.c_free_N_per_m * 1e-3, "c_stop_N_per_mm": task.c_stop_N_per_m * 1e-3,
+              "contact_time_s": task.contact_time_s}
+    return Result(Status.SOLVED, values, Timing(0.0, time.perf_counter() - start),
+                  message="c = 3 E J_x / ((a + b) b^2), f = sqrt(c / m) / (2 pi)")
+
+
+def impact_forces(task: LeverStop) -> Result:
+    """Impact force F_ud = J_A omega_0 (1 + k) / (l tau) at each speed of `speeds_rpm`, with the
+    impulse S_C = F tau and the approach velocity; `impact_force_N_<rpm>` etc."""
+    task.need_effect("impact_pulse")
+    _need_speeds(task)
+    start = time.perf_counter()
+    values = {"contact_time_s": task.contact_time_s}
+    for n in task.speeds_rpm:
+        v0 = float(task.approach_velocity_m_s(n))
+        F = float(task.impact_force_N(v0))
+        values |= {f"impact_force_N_{_tag(n)}": F, f"impulse_Ns_{_tag(n)}": F * task.contact_time_s,
+                   f"approach_velocity_m_s_{_tag(n)}": v0}
+    return Result(Status.SOLVED, values, Timing(0.0, time.perf_counter() - start),
+                  message="tau = half the natural period on the plate")
+
+
+def rebound(task: LeverStop, *, method: Literal["closed_form", "quadrature", "ode"] = "closed_form",
+            cross_check: bool = True) -> Result:
+    """First-rebound amplitude of eq. (2) at each speed of `speeds_rpm` and the phase angle
+    `t_deg`: `rebound_mm_<rpm>`. With `cross_check` the other two methods run as well and must
+    agree within 1e-8 relative (else INACCURATE), and the event-driven simulation reports how far
+    the single-mass eq. (2) is from a contact that switches stiffness (`rebound_event_mm_<rpm>`).
+    """
+    _need_speeds(task)
+    task.need("t_deg")
+    methods = {"closed_form": _by_closed_form, "quadrature": _by_quadrature, "ode": _by_ode}
+    start = time.perf_counter()
+    build_s, values, diagnostics, status, notes = 0.0, {}, {}, Status.SOLVED, []
+    for n in task.speeds_rpm:
+        imp = task.impact(n)
+        runs = {name: methods[name](imp) for name in ([method] + [k for k in methods if k != method]
+                                                      if cross_check else [method])}
+        build_s += sum(r[2] for r in runs.values())
+        amp, own_status = runs[method][0], runs[method][1]
+        if own_status is not Status.SOLVED or not math.isfinite(amp):
+            return Result(Status.FAILED if own_status is Status.SOLVED else own_status, values,
+                          Timing(build_s, time.perf_counter() - start - build_s),
+                          message=f"{method}: {own_status.value} at {n:g} rpm, no amplitude reported",
+                          diagnostics=diagnostics)
+        values[f"rebound_mm_{_tag(n)}"] = amp * 1e3
+        if cross_check:
+            bad = [k for k, r in runs.items() if r[1] is not Status.SOLVED or not math.isfinite(r[0])]
+            spread = max(abs(r[0] - amp) for k, r in runs.items() if k not in bad) / max(amp, 1e-300)
+            diagnostics[f"methods_{_tag(n)}"] = {k: {"mm": r[0] * 1e3, "status": r[1].value} for k, r in runs.items()}
+            values[f"methods_max_rel_diff_{_tag(n)}"] = spread
+            if spread > AGREEMENT_REL or bad:
+                status = Status.INACCURATE
+                notes.append(f"{n:g} rpm: methods differ by {spread:.2e} relative"
+                             + (f", {bad} not solved" if bad else ""))
+            event_mm, contact_s, ev_status, ev_message = simulate_contact(task, n)
+            if ev_status is Status.SOLVED:
+                values[f"rebound_event_mm_{_tag(n)}"] = event_mm
+                values[f"contact_time_event_s_{_tag(n)}"] = contact_s
+            diagnostics[f"event_driven_{_tag(n)}"] = ev_message
+    values["contact_time_s"] = task.contact_time_s
+    agreed = "closed form, quadrature and ODE agree within 1e-8" if cross_check else "no cross-check"
+    message = f"{method}; " + ("; ".join(notes) if notes else agreed)
+    return Result(status, values, Timing(build_s, time.perf_counter() - start - build_s), message=message,
+                  diagnostics=diagnostics)
+
+
+def linearise_amplitude(task: LeverStop) -> Result:
+    """The amplitude law for the LP: tangent of a(t) at `t_deg`, `speed_nominal_rpm`; the bound on
+    t(3,7) that a <= `amplitude_limit_mm` gives, by the tangent and by the exact law (a falls
+    with t: the exact bound is the root of a(t) = limit)."""
+    task.need("amplitude_limit_mm")
+    start = time.perf_counter()
+    slope, intercept = amplitude_law(task)
+    limit = task.amplitude_limit_mm
+    n = task.speed_nominal_rpm
+    exact = lambda t: float(rebound_amplitude_mm(task, n, t)) - limit      # noqa: E731
+    lo, hi = 1e-3 * task.t_deg, 359.0
+    if exact(lo) < 0 or exact(hi) > 0:
+        raise ModelError(f"amplitude_limit_mm={limit}: a(t) at {n:g} rpm does not cross it for t in "
+                         f"({lo:g}, {hi:g}) deg", key="amplitude_limit_mm")
+    t_exact = brentq(exact, lo, hi, xtol=1e-12, rtol=1e-14)
+    t_linear = (limit - intercept) / slope
+    values = {"slope_mm_per_deg": slope, "intercept_mm": intercept, "t_3_7_min_deg": t_linear,
+              "t_3_7_min_exact_deg": t_exact, "span_gain_deg": t_exact - t_linear,
+              "amplitude_nominal_mm": float(rebound_amplitude_mm(task, n, task.t_deg))}
+    return Result(Status.SOLVED, values, Timing(0.0, time.perf_counter() - start),
+                  message=f"tangent at t = {task.t_deg:g} deg, n = {n:g} rpm; a(t) is convex, so the tangent's "
+                          f"bound is looser than the exact one by span_gain_deg")
+
+
+def operating_point(task: LeverStop) -> Result:
+    """The first rebound at one operating point, main-shaft speed `speed_nominal_rpm` and phase
+    angle `t_deg`, against `amplitude_limit_mm`: swept over both, the map of where the lift meets
+    the weft-transfer limit. The exact law `rebound_amplitude_mm` is checked at the point by
+    CasADi/CVODES on eq. (2) itself (within 1e-8 relative, else INACCURATE). SOLVED when the
+    rebound keeps the limit, INFEASIBLE (violated amplitude) when it does not; `margin_mm` is
+    the limit left over (negative when exceeded)."""
+    task.need("speed_nominal_rpm", "t_deg", "amplitude_limit_mm")
+    start = time.perf_counter()
+    n, t, limit = task.speed_nominal_rpm, task.t_deg, task.amplitude_limit_mm
+    amplitude_mm = float(rebound_amplitude_mm(task, n, t))
+    ode_m, ode_status, build_s = ode_amplitude_m(task.impact(n))
+    values = {"rebound_mm": amplitude_mm, "margin_mm": limit - amplitude_mm,
+              "approach_velocity_m_s": float(task.approach_velocity_m_s(n)), "contact_time_s": task.contact_time_s}
+    if "impact_pulse" in task.effects:
+        values["impact_force_N"] = float(task.impact_force_N(values["approach_velocity_m_s"]))
+    timing = Timing(build_s, time.perf_counter() - start - build_s)
+    if ode_status is not Status.SOLVED:
+        return Result(Status.INACCURATE, values, timing,
+                      message=f"the ODE cross-check gave {ode_status.value}: the law's "
+                              f"{amplitude_mm:.4g} mm is unconfirmed")
+    spread = abs(ode_m * 1e3 - amplitude_mm) / max(amplitude_mm, 1e-300)
+    values["methods_rel_diff"] = spread
+    if spread > AGREEMENT_REL:
+        return Result(Status.INACCURATE, values, timing,
+                      message=f"exact law and ODE differ by {spread:.2e} relative at {n:g} rpm, {t:g} deg")
+    within = amplitude_mm <= limit
+    return Result(Status.SOLVED if within else Status.INFEASIBLE, values, timing,
+                  violated=() if within else ("amplitude",),
+                  message=f"{amplitude_mm:.4g} mm at {n:g} rpm, t = {t:g} deg: "
+                          f"{'within' if within else 'above'} amplitude_limit_mm={limit:g}; "
+                          f"the ODE agrees to {spread:.1e}")
+
+
+def _by_closed_form(imp):
+    return closed_form_amplitude_m(imp)[0], Status.SOLVED, 0.0
+
+
+def _by_quadrature(imp):
+    return *quadrature_amplitude_m(imp), 0.0
+
+
+def _by_ode(imp):
+    return ode_amplitude_m(imp)
+
+
+def _need_speeds(task):
+    if not task.speeds_rpm:
+        raise ModelError("speeds_rpm=[]: give the main-shaft speeds to report (structure table)", key="speeds_rpm")
+
+
+def _tag(speed_rpm):
+    """Speed as a value-name suffix: 280.0 -> '280', 177.5 -> '177p5'."""
+    return f"{speed_rpm:g}".replace(".", "p")
