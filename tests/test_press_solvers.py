@@ -220,7 +220,7 @@ def test_status_words_map_without_passing_failure_as_success():
 def test_figure_of_a_press_scene_is_written(tmp_path):
     from mechopt.plots import plot_run
     paths = plot_run(registry.run(registry.find("press/kd2322-rigid-belt")), tmp_path)
-    assert [p.name for p in paths] == ["press_kd2322-rigid-belt.png"] and paths[0].stat().st_size > 20_000
+    assert [p.name for p in paths] == ["press_kd2322-rigid-belt_cycle.png"] and paths[0].stat().st_size > 20_000
 
 
 def test_benchmark_interpolates_time_to_accuracy_in_log_log():

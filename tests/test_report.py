@@ -75,7 +75,7 @@ def test_figures_sweep_maps_and_bench_plots_are_embedded_in_the_one_page(page):
     assert len(images) == text.count("<img ")                     # every image is embedded
     assert all(base64.b64decode(data)[:8] == b"\x89PNG\r\n\x1a\n" for data, _ in images)
     names = [alt for _, alt in images]
-    assert {"loom_group1", "sweep_span_deg_vs_amplitude_limit_mm", "demo_work_precision"} <= set(names)
+    assert {"loom_group1_cyclogram", "sweep_span_deg_vs_amplitude_limit_mm", "demo_work_precision"} <= set(names)
     assert "3 variants (3 SOLVED)" in text
     assert [p.name for p in path.parent.iterdir()] == ["index.html"]      # nothing beside the page
 

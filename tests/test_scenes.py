@@ -122,7 +122,7 @@ def test_cli_run_writes_the_documented_json(tmp_path):
     assert data["values"]["H_mm"] == pytest.approx(59.45) and data["status"] == "SOLVED"
     assert {"name", "expected", "got", "tol", "ok"} <= data["checks"][0].keys()
     assert {"build_s", "solve_s"} == data["timing"].keys()
-    assert (tmp_path / "cam-cutter_paper-grid.png").stat().st_size > 10_000
+    assert (tmp_path / "cam-cutter_paper-grid_paths.png").stat().st_size > 10_000
 
 
 def test_cli_validate_passes_and_reports_every_check(tmp_path, capsys):
@@ -237,7 +237,7 @@ def test_a_calibration_target_no_scene_expects_is_refused(cases_in):
         registry.all_scenes()
 
 
-@pytest.mark.parametrize("case, name", [("cam-cutter/linkage-check", "cam-cutter_linkage-check.png"),
+@pytest.mark.parametrize("case, name", [("cam-cutter/linkage-check", "cam-cutter_linkage-check_paths.png"),
                                         ("stop-impact/rebound-map", "stop-impact_rebound-map_histories.png")])
 def test_what_if_scenes_draw_their_operating_point(case, name, tmp_path):
     # a checked linkage has no H_mm among its values (it is an input), an operating point no speeds_rpm

@@ -1,12 +1,11 @@
 """The `mechopt` command: list, run, validate, sweep, report and benchmark the registry's scenes."""
 import argparse
-import importlib
 import json
-import pkgutil
 import sys
 from pathlib import Path
 
 from mechopt import registry
+from mechopt.benchmarks import STUDIES, study
 from mechopt.models.errors import MechoptError
 from mechopt.scene import parse_overrides
 from mechopt.solvers.result import Status
@@ -25,7 +24,7 @@ def main(argv=None) -> int:
     validate = sub.add_parser("validate", help="run every scene; non-zero exit when any expectation fails")
     validate.add_argument("--json", type=Path, metavar="FILE")
     bench = sub.add_parser("bench", help="accuracy against time for a mechanism's solvers")
-    bench.add_argument("study", choices=_benchmarks(), help="benchmarks/<study>.py")
+    bench.add_argument("study", choices=list(STUDIES), help="a registered study (benchmarks/__init__.py)")
     bench.add_argument("--repeats", type=int, default=5, help="runs per point; medians are reported")
     bench.add_argument("--plot", type=Path, default=Path("out/bench"), metavar="DIR")
     fit = sub.add_parser("fit-force", help="fit a polynomial force law to load-travel data (paper 001, eq. (1))")
@@ -105,8 +104,7 @@ def _validate(args) -> int:
 
 
 def _bench(args) -> int:
-    study = importlib.import_module(f"mechopt.benchmarks.{args.study.replace('-', '_')}")
-    print(study.cli(args.repeats, args.plot, progress=lambda line: print(line, file=sys.stderr, flush=True)))
+    print(study(args.study).cli(args.repeats, args.plot, progress=lambda line: print(line, file=sys.stderr, flush=True)))
     return 0
 
 
@@ -145,12 +143,6 @@ def _report(args) -> int:
                         progress=lambda line: print(line, file=sys.stderr, flush=True))
     print(f"report: {path}")
     return 0
-
-
-def _benchmarks():
-    """Studies in benchmarks/, by file name with '-' for '_' (cam_cutter.py -> cam-cutter)."""
-    import mechopt.benchmarks
-    return sorted(m.name.replace("_", "-") for m in pkgutil.iter_modules(mechopt.benchmarks.__path__))
 
 
 def _print_run(run):

@@ -1,30 +1,27 @@
-"""Pictures of a solved scene, for where a designer would rather look than read.
-
-The figures of a task from `models/<module>.py` live in `mechopt/figures/<module>.py`, as
-`plot(run, out_dir) -> list[Path]`; a model without such a module has no figures yet.
-"""
-import importlib
+"""Pictures of a solved scene, for where a designer would rather look than read: drawn by the
+functions registered in `mechopt.figures`, saved here."""
 from pathlib import Path
 
 
+def figures(run) -> dict:
+    """The figures of a solved scene as matplotlib Figures, by name (for a notebook: no files)."""
+    from mechopt.figures import figures_of
+    return figures_of(run)
+
+
 def plot_run(run, out_dir) -> list[Path]:
-    """Write the figures of a solved scene into out_dir; returns their paths."""
-    import matplotlib
-    matplotlib.use("Agg")
-    module = run.scene.task_class.__module__.rpartition(".")[2]
-    try:
-        figures = importlib.import_module(f"mechopt.figures.{module}")
-    except ModuleNotFoundError:
-        return []
+    """Write the figures of a solved scene into out_dir as `<scene>_<name>.png`; their paths."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    return figures.plot(run, out_dir)
+    stem = run.scene.id.replace("/", "_")
+    return [save_figure(fig, out_dir / f"{stem}_{name}.png") for name, fig in figures(run).items()]
 
 
 def save_figure(fig, path, *, dpi=110) -> Path:
-    """Lay out, write and close a matplotlib figure (closing frees it: sweeps draw many)."""
-    import matplotlib.pyplot as plt
+    """Lay out, write and release a matplotlib figure (sweeps draw many)."""
     fig.tight_layout()
     fig.savefig(path, dpi=dpi)
-    plt.close(fig)
+    if fig.canvas.manager is not None:      # a pyplot figure: pyplot keeps it until closed
+        import matplotlib.pyplot as plt
+        plt.close(fig)
     return Path(path)

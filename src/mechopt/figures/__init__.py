@@ -1,1 +1,7 @@
-"""One module per model module (`mechopt.figures.<model module>`), each with `plot(run, out_dir) -> [paths]`."""
+"""Figures of solved scenes, one module per mechanism, each registering its functions per task
+class (see `registry`); `sweep` draws the maps of a sweep table. Every module is imported here,
+by name: a broken one is an import error, never a silently missing figure."""
+from mechopt.figures import cam_cutter, loom, press, stop_impact  # noqa: F401  (they register)
+from mechopt.figures.registry import FIGURES, figures_of, register
+
+__all__ = ["FIGURES", "figures_of", "register"]

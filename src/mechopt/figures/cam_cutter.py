@@ -1,28 +1,28 @@
 """Figures for the cam-cutting linkage scenes (models/cam_cutter.py)."""
 import numpy as np
 
-from mechopt.plots import save_figure
+from mechopt.figures.registry import new_figure, register
+from mechopt.models.cam_cutter import LinkageCheck, LinkageFit, ideal_point, real_point
+from mechopt.solvers.cam_cutter.deviation import path_distance
 
 
-def plot(run, out_dir):
+@register(LinkageFit, LinkageCheck)
+def paths_and_deviation(run):
     """The two paths and the deviation along the ideal path, with the band."""
-    import matplotlib.pyplot as plt
     task = run.task
     # the linkage a solver found, or the one a check was given
     H = run.result.values.get("H_mm", getattr(task, "H_mm", None))
     L = run.result.values.get("L_mm", getattr(task, "L_mm", None))
     if H is None or L is None:
-        return []             # no linkage found (an infeasible grid scan): nothing to draw
-
-    from mechopt.models.cam_cutter import ideal_point, real_point
-    from mechopt.solvers.cam_cutter.deviation import path_distance
+        return {}             # no linkage found (an infeasible grid scan): nothing to draw
 
     t = np.linspace(0.0, task.t_finish_rad, 2000)
     ix, iy = ideal_point(t, task.a_mm, task.h_mm)
     rx, ry = real_point(np.linspace(0, 2 * np.pi, 4000), H, L)
     dist = path_distance(ix, iy, H, L)
 
-    fig, (left, right) = plt.subplots(1, 2, figsize=(12, 5), gridspec_kw={"width_ratios": [1, 1.3]})
+    fig = new_figure(figsize=(12, 5))
+    left, right = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1, 1.3]})
     left.plot(rx, ry, lw=1.0, color="tab:orange", label=f"real path: limaçon H={H:.3f}, L={L:.3f} mm")
     left.plot(ix, iy, lw=1.0, ls="--", color="tab:blue", label="ideal path (upper half) and its mirror")
     left.plot(ix, -iy, lw=1.0, ls="--", color="tab:blue")
@@ -50,6 +50,4 @@ def plot(run, out_dir):
     right.set_ylabel("deviation [µm]")
     right.set_title(f"max {run.result.values['max_deviation_mm'] * 1000:.2f} µm ({run.result.status.value})")
     right.legend(fontsize=8)
-    path = out_dir / f"{run.scene.id.replace('/', '_')}.png"
-    save_figure(fig, path, dpi=110)
-    return [path]
+    return {"paths": fig}

@@ -1,15 +1,16 @@
 """Figures for the loom cyclogram scenes (models/loom.py): the cyclogram as a Gantt chart."""
-from mechopt.plots import save_figure
+from mechopt.figures.registry import new_figure, register
+from mechopt.models.loom import Cyclogram
 
 
-def plot(run, out_dir):
+@register(Cyclogram)
+def gantt(run):
     """One bar per operation from p(from) to p(to) over the machine angle, a row per operation,
     labelled by the mechanism whose event starts it (or the operation's name) and sorted by it;
     the critical chain in red, every other operation's total float as a light tail."""
-    import matplotlib.pyplot as plt
     values = run.result.values
     if "span_deg" not in values:
-        return []             # infeasible or unbounded: there are no event times to draw
+        return {}             # infeasible or unbounded: there are no event times to draw
 
     task = run.task
     diag = run.result.diagnostics
@@ -19,7 +20,8 @@ def plot(run, out_dir):
     label = {(x, y): d["name"] or mechanism[x] or "-" for x, y, d in task.graph.edges(data=True)}
     arcs = sorted(task.arcs, key=lambda a: (label[a], values[f"p_{a[0]}_deg"]))
 
-    fig, ax = plt.subplots(figsize=(11, 0.35 * len(arcs) + 1.8))
+    fig = new_figure(figsize=(11, 0.35 * len(arcs) + 1.8))
+    ax = fig.subplots()
     for row, (x, y) in enumerate(arcs):
         start, angle = values[f"p_{x}_deg"], values[f"t_{x}_{y}_deg"]
         key = f"{x}->{y}"
@@ -42,4 +44,4 @@ def plot(run, out_dir):
                 else f"span {values['span_deg']:.2f} deg")
     ax.set_title(f"{run.scene.id}: {headline}; critical chain (red) {' - '.join(chain)}", fontsize=9)
     ax.grid(True, axis="x", alpha=0.3)
-    return [save_figure(fig, out_dir / f"{run.scene.id.replace('/', '_')}.png")]
+    return {"cyclogram": fig}

@@ -1,25 +1,24 @@
 """Figures for the crank press scenes (models/press.py), after the paper's Figs. 8-10."""
-from pathlib import Path
-
 import numpy as np
 
-from mechopt.plots import save_figure
+from mechopt.figures.registry import new_figure, register
+from mechopt.models.press import PressDrive
 
 
-def plot(run, out_dir) -> list[Path]:
+@register(PressDrive)
+def cycle(run):
     """Force F and load Q against tool travel and crank angle (Figs. 8-10), crank speed and belt
     torque against time; one PNG per scene."""
-    import matplotlib.pyplot as plt
-
     arrays = run.result.arrays
     if not len(arrays.get("t_s", ())):
-        return []
+        return {}
     t, w, out = arrays["t_s"], arrays["omega_rad_s"], arrays
     phi_deg = np.degrees(arrays["phi_rad"]) % 360
     cutting = arrays["cutting"] > 0
     task = run.task
 
-    fig, ax = plt.subplots(2, 2, figsize=(12, 8))
+    fig = new_figure(figsize=(12, 8))
+    ax = fig.subplots(2, 2)
     if cutting.any():
         pen = out["penetration_mm"]
         ax[0, 0].plot(pen[cutting], out["force_N"][cutting], ".", ms=3, label="F, eq. (1) (Fig. 8)")
@@ -42,6 +41,4 @@ def plot(run, out_dir) -> list[Path]:
     for a in ax.ravel():
         a.grid(alpha=0.3)
     fig.suptitle(f"{run.scene.id}: {run.result.status.value}", fontsize=10)
-    path = Path(out_dir) / f"{run.scene.id.replace('/', '_')}.png"
-    save_figure(fig, path, dpi=110)
-    return [path]
+    return {"cycle": fig}

@@ -7,33 +7,31 @@ operating-point scene: the history at its speed and phase angle against the limi
 """
 import numpy as np
 
-from mechopt.plots import save_figure
+from mechopt.figures.registry import new_figure, register
+from mechopt.models.stop_impact import LeverStop
+from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
+from mechopt.solvers.stop_impact.response import closed_form_response
 
 
-def plot(run, out_dir):
-    """Write this scene's figures into out_dir; returns their paths ([] for scenes without any)."""
+@register(LeverStop)
+def rebound_figures(run):
+    """This scene's figures by name ({} for scenes without any: frequencies, impact forces)."""
     solver = run.scene.solver.__name__
     if solver == "rebound" and any(k.startswith("rebound_mm_") for k in run.result.values):
-        return [_histories(run, out_dir), _amplitude_vs_speed(run, out_dir)]
+        return {"histories": _histories(run), "amplitude": _amplitude_vs_speed(run)}
     if solver == "linearise_amplitude" and "slope_mm_per_deg" in run.result.values:
-        return [_law(run, out_dir)]
+        return {"law": _law(run)}
     if solver == "operating_point" and "rebound_mm" in run.result.values:
-        return [_histories(run, out_dir, [run.task.speed_nominal_rpm], run.task.amplitude_limit_mm)]
-    return []
+        return {"histories": _histories(run, [run.task.speed_nominal_rpm], run.task.amplitude_limit_mm)}
+    return {}
 
 
-def _name(run, what):
-    return f"{run.scene.id.replace('/', '_')}_{what}.png"
-
-
-def _histories(run, out_dir, speeds=None, limit_mm=None):
+def _histories(run, speeds=None, limit_mm=None):
     """q(t) after contact at each speed (the scene's `speeds_rpm` by default), with the
     amplitude limit when one is given."""
-    import matplotlib.pyplot as plt
-    from mechopt.solvers.stop_impact.response import closed_form_response
-
     task = run.task
-    fig, ax = plt.subplots(figsize=(8, 4.5))
+    fig = new_figure(figsize=(8, 4.5))
+    ax = fig.subplots()
     for n in task.speeds_rpm if speeds is None else speeds:
         imp = task.impact(n)
         t = np.linspace(0.0, 3 * imp.window_s, 1500)
@@ -45,16 +43,14 @@ def _histories(run, out_dir, speeds=None, limit_mm=None):
     ax.set(xlabel="time after contact [ms]", ylabel="q: C off the plate [mm]",
            title=f"{run.scene.id}: rebound after contact, eq. (2) (cf. paper's Fig. 8)")
     ax.legend(fontsize=8)
-    return save_figure(fig, out_dir / _name(run, "histories"))
+    return fig
 
 
-def _amplitude_vs_speed(run, out_dir):
-    import matplotlib.pyplot as plt
-    from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
-
+def _amplitude_vs_speed(run):
     task = run.task
     speeds = np.linspace(0.5 * min(task.speeds_rpm), 1.2 * max(task.speeds_rpm), 200)
-    fig, ax = plt.subplots(figsize=(7, 4.5))
+    fig = new_figure(figsize=(7, 4.5))
+    ax = fig.subplots()
     ax.plot(speeds, rebound_amplitude_mm(task, speeds, task.t_deg), label=f"eq. (2), t = {task.t_deg:g} deg")
     got = {k: v for k, v in run.result.values.items() if k.startswith("rebound_mm_")}
     ax.plot([task.speeds_rpm[i] for i in range(len(got))], list(got.values()), "o", mfc="none", label="computed")
@@ -70,17 +66,15 @@ def _amplitude_vs_speed(run, out_dir):
                 label="event-driven contact (stiffness switch)")
     ax.set(xlabel="main shaft speed n [rpm]", ylabel="first rebound [mm]", title=f"{run.scene.id}")
     ax.legend(fontsize=8)
-    return save_figure(fig, out_dir / _name(run, "amplitude"))
+    return fig
 
 
-def _law(run, out_dir):
-    import matplotlib.pyplot as plt
-    from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
-
+def _law(run):
     task = run.task
     v = run.result.values
     t = np.linspace(0.5 * task.t_deg, 2.0 * task.t_deg, 300)
-    fig, ax = plt.subplots(figsize=(7, 4.5))
+    fig = new_figure(figsize=(7, 4.5))
+    ax = fig.subplots()
     ax.plot(t, rebound_amplitude_mm(task, task.speed_nominal_rpm, t), label="exact a(t), eq. (2)")
     ax.plot(t, v["slope_mm_per_deg"] * t + v["intercept_mm"], "--",
             label=f"tangent: {v['slope_mm_per_deg']:.4f} t + {v['intercept_mm']:.4f}")
@@ -89,4 +83,4 @@ def _law(run, out_dir):
     ax.set(xlabel="phase angle t(3,7) [deg]", ylabel="first rebound a [mm]",
            title=f"{run.scene.id}: n = {task.speed_nominal_rpm:g} rpm")
     ax.legend(fontsize=8)
-    return save_figure(fig, out_dir / _name(run, "law"))
+    return fig
