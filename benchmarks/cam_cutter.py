@@ -19,8 +19,8 @@ and its load). `grid_box_timing` measures the headline numbers against their tar
 import statistics
 import time
 
-from mechopt.models.cache import clear as clear_caches
 from mechopt import registry
+from mechopt.models.cache import clear as clear_caches
 from mechopt.plots import save_figure
 from mechopt.solvers.cam_cutter import fit as trajectory_fit
 
@@ -140,6 +140,7 @@ def plot(rows, out_dir):
     """Write "cam_cutter_work_precision.png" to `out_dir`: work-precision (wall time against excess
     deviation over the best minimax answer) and wall time against COUNT. Returns [path]."""
     import pathlib
+
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

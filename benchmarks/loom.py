@@ -24,10 +24,10 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.optimize import linprog
 
-from mechopt.models.cache import clear as clear_caches
 from mechopt import registry
-from mechopt.solvers import loom as cyclogram_lp
+from mechopt.models.cache import clear as clear_caches
 from mechopt.plots import save_figure
+from mechopt.solvers import loom as cyclogram_lp
 from mechopt.solvers.loom import build_event_time_lp, incidence, plan_cyclogram
 
 __all__ = ["cli", "layered", "scale", "what_if", "TARGETS"]
@@ -226,6 +226,7 @@ def table(rows, whatif):
 def plot(rows, out_dir):
     """Write "loom_scale.png": total seconds against events per method. Returns [path]."""
     import pathlib
+
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

@@ -111,6 +111,7 @@ def sweep_table(rows):
 def plot(rows, out_dir):
     """Write "rebound_work_precision.png": relative error against time per evaluation."""
     import pathlib
+
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

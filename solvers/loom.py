@@ -29,6 +29,7 @@ from mechopt.models.cache import BuildCache
 from mechopt.models.errors import SolverError
 from mechopt.models.loom import Cyclogram, amplitude_mm, stress_bound_deg, stress_MPa
 from mechopt.solvers.result import Result, Status, Timing, from_cvxpy
+from mechopt.solvers.settings import Tolerance
 
 __all__ = ["plan_cyclogram"]
 
@@ -117,7 +118,7 @@ _BUILDS = BuildCache("loom.event_time_lp", maxsize=8)
 
 def plan_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] = "HIGHS",
                    stress_form: Literal["exact", "linear"] = "exact", warm_start: bool = False,
-                   tol_deg: float = 1e-6) -> Result:
+                   tol_deg: Tolerance = 1e-6) -> Result:
     """Event times minimising the span p(N) - p(1) of a cyclogram (paper 004, problem (1)), or
     maximising the machine's limiting operation inside its cycle.
 

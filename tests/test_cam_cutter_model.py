@@ -5,11 +5,21 @@ numerically, instead of calling the model a second time.
 """
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
-from mechopt.models.cam_cutter import (LinkageFit, decimal_reading, finish_angle, ideal_normal, ideal_point,
-                                        limacon_implicit, matched_linkage, real_acceleration, real_point,
-                                        real_velocity)
+from mechopt.models.cam_cutter import (
+    LinkageFit,
+    decimal_reading,
+    finish_angle,
+    ideal_normal,
+    ideal_point,
+    limacon_implicit,
+    matched_linkage,
+    real_acceleration,
+    real_point,
+    real_velocity,
+)
 from mechopt.models.errors import ModelError
 
 PROPERTY = settings(max_examples=40, deadline=None)

@@ -10,14 +10,15 @@ import re
 
 import numpy as np
 import pytest
-from hypothesis import assume, given, settings, strategies as st
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
 
 from mechopt import registry
 from mechopt.models.cam_cutter import LinkageCheck, LinkageFit, ideal_normal, ideal_point, limacon_implicit
 from mechopt.models.errors import ModelError, SolverError
 from mechopt.solvers.cam_cutter.deviation import normal_deviation, path_distance, verified_deviation
-from mechopt.solvers.result import Result, Status, Timing, from_ipopt, from_sqpmethod
 from mechopt.solvers.cam_cutter.fit import check, evolve, grid_scan, minimax, robust
+from mechopt.solvers.result import Result, Status, Timing, from_ipopt, from_sqpmethod
 
 PROPERTY = settings(max_examples=30, deadline=None)
 H_PUBLISHED_MM, L_PUBLISHED_MM = 59.45, 47.52     # Podchasov (2021), Sec. IV

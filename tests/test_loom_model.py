@@ -2,13 +2,13 @@
 stress and amplitude laws. Published: a(3,7) = -0.003 t(3,7) + 0.208 mm, limit 0.1 mm (Results and discussion; Research methodology)."""
 import networkx as nx
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from mechopt import registry
-from mechopt.scene import load
 from mechopt.models.errors import ModelError, SceneError
-from mechopt.models.loom import (Cyclogram, amplitude_bound_deg, amplitude_mm, stress_bound_deg,
-                                           stress_MPa)
+from mechopt.models.loom import Cyclogram, amplitude_bound_deg, amplitude_mm, stress_bound_deg, stress_MPa
+from mechopt.scene import load
 
 SLOPE_MM_PER_DEG, INTERCEPT_MM, LIMIT_MM = -0.003, 0.208, 0.1      # Podgorny et al. (2018), Results and discussion; Research methodology
 

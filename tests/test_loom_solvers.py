@@ -9,9 +9,9 @@ import cvxpy as cp
 import numpy as np
 import pytest
 
-from mechopt.models.cache import clear as clear_caches
 from mechopt import registry
 from mechopt.benchmarks.loom import layered
+from mechopt.models.cache import clear as clear_caches
 from mechopt.models.errors import SolverError
 from mechopt.models.loom import Cyclogram
 from mechopt.solvers import loom as cyclogram_lp

@@ -4,13 +4,24 @@ import dataclasses
 import casadi as ca
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from mechopt import registry
-from mechopt.models.press import (PressDrive, coefficient_b, coefficient_d, coefficient_k, crank_inertia,
-                                        cutting_force_N, dynamics, kloss_torque_Nm, mean_crank_inertia_kgm2,
-                                        rod_middle_m, travel_m)
 from mechopt.models.errors import ModelError
+from mechopt.models.press import (
+    PressDrive,
+    coefficient_b,
+    coefficient_d,
+    coefficient_k,
+    crank_inertia,
+    cutting_force_N,
+    dynamics,
+    kloss_torque_Nm,
+    mean_crank_inertia_kgm2,
+    rod_middle_m,
+    travel_m,
+)
 
 PAPER, _ = registry.find("press/kd2322").build()
 EQ1 = (1075.68, -406.8, -4.0, 90.93)           # eq. (1): c1 .. c4, N / mm^k

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from mechopt import registry
-from mechopt.models.press import PressDrive
 from mechopt.models.errors import ModelError
+from mechopt.models.press import PressDrive
 from mechopt.solvers import press as pd
 from mechopt.solvers.press import event_driven
 from mechopt.solvers.press.common import initial_state, paper_U

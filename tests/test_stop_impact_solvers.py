@@ -10,17 +10,25 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from mechopt import registry
 from mechopt.models.errors import ModelError
 from mechopt.models.stop_impact import Impact
+from mechopt.solvers.result import Status, from_casadi_integrator, from_quadpack
 from mechopt.solvers.stop_impact import entry_points, response
 from mechopt.solvers.stop_impact.contact import simulate_contact
 from mechopt.solvers.stop_impact.entry_points import linearise_amplitude, operating_point, rebound
 from mechopt.solvers.stop_impact.law import amplitude_law, rebound_amplitude_mm
-from mechopt.solvers.stop_impact.response import closed_form_amplitude_m, closed_form_response, ode_amplitude_m, quadrature_amplitude_m, quadrature_response, response_scale_m
-from mechopt.solvers.result import Status, from_casadi_integrator, from_quadpack
+from mechopt.solvers.stop_impact.response import (
+    closed_form_amplitude_m,
+    closed_form_response,
+    ode_amplitude_m,
+    quadrature_amplitude_m,
+    quadrature_response,
+    response_scale_m,
+)
 
 PROPERTY = settings(max_examples=25, deadline=None)
 REBOUND_177_MM, REBOUND_177_EXPERIMENT_MM = 0.022, 0.02

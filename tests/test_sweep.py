@@ -10,7 +10,8 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
-from mechopt import registry, sweep as sw
+from mechopt import registry
+from mechopt import sweep as sw
 from mechopt.cli import main
 from mechopt.figures.sweep import outputs_of, plot_sweep
 from mechopt.models.errors import SceneError, SolverError

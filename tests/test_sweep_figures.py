@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from mechopt import registry, sweep as sw
+from mechopt import registry
+from mechopt import sweep as sw
 from mechopt.figures.sweep import MAX_PANELS, boundary_of, grid_of, plot_sweep
 
 LOOM = "loom/group1"

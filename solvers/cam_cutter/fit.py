@@ -15,12 +15,28 @@ import casadi as ca
 import numpy as np
 from scipy.optimize import differential_evolution
 
-from mechopt.models.cam_cutter import (LinkageCheck, LinkageFit, ideal_normal, ideal_point, limacon_implicit,
-                                        real_point, real_velocity)
 from mechopt.models.cache import BuildCache
+from mechopt.models.cam_cutter import (
+    LinkageCheck,
+    LinkageFit,
+    ideal_normal,
+    ideal_point,
+    limacon_implicit,
+    real_point,
+    real_velocity,
+)
 from mechopt.models.errors import ModelError
-from mechopt.solvers.cam_cutter.deviation import (foot_points, nodes_and_normals, normal_crossings, normal_deviation,
-                                            path_distance, verified_deviation)
+from mechopt.solvers.cam_cutter.deviation import (
+    foot_points,
+    nodes_and_normals,
+    normal_crossings,
+    normal_deviation,
+    path_distance,
+    verified_deviation,
+)
+from mechopt.solvers.settings import Annotated, Ge, Interval, Tolerance
+
+Nodes = Annotated[int, Interval(ge=2, le=1_000_000)]      # COUNT: nodes on the ideal path
 from mechopt.solvers.result import Result, Status, Timing, from_ipopt, from_sqpmethod
 
 __all__ = ["grid_scan", "minimax", "robust", "evolve", "check"]
@@ -38,7 +54,7 @@ GRID_POINT_LIMIT = 50_000_000
 ROUND_VERTICES = 2**12
 
 
-def grid_scan(task: LinkageFit, *, count: int = 1000,
+def grid_scan(task: LinkageFit, *, count: Nodes = 1000,
               nodes: Literal["half_open", "closed", "open_start"] = "half_open") -> Result:
     """The paper's grid scan (Sec. IV): the first (H, L), H ascending then L ascending, on the
     STEP lattice of the box, at which every node's error segment is crossed by the limaçon.
@@ -111,7 +127,8 @@ def grid_scan(task: LinkageFit, *, count: int = 1000,
                   diagnostics=diagnostics)
 
 
-def minimax(task: LinkageFit, *, count: int = 1000, slots: int = 8, max_rounds: int = 40,
+def minimax(task: LinkageFit, *, count: Nodes = 1000, slots: Annotated[int, Interval(ge=1, le=4096)] = 8,
+            max_rounds: Annotated[int, Interval(ge=1, le=10_000)] = 40,
             nlp: Literal["sqp", "ipopt"] = "sqp") -> Result:
     """(H, L) in the box minimising the largest distance from COUNT nodes of the ideal path to
     the limaçon, as a CasADi NLP:
@@ -210,7 +227,7 @@ def minimax(task: LinkageFit, *, count: int = 1000, slots: int = 8, max_rounds: 
                                "max_deviation_at_rad": where, "t_finish_exact_rad": t_end})
 
 
-def robust(task: LinkageFit, *, count: int = 1000, max_moves: int = 200) -> Result:
+def robust(task: LinkageFit, *, count: Nodes = 1000, max_moves: Annotated[int, Interval(ge=1, le=100_000)] = 200) -> Result:
     """The STEP-lattice point whose worst node deviation over its manufacturing box
     (H +- STEP, L +- STEP) is smallest; reports that worst case, Euclidean-verified.
 
@@ -272,8 +289,9 @@ def robust(task: LinkageFit, *, count: int = 1000, max_moves: int = 200) -> Resu
                                "lattice_points": len(memo)})
 
 
-def evolve(task: LinkageFit, *, count: int = 1000, popsize: int = 15, tol: float = 1e-8,
-           maxiter: int = 1000, seed: int = 1) -> Result:
+def evolve(task: LinkageFit, *, count: Nodes = 1000, popsize: Annotated[int, Interval(ge=5, le=1000)] = 15,
+           tol: Tolerance = 1e-8, maxiter: Annotated[int, Interval(ge=1, le=100_000)] = 1000,
+           seed: Annotated[int, Ge(0)] = 1) -> Result:
     """scipy's differential evolution on the largest node deviation, the peer a user would try.
 
     The whole population is measured per call through the batched quartic of `normal_deviation`
@@ -304,7 +322,7 @@ def evolve(task: LinkageFit, *, count: int = 1000, popsize: int = 15, tol: float
                                                            "evaluations": int(found.nfev)})
 
 
-def check(task: LinkageCheck, *, count: int = 1000,
+def check(task: LinkageCheck, *, count: Nodes = 1000,
           nodes: Literal["half_open", "closed", "open_start"] = "half_open") -> Result:
     """A given linkage (H, L) measured both ways: the dense Euclidean deviation over the
     continuous path (`max_deviation_mm`, the verdict) and the paper's segment test at COUNT nodes

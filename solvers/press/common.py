@@ -1,9 +1,10 @@
 """What the press solvers share: the assembled equations per task, the initial state, the trace
 of a run and its summary, and the switching logic (U, the next angle event, the mode)."""
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Annotated, Literal
 
 import numpy as np
+from annotated_types import Interval
 
 from mechopt.models.cache import memoised
 from mechopt.models.errors import ModelError
@@ -13,6 +14,8 @@ from mechopt.solvers.result import Status
 TWO_PI = 2 * np.pi
 ANGLE_TOL_RAD = 1e-12          # events are located to this in crank angle (omega ~ 25: 4e-14 s)
 Start = Literal["nominal", "rest"]
+Duration = Annotated[float, Interval(gt=0, le=3600)]          # simulated time [s]
+Samples = Annotated[int, Interval(ge=1, le=10_000)]           # outputs per integrated piece
 
 
 @memoised(maxsize=32)

@@ -11,9 +11,24 @@ import numpy as np
 from mechopt.models.cache import memoised
 from mechopt.models.errors import MechoptError, ModelError
 from mechopt.models.press import PressDrive
-from mechopt.solvers.press.common import (ANGLE_TOL_RAD, TWO_PI, Start, Trace, angle_events, check_task, checked,
-                                          drive_torque, dynamics_of, initial_state, mode_at, summarise)
+from mechopt.solvers.press.common import (
+    ANGLE_TOL_RAD,
+    TWO_PI,
+    Duration,
+    Samples,
+    Start,
+    Trace,
+    angle_events,
+    check_task,
+    checked,
+    drive_torque,
+    dynamics_of,
+    initial_state,
+    mode_at,
+    summarise,
+)
 from mechopt.solvers.result import Result, Status, Timing, from_casadi_integrator
+from mechopt.solvers.settings import Annotated, Interval, Positive, Tolerance
 
 
 @memoised(maxsize=32)
@@ -32,8 +47,9 @@ class _Stall(Exception):
     pass
 
 
-def events(task: PressDrive, *, tol: float = 1e-10, duration_s: float = 1.0, start: Start = "nominal",
-           max_step_s: float = 0.02, samples: int = 8, max_events: int = 10000) -> Result:
+def events(task: PressDrive, *, tol: Tolerance = 1e-10, duration_s: Duration = 1.0, start: Start = "nominal",
+           max_step_s: Positive = 0.02, samples: Samples = 8,
+           max_events: Annotated[int, Interval(ge=1, le=10_000_000)] = 10000) -> Result:
     """CVODES between located events, restarted at each (see the module doc).
 
     Events: "cut_start" and "cut_end" (the crank angles where X = H - Z - delta and X = H - delta

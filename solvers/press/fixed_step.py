@@ -9,8 +9,19 @@ import numpy as np
 from mechopt.models.cache import memoised
 from mechopt.models.errors import ModelError
 from mechopt.models.press import PressDrive
-from mechopt.solvers.press.common import Start, Trace, check_task, checked, dynamics_of, initial_state, paper_U, summarise
+from mechopt.solvers.press.common import (
+    Duration,
+    Start,
+    Trace,
+    check_task,
+    checked,
+    dynamics_of,
+    initial_state,
+    paper_U,
+    summarise,
+)
 from mechopt.solvers.result import Result, Status, Timing
+from mechopt.solvers.settings import Annotated, Interval, NonNegative, Positive
 
 
 @memoised(maxsize=64)
@@ -47,8 +58,8 @@ def _rk4_trace(task, step_s, duration_s, start):
     return trace, dyn
 
 
-def rk4(task: PressDrive, *, step_s: float = 1e-4, duration_s: float = 1.0, start: Start = "nominal",
-        refine_tol_rad: float = 1e-6, max_halvings: int = 4) -> Result:
+def rk4(task: PressDrive, *, step_s: Positive = 1e-4, duration_s: Duration = 1.0, start: Start = "nominal",
+        refine_tol_rad: NonNegative = 1e-6, max_halvings: Annotated[int, Interval(ge=0, le=20)] = 4) -> Result:
     """Fixed-step RK4 on eqs. (2) with the paper's switching function U (Sec. "DYNAM").
 
     The step is halved (`max_halvings` at most) until two successive runs agree on the final

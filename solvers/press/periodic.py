@@ -10,8 +10,18 @@ import numpy as np
 from mechopt.models.cache import memoised
 from mechopt.models.errors import MechoptError, ModelError
 from mechopt.models.press import WORK_NAMES, PressDrive
-from mechopt.solvers.press.common import TWO_PI, Trace, check_task, checked, dynamics_of, initial_state, summarise
+from mechopt.solvers.press.common import (
+    TWO_PI,
+    Samples,
+    Trace,
+    check_task,
+    checked,
+    dynamics_of,
+    initial_state,
+    summarise,
+)
 from mechopt.solvers.result import Result, Status, Timing, from_casadi_integrator, from_rootfinder
+from mechopt.solvers.settings import Annotated, Interval, Tolerance
 
 
 @memoised(maxsize=16)
@@ -39,7 +49,8 @@ def _revolution(task: PressDrive, tol: float, samples: int):
     return pieces, n
 
 
-def steady_state(task: PressDrive, *, tol: float = 1e-10, samples: int = 60, max_iter: int = 30) -> Result:
+def steady_state(task: PressDrive, *, tol: Tolerance = 1e-10, samples: Samples = 60,
+                 max_iter: Annotated[int, Interval(ge=1, le=1000)] = 30) -> Result:
     """The periodic steady motion (the paper's assumption: the whole cut happens in steady
     motion), found directly instead of integrating until transients die.
 

@@ -8,14 +8,25 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from mechopt.models.press import PressDrive
-from mechopt.solvers.press.common import (Trace, angle_events, check_task, checked, dynamics_of, initial_state,
-                                          mode_at, paper_U, summarise)
+from mechopt.solvers.press.common import (
+    Duration,
+    Trace,
+    angle_events,
+    check_task,
+    checked,
+    dynamics_of,
+    initial_state,
+    mode_at,
+    paper_U,
+    summarise,
+)
 from mechopt.solvers.result import Result, Status, Timing, from_ivp
+from mechopt.solvers.settings import NonNegative, Tolerance
 
 
 def ivp(task: PressDrive, *, method: Literal["Radau", "LSODA", "DOP853", "RK45", "BDF"] = "Radau",
-        rtol: float = 1e-8, atol: float = 1e-10, duration_s: float = 1.0, locate_events: bool = True,
-        max_step_s: float = 0.0) -> Result:
+        rtol: Tolerance = 1e-8, atol: Tolerance = 1e-10, duration_s: Duration = 1.0, locate_events: bool = True,
+        max_step_s: NonNegative = 0.0) -> Result:
     """scipy's solve_ivp from the nominal state, the peer a user would reach for.
 
     With `locate_events`, each smooth piece ends at a terminal event (the next cut start, cut

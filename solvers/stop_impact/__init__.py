@@ -7,7 +7,12 @@
                   (method="closed_form" | "quadrature" | "ode"), `linearise_amplitude`,
                   `operating_point`.
 """
-from mechopt.solvers.stop_impact.entry_points import (impact_forces, linearise_amplitude, natural_frequencies,
-                                                      operating_point, rebound)
+from mechopt.solvers.stop_impact.entry_points import (
+                                                      impact_forces,
+                                                      linearise_amplitude,
+                                                      natural_frequencies,
+                                                      operating_point,
+                                                      rebound,
+)
 
 __all__ = ["natural_frequencies", "impact_forces", "rebound", "linearise_amplitude", "operating_point"]

@@ -120,6 +120,7 @@ def _fit_force(args) -> int:
 
 def _sweep(args) -> int:
     from collections import Counter
+
     from mechopt import sweep
     scene = registry.find(args.case)
     out = args.out or Path("out/sweep") / f"{scene.id.replace('/', '_')}.parquet"

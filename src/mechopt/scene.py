@@ -8,18 +8,22 @@ import copy
 import dataclasses
 import importlib
 import inspect
+import math
+import operator
 import re
 import tomllib
 from functools import lru_cache
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any, Literal, get_args, get_origin
+from typing import Annotated, Any, Literal, get_args, get_origin
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from mechopt.models.errors import MechoptError, SceneError
+from mechopt.solvers.result import Status
 
 Number = int | float
+STATUS_WORDS = tuple(s.value for s in Status)
 
 
 class Param(BaseModel):
@@ -38,6 +42,8 @@ class Param(BaseModel):
 
     @model_validator(mode="after")
     def _explained(self):
+        if isinstance(self.value, float) and not math.isfinite(self.value):
+            raise ValueError(f"value = {self.value}: expected a finite number")
         if self.mark != "given" and not self.why.strip():
             raise ValueError(f"a parameter marked '{self.mark}' needs a 'why' (the reasoning or the figure fitted)")
         if (self.mark == "calibrated") != bool(self.on.strip()):
@@ -60,7 +66,12 @@ class Expectation(BaseModel):
     @model_validator(mode="after")
     def _one_form(self):
         if isinstance(self.value, str):
+            if self.value not in STATUS_WORDS:
+                raise ValueError(f"status {self.value!r} is not a status word; allowed: {', '.join(STATUS_WORDS)}")
             return self
+        for name in ("value", "max", "min"):
+            if getattr(self, name) is not None and not math.isfinite(getattr(self, name)):
+                raise ValueError(f"{name} = {getattr(self, name)}: expected a finite number")
         if self.value is not None and self.abs is None and self.rel is None:
             raise ValueError("a numeric 'value' needs a tolerance 'abs' or 'rel' (> 0)")
         if self.value is None and self.max is None and self.min is None:
@@ -176,7 +187,24 @@ def load(path: Path) -> Scene:
     """Read and validate one scene file; raise SceneError naming the file, the key and what is allowed."""
     path = Path(path)
     try:
-        raw = tomllib.loads(path.read_text(encoding="utf-8"))
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise SceneError(f"{path}: no such scene file") from None
+    except IsADirectoryError:
+        raise SceneError(f"{path}: a folder, not a scene file") from None
+    except UnicodeDecodeError as exc:
+        raise SceneError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start})") from None
+    except OSError as exc:
+        raise SceneError(f"{path}: cannot read: {exc.strerror}") from None
+    return loads(text, path)
+
+
+def loads(text: str, path: Path) -> Scene:
+    """Validate a scene from its TOML text; `path` names it in messages (and is where it came
+    from: a sweep's worker loads the client's file from its text)."""
+    path = Path(path)
+    try:
+        raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(f"{path}: not valid TOML: {exc}") from None
     try:
@@ -297,6 +325,8 @@ def _build_task(path, task_class, effects, params, structure=None):
                              f"not call for; add it to effects or drop the parameter", key=key)
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise SceneError(f"{path}: params.{key} = {value!r}: expected a number", key=key)
+        if not math.isfinite(value):
+            raise SceneError(f"{path}: params.{key} = {value!r}: expected a finite number", key=key)
     structure = dict(structure or {})
     if "effects" in fields:             # a task assembled from its effects is told which ones
         structure["effects"] = tuple(effects)
@@ -329,19 +359,57 @@ def _check_settings(path, solver, settings):
         if key not in options:
             raise SceneError(f"{path}: solver_settings.{key}: unknown setting of {solver.__name__}; "
                              f"allowed: {', '.join(options) or 'none'}", key=key)
-        default, choices = options[key].default, get_args(options[key].annotation)
-        if get_origin(options[key].annotation) is Literal:
-            if value not in choices:
-                raise SceneError(f"{path}: solver_settings.{key} = {value!r}: allowed "
-                                 f"{', '.join(map(str, choices))}", key=key)
-            continue
-        expected = type(default)
-        ok = (isinstance(value, (int, float)) and not isinstance(value, bool) if expected is float
-              else type(value) is expected)
-        if not ok:
-            raise SceneError(f"{path}: solver_settings.{key} = {value!r}: expected {expected.__name__} "
-                             f"(default {default!r})", key=key)
+        problem = setting_problem(options[key], value)
+        if problem:
+            raise SceneError(f"{path}: solver_settings.{key} = {value!r}: {problem}", key=key)
     return {k: (float(v) if type(options[k].default) is float else v) for k, v in settings.items()}
+
+
+def setting_problem(option: inspect.Parameter, value) -> str:
+    """What is wrong with a value for a solver setting ('' when nothing): its type, its choices
+    (a Literal) or its range (annotated_types constraints in the signature, see solvers/settings.py)."""
+    annotation, default = option.annotation, option.default
+    if get_origin(annotation) is Literal:
+        choices = get_args(annotation)
+        return "" if value in choices else f"allowed {', '.join(map(str, choices))}"
+    expected = type(default)
+    ok = (isinstance(value, (int, float)) and not isinstance(value, bool) if expected is float
+          else type(value) is expected)
+    if not ok:
+        return f"expected {expected.__name__} (default {default!r})"
+    if isinstance(value, float) and not math.isfinite(value):
+        return "expected a finite number"
+    low, high = setting_range(option)
+    if (low and not low[1](value, low[0])) or (high and not high[1](value, high[0])):
+        return f"allowed {describe_range(low, high)}"
+    return ""
+
+
+def setting_range(option: inspect.Parameter):
+    """((bound, test) or None, (bound, test) or None): a setting's declared lower and upper limits."""
+    low = high = None
+    if get_origin(option.annotation) is Annotated:
+        for mark in get_args(option.annotation)[1:]:
+            for name, test in (("gt", operator.gt), ("ge", operator.ge)):
+                if getattr(mark, name, None) is not None:
+                    low = (getattr(mark, name), test, name)
+            for name, test in (("lt", operator.lt), ("le", operator.le)):
+                if getattr(mark, name, None) is not None:
+                    high = (getattr(mark, name), test, name)
+    return low, high
+
+
+def describe_range(low, high) -> str:
+    """'> 0', '1 ... 10000', 'any' for a range from `setting_range`."""
+    sign = {"gt": ">", "ge": ">=", "lt": "<", "le": "<="}
+    text = lambda x: f"{x:,}" if isinstance(x, int) else f"{x:g}"        # noqa: E731
+    if low and high:
+        return f"{'' if low[2] == 'ge' else '> '}{text(low[0])} ... {text(high[0])}{'' if high[2] == 'le' else ' (excl.)'}"
+    if low:
+        return f"{sign[low[2]]} {text(low[0])}"
+    if high:
+        return f"{sign[high[2]]} {text(high[0])}"
+    return "any"
 
 
 def _explain(error) -> str:
