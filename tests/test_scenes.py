@@ -5,6 +5,7 @@ from pathlib import Path
 
 import pytest
 
+import mechopt
 from mechopt import registry
 from mechopt.cli import main
 from mechopt.models.errors import SceneError
@@ -75,9 +76,9 @@ def test_bad_scene_is_refused_naming_file_key_and_what_is_allowed(tmp_path, old,
 def cases_in(tmp_path, monkeypatch):
     """The registry reading its scenes from tmp_path (restored afterwards)."""
     monkeypatch.setattr(registry, "cases_dir", lambda: tmp_path)
-    registry.all_scenes.cache_clear()
+    mechopt.clear_caches()
     yield tmp_path
-    registry.all_scenes.cache_clear()
+    mechopt.clear_caches()
 
 
 def test_duplicate_ids_are_refused(cases_in):

@@ -28,7 +28,7 @@ def simulate(task, *, method="events", **options):
     that method's keyword options; returns its Result (values, status, `arrays` of the samples).
 
     >>> from mechopt import load
-    >>> task = load("press/kd2322").task()
+    >>> task, _ = load("press/kd2322").build()
     >>> simulate(task, method="steady_state").status.value
     'SOLVED'
     """

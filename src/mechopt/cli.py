@@ -1,39 +1,83 @@
-"""The `mechopt` command: list, run, validate, sweep, report and benchmark the registry's scenes."""
+"""The `mechopt` command: list, describe, run, validate, sweep, report and benchmark scenes, the
+registry's or the user's own (a scene is named by its id or by its file's path).
+
+Exit codes: 0 solved (and every check passed), 1 a check or a target failed, 2 bad input (the
+message names the file, key and allowed range; nothing was computed or written), 3 not solved
+(INFEASIBLE, LIMIT, INACCURATE, FAILED), 130 interrupted.
+"""
 import argparse
 import json
+import os
 import sys
+import tempfile
 from pathlib import Path
 
-from mechopt import registry
+from mechopt import __version__, registry
 from mechopt.benchmarks import STUDIES, study
-from mechopt.models.errors import MechoptError
+from mechopt.models.errors import MechoptError, SceneError
 from mechopt.scene import parse_overrides
 from mechopt.solvers.result import Status
 
+OK, CHECK_FAILED, BAD_INPUT, NOT_SOLVED, INTERRUPTED = 0, 1, 2, 3, 130
+
+TEMPLATES = {"cam-cutter": "cam-cutter/minimax", "press": "press/kd2322", "loom": "loom/group1",
+             "stop-impact": "stop-impact/rebound-177rpm"}
+
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="mechopt", description=__doc__)
+    args = _parser().parse_args(argv)
+    try:
+        for folder in args.cases:
+            registry.add_cases(folder)
+        return COMMANDS[args.command](args)
+    except MechoptError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return BAD_INPUT
+    except KeyboardInterrupt:
+        print("interrupted (a sweep keeps its finished chunks: re-run the same command to resume)",
+              file=sys.stderr)
+        return INTERRUPTED
+
+
+def _parser():
+    parser = argparse.ArgumentParser(prog="mechopt", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--version", action="version", version=f"mechopt {__version__}")
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("--cases", action="append", default=[], type=Path, metavar="DIR",
+                        help="a folder of your own scenes (*.toml, searched recursively) added to the registry; "
+                             "repeatable; also the MECHOPT_CASES variable")
     sub = parser.add_subparsers(dest="command", required=True)
-    sub.add_parser("cases", help="list scene ids and titles")
-    run = sub.add_parser("run", help="solve one scene and check it against its source")
-    run.add_argument("case")
+    sub.add_parser("cases", parents=[common], help="list scene ids and titles")
+    describe = sub.add_parser("describe", parents=[common],
+                              help="every key --set reaches: unit, mark, allowed range, current value")
+    describe.add_argument("case", help="a scene id or a scene file's path")
+    new = sub.add_parser("new", parents=[common], help="write a commented scene to start from")
+    new.add_argument("mechanism", choices=list(TEMPLATES))
+    new.add_argument("file", type=Path, help="the scene file to write (not overwritten if it exists)")
+    run = sub.add_parser("run", parents=[common], help="solve one scene and check it against its source")
+    run.add_argument("case", help="a scene id or a scene file's path")
     run.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                     help="override a parameter or solver setting (what-if); repeatable")
+                     help="override a parameter, solver setting or structure path (what-if); repeatable")
     run.add_argument("--json", type=Path, metavar="FILE", help="write the result as JSON")
     run.add_argument("--plot", type=Path, metavar="DIR", help="write figures into DIR")
-    validate = sub.add_parser("validate", help="run every scene; non-zero exit when any expectation fails")
+    validate = sub.add_parser("validate", parents=[common],
+                              help="run scenes and check them; exit 1 when any expectation fails")
+    validate.add_argument("refs", nargs="*", metavar="CASE",
+                          help="scene ids, files or folders (default: every scene in the registry)")
     validate.add_argument("--json", type=Path, metavar="FILE")
-    bench = sub.add_parser("bench", help="accuracy against time for a mechanism's solvers")
+    bench = sub.add_parser("bench", parents=[common], help="accuracy against time for a mechanism's solvers")
     bench.add_argument("study", choices=list(STUDIES), help="a registered study (benchmarks/__init__.py)")
-    bench.add_argument("--repeats", type=int, default=5, help="runs per point; medians are reported")
+    bench.add_argument("--repeats", type=_positive_int, default=5, help="runs per point (>= 1); medians reported")
     bench.add_argument("--plot", type=Path, default=Path("out/bench"), metavar="DIR")
-    fit = sub.add_parser("fit-force", help="fit a polynomial force law to load-travel data (paper 001, eq. (1))")
+    fit = sub.add_parser("fit-force", parents=[common],
+                         help="fit a polynomial force law to load-travel data (paper 001, eq. (1))")
     fit.add_argument("csv", type=Path, help="header names columns and units, e.g. travel_mm,load_N")
     fit.add_argument("--degree", type=int, default=4, help="1 to 6 (the paper: 4)")
     fit.add_argument("--segments", type=int, default=2, help="spans of travel on which errors are reported")
     fit.add_argument("--with-intercept", action="store_true", help="allow a constant term (default: F(0) = 0)")
-    sweep = sub.add_parser("sweep", help="what-if study: every variant of a scene, one Parquet table")
-    sweep.add_argument("case")
+    sweep = sub.add_parser("sweep", parents=[common], help="what-if study: every variant of a scene, one Parquet table")
+    sweep.add_argument("case", help="a scene id or a scene file's path")
     sweep.add_argument("--grid", action="append", default=[], metavar="KEY=START:STOP:NUM",
                        help="NUM evenly spaced values from START to STOP; repeatable (all combinations)")
     sweep.add_argument("--random", action="append", default=[], metavar="KEY=LOW:HIGH",
@@ -46,33 +90,85 @@ def main(argv=None) -> int:
     sweep.add_argument("--chunk", type=int, default=100, metavar="N", help="variants per task")
     sweep.add_argument("--out", type=Path, metavar="FILE", help="Parquet table (default out/sweep/<case>.parquet)")
     sweep.add_argument("--plot", type=Path, metavar="DIR", help="write the sweep's figures into DIR")
-    report = sub.add_parser("report", help="one static HTML page: validation table, figures, bench plots")
+    report = sub.add_parser("report", parents=[common],
+                            help="one static HTML page: validation table, figures, maps, bench plots")
     report.add_argument("--out", type=Path, default=Path("out/report"), metavar="DIR")
     report.add_argument("--bench", type=Path, default=Path("out/bench"), metavar="DIR",
                         help="folder of `mechopt bench` outputs to include (not re-run)")
-    report.add_argument("--case", action="append", default=[], metavar="ID", help="only these scenes; repeatable")
+    report.add_argument("--case", action="append", default=[], metavar="CASE",
+                        help="only these scenes (ids, files or folders); repeatable")
     report.add_argument("--sweep", action="append", default=[], type=Path, metavar="FILE",
                         help="a `mechopt sweep --out` table whose maps to include; repeatable")
-    args = parser.parse_args(argv)
+    return parser
+
+
+def _positive_int(text):
     try:
-        return {"cases": _cases, "run": _run, "validate": _validate, "bench": _bench,
-                "fit-force": _fit_force, "sweep": _sweep, "report": _report}[args.command](args)
-    except MechoptError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{value}: expected a whole number >= 1")
+    return value
 
 
 def _cases(args) -> int:
-    scenes = registry.all_scenes()
-    width = max(len(s.id) for s in scenes)
-    for scene in scenes:
-        print(f"{scene.id:<{width}}  {scene.spec.title}")
-    return 0
+    catalogue = registry.catalogue()
+    width = max(len(s.id) for s in catalogue.scenes)
+    for scene in catalogue.scenes:
+        where = "" if scene.path.is_relative_to(registry.cases_dir()) else f"  [{scene.path}]"
+        print(f"{scene.id:<{width}}  {scene.spec.title}{where}")
+    _warn(catalogue.problems)
+    return OK
+
+
+def _describe(args) -> int:
+    scene = registry.find(args.case)
+    print(f"{scene.id}: {scene.spec.title}\nfile: {scene.path}\n"
+          f"task {scene.spec.task}, solver {scene.spec.solver}, effects {', '.join(scene.spec.effects) or 'none'}")
+    rows = scene.describe()
+    _print_table(("key", "kind", "unit", "mark", "allowed", "value"),
+                 [(r["key"], r["kind"], r["unit"] or "-", r["mark"], r["range"], r["value"]) for r in rows])
+    print("\nchange any of them with --set KEY=VALUE (structure: --set 'PATH=VALUE', a TOML value)")
+    return OK
+
+
+def _new(args) -> int:
+    if args.file.exists():
+        raise SceneError(f"{args.file}: exists; name a new file (nothing was written)")
+    template = registry.find(TEMPLATES[args.mechanism])
+    text = scene_template(template, f"my/{args.file.stem}")
+    from mechopt.scene import loads
+    loads(text, args.file)                     # what we write must load
+    _write_text(args.file, text)
+    print(f"scene: {args.file} (from {template.id}); try: mechopt run {args.file}")
+    return OK
+
+
+def scene_template(scene, new_id: str) -> str:
+    """A scene's file as a user's starting point: a new id, its source's expectations dropped
+    (they hold for the source's numbers only), and a header saying what to edit."""
+    lines, out, skipping = scene.path.read_text(encoding="utf-8").splitlines(), [], False
+    for line in lines:
+        stripped = line.strip()
+        if stripped.startswith("["):
+            skipping = stripped.startswith("[expect")
+        if skipping:
+            continue
+        out.append(f'id = "{new_id}"' if stripped.startswith("id =") else line)
+    header = [f"# A scene of your own, started from {scene.id} ({scene.path.name}).",
+              "# Edit [params] (the unit is in every name; mark what you assumed), [structure] and",
+              "# [solver_settings]; `mechopt describe THIS_FILE` lists every key with its allowed range.",
+              "# Add [expect.NAME] tables (value with abs or rel, or max/min, kind, where) for figures you",
+              "# know: `mechopt run THIS_FILE` checks them.", ""]
+    return "\n".join(header + out).rstrip() + "\n"
 
 
 def _run(args) -> int:
+    overrides = parse_overrides(args.set)
+    _check_outputs(json_file=args.json, plot_dir=args.plot)
     scene = registry.find(args.case)
-    result = registry.run(scene, parse_overrides(args.set))
+    result = registry.run(scene, overrides)
     _print_run(result)
     if args.json:
         _write_json(args.json, result.as_dict())
@@ -80,12 +176,26 @@ def _run(args) -> int:
         from mechopt.plots import plot_run
         for path in plot_run(result, args.plot):
             print(f"plot: {path}")
-    return 0 if result.ok and result.result.status is not Status.FAILED else 1
+    return run_exit_code(result)
+
+
+def run_exit_code(run) -> int:
+    """0 solved and checked, 1 a check failed, 3 not solved (unless the scene expects that status)."""
+    expected = run.scene.spec.expect.get("status")
+    if run.result.status is not Status.SOLVED and (expected is None or expected.value != run.result.status.value):
+        return NOT_SOLVED
+    return OK if run.ok else CHECK_FAILED
 
 
 def _validate(args) -> int:
+    _check_outputs(json_file=args.json)
+    if args.refs:
+        scenes, problems = registry.select(args.refs)
+    else:
+        catalogue = registry.catalogue()
+        scenes, problems = list(catalogue.scenes), list(catalogue.problems)
     rows, runs = [], []
-    for scene in registry.all_scenes():
+    for scene in scenes:
         print(f"running {scene.id} ...", file=sys.stderr, flush=True)
         result = registry.run(scene)
         runs.append(result)
@@ -98,14 +208,20 @@ def _validate(args) -> int:
     print(f"of the passed: {counts['reproduced']} reproduce a published value, {counts['calibrated']} are "
           f"calibrations (fitted, or following from a fit by construction), {counts['consistent']} are "
           "derived (independent computations, bounds, statuses)")
+    unchecked = [r.scene.id for r in runs if not r.checks]
+    if unchecked:
+        print(f"scenes with no expectations (solved, nothing to check): {', '.join(unchecked)}")
+    _warn(problems)
     if args.json:
         _write_json(args.json, [r.as_dict() for r in runs])
-    return 1 if counts["failed"] else 0
+    return CHECK_FAILED if counts["failed"] or problems else OK
 
 
 def _bench(args) -> int:
-    print(study(args.study).cli(args.repeats, args.plot, progress=lambda line: print(line, file=sys.stderr, flush=True)))
-    return 0
+    _check_outputs(plot_dir=args.plot)
+    text = study(args.study).cli(args.repeats, args.plot, progress=lambda line: print(line, file=sys.stderr, flush=True))
+    print(text)
+    return CHECK_FAILED if "MISSED" in text else OK
 
 
 def _fit_force(args) -> int:
@@ -115,17 +231,19 @@ def _fit_force(args) -> int:
                        through_origin=not args.with_intercept)
     print(f"{args.csv}: degree {args.degree}, status {result.status.value}" + (f" ({result.message})" if result.message else ""))
     _print_table(("value", "got"), [(k, _fmt(v)) for k, v in result.values.items()])
-    return 0 if result.status is Status.SOLVED else 1
+    return OK if result.status is Status.SOLVED else NOT_SOLVED
 
 
 def _sweep(args) -> int:
     from collections import Counter
 
     from mechopt import sweep
+    grid = [sweep.parse_grid(g) for g in args.grid]
+    random = [sweep.parse_random(r) for r in args.random]
     scene = registry.find(args.case)
     out = args.out or Path("out/sweep") / f"{scene.id.replace('/', '_')}.parquet"
-    table = sweep.sweep(scene, [sweep.parse_grid(g) for g in args.grid],
-                        [sweep.parse_random(r) for r in args.random], samples=args.samples, seed=args.seed,
+    _check_outputs(table_file=out, plot_dir=args.plot)
+    table = sweep.sweep(scene, grid, random, samples=args.samples, seed=args.seed,
                         out=out, scheduler=args.scheduler, workers=args.workers, chunk=args.chunk)
     counts = Counter(table.column("status").to_pylist())
     print(f"{scene.id}: {table.num_rows} variants ({', '.join(f'{n} {s}' for s, n in sorted(counts.items()))})")
@@ -134,16 +252,53 @@ def _sweep(args) -> int:
         from mechopt.figures.sweep import plot_sweep
         for path in plot_sweep(table, args.plot, scene=scene):
             print(f"plot: {path}")
-    return 0
+    return OK
 
 
 def _report(args) -> int:
     from mechopt.report import write_report
-    scenes = [registry.find(c) for c in args.case] if args.case else None
+    _check_outputs(plot_dir=args.out)
+    if args.case:
+        scenes, problems = registry.select(args.case)
+    else:
+        catalogue = registry.catalogue()
+        scenes, problems = list(catalogue.scenes), list(catalogue.problems)
+    _warn(problems)
     path = write_report(args.out, scenes=scenes, bench_dir=args.bench, sweeps=args.sweep,
                         progress=lambda line: print(line, file=sys.stderr, flush=True))
     print(f"report: {path}")
-    return 0
+    return OK
+
+
+COMMANDS = {"cases": _cases, "describe": _describe, "new": _new, "run": _run, "validate": _validate,
+            "bench": _bench, "fit-force": _fit_force, "sweep": _sweep, "report": _report}
+
+
+def _check_outputs(*, json_file=None, plot_dir=None, table_file=None):
+    """Refuse an output that cannot be written before any work is done."""
+    for flag, path in (("--json", json_file), ("--out", table_file)):
+        if path is None:
+            continue
+        if path.is_dir() or str(path).endswith(os.sep) or path.name in ("", ".", ".."):
+            raise SceneError(f"{flag} {path}: a folder; give a file name, e.g. {path / 'result.json'}")
+        _writable_folder(flag, path.parent)
+    if plot_dir is not None:
+        if plot_dir.exists() and not plot_dir.is_dir():
+            raise SceneError(f"--plot/--out {plot_dir}: an existing file, not a folder")
+        _writable_folder("--plot/--out", plot_dir)
+
+
+def _writable_folder(flag, folder):
+    existing = next((p for p in (folder, *folder.parents) if p.exists()), Path("."))
+    if not existing.is_dir():
+        raise SceneError(f"{flag}: {existing} is a file, so {folder} cannot be a folder")
+    if not os.access(existing, os.W_OK):
+        raise SceneError(f"{flag}: {existing} is not writable")
+
+
+def _warn(problems):
+    for line in problems:
+        print(f"warning: skipped {line}", file=sys.stderr)
 
 
 def _print_run(run):
@@ -184,9 +339,20 @@ def _fmt(value):
 
 
 def _write_json(path, payload):
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(payload, indent=2))
+    _write_text(path, json.dumps(payload, indent=2))
     print(f"json: {path}")
+
+
+def _write_text(path, text):
+    """Write atomically: a temporary file beside the target, then a rename (no half-written file)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.NamedTemporaryFile("w", dir=path.parent, prefix=f".{path.name}.", delete=False,
+                                     encoding="utf-8") as tmp:
+        tmp.write(text)
+        tmp.flush()
+        os.fsync(tmp.fileno())
+    os.replace(tmp.name, path)
 
 
 if __name__ == "__main__":

@@ -1,14 +1,17 @@
-"""The case registry: every scene under cases/, run one, check it against what its source says."""
+"""The case registry: the scenes that ship with mechopt plus the user's folders (`--cases DIR`,
+MECHOPT_CASES) and files (named by path); run one, check it against what its source says."""
 import difflib
+import os
 from dataclasses import dataclass, field
-from functools import lru_cache
 from importlib.resources import files
 from pathlib import Path
 from typing import Any
 
-from mechopt.models.errors import SceneError
+from mechopt.models.cache import memoised
+from mechopt.models.errors import MechoptError, SceneError
 from mechopt.scene import Scene, load
 from mechopt.solvers.result import Result, Status
+from mechopt.units import unit_of
 
 
 @dataclass(frozen=True)
@@ -59,6 +62,29 @@ class Run:
     def ok(self) -> bool:
         return all(c.ok for c in self.checks)
 
+    @property
+    def status(self) -> Status:
+        return self.result.status
+
+    @property
+    def values(self) -> dict[str, float]:
+        """The solver's values, named with their unit (`H_mm`)."""
+        return self.result.values
+
+    @property
+    def arrays(self) -> dict:
+        """What the solver computed along the way (a run's `t_s` and states), named with units."""
+        return self.result.arrays
+
+    def with_units(self) -> dict[str, tuple[float, str]]:
+        """Each value with the unit its name states: {"H_mm": (59.60, "mm"), ...}."""
+        return {k: (v, unit_of(k)) for k, v in self.result.values.items()}
+
+    def figures(self) -> dict:
+        """This run's figures as matplotlib Figures, by name (shown as they are in a notebook)."""
+        from mechopt.figures import figures_of
+        return figures_of(self)
+
     def as_dict(self):
         r = self.result
         return {"case": self.scene.id, "status": r.status.value, "message": r.message,
@@ -69,20 +95,78 @@ class Run:
                 "diagnostics": _plain(r.diagnostics)}
 
 
+ENV_CASES = "MECHOPT_CASES"          # more scene folders, separated like PATH
+
+
 def cases_dir() -> Path:
+    """The scenes that ship with mechopt."""
     return Path(str(files("mechopt.cases")))
 
 
-@lru_cache(maxsize=1)
-def all_scenes() -> tuple[Scene, ...]:
-    """Every scene in the registry, validated, in id order; a bad file stops the whole load."""
+_USER_FOLDERS: list[Path] = []
+
+
+def add_cases(folder) -> None:
+    """Add a folder of the user's scenes (searched recursively for *.toml) to the registry."""
+    folder = Path(folder).expanduser()
+    if not folder.is_dir():
+        raise SceneError(f"--cases {folder}: no such folder")
+    if folder.resolve() not in [f.resolve() for f in _USER_FOLDERS]:
+        _USER_FOLDERS.append(folder)
+
+
+def user_folders() -> tuple[Path, ...]:
+    """The user's scene folders: `add_cases` (`--cases DIR`) and the MECHOPT_CASES variable."""
+    from_env = [Path(p).expanduser() for p in os.environ.get(ENV_CASES, "").split(os.pathsep) if p.strip()]
+    missing = [str(p) for p in from_env if not p.is_dir()]
+    if missing:
+        raise SceneError(f"{ENV_CASES}: no such folder {', '.join(missing)}")
+    return tuple(dict.fromkeys([*_USER_FOLDERS, *from_env]))
+
+
+@dataclass(frozen=True)
+class Catalogue:
+    """Every scene the registry knows, in id order, and the user's files it could not load."""
+    scenes: tuple[Scene, ...]
+    problems: tuple[str, ...]        # one line each: "<file>: <what is wrong>"
+
+
+def catalogue() -> Catalogue:
+    return _catalogue(user_folders())
+
+
+@memoised(maxsize=4)
+def _catalogue(folders: tuple[Path, ...]) -> Catalogue:
+    # the package's own scenes must all load: a bad one stops everything
     scenes = [load(p) for p in sorted(cases_dir().glob("*/*.toml"))]
+    _refuse_twice(scenes, cases_dir())
+    problems = []
+    for folder in folders:
+        for path in sorted(folder.rglob("*.toml")):
+            try:
+                scene = load(path)
+            except MechoptError as exc:      # one bad file of the user's does not stop the others
+                problems.append(str(exc))
+                continue
+            clash = next((s for s in scenes if s.id == scene.id), None)
+            if clash is not None:
+                problems.append(f"{path}: id {scene.id!r} is already taken by {clash.path}; give it another id")
+                continue
+            scenes.append(scene)
+    _check_calibration_targets(scenes)
+    return Catalogue(tuple(sorted(scenes, key=lambda s: s.id)), tuple(problems))
+
+
+def all_scenes() -> tuple[Scene, ...]:
+    """Every scene in the registry (the package's and the user's folders'), validated, in id order."""
+    return catalogue().scenes
+
+
+def _refuse_twice(scenes, where):
     ids = [s.id for s in scenes]
     twice = {i for i in ids if ids.count(i) > 1}
     if twice:
-        raise SceneError(f"{cases_dir()}: scene ids used twice: {', '.join(sorted(twice))}")
-    _check_calibration_targets(scenes)
-    return tuple(sorted(scenes, key=lambda s: s.id))
+        raise SceneError(f"{where}: scene ids used twice: {', '.join(sorted(twice))}")
 
 
 def _check_calibration_targets(scenes):
@@ -96,18 +180,55 @@ def _check_calibration_targets(scenes):
                                  + (f"; did you mean {', '.join(near)}?" if near else ""), key=key)
 
 
-def find(case_id: str) -> Scene:
+def is_path(ref: str) -> bool:
+    """Whether a reference names a file or folder rather than a registry id."""
+    ref = str(ref)
+    return ref.endswith(".toml") or Path(ref).is_dir() or Path(ref).is_file() or ref.startswith((".", "~", os.sep))
+
+
+def find(ref) -> Scene:
+    """A scene by registry id ("loom/group1"), or loaded from a scene file's path."""
+    if isinstance(ref, Scene):
+        return ref
+    if is_path(ref):
+        path = Path(ref).expanduser()
+        if path.is_dir():
+            raise SceneError(f"{path}: a folder of scenes; name one file, or use it where several scenes are taken "
+                             "(validate, report)")
+        return load(path)
     for scene in all_scenes():
-        if scene.id == case_id:
+        if scene.id == ref:
             return scene
     ids = [s.id for s in all_scenes()]
-    near = difflib.get_close_matches(case_id, ids, n=3)
-    raise SceneError(f"unknown case {case_id!r}" + (f"; did you mean {', '.join(near)}?" if near else "")
-                     + f" (known: {', '.join(ids)}; `mechopt cases` lists them)")
+    near = difflib.get_close_matches(ref, ids, n=3)
+    raise SceneError(f"unknown case {ref!r}" + (f"; did you mean {', '.join(near)}?" if near else "")
+                     + " (`mechopt cases` lists the ids; a scene file is named by its path, e.g. ./my.toml)")
 
 
-def run(scene: Scene, overrides: dict | None = None) -> Run:
-    """Solve a scene (with `--set` overrides, validated like the file) and check its expectations."""
+def select(refs) -> tuple[list[Scene], list[str]]:
+    """Scenes for several references (ids, files, folders of *.toml): the scenes, and one line per
+    file of a folder that could not be loaded (the others still run)."""
+    scenes, problems = [], []
+    for ref in refs:
+        path = Path(str(ref)).expanduser()
+        if not isinstance(ref, Scene) and is_path(ref) and path.is_dir():
+            found = sorted(path.rglob("*.toml"))
+            if not found:
+                raise SceneError(f"{path}: no scene files (*.toml) in this folder")
+            for file in found:
+                try:
+                    scenes.append(load(file))
+                except MechoptError as exc:
+                    problems.append(str(exc))
+        else:
+            scenes.append(find(ref))
+    return scenes, problems
+
+
+def run(scene: Scene | str, overrides: dict | None = None) -> Run:
+    """Solve a scene (a Scene, a registry id or a scene file's path), with `--set` overrides
+    validated like the file, and check its expectations."""
+    scene = find(scene)
     overrides = dict(overrides or {})
     task, settings = scene.build(_derived_params(scene) | overrides)
     result = scene.solver(task, **settings)
@@ -131,7 +252,7 @@ def _derived_params(scene: Scene, chain: tuple[str, ...] = ()) -> dict:
     return out
 
 
-@lru_cache(maxsize=None)
+@memoised(maxsize=64)
 def _source_result(source_id: str, chain: tuple[str, ...]) -> Result:
     """A scene's result as its file says: depends on the file alone, so a sweep of a derived
     scene solves its source once per process, not once per variant."""

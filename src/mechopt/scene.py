@@ -21,6 +21,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from mechopt.models.errors import MechoptError, SceneError
 from mechopt.solvers.result import Status
+from mechopt.units import unit_of
 
 Number = int | float
 STATUS_WORDS = tuple(s.value for s in Status)
@@ -173,10 +174,45 @@ class Scene:
                                     if self.spec.structure else ""), key=key)
         return params, settings
 
+    def describe(self) -> list[dict[str, str]]:
+        """Every key `--set` reaches, one row each: key, kind (parameter, setting, structure),
+        unit, mark (given, assumed, calibrated, derived, default), allowed range, current value."""
+        rows = []
+        fields = task_fields(self.task_class)
+        for key, f in fields.items():
+            if key in self.spec.params:
+                param = self.spec.params[key]
+                mark, value = param.mark, param.value
+            elif key in self.spec.derive:
+                mark, value = "derived", self.spec.derive[key]
+            elif key in self.spec.structure or key == "effects":
+                continue
+            elif f.default is not dataclasses.MISSING:
+                mark, value = "default", f.default
+            else:
+                continue
+            low, high = declared_range(f.type)
+            rows.append({"key": key, "kind": "parameter", "unit": unit_of(key), "mark": mark,
+                         "range": describe_range(low, high) if low or high else f"checked by {self.task_class.__name__}",
+                         "value": _show(value)})
+        for key, option in solver_options(self.solver).items():
+            choices = get_args(option.annotation) if get_origin(option.annotation) is Literal else ()
+            low, high = declared_range(option.annotation)
+            rows.append({"key": key, "kind": f"setting of {self.solver.__name__}", "unit": unit_of(key),
+                         "mark": "scene" if key in self.spec.solver_settings else "default",
+                         "range": " | ".join(map(str, choices)) if choices else describe_range(low, high),
+                         "value": _show(self.spec.solver_settings.get(key, option.default))})
+        for key, value in self.spec.structure.items():
+            rows.append({"key": key if not (isinstance(value, list) and value and isinstance(value[0], dict))
+                         else _path_example(self.spec.structure, key).split("=")[0].strip("'"),
+                         "kind": "structure", "unit": unit_of(key), "mark": "given",
+                         "range": "a TOML value of the same shape", "value": _show(value)})
+        return rows
+
     def build(self, overrides: dict[str, Any] | None = None):
         """The task instance and solver settings, overrides applied and validated like the file."""
         params, settings = self.split_overrides(overrides or {})
-        paths = {k: v for k, v in params.items() if _path_head(k) in self.spec.structure and k not in self.spec.structure}
+        paths = {k: v for k, v in params.items() if _path_head(k) in self.spec.structure}
         params = {k: v for k, v in params.items() if k not in paths}
         return (_build_task(self.path, self.task_class, self.spec.effects, self.params() | params,
                             _set_paths(self.path, self.spec.structure, paths)),
@@ -245,12 +281,27 @@ def parse_overrides(pairs: list[str]) -> dict[str, Any]:
     return out
 
 
+def _path_parts(key):
+    """`a.b[k=10.1].c` -> ["a", "b[k=10.1]", "c"]: dots inside a selector's brackets belong to it."""
+    parts, depth, current = [], 0, ""
+    for ch in key:
+        depth += (ch == "[") - (ch == "]")
+        if ch == "." and depth == 0:
+            parts.append(current)
+            current = ""
+        else:
+            current += ch
+    return parts + [current]
+
+
 def _path_head(key):
-    return key.split(".", 1)[0].split("[", 1)[0]
+    return _path_parts(key)[0].split("[", 1)[0]
 
 
-def _path_example(structure):
+def _path_example(structure, only=None):
     for name, value in structure.items():
+        if only is not None and name != only:
+            continue
         if isinstance(value, list) and value and isinstance(value[0], dict):
             first = value[0]
             keys = [k for k in first if isinstance(first[k], str)][:2]
@@ -264,7 +315,7 @@ def _set_paths(path, structure, assignments):
     `list[k=v,k2=v2]` picks the one table of a list whose entries match."""
     out = copy.deepcopy(dict(structure))
     for key, value in assignments.items():
-        node, parts = out, key.split(".")
+        node, parts = out, _path_parts(key)
         for i, part in enumerate(parts):
             name, _, selector = part.partition("[")
             last = i == len(parts) - 1
@@ -304,6 +355,11 @@ def _resolve(path, field, dotted, package):
     return getattr(module, name)
 
 
+def _show(value) -> str:
+    text = repr(value) if isinstance(value, str) else str(value)
+    return text if len(text) <= 40 else f"{text[:37]}..."
+
+
 def task_fields(task_class):
     """The task dataclass's fields by name (its parameters and structure inputs)."""
     return {f.name: f for f in dataclasses.fields(task_class)}
@@ -327,6 +383,9 @@ def _build_task(path, task_class, effects, params, structure=None):
             raise SceneError(f"{path}: params.{key} = {value!r}: expected a number", key=key)
         if not math.isfinite(value):
             raise SceneError(f"{path}: params.{key} = {value!r}: expected a finite number", key=key)
+        low, high = declared_range(fields[key].type)
+        if (low and not low[1](value, low[0])) or (high and not high[1](value, high[0])):
+            raise SceneError(f"{path}: params.{key} = {value!r}: allowed {describe_range(low, high)}", key=key)
     structure = dict(structure or {})
     if "effects" in fields:             # a task assembled from its effects is told which ones
         structure["effects"] = tuple(effects)
@@ -379,17 +438,18 @@ def setting_problem(option: inspect.Parameter, value) -> str:
         return f"expected {expected.__name__} (default {default!r})"
     if isinstance(value, float) and not math.isfinite(value):
         return "expected a finite number"
-    low, high = setting_range(option)
+    low, high = declared_range(annotation)
     if (low and not low[1](value, low[0])) or (high and not high[1](value, high[0])):
         return f"allowed {describe_range(low, high)}"
     return ""
 
 
-def setting_range(option: inspect.Parameter):
-    """((bound, test) or None, (bound, test) or None): a setting's declared lower and upper limits."""
+def declared_range(annotation):
+    """(low, high), each (bound, test, "gt"|"ge"|"lt"|"le") or None: the limits an annotation
+    declares with annotated_types (a solver setting, or a task field)."""
     low = high = None
-    if get_origin(option.annotation) is Annotated:
-        for mark in get_args(option.annotation)[1:]:
+    if get_origin(annotation) is Annotated:
+        for mark in get_args(annotation)[1:]:
             for name, test in (("gt", operator.gt), ("ge", operator.ge)):
                 if getattr(mark, name, None) is not None:
                     low = (getattr(mark, name), test, name)
@@ -400,7 +460,7 @@ def setting_range(option: inspect.Parameter):
 
 
 def describe_range(low, high) -> str:
-    """'> 0', '1 ... 10000', 'any' for a range from `setting_range`."""
+    """'> 0', '1 ... 10,000', 'any' for a range from `declared_range`."""
     sign = {"gt": ">", "ge": ">=", "lt": "<", "le": "<="}
     text = lambda x: f"{x:,}" if isinstance(x, int) else f"{x:g}"        # noqa: E731
     if low and high:

@@ -1,0 +1,223 @@
+"""The public Python API and scenes from anywhere: a designer's own scene files, outside the
+package, loaded by path or from a folder added to the registry."""
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import networkx as nx
+import numpy as np
+import pytest
+from matplotlib.figure import Figure
+
+import mechopt
+from mechopt import registry
+from mechopt.cli import main, scene_template
+
+ROOT = Path(__file__).resolve().parents[1]
+
+SIX_EVENTS = '''id = "my/loom-six"
+title = "A loom group of my own: six events"
+source = "a designer's own network (test)"
+task = "loom.Cyclogram"
+solver = "loom.plan_cyclogram"
+effects = ["contact_stress", "stop_vibration"]
+
+[params]
+amplitude_slope_mm_per_deg = -0.003
+amplitude_intercept_mm = 0.208
+amplitude_limit_mm = 0.1
+sigma_H_limit_MPa = { value = 800.0, mark = "assumed", why = "a hardened steel cam" }
+
+[structure.events]
+"1" = { mechanism = "lift", group = "mine", what = "start" }
+"2" = { mechanism = "returner", group = "mine", what = "returner starts" }
+"3" = { mechanism = "lift", group = "mine", what = "lift leaves its lower stop" }
+"4" = { mechanism = "lift", group = "mine", what = "lift at its upper stop" }
+"5" = { mechanism = "returner", group = "mine", what = "weft presented" }
+"6" = { mechanism = "returner", group = "mine", what = "done" }
+
+[structure.stress_models]
+lift_cam = { sigma_ref_MPa = 700.0, t_ref_deg = 36.0, mark = "assumed", why = "test" }
+
+[[structure.operations]]
+from = "1"
+to = "2"
+min_deg = 10.0
+[[structure.operations]]
+from = "1"
+to = "3"
+min_deg = 20.0
+[[structure.operations]]
+from = "3"
+to = "4"
+min_deg = 30.0
+stress = "lift_cam"
+amplitude = "linear"
+[[structure.operations]]
+from = "2"
+to = "5"
+min_deg = 40.0
+[[structure.operations]]
+from = "4"
+to = "6"
+min_deg = 10.0
+[[structure.operations]]
+from = "5"
+to = "6"
+min_deg = 5.0
+'''
+
+
+def copy_scene(case_id, folder, new_id, replace=()):
+    """A registry scene as a user's starting point (`mechopt new`: new id, the source's
+    expectations dropped) in `folder`, with text replacements."""
+    text = scene_template(registry.find(case_id), new_id)
+    for old, new in replace:
+        assert old in text, old
+        text = text.replace(old, new)
+    path = folder / f"{new_id.replace('/', '_')}.toml"
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+@pytest.fixture
+def own(tmp_path, monkeypatch):
+    """A folder of a designer's own scenes, outside the package: another cardioid, a six-event
+    loom group, a press with another flywheel; the registry is restored afterwards."""
+    folder = tmp_path / "my-scenes"
+    folder.mkdir()
+    copy_scene("cam-cutter/pure-cardioid", folder, "my/cardioid-30", [("a_mm = { value = 25.0", "a_mm = { value = 30.0")])
+    (folder / "loom-six.toml").write_text(SIX_EVENTS, encoding="utf-8")
+    copy_scene("press/kd2322", folder, "my/press-heavy-flywheel",
+               [("flywheel_inertia_kgm2 = { value = 2.0", "flywheel_inertia_kgm2 = { value = 3.0")])
+    monkeypatch.setattr(registry, "_USER_FOLDERS", [])
+    mechopt.clear_caches()
+    yield folder
+    mechopt.clear_caches()
+
+
+def test_a_scene_file_outside_the_package_runs_by_its_path(own):
+    run = mechopt.solve(own / "my_cardioid-30.toml")
+    # a pure cardioid is followed exactly by H = L = 2a: 60 mm for a = 30 mm
+    assert run.status is mechopt.Status.SOLVED
+    assert run.values["H_mm"] == pytest.approx(60.0, abs=1e-6) and run.values["L_mm"] == pytest.approx(60.0, abs=1e-6)
+
+
+def test_a_loom_group_of_my_own_is_planned_to_its_longest_path(own):
+    run = mechopt.solve(own / "loom-six.toml")
+    # independent: the amplitude law binds t(3,4) at (0.208 - 0.1) / 0.003 = 36 deg; longest path 1-3-4-6
+    g = nx.DiGraph([("1", "2", {"w": 10}), ("1", "3", {"w": 20}), ("3", "4", {"w": 36}), ("2", "5", {"w": 40}),
+                    ("4", "6", {"w": 10}), ("5", "6", {"w": 5})])
+    assert run.status is mechopt.Status.SOLVED
+    assert run.values["span_deg"] == pytest.approx(nx.dag_longest_path_length(g, weight="w"), abs=1e-6)
+
+
+def test_a_press_with_another_flywheel_turns_more_evenly(own):
+    base, heavy = mechopt.solve("press/kd2322"), mechopt.solve(own / "my_press-heavy-flywheel.toml")
+    assert heavy.status is mechopt.Status.SOLVED
+    # more inertia, less fluctuation; but never below 2/3 of it (the ratio of flywheels alone:
+    # motor, crank and the elastic belt's share do not grow with the flywheel)
+    ratio = heavy.values["speed_fluctuation"] / base.values["speed_fluctuation"]
+    assert 2 / 3 < ratio < 0.95
+
+
+def test_a_users_folder_joins_the_registry_and_a_bad_file_is_named_not_fatal(own, capsys):
+    (own / "broken.toml").write_text('id = "my/broken"\ntitle = 3\n', encoding="utf-8")
+    mechopt.add_cases(own)
+    catalogue = registry.catalogue()
+    ids = {s.id for s in catalogue.scenes}
+    assert {"my/cardioid-30", "my/loom-six", "my/press-heavy-flywheel", "cam-cutter/minimax"} <= ids
+    assert len(catalogue.problems) == 1 and "broken.toml" in catalogue.problems[0]
+    assert main(["cases", "--cases", str(own)]) == 0
+    assert "warning: skipped" in capsys.readouterr().err
+
+
+def test_the_environment_variable_adds_a_folder_too(own, monkeypatch):
+    monkeypatch.setenv("MECHOPT_CASES", str(own))
+    assert mechopt.load("my/loom-six").path == own / "loom-six.toml"
+    monkeypatch.setenv("MECHOPT_CASES", str(own / "nowhere"))
+    with pytest.raises(mechopt.SceneError, match="MECHOPT_CASES: no such folder .*nowhere"):
+        registry.catalogue()
+
+
+def test_a_users_scene_may_not_take_a_registry_id(own):
+    copy_scene("loom/group1", own, "loom/group1")
+    mechopt.add_cases(own)
+    problems = registry.catalogue().problems
+    assert any("id 'loom/group1' is already taken" in p for p in problems)
+
+
+def test_validate_and_report_take_a_folder(own, tmp_path, capsys):
+    assert main(["validate", str(own)]) == 0
+    out = capsys.readouterr().out
+    assert "scenes with no expectations" in out and "my/loom-six" in out
+    assert main(["report", "--cases", str(own), "--case", str(own), "--out", str(tmp_path / "rep"),
+                 "--bench", str(tmp_path / "none")]) == 0
+    page = (tmp_path / "rep" / "index.html").read_text(encoding="utf-8")
+    assert "my/cardioid-30" in page and "my/loom-six" in page and "my/press-heavy-flywheel" in page
+
+
+def test_new_writes_a_commented_scene_that_runs_and_never_overwrites(tmp_path, capsys):
+    path = tmp_path / "mine.toml"
+    assert main(["new", "loom", str(path)]) == 0
+    text = path.read_text(encoding="utf-8")
+    assert text.startswith("# A scene of your own") and 'id = "my/mine"' in text
+    assert not re.search(r"^\[expect", text, flags=re.M)
+    assert main(["run", str(path)]) == 0
+    before = path.read_text(encoding="utf-8")
+    assert main(["new", "press", str(path)]) == 2
+    assert "exists" in capsys.readouterr().err and path.read_text(encoding="utf-8") == before
+
+
+def test_describe_lists_every_key_with_unit_mark_range_and_value(capsys):
+    rows = {r["key"]: r for r in mechopt.describe("press/kd2322")}
+    assert rows["flywheel_inertia_kgm2"]["unit"] == "kg m²" and rows["flywheel_inertia_kgm2"]["mark"] == "assumed"
+    assert rows["tol"]["range"] == "> 0 ... 0.1" and rows["tol"]["value"] == "1e-10"
+    assert rows["kinematics"]["kind"] == "structure"
+    assert main(["describe", "press/kd2322"]) == 0
+    assert "samples" in capsys.readouterr().out
+
+
+def test_the_result_carries_its_arrays_and_its_figures_need_no_files(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    run = mechopt.solve("press/kd2322")
+    t, w = run.arrays["t_s"], run.arrays["omega_rad_s"]
+    assert t.shape == w.shape and t[0] == 0 and not t.flags.writeable
+    # one revolution of the periodic orbit: the mean speed is 2 pi / period
+    assert np.trapezoid(w, t) / (t[-1] - t[0]) == pytest.approx(run.values["omega_mean_rad_s"], rel=1e-3)
+    figures = run.figures()
+    assert list(figures) == ["cycle"] and isinstance(figures["cycle"], Figure)
+    assert list(tmp_path.iterdir()) == []
+    assert run.with_units()["peak_belt_torque_Nm"][1] == "N m"
+
+
+def test_overrides_reach_structure_entries_and_dotted_event_names():
+    run = mechopt.solve("loom/machine", {"operations[from=10.1,to=10.2].min_deg": 5.0})
+    assert run.status is mechopt.Status.SOLVED and not run.checks
+    assert mechopt.solve("stop-impact/rebound-177rpm", speeds_rpm=[150, 177]).values.keys() >= {
+        "rebound_mm_150", "rebound_mm_177"}
+    assert mechopt.solve("press/kd2322", kinematics="exact").status is mechopt.Status.SOLVED
+
+
+def test_version_on_the_package_the_command_and_python_m():
+    assert re.fullmatch(r"\d+\.\d+\.\d+.*", mechopt.__version__)
+    out = subprocess.run([sys.executable, "-m", "mechopt", "--version"], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == f"mechopt {mechopt.__version__}"
+
+
+def test_readme_python_examples_run(tmp_path, monkeypatch):
+    blocks = re.findall(r"```python\n(.*?)```", (ROOT / "README.md").read_text(encoding="utf-8"), flags=re.S)
+    assert len(blocks) >= 4                       # one per mechanism at least
+    monkeypatch.chdir(tmp_path)
+    for block in blocks:
+        exec(compile(block, "README.md", "exec"), {"__name__": "readme"})
+
+
+def test_importing_from_the_repository_root_gives_the_installed_package():
+    code = "import mechopt.models, mechopt.solvers, mechopt; print(mechopt.__file__)"
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True,
+                         env={**os.environ, "PYTHONPATH": ""})
+    assert out.returncode == 0, out.stderr
+    assert Path(out.stdout.strip()).parent.name == "mechopt"

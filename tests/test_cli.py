@@ -1,0 +1,73 @@
+"""The command's exit codes (0 solved, 1 a check or target failed, 2 bad input, 3 not solved)
+and its refusal of outputs it cannot write before any work is done."""
+import pytest
+
+from mechopt import benchmarks, registry
+from mechopt.cli import main, scene_template
+
+
+def test_a_what_if_that_is_not_solved_exits_3(capsys):
+    # a band of 1 um: no limaçon follows the offset cardioid that closely
+    assert main(["run", "cam-cutter/minimax", "--set", "err_width_mm=0.001"]) == 3
+    assert "status: INFEASIBLE" in capsys.readouterr().out
+
+
+def test_a_scene_that_expects_its_infeasibility_exits_0():
+    assert registry.find("loom/group1-window-conflict").spec.expect["status"].value == "INFEASIBLE"
+    assert main(["run", "loom/group1-window-conflict"]) == 0
+
+
+def test_a_failed_check_exits_1(tmp_path):
+    text = scene_template(registry.find("cam-cutter/pure-cardioid"), "my/wrong")
+    path = tmp_path / "wrong.toml"
+    path.write_text(text + '\n[expect.L_mm]\nvalue = 49.0\nabs = 0.01\nkind = "derived"\nwhere = "a wrong guess"\n',
+                    encoding="utf-8")
+    assert main(["run", str(path)]) == 1
+
+
+@pytest.mark.parametrize("args, match", [
+    (["run", "loom/group1", "--json", "."], r"--json \.: a folder"),
+    (["run", "loom/group1", "--set", "colour=1"], r"--set colour: unknown key"),
+    (["run", "no/such-case"], r"unknown case 'no/such-case'"),
+    (["run", "missing.toml"], r"missing\.toml: no such scene file"),
+    (["validate", "nowhere-folder/"], r"no such scene file|unknown case"),
+])
+def test_bad_input_exits_2_with_one_line(args, match, capsys):
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: ") and len(err.strip().splitlines()) == 1
+    assert __import__("re").search(match, err)
+
+
+def test_an_output_that_cannot_be_written_is_refused_before_any_work(tmp_path, monkeypatch, capsys):
+    ran = []
+    monkeypatch.setattr(registry, "run", lambda *a, **k: ran.append(a))
+    taken = tmp_path / "a-file"
+    taken.write_text("x")
+    assert main(["run", "loom/group1", "--plot", str(taken)]) == 2
+    assert main(["run", "loom/group1", "--json", str(taken / "r.json")]) == 2
+    assert main(["run", "loom/group1", "--json", str(tmp_path)]) == 2
+    assert ran == [] and taken.read_text() == "x"
+    assert "an existing file, not a folder" in capsys.readouterr().err
+
+
+def test_bench_refuses_zero_repeats_and_exits_1_on_a_missed_target(monkeypatch, tmp_path):
+    with pytest.raises(SystemExit) as exit_:
+        main(["bench", "loom", "--repeats", "0"])
+    assert exit_.value.code == 2
+
+    class Study:
+        @staticmethod
+        def cli(repeats, out_dir, progress=None):
+            return "target  0.5 s  MISSED"
+    monkeypatch.setattr("mechopt.cli.study", lambda name: Study)
+    assert main(["bench", "loom", "--plot", str(tmp_path)]) == 1
+    assert set(benchmarks.STUDIES) >= {"cam-cutter", "press", "loom", "stop-impact", "sweep"}
+
+
+def test_json_is_written_whole_or_not_at_all(tmp_path):
+    out = tmp_path / "deep" / "r.json"
+    assert main(["run", "stop-impact/frequencies", "--json", str(out)]) == 0
+    import json
+    assert json.loads(out.read_text())["case"] == "stop-impact/frequencies"
+    assert [p.name for p in out.parent.iterdir()] == ["r.json"]       # no temporary file left beside it
