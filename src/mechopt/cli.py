@@ -9,11 +9,11 @@ import argparse
 import json
 import os
 import sys
-import tempfile
 from pathlib import Path
 
 from mechopt import __version__, registry
 from mechopt.benchmarks import STUDIES, study
+from mechopt.files import write_text_atomic
 from mechopt.models.errors import MechoptError, SceneError
 from mechopt.scene import parse_overrides
 from mechopt.solvers.result import Status
@@ -344,16 +344,7 @@ def _write_json(path, payload):
 
 
 def _write_text(path, text):
-    """Write atomically: a temporary file beside the target, then a rename (no half-written file)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.NamedTemporaryFile("w", dir=path.parent, prefix=f".{path.name}.", delete=False,
-                                     encoding="utf-8") as tmp:
-        tmp.write(text)
-        tmp.flush()
-        os.fsync(tmp.fileno())
-    os.replace(tmp.name, path)
-
+    write_text_atomic(path, text)
 
 if __name__ == "__main__":
     sys.exit(main())

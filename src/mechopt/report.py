@@ -16,6 +16,7 @@ from pathlib import Path
 
 from mechopt import registry
 from mechopt.figures.sweep import plot_sweep
+from mechopt.files import write_text_atomic
 from mechopt.plots import plot_run
 from mechopt.sweep import describe_axes, read_table, scene_hash
 
@@ -60,9 +61,8 @@ def write_report(out_dir, *, scenes: Sequence | None = None, bench_dir=None, swe
         parts += ["<h2>Accuracy against time</h2>", _bench(bench_dir)]
     out_dir.mkdir(parents=True, exist_ok=True)
     page = out_dir / "index.html"
-    page.write_text("<!doctype html><html><head><meta charset='utf-8'><title>mechopt report</title>"
-                    f"<style>{_STYLE}</style></head><body>\n" + "\n".join(parts) + "\n</body></html>\n",
-                    encoding="utf-8")
+    write_text_atomic(page, "<!doctype html><html><head><meta charset='utf-8'><title>mechopt report</title>"
+                      f"<style>{_STYLE}</style></head><body>\n" + "\n".join(parts) + "\n</body></html>\n")
     return page
 
 
