@@ -12,6 +12,7 @@ from mechopt.cli import main
 from mechopt.models.errors import SceneError
 from mechopt.plots import save_figure
 from mechopt.report import write_report
+from mechopt.units import unit_of
 from mechopt.sweep import parse_grid, sweep
 
 matplotlib.use("Agg")
@@ -66,7 +67,8 @@ def test_calibrations_are_marked_and_not_counted_as_reproductions(page):
     scene = registry.find("stop-impact/frequencies")
     for key, param in scene.spec.params.items():
         if param.mark != "given":
-            assert f"<td>{html.escape(key)}</td><td>{param.mark}</td>" in text
+            assert (f"<td>{html.escape(key)}</td><td>{param.value:.6g}</td><td>{unit_of(key)}</td>"
+                    f"<td>{param.mark}</td>") in text
 
 
 def test_figures_sweep_maps_and_bench_plots_are_embedded_in_the_one_page(page):
@@ -111,3 +113,14 @@ def test_maps_of_a_sweep_of_an_older_scene_file_are_flagged(tmp_path, monkeypatc
     assert "earlier version of the scene file" not in fresh
     assert "swept an earlier version of the scene file" in stale
     assert "swept amplitude_limit_mm=0.08:0.14:2" in fresh
+
+
+def test_the_page_says_what_made_it_and_links_every_scene(page):
+    path, text = page
+    import mechopt
+    assert f"mechopt {mechopt.__version__}, " in text and " UTC" in text
+    for scene_id in SCENES:
+        anchor = scene_id.replace("/", "_")
+        assert f"href='#{anchor}'" in text and f"id='{anchor}'" in text
+        assert registry.find(scene_id).path.name in text             # the file it came from, with its hash
+    assert "<div class='scroll'><table>" in text                      # the wide table scrolls, never the page

@@ -8,6 +8,7 @@ message names the file, key and allowed range; nothing was computed or written),
 import argparse
 import json
 import os
+import shlex
 import sys
 from pathlib import Path
 
@@ -25,7 +26,9 @@ TEMPLATES = {"cam-cutter": "cam-cutter/minimax", "press": "press/kd2322", "loom"
 
 
 def main(argv=None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
     args = _parser().parse_args(argv)
+    args.argv = argv
     try:
         for folder in args.cases:
             registry.add_cases(folder)
@@ -265,7 +268,8 @@ def _report(args) -> int:
         scenes, problems = list(catalogue.scenes), list(catalogue.problems)
     _warn(problems)
     path = write_report(args.out, scenes=scenes, bench_dir=args.bench, sweeps=args.sweep,
-                        progress=lambda line: print(line, file=sys.stderr, flush=True))
+                        progress=lambda line: print(line, file=sys.stderr, flush=True),
+                        command=shlex.join(["mechopt", *args.argv]))
     print(f"report: {path}")
     return OK
 

@@ -12,25 +12,32 @@ import base64
 import html
 import tempfile
 from collections.abc import Callable, Sequence
+from datetime import datetime, timezone
 from pathlib import Path
 
-from mechopt import registry
+from mechopt import __version__, registry
 from mechopt.figures.sweep import plot_sweep
 from mechopt.files import write_text_atomic
 from mechopt.plots import plot_run
 from mechopt.sweep import describe_axes, read_table, scene_hash
+from mechopt.units import unit_of
 
 __all__ = ["write_report"]
 
-_STYLE = """body{font-family:sans-serif;max-width:1100px;margin:2em auto;color:#222}
-table{border-collapse:collapse;font-size:13px}td,th{border:1px solid #ccc;padding:3px 6px;text-align:left}
-th{background:#f0f0f0}.ok{color:#176117}.fail{color:#b00020;font-weight:bold}.cal{color:#8a5a00}
-img{max-width:520px;border:1px solid #ddd}figure{display:inline-block;margin:4px;font-size:11px;color:#555}
-details{margin:0.4em 0}"""
+_STYLE = """body{font-family:system-ui,sans-serif;max-width:1180px;margin:1.5em auto;padding:0 1em;color:#222;
+line-height:1.4}table{border-collapse:collapse;font-size:14px;width:100%}td,th{border:1px solid #ccc;
+padding:3px 6px;text-align:left;vertical-align:top;overflow-wrap:anywhere}th{background:#f0f0f0}
+.ok{color:#176117}.fail{color:#b00020;font-weight:bold}.cal{color:#8a5a00}.scroll{overflow-x:auto}
+figure{margin:10px 0;font-size:13px;color:#555}img{width:100%;height:auto;border:1px solid #ddd;cursor:zoom-in}
+img.zoom{position:fixed;inset:0;margin:auto;width:auto;max-width:98vw;max-height:98vh;z-index:9;cursor:zoom-out;
+background:#fff;box-shadow:0 0 0 100vmax rgba(0,0,0,.6)}details{margin:0.4em 0}nav li{margin:2px 0}
+code{overflow-wrap:anywhere}"""
+_SCRIPT = ("<script>document.addEventListener('click',e=>{if(e.target.tagName==='IMG')"
+           "e.target.classList.toggle('zoom')})</script>")
 
 
 def write_report(out_dir, *, scenes: Sequence | None = None, bench_dir=None, sweeps: Sequence = (),
-                 progress: Callable[[str], None] | None = None) -> Path:
+                 progress: Callable[[str], None] | None = None, command: str | None = None) -> Path:
     """Run the scenes (all by default), draw their figures and write ``out_dir/index.html``.
 
     Parameters
@@ -40,6 +47,7 @@ def write_report(out_dir, *, scenes: Sequence | None = None, bench_dir=None, swe
     bench_dir : folder of `mechopt bench` outputs; its PNG files are embedded when it exists.
     sweeps : Parquet tables written by `mechopt sweep --out`; their maps are embedded.
     progress : called with one line per scene run.
+    command : the command that made the page, shown with the version, date and scene hashes.
 
     Returns
     -------
@@ -53,7 +61,8 @@ def write_report(out_dir, *, scenes: Sequence | None = None, bench_dir=None, swe
             progress(f"running {scene.id} ...")
         runs.append(registry.run(scene))
     with tempfile.TemporaryDirectory() as scratch:
-        parts = ["<h1>mechopt: validation report</h1>", _summary(runs), "<h2>Validation</h2>", _validation(runs),
+        parts = ["<h1>mechopt: validation report</h1>", _provenance(runs, command), _summary(runs), _contents(runs),
+                 "<h2 id='validation'>Validation</h2>", _validation(runs),
                  "<h2>Scenes</h2>", *(_scene_section(run, Path(scratch)) for run in runs)]
         if tables:
             parts += ["<h2>What-if maps</h2>",
@@ -62,7 +71,7 @@ def write_report(out_dir, *, scenes: Sequence | None = None, bench_dir=None, swe
     out_dir.mkdir(parents=True, exist_ok=True)
     page = out_dir / "index.html"
     write_text_atomic(page, "<!doctype html><html><head><meta charset='utf-8'><title>mechopt report</title>"
-                      f"<style>{_STYLE}</style></head><body>\n" + "\n".join(parts) + "\n</body></html>\n")
+                      f"<style>{_STYLE}</style></head><body>\n" + "\n".join(parts) + f"\n{_SCRIPT}</body></html>\n")
     return page
 
 
@@ -84,14 +93,34 @@ def _validation(runs):
                 if c.ok else "<span class='fail'>FAIL</span>"
             rows.append([_e(run.scene.id), _e(c.name), _e(c.kind), _e(c.expected), _e(_fmt(c.got)), verdict,
                          _e(c.where), str(assumed)])
-    return _table(["case", "quantity", "kind", "expected (source)", "computed", "check", "where",
-                   "assumed params"], rows)
+    return "<div class='scroll'>" + _table(["case", "quantity", "kind", "expected (source)", "computed", "check",
+                                            "where", "assumed params"], rows) + "</div>"
+
+
+def _provenance(runs, command):
+    """Which mechopt made the page, when, by what command, from which scene files."""
+    hashes = [[_e(r.scene.id), f"<code>{scene_hash(r.scene)[:16]}</code>", _e(str(r.scene.path))] for r in runs]
+    return (f"<p>mechopt {_e(__version__)}, {datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC"
+            + (f"; made by <code>{_e(command)}</code>" if command else "") + "</p>"
+            + "<details><summary>scene files (sha256)</summary>" + _table(["scene", "sha256", "file"], hashes)
+            + "</details>")
+
+
+def _contents(runs):
+    """The scenes by mechanism (the first part of the id), each a link to its section."""
+    groups = {}
+    for run in runs:
+        groups.setdefault(run.scene.id.split("/", 1)[0], []).append(run)
+    items = "".join(f"<li><b>{_e(name)}</b>: " + ", ".join(
+        f"<a href='#{_e(r.scene.id.replace('/', '_'))}'>{_e(r.scene.id.split('/', 1)[-1])}</a>" for r in group)
+        + "</li>" for name, group in groups.items())
+    return f"<nav><h2>Contents</h2><ul><li><a href='#validation'>validation table</a></li>{items}</ul></nav>"
 
 
 def _scene_section(run, scratch):
     scene, r = run.scene, run.result
     slug = scene.id.replace("/", "_")
-    marked = [(k, p.mark, p.why + (f" (fitted to {p.on})" if p.on else ""))
+    marked = [(k, p.value, p.mark, p.why + (f" (fitted to {p.on})" if p.on else ""))
               for k, p in scene.spec.params.items() if p.mark != "given"]
     images = "".join(_image(p) for p in plot_run(run, scratch / slug))
     return (f"<h3 id='{_e(slug)}'>{_e(scene.id)}: {_e(scene.spec.title)}</h3>"
@@ -99,7 +128,8 @@ def _scene_section(run, scratch):
             f"{' (' + _e(r.message) + ')' if r.message else ''}; build {r.timing.build_s:.4f} s, "
             f"solve {r.timing.solve_s:.4f} s</p>"
             + (f"<details><summary>{len(marked)} assumed / calibrated parameters</summary>"
-               + _table(["parameter", "mark", "why"], [[_e(k), _e(m), _e(w)] for k, m, w in marked])
+               + _table(["parameter", "value", "unit", "mark", "why"],
+                        [[_e(k), _e(_fmt(v)), _e(unit_of(k)), _e(m), _e(w)] for k, v, m, w in marked])
                + "</details>" if marked else "<p>every parameter given by the source</p>")
             + (images or "<p>no figures for this model</p>"))
 
@@ -128,7 +158,7 @@ def _bench(bench_dir):
 
 
 def _image(png):
-    """A PNG embedded in the page, captioned with its file name."""
+    """A PNG embedded in the page at full width (click: the whole window), captioned with its name."""
     data = base64.b64encode(Path(png).read_bytes()).decode("ascii")
     return (f"<figure><img src='data:image/png;base64,{data}' alt='{_e(Path(png).stem)}'>"
             f"<figcaption>{_e(Path(png).name)}</figcaption></figure>")

@@ -12,13 +12,13 @@ import math
 import operator
 import re
 import tomllib
-from functools import lru_cache
 from pathlib import Path
 from types import MappingProxyType
 from typing import Annotated, Any, Literal, get_args, get_origin
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
+from mechopt.models.cache import memoised
 from mechopt.models.errors import MechoptError, SceneError
 from mechopt.solvers.result import Status
 from mechopt.units import unit_of
@@ -404,7 +404,7 @@ def _build_task(path, task_class, effects, params, structure=None):
         raise SceneError(f"{path}: params.{exc.key}: {exc}" if exc.key else f"{path}: {exc}", key=exc.key) from None
 
 
-@lru_cache(maxsize=None)
+@memoised(maxsize=256)
 def solver_options(solver):
     """A solver's keyword-only settings by name (each with its default); read-only, cached: a
     sweep asks for them with every variant and `inspect.signature` is slow."""
