@@ -175,6 +175,31 @@ def test_a_damaged_part_is_named_and_recomputed(tmp_path, monkeypatch, clean, da
     assert _values(table).equals(_values(clean))
 
 
+def test_an_unreadable_part_is_named_and_recomputed(tmp_path, monkeypatch, clean):
+    out, parts = _two_parts(tmp_path, monkeypatch)
+    parts[0].unlink()
+    parts[0].mkdir()                                               # read_bytes fails with an OSError
+    calls = _counting(monkeypatch)
+    with pytest.warns(sw.SweepWarning, match=r"part-000000000.parquet: unreadable \(Is a directory\); "
+                                             r"its 3 variants are recomputed"):
+        table = sw.sweep(registry.find(LOOM), _grid(GRID), out=out, chunk=3, progress=False)
+    assert len(calls) == 7
+    assert _values(table).equals(_values(clean))
+
+
+def test_a_damaged_part_that_cannot_be_removed_is_named(tmp_path, monkeypatch):
+    out, parts = _two_parts(tmp_path, monkeypatch)
+    parts[0].write_bytes(b"")
+
+    def refused(self, missing_ok=False):
+        raise PermissionError(13, "Permission denied")
+    monkeypatch.setattr(sw.Path, "unlink", refused)
+    with pytest.warns(sw.SweepWarning), pytest.raises(
+            SceneError, match=r"part-000000000.parquet: cannot remove this damaged part \(Permission denied\); "
+                              r"remove it by hand and re-run"):
+        sw.sweep(registry.find(LOOM), _grid(GRID), out=out, chunk=3, progress=False)
+
+
 def test_a_part_without_its_checksum_is_recomputed(tmp_path, monkeypatch, clean):
     out, parts = _two_parts(tmp_path, monkeypatch)
     parts[1].with_name(parts[1].name + ".sha256").unlink()         # killed between the part and its sum

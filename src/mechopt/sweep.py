@@ -463,8 +463,12 @@ class _Store:
             if why:
                 what = f"its {count} variants are" if count is not None else "its variants are"
                 warnings.warn(f"{part}: {why}; {what} recomputed", SweepWarning, stacklevel=4)
-                part.unlink(missing_ok=True)
-                check.unlink(missing_ok=True)
+                try:
+                    shutil.rmtree(part) if part.is_dir() else part.unlink(missing_ok=True)
+                    check.unlink(missing_ok=True)
+                except OSError as exc:
+                    raise SceneError(f"{part}: cannot remove this damaged part ({exc.strerror}); remove it "
+                                     f"by hand and re-run", key="out") from None
 
     def done(self) -> set[int]:
         tables = [pq.read_table(p, columns=["variant"]) for p in self._files()]
