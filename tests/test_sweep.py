@@ -1,6 +1,7 @@
 """Sweeps: variants expanded as specified, every row equal to a direct `registry.run`, failures kept
 as rows, resume without recomputation, refusal to mix sweeps, and the Dask path equal to the
 in-process one (also after a worker is killed mid-sweep)."""
+import dataclasses
 import itertools
 import os
 import signal
@@ -322,14 +323,18 @@ def test_worker_killed_mid_sweep_loses_no_variant(cluster):
     assert pids[0] not in after and pids[1] in after
 
 
-def test_worker_with_another_scene_file_refuses_its_chunk():
-    with pytest.raises(SceneError, match=r"this worker's scene file differs from the sweep's"):
-        sw.run_chunk(LOOM, [(0, {"sigma_H_limit_MPa": 800.0})], scene_sha256="0" * 64)
+def test_worker_refuses_a_scene_text_changed_on_the_way():
+    sent = sw.SceneText.of(registry.find(LOOM))
+    assert sent.sha256 == sw.scene_hash(registry.find(LOOM))
+    with pytest.raises(SceneError, match=r"group1.toml: the scene file this worker received differs from the sweep's"):
+        sw.run_chunk(sw.SceneText(sent.text + " ", sent.path, sent.sha256), [(0, {"sigma_H_limit_MPa": 800.0})])
 
 
 @pytest.mark.slow
 def test_variants_lost_on_the_cluster_are_named_not_hidden(cluster, monkeypatch):
-    monkeypatch.setattr(sw, "scene_hash", lambda scene: "f" * 64)     # the client's file "differs"
-    with pytest.raises(SolverError, match=r"3 of 3 variants were not computed \(SceneError: .*scene file differs"):
+    real = sw.SceneText.of
+    monkeypatch.setattr(sw.SceneText, "of", lambda scene: dataclasses.replace(real(scene), sha256="f" * 64))
+    with pytest.raises(SolverError, match=r"3 of 3 variants were not computed \(SceneError: .*scene file this "
+                                          r"worker received differs"):
         sw.sweep(registry.find(LOOM), _grid("sigma_H_limit_MPa=700:900:3"), chunk=1,
                  scheduler=cluster.scheduler_address, progress=False)

@@ -15,17 +15,29 @@ sweep loses at most the chunks in flight and a re-run with the same ``--out`` sk
 The file carries its case, its sweep spec and its scene file's hash in the Parquet metadata, and
 a file of another sweep is refused rather than mixed.
 
+Integrity: one writer per ``--out`` (an OS lock on ``<out>.lock``; a second sweep is refused at
+once); each part has a sha256 beside it (``part-N.parquet.sha256``), and a part that fails it is
+named, dropped and recomputed; the merge writes a temporary file, fsyncs it and renames it over
+``<out>``, and drops part rows already in ``<out>``, so a kill at any moment leaves no variant
+twice. A table with a variant stored twice is refused when read or drawn. A request is counted
+before anything is allocated and refused past ``max_variants``. The scene travels with each chunk
+as its TOML text and hash, so a scene from any file runs on any worker.
+
 Row columns: the swept keys, ``variant`` (its number), ``status`` (a Result status, or INVALID for
 a setting the scene or model refuses, ERROR for an unexpected exception), ``message``, ``build_s``,
 ``solve_s``, then every ``values`` entry of the result (null where a variant did not produce it).
 """
 import difflib
+import errno
+import fcntl
 import hashlib
 import itertools
 import json
 import math
+import os
 import shutil
 import sys
+import warnings
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -33,17 +45,52 @@ from typing import Literal, get_origin
 
 import numpy as np
 import pyarrow as pa
+import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
 from mechopt import registry
+from mechopt.models.cache import BuildCache
 from mechopt.models.errors import MechoptError, SceneError, SolverError
-from mechopt.scene import Scene, solver_options, task_fields
+from mechopt.scene import Scene, loads, solver_options, task_fields
 
-__all__ = ["Axis", "SweepSpec", "parse_grid", "parse_random", "plan", "sweep", "run_chunk", "read_table",
-           "scene_hash", "describe_axes"]
+__all__ = ["Axis", "SweepSpec", "SceneText", "SweepInterrupted", "SweepWarning", "parse_grid", "parse_random",
+           "grid_values", "count_variants", "plan", "sweep", "run_chunk", "read_table", "check_unique", "scene_hash", "describe_axes"]
 
 META_KEY = b"mechopt.sweep"
 FIXED_COLUMNS = ("variant", "status", "message", "build_s", "solve_s")
+MAX_VARIANTS = 1_000_000
+BYTES_PER_VARIANT = 400         # plan dicts (~190 B, 2 keys) and table; the audit saw 3.3 GB for 10^7
+AXIS_LIMIT = 1e12               # no length, stress, speed or setting of a mechanism is larger
+GRID_DIGITS = 12                # grid values keep this many significant digits (0.075, not 0.07500000000000001)
+
+
+class SweepInterrupted(MechoptError):
+    """Ctrl-C during a sweep: the finished variants are kept; `done` of `total` were computed."""
+
+    def __init__(self, message: str, *, done: int, total: int):
+        super().__init__(message)
+        self.done, self.total = done, total
+
+
+class SweepWarning(UserWarning):
+    """Something on disk was repaired (a damaged part dropped and recomputed)."""
+
+
+@dataclass(frozen=True)
+class SceneText:
+    """A scene as a worker receives it: its file's text, where it came from, the sha256 of its bytes."""
+    text: str
+    path: str
+    sha256: str
+
+    @classmethod
+    def of(cls, scene: Scene) -> "SceneText":
+        try:
+            data = Path(scene.path).read_bytes()
+        except OSError as exc:
+            raise SceneError(f"{scene.path}: cannot read the scene file to send it to the workers: "
+                             f"{exc.strerror}") from None
+        return cls(data.decode("utf-8"), str(scene.path), hashlib.sha256(data).hexdigest())
 
 
 @dataclass(frozen=True)
@@ -96,12 +143,34 @@ def parse_random(text: str) -> Axis:
     return Axis(key, low, high)
 
 
-def plan(scene: Scene, grid=(), random=(), *, samples: int = 0, seed: int = 0) -> tuple[SweepSpec, list[dict]]:
+def grid_values(axis: Axis) -> list[float]:
+    """The grid points of an axis as a user would type them: START + i (STOP - START) / (NUM - 1)
+    kept to 12 significant digits (0.075, not linspace's 0.07500000000000001), unless that would
+    move a point by more than 1e-6 of a step (a range far narrower than its magnitude)."""
+    if axis.num == 1:
+        return [axis.low]
+    step = (axis.high - axis.low) / (axis.num - 1)
+    out = []
+    for i in range(axis.num):
+        exact = axis.high if i == axis.num - 1 else axis.low + i * step
+        short = float(f"{exact:.{GRID_DIGITS}g}")
+        out.append(short if abs(short - exact) <= 1e-6 * abs(step) else exact)
+    return out
+
+
+def count_variants(grid=(), random=(), samples: int = 0) -> int:
+    """How many variants a request expands to (grid points x samples), without expanding it."""
+    return math.prod(a.num for a in grid) * (int(samples) if random else 1)
+
+
+def plan(scene: Scene, grid=(), random=(), *, samples: int = 0, seed: int = 0,
+         max_variants: int = MAX_VARIANTS) -> tuple[SweepSpec, list[dict]]:
     """Check the axes against the scene and expand them into variants (dicts of overrides).
 
     Every key must be a parameter of the scene's task or a numeric setting of its solver, swept
     once. Whole-number settings (``count``) take rounded values. Variant ``i`` is the i-th grid
-    point (last axis fastest) of the ``i // n_grid``-th random sample.
+    point (last axis fastest) of the ``i // n_grid``-th random sample. The count is checked
+    against `max_variants` before anything is expanded.
     """
     spec = SweepSpec(scene.id, tuple(grid), tuple(random), int(samples), int(seed))
     if not spec.grid and not spec.random:
@@ -113,8 +182,9 @@ def plan(scene: Scene, grid=(), random=(), *, samples: int = 0, seed: int = 0) -
     twice = sorted({k for k in spec.keys if spec.keys.count(k) > 1})
     if twice:
         raise SceneError(f"swept twice: {', '.join(twice)}; give each key one range", key=twice[0])
+    _check_size(count_variants(spec.grid, spec.random, spec.samples), max_variants)
     kinds = {key: _kind(scene, key) for key in spec.keys}
-    grids = [[kinds[a.key](v) for v in np.linspace(a.low, a.high, a.num)] for a in spec.grid]
+    grids = [[kinds[a.key](v) for v in grid_values(a)] for a in spec.grid]
     points = list(itertools.product(*grids))
     if not spec.random:
         return spec, [dict(zip(spec.keys, p)) for p in points]
@@ -125,18 +195,43 @@ def plan(scene: Scene, grid=(), random=(), *, samples: int = 0, seed: int = 0) -
                   for row in draws for p in points]
 
 
-def run_chunk(case_id: str, chunk: list[tuple[int, dict]], scene_sha256: str | None = None) -> list[dict]:
-    """Solve the variants `(number, overrides)` of one scene in this process; one row each.
+def _check_size(count, limit):
+    if isinstance(limit, bool) or not isinstance(limit, int) or limit < 1:
+        raise SceneError(f"max_variants = {limit!r}: expected a whole number >= 1", key="max_variants")
+    if count > limit:
+        raise SceneError(f"{count:,} variants (about {_size(count * BYTES_PER_VARIANT)} of memory before any "
+                         f"solver runs) exceed the limit of {limit:,}; narrow the ranges, or raise the limit "
+                         f"(max_variants) if the machine and the time allow", key="max_variants")
 
-    A refused setting (SceneError, ModelError) is an INVALID row, a crashed back end a FAILED row,
-    anything else unexpected an ERROR row naming the exception: a sweep outlives its variants.
-    With `scene_sha256`, a worker whose scene file differs from the client's refuses the chunk
-    (a cluster's workers read their own installation's cases/).
+
+def _size(n_bytes):
+    for unit, scale in (("TB", 1e12), ("GB", 1e9), ("MB", 1e6)):
+        if n_bytes >= scale:
+            return f"{n_bytes / scale:.3g} {unit}"
+    return f"{n_bytes / 1e3:.3g} kB"
+
+
+_SCENES = BuildCache("mechopt.sweep.scenes", 8)      # a worker parses each scene text once
+
+
+def run_chunk(source: SceneText, chunk: list[tuple[int, dict]]) -> list[dict]:
+    """Solve the variants `(number, overrides)` of one scene on a worker; one row each.
+
+    The scene comes as its file's text (`SceneText`), so a scene from any file runs on any
+    worker; a text whose sha256 is not the one sent (damaged on the way) is refused. The loaded
+    scene is kept per process by hash.
     """
-    scene = registry.find(case_id)
-    if scene_sha256 is not None and scene_hash(scene) != scene_sha256:
-        raise SceneError(f"{scene.path}: this worker's scene file differs from the sweep's (sha256 "
-                         f"{scene_hash(scene)[:12]} != {scene_sha256[:12]}); install the same mechopt on every worker")
+    got = hashlib.sha256(source.text.encode("utf-8")).hexdigest()
+    if got != source.sha256:
+        raise SceneError(f"{source.path}: the scene file this worker received differs from the sweep's "
+                         f"(sha256 {got[:12]} != {source.sha256[:12]}); it was changed on the way")
+    scene, _ = _SCENES.get(source.sha256, lambda: loads(source.text, Path(source.path)))
+    return _solve_rows(scene, chunk)
+
+
+def _solve_rows(scene: Scene, chunk) -> list[dict]:
+    """A refused setting (SceneError, ModelError) is an INVALID row, a crashed back end a FAILED row,
+    anything else unexpected an ERROR row naming the exception: a sweep outlives its variants."""
     rows = []
     for number, overrides in chunk:
         row = {**overrides, "variant": number, "build_s": None, "solve_s": None}
@@ -159,16 +254,18 @@ def run_chunk(case_id: str, chunk: list[tuple[int, dict]], scene_sha256: str | N
 
 def sweep(scene: Scene, grid=(), random=(), *, samples: int = 0, seed: int = 0, out: Path | None = None,
           scheduler: str | None = None, workers: int = 1, chunk: int = 100, progress: bool = True,
-          connect_timeout_s: float = 5.0, on_chunk: Callable[[list[dict]], None] | None = None) -> pa.Table:
+          connect_timeout_s: float = 5.0, on_chunk: Callable[[list[dict]], None] | None = None,
+          max_variants: int = MAX_VARIANTS) -> pa.Table:
     """Run every variant of a sweep and return (and write, when `out` is given) its table.
 
     Parameters
     ----------
-    scene : the scene swept (``registry.find(case_id)``).
+    scene : the scene swept (``registry.find(case_id)`` or ``scene.load(path)``: any file).
     grid, random : Axis sequences (``parse_grid``, ``parse_random``).
     samples, seed : random draws per grid point and the seed of the generator.
     out : Parquet file; finished chunks go to ``<out>.parts/`` as they arrive and are merged into
-        ``out`` at the end. Variants already in ``out`` or its parts are skipped.
+        ``out`` at the end. Variants already in ``out`` or its parts are skipped. One sweep at a
+        time writes it (``<out>.lock``); a second is refused at once.
     scheduler : a Dask scheduler address (``tcp://host:8786``); None runs on this machine.
     workers : without a scheduler, 1 runs in this process; more spreads the chunks over as many
         local processes (spawned, each keeping its own solver builds).
@@ -176,10 +273,15 @@ def sweep(scene: Scene, grid=(), random=(), *, samples: int = 0, seed: int = 0, 
     progress : draw a tqdm bar on stderr (rate and time remaining).
     connect_timeout_s : how long to try the scheduler before giving up [s].
     on_chunk : called with each chunk's rows as it arrives (after it is written).
+    max_variants : a larger request is refused before anything is allocated.
 
     Returns
     -------
     pyarrow.Table, one row per variant in variant order.
+
+    Raises
+    ------
+    SweepInterrupted : on Ctrl-C; the finished chunks stay in ``<out>.parts/``.
 
     Examples
     --------
@@ -193,34 +295,46 @@ def sweep(scene: Scene, grid=(), random=(), *, samples: int = 0, seed: int = 0, 
     if scheduler and workers > 1:
         raise SceneError("give either --scheduler (the cluster's workers run it) or --workers, not both",
                          key="workers")
-    spec, variants = plan(scene, grid, random, samples=samples, seed=seed)
-    meta = {"case": spec.case, "spec": json.loads(spec.as_json()), "scene_sha256": scene_hash(scene)}
-    store = _Store(Path(out), meta) if out is not None else None
-    done = store.done() if store else set()
-    todo = [(i, v) for i, v in enumerate(variants) if i not in done]
-    chunks = [todo[i:i + chunk] for i in range(0, len(todo), chunk)]
+    spec, variants = plan(scene, grid, random, samples=samples, seed=seed, max_variants=max_variants)
+    source = SceneText.of(scene)
+    meta = {"case": spec.case, "spec": json.loads(spec.as_json()), "scene_sha256": source.sha256}
     client = _connect(scheduler, connect_timeout_s) if scheduler else None   # before anything is written
+    store = _Store(Path(out), meta) if out is not None else None
     rows: list[dict] = []           # kept in memory only when there is no file to hold them
     lost: list[str] = []            # why a Dask task failed for good
     try:
         if store:
-            store.open()
+            store.lock()
+        done = store.done() if store else set()
+        todo = [(i, v) for i, v in enumerate(variants) if i not in done]
+        chunks = [todo[i:i + chunk] for i in range(0, len(todo), chunk)]
         bar = _bar(len(variants), len(done), progress)
-        for got in (_on_dask(client, spec.case, chunks, meta["scene_sha256"], lost) if client
-                    else _on_pool(workers, spec.case, chunks) if workers > 1
-                    else (run_chunk(spec.case, c) for c in chunks)):
-            if store:
-                store.write_part(got)
-            else:
-                rows.extend(got)
-            bar.update(len(got))
-            if on_chunk:
-                on_chunk(got)
+        count = len(done)
+        try:
+            for got in (_on_dask(client, source, chunks, lost) if client
+                        else _on_pool(workers, source, chunks) if workers > 1
+                        else (_solve_rows(scene, c) for c in chunks)):
+                if store:
+                    store.write_part(got)
+                else:
+                    rows.extend(got)
+                count += len(got)
+                bar.update(len(got))
+                if on_chunk:
+                    on_chunk(got)
+        except KeyboardInterrupt:
+            bar.close()
+            kept = (f"kept in {store.parts}; re-run the same command to resume" if store
+                    else "nothing was kept (no --out); give --out to make a sweep resumable")
+            raise SweepInterrupted(f"sweep of {spec.case} interrupted: {count} of {len(variants)} variants "
+                                   f"done, {kept}", done=count, total=len(variants)) from None
         bar.close()
+        table = store.consolidate() if store else _table(sorted(rows, key=lambda r: r["variant"]), spec.keys, meta)
     finally:
         if client:
             client.close()
-    table = store.consolidate() if store else _table(sorted(rows, key=lambda r: r["variant"]), spec.keys, meta)
+        if store:
+            store.unlock()
     missing = len(variants) - table.num_rows
     if missing:
         raise SolverError(f"{missing} of {len(variants)} variants were not computed"
@@ -230,9 +344,26 @@ def sweep(scene: Scene, grid=(), random=(), *, samples: int = 0, seed: int = 0, 
 
 
 def read_table(path) -> tuple[pa.Table, dict]:
-    """A sweep's table and its metadata (case, spec, scene hash); refuses a Parquet file of no sweep."""
+    """A sweep's table and its metadata (case, spec, scene hash); refuses a Parquet file of no sweep
+    and a table with a variant stored twice."""
     meta = _read_meta(path)
-    return pq.read_table(path), meta
+    try:
+        table = pq.read_table(path)
+    except (OSError, pa.ArrowInvalid) as exc:
+        raise SceneError(f"{path}: not a readable Parquet file ({exc})") from None
+    check_unique(table, path)
+    return table, meta
+
+
+def check_unique(table: pa.Table, where) -> None:
+    """Refuse a sweep table holding a variant more than once (`where` names it in the message)."""
+    variants = table.column("variant").to_numpy()
+    numbers, counts = np.unique(variants, return_counts=True)
+    twice = numbers[counts > 1]
+    if len(twice):
+        shown = ", ".join(str(int(v)) for v in twice[:5]) + (", ..." if len(twice) > 5 else "")
+        raise SceneError(f"{where}: {len(twice)} variants are stored more than once ({shown}); the table is "
+                         f"not one sweep's: re-run the sweep with this --out to rebuild it", key="variant")
 
 
 def _read_meta(path) -> dict:
@@ -250,13 +381,61 @@ def _read_meta(path) -> dict:
 
 
 class _Store:
-    """The --out file and its sidecar folder of per-chunk parts."""
+    """The --out file, its lock and its sidecar folder of per-chunk parts (each with its sha256)."""
 
     def __init__(self, path: Path, meta: dict):
         self.path, self.meta = path, meta
         self.parts = path.with_name(path.name + ".parts")
-        for file in self._files():
-            self._own(file)
+        self.lock_path = path.with_name(path.name + ".lock")
+        self._lock = None
+
+    def lock(self):
+        """Take `<out>.lock` (one writer per file), drop damaged parts, refuse another sweep's files."""
+        if self.path.is_dir():
+            raise SceneError(f"{self.path}: a folder; --out names the table's file, e.g. {self.path / 'sweep.parquet'}",
+                             key="out")
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        while True:
+            fd = os.open(self.lock_path, os.O_RDWR | os.O_CREAT, 0o644)
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError as exc:
+                os.close(fd)
+                if exc.errno not in (errno.EAGAIN, errno.EACCES):
+                    raise
+                raise SceneError(f"{self.path} is being written by another sweep (pid {self._holder()}); "
+                                 f"wait for it or choose another --out", key="out") from None
+            try:
+                same = os.fstat(fd).st_ino == os.stat(self.lock_path).st_ino
+            except FileNotFoundError:
+                same = False
+            if same:                 # else its holder removed it as we opened it: take the new one
+                break
+            os.close(fd)
+        os.ftruncate(fd, 0)
+        os.write(fd, f"{os.getpid()}\n".encode())
+        self._lock = fd
+        try:
+            for stale in self.path.parent.glob(f"{self.path.name}.*.tmp"):   # a merge killed mid-write
+                stale.unlink()
+            self._drop_damaged()
+            for file in self._files():
+                self._own(file)
+        except BaseException:
+            self.unlock()
+            raise
+
+    def unlock(self):
+        if self._lock is not None:
+            os.unlink(self.lock_path)        # while still held: the next sweep makes a fresh one
+            os.close(self._lock)
+            self._lock = None
+
+    def _holder(self):
+        try:
+            return self.lock_path.read_text().strip() or "unknown"
+        except OSError:
+            return "unknown"
 
     def _own(self, path):
         theirs = _read_meta(path)
@@ -265,44 +444,102 @@ class _Store:
                              f"{_describe(self.meta)}; refusing to mix them: choose another --out "
                              f"or remove that file", key="out")
 
+    def _drop_damaged(self):
+        """A part whose bytes are not those written (or cannot be read) is named, removed and its
+        variants computed again; so is a part whose checksum never got written (killed in between)."""
+        for part in self._parts():
+            check = part.with_name(part.name + ".sha256")
+            try:
+                want, _, count = check.read_text().partition(" ")
+                count = int(count)
+            except (OSError, ValueError):
+                why, want, count = "no checksum (the sweep stopped while writing it)", None, None
+            if want is not None:
+                try:
+                    got = hashlib.sha256(part.read_bytes()).hexdigest()
+                    why = None if got == want else "damaged (checksum mismatch)"
+                except OSError as exc:
+                    why = f"unreadable ({exc.strerror})"
+            if why:
+                what = f"its {count} variants are" if count is not None else "its variants are"
+                warnings.warn(f"{part}: {why}; {what} recomputed", SweepWarning, stacklevel=4)
+                try:
+                    shutil.rmtree(part) if part.is_dir() else part.unlink(missing_ok=True)
+                    check.unlink(missing_ok=True)
+                except OSError as exc:
+                    raise SceneError(f"{part}: cannot remove this damaged part ({exc.strerror}); remove it "
+                                     f"by hand and re-run", key="out") from None
+
     def done(self) -> set[int]:
         tables = [pq.read_table(p, columns=["variant"]) for p in self._files()]
         return {int(v) for t in tables for v in t.column("variant").to_pylist()}
 
-    def open(self):
-        self.parts.mkdir(parents=True, exist_ok=True)
-
     def write_part(self, rows):
+        self.parts.mkdir(parents=True, exist_ok=True)
         first = min(r["variant"] for r in rows)
         path = self.parts / f"part-{first:09d}.parquet"
-        tmp = path.with_suffix(".tmp")
-        pq.write_table(_table(rows, _keys(self.meta), self.meta), tmp)
-        tmp.replace(path)          # a part is whole or absent, even if the sweep is killed mid-write
+        sink = pa.BufferOutputStream()
+        pq.write_table(_table(rows, _keys(self.meta), self.meta), sink)
+        data = sink.getvalue().to_pybytes()
+        _write_atomic(path, data)      # a part is whole or absent, even if the sweep is killed mid-write
+        _write_atomic(path.with_name(path.name + ".sha256"),
+                      f"{hashlib.sha256(data).hexdigest()} {len(rows)}\n".encode())
 
     def consolidate(self) -> pa.Table:
-        tables = [pq.read_table(p) for p in self._files()]
+        """Merge `out` and the parts into `out` (atomic); part rows already in `out` (a merge killed
+        before the parts were removed) are dropped, so the merge can be run again at any point."""
+        tables, seen = [], pa.array([], pa.int64())
+        for file in self._files():
+            table = pq.read_table(file)
+            table = table.filter(pc.invert(pc.is_in(table.column("variant"), value_set=seen)))
+            table = _unique_variants(table)
+            seen = pa.concat_arrays([seen, table.column("variant").combine_chunks()])
+            tables.append(table)
         table = (pa.concat_tables(tables, promote_options="default") if tables
                  else _table([], _keys(self.meta), self.meta))
         table = _ordered(table.sort_by("variant"), _keys(self.meta)).replace_schema_metadata(
             {META_KEY: json.dumps(self.meta, sort_keys=True).encode()})
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = self.path.with_name(self.path.name + ".tmp")
-        pq.write_table(table, tmp)
-        tmp.replace(self.path)
+        sink = pa.BufferOutputStream()
+        pq.write_table(table, sink)
+        _write_atomic(self.path, sink.getvalue().to_pybytes())
         shutil.rmtree(self.parts, ignore_errors=True)     # all of it is in the file now
         return table
 
+    def _parts(self):
+        return sorted(self.parts.glob("*.parquet")) if self.parts.is_dir() else []
+
     def _files(self):
-        parts = sorted(self.parts.glob("*.parquet")) if self.parts.is_dir() else []
-        return ([self.path] if self.path.exists() else []) + parts
+        return ([self.path] if self.path.exists() else []) + self._parts()
 
 
-def _on_dask(client, case_id, chunks, scene_sha256, lost):
+def _unique_variants(table):
+    """The first row of each variant (a table written twice by an interrupted merge holds two)."""
+    variants = table.column("variant").to_numpy()
+    _, first = np.unique(variants, return_index=True)
+    return table if len(first) == len(variants) else table.take(np.sort(first))
+
+
+def _write_atomic(path: Path, data: bytes):
+    """`data` into `path` whole or not at all: a temporary file beside it, fsynced, renamed over it."""
+    tmp = path.with_name(path.name + f".{os.getpid()}.tmp")
+    with open(tmp, "wb") as f:
+        f.write(data)
+        f.flush()
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
+    folder = os.open(path.parent, os.O_RDONLY)
+    try:
+        os.fsync(folder)               # the rename itself survives a power cut
+    finally:
+        os.close(folder)
+
+
+def _on_dask(client, source, chunks, lost):
     """Chunks as Dask tasks; their rows as they finish. A lost worker's tasks are rescheduled by
-    Dask; a task that still fails (KilledWorker, a worker's different scene) leaves its variants
-    out, its reason appended to `lost`, and the sweep says so at the end."""
+    Dask; a task that still fails (KilledWorker, a scene text damaged on the way) leaves its
+    variants out, its reason appended to `lost`, and the sweep says so at the end."""
     from distributed import as_completed
-    futures = [client.submit(run_chunk, case_id, c, scene_sha256, pure=False) for c in chunks]
+    futures = [client.submit(run_chunk, source, c, pure=False) for c in chunks]
     for future in as_completed(futures):
         if future.status == "finished":
             yield future.result()
@@ -311,14 +548,17 @@ def _on_dask(client, case_id, chunks, scene_sha256, lost):
         future.release()
 
 
-def _on_pool(workers, case_id, chunks):
+def _on_pool(workers, source, chunks):
     """Chunks on local processes, rows as they finish. Spawned, not forked: a child inherits no
-    half-initialised solver state from this process."""
+    half-initialised solver state from this process. On Ctrl-C the chunks not started are dropped."""
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor, as_completed
-    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
-        for future in as_completed([pool.submit(run_chunk, case_id, c) for c in chunks]):
+    pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"))
+    try:
+        for future in as_completed([pool.submit(run_chunk, source, c) for c in chunks]):
             yield future.result()
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
 
 
 def _connect(address, timeout_s):
@@ -387,7 +627,7 @@ def _sweepable(scene):
 
 def scene_hash(scene) -> str:
     """sha256 of a scene's file: a sweep table records it, so a table of another version shows."""
-    return hashlib.sha256(Path(scene.path).read_bytes()).hexdigest()
+    return SceneText.of(scene).sha256
 
 
 def describe_axes(spec: dict) -> list[str]:
@@ -418,4 +658,7 @@ def _number(text, flag, word, name):
         value = math.nan
     if not math.isfinite(value):
         raise SceneError(f"{flag} {text!r}: {name} = {word!r} is not a finite number", key=text.partition("=")[0])
+    if abs(value) > AXIS_LIMIT:
+        raise SceneError(f"{flag} {text!r}: {name} = {word} is beyond ±{AXIS_LIMIT:g}; no parameter or setting "
+                         f"of a mechanism is that large", key=text.partition("=")[0])
     return value

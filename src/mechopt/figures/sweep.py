@@ -23,7 +23,7 @@ from typing import NamedTuple
 import numpy as np
 
 from mechopt.plots import save_figure
-from mechopt.sweep import META_KEY
+from mechopt.sweep import META_KEY, check_unique
 
 __all__ = ["plot_sweep", "outputs_of", "grid_of", "boundary_of", "Grid"]
 
@@ -114,13 +114,18 @@ def plot_sweep(table, out_dir, *, scene=None, outputs=None) -> list[Path]:
     Returns
     -------
     list of Path, one per output: ``sweep_<output>_vs_<key1>[_<key2>][_by_<key3>].png``.
+
+    Raises
+    ------
+    SceneError : the table holds a variant more than once.
     """
     import matplotlib
     matplotlib.use("Agg")
+    case = scene.id if scene else _meta(table).get("case", "sweep")
+    check_unique(table, f"sweep table of {case}")     # a twice-written table would draw wrong maps
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     keys = _swept(table)
-    case = scene.id if scene else _meta(table).get("case", "sweep")
     regular = _regular(table, keys)
     paths = []
     for output in outputs or outputs_of(table, scene):
