@@ -71,3 +71,16 @@ def test_json_is_written_whole_or_not_at_all(tmp_path):
     import json
     assert json.loads(out.read_text())["case"] == "stop-impact/frequencies"
     assert [p.name for p in out.parent.iterdir()] == ["r.json"]       # no temporary file left beside it
+
+
+def test_sweep_takes_a_scene_file_and_refuses_a_huge_grid_before_work(tmp_path, capsys):
+    path = tmp_path / "mine.toml"
+    assert main(["new", "loom", str(path)]) == 0
+    out = tmp_path / "mine.parquet"
+    assert main(["sweep", str(path), "--grid", "amplitude_limit_mm=0.08:0.14:3", "--out", str(out)]) == 0
+    assert "my/mine: 3 variants (3 SOLVED)" in capsys.readouterr().out
+    assert main(["sweep", str(path), "--grid", "amplitude_limit_mm=0.08:0.14:100000",
+                 "--grid", "sigma_H_limit_MPa=600:1000:100000", "--out", str(tmp_path / "huge.parquet")]) == 2
+    err = capsys.readouterr().err
+    assert "10,000,000,000 variants" in err and "exceed the limit of 1,000,000" in err
+    assert not (tmp_path / "huge.parquet").exists()

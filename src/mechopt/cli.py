@@ -10,6 +10,7 @@ import json
 import os
 import shlex
 import sys
+import warnings
 from pathlib import Path
 
 from mechopt import __version__, registry
@@ -93,6 +94,8 @@ def _parser():
     sweep.add_argument("--chunk", type=int, default=100, metavar="N", help="variants per task")
     sweep.add_argument("--out", type=Path, metavar="FILE", help="Parquet table (default out/sweep/<case>.parquet)")
     sweep.add_argument("--plot", type=Path, metavar="DIR", help="write the sweep's figures into DIR")
+    sweep.add_argument("--max-variants", type=_positive_int, default=1_000_000, metavar="N",
+                       help="refuse a sweep of more variants than this before any work (default 1,000,000)")
     report = sub.add_parser("report", parents=[common],
                             help="one static HTML page: validation table, figures, maps, bench plots")
     report.add_argument("--out", type=Path, default=Path("out/report"), metavar="DIR")
@@ -246,8 +249,18 @@ def _sweep(args) -> int:
     scene = registry.find(args.case)
     out = args.out or Path("out/sweep") / f"{scene.id.replace('/', '_')}.parquet"
     _check_outputs(table_file=out, plot_dir=args.plot)
-    table = sweep.sweep(scene, grid, random, samples=args.samples, seed=args.seed,
-                        out=out, scheduler=args.scheduler, workers=args.workers, chunk=args.chunk)
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always", sweep.SweepWarning)
+        try:
+            table = sweep.sweep(scene, grid, random, samples=args.samples, seed=args.seed, out=out,
+                                scheduler=args.scheduler, workers=args.workers, chunk=args.chunk,
+                                max_variants=args.max_variants)
+        except sweep.SweepInterrupted as stop:
+            print(f"interrupted: {stop}", file=sys.stderr)
+            return INTERRUPTED
+        finally:
+            for warning in said:
+                print(f"warning: {warning.message}", file=sys.stderr)
     counts = Counter(table.column("status").to_pylist())
     print(f"{scene.id}: {table.num_rows} variants ({', '.join(f'{n} {s}' for s, n in sorted(counts.items()))})")
     print(f"table: {out}")
