@@ -185,20 +185,19 @@ def test_grid_scan_with_too_narrow_width_names_best_achievable(task):
     assert stated > 0.01
 
 
-def test_grid_scan_with_width_wider_than_cam_reports_double_crossings(task):
-    # the paper warns (Sec. IV) that its test goes blind for widths beyond a; it must still run
-    wide = dataclasses.replace(task, err_width_mm=30.0)
+def test_grid_scan_with_width_wider_than_cam_equals_brute_force_lattice(task):
+    # the paper warns (Sec. IV) that its test goes blind for widths beyond a; it must still run,
+    # and still give the scan's answer: every lattice point against every node, in the test
+    wide = dataclasses.replace(task, err_width_mm=30.0, step_mm=1.0, H_min_mm=40.0, H_max_mm=80.0,
+                               L_min_mm=30.0, L_max_mm=60.0)
     got = grid_scan(wide, count=50)
-    assert got.status is Status.SOLVED
-    assert isinstance(got.diagnostics["segments_crossed_twice"], int)
     t = np.arange(50) * (T_FINISH_PUBLISHED_RAD / 50)
-    px, py = ideal_point(t, 25.0, 2.0)
-    nx, ny = ideal_normal(t)
-    lam = np.linspace(-30.0, 30.0, 20001)
-    inside = limacon_implicit(px[:, None] + lam * nx[:, None], py[:, None] + lam * ny[:, None],
-                              got.values["H_mm"], got.values["L_mm"]) < 0
-    changes = np.count_nonzero(np.diff(inside, axis=1), axis=1)
-    assert got.diagnostics["segments_crossed_twice"] == int(np.count_nonzero(changes >= 2))
+    passing = brute_force_scan(np.arange(40.0, 81.0), np.arange(30.0, 61.0), t, 25.0, 2.0, 30.0)
+    assert 0 < len(passing) < 41 * 31                 # the band decides: neither nothing nor everything
+    assert got.values["n_passing"] == len(passing)
+    assert (got.values["H_mm"], got.values["L_mm"]) == pytest.approx(passing[0], abs=1e-9)
+    H, L = np.array(passing).T
+    assert got.diagnostics["passing_box_mm"] == pytest.approx([H.min(), H.max(), L.min(), L.max()], abs=1e-9)
     assert all(math.isfinite(v) for v in got.values.values())
 
 
@@ -225,9 +224,38 @@ def test_minimax_beats_published_linkage(task, best):
     assert best.values["max_deviation_mm"] <= task.err_width_mm
 
 
+def ideal_eq9(t, a, h):
+    """Eq. (9) of the paper, written out: the torch's ideal path."""
+    X = a * (2 * np.cos(t) + np.cos(2 * t) + 1) + h * np.cos(1.5 * t) - (4 * a + h)
+    Y = a * (2 * np.sin(t) + np.sin(2 * t)) + h * np.sin(1.5 * t)
+    return X, Y
+
+
+def brute_max_deviation(a, h, H, L, t_end, samples=300):
+    """Largest distance from the ideal path to the limaçon, by brute force: `brute_distance`
+    (a dense polyline, refined) at evenly spread path samples, then every local maximum
+    maximised by ternary search in t over +-2 sample spacings."""
+    def dist(tt):
+        return brute_distance(*(float(v) for v in ideal_eq9(tt, a, h)), H, L, samples=20_000)
+    t = np.linspace(0.0, t_end, samples)
+    coarse = np.array([dist(tt) for tt in t])
+    padded = np.r_[-np.inf, coarse, -np.inf]
+    found = [coarse.max()]
+    for k in np.flatnonzero((padded[1:-1] >= padded[:-2]) & (padded[1:-1] >= padded[2:])):
+        lo, hi = t[max(k - 2, 0)], t[min(k + 2, samples - 1)]
+        for _ in range(40):                      # (2/3)^40 of 4 spacings: ~1e-9 rad
+            m1, m2 = lo + (hi - lo) / 3, hi - (hi - lo) / 3
+            lo, hi = (m1, hi) if dist(m1) < dist(m2) else (lo, m2)
+        found.append(max(dist(lo), dist(hi)))
+    return max(found)
+
+
 def test_minimax_reports_dense_deviation_of_its_answer(task, best):
-    assert best.values["max_deviation_mm"] == pytest.approx(deviation(task, best.values["H_mm"], best.values["L_mm"]),
-                                                            abs=1e-12)
+    # an independent measure of the answer: brute-force distances in the test, no package code
+    # but the answer; the node maximum (nodes_max_deviation_mm) is 1.6e-7 mm below it, so a
+    # solver reporting it instead of the dense check fails here
+    brute = brute_max_deviation(25.0, 2.0, best.values["H_mm"], best.values["L_mm"], task.t_finish_rad)
+    assert best.values["max_deviation_mm"] == pytest.approx(brute, abs=2e-8)
 
 
 def test_minimax_beats_every_lattice_point_around_it(task, best):
