@@ -78,10 +78,10 @@ def grid_scan(task: LinkageFit, *, count: Nodes = 1000,
     "open_start") then fails everywhere at the paper's width. `diagnostics` reports this.
     """
     start = time.perf_counter()
+    H_grid, L_grid = _lattice(task)             # first: a lattice too large is refused before any work
     t_finish = task.t_finish_read_rad
     t = _node_times(task, count, nodes)
     ends = _segment_ends(t, task)
-    H_grid, L_grid = _lattice(task)
     build = time.perf_counter() - start
 
     # golden-ratio spread from the far end: early nodes pass nearly every point, late ones ~3 %
