@@ -6,7 +6,10 @@
 * `evolve`:    scipy's differential evolution on the minimax objective: the peer a user would try.
 * `check`:     a given (H, L) measured both ways, for what-if maps over the link lengths.
 
-Every answer's `max_deviation_mm` is the independent Euclidean check of `deviation`.
+Every answer's `max_deviation_mm` is the independent Euclidean check of `deviation`, and every
+fitting solver's status follows one rule (`_verdict`, `_on_edge`): outside err_width_mm is
+INFEASIBLE with the best values kept, on a side of the default box LIMIT naming it. Lengths are
+solved in units of the cam (`_scale`), so one set of tolerances serves a 1 um and a 1 m cam.
 """
 import inspect
 import math
