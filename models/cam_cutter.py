@@ -102,6 +102,12 @@ def matched_linkage(a, h=0.0):
     return H, span - H
 
 
+PAPER_A_MM = 25.0              # the paper's cam (Sec. IV): the size the solvers' tolerances were tuned on
+A_RANGE_MM = (1e-6, 1e6)       # cam sizes accepted
+LINK_MAX_PER_A = 100.0         # links and box bounds accepted up to this many cam sizes
+MIN_LINK_PER_A = 0.01          # a derived lower bound never below this many cam sizes
+
+
 class _OnIdealPath:
     """What every task on the ideal path (`a_mm`, `h_mm`, `y_tol_mm`) knows of its end."""
 
@@ -125,13 +131,15 @@ class LinkageFit(_OnIdealPath):
     the path (the paper's ERRSHIFT, Δd); `step_mm` manufacturing precision of H and L (STEP);
     `h_mm` kerf offset (effect torch_offset); `y_tol_mm` accuracy in Y of t_FINISH; `H_min_mm` ...
     `L_max_mm` the search box (LOW_H ... HIGH_L); a bound not given is the matched linkage
-    (`matched_linkage`, exact for h = 0) +- a/2.
+    (`matched_linkage`, exact for h = 0) +- a/2. `step_mm` and `y_tol_mm` not given keep the
+    paper's ratios to its cam (0.01 mm and 0.001 mm at a = 25 mm, `scaled_default`); the value
+    filled in is stored, so `dataclasses.replace` of `a_mm` alone keeps it.
     """
     a_mm: float
     err_width_mm: float
-    step_mm: float = 0.01
+    step_mm: float | None = None
     h_mm: float = 0.0
-    y_tol_mm: float = 0.001
+    y_tol_mm: float | None = None
     H_min_mm: float | None = None
     H_max_mm: float | None = None
     L_min_mm: float | None = None
@@ -144,10 +152,12 @@ class LinkageFit(_OnIdealPath):
 
     def __post_init__(self):
         _check_path(self)
+        _fill_scaled_default(self, "step_mm")
         _require(self, "step_mm", self.step_mm > 0, "must be > 0")
+        _require(self, "step_mm", self.step_mm <= self.a_mm, f"must be <= a_mm={self.a_mm} (the lattice must be finer than the cam)")
         for key in ("H_min_mm", "H_max_mm", "L_min_mm", "L_max_mm"):
-            value = getattr(self, key)
-            _require(self, key, value is None or value > 0, "must be > 0 (a link length)")
+            if getattr(self, key) is not None:
+                _check_link(self, key)
         box = self.bounds()
         for k, (lo, hi) in enumerate((("H_min_mm", "H_max_mm"), ("L_min_mm", "L_max_mm"))):
             if box[2 * k] > box[2 * k + 1]:
@@ -161,13 +171,19 @@ class LinkageFit(_OnIdealPath):
         """`matched_linkage` of this cardioid (H, L) [mm]: the NLP's start and the default box's centre."""
         return matched_linkage(self.a_mm, self.h_mm)
 
-    def bounds(self) -> tuple[float, float, float, float]:
-        """(H_min, H_max, L_min, L_max) [mm]: the given box, gaps filled around the matched linkage."""
+    def bounds(self, pad_per_a: float = 0.5) -> tuple[float, float, float, float]:
+        """(H_min, H_max, L_min, L_max) [mm]: the given box, gaps filled around the matched linkage
+        +- pad_per_a * a (a solver widens a derived side its optimum lies on). A derived lower end
+        never drops below MIN_LINK_PER_A * a: at the default pad it is >= 1.24 a for every h < a."""
         H0, L0 = self.matched
-        pad = self.a_mm / 2
-        given = (self.H_min_mm, self.H_max_mm, self.L_min_mm, self.L_max_mm)
-        derived = (H0 - pad, H0 + pad, L0 - pad, L0 + pad)
-        return tuple(float(g) if g is not None else max(d, self.step_mm) for g, d in zip(given, derived))
+        pad = pad_per_a * self.a_mm
+        floor = MIN_LINK_PER_A * self.a_mm
+        derived = (max(H0 - pad, floor), H0 + pad, max(L0 - pad, floor), L0 + pad)
+        return tuple(float(g) if g is not None else d for g, d in zip(self.given_bounds(), derived))
+
+    def given_bounds(self) -> tuple[float | None, ...]:
+        """(H_min_mm, H_max_mm, L_min_mm, L_max_mm) as given, None where the task derives it."""
+        return (self.H_min_mm, self.H_max_mm, self.L_min_mm, self.L_max_mm)
 
 
 @dataclass(frozen=True)
@@ -182,23 +198,49 @@ class LinkageCheck(_OnIdealPath):
     H_mm: float
     L_mm: float
     h_mm: float = 0.0
-    y_tol_mm: float = 0.001
+    y_tol_mm: float | None = None
 
     EFFECTS: ClassVar[dict[str, Effect]] = LinkageFit.EFFECTS
 
     def __post_init__(self):
         _check_path(self)
         for key in ("H_mm", "L_mm"):
-            _require(self, key, getattr(self, key) > 0, "must be > 0 (a link length)")
+            _check_link(self, key)
 
 
 def _check_path(task):
-    """The ideal path's inputs, shared by every task on it."""
-    for key in ("a_mm", "err_width_mm", "y_tol_mm"):
+    """The ideal path's inputs, shared by every task on it: each in a physical range, so no
+    solver meets an infinite or absurd number (ranges relative to a keep every size usable)."""
+    a_lo, a_hi = A_RANGE_MM
+    _require(task, "a_mm", task.a_mm > 0, "must be > 0")
+    _require(task, "a_mm", a_lo <= task.a_mm <= a_hi, f"must be within {a_lo:g} .. {a_hi:g} mm (a cam of 1 nm to 1 km)")
+    _fill_scaled_default(task, "y_tol_mm")
+    for key in ("err_width_mm", "y_tol_mm"):
         _require(task, key, getattr(task, key) > 0, "must be > 0")
+    _require(task, "err_width_mm", task.err_width_mm <= LINK_MAX_PER_A * task.a_mm,
+             f"must be <= {LINK_MAX_PER_A:g} a_mm = {LINK_MAX_PER_A * task.a_mm:g} (a band a hundred cams wide)")
+    _require(task, "y_tol_mm", task.y_tol_mm <= task.a_mm, f"must be <= a_mm={task.a_mm} (a reading must be finer than the cam)")
     _require(task, "h_mm", task.h_mm >= 0, "must be >= 0 (the torch runs outside the cam)")
     _require(task, "h_mm", task.h_mm < task.a_mm,
              f"must be < a_mm={task.a_mm} (a wider kerf than the cardioid has no cam left)")
+
+
+def _check_link(task, key):
+    """A link length (or a bound on one): positive, and at most LINK_MAX_PER_A cam sizes."""
+    _require(task, key, getattr(task, key) > 0, "must be > 0 (a link length)")
+    _require(task, key, getattr(task, key) <= LINK_MAX_PER_A * task.a_mm,
+             f"must be <= {LINK_MAX_PER_A:g} a_mm = {LINK_MAX_PER_A * task.a_mm:g} (the matched links are 1.7 a .. 4.6 a)")
+
+
+def scaled_default(key, a):
+    """The default of `step_mm` or `y_tol_mm` for a cam of size a [mm]: the paper's value at its
+    a = 25 mm, in proportion (a / 2500 and a / 25000: exactly 0.01 and 0.001 at a = 25)."""
+    return a / {"step_mm": 2500, "y_tol_mm": 25000}[key]
+
+
+def _fill_scaled_default(task, key):
+    if getattr(task, key) is None:
+        object.__setattr__(task, key, scaled_default(key, task.a_mm))     # frozen: set once, here
 
 
 def _require(task, key, ok, what):

@@ -3,6 +3,8 @@
 Every geometric check below restates the paper's equation in the test, or differentiates
 numerically, instead of calling the model a second time.
 """
+import re
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -268,3 +270,58 @@ def test_equal_bounds_are_accepted():
 def test_nan_size_is_rejected():
     with pytest.raises(ModelError, match=r"a_mm=nan must be > 0"):
         paper_task(a_mm=float("nan"))
+
+
+@pytest.mark.parametrize("value", [float("inf"), 1e300, 1e7, 1e-9])
+def test_cam_size_outside_its_physical_range_is_rejected(value):
+    with pytest.raises(ModelError, match=rf"^a_mm={re.escape(str(value))} must be within 1e-06 \.\. 1e\+06 mm \(a cam of 1 nm to 1 km\)$") as err:
+        LinkageFit(a_mm=value, err_width_mm=1e-10)
+    assert err.value.key == "a_mm"
+
+
+@pytest.mark.parametrize("key, value, message", [
+    ("err_width_mm", float("inf"), r"err_width_mm=inf must be <= 100 a_mm = 2500 \(a band a hundred cams wide\)"),
+    ("y_tol_mm", 26.0, r"y_tol_mm=26\.0 must be <= a_mm=25\.0 \(a reading must be finer than the cam\)"),
+    ("step_mm", float("inf"), r"step_mm=inf must be <= a_mm=25\.0 \(the lattice must be finer than the cam\)"),
+    ("H_max_mm", float("inf"), r"H_max_mm=inf must be <= 100 a_mm = 2500 \(the matched links are"),
+    ("L_min_mm", 1e6, r"L_min_mm=1000000\.0 must be <= 100 a_mm = 2500"),
+])
+def test_huge_or_infinite_length_is_rejected_naming_its_range(key, value, message):
+    with pytest.raises(ModelError, match=rf"^{message}") as err:
+        paper_task(**{key: value})
+    assert err.value.key == key
+
+
+@pytest.mark.parametrize("key", ["H_mm", "L_mm"])
+def test_huge_link_of_a_checked_linkage_is_rejected(key):
+    from mechopt.models.cam_cutter import LinkageCheck
+    fields = {"a_mm": 25.0, "err_width_mm": 0.075, "H_mm": 59.45, "L_mm": 47.52} | {key: float("inf")}
+    with pytest.raises(ModelError, match=rf"^{key}=inf must be <= 100 a_mm = 2500") as err:
+        LinkageCheck(**fields)
+    assert err.value.key == key
+
+
+@pytest.mark.parametrize("a", [1e-3, 1.0, 25.0, 1e3])
+def test_step_and_reading_defaults_keep_the_papers_ratio_to_the_cam(a):
+    # Sec. IV: STEP 0.01 mm and t_FINISH to 0.001 mm, for a = 25 mm
+    task = LinkageFit(a_mm=a, err_width_mm=0.003 * a)
+    assert task.step_mm == pytest.approx(0.01 * a / 25, rel=1e-15)
+    assert task.y_tol_mm == pytest.approx(0.001 * a / 25, rel=1e-15)
+    if a == 25.0:
+        assert (task.step_mm, task.y_tol_mm) == (0.01, 0.001)        # exactly the paper's values
+
+
+@pytest.mark.parametrize("a", [1e-3, 1.0, 25.0, 1e3])
+def test_default_box_is_matched_linkage_plus_minus_half_a_at_every_size(a):
+    # once clamped to at least step_mm: a 1 um cam got the box 0.01 .. 0.01 mm
+    H0, L0 = matched_linkage(a, 0.0)
+    box = LinkageFit(a_mm=a, err_width_mm=0.003 * a).bounds()
+    assert box == pytest.approx((H0 - a / 2, H0 + a / 2, L0 - a / 2, L0 + a / 2), rel=1e-12)
+    assert box[0] < 2 * a < box[1] and box[2] < 2 * a < box[3]
+
+
+def test_widened_default_box_keeps_links_positive():
+    box = LinkageFit(a_mm=25.0, h_mm=2.0, err_width_mm=0.075).bounds(pad_per_a=8.0)
+    assert box[0] == box[2] == pytest.approx(0.01 * 25.0)         # floor: MIN_LINK_PER_A a
+    H0, L0 = matched_linkage(25.0, 2.0)
+    assert (box[1], box[3]) == pytest.approx((H0 + 200.0, L0 + 200.0))

@@ -6,8 +6,13 @@
 * `evolve`:    scipy's differential evolution on the minimax objective: the peer a user would try.
 * `check`:     a given (H, L) measured both ways, for what-if maps over the link lengths.
 
-Every answer's `max_deviation_mm` is the independent Euclidean check of `deviation`.
+Every answer's `max_deviation_mm` is the independent Euclidean check of `deviation`, and every
+fitting solver's status follows one rule (`_verdict`, `_on_edge`): outside err_width_mm is
+INFEASIBLE with the best values kept, on a side of the default box LIMIT naming it. Lengths are
+solved in units of the cam (`_scale`), so one set of tolerances serves a 1 um and a 1 m cam.
 """
+import inspect
+import math
 import time
 from typing import Literal
 
@@ -17,6 +22,7 @@ from scipy.optimize import differential_evolution
 
 from mechopt.models.cache import BuildCache
 from mechopt.models.cam_cutter import (
+    PAPER_A_MM,
     LinkageCheck,
     LinkageFit,
     ideal_normal,
@@ -48,6 +54,8 @@ NODE_RULES = {
     "open_start": (1, 1),   # i = 1 .. COUNT
 }
 GRID_POINT_LIMIT = 50_000_000
+BOX_PAD_PER_A = 0.5        # the default box: matched linkage +- a/2 (`LinkageFit.bounds`)
+BOX_WIDEN_FACTOR = 4.0     # each widening of a default side the optimum lies on
 # polyline vertices seeding Newton's foot points inside the exchange rounds: 4096 match 2^16 to
 # 1e-13 mm on the paper's and other cardioids (2048 can seed the wrong branch); the reported
 # max_deviation_mm keeps the finer default of `path_distance`
@@ -73,10 +81,10 @@ def grid_scan(task: LinkageFit, *, count: Nodes = 1000,
     "open_start") then fails everywhere at the paper's width. `diagnostics` reports this.
     """
     start = time.perf_counter()
+    H_grid, L_grid = _lattice(task)             # first: a lattice too large is refused before any work
     t_finish = task.t_finish_read_rad
     t = _node_times(task, count, nodes)
     ends = _segment_ends(t, task)
-    H_grid, L_grid = _lattice(task)
     build = time.perf_counter() - start
 
     # golden-ratio spread from the far end: early nodes pass nearly every point, late ones ~3 %
@@ -123,13 +131,15 @@ def grid_scan(task: LinkageFit, *, count: Nodes = 1000,
     if deviation > task.err_width_mm:       # every node passes, yet the path leaves the band between them
         status, violated = Status.INACCURATE, ("err_width",)
         message += f"; between the {t.size} nodes the path is {deviation:.4g} mm off: raise count"
+    # the first passing point on a side of the box: the passing set may go on past it
+    status, message = _on_edge(task, status, message, H, L, (H_grid[0], H_grid[-1], L_grid[0], L_grid[-1]))
     return Result(status, values, Timing(build, solve), message=message, violated=violated,
                   diagnostics=diagnostics)
 
 
 def minimax(task: LinkageFit, *, count: Nodes = 1000, slots: Annotated[int, Interval(ge=1, le=4096)] = 8,
             max_rounds: Annotated[int, Interval(ge=1, le=10_000)] = 40,
-            nlp: Literal["sqp", "ipopt"] = "sqp") -> Result:
+            nlp: Literal["sqp", "ipopt"] = "sqp", widen: Annotated[int, Interval(ge=0, le=10)] = 3) -> Result:
     """(H, L) in the box minimising the largest distance from COUNT nodes of the ideal path to
     the limaçon, as a CasADi NLP:
 
@@ -148,23 +158,80 @@ def minimax(task: LinkageFit, *, count: Nodes = 1000, slots: Annotated[int, Inte
     followed has stopped being the nearest. The start matches the limaçon's double point and
     vertex curvature to the ideal path (`matched_linkage`), exact for h = 0.
 
+    Lengths are solved in units of a / 25 mm (`_scale`), so the tolerances tuned on the paper's
+    cam hold at every size. A side of the default box (not given) that the optimum lies on is
+    widened BOX_WIDEN_FACTOR-fold and the NLP re-solved, up to `widen` times; an optimum still on
+    one is LIMIT, naming the side. A side the user gave is a constraint: the message names it.
+
     `nlp` picks the back end of each round: "sqp" (CasADi's sqpmethod with qrqp, exact Hessian;
     a round it does not converge is re-solved by IPOPT) or "ipopt" only. Both reach the same
     (H, L) to ~1e-9 mm; SQP is ~7x faster per round (`mechopt bench cam-cutter`).
     """
     _check_count(count)
+    _check_settings(minimax, slots=slots, max_rounds=max_rounds, widen=widen)
     if nlp not in _NLP_OPTIONS:
         raise ModelError(f"nlp={nlp!r} is not an NLP back end; known: {', '.join(_NLP_OPTIONS)}", key="nlp")
     start = time.perf_counter()
     t_end = task.t_finish_rad
+    scale = _scale(task)
     t = np.linspace(0.0, t_end, count)
-    px, py = ideal_point(t, task.a_mm, task.h_mm)
-    H_lo, H_hi, L_lo, L_hi = task.bounds()
-    H, L = (float(v) for v in np.clip(task.matched, (H_lo, L_lo), (H_hi, L_hi)))
+    px, py = (v / scale for v in ideal_point(t, task.a_mm, task.h_mm))
+    pad, widened = BOX_PAD_PER_A, 0
+    H, L = task.matched
+    build_s, back_ends, unsolved, rounds_in_all = 0.0, [], {}, 0
+    while True:
+        box = task.bounds(pad)
+        H, L = (float(v) for v in np.clip((H, L), box[::2], box[1::2]))
+        got = _exchange_rounds(px, py, task.a_mm / scale, np.divide(box, scale), H / scale, L / scale,
+                               count, slots, max_rounds, nlp)
+        build_s += got["build_s"]
+        back_ends += got["back_ends"]
+        unsolved |= {r + rounds_in_all: w for r, w in got["unsolved"].items()}
+        rounds_in_all += got["rounds"]
+        status, status_word = got["status"], got["status_word"]
+        if status is Status.FAILED:
+            break
+        H, L = got["H"] * scale, got["L"] * scale
+        on_bounds = _bounds_hit(task, H, L, box)
+        derived = [name for name in on_bounds if getattr(task, name) is None]
+        if not derived or widened == widen or status is not Status.SOLVED:
+            break
+        pad, widened = pad * BOX_WIDEN_FACTOR, widened + 1     # the default box cut it short: widen, re-solve
+    rounds = rounds_in_all
+    if status is Status.FAILED:
+        return Result(Status.FAILED, {"t_finish_rad": task.t_finish_read_rad},
+                      Timing(build_s, time.perf_counter() - start - build_s),
+                      message=f"{back_ends[-1] if back_ends else nlp} failed ({status_word}) after {rounds} round(s)")
+    deviation, where = verified_deviation(task.a_mm, task.h_mm, H, L, t_end)
+    solve_s = time.perf_counter() - start - build_s       # the verification is part of the answer
+    nodes_max = got["nodes_max"] * scale
+    message = (f"{status_word} after {rounds} exchange round(s) ({', '.join(back_ends)}), "
+               f"{got['nlp_nodes']} nodes in the NLP" + (f", default box widened {widened} time(s)" if widened else ""))
+    earlier = [f"round {r}: {word}" for r, word in unsolved.items() if r < rounds]
+    if earlier:             # a later round started from it; only the last round's answer counts
+        message += f"; earlier rounds not solved ({', '.join(earlier)})"
+    status, violated, message = _verdict(task, status, message, nodes_max, deviation, count, H, L, box, on_bounds)
+    return Result(status, {"H_mm": H, "L_mm": L, "max_deviation_mm": deviation,
+                           "t_finish_rad": task.t_finish_read_rad},
+                  Timing(build_s, solve_s), message=message, violated=violated,
+                  diagnostics={"nodes_max_deviation_mm": nodes_max, "nlp_nodes": got["nlp_nodes"],
+                               "kept_nodes": got["kept_nodes"], "exchange_rounds": rounds,
+                               "nlp_status": status_word, "nlp_back_ends": back_ends,
+                               "nlp_unsolved_rounds": {str(r): w for r, w in unsolved.items()},
+                               "active_bounds": on_bounds, "box_mm": [float(b) for b in box],
+                               "box_widenings": widened,
+                               "max_deviation_at_rad": where, "t_finish_exact_rad": t_end})
+
+
+def _exchange_rounds(px, py, a, box, H, L, count, slots, max_rounds, nlp):
+    """The exchange rounds of `minimax` in the box (H_lo, H_hi, L_lo, L_hi) from (H, L), every
+    length in units of the cam scale (`_scale`), so its absolute tolerances hold at every size."""
+    H_lo, H_hi, L_lo, L_hi = box
     kept: list[int] = []           # nodes that were ever active or worst: they never leave
     back_ends: list[str] = []      # which NLP back end answered each round
     unsolved: dict[int, str] = {}  # rounds whose NLP was not solved (the next one starts from it)
     build_s, status, status_word = 0.0, Status.FAILED, "not_run"
+    every = feet = None            # every node's distance and foot point at the last round's (H, L)
     for rounds in range(1, max_rounds + 1):
         k = min(_slot_count(len(kept), slots), count)
         chosen = np.array(_pad(kept, k, count))
@@ -173,7 +240,7 @@ def minimax(task: LinkageFit, *, count: Nodes = 1000, slots: Annotated[int, Inte
         else:                      # the last round measured every node at this (H, L)
             dist, s0 = every[chosen], feet[chosen]
         sol, status, status_word, used, built_s = _solve_round(k, nlp, dict(
-            x0=np.r_[H, L, dist.max(), s0], p=np.r_[px[chosen], py[chosen], task.a_mm],
+            x0=np.r_[H, L, dist.max(), s0], p=np.r_[px[chosen], py[chosen], a],
             lbx=np.r_[H_lo, L_lo, 0.0, np.full(k, -np.inf)], ubx=np.r_[H_hi, L_hi, np.inf, np.full(k, np.inf)],
             lbg=np.zeros(3 * k), ubg=np.r_[np.zeros(k), np.full(2 * k, np.inf)]))
         build_s += built_s
@@ -195,36 +262,70 @@ def minimax(task: LinkageFit, *, count: Nodes = 1000, slots: Annotated[int, Inte
             break
     else:
         status, status_word = Status.LIMIT, "exchange_round_limit"
-    if not np.all(np.isfinite([H, L])) or status is Status.FAILED:
-        return Result(Status.FAILED, {"t_finish_rad": task.t_finish_read_rad},
-                      Timing(build_s, time.perf_counter() - start - build_s),
-                      message=f"{back_ends[-1] if back_ends else nlp} failed ({status_word}) after {rounds} round(s)")
-    deviation, where = verified_deviation(task.a_mm, task.h_mm, H, L, t_end)
-    solve_s = time.perf_counter() - start - build_s       # the verification is part of the answer
-    active_bounds = [name for name, hit in (("H_min_mm", H <= H_lo + 1e-7), ("H_max_mm", H >= H_hi - 1e-7),
-                                            ("L_min_mm", L <= L_lo + 1e-7), ("L_max_mm", L >= L_hi - 1e-7)) if hit]
-    message = (f"{status_word} after {rounds} exchange round(s) ({', '.join(back_ends)}), "
-               f"{len(chosen)} nodes in the NLP")
-    earlier = [f"round {r}: {word}" for r, word in unsolved.items() if r < rounds]
-    if earlier:             # a later round started from it; only the last round's answer counts
-        message += f"; earlier rounds not solved ({', '.join(earlier)})"
-    violated = ()
-    if status is Status.SOLVED and every.max() > task.err_width_mm:
-        status, violated = Status.INFEASIBLE, ("err_width",)
-        message = (f"no linkage in the box keeps the path within err_width_mm={task.err_width_mm}; best "
-                   f"achievable {deviation:.4g} mm" + (f" (on {', '.join(active_bounds)})" if active_bounds else ""))
-    elif status is Status.SOLVED and deviation > task.err_width_mm:
+    return {"H": H, "L": L, "status": status, "status_word": status_word, "rounds": rounds,
+            "back_ends": back_ends, "unsolved": unsolved, "build_s": build_s,
+            "nodes_max": float(every.max()) if status is not Status.FAILED else float("nan"),
+            "nlp_nodes": len(chosen), "kept_nodes": len(kept)}
+
+
+def _scale(task):
+    """The cam's size in units of the paper's (a / 25 mm, exactly 1 there): the solvers measure
+    lengths in it, so tolerances tuned on the paper's cam hold for a 1 um and a 1 m cam alike."""
+    return task.a_mm / PAPER_A_MM
+
+
+def _bounds_hit(task, H, L, box):
+    """Names of the box sides (H, L) lies on, to 1e-7 of the cam scale."""
+    tol = 1e-7 * _scale(task)
+    H_lo, H_hi, L_lo, L_hi = box
+    return [name for name, hit in (("H_min_mm", H <= H_lo + tol), ("H_max_mm", H >= H_hi - tol),
+                                   ("L_min_mm", L <= L_lo + tol), ("L_max_mm", L >= L_hi - tol)) if hit]
+
+
+def _describe_bounds(task, H, L, box, names):
+    """'H at its upper bound H_max_mm = 58 (given)' for each side in names."""
+    value = dict(zip(("H_min_mm", "H_max_mm", "L_min_mm", "L_max_mm"), box))
+    return ", ".join(f"{name[0]} at its {'lower' if 'min' in name else 'upper'} bound {name} = {value[name]:.6g} "
+                     f"({'given' if getattr(task, name) is not None else 'the default box'})" for name in names)
+
+
+def _on_edge(task, status, message, H, L, edges):
+    """The lattice solvers' share of `_verdict`: an answer on a side of the box's lattice is named;
+    on a side of the default box (not given) a SOLVED becomes LIMIT."""
+    on_bounds = _bounds_hit(task, H, L, edges)
+    if not on_bounds:
+        return status, message
+    message += f" ({_describe_bounds(task, H, L, task.bounds(), on_bounds)})"
+    if status is Status.SOLVED and any(getattr(task, n) is None for n in on_bounds):
+        status = Status.LIMIT
+        message += ": the box, not the band, stopped it; give a wider box"
+    return status, message
+
+
+def _verdict(task, status, message, nodes_max, deviation, count, H, L, box, on_bounds):
+    """The one status rule every fitting solver applies to its answer (H, L) in `box`:
+    the back end's status stands unless it is SOLVED; then, in this order, an answer on a side
+    of the default box is LIMIT (the box, not the physics, stopped it), nodes outside the band
+    are INFEASIBLE, nodes within it but the dense path outside are INACCURATE. A side the user
+    gave is a constraint: its answer keeps its status, and the message names it. Returns
+    (status, violated, message)."""
+    violated = ("err_width",) if max(nodes_max, deviation) > task.err_width_mm else ()
+    derived = [n for n in on_bounds if getattr(task, n) is None]
+    where = f" ({_describe_bounds(task, H, L, box, on_bounds)})" if on_bounds else ""
+    if status is not Status.SOLVED:
+        return status, violated, message + where
+    if derived:
+        return (Status.LIMIT, violated, f"{_describe_bounds(task, H, L, box, derived)}: the optimum may lie "
+                f"outside; give a wider box (deviation there {deviation:.4g} mm)")
+    if nodes_max > task.err_width_mm:
+        return (Status.INFEASIBLE, violated, f"no linkage in the box keeps the path within err_width_mm="
+                f"{task.err_width_mm}; best achievable {deviation:.4g} mm"
+                + (f" (on {', '.join(on_bounds)}: {_describe_bounds(task, H, L, box, on_bounds)})" if on_bounds else ""))
+    if deviation > task.err_width_mm:
         # within the band at every node, outside it between them: the nodes are too sparse
-        status, violated = Status.INACCURATE, ("err_width",)
-        message = (f"within err_width_mm={task.err_width_mm} at the {count} nodes ({every.max():.4g} mm) but "
-                   f"{deviation:.4g} mm between them: raise count")
-    return Result(status, {"H_mm": H, "L_mm": L, "max_deviation_mm": deviation,
-                           "t_finish_rad": task.t_finish_read_rad},
-                  Timing(build_s, solve_s), message=message, violated=violated,
-                  diagnostics={"nodes_max_deviation_mm": float(every.max()), "nlp_nodes": len(chosen),
-                               "kept_nodes": len(kept), "exchange_rounds": rounds,
-                               "nlp_status": status_word, "nlp_back_ends": back_ends, "nlp_unsolved_rounds": {str(r): w for r, w in unsolved.items()}, "active_bounds": active_bounds,
-                               "max_deviation_at_rad": where, "t_finish_exact_rad": t_end})
+        return (Status.INACCURATE, violated, f"within err_width_mm={task.err_width_mm} at the {count} nodes "
+                f"({nodes_max:.4g} mm) but {deviation:.4g} mm between them: raise count" + where)
+    return status, violated, message + where
 
 
 def robust(task: LinkageFit, *, count: Nodes = 1000, max_moves: Annotated[int, Interval(ge=1, le=100_000)] = 200) -> Result:
@@ -236,6 +337,9 @@ def robust(task: LinkageFit, *, count: Nodes = 1000, max_moves: Annotated[int, I
     corners (a test bounds what a finer box sampling adds). The search is a descent over lattice
     points from the minimax optimum; lattice deviations are memoised, neighbours share them.
     """
+    _check_count(count)
+    _check_settings(robust, max_moves=max_moves)
+    lattice = _lattice_indices(task)            # a box with no lattice point is refused before any work
     start = time.perf_counter()
     best = minimax(task, count=count)
     if best.status not in (Status.SOLVED, Status.INFEASIBLE):
@@ -252,13 +356,6 @@ def robust(task: LinkageFit, *, count: Nodes = 1000, max_moves: Annotated[int, I
 
     def worst_case(i, j):
         return max(deviation(i + di, j + dj) for di in (-1, 0, 1) for dj in (-1, 0, 1))
-
-    H_lo, H_hi, L_lo, L_hi = task.bounds()
-    lattice = (int(np.ceil(H_lo / step - 1e-9)), int(np.floor(H_hi / step + 1e-9)),
-               int(np.ceil(L_lo / step - 1e-9)), int(np.floor(L_hi / step + 1e-9)))
-    if lattice[0] > lattice[1] or lattice[2] > lattice[3]:
-        raise ModelError(f"the box H {H_lo:g}..{H_hi:g}, L {L_lo:g}..{L_hi:g} mm holds no multiple of "
-                         f"step_mm={step}", key="step_mm")
 
     def inside(i, j):
         return lattice[0] <= i <= lattice[1] and lattice[2] <= j <= lattice[3]
@@ -280,6 +377,7 @@ def robust(task: LinkageFit, *, count: Nodes = 1000, max_moves: Annotated[int, I
     if verified > task.err_width_mm:
         status, violated = Status.INFEASIBLE, ("err_width",)
         message = f"worst case over the manufacturing box {verified:.4g} mm exceeds err_width_mm={task.err_width_mm}"
+    status, message = _on_edge(task, status, message, H, L, tuple(k * step for k in lattice))
     return Result(status, {"H_mm": H, "L_mm": L, "max_deviation_mm": nominal, "worst_deviation_mm": verified,
                            "t_finish_rad": task.t_finish_read_rad},
                   Timing(best.timing.build_s, time.perf_counter() - start - best.timing.build_s),
@@ -297,12 +395,18 @@ def evolve(task: LinkageFit, *, count: Nodes = 1000, popsize: Annotated[int, Int
     The whole population is measured per call through the batched quartic of `normal_deviation`
     (the paper's along-normal distance: a foot-point search would need a KD-tree per candidate
     and does not batch); at the optimum it agrees with the minimax NLP's foot-point distance to
-    about 1e-5 mm. No polish: the objective is a maximum with kinks, where L-BFGS-B stalls."""
+    about 1e-5 mm. No polish: the objective is a maximum with kinks, where L-BFGS-B stalls.
+    Its answer gets the status rule of `minimax` (`_verdict`): outside err_width_mm is INFEASIBLE
+    with the best values kept, on a side of the default box LIMIT (no widening here)."""
     _check_count(count)
+    _check_settings(evolve, popsize=popsize, tol=tol, maxiter=maxiter, seed=seed)
     start = time.perf_counter()
+    scale = _scale(task)
     t = np.linspace(0.0, task.t_finish_rad, count)
     px, py, nx, ny = nodes_and_normals(t, task.a_mm, task.h_mm)
-    H_lo, H_hi, L_lo, L_hi = task.bounds()
+    px, py = px / scale, py / scale                # in units of the cam scale, like minimax
+    box = task.bounds()
+    H_lo, H_hi, L_lo, L_hi = np.divide(box, scale)
 
     def objective(population):                 # shape (2, S): every candidate in one call
         H, L = population
@@ -312,14 +416,20 @@ def evolve(task: LinkageFit, *, count: Nodes = 1000, popsize: Annotated[int, Int
     found = differential_evolution(objective, [(H_lo, H_hi), (L_lo, L_hi)],
                                    popsize=popsize, tol=tol, atol=0.0, maxiter=maxiter, seed=seed,
                                    polish=False, vectorized=True, updating="deferred")
-    H, L = (float(v) for v in found.x)
-    deviation, _ = verified_deviation(task.a_mm, task.h_mm, H, L, task.t_finish_rad)
+    H, L = (float(v) * scale for v in found.x)
+    deviation, where = verified_deviation(task.a_mm, task.h_mm, H, L, task.t_finish_rad)
+    nodes_max = float(found.fun) * scale        # the along-normal node measure DE minimised
     solve = time.perf_counter() - start
     status = Status.SOLVED if found.success else Status.LIMIT
+    on_bounds = _bounds_hit(task, H, L, box)
+    status, violated, message = _verdict(task, status, str(found.message), nodes_max, deviation, count,
+                                         H, L, box, on_bounds)
     return Result(status, {"H_mm": H, "L_mm": L, "max_deviation_mm": deviation,
                            "t_finish_rad": task.t_finish_read_rad}, Timing(0.0, solve),
-                  message=str(found.message), diagnostics={"generations": int(found.nit),
-                                                           "evaluations": int(found.nfev)})
+                  message=message, violated=violated,
+                  diagnostics={"generations": int(found.nit), "evaluations": int(found.nfev),
+                               "nodes_max_deviation_mm": nodes_max, "active_bounds": on_bounds,
+                               "max_deviation_at_rad": where})
 
 
 def check(task: LinkageCheck, *, count: Nodes = 1000,
@@ -432,21 +542,60 @@ def _node_times(task, count, nodes):
     return np.arange(first, count + extra) * (task.t_finish_read_rad / count)
 
 
+def _check_settings(solver, **values):
+    """Settings against the ranges their signature declares (as the scene loader checks them),
+    so a direct call with max_rounds=0 is a one-line error, not a traceback from inside."""
+    signature = inspect.signature(solver).parameters
+    for key, value in values.items():
+        low = high = None
+        for mark in getattr(signature[key].annotation, "__metadata__", ()):
+            low = next((getattr(mark, n) for n in ("ge", "gt") if getattr(mark, n, None) is not None), low)
+            high = next((getattr(mark, n) for n in ("le", "lt") if getattr(mark, n, None) is not None), high)
+            opens = (getattr(mark, "gt", None) is not None, getattr(mark, "lt", None) is not None)
+        whole = signature[key].annotation.__origin__ is int
+        bad = (isinstance(value, bool) or not isinstance(value, (int, np.integer) if whole else (int, float))
+               or not math.isfinite(value)
+               or (low is not None and (value <= low if opens[0] else value < low))
+               or (high is not None and (value >= high if opens[1] else value > high)))
+        if bad:
+            allowed = (f"{'>' if opens[0] else '>='} {low:g}" if low is not None else "") + \
+                      (f" and {'<' if opens[1] else '<='} {high:g}" if high is not None else "")
+            raise ModelError(f"{key}={value!r} must be {'a whole number ' if whole else ''}{allowed.strip(' and')}",
+                             key=key)
+
+
 def _check_count(count):
     if not isinstance(count, (int, np.integer)) or count < 1:
         raise ModelError(f"count={count!r} must be a whole number >= 1 (nodes on the ideal path)", key="count")
 
 
-def _lattice(task):
-    """H and L on the STEP lattice of the box, as integer multiples so no rounding drifts [mm]."""
+def _lattice_indices(task):
+    """(i_lo, i_hi, j_lo, j_hi): the box's STEP lattice as integer multiples H = i STEP, L = j STEP,
+    counted without allocating anything; a box holding no lattice point is an error."""
     H_lo, H_hi, L_lo, L_hi = task.bounds()
     step = task.step_mm
-    H = np.arange(np.ceil(H_lo / step - 1e-9), np.floor(H_hi / step + 1e-9) + 1) * step
-    L = np.arange(np.ceil(L_lo / step - 1e-9), np.floor(L_hi / step + 1e-9) + 1) * step
-    if H.size * L.size > GRID_POINT_LIMIT:
-        raise ModelError(f"the box H {H_lo:g}..{H_hi:g} mm, L {L_lo:g}..{L_hi:g} mm has {H.size * L.size:,} "
-                         f"points at step_mm={step}; the scan allows {GRID_POINT_LIMIT:,}: narrow "
-                         "H_min_mm .. L_max_mm or coarsen step_mm", key="step_mm")
+    index = (math.ceil(H_lo / step - 1e-9), math.floor(H_hi / step + 1e-9),
+             math.ceil(L_lo / step - 1e-9), math.floor(L_hi / step + 1e-9))
+    if index[0] > index[1] or index[2] > index[3]:
+        raise ModelError(f"the box H {H_lo:g}..{H_hi:g}, L {L_lo:g}..{L_hi:g} mm holds no multiple of "
+                         f"step_mm={step}", key="step_mm")
+    return index
+
+
+def _lattice(task):
+    """H and L on the STEP lattice of the box, as integer multiples so no rounding drifts [mm].
+    Its size is counted first: a lattice past GRID_POINT_LIMIT is refused before any allocation."""
+    H_lo, H_hi, L_lo, L_hi = task.bounds()
+    step = task.step_mm
+    i_lo, i_hi, j_lo, j_hi = _lattice_indices(task)
+    points = (i_hi - i_lo + 1) * (j_hi - j_lo + 1)            # Python ints: no overflow
+    if points > GRID_POINT_LIMIT:
+        raise ModelError(f"the box H {H_lo:g}..{H_hi:g} mm, L {L_lo:g}..{L_hi:g} mm has {points:,} "
+                         f"points at step_mm={step} ({points * 16 / 2**30:,.3g} GiB as float64 (H, L) pairs); "
+                         f"the scan allows {GRID_POINT_LIMIT:,}: narrow H_min_mm .. L_max_mm or coarsen step_mm",
+                         key="step_mm")
+    H = np.arange(i_lo, i_hi + 1) * step
+    L = np.arange(j_lo, j_hi + 1) * step
     return np.round(H, 9), np.round(L, 9)
 
 
@@ -470,7 +619,7 @@ def _finish_node_report(task, H, L, t_finish):
     normal above and below the axis: the reason the node rule matters."""
     px, py, nx, ny = nodes_and_normals(np.array([t_finish]), task.a_mm, task.h_mm)
     roots = normal_crossings(px, py, nx, ny, H, L)[0]
-    d = roots.real[np.abs(roots.imag) < 1e-7]
+    d = roots.real[np.abs(roots.imag) < 1e-7 * _scale(task)]
     above = d[py[0] + d * ny[0] >= 0]
     ends = _segment_ends(np.array([t_finish]), task)
     passes = bool((limacon_implicit(ends[0], ends[1], H, L) < 0) != (limacon_implicit(ends[2], ends[3], H, L) < 0))
@@ -484,5 +633,5 @@ def _even_crossings(t, task, H, L):
     paper's one-end-in, one-end-out test is blind (wide error widths, Sec. IV)."""
     px, py, nx, ny = nodes_and_normals(t, task.a_mm, task.h_mm)
     roots = normal_crossings(px, py, nx, ny, H, L)
-    inside = (np.abs(roots.imag) < 1e-7) & (np.abs(roots.real) <= task.err_width_mm)
+    inside = (np.abs(roots.imag) < 1e-7 * _scale(task)) & (np.abs(roots.real) <= task.err_width_mm)
     return int(np.count_nonzero(inside.sum(axis=-1) >= 2))
