@@ -268,6 +268,42 @@ def _require(task, key, ok, what):
         raise ModelError(f"{key}={getattr(task, key)} {what}", key=key)
 
 
+# --- what one revolution costs ------------------------------------------------------------------
+
+def cut_work_J(task: PressDrive) -> float:
+    """The work of one cut, the integral of eq. (1) over the penetration [0, Z] [J]; 0 without a cut."""
+    if not task.cutting:
+        return 0.0
+    coeffs = [getattr(task, k) for k in FORCE_KEYS]
+    antiderivative = [0, 0, *[c / (i + 2) for i, c in enumerate(coeffs)]]      # of eq. (1), N mm
+    return float(np.polynomial.polynomial.polyval(task.blank_thickness_mm, antiderivative)) / 1000
+
+
+def required_mean_torque_Nm(task: PressDrive) -> float:
+    """The least mean torque at the crank a forward periodic motion needs [N m]: per revolution
+    the cut's work plus 2 pi M_tr of friction (the weights give back what they take, belt
+    damping only adds), over 2 pi."""
+    friction = task.friction_torque_Nm if task.friction else 0.0
+    return cut_work_J(task) / (2 * np.pi) + friction
+
+
+def breakdown_torque_at_crank_Nm(task: PressDrive) -> float:
+    """The most the motor can ever give, M_k, reduced to the crank: i M_k [N m] (inf for an ideal drive)."""
+    return task.gear_ratio * task.motor_breakdown_torque_Nm if task.motor else float("inf")
+
+
+def belt_mode_rad_s(task: PressDrive) -> float:
+    """Angular frequency of the belt mode [rad/s]: the belt's stiffness between the pulley's
+    reduced inertia and the crank shaft's mean one (the pulley held at its speed by an ideal
+    drive: the crank shaft alone); 0 without an elastic belt."""
+    if not task.belt:
+        return 0.0
+    inverse = 1 / mean_crank_inertia_kgm2(task)
+    if task.motor:
+        inverse += 1 / task.reduced_motor_inertia_kgm2()
+    return float(np.sqrt(task.belt_stiffness_Nm_rad * inverse))
+
+
 # --- reduced inertia and moments (CasADi) -------------------------------------------------------
 
 def crank_inertia(task: PressDrive):

@@ -13,15 +13,20 @@ from mechopt.solvers.press.common import (
     Duration,
     Start,
     Trace,
+    belt_mode,
+    belt_too_fast,
     check_task,
     checked,
     dynamics_of,
     initial_state,
     paper_U,
+    stable_step_s,
     summarise,
 )
 from mechopt.solvers.result import Result, Status, Timing
 from mechopt.solvers.settings import Annotated, Interval, NonNegative, Positive
+
+MAX_STEPS = 500_000         # per run (refinement included): ~200 MB of samples and outputs, seconds
 
 
 @memoised(maxsize=64)
@@ -70,7 +75,8 @@ def rk4(task: PressDrive, *, step_s: Positive = 1e-4, duration_s: Duration = 1.0
 
     Parameters
     ----------
-    step_s : first step [s]; must divide `duration_s`.
+    step_s : first step [s]; must divide `duration_s` into at most `MAX_STEPS` steps, and lie
+        within RK4's stability limit for the belt mode (else FAILED at once, saying so).
     duration_s : simulated time [s].
     start : "nominal" (turning at the nominal speed) or "rest".
     Returns a Result: SOLVED, or INACCURATE when refinement did not reach `refine_tol_rad`.
@@ -78,12 +84,26 @@ def rk4(task: PressDrive, *, step_s: Positive = 1e-4, duration_s: Duration = 1.0
     check_task(task, duration_s)
     if not step_s > 0:
         raise ModelError(f"step_s={step_s} must be > 0", key="step_s")
+    if duration_s / step_s > MAX_STEPS:
+        raise ModelError(f"step_s={step_s} with duration_s={duration_s} means {duration_s / step_s:.3g} RK4 steps; "
+                         f"allowed at most {MAX_STEPS} (step_s >= {duration_s / MAX_STEPS:.3g} s)", key="step_s")
     t_start = time.perf_counter()
     build = 0.0
+    hz, eigenvalue = belt_mode(task)
+    stable = stable_step_s(eigenvalue)
+    if step_s > stable:         # it would diverge: say why before integrating
+        return Result(Status.FAILED, {"belt_mode_Hz": hz, "step_needed_s": stable, "step_s": step_s},
+                      Timing(build, time.perf_counter() - t_start),
+                      belt_too_fast(task, stable, float("inf"), 0, f"RK4 at step_s={step_s:g}",
+                                    why=" (RK4's stability limit)")
+                      + f"; reduce step_s below {stable:.3g} s or use events")
     trace, _ = _rk4_trace(task, step_s, duration_s, start)
     iphi = task.state_names.index("phi_rad")
-    change, halvings, h = np.inf, 0, step_s
+    change, halvings, h, capped = np.inf, 0, step_s, ""
     while refine_tol_rad > 0 and halvings < max_halvings and np.all(np.isfinite(trace.x[0])):
+        if 2 * duration_s / h > MAX_STEPS:
+            capped = f"; refining stopped: the next halving needs {2 * duration_s / h:.3g} steps > {MAX_STEPS}"
+            break
         finer, _ = _rk4_trace(task, h / 2, duration_s, start)
         change = abs(finer.x[0][-1, iphi] - trace.x[0][-1, iphi])
         trace, h, halvings = finer, h / 2, halvings + 1
@@ -103,6 +123,6 @@ def rk4(task: PressDrive, *, step_s: Positive = 1e-4, duration_s: Duration = 1.0
                                          "the jump at the end of the cut and the friction sign change "
                                          "(first order there: the paper's method as published)"
                                          + ("" if ok else f"; last halving still moved phi by {change:.3g} rad > "
-                                                          f"{refine_tol_rad:g}"), (), diagnostics)
+                                                          f"{refine_tol_rad:g}{capped}"), (), diagnostics)
     timing = Timing(build, time.perf_counter() - t_start - build)
     return Result(status, values, timing, message, violated, diagnostics, arrays)

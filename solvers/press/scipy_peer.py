@@ -5,23 +5,33 @@ from typing import Literal
 
 import casadi as ca
 import numpy as np
-from scipy.integrate import solve_ivp
+from scipy.integrate import DOP853, RK45, solve_ivp
 
 from mechopt.models.press import PressDrive
 from mechopt.solvers.press.common import (
+    TWO_PI,
     Duration,
     Trace,
     angle_events,
+    belt_mode,
+    belt_too_fast,
     check_task,
     checked,
     dynamics_of,
     initial_state,
     mode_at,
     paper_U,
+    refuse_work,
+    stable_step_s,
     summarise,
+    top_speed_rad_s,
 )
 from mechopt.solvers.result import Result, Status, Timing, from_ivp
 from mechopt.solvers.settings import NonNegative, Tolerance
+
+MAX_REVOLUTIONS = 100        # solve_ivp calls a Python right-hand side: ~0.25 s per revolution (Radau)
+MAX_STEPS = 20_000           # steps an explicit method may need (~10 s)
+EXPLICIT = {"RK45": (RK45.A, RK45.B), "DOP853": (DOP853.A, DOP853.B)}    # Butcher tableaux: stability limit
 
 
 def ivp(task: PressDrive, *, method: Literal["Radau", "LSODA", "DOP853", "RK45", "BDF"] = "Radau",
@@ -34,9 +44,25 @@ def ivp(task: PressDrive, *, method: Literal["Radau", "LSODA", "DOP853", "RK45",
     Without it the paper's switched right-hand side is integrated in one go: at loose tolerance
     and with no `max_step_s` (0 = unbounded) the adaptive step can jump over the whole cut, and
     `values["cuts"]` then counts fewer cuts than revolutions (the test of a missed cut).
-    Friction sticking is not handled here (the crank must keep turning).
+    Friction sticking is not handled here (the crank must keep turning). Refused before work:
+    more than `MAX_REVOLUTIONS`, or more than `MAX_STEPS` steps (`max_step_s`, or an explicit
+    method's stability limit for the belt mode: then LIMIT, saying so).
     """
     check_task(task, duration_s)
+    per_s = top_speed_rad_s(task) / TWO_PI
+    refuse_work("duration_s", duration_s, duration_s * per_s, MAX_REVOLUTIONS, "revolutions (~0.25 s each with "
+                "a Python right-hand side)", f"duration_s <= {MAX_REVOLUTIONS / per_s:.4g} s; `events` goes further")
+    if max_step_s > 0:
+        refuse_work("max_step_s", max_step_s, duration_s / max_step_s, MAX_STEPS, "steps",
+                    f"max_step_s >= {duration_s / MAX_STEPS:.3g} s over duration_s={duration_s:g}, or 0")
+    if method in EXPLICIT:
+        hz, eigenvalue = belt_mode(task)
+        stable = stable_step_s(eigenvalue, EXPLICIT[method])
+        too_fast = belt_too_fast(task, stable, duration_s / stable, MAX_STEPS, method,
+                                 why=f" ({method}'s stability limit)", over=f" over duration_s={duration_s:g}")
+        if too_fast:
+            return Result(Status.LIMIT, {"belt_mode_Hz": hz, "step_needed_s": stable}, Timing(0.0, 0.0),
+                          too_fast + "; Radau, LSODA or `events` integrate it")
     dyn = dynamics_of(task)
     iphi, iw = task.state_names.index("phi_rad"), task.state_names.index("omega_rad_s")
     t_start = time.perf_counter()
