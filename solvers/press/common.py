@@ -147,7 +147,7 @@ def refuse_work(key: str, value, amount: float, most: float, what: str, bound: s
     """Refuse before any work a request whose size estimate `amount` exceeds `most`: one line naming
     the key, what the value implies, and the range that is allowed."""
     if amount > most:
-        raise ModelError(f"{key}={value} means about {amount:.3g} {what}, more than the {most:.3g} allowed "
+        raise ModelError(f"{key}={value} means about {amount:.3g} {what}, more than the {most:g} allowed "
                          f"({bound})", key=key)
 
 

@@ -138,11 +138,20 @@ def steady_state(task: PressDrive, *, tol: Tolerance = 1e-10, samples: Samples =
     values, diagnostics, arrays = summarise(task, trace, cut_angles=task.cut_window_rad())
     values["periodicity_residual"] = miss
     diagnostics |= {"newton_iterations": rf.stats()["iter_count"], "initial_state": solution.tolist()}
-    message = f"periodic orbit by Newton shooting, {rf.stats()['iter_count']} iterations, residual {miss:.3g}"
+    iterations = rf.stats()["iter_count"]
     if status is Status.SOLVED and diagnostics["min_omega_rad_s"] <= 0:
-        status, message = Status.FAILED, message + "; the crank does not keep turning forward: no such orbit"
-    if status is Status.SOLVED and miss > 1e3 * tol:
+        status = Status.FAILED
+        message = (f"no forward periodic motion: Newton shooting converged ({iterations} iterations) to an orbit on "
+                   f"which the crank stops or turns back (min omega {diagnostics['min_omega_rad_s']:.3g} rad/s)")
+    elif status is Status.SOLVED and miss > 1e3 * tol:
         status = Status.INACCURATE
+        message = (f"not a periodic orbit to trust: Newton shooting stopped after {iterations} iterations with "
+                   f"periodicity residual {miss:.3g} > 1000 tol = {1e3 * tol:.3g}")
+    elif status is Status.SOLVED:
+        message = f"periodic orbit by Newton shooting, {iterations} iterations, residual {miss:.3g}"
+    else:               # never a message that reads like an answer
+        message = (f"no periodic orbit found: Newton shooting stopped after {iterations} of max_iter={max_iter} "
+                   f"iterations ({rf.stats()['return_status']}) with periodicity residual {miss:.3g}")
     status, message, violated = checked(status, message, (), diagnostics)
     return Result(status, values, Timing(build, time.perf_counter() - t_start - build), message, violated,
                   diagnostics, arrays)
