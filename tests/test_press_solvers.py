@@ -370,3 +370,26 @@ def test_a_set_override_past_the_limits_is_refused_naming_the_key():
     from mechopt.models.errors import SceneError
     with pytest.raises(SceneError, match=r"max_events"):
         registry.run(registry.find("press/start-up"), {"max_events": 10**7})
+
+
+def test_a_press_that_coasts_to_a_stop_is_a_stall_with_the_torques_that_explain_it():
+    r = pd.events(_task(motor_breakdown_torque_Nm=0.5), duration_s=20.0)       # 39 turns on the flywheel's energy
+    kinds = [e[0] for e in r.diagnostics["events"]]
+    assert kinds[-2:] == ["stop", "stick"] and r.values["final_omega_rad_s"] == 0.0
+    assert r.status is Status.INFEASIBLE and r.violated == ("stall",)
+    assert r.message.startswith("the press coasted to a stop: static friction holds the crank at")
+    assert "; the motor cannot deliver the cycle's work: mean load torque 5.878 N m" in r.message
+    assert r.values["breakdown_torque_at_crank_Nm"] == pytest.approx(6.2695 * 0.5, rel=1e-12)
+
+
+def test_rk4_and_ivp_name_the_same_stall_in_the_cut():
+    thick = _task(blank_thickness_mm=9.0)
+    a = pd.rk4(thick, step_s=1e-5, duration_s=0.2, refine_tol_rad=0.0)
+    b = pd.ivp(thick, duration_s=0.2)
+    angles = []
+    for r in (a, b):
+        assert r.status is Status.INFEASIBLE and r.violated == ("stall",)
+        assert r.message.startswith("the press stalls in the cut at crank angle")
+        angles.append(float(r.message.split("crank angle ")[1].split(" deg")[0]))
+    start, end = np.degrees(thick.cut_window_rad())
+    assert start < angles[1] < end and angles[0] == pytest.approx(angles[1], abs=0.01)

@@ -27,6 +27,7 @@ from mechopt.solvers.press.common import (
     initial_state,
     mode_at,
     refuse_work,
+    stall_check,
     summarise,
     top_speed_rad_s,
 )
@@ -75,7 +76,9 @@ def events(task: PressDrive, *, tol: Tolerance = 1e-10, duration_s: Duration = 1
     A request that implies more than `MAX_PIECES` pieces or `MAX_SAMPLES` samples is refused
     before any work (ModelError naming the key and its allowed range).
     Returns a Result: SOLVED; INFEASIBLE with violated ("stall",) when the crank stops inside the
-    cut or never turns; LIMIT after `max_events`; FAILED if CVODES fails.
+    cut, never turns, or coasts to a stop and is held by friction at the end (with the mean load
+    torque against the breakdown torque in `values` when the motor cannot carry the cycle);
+    LIMIT after `max_events`; FAILED if CVODES fails.
     """
     check_task(task, duration_s)
     for key, value in (("tol", tol), ("max_step_s", max_step_s)):
@@ -113,6 +116,15 @@ def events(task: PressDrive, *, tol: Tolerance = 1e-10, duration_s: Duration = 1
     if status is Status.SOLVED and values["revolutions"] < 1 and values["final_omega_rad_s"] <= 0:
         status, violated = Status.INFEASIBLE, ("stall",)
         message = f"the crank never turned in {duration_s} s: the drive cannot overcome friction and the load"
+    held = [e for e in trace.events if e[0] in ("stick", "slip")]
+    if status is Status.SOLVED and held and held[-1][0] == "stick":
+        status, violated = Status.INFEASIBLE, ("stall",)
+        message = (f"the press coasted to a stop: static friction holds the crank at {np.degrees(held[-1][2] % TWO_PI):.3f}"
+                   f" deg from t = {held[-1][1]:.6g} s to the end, after {values['revolutions']:.0f} revolutions")
+    stall = stall_check(task)
+    if stall is not None:       # the mean load is beyond the motor: a run that still turns is slowing to a stall
+        values |= stall[0]
+        message += "; " + stall[1] + ("" if violated else ": this run is slowing down toward a stall")
     status, message, violated = checked(status, message, violated, diagnostics)
     timing = Timing(build, time.perf_counter() - t_start - build)
     return Result(status, values, timing, message, violated, diagnostics, arrays)

@@ -63,6 +63,18 @@ def _rk4_trace(task, step_s, duration_s, start):
     return trace, dyn
 
 
+def _first_stop(task, trace):
+    """(t, phi, in the cut) of the first sample where the crank, having turned, stops or turns
+    back (omega <= 0); None if it keeps turning."""
+    w = trace.x[0][:, task.state_names.index("omega_rad_s")]
+    turned = np.maximum.accumulate(w) > 0
+    hits = np.flatnonzero((w <= 0) & np.r_[False, turned[:-1]])
+    if not hits.size:
+        return None
+    k = int(hits[0])
+    return float(trace.t[0][k]), float(trace.x[0][k, task.state_names.index("phi_rad")]), bool(trace.mode[0][k - 1, 0])
+
+
 def rk4(task: PressDrive, *, step_s: Positive = 1e-4, duration_s: Duration = 1.0, start: Start = "nominal",
         refine_tol_rad: NonNegative = 1e-6, max_halvings: Annotated[int, Interval(ge=0, le=20)] = 4) -> Result:
     """Fixed-step RK4 on eqs. (2) with the paper's switching function U (Sec. "DYNAM").
@@ -79,7 +91,8 @@ def rk4(task: PressDrive, *, step_s: Positive = 1e-4, duration_s: Duration = 1.0
         within RK4's stability limit for the belt mode (else FAILED at once, saying so).
     duration_s : simulated time [s].
     start : "nominal" (turning at the nominal speed) or "rest".
-    Returns a Result: SOLVED, or INACCURATE when refinement did not reach `refine_tol_rad`.
+    Returns a Result: SOLVED, or INACCURATE when refinement did not reach `refine_tol_rad`;
+    INFEASIBLE with violated ("stall",) when the crank, having turned, stops (in the cut or not).
     """
     check_task(task, duration_s)
     if not step_s > 0:
@@ -118,6 +131,15 @@ def rk4(task: PressDrive, *, step_s: Positive = 1e-4, duration_s: Duration = 1.0
     diagnostics |= {"halvings": halvings, "last_change_rad": float(change) if np.isfinite(change) else None}
     ok = refine_tol_rad <= 0 or change <= refine_tol_rad
     diagnostics["switches_stepped_over"] = True      # fixed steps: first order across the jump
+    stop = _first_stop(task, trace)
+    if stop is not None:
+        t_stop, phi_stop, in_cut = stop
+        where = f"crank angle {np.degrees(phi_stop % (2 * np.pi)):.3f} deg, t = {t_stop:.6g} s"
+        message = (f"the press stalls in the cut at {where}: the flywheel and motor cannot supply the cutting work"
+                   if in_cut else f"the crank stops at {where}: the drive cannot keep it turning")
+        status, message, violated = checked(Status.INFEASIBLE, message, ("stall",), diagnostics)
+        return Result(status, values, Timing(build, time.perf_counter() - t_start - build), message, violated,
+                      diagnostics, arrays)
     status, message, violated = checked(Status.SOLVED if ok else Status.INACCURATE,
                                          f"RK4, step {h:.3g} s after {halvings} halvings; fixed steps cross "
                                          "the jump at the end of the cut and the friction sign change "

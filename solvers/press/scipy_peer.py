@@ -93,7 +93,7 @@ def ivp(task: PressDrive, *, method: Literal["Radau", "LSODA", "DOP853", "RK45",
         return Result(status, values, timing, message, violated, diagnostics, arrays)
     mode = mode_at(task, dyn, x, 1.0)
     trace.add(t, x, mode)
-    status, message = Status.SOLVED, ""
+    status, message, violated = Status.SOLVED, "", ()
     while t < duration_s * (1 - 1e-14):
         target, kind = angle_events(task, x[iphi])
         f = (lambda m: lambda tt, xx: np.asarray(dyn.rhs(xx, m)).ravel())(mode)
@@ -111,7 +111,11 @@ def ivp(task: PressDrive, *, method: Literal["Radau", "LSODA", "DOP853", "RK45",
         trace.add(sol.t[1:], sol.y.T[1:], mode)
         t, x = float(sol.t[-1]), sol.y[:, -1].copy()
         if sol.status == 1 and sol.t_events[1].size:
-            status, message = Status.INFEASIBLE, f"the crank stopped at t = {t:.6g} s (not handled by ivp)"
+            where = f"crank angle {np.degrees(x[iphi] % TWO_PI):.3f} deg, t = {t:.6g} s"
+            status, violated = Status.INFEASIBLE, ("stall",)
+            message = (f"the press stalls in the cut at {where}: the flywheel and motor cannot supply the cutting work"
+                       if mode[0] > 0 else f"the crank stopped at {where} (what follows, friction sticking, is not "
+                                           f"handled by ivp: `events` is)")
             break
         if sol.status == 1:
             trace.events.append((kind, t, float(target)))
@@ -119,6 +123,6 @@ def ivp(task: PressDrive, *, method: Literal["Radau", "LSODA", "DOP853", "RK45",
             mode = mode_at(task, dyn, x, 1.0)
     values, diagnostics, arrays = summarise(task, trace)
     diagnostics["rhs_calls"] = int(calls)
-    status, message, violated = checked(status, message or f"solve_ivp {method}", (), diagnostics)
+    status, message, violated = checked(status, message or f"solve_ivp {method}", violated, diagnostics)
     timing = Timing(0.0, time.perf_counter() - t_start)
     return Result(status, values, timing, message, violated, diagnostics, arrays)
