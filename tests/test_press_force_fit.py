@@ -154,3 +154,12 @@ def test_cli_fit_force_on_a_non_utf8_file_is_exit_2_with_one_line(tmp_path, caps
     assert main(["fit-force", str(path)]) == 2
     err = capsys.readouterr().err.strip()
     assert "latin1.csv: not UTF-8 text" in err and "Traceback" not in err and len(err.splitlines()) == 1
+
+
+def test_a_file_far_larger_than_a_test_record_is_refused_before_reading(tmp_path, monkeypatch):
+    from mechopt import force_data
+    path = tmp_path / "big.csv"
+    path.write_text("travel_mm,load_N\n" + "1,2\n" * 1000)                # 4017 bytes
+    monkeypatch.setattr(force_data, "MAX_BYTES", 4000)
+    with pytest.raises(ModelError, match=r"big\.csv: 0\.00402 MB; a load-travel record is at most 0\.004 MB"):
+        read_force_csv(path)

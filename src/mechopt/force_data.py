@@ -18,6 +18,7 @@ EXPECTED_HEADER = "travel_<mm|m|um>,load_<N|kN> (or ';' between columns; any ord
 # overflows (X^6 of 1e60 is inf): refused rather than fitted
 MAX_TRAVEL_MM = 1e6
 MAX_LOAD_N = 1e12
+MAX_BYTES = 100_000_000      # read whole into memory: refuse what is plainly not a testing machine's record
 
 
 def read_force_csv(path):
@@ -26,6 +27,10 @@ def read_force_csv(path):
     one row per reading."""
     path = Path(path)
     try:
+        size = path.stat().st_size
+        if size > MAX_BYTES:
+            raise ModelError(f"{path}: {size / 1e6:.3g} MB; a load-travel record is at most {MAX_BYTES / 1e6:g} MB "
+                             f"(millions of readings)", key="path")
         raw = path.read_bytes()
     except OSError as exc:
         raise ModelError(f"{path}: cannot read: {exc.strerror}", key="path") from None
