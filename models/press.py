@@ -156,6 +156,19 @@ class PressDrive:
                                                "motor_breakdown_slip")),
     }
 
+    # upper ends of the physical ranges (lower ends: the signs below); each far past any crank press,
+    # there to refuse inf and values that overflow the dynamics, not to judge a design
+    RANGES: ClassVar[dict[str, tuple[float, str]]] = {
+        "crank_radius_mm": (1000.0, "a 2 m stroke"), "nominal_speed_rad_s": (1000.0, "about 10000 rpm"),
+        "flywheel_inertia_kgm2": (1e5, "a 10 t, 4 m flywheel"), "crank_mass_kg": (1e5, "100 t"),
+        "tool_mass_kg": (1e5, "100 t"), "rod_mass_kg": (1e5, "100 t"), "motor_inertia_kgm2": (1e3, "a 1 MW motor"),
+        "gear_ratio": (1e3, "motor speed / crank speed"), "belt_stiffness_Nm_rad": (1e12, "1e8 times a V-belt drive"),
+        "belt_damping_Nms_rad": (1e6, "N m s/rad"), "gravity_m_s2": (100.0, "10 g"),
+        "friction_torque_Nm": (1e6, "N m"), "blank_thickness_mm": (1000.0, "mm"), "shortfall_mm": (1000.0, "mm"),
+        "motor_sync_speed_rad_s": (1e4, "about 100000 rpm"), "motor_breakdown_torque_Nm": (1e6, "N m"),
+        **{key: (1e9, f"N/mm^{i + 1} in eq. (1)") for i, key in enumerate(FORCE_KEYS)},
+    }
+
     def __post_init__(self):
         object.__setattr__(self, "effects", tuple(self.effects))
         unknown = [e for e in self.effects if e not in self.EFFECTS]
@@ -172,6 +185,9 @@ class PressDrive:
                                      f"listed in effects", key=key)
                 if not given and name in self.effects:
                     raise ModelError(f"{key} missing: effect '{name}' needs it", key=key)
+        for key in ("rod_ratio", *self.RANGES):
+            value = getattr(self, key)
+            _require(self, key, value is None or value == value, "is not a number")     # NaN fails every range
         for key in ("crank_radius_mm", "nominal_speed_rad_s", "gear_ratio"):
             _require(self, key, getattr(self, key) > 0, "must be > 0")
         for key in ("flywheel_inertia_kgm2", "crank_mass_kg", "tool_mass_kg", "rod_mass_kg", "motor_inertia_kgm2",
@@ -179,6 +195,11 @@ class PressDrive:
                     "blank_thickness_mm", "shortfall_mm"):
             value = getattr(self, key)
             _require(self, key, value is None or value >= 0, "must be >= 0")
+        for key, (most, why) in self.RANGES.items():      # also refuses inf and NaN
+            value = getattr(self, key)
+            low = -most if key in FORCE_KEYS else 0
+            _require(self, key, value is None or abs(value) <= most,
+                     f"is outside the physical range [{low:g}, {most:g}] ({why})")
         _require(self, "rod_ratio", 0 < self.rod_ratio < 1,
                  "must be in (0, 1): with lambda = r/l >= 1 the crank-slider cannot pass its dead centres")
         _require(self, "flywheel_inertia_kgm2", self.flywheel_inertia_kgm2 > 0 or self.crank_mass_kg > 0,
@@ -266,6 +287,42 @@ def _angle_at_travel(task, x_m):
 def _require(task, key, ok, what):
     if not ok:
         raise ModelError(f"{key}={getattr(task, key)} {what}", key=key)
+
+
+# --- what one revolution costs ------------------------------------------------------------------
+
+def cut_work_J(task: PressDrive) -> float:
+    """The work of one cut, the integral of eq. (1) over the penetration [0, Z] [J]; 0 without a cut."""
+    if not task.cutting:
+        return 0.0
+    coeffs = [getattr(task, k) for k in FORCE_KEYS]
+    antiderivative = [0, 0, *[c / (i + 2) for i, c in enumerate(coeffs)]]      # of eq. (1), N mm
+    return float(np.polynomial.polynomial.polyval(task.blank_thickness_mm, antiderivative)) / 1000
+
+
+def required_mean_torque_Nm(task: PressDrive) -> float:
+    """The least mean torque at the crank a forward periodic motion needs [N m]: per revolution
+    the cut's work plus 2 pi M_tr of friction (the weights give back what they take, belt
+    damping only adds), over 2 pi."""
+    friction = task.friction_torque_Nm if task.friction else 0.0
+    return cut_work_J(task) / (2 * np.pi) + friction
+
+
+def breakdown_torque_at_crank_Nm(task: PressDrive) -> float:
+    """The most the motor can ever give, M_k, reduced to the crank: i M_k [N m] (inf for an ideal drive)."""
+    return task.gear_ratio * task.motor_breakdown_torque_Nm if task.motor else float("inf")
+
+
+def belt_mode_rad_s(task: PressDrive) -> float:
+    """Angular frequency of the belt mode [rad/s]: the belt's stiffness between the pulley's
+    reduced inertia and the crank shaft's mean one (the pulley held at its speed by an ideal
+    drive: the crank shaft alone); 0 without an elastic belt."""
+    if not task.belt:
+        return 0.0
+    inverse = 1 / mean_crank_inertia_kgm2(task)
+    if task.motor:
+        inverse += 1 / task.reduced_motor_inertia_kgm2()
+    return float(np.sqrt(task.belt_stiffness_Nm_rad * inverse))
 
 
 # --- reduced inertia and moments (CasADi) -------------------------------------------------------

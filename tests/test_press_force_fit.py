@@ -114,3 +114,52 @@ def test_cli_fit_force_prints_the_coefficients_and_segment_errors(tmp_path, caps
     expected = fit_force(x, f, 4)
     assert f"{expected.values['c4_N_per_mm4']:.6g}" in out and "max_rel_error_seg2" in out
     assert main(["fit-force", str(tmp_path / "missing.csv")]) == 2
+
+
+def test_semicolon_decimal_comma_and_any_case_header_read_the_same_numbers(tmp_path):
+    x, f = (a.tolist() for a in _fixture(points=7))
+    plain = tmp_path / "plain.csv"
+    plain.write_text("travel_mm,load_N\n" + "".join(f"{a!r},{b!r}\n" for a, b in zip(x, f)))
+    european = tmp_path / "eu.csv"        # what a German testing machine exports: ';' and a decimal comma
+    european.write_text("LOAD_KN;Travel_MM\n" + "".join(f"{float(b) / 1000!r};{float(a)!r}\n".replace(".", ",")
+                                                      for a, b in zip(x, f)))
+    upper = tmp_path / "upper.csv"
+    upper.write_bytes(("\ufeffTRAVEL_mm,Load_n\n" + "".join(f"{a!r},{b!r}\n" for a, b in zip(x, f))).encode())
+    for path in (plain, european, upper):
+        tx, tf = read_force_csv(path)
+        assert np.allclose(tx, x, rtol=1e-15) and np.allclose(tf, f, rtol=1e-12)
+
+
+@pytest.mark.parametrize("content, match", [
+    (b"travel_mm,load_N\n1,2\n\xe9\n", r"bad\.csv: not UTF-8 text \(byte 0xe9 at offset 21\); save it as UTF-8 CSV"),
+    (b"travel_mm,load_N\n1,1e400\n", r"bad\.csv: line 2: '1e400' in column 2 is inf N, outside \[-1e\+12, 1e\+12\] N"),
+    (b"travel_mm,load_N\n1e300,2\n", r"bad\.csv: line 2: '1e300' in column 1 is 1e\+300 mm, outside \[-1e\+06, 1e\+06\] mm"),
+    (b"travel_m,load_N\n2000,2\n", r"bad\.csv: line 2: '2000' in column 1 is 2e\+06 mm, outside"),
+    (b"travel_mm,load_N\nnan,2\n", r"bad\.csv: line 2: 'nan' in column 1 is nan mm, outside"),
+    (b"x;y\n1;2\n", r"bad\.csv: no 'travel_<unit>' column in header \['x', 'y'\]; expected travel_<mm\|m\|um>,"
+                    r"load_<N\|kN>"),
+])
+def test_unreadable_csv_is_one_line_naming_the_file(tmp_path, content, match):
+    path = tmp_path / "bad.csv"
+    path.write_bytes(content)
+    with pytest.raises(ModelError, match=match) as info:
+        read_force_csv(path)
+    assert "\n" not in str(info.value)
+
+
+def test_cli_fit_force_on_a_non_utf8_file_is_exit_2_with_one_line(tmp_path, capsys):
+    from mechopt.cli import main
+    path = tmp_path / "latin1.csv"
+    path.write_bytes("travel_mm,load_N\n1,2\n2,4\n# Prüfung\n".encode("latin-1"))
+    assert main(["fit-force", str(path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "latin1.csv: not UTF-8 text" in err and "Traceback" not in err and len(err.splitlines()) == 1
+
+
+def test_a_file_far_larger_than_a_test_record_is_refused_before_reading(tmp_path, monkeypatch):
+    from mechopt import force_data
+    path = tmp_path / "big.csv"
+    path.write_text("travel_mm,load_N\n" + "1,2\n" * 1000)                # 4017 bytes
+    monkeypatch.setattr(force_data, "MAX_BYTES", 4000)
+    with pytest.raises(ModelError, match=r"big\.csv: 0\.00402 MB; a load-travel record is at most 0\.004 MB"):
+        read_force_csv(path)

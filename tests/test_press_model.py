@@ -215,3 +215,35 @@ def test_exact_travel_stays_within_the_stroke(phi, lam):
 def test_scene_hands_its_effects_to_the_task(scene_id):
     scene = registry.find(scene_id)
     assert scene.build()[0].effects == tuple(scene.spec.effects)
+
+
+@pytest.mark.parametrize("changes, match", [
+    ({"crank_radius_mm": float("inf")}, r"crank_radius_mm=inf is outside the physical range \[0, 1000\] \(a 2 m stroke\)"),
+    ({"belt_stiffness_Nm_rad": 1e13}, r"belt_stiffness_Nm_rad=10000000000000\.0 is outside the physical range \[0, 1e\+12\]"),
+    ({"force_c4_N_mm4": -float("inf")}, r"force_c4_N_mm4=-inf is outside the physical range \[-1e\+09, 1e\+09\]"),
+    ({"motor_breakdown_torque_Nm": 1e300}, r"motor_breakdown_torque_Nm=1e\+300 is outside the physical range"),
+    ({"flywheel_inertia_kgm2": float("nan")}, r"flywheel_inertia_kgm2=nan is not a number"),
+    ({"nominal_speed_rad_s": 1e6}, r"nominal_speed_rad_s=1000000\.0 is outside the physical range \[0, 1000\]"),
+])
+def test_infinite_or_huge_parameters_are_refused_naming_the_range(changes, match):
+    with pytest.raises(ModelError, match=match):
+        _task(**changes)
+
+
+def test_mean_load_torque_and_breakdown_torque_at_the_crank():
+    from mechopt.models.press import breakdown_torque_at_crank_Nm, cut_work_J, required_mean_torque_Nm
+    work = (90.93 * 3**5 / 5 - 4 * 3**4 / 4 - 406.8 * 3**3 / 3 + 1075.68 * 3**2 / 2) / 1000   # integral of eq. (1)
+    assert cut_work_J(PAPER) == pytest.approx(work, rel=1e-12)
+    assert required_mean_torque_Nm(PAPER) == pytest.approx(work / (2 * np.pi) + 5.0, rel=1e-12)
+    assert breakdown_torque_at_crank_Nm(PAPER) == pytest.approx(6.2695 * 43.0, rel=1e-12)
+
+
+def test_belt_mode_is_the_two_inertia_eigenfrequency():
+    from scipy.linalg import eigh
+
+    from mechopt.models.press import belt_mode_rad_s, mean_crank_inertia_kgm2
+    k = PAPER.belt_stiffness_Nm_rad
+    M = np.diag([PAPER.motor_inertia_kgm2 * PAPER.gear_ratio**2, mean_crank_inertia_kgm2(PAPER)])
+    squares = eigh(k * np.array([[1.0, -1.0], [-1.0, 1.0]]), M, eigvals_only=True)   # 0 (rigid turning) and the mode
+    assert belt_mode_rad_s(PAPER) == pytest.approx(np.sqrt(squares.max()), rel=1e-12)
+    assert belt_mode_rad_s(PAPER) / (2 * np.pi) == pytest.approx(30.0, abs=0.1)        # the scene's "30 Hz"

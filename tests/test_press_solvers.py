@@ -243,3 +243,153 @@ def test_cvodes_running_out_of_steps_is_a_limit_not_a_crash(monkeypatch):
     r = pd.events(PAPER, duration_s=0.1)
     assert r.status is Status.LIMIT and "CV_TOO_MUCH_WORK" in r.message
     assert r.values["duration_s"] == 0.0          # what was integrated before the failure: nothing
+
+
+# --- stalls, stiff belts and sizes: said in the user's terms, before the work ------------------------
+
+def _no_stack(message):
+    """A message a user reads: one line, no CasADi call stack, nothing that reads like success."""
+    assert "\n" not in message and "Function::" not in message and ".cpp" not in message
+    assert not any(word in message.lower() for word in ("solved", "success", "converged to the", "periodic orbit by"))
+
+
+def _timed(call):
+    import time
+    start = time.perf_counter()
+    result = call()
+    return result, time.perf_counter() - start
+
+
+@pytest.mark.parametrize("override, cut_work", [
+    ({"motor_breakdown_torque_Nm": 0.5}, CUT_WORK_J),
+    ({"blank_thickness_mm": 20.0},
+     (90.93 * 20**5 / 5 - 4 * 20**4 / 4 - 406.8 * 20**3 / 3 + 1075.68 * 20**2 / 2) / 1000),
+])
+def test_a_motor_that_cannot_deliver_the_cycles_work_is_an_infeasible_stall_at_once(override, cut_work):
+    run, seconds = _timed(lambda: registry.run(registry.find("press/kd2322"), override))
+    r = run.result
+    need = cut_work / (2 * np.pi) + 5.0                          # cut work per turn over 2 pi, plus friction
+    most = 6.2695 * override.get("motor_breakdown_torque_Nm", 43.0)    # breakdown torque times i
+    assert need > most
+    assert r.status is Status.INFEASIBLE and r.violated == ("stall",) and seconds < 1.0
+    assert r.values["required_mean_torque_Nm"] == pytest.approx(need, rel=1e-12)
+    assert r.values["breakdown_torque_at_crank_Nm"] == pytest.approx(most, rel=1e-12)
+    assert r.message.startswith(f"the motor cannot deliver the cycle's work: mean load torque {need:.4g} N m at the "
+                                f"crank (cut work {cut_work:.4g} J per turn")
+    assert f"against breakdown torque {most:.4g} N m (reduced to the crank" in r.message
+    _no_stack(r.message)
+
+
+def test_a_flywheel_that_cannot_carry_the_cut_is_a_stall_not_a_casadi_stack():
+    # the motor covers the mean (166 N m of 270) but a 9 mm blank takes 1013 J in 17 degrees of crank angle
+    thick = _task(blank_thickness_mm=9.0)
+    r = pd.steady_state(thick)
+    assert r.values["required_mean_torque_Nm"] < r.values["breakdown_torque_at_crank_Nm"]
+    assert r.status is Status.INFEASIBLE and r.violated == ("stall",)
+    assert r.message.startswith("no periodic motion: started at the Newton guess") and "stalls in the cut" in r.message
+    _no_stack(r.message)
+    assert "CV_TOO_MUCH_WORK" in r.diagnostics["casadi_error"]        # the raw text is kept, out of the message
+    start, end = np.degrees(thick.cut_window_rad())
+    assert start < float(r.message.split("crank angle ")[1].split(" deg")[0]) < end
+    # the transient from the nominal speed stalls in the cut too (events' own stall detection)
+    transient = pd.events(thick, duration_s=0.5)
+    assert transient.status is Status.INFEASIBLE and "stalls in the cut" in transient.message
+
+
+def test_a_cvodes_failure_keeps_its_stack_out_of_the_message(monkeypatch):
+    raw = ("Error in Function::call for 'piece' [IntegratorInternal] at .../casadi/core/function.cpp:1736:\n"
+           ".../casadi/interfaces/sundials/cvodes_interface.cpp:403: CVode returned \"CV_CONV_FAILURE\".")
+    monkeypatch.setattr(event_driven, "_run", lambda *a, **k: (_ for _ in ()).throw(RuntimeError(raw)))
+    r = pd.events(PAPER, duration_s=0.1)
+    assert r.status is Status.FAILED and r.diagnostics["casadi_error"] == raw
+    assert r.message == "CVODES gave up (CV_CONV_FAILURE: the corrector did not converge) at t = 0 s of 0.1 s"
+    _no_stack(r.message)
+
+
+def _belt_hz(task):
+    """The belt mode from the two-inertia eigenproblem (independent of the model's formula)."""
+    from scipy.linalg import eigh
+
+    from mechopt.models.press import mean_crank_inertia_kgm2
+    M = np.diag([task.motor_inertia_kgm2 * task.gear_ratio**2, mean_crank_inertia_kgm2(task)])
+    K = task.belt_stiffness_Nm_rad * np.array([[1.0, -1.0], [-1.0, 1.0]])
+    return float(np.sqrt(eigh(K, M, eigvals_only=True).max()) / (2 * np.pi))
+
+
+def test_a_belt_a_million_times_stiffer_fails_fast_naming_the_mode_and_the_rigid_limit():
+    stiff = _task(belt_stiffness_Nm_rad=PAPER.belt_stiffness_Nm_rad * 1e6)
+    hz = _belt_hz(stiff)
+    assert hz == pytest.approx(29930, rel=1e-3)
+    run, seconds = _timed(lambda: registry.run(registry.find("press/kd2322"), {"belt_stiffness_Nm_rad": 2e10}))
+    r = run.result
+    assert r.status is Status.LIMIT and seconds < 1.0
+    assert r.values["belt_mode_Hz"] == pytest.approx(hz, rel=1e-9)
+    assert r.values["step_needed_s"] == pytest.approx(0.1 / hz, rel=1e-9)       # a tenth of the mode's period
+    assert r.message.startswith(f"the belt mode at {hz:.4g} Hz needs steps below {0.1 / hz:.3g} s")
+    assert "the rigid-belt model (drop effect `belt_elasticity`) is its limit" in r.message
+    _no_stack(r.message)
+    # RK4 diverges past h |lambda| = 2.83 (undamped; 2.85 with this 5 % damping): refused before the run
+    r, seconds = _timed(lambda: pd.rk4(stiff, step_s=1e-4, duration_s=0.25))
+    assert r.status is Status.FAILED and seconds < 1.0 and "would diverge (beyond its stability limit)" in r.message
+    assert 2.8 / (2 * np.pi * hz) < r.values["step_needed_s"] < 2.9 / (2 * np.pi * hz)
+    r, seconds = _timed(lambda: pd.ivp(stiff, method="DOP853", duration_s=1.0))
+    assert r.status is Status.LIMIT and seconds < 1.0 and "more than the 20000 DOP853 can afford" in r.message
+    _no_stack(r.message)
+
+
+def test_the_paper_belt_passes_the_stiffness_guards_with_room():
+    assert _belt_hz(PAPER) == pytest.approx(29.93, abs=0.01)
+    r = pd.rk4(PAPER, step_s=1e-3, duration_s=0.25, refine_tol_rad=0.0)     # 1 ms: 0.19 rad of the mode per step
+    assert r.status is not Status.FAILED and "belt mode" not in r.message and r.values["energy_residual"] < 1e-3
+    assert pd.steady_state(PAPER, samples=4).status is Status.SOLVED
+
+
+@pytest.mark.parametrize("call, match", [
+    # pieces per second: one per max_step_s = 0.02 s, three events per turn at 157.08 / 6.2695 rad/s: 61.96
+    (lambda: pd.events(PAPER, duration_s=3600.0), r"duration_s=3600\.0 means about 2\.23e\+05 CVODES pieces .*more "
+                                                  r"than the 50000 allowed \(duration_s <= 806\.9 s with max_step_s"),
+    (lambda: pd.events(PAPER, duration_s=10.0, samples=10_000), r"samples=10000 means about 6\.2e\+06 samples in "
+                                                               r"memory, more than the 1e\+06 allowed \(samples <= 1613 "),
+    (lambda: pd.rk4(PAPER, step_s=1e-9), r"step_s=1e-09 with duration_s=1\.0 means 1e\+09 RK4 steps; allowed at most "
+                                         r"500000 \(step_s >= 2e-06 s\)"),
+    (lambda: pd.ivp(PAPER, duration_s=3600.0), r"duration_s=3600\.0 means about 1\.44e\+04 revolutions .* "
+                                               r"\(duration_s <= 25\.08 s; `events` goes further\)"),
+    (lambda: pd.ivp(PAPER, max_step_s=1e-9), r"max_step_s=1e-09 means about 1e\+09 steps, more than the 20000 allowed \(max_step_s >= 5e-05 s"),
+])
+def test_work_past_the_stated_limits_is_refused_before_it_starts(call, match):
+    import time
+    start = time.perf_counter()
+    with pytest.raises(ModelError, match=match):
+        call()
+    assert time.perf_counter() - start < 1.0
+
+
+def test_a_set_override_past_the_limits_is_refused_naming_the_key():
+    with pytest.raises(ModelError, match=r"duration_s=3600\.0 means about"):
+        registry.run(registry.find("press/start-up"), {"duration_s": 3600.0})
+    from mechopt.models.errors import SceneError
+    with pytest.raises(SceneError, match=r"max_events"):
+        registry.run(registry.find("press/start-up"), {"max_events": 10**7})
+
+
+def test_a_press_that_coasts_to_a_stop_is_a_stall_with_the_torques_that_explain_it():
+    r = pd.events(_task(motor_breakdown_torque_Nm=0.5), duration_s=20.0)       # 39 turns on the flywheel's energy
+    kinds = [e[0] for e in r.diagnostics["events"]]
+    assert kinds[-2:] == ["stop", "stick"] and r.values["final_omega_rad_s"] == 0.0
+    assert r.status is Status.INFEASIBLE and r.violated == ("stall",)
+    assert r.message.startswith("the press coasted to a stop: static friction holds the crank at")
+    assert "; the motor cannot deliver the cycle's work: mean load torque 5.878 N m" in r.message
+    assert r.values["breakdown_torque_at_crank_Nm"] == pytest.approx(6.2695 * 0.5, rel=1e-12)
+
+
+def test_rk4_and_ivp_name_the_same_stall_in_the_cut():
+    thick = _task(blank_thickness_mm=9.0)
+    a = pd.rk4(thick, step_s=1e-5, duration_s=0.2, refine_tol_rad=0.0)
+    b = pd.ivp(thick, duration_s=0.2)
+    angles = []
+    for r in (a, b):
+        assert r.status is Status.INFEASIBLE and r.violated == ("stall",)
+        assert r.message.startswith("the press stalls in the cut at crank angle")
+        angles.append(float(r.message.split("crank angle ")[1].split(" deg")[0]))
+    start, end = np.degrees(thick.cut_window_rad())
+    assert start < angles[1] < end and angles[0] == pytest.approx(angles[1], abs=0.01)

@@ -1,5 +1,6 @@
 """What the press solvers share: the assembled equations per task, the initial state, the trace
 of a run and its summary, and the switching logic (U, the next angle event, the mode)."""
+import re
 from dataclasses import dataclass, field
 from typing import Annotated, Literal
 
@@ -8,8 +9,18 @@ from annotated_types import Interval
 
 from mechopt.models.cache import memoised
 from mechopt.models.errors import ModelError
-from mechopt.models.press import FORCE_KEYS, WORK_NAMES, Dynamics, PressDrive, dynamics
-from mechopt.solvers.result import Status
+from mechopt.models.press import (
+    FORCE_KEYS,
+    WORK_NAMES,
+    Dynamics,
+    PressDrive,
+    belt_mode_rad_s,
+    breakdown_torque_at_crank_Nm,
+    cut_work_J,
+    dynamics,
+    required_mean_torque_Nm,
+)
+from mechopt.solvers.result import Status, from_casadi_integrator
 
 TWO_PI = 2 * np.pi
 ANGLE_TOL_RAD = 1e-12          # events are located to this in crank angle (omega ~ 25: 4e-14 s)
@@ -46,6 +57,98 @@ class Trace:
 
     def arrays(self):
         return np.concatenate(self.t), np.concatenate(self.x), np.concatenate(self.mode)
+
+
+def casadi_failure(exc: BaseException, doing: str) -> tuple[Status, str, dict]:
+    """A CasADi integrator's exception as (status, one-line message in the user's terms, diagnostics
+    keeping the raw text): the call stack CasADi puts in its message never reaches `message`."""
+    raw = str(exc)
+    flags = re.findall(r"CV_[A-Z_]+", raw)
+    what = flags[-1] if flags else "an integrator error"
+    hint = {"CV_TOO_MUCH_WORK": "more steps than allowed: the crank nearly stops (omega -> 0) or a mode is "
+                                "too fast for the step",
+            "CV_CONV_FAILURE": "the corrector did not converge", "CV_ERR_FAILURE": "the error test kept failing"}
+    return (from_casadi_integrator(raw), f"CVODES gave up ({what}: {hint.get(what, 'see diagnostics')}) {doing}",
+            {"casadi_error": raw})
+
+
+def stall_check(task: PressDrive) -> tuple[dict, str] | None:
+    """(values, message) when the motor cannot deliver a revolution's work even at its breakdown
+    torque, so no forward periodic motion exists; None otherwise (or without a motor)."""
+    need, most = required_mean_torque_Nm(task), breakdown_torque_at_crank_Nm(task)
+    if need <= most:
+        return None
+    friction = task.friction_torque_Nm if task.friction else 0.0
+    values = {"required_mean_torque_Nm": need, "breakdown_torque_at_crank_Nm": most,
+              "cut_work_J": cut_work_J(task), "friction_torque_Nm": friction}
+    return values, (f"the motor cannot deliver the cycle's work: mean load torque {need:.4g} N m at the crank "
+                    f"(cut work {cut_work_J(task):.4g} J per turn / 2 pi + friction {friction:.4g} N m) against "
+                    f"breakdown torque {most:.4g} N m (reduced to the crank: i {task.gear_ratio:.4g} x "
+                    f"{task.motor_breakdown_torque_Nm:.4g} N m at the motor)")
+
+
+# --- the belt mode against what a method can afford ------------------------------------------
+
+RIGID_LIMIT = "the rigid-belt model (drop effect `belt_elasticity`) is its limit"
+_RK4_TABLEAU = (np.array([[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0], [0, 0, 1, 0]]), np.array([1, 2, 2, 1]) / 6)
+
+
+def belt_mode(task: PressDrive) -> tuple[float, complex]:
+    """(frequency [Hz], fastest eigenvalue [1/s]) of the linearised belt mode: the twist between
+    the two inertias, J_eff s^2 + h_p s + C_p = 0 with 1/J_eff = 1/J_p + 1/J_k (see `belt_mode_rad_s`)."""
+    omega = belt_mode_rad_s(task)
+    if omega == 0:
+        return 0.0, 0j
+    j_eff = task.belt_stiffness_Nm_rad / omega**2
+    roots = np.roots([j_eff, task.belt_damping_Nms_rad, task.belt_stiffness_Nm_rad])
+    return omega / TWO_PI, complex(roots[np.argmax(np.abs(roots))])
+
+
+def stable_step_s(eigenvalue: complex, tableau=_RK4_TABLEAU) -> float:
+    """The largest step h of an explicit Runge-Kutta method (Butcher A, b) with |R(h lambda)| <= 1
+    for this eigenvalue: R(z) = 1 + z b (I - z A)^-1 1, bisected along the eigenvalue's ray."""
+    A, b = (np.asarray(a, dtype=float) for a in tableau)
+    A = np.pad(A[:len(b), :len(b)], ((0, 0), (0, len(b) - min(A.shape[1], len(b)))))   # scipy stores A narrower
+    if eigenvalue == 0:
+        return float("inf")
+
+    def stable(h):
+        z = h * eigenvalue
+        return abs(1 + z * b @ np.linalg.solve(np.eye(len(b)) - z * A, np.ones(len(b)))) <= 1 + 1e-12
+
+    lo, hi = 0.0, 10.0 / abs(eigenvalue)
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if stable(mid) else (lo, mid)
+    return lo
+
+
+def belt_too_fast(task: PressDrive, step_s: float, steps: float, most: float, method: str, *,
+                  why: str = "", over: str = "") -> str | None:
+    """The message when `method` needs `steps` steps below `step_s` each (`over` a span) and can
+    afford `most`, or its step is above the limit (steps = inf); None when it can."""
+    if steps <= most:
+        return None
+    hz, _ = belt_mode(task)
+    return (f"the belt mode at {hz:.4g} Hz needs steps below {step_s:.3g} s{why}: "
+            + (f"{steps:.3g} of them{over}, more than the {most:g} {method} can afford"
+               if np.isfinite(steps) else f"{method} would diverge (beyond its stability limit)")
+            + f"; {RIGID_LIMIT} (belt_stiffness_Nm_rad = {task.belt_stiffness_Nm_rad:g})")
+
+
+def top_speed_rad_s(task: PressDrive) -> float:
+    """The fastest the crank turns for long: the motor's synchronous speed reduced by i, or the
+    nominal speed of an ideal drive (and never below it) [rad/s]."""
+    sync = task.motor_sync_speed_rad_s / task.gear_ratio if task.motor else 0.0
+    return max(sync, task.nominal_speed_rad_s)
+
+
+def refuse_work(key: str, value, amount: float, most: float, what: str, bound: str):
+    """Refuse before any work a request whose size estimate `amount` exceeds `most`: one line naming
+    the key, what the value implies, and the range that is allowed."""
+    if amount > most:
+        raise ModelError(f"{key}={value} means about {amount:.3g} {what}, more than the {most:g} allowed "
+                         f"({bound})", key=key)
 
 
 def check_task(task, duration_s=None):

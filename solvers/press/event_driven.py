@@ -19,15 +19,19 @@ from mechopt.solvers.press.common import (
     Start,
     Trace,
     angle_events,
+    casadi_failure,
     check_task,
     checked,
     drive_torque,
     dynamics_of,
     initial_state,
     mode_at,
+    refuse_work,
+    stall_check,
     summarise,
+    top_speed_rad_s,
 )
-from mechopt.solvers.result import Result, Status, Timing, from_casadi_integrator
+from mechopt.solvers.result import Result, Status, Timing
 from mechopt.solvers.settings import Annotated, Interval, Positive, Tolerance
 
 
@@ -43,13 +47,17 @@ def _piece(task: PressDrive, tol: float, samples: int) -> ca.Function:
                          {"abstol": tol, "reltol": tol, "max_num_steps": 100000})
 
 
+MAX_PIECES = 50_000          # ~25 s of CVODES calls
+MAX_SAMPLES = 1_000_000      # states and outputs kept: ~250 MB
+
+
 class _Stall(Exception):
     pass
 
 
 def events(task: PressDrive, *, tol: Tolerance = 1e-10, duration_s: Duration = 1.0, start: Start = "nominal",
            max_step_s: Positive = 0.02, samples: Samples = 8,
-           max_events: Annotated[int, Interval(ge=1, le=10_000_000)] = 10000) -> Result:
+           max_events: Annotated[int, Interval(ge=1, le=100_000)] = 10000) -> Result:
     """CVODES between located events, restarted at each (see the module doc).
 
     Events: "cut_start" and "cut_end" (the crank angles where X = H - Z - delta and X = H - delta
@@ -65,8 +73,12 @@ def events(task: PressDrive, *, tol: Tolerance = 1e-10, duration_s: Duration = 1
     tol : CVODES relative and absolute tolerance.
     duration_s : simulated time [s].  start : "nominal" or "rest".
     max_step_s : longest piece [s].  samples : outputs per piece (for peaks and plots).
+    A request that implies more than `MAX_PIECES` pieces or `MAX_SAMPLES` samples is refused
+    before any work (ModelError naming the key and its allowed range).
     Returns a Result: SOLVED; INFEASIBLE with violated ("stall",) when the crank stops inside the
-    cut or never turns; LIMIT after `max_events`; FAILED if CVODES fails.
+    cut, never turns, or coasts to a stop and is held by friction at the end (with the mean load
+    torque against the breakdown torque in `values` when the motor cannot carry the cycle);
+    LIMIT after `max_events`; FAILED if CVODES fails.
     """
     check_task(task, duration_s)
     for key, value in (("tol", tol), ("max_step_s", max_step_s)):
@@ -74,11 +86,17 @@ def events(task: PressDrive, *, tol: Tolerance = 1e-10, duration_s: Duration = 1
             raise ModelError(f"{key}={value} must be > 0", key=key)
     if samples < 1:
         raise ModelError(f"samples={samples} must be >= 1", key="samples")
+    # pieces: one per max_step_s at least, plus three events per revolution at the top speed
+    per_s = 1 / max_step_s + 3 * top_speed_rad_s(task) / TWO_PI
+    refuse_work("duration_s", duration_s, duration_s * per_s, MAX_PIECES, "CVODES pieces (~0.5 ms each)",
+                f"duration_s <= {MAX_PIECES / per_s:.4g} s with max_step_s={max_step_s:g}")
+    refuse_work("samples", samples, duration_s * per_s * samples, MAX_SAMPLES, "samples in memory",
+                f"samples <= {max(int(MAX_SAMPLES / (duration_s * per_s)), 1)} over duration_s={duration_s:g}")
     t_start = time.perf_counter()
     piece = _piece(task, tol, samples)
     build = time.perf_counter() - t_start
     trace = Trace()
-    status, message, violated = Status.SOLVED, "", ()
+    status, message, violated, failure = Status.SOLVED, "", (), {}
     try:
         _march(task, piece, trace, initial_state(task, start), duration_s, max_step_s, max_events)
         message = f"CVODES tol {tol:g}, {len(trace.events)} events located"
@@ -89,13 +107,24 @@ def events(task: PressDrive, *, tol: Tolerance = 1e-10, duration_s: Duration = 1
     except RuntimeError as exc:        # CVODES gave up (e.g. too much work): a status, not a crash
         if isinstance(exc, MechoptError):
             raise
-        status, message = from_casadi_integrator(str(exc)), f"CVODES failed: {exc}"
+        t_fail = float(trace.t[-1][-1]) if trace.t else 0.0
+        status, message, failure = casadi_failure(exc, f"at t = {t_fail:.6g} s of {duration_s} s")
     if not trace.t:
-        return Result(status, {}, Timing(build, time.perf_counter() - t_start - build), message, violated)
+        return Result(status, {}, Timing(build, time.perf_counter() - t_start - build), message, violated, failure)
     values, diagnostics, arrays = summarise(task, trace)
+    diagnostics |= failure
     if status is Status.SOLVED and values["revolutions"] < 1 and values["final_omega_rad_s"] <= 0:
         status, violated = Status.INFEASIBLE, ("stall",)
         message = f"the crank never turned in {duration_s} s: the drive cannot overcome friction and the load"
+    held = [e for e in trace.events if e[0] in ("stick", "slip")]
+    if status is Status.SOLVED and held and held[-1][0] == "stick":
+        status, violated = Status.INFEASIBLE, ("stall",)
+        message = (f"the press coasted to a stop: static friction holds the crank at {np.degrees(held[-1][2] % TWO_PI):.3f}"
+                   f" deg from t = {held[-1][1]:.6g} s to the end, after {values['revolutions']:.0f} revolutions")
+    stall = stall_check(task)
+    if stall is not None:       # the mean load is beyond the motor: a run that still turns is slowing to a stall
+        values |= stall[0]
+        message += "; " + stall[1] + ("" if violated else ": this run is slowing down toward a stall")
     status, message, violated = checked(status, message, violated, diagnostics)
     timing = Timing(build, time.perf_counter() - t_start - build)
     return Result(status, values, timing, message, violated, diagnostics, arrays)

@@ -13,15 +13,20 @@ from mechopt.solvers.press.common import (
     Duration,
     Start,
     Trace,
+    belt_mode,
+    belt_too_fast,
     check_task,
     checked,
     dynamics_of,
     initial_state,
     paper_U,
+    stable_step_s,
     summarise,
 )
 from mechopt.solvers.result import Result, Status, Timing
 from mechopt.solvers.settings import Annotated, Interval, NonNegative, Positive
+
+MAX_STEPS = 500_000         # per run (refinement included): ~200 MB of samples and outputs, seconds
 
 
 @memoised(maxsize=64)
@@ -58,6 +63,18 @@ def _rk4_trace(task, step_s, duration_s, start):
     return trace, dyn
 
 
+def _first_stop(task, trace):
+    """(t, phi, in the cut) of the first sample where the crank, having turned, stops or turns
+    back (omega <= 0); None if it keeps turning."""
+    w = trace.x[0][:, task.state_names.index("omega_rad_s")]
+    turned = np.maximum.accumulate(w) > 0
+    hits = np.flatnonzero((w <= 0) & np.r_[False, turned[:-1]])
+    if not hits.size:
+        return None
+    k = int(hits[0])
+    return float(trace.t[0][k]), float(trace.x[0][k, task.state_names.index("phi_rad")]), bool(trace.mode[0][k - 1, 0])
+
+
 def rk4(task: PressDrive, *, step_s: Positive = 1e-4, duration_s: Duration = 1.0, start: Start = "nominal",
         refine_tol_rad: NonNegative = 1e-6, max_halvings: Annotated[int, Interval(ge=0, le=20)] = 4) -> Result:
     """Fixed-step RK4 on eqs. (2) with the paper's switching function U (Sec. "DYNAM").
@@ -70,20 +87,36 @@ def rk4(task: PressDrive, *, step_s: Positive = 1e-4, duration_s: Duration = 1.0
 
     Parameters
     ----------
-    step_s : first step [s]; must divide `duration_s`.
+    step_s : first step [s]; must divide `duration_s` into at most `MAX_STEPS` steps, and lie
+        within RK4's stability limit for the belt mode (else FAILED at once, saying so).
     duration_s : simulated time [s].
     start : "nominal" (turning at the nominal speed) or "rest".
-    Returns a Result: SOLVED, or INACCURATE when refinement did not reach `refine_tol_rad`.
+    Returns a Result: SOLVED, or INACCURATE when refinement did not reach `refine_tol_rad`;
+    INFEASIBLE with violated ("stall",) when the crank, having turned, stops (in the cut or not).
     """
     check_task(task, duration_s)
     if not step_s > 0:
         raise ModelError(f"step_s={step_s} must be > 0", key="step_s")
+    if duration_s / step_s > MAX_STEPS:
+        raise ModelError(f"step_s={step_s} with duration_s={duration_s} means {duration_s / step_s:.3g} RK4 steps; "
+                         f"allowed at most {MAX_STEPS} (step_s >= {duration_s / MAX_STEPS:.3g} s)", key="step_s")
     t_start = time.perf_counter()
     build = 0.0
+    hz, eigenvalue = belt_mode(task)
+    stable = stable_step_s(eigenvalue)
+    if step_s > stable:         # it would diverge: say why before integrating
+        return Result(Status.FAILED, {"belt_mode_Hz": hz, "step_needed_s": stable, "step_s": step_s},
+                      Timing(build, time.perf_counter() - t_start),
+                      belt_too_fast(task, stable, float("inf"), 0, f"RK4 at step_s={step_s:g}",
+                                    why=" (RK4's stability limit)")
+                      + f"; reduce step_s below {stable:.3g} s or use events")
     trace, _ = _rk4_trace(task, step_s, duration_s, start)
     iphi = task.state_names.index("phi_rad")
-    change, halvings, h = np.inf, 0, step_s
+    change, halvings, h, capped = np.inf, 0, step_s, ""
     while refine_tol_rad > 0 and halvings < max_halvings and np.all(np.isfinite(trace.x[0])):
+        if 2 * duration_s / h > MAX_STEPS:
+            capped = f"; refining stopped: the next halving needs {2 * duration_s / h:.3g} steps > {MAX_STEPS}"
+            break
         finer, _ = _rk4_trace(task, h / 2, duration_s, start)
         change = abs(finer.x[0][-1, iphi] - trace.x[0][-1, iphi])
         trace, h, halvings = finer, h / 2, halvings + 1
@@ -98,11 +131,20 @@ def rk4(task: PressDrive, *, step_s: Positive = 1e-4, duration_s: Duration = 1.0
     diagnostics |= {"halvings": halvings, "last_change_rad": float(change) if np.isfinite(change) else None}
     ok = refine_tol_rad <= 0 or change <= refine_tol_rad
     diagnostics["switches_stepped_over"] = True      # fixed steps: first order across the jump
+    stop = _first_stop(task, trace)
+    if stop is not None:
+        t_stop, phi_stop, in_cut = stop
+        where = f"crank angle {np.degrees(phi_stop % (2 * np.pi)):.3f} deg, t = {t_stop:.6g} s"
+        message = (f"the press stalls in the cut at {where}: the flywheel and motor cannot supply the cutting work"
+                   if in_cut else f"the crank stops at {where}: the drive cannot keep it turning")
+        status, message, violated = checked(Status.INFEASIBLE, message, ("stall",), diagnostics)
+        return Result(status, values, Timing(build, time.perf_counter() - t_start - build), message, violated,
+                      diagnostics, arrays)
     status, message, violated = checked(Status.SOLVED if ok else Status.INACCURATE,
                                          f"RK4, step {h:.3g} s after {halvings} halvings; fixed steps cross "
                                          "the jump at the end of the cut and the friction sign change "
                                          "(first order there: the paper's method as published)"
                                          + ("" if ok else f"; last halving still moved phi by {change:.3g} rad > "
-                                                          f"{refine_tol_rad:g}"), (), diagnostics)
+                                                          f"{refine_tol_rad:g}{capped}"), (), diagnostics)
     timing = Timing(build, time.perf_counter() - t_start - build)
     return Result(status, values, timing, message, violated, diagnostics, arrays)

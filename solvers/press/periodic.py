@@ -9,19 +9,32 @@ import numpy as np
 
 from mechopt.models.cache import memoised
 from mechopt.models.errors import MechoptError, ModelError
-from mechopt.models.press import WORK_NAMES, PressDrive
+from mechopt.models.press import (
+    WORK_NAMES,
+    PressDrive,
+    breakdown_torque_at_crank_Nm,
+    cut_work_J,
+    required_mean_torque_Nm,
+)
 from mechopt.solvers.press.common import (
     TWO_PI,
     Samples,
     Trace,
+    belt_mode,
+    belt_too_fast,
+    casadi_failure,
     check_task,
     checked,
     dynamics_of,
     initial_state,
+    stall_check,
     summarise,
 )
-from mechopt.solvers.result import Result, Status, Timing, from_casadi_integrator, from_rootfinder
+from mechopt.solvers.press.event_driven import _Limit, _march, _piece, _Stall
+from mechopt.solvers.result import Result, Status, Timing, from_rootfinder
 from mechopt.solvers.settings import Annotated, Interval, Tolerance
+
+STEPS_PER_REVOLUTION = 2500     # belt-mode steps per revolution steady_state takes on (1 kHz belt: ~3 s)
 
 
 @memoised(maxsize=16)
@@ -50,7 +63,7 @@ def _revolution(task: PressDrive, tol: float, samples: int):
 
 
 def steady_state(task: PressDrive, *, tol: Tolerance = 1e-10, samples: Samples = 60,
-                 max_iter: Annotated[int, Interval(ge=1, le=1000)] = 30) -> Result:
+                 max_iter: Annotated[int, Interval(ge=1, le=100)] = 30) -> Result:
     """The periodic steady motion (the paper's assumption: the whole cut happens in steady
     motion), found directly instead of integrating until transients die.
 
@@ -59,9 +72,10 @@ def steady_state(task: PressDrive, *, tol: Tolerance = 1e-10, samples: Samples =
     cut's ends are fixed angles there, so no event location is needed), to the states at
     phi = 2 pi. CasADi's Newton rootfinder, with CVODES sensitivities, makes the two equal.
     Assumes the crank keeps turning forward (omega > 0); a solution that violates it is FAILED.
-    A belt far stiffer than the drive (1e6 times the KD2322 value) makes the CVODES
-    sensitivities very expensive (minutes, and Newton stalls at ~1e-7): use the rigid-belt
-    model there, which is the same motion to 1e-7 rad (a test pins that with `events`).
+    A belt far stiffer than the drive makes the CVODES sensitivities very expensive (1e4 times
+    the KD2322 value: 25 s; 1e6: minutes, and Newton stalls at ~1e-7): past `STEPS_PER_REVOLUTION`
+    steps of a tenth of the belt mode's period per revolution it returns LIMIT before any work;
+    the rigid-belt model is that motion's limit (to 1e-7 rad: a test pins it with `events`).
 
     Parameters
     ----------
@@ -72,6 +86,17 @@ def steady_state(task: PressDrive, *, tol: Tolerance = 1e-10, samples: Samples =
     if not tol > 0:
         raise ModelError(f"tol={tol} must be > 0", key="tol")
     t_start = time.perf_counter()
+    hz, _ = belt_mode(task)
+    if hz > 0:              # Newton's CVODES sensitivities must follow the belt mode: minutes past ~2 kHz
+        step = 0.1 / hz
+        too_fast = belt_too_fast(task, step, TWO_PI / task.nominal_speed_rad_s / step, STEPS_PER_REVOLUTION,
+                                 "steady_state", why=" (a tenth of its period)", over=" per revolution")
+        if too_fast:
+            return Result(Status.LIMIT, {"belt_mode_Hz": hz, "step_needed_s": step},
+                          Timing(0.0, time.perf_counter() - t_start), too_fast + "; `events` integrates it")
+    stall = stall_check(task)
+    if stall is not None:           # no forward periodic motion can exist: say so before any work
+        return Result(Status.INFEASIBLE, stall[0], Timing(0.0, time.perf_counter() - t_start), stall[1], ("stall",))
     pieces, n = _revolution(task, tol, samples)
     m = n - 1
     y0 = ca.MX.sym("y0", m)
@@ -86,6 +111,7 @@ def steady_state(task: PressDrive, *, tol: Tolerance = 1e-10, samples: Samples =
     if task.motor:      # start near the motor's idle speed rather than the nominal one
         guess[[i for i, k in enumerate(np.delete(np.array(task.state_names), task.state_names.index("phi_rad")))
                if k.startswith("omega")]] = task.motor_sync_speed_rad_s / task.gear_ratio * 0.99
+    guess_speed = float(guess[task.state_names.index("omega_rad_s") - 1])
     try:                # the re-integration of the found orbit can fail as well as the Newton solve
         solution = np.asarray(rf(guess)).ravel()
         status = from_rootfinder(rf.stats()["return_status"])
@@ -94,19 +120,57 @@ def steady_state(task: PressDrive, *, tol: Tolerance = 1e-10, samples: Samples =
     except RuntimeError as exc:
         if isinstance(exc, MechoptError):
             raise
-        return Result(from_casadi_integrator(str(exc)), {}, Timing(build, time.perf_counter() - t_start - build),
-                      message=f"CVODES failed inside the periodic Newton solve: {exc}")
+        status, message, diagnostics = casadi_failure(exc, "integrating a revolution inside the periodic Newton "
+                                                           "solve: no periodic motion found")
+        values, violated = {}, ()
+        stalled = _stalls_from(task, guess, tol)
+        if stalled is not None:
+            status, violated = Status.INFEASIBLE, ("stall",)
+            values = {"required_mean_torque_Nm": required_mean_torque_Nm(task),
+                      "breakdown_torque_at_crank_Nm": breakdown_torque_at_crank_Nm(task),
+                      "cut_work_J": cut_work_J(task)}
+            message = (f"no periodic motion: started at the Newton guess (crank at {guess_speed:.4g} rad/s, the "
+                       f"motor's idle speed), {stalled}; the motor could carry the mean load torque "
+                       f"{values['required_mean_torque_Nm']:.4g} N m (breakdown {values['breakdown_torque_at_crank_Nm']:.4g}"
+                       f" N m at the crank), but the flywheel cannot carry the cut ({values['cut_work_J']:.4g} J)")
+        return Result(status, values, Timing(build, time.perf_counter() - t_start - build), message, violated,
+                      diagnostics)
     values, diagnostics, arrays = summarise(task, trace, cut_angles=task.cut_window_rad())
     values["periodicity_residual"] = miss
     diagnostics |= {"newton_iterations": rf.stats()["iter_count"], "initial_state": solution.tolist()}
-    message = f"periodic orbit by Newton shooting, {rf.stats()['iter_count']} iterations, residual {miss:.3g}"
+    iterations = rf.stats()["iter_count"]
     if status is Status.SOLVED and diagnostics["min_omega_rad_s"] <= 0:
-        status, message = Status.FAILED, message + "; the crank does not keep turning forward: no such orbit"
-    if status is Status.SOLVED and miss > 1e3 * tol:
+        status = Status.FAILED
+        message = (f"no forward periodic motion: Newton shooting converged ({iterations} iterations) to an orbit on "
+                   f"which the crank stops or turns back (min omega {diagnostics['min_omega_rad_s']:.3g} rad/s)")
+    elif status is Status.SOLVED and miss > 1e3 * tol:
         status = Status.INACCURATE
+        message = (f"not a periodic orbit to trust: Newton shooting stopped after {iterations} iterations with "
+                   f"periodicity residual {miss:.3g} > 1000 tol = {1e3 * tol:.3g}")
+    elif status is Status.SOLVED:
+        message = f"periodic orbit by Newton shooting, {iterations} iterations, residual {miss:.3g}"
+    else:               # never a message that reads like an answer
+        message = (f"no periodic orbit found: Newton shooting stopped after {iterations} of max_iter={max_iter} "
+                   f"iterations ({rf.stats()['return_status']}) with periodicity residual {miss:.3g}")
     status, message, violated = checked(status, message, (), diagnostics)
     return Result(status, values, Timing(build, time.perf_counter() - t_start - build), message, violated,
                   diagnostics, arrays)
+
+
+def _stalls_from(task, guess, tol):
+    """The stall message of `events` run for three revolutions from the Newton guess (phi = 0, the
+    motor's idle speed: the fastest a periodic motion turns), or None if the crank keeps turning."""
+    iphi = task.state_names.index("phi_rad")
+    x = initial_state(task, "nominal")
+    x[[i for i in range(len(task.state_names)) if i != iphi]] = guess
+    speed = max(float(x[task.state_names.index("omega_rad_s")]), 1e-3)
+    try:
+        _march(task, _piece(task, tol, 8), Trace(), x, 3 * TWO_PI / speed, 0.02, 10_000)
+    except _Stall as stall:
+        return str(stall)
+    except (_Limit, RuntimeError):
+        return None
+    return None
 
 
 def _revolution_trace(task, pieces, n, y0):

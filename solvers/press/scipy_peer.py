@@ -5,23 +5,33 @@ from typing import Literal
 
 import casadi as ca
 import numpy as np
-from scipy.integrate import solve_ivp
+from scipy.integrate import DOP853, RK45, solve_ivp
 
 from mechopt.models.press import PressDrive
 from mechopt.solvers.press.common import (
+    TWO_PI,
     Duration,
     Trace,
     angle_events,
+    belt_mode,
+    belt_too_fast,
     check_task,
     checked,
     dynamics_of,
     initial_state,
     mode_at,
     paper_U,
+    refuse_work,
+    stable_step_s,
     summarise,
+    top_speed_rad_s,
 )
 from mechopt.solvers.result import Result, Status, Timing, from_ivp
 from mechopt.solvers.settings import NonNegative, Tolerance
+
+MAX_REVOLUTIONS = 100        # solve_ivp calls a Python right-hand side: ~0.25 s per revolution (Radau)
+MAX_STEPS = 20_000           # steps an explicit method may need (~10 s)
+EXPLICIT = {"RK45": (RK45.A, RK45.B), "DOP853": (DOP853.A, DOP853.B)}    # Butcher tableaux: stability limit
 
 
 def ivp(task: PressDrive, *, method: Literal["Radau", "LSODA", "DOP853", "RK45", "BDF"] = "Radau",
@@ -34,9 +44,25 @@ def ivp(task: PressDrive, *, method: Literal["Radau", "LSODA", "DOP853", "RK45",
     Without it the paper's switched right-hand side is integrated in one go: at loose tolerance
     and with no `max_step_s` (0 = unbounded) the adaptive step can jump over the whole cut, and
     `values["cuts"]` then counts fewer cuts than revolutions (the test of a missed cut).
-    Friction sticking is not handled here (the crank must keep turning).
+    Friction sticking is not handled here (the crank must keep turning). Refused before work:
+    more than `MAX_REVOLUTIONS`, or more than `MAX_STEPS` steps (`max_step_s`, or an explicit
+    method's stability limit for the belt mode: then LIMIT, saying so).
     """
     check_task(task, duration_s)
+    per_s = top_speed_rad_s(task) / TWO_PI
+    refuse_work("duration_s", duration_s, duration_s * per_s, MAX_REVOLUTIONS, "revolutions (~0.25 s each with "
+                "a Python right-hand side)", f"duration_s <= {MAX_REVOLUTIONS / per_s:.4g} s; `events` goes further")
+    if max_step_s > 0:
+        refuse_work("max_step_s", max_step_s, duration_s / max_step_s, MAX_STEPS, "steps",
+                    f"max_step_s >= {duration_s / MAX_STEPS:.3g} s over duration_s={duration_s:g}, or 0")
+    if method in EXPLICIT:
+        hz, eigenvalue = belt_mode(task)
+        stable = stable_step_s(eigenvalue, EXPLICIT[method])
+        too_fast = belt_too_fast(task, stable, duration_s / stable, MAX_STEPS, method,
+                                 why=f" ({method}'s stability limit)", over=f" over duration_s={duration_s:g}")
+        if too_fast:
+            return Result(Status.LIMIT, {"belt_mode_Hz": hz, "step_needed_s": stable}, Timing(0.0, 0.0),
+                          too_fast + "; Radau, LSODA or `events` integrate it")
     dyn = dynamics_of(task)
     iphi, iw = task.state_names.index("phi_rad"), task.state_names.index("omega_rad_s")
     t_start = time.perf_counter()
@@ -67,7 +93,7 @@ def ivp(task: PressDrive, *, method: Literal["Radau", "LSODA", "DOP853", "RK45",
         return Result(status, values, timing, message, violated, diagnostics, arrays)
     mode = mode_at(task, dyn, x, 1.0)
     trace.add(t, x, mode)
-    status, message = Status.SOLVED, ""
+    status, message, violated = Status.SOLVED, "", ()
     while t < duration_s * (1 - 1e-14):
         target, kind = angle_events(task, x[iphi])
         f = (lambda m: lambda tt, xx: np.asarray(dyn.rhs(xx, m)).ravel())(mode)
@@ -85,7 +111,11 @@ def ivp(task: PressDrive, *, method: Literal["Radau", "LSODA", "DOP853", "RK45",
         trace.add(sol.t[1:], sol.y.T[1:], mode)
         t, x = float(sol.t[-1]), sol.y[:, -1].copy()
         if sol.status == 1 and sol.t_events[1].size:
-            status, message = Status.INFEASIBLE, f"the crank stopped at t = {t:.6g} s (not handled by ivp)"
+            where = f"crank angle {np.degrees(x[iphi] % TWO_PI):.3f} deg, t = {t:.6g} s"
+            status, violated = Status.INFEASIBLE, ("stall",)
+            message = (f"the press stalls in the cut at {where}: the flywheel and motor cannot supply the cutting work"
+                       if mode[0] > 0 else f"the crank stopped at {where} (what follows, friction sticking, is not "
+                                           f"handled by ivp: `events` is)")
             break
         if sol.status == 1:
             trace.events.append((kind, t, float(target)))
@@ -93,6 +123,6 @@ def ivp(task: PressDrive, *, method: Literal["Radau", "LSODA", "DOP853", "RK45",
             mode = mode_at(task, dyn, x, 1.0)
     values, diagnostics, arrays = summarise(task, trace)
     diagnostics["rhs_calls"] = int(calls)
-    status, message, violated = checked(status, message or f"solve_ivp {method}", (), diagnostics)
+    status, message, violated = checked(status, message or f"solve_ivp {method}", violated, diagnostics)
     timing = Timing(0.0, time.perf_counter() - t_start)
     return Result(status, values, timing, message, violated, diagnostics, arrays)
