@@ -12,8 +12,8 @@ from mechopt.cli import main
 from mechopt.models.errors import SceneError
 from mechopt.plots import save_figure
 from mechopt.report import write_report
-from mechopt.units import unit_of
 from mechopt.sweep import parse_grid, sweep
+from mechopt.units import unit_of
 
 matplotlib.use("Agg")
 SCENES = ("loom/group1", "stop-impact/frequencies")

@@ -11,7 +11,6 @@ fitting solver's status follows one rule (`_verdict`, `_on_edge`): outside err_w
 INFEASIBLE with the best values kept, on a side of the default box LIMIT naming it. Lengths are
 solved in units of the cam (`_scale`), so one set of tolerances serves a 1 um and a 1 m cam.
 """
-import inspect
 import math
 import time
 from typing import Literal
@@ -40,7 +39,7 @@ from mechopt.solvers.cam_cutter.deviation import (
     path_distance,
     verified_deviation,
 )
-from mechopt.solvers.settings import Annotated, Ge, Interval, Tolerance
+from mechopt.solvers.settings import Annotated, Ge, Interval, Tolerance, check_settings
 
 Nodes = Annotated[int, Interval(ge=2, le=1_000_000)]      # COUNT: nodes on the ideal path
 from mechopt.solvers.result import Result, Status, Timing, from_ipopt, from_sqpmethod
@@ -168,7 +167,7 @@ def minimax(task: LinkageFit, *, count: Nodes = 1000, slots: Annotated[int, Inte
     (H, L) to ~1e-9 mm; SQP is ~7x faster per round (`mechopt bench cam-cutter`).
     """
     _check_count(count)
-    _check_settings(minimax, slots=slots, max_rounds=max_rounds, widen=widen)
+    check_settings(minimax, slots=slots, max_rounds=max_rounds, widen=widen)
     if nlp not in _NLP_OPTIONS:
         raise ModelError(f"nlp={nlp!r} is not an NLP back end; known: {', '.join(_NLP_OPTIONS)}", key="nlp")
     start = time.perf_counter()
@@ -338,7 +337,7 @@ def robust(task: LinkageFit, *, count: Nodes = 1000, max_moves: Annotated[int, I
     points from the minimax optimum; lattice deviations are memoised, neighbours share them.
     """
     _check_count(count)
-    _check_settings(robust, max_moves=max_moves)
+    check_settings(robust, max_moves=max_moves)
     lattice = _lattice_indices(task)            # a box with no lattice point is refused before any work
     start = time.perf_counter()
     best = minimax(task, count=count)
@@ -399,7 +398,7 @@ def evolve(task: LinkageFit, *, count: Nodes = 1000, popsize: Annotated[int, Int
     Its answer gets the status rule of `minimax` (`_verdict`): outside err_width_mm is INFEASIBLE
     with the best values kept, on a side of the default box LIMIT (no widening here)."""
     _check_count(count)
-    _check_settings(evolve, popsize=popsize, tol=tol, maxiter=maxiter, seed=seed)
+    check_settings(evolve, popsize=popsize, tol=tol, maxiter=maxiter, seed=seed)
     start = time.perf_counter()
     scale = _scale(task)
     t = np.linspace(0.0, task.t_finish_rad, count)
@@ -540,28 +539,6 @@ def _node_times(task, count, nodes):
         raise ModelError(f"nodes={nodes!r} is not a node rule; known: {', '.join(NODE_RULES)}", key="nodes")
     first, extra = NODE_RULES[nodes]
     return np.arange(first, count + extra) * (task.t_finish_read_rad / count)
-
-
-def _check_settings(solver, **values):
-    """Settings against the ranges their signature declares (as the scene loader checks them),
-    so a direct call with max_rounds=0 is a one-line error, not a traceback from inside."""
-    signature = inspect.signature(solver).parameters
-    for key, value in values.items():
-        low = high = None
-        for mark in getattr(signature[key].annotation, "__metadata__", ()):
-            low = next((getattr(mark, n) for n in ("ge", "gt") if getattr(mark, n, None) is not None), low)
-            high = next((getattr(mark, n) for n in ("le", "lt") if getattr(mark, n, None) is not None), high)
-            opens = (getattr(mark, "gt", None) is not None, getattr(mark, "lt", None) is not None)
-        whole = signature[key].annotation.__origin__ is int
-        bad = (isinstance(value, bool) or not isinstance(value, (int, np.integer) if whole else (int, float))
-               or not math.isfinite(value)
-               or (low is not None and (value <= low if opens[0] else value < low))
-               or (high is not None and (value >= high if opens[1] else value > high)))
-        if bad:
-            allowed = (f"{'>' if opens[0] else '>='} {low:g}" if low is not None else "") + \
-                      (f" and {'<' if opens[1] else '<='} {high:g}" if high is not None else "")
-            raise ModelError(f"{key}={value!r} must be {'a whole number ' if whole else ''}{allowed.strip(' and')}",
-                             key=key)
 
 
 def _check_count(count):

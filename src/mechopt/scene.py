@@ -9,18 +9,18 @@ import dataclasses
 import importlib
 import inspect
 import math
-import operator
 import re
 import tomllib
 from pathlib import Path
 from types import MappingProxyType
-from typing import Annotated, Any, Literal, get_args, get_origin
+from typing import Any, Literal, get_args, get_origin
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from mechopt.models.cache import memoised
 from mechopt.models.errors import MechoptError, SceneError
 from mechopt.solvers.result import Status
+from mechopt.solvers.settings import declared_range, describe_range, setting_problem
 from mechopt.units import unit_of
 
 Number = int | float
@@ -422,54 +422,6 @@ def _check_settings(path, solver, settings):
         if problem:
             raise SceneError(f"{path}: solver_settings.{key} = {value!r}: {problem}", key=key)
     return {k: (float(v) if type(options[k].default) is float else v) for k, v in settings.items()}
-
-
-def setting_problem(option: inspect.Parameter, value) -> str:
-    """What is wrong with a value for a solver setting ('' when nothing): its type, its choices
-    (a Literal) or its range (annotated_types constraints in the signature, see solvers/settings.py)."""
-    annotation, default = option.annotation, option.default
-    if get_origin(annotation) is Literal:
-        choices = get_args(annotation)
-        return "" if value in choices else f"allowed {', '.join(map(str, choices))}"
-    expected = type(default)
-    ok = (isinstance(value, (int, float)) and not isinstance(value, bool) if expected is float
-          else type(value) is expected)
-    if not ok:
-        return f"expected {expected.__name__} (default {default!r})"
-    if isinstance(value, float) and not math.isfinite(value):
-        return "expected a finite number"
-    low, high = declared_range(annotation)
-    if (low and not low[1](value, low[0])) or (high and not high[1](value, high[0])):
-        return f"allowed {describe_range(low, high)}"
-    return ""
-
-
-def declared_range(annotation):
-    """(low, high), each (bound, test, "gt"|"ge"|"lt"|"le") or None: the limits an annotation
-    declares with annotated_types (a solver setting, or a task field)."""
-    low = high = None
-    if get_origin(annotation) is Annotated:
-        for mark in get_args(annotation)[1:]:
-            for name, test in (("gt", operator.gt), ("ge", operator.ge)):
-                if getattr(mark, name, None) is not None:
-                    low = (getattr(mark, name), test, name)
-            for name, test in (("lt", operator.lt), ("le", operator.le)):
-                if getattr(mark, name, None) is not None:
-                    high = (getattr(mark, name), test, name)
-    return low, high
-
-
-def describe_range(low, high) -> str:
-    """'> 0', '1 ... 10,000', 'any' for a range from `declared_range`."""
-    sign = {"gt": ">", "ge": ">=", "lt": "<", "le": "<="}
-    text = lambda x: f"{x:,}" if isinstance(x, int) else f"{x:g}"        # noqa: E731
-    if low and high:
-        return f"{'' if low[2] == 'ge' else '> '}{text(low[0])} ... {text(high[0])}{'' if high[2] == 'le' else ' (excl.)'}"
-    if low:
-        return f"{sign[low[2]]} {text(low[0])}"
-    if high:
-        return f"{sign[high[2]]} {text(high[0])}"
-    return "any"
 
 
 def _explain(error) -> str:
