@@ -17,8 +17,8 @@ def check_effects(task) -> None:
     known = type(task).EFFECTS
     unknown = [e for e in task.effects if e not in known]
     if unknown:
-        raise ModelError(f"effects={list(task.effects)}: unknown {unknown}; {type(task).__name__} knows "
-                         f"{', '.join(known) or 'none'}", key="effects")
+        raise ModelError(f"effects={list(task.effects)}: unknown {unknown}; known: "
+                         f"{', '.join(known) or 'none'} ({type(task).__name__})", key="effects")
     for name, effect in known.items():
         for key in effect.params:
             given = getattr(task, key, None) is not None

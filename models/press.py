@@ -48,7 +48,7 @@ import casadi as ca
 import numpy as np
 from scipy.optimize import brentq
 
-from mechopt.models.effects import Effect
+from mechopt.models.effects import Effect, check_effects
 from mechopt.models.errors import ModelError
 
 KINEMATICS = ("paper", "exact")
@@ -171,20 +171,9 @@ class PressDrive:
 
     def __post_init__(self):
         object.__setattr__(self, "effects", tuple(self.effects))
-        unknown = [e for e in self.effects if e not in self.EFFECTS]
-        if unknown:
-            raise ModelError(f"effects={list(self.effects)}: unknown {unknown}; known: {', '.join(self.EFFECTS)}",
-                             key="effects")
+        check_effects(self)
         if self.kinematics not in KINEMATICS:
             raise ModelError(f"kinematics={self.kinematics!r}; allowed: {', '.join(KINEMATICS)}", key="kinematics")
-        for name, spec in self.EFFECTS.items():
-            for key in spec.params:
-                given = getattr(self, key) is not None
-                if given and name not in self.effects:
-                    raise ModelError(f"{key}={getattr(self, key)} belongs to effect '{name}', which is not "
-                                     f"listed in effects", key=key)
-                if not given and name in self.effects:
-                    raise ModelError(f"{key} missing: effect '{name}' needs it", key=key)
         for key in ("rod_ratio", *self.RANGES):
             value = getattr(self, key)
             _require(self, key, value is None or value == value, "is not a number")     # NaN fails every range

@@ -221,3 +221,17 @@ def test_importing_from_the_repository_root_gives_the_installed_package():
                          env={**os.environ, "PYTHONPATH": ""})
     assert out.returncode == 0, out.stderr
     assert Path(out.stdout.strip()).parent.name == "mechopt"
+
+
+def test_one_door_per_question_takes_method():
+    from mechopt.solvers.cam_cutter import fit_linkage
+    from mechopt.solvers.press import simulate
+    cam, _ = mechopt.load("cam-cutter/paper-grid").build()
+    by_grid, by_nlp = fit_linkage(cam, method="grid_scan"), fit_linkage(cam, method="minimax")
+    # the NLP's optimum is no worse than any lattice point the scan accepts
+    assert by_nlp.values["max_deviation_mm"] <= by_grid.values["max_deviation_mm"] + 1e-12
+    with pytest.raises(mechopt.SceneError, match=r"method='newton': allowed grid_scan, minimax, robust, evolve"):
+        fit_linkage(cam, method="newton")
+    press, _ = mechopt.load("press/kd2322").build()
+    with pytest.raises(mechopt.SceneError, match=r"method='euler': allowed rk4, events, steady_state, ivp"):
+        simulate(press, method="euler")

@@ -1,8 +1,22 @@
 """The torch-guiding linkage (paper 000): fit H, L to the ideal path, check a given linkage.
 
 `fit` holds the solvers a scene names (`cam_cutter.minimax`, ...); `deviation` measures how far
-a limaçon is from the ideal path.
+a limaçon is from the ideal path. `fit_linkage(task, method=...)` is the one door to the four
+ways of finding the linkage, as `scipy.integrate.solve_ivp` has one for its methods.
 """
+from mechopt.models.errors import SceneError
 from mechopt.solvers.cam_cutter.fit import check, evolve, grid_scan, minimax, robust
 
-__all__ = ["grid_scan", "minimax", "robust", "evolve", "check"]
+__all__ = ["grid_scan", "minimax", "robust", "evolve", "check", "fit_linkage", "METHODS"]
+
+METHODS = {"grid_scan": grid_scan, "minimax": minimax, "robust": robust, "evolve": evolve}
+
+
+def fit_linkage(task, *, method="minimax", **options):
+    """Link lengths H, L [mm] that keep the limaçon within the band of the offset cardioid, by one
+    of `METHODS`: "grid_scan" (the paper's), "minimax" (exact NLP), "robust" (the lattice point
+    whose neighbours stay best), "evolve" (scipy's differential evolution, the peer); with that
+    method's keyword options. Returns its Result."""
+    if method not in METHODS:
+        raise SceneError(f"method={method!r}: allowed {', '.join(METHODS)}", key="method")
+    return METHODS[method](task, **options)
