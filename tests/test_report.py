@@ -3,6 +3,7 @@ assumptions marked, figures, sweep maps and bench plots embedded in the one page
 import base64
 import html
 import re
+from pathlib import Path
 
 import matplotlib
 import pytest
@@ -14,6 +15,8 @@ from mechopt.plots import save_figure
 from mechopt.report import write_report
 from mechopt.sweep import parse_grid, sweep
 from mechopt.units import unit_of
+
+ROOT = Path(__file__).resolve().parents[1]
 
 matplotlib.use("Agg")
 SCENES = ("loom/group1", "stop-impact/frequencies")
@@ -124,3 +127,23 @@ def test_the_page_says_what_made_it_and_links_every_scene(page):
         assert f"href='#{anchor}'" in text and f"id='{anchor}'" in text
         assert registry.find(scene_id).path.name in text             # the file it came from, with its hash
     assert "<div class='scroll'><table>" in text                      # the wide table scrolls, never the page
+
+
+def test_the_page_reads_on_a_laptop_in_a_real_browser(page, tmp_path):
+    """Headless Chromium at 1280 px (tools/report_in_browser.py): no horizontal overflow, every
+    image loads, no text below 11 px, no figure shrunk below 60 % (its axis text with it)."""
+    import importlib.util
+    import shutil
+    if not any(shutil.which(b) for b in ("chromium", "chromium-browser", "google-chrome")):
+        pytest.skip("no Chromium on this machine (apt-get install chromium)")
+    spec = importlib.util.spec_from_file_location("report_in_browser", ROOT / "tools" / "report_in_browser.py")
+    tool = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(tool)
+    path, _ = page
+    metrics = tool.measure(path, width=1280)
+    assert metrics["images"] >= 3 and tool.problems(metrics) == []
+    # the check itself bites: the old 520 px thumbnails shrink figures below the limit
+    old = tmp_path / "old.html"
+    old.write_text(path.read_text(encoding="utf-8").replace("img{width:100%;height:auto;", "img{width:520px;"),
+                   encoding="utf-8")
+    assert any("smallest_figure_scale" in p for p in tool.problems(tool.measure(old, width=1280)))

@@ -26,7 +26,7 @@ __all__ = ["write_report"]
 
 _STYLE = """body{font-family:system-ui,sans-serif;max-width:1180px;margin:1.5em auto;padding:0 1em;color:#222;
 line-height:1.4}table{border-collapse:collapse;font-size:14px;width:100%}td,th{border:1px solid #ccc;
-padding:3px 6px;text-align:left;vertical-align:top;overflow-wrap:anywhere}th{background:#f0f0f0}
+padding:3px 6px;text-align:left;vertical-align:top}.long{overflow-wrap:anywhere}th{background:#f0f0f0}
 .ok{color:#176117}.fail{color:#b00020;font-weight:bold}.cal{color:#8a5a00}.scroll{overflow-x:auto}
 figure{margin:10px 0;font-size:13px;color:#555}img{width:100%;height:auto;border:1px solid #ddd;cursor:zoom-in}
 img.zoom{position:fixed;inset:0;margin:auto;width:auto;max-width:98vw;max-height:98vh;z-index:9;cursor:zoom-out;
@@ -92,14 +92,15 @@ def _validation(runs):
             verdict = ("<span class='cal'>ok (calibrated)</span>" if c.calibrated else "<span class='ok'>ok</span>") \
                 if c.ok else "<span class='fail'>FAIL</span>"
             rows.append([_e(run.scene.id), _e(c.name), _e(c.kind), _e(c.expected), _e(_fmt(c.got)), verdict,
-                         _e(c.where), str(assumed)])
+                         f"<span class='long'>{_e(c.where)}</span>", str(assumed)])
     return "<div class='scroll'>" + _table(["case", "quantity", "kind", "expected (source)", "computed", "check",
                                             "where", "assumed params"], rows) + "</div>"
 
 
 def _provenance(runs, command):
     """Which mechopt made the page, when, by what command, from which scene files."""
-    hashes = [[_e(r.scene.id), f"<code>{scene_hash(r.scene)[:16]}</code>", _e(str(r.scene.path))] for r in runs]
+    hashes = [[_e(r.scene.id), f"<code>{scene_hash(r.scene)[:16]}</code>", f"<span class='long'>{_e(str(r.scene.path))}</span>"]
+              for r in runs]
     return (f"<p>mechopt {_e(__version__)}, {datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC"
             + (f"; made by <code>{_e(command)}</code>" if command else "") + "</p>"
             + "<details><summary>scene files (sha256)</summary>" + _table(["scene", "sha256", "file"], hashes)
