@@ -84,3 +84,35 @@ def test_sweep_takes_a_scene_file_and_refuses_a_huge_grid_before_work(tmp_path, 
     err = capsys.readouterr().err
     assert "10,000,000,000 variants" in err and "exceed the limit of 1,000,000" in err
     assert not (tmp_path / "huge.parquet").exists()
+
+
+def test_run_writes_its_arrays_as_csv_columns(tmp_path):
+    import numpy as np
+
+    import mechopt
+    out = tmp_path / "press.csv"
+    assert main(["run", "press/kd2322", "--csv", str(out)]) == 0
+    header = out.read_text().splitlines()[0].split(",")
+    data = np.loadtxt(out, delimiter=",", skiprows=1)
+    arrays = mechopt.solve("press/kd2322").arrays
+    assert header == list(arrays) and data.shape == (len(arrays["t_s"]), len(arrays))
+    np.testing.assert_allclose(data[:, header.index("omega_rad_s")], arrays["omega_rad_s"], rtol=1e-11)
+
+
+def test_the_shipped_sample_record_gives_back_the_scenes_force_law(tmp_path):
+    import json
+    from pathlib import Path
+
+    import numpy as np
+
+    from mechopt.models.press import FORCE_KEYS, cutting_force_N
+    sample = Path(__file__).resolve().parents[1] / "examples" / "instron-sample.csv"
+    out = tmp_path / "fit.json"
+    assert main(["fit-force", str(sample), "--degree", "4", "--json", str(out)]) == 0
+    fit = json.loads(out.read_text())
+    assert fit["status"] == "SOLVED"
+    # the record is eq. (1) with the scene's coefficients plus 1 % noise: the fitted law follows it
+    law = [registry.find("press/kd2322").params()[k] for k in FORCE_KEYS]
+    got = [fit["values"][f"c{i}_N_per_mm{i}"] for i in range(1, 5)]
+    x = np.linspace(0.0, 3.0, 31)
+    assert np.max(np.abs(cutting_force_N(x, *got) - cutting_force_N(x, *law))) < 0.02 * np.max(cutting_force_N(x, *law))

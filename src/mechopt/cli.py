@@ -65,6 +65,8 @@ def _parser():
                      help="override a parameter, solver setting or structure path (what-if); repeatable")
     run.add_argument("--json", type=Path, metavar="FILE", help="write the result as JSON")
     run.add_argument("--plot", type=Path, metavar="DIR", help="write figures into DIR")
+    run.add_argument("--csv", type=Path, metavar="FILE",
+                     help="write the run's arrays (trajectories: t_s, states, loads ...) as CSV columns")
     validate = sub.add_parser("validate", parents=[common],
                               help="run scenes and check them; exit 1 when any expectation fails")
     validate.add_argument("refs", nargs="*", metavar="CASE",
@@ -80,6 +82,7 @@ def _parser():
     fit.add_argument("--degree", type=int, default=4, help="1 to 6 (the paper: 4)")
     fit.add_argument("--segments", type=int, default=2, help="spans of travel on which errors are reported")
     fit.add_argument("--with-intercept", action="store_true", help="allow a constant term (default: F(0) = 0)")
+    fit.add_argument("--json", type=Path, metavar="FILE", help="write the fitted coefficients and errors as JSON")
     sweep = sub.add_parser("sweep", parents=[common], help="what-if study: every variant of a scene, one Parquet table")
     sweep.add_argument("case", help="a scene id or a scene file's path")
     sweep.add_argument("--grid", action="append", default=[], metavar="KEY=START:STOP:NUM",
@@ -172,12 +175,15 @@ def scene_template(scene, new_id: str) -> str:
 
 def _run(args) -> int:
     overrides = parse_overrides(args.set)
-    _check_outputs(json_file=args.json, plot_dir=args.plot)
+    _check_outputs(json_file=args.json, plot_dir=args.plot, table_file=args.csv)
     scene = registry.find(args.case)
     result = registry.run(scene, overrides)
     _print_run(result)
     if args.json:
         _write_json(args.json, result.as_dict())
+    if args.csv:
+        _write_text(args.csv, arrays_csv(result.arrays, args.csv))
+        print(f"csv: {args.csv}")
     if args.plot:
         from mechopt.plots import plot_run
         for path in plot_run(result, args.plot):
@@ -231,12 +237,16 @@ def _bench(args) -> int:
 
 
 def _fit_force(args) -> int:
+    _check_outputs(json_file=args.json)
     from mechopt.force_data import read_force_csv
     from mechopt.solvers.press.force_fit import fit_force
     result = fit_force(*read_force_csv(args.csv), args.degree, segments=args.segments,
                        through_origin=not args.with_intercept)
     print(f"{args.csv}: degree {args.degree}, status {result.status.value}" + (f" ({result.message})" if result.message else ""))
     _print_table(("value", "got"), [(k, _fmt(v)) for k, v in result.values.items()])
+    if args.json:
+        _write_json(args.json, {"file": str(args.csv), "degree": args.degree, "status": result.status.value,
+                                "message": result.message, "values": result.values})
     return OK if result.status is Status.SOLVED else NOT_SOLVED
 
 
@@ -287,13 +297,25 @@ def _report(args) -> int:
     return OK
 
 
+def arrays_csv(arrays, where) -> str:
+    """A result's arrays as CSV columns (header: their names, with units); one row per sample."""
+    if not arrays:
+        raise SceneError(f"--csv {where}: this solver computes no arrays (only values); use --json")
+    lengths = {len(a) for a in arrays.values()}
+    if len(lengths) != 1:
+        raise SceneError(f"--csv {where}: the arrays have different lengths {sorted(lengths)}; use --json")
+    names = list(arrays)
+    rows = zip(*(arrays[n] for n in names))
+    return ",".join(names) + "\n" + "".join(",".join(f"{x:.12g}" for x in row) + "\n" for row in rows)
+
+
 COMMANDS = {"cases": _cases, "describe": _describe, "new": _new, "run": _run, "validate": _validate,
             "bench": _bench, "fit-force": _fit_force, "sweep": _sweep, "report": _report}
 
 
 def _check_outputs(*, json_file=None, plot_dir=None, table_file=None):
     """Refuse an output that cannot be written before any work is done."""
-    for flag, path in (("--json", json_file), ("--out", table_file)):
+    for flag, path in (("--json", json_file), ("--out/--csv", table_file)):
         if path is None:
             continue
         if path.is_dir() or str(path).endswith(os.sep) or path.name in ("", ".", ".."):
