@@ -112,12 +112,60 @@ def table(loom, cam, cam_pool, dask, dask_side=DASK_SIDE):
     return "\n".join(lines)
 
 
-def cli(repeats, out_dir, progress=None) -> str:
-    """What `mechopt bench sweep` prints. The 10^4 cam sweeps run at most CAM_REPEATS_MAX times (minutes each)."""
-    side = 100
+QUICK_SIDE, QUICK_DASK_SIDE = 30, 20          # --quick: 900 and 400 variants, one run each
+WARM_UP_S = 25.0                 # imports, clusters started, warm-up sweeps
+MEASURED_S = {"loom": 27.0, "cam": 106.0, "cam_pool": 55.0, "dask_chunk": 3.0}   # per 10^4 variants / per run
+
+
+def expected_s(repeats, quick=False) -> float:
+    """A rough wall time [s] of `cli` on 2 cores (from the medians measured when it was written)."""
+    if quick:
+        repeats, scale, dask_scale = 1, QUICK_SIDE**2 / 1e4, (QUICK_DASK_SIDE / DASK_SIDE) ** 2
+    else:
+        scale, dask_scale = 1.0, 1.0
+    cam_repeats = min(repeats, CAM_REPEATS_MAX)
+    return (WARM_UP_S + scale * (repeats * MEASURED_S["loom"] + cam_repeats * (MEASURED_S["cam"] + MEASURED_S["cam_pool"]))
+            + dask_scale * len(DASK_CHUNKS) * 3 * repeats * MEASURED_S["dask_chunk"])
+
+
+def cli(repeats, out_dir, progress=None, quick=False) -> str:
+    """What `mechopt bench sweep` prints, and its figure in out_dir. The 10^4 cam sweeps run at most
+    CAM_REPEATS_MAX times (minutes each); `quick` runs 900-variant sweeps once (about a minute)."""
+    side, dask_side = (QUICK_SIDE, QUICK_DASK_SIDE) if quick else (100, DASK_SIDE)
+    repeats = 1 if quick else repeats
+    if progress:
+        seconds = expected_s(repeats, quick)
+        progress(f"sweep benchmark: expect about {f'{seconds / 60:.0f} min' if seconds > 120 else f'{seconds:.0f} s'} "
+                 "on 2 cores" + ("" if quick else " (--quick: about a minute)"))
     loom = in_process("loom/group1", LOOM_GRID, side, repeats=repeats, progress=progress)
     cam_repeats = min(repeats, CAM_REPEATS_MAX)
     cam = in_process("cam-cutter/minimax", CAM_GRID, side, repeats=cam_repeats, progress=progress)
     cam_pool = in_process("cam-cutter/minimax", CAM_GRID, side, repeats=cam_repeats, workers=2, progress=progress)
-    dask = dask_overhead(repeats=repeats, progress=progress)
-    return table(loom, cam, cam_pool, dask)
+    dask = dask_overhead(side=dask_side, repeats=repeats, progress=progress)
+    plot(loom, cam, cam_pool, dask, out_dir)
+    return table(loom, cam, cam_pool, dask, dask_side)
+
+
+def plot(loom, cam, cam_pool, dask, out_dir):
+    """Variants per second of each route, and the Dask path's time over in-process per chunk size."""
+    from mechopt.figures.registry import new_figure
+    from mechopt.plots import save_figure
+    fig = new_figure(figsize=(11, 4.5))
+    left, right = fig.subplots(1, 2)
+    names = ["loom/group1\nin-process", "cam-cutter/minimax\nin-process", "cam-cutter/minimax\n--workers 2"]
+    rates = [n / seconds for seconds, _, n in (loom, cam, cam_pool)]
+    left.bar(names, rates, color=["tab:blue", "tab:orange", "tab:green"])
+    for i, rate in enumerate(rates):
+        left.annotate(f"{rate:.0f}", (i, rate), ha="center", va="bottom", fontsize=9)
+    left.set(ylabel="variants per second [1/s]", title="sweep throughput (median wall time, table included)")
+    chunks = list(dask)
+    for key, colour, label in (("dask_1", "tab:red", "Dask, 1 worker"), ("dask_2", "tab:purple", "Dask, 2 workers")):
+        right.plot(chunks, [dask[c][key] / dask[c]["in_process"] for c in chunks], "o-", color=colour, label=label)
+    right.axhline(TARGETS["dask_over_in_process"], color="0.4", ls=":", label="target for 1 worker")
+    right.axhline(1.0, color="k", lw=0.6)
+    right.set(xscale="log", xlabel="chunk [variants per task]", ylabel="wall time / in-process [-]",
+              title="loom/group1 on a LocalCluster")
+    right.legend(fontsize=8)
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    return save_figure(fig, out_dir / "sweep_throughput.png")

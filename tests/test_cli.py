@@ -116,3 +116,16 @@ def test_the_shipped_sample_record_gives_back_the_scenes_force_law(tmp_path):
     got = [fit["values"][f"c{i}_N_per_mm{i}"] for i in range(1, 5)]
     x = np.linspace(0.0, 3.0, 31)
     assert np.max(np.abs(cutting_force_N(x, *got) - cutting_force_N(x, *law))) < 0.02 * np.max(cutting_force_N(x, *law))
+
+
+def test_bench_quick_is_offered_where_a_study_has_it_and_the_long_one_says_its_time(capsys, monkeypatch, tmp_path):
+    from mechopt.benchmarks import sweep as sweep_bench
+    assert main(["bench", "press", "--quick"]) == 2
+    assert "bench press: no --quick version" in capsys.readouterr().err
+    # the full sweep study announces itself as long, the quick one as short, before anything runs
+    assert sweep_bench.expected_s(5) > 600 > 120 > sweep_bench.expected_s(5, quick=True)
+    said = []
+    monkeypatch.setattr(sweep_bench, "in_process", lambda *a, **k: (_ for _ in ()).throw(KeyboardInterrupt))
+    with pytest.raises(KeyboardInterrupt):
+        sweep_bench.cli(5, tmp_path, progress=said.append)
+    assert said and "expect about 13 min" in said[0] and "--quick" in said[0]

@@ -6,6 +6,7 @@ message names the file, key and allowed range; nothing was computed or written),
 (INFEASIBLE, LIMIT, INACCURATE, FAILED), 130 interrupted.
 """
 import argparse
+import inspect
 import json
 import os
 import shlex
@@ -76,6 +77,8 @@ def _parser():
     bench.add_argument("study", choices=list(STUDIES), help="a registered study (benchmarks/__init__.py)")
     bench.add_argument("--repeats", type=_positive_int, default=5, help="runs per point (>= 1); medians reported")
     bench.add_argument("--plot", type=Path, default=Path("out/bench"), metavar="DIR")
+    bench.add_argument("--quick", action="store_true",
+                       help="a short version where the study offers one (sweep: ~1 min instead of ~15)")
     fit = sub.add_parser("fit-force", parents=[common],
                          help="fit a polynomial force law to load-travel data (paper 001, eq. (1))")
     fit.add_argument("csv", type=Path, help="header names columns and units, e.g. travel_mm,load_N")
@@ -231,7 +234,13 @@ def _validate(args) -> int:
 
 def _bench(args) -> int:
     _check_outputs(plot_dir=args.plot)
-    text = study(args.study).cli(args.repeats, args.plot, progress=lambda line: print(line, file=sys.stderr, flush=True))
+    module = study(args.study)
+    quick = {}
+    if args.quick:
+        if "quick" not in inspect.signature(module.cli).parameters:
+            raise SceneError(f"bench {args.study}: no --quick version (it takes seconds to a few minutes as it is)")
+        quick = {"quick": True}
+    text = module.cli(args.repeats, args.plot, progress=lambda line: print(line, file=sys.stderr, flush=True), **quick)
     print(text)
     return CHECK_FAILED if "MISSED" in text else OK
 
