@@ -235,3 +235,12 @@ def test_one_door_per_question_takes_method():
     press, _ = mechopt.load("press/kd2322").build()
     with pytest.raises(mechopt.SceneError, match=r"method='euler': allowed rk4, events, steady_state, ivp"):
         simulate(press, method="euler")
+
+
+@pytest.mark.parametrize("name, unit, words", [("err_width_mm", "mm", "err width [mm]"),
+                                              ("belt_stiffness_Nm_rad", "N m/rad", "belt stiffness [N m/rad]"),
+                                              ("speed_fluctuation", "", "speed fluctuation"),
+                                              ("c_stop_N_per_mm", "N/mm", "c stop [N/mm]")])
+def test_units_are_read_from_names_and_axes_say_them(name, unit, words):
+    from mechopt.units import label, unit_of
+    assert unit_of(name) == unit and label(name) == words

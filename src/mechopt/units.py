@@ -14,3 +14,11 @@ SUFFIXES = (
 def unit_of(name: str) -> str:
     """The unit a name's suffix states ('' when it states none: a ratio, a count)."""
     return next((unit for suffix, unit in SUFFIXES if name.endswith(suffix)), "")
+
+
+def label(name: str) -> str:
+    """A name as an axis label: words and unit, `err_width_mm` -> "err width [mm]"."""
+    unit = unit_of(name)
+    suffix = next((sfx for sfx, u in SUFFIXES if name.endswith(sfx)), "")
+    words = (name[: -len(suffix)] if suffix else name).replace("_", " ")
+    return f"{words} [{unit}]" if unit else words

@@ -24,6 +24,7 @@ import numpy as np
 
 from mechopt.plots import save_figure
 from mechopt.sweep import META_KEY, check_unique
+from mechopt.units import label as axis_label
 
 __all__ = ["plot_sweep", "outputs_of", "grid_of", "boundary_of", "Grid"]
 
@@ -164,8 +165,8 @@ def _line(table, key, output, case):
     if bad.any():
         ax.plot(x[bad], np.where(np.isnan(y[bad]), floor, y[bad]), "x", color="tab:red", ms=7,
                 label=f"not solved: {_statuses(table, bad)} (no value: on the floor)")
-    ax.set_xlabel(key)
-    ax.set_ylabel(output)
+    ax.set_xlabel(axis_label(key))
+    ax.set_ylabel(axis_label(output))
     ax.set_title(f"{case}: {output}", fontsize=10)
     ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2, frameon=False)
     ax.grid(alpha=0.3)
@@ -181,11 +182,11 @@ def _scatter(table, keys, output, case):
     shown = solved & np.isfinite(y)
     dots = ax.scatter(x[shown], z[shown], c=y[shown], s=30, cmap="viridis", label="SOLVED")
     if shown.any():
-        fig.colorbar(dots, ax=ax, label=output)
+        fig.colorbar(dots, ax=ax, label=axis_label(output))
     if (~solved).any():
         ax.plot(x[~solved], z[~solved], "x", color="tab:red", ms=7, label=f"not solved: {_statuses(table, ~solved)}")
-    ax.set_xlabel(keys[0])
-    ax.set_ylabel(keys[1])
+    ax.set_xlabel(axis_label(keys[0]))
+    ax.set_ylabel(axis_label(keys[1]))
     more = f"; {', '.join(keys[2:])} overlaid" if len(keys) > 2 else ""
     ax.set_title(f"{case}: {output}\nrandom points, not a grid{more}", fontsize=10)
     ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2, frameon=False)
@@ -228,7 +229,7 @@ def _panels(table, keys, output, case):
         mesh = _map(ax, grid, line, scale, levels, x_key, y_key)
         ax.set_title(f"{by} = {value:g}" if by else "", fontsize=9)
     if coloured.size:
-        fig.colorbar(mesh, cax=fig.add_subplot(spec[:, -1]), label=output)
+        fig.colorbar(mesh, cax=fig.add_subplot(spec[:, -1]), label=axis_label(output))
     if overview:
         _overview(axes[-1], grids, lines, by, shown, x_key, y_key)
     spare = nrows * ncols > total          # an empty slot holds the legend, else it goes under the first map
@@ -271,8 +272,8 @@ def _map(ax, grid, lines, scale, levels, x_key, y_key):
         ax.plot(line[:, 0], line[:, 1], color="black", lw=2.0)
     ax.set_xlim(xe[0], xe[-1])
     ax.set_ylim(ye[0], ye[-1])
-    ax.set_xlabel(x_key)
-    ax.set_ylabel(y_key)
+    ax.set_xlabel(axis_label(x_key))
+    ax.set_ylabel(axis_label(y_key))
     return mesh
 
 
@@ -289,8 +290,8 @@ def _overview(ax, grids, lines, by, shown, x_key, y_key):
     xe, ye = _edges(grids[0].xs), _edges(grids[0].ys)
     ax.set_xlim(xe[0], xe[-1])
     ax.set_ylim(ye[0], ye[-1])
-    ax.set_xlabel(x_key)
-    ax.set_ylabel(y_key)
+    ax.set_xlabel(axis_label(x_key))
+    ax.set_ylabel(axis_label(y_key))
     ax.grid(alpha=0.3)
     ax.set_title("feasibility boundaries", fontsize=9)
     ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), frameon=False)
