@@ -1,0 +1,61 @@
+"""The README's command examples, run in order as written, in a fresh folder: every one must
+work. Grids are shrunk to 3 points a key and random draws to 5 (the README's sizes are for a
+designer's machine); the Dask example runs on a local cluster standing in for `scheduler-host`.
+The `bench` lines are timed studies of minutes, measured by `mechopt bench`, and the `dask
+scheduler` / `dask worker` lines start services: those are named here and left out."""
+import re
+import shlex
+import shutil
+from pathlib import Path
+
+import pytest
+
+from mechopt.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+LEFT_OUT = ("mechopt bench ", "dask scheduler", "dask worker")
+
+
+def readme_commands():
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    lines = []
+    for block in re.findall(r"```bash\n(.*?)```", text, flags=re.S):
+        for line in block.replace("\\\n", " ").splitlines():
+            command = line.split("  #", 1)[0].split(" # ", 1)[0].strip()
+            if command:
+                lines.append(command)
+    return lines
+
+
+def shrunk(argv):
+    out = []
+    for arg in argv:
+        grid = re.fullmatch(r"(\w+=[^:]+:[^:]+):(\d+)", arg)
+        out.append(f"{grid.group(1)}:{min(int(grid.group(2)), 3)}" if grid else arg)
+    return ["5" if prev == "--samples" else a for prev, a in zip([None, *out], out)]
+
+
+def test_the_readme_names_its_commands():
+    commands = readme_commands()
+    assert len(commands) >= 20 and commands[0].startswith("python -m pip install")
+    assert sum(c.startswith(LEFT_OUT) for c in commands) <= 6
+
+
+@pytest.mark.slow
+def test_every_readme_command_runs_in_order(tmp_path, monkeypatch):
+    from distributed import LocalCluster
+    shutil.copytree(ROOT / "examples", tmp_path / "examples")
+    monkeypatch.chdir(tmp_path)
+    cluster = LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=":0")
+    ran = []
+    try:
+        for command in readme_commands():
+            if not command.startswith("mechopt ") or command.startswith(LEFT_OUT):
+                continue
+            command = command.replace("tcp://scheduler-host:8786", cluster.scheduler_address)
+            argv = shrunk(shlex.split(command)[1:])
+            assert main(argv) == 0, command
+            ran.append(argv[0])
+    finally:
+        cluster.close()
+    assert {"cases", "describe", "run", "validate", "sweep", "report", "new", "fit-force"} <= set(ran)
