@@ -141,34 +141,33 @@ def plot(rows, out_dir):
     deviation over the best minimax answer) and wall time against COUNT. Returns [path]."""
     import pathlib
 
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from mechopt.figures.registry import new_figure
 
     out = pathlib.Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     best = min((r["max_deviation_mm"] for r in rows if r["method"] in (COLD, WARM)),
                default=min(r["max_deviation_mm"] for r in rows))
     style = {GRID: ("s", "-"), COLD: ("o", "--"), WARM: ("o", "-"), IPOPT: ("D", ":"), DE: ("^", "-")}
-    # COUNT labels: cold right of its points, warm left, grid above and below by turns
-    nudge = {COLD: ((5, -3), "left"), WARM: ((-5, -3), "right")}
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(13, 5.5))
+    # COUNT labels at the ends of each line only (the minimax points share one deviation, so labels
+    # on every point pile up): each method's labels on its own side, above or below
+    side = {GRID: 8, COLD: 8, WARM: -13, DE: 8}
+    fig = new_figure(figsize=(13, 5.5))
+    ax1, ax2 = fig.subplots(1, 2)
     for method in dict.fromkeys(r["method"] for r in rows):
         mine = sorted((r for r in rows if r["method"] == method), key=lambda r: r["count"])
         wall = [r["wall_s_median"] for r in mine]
         excess = [max(r["max_deviation_mm"] - best, 0.0) + 1e-7 for r in mine]
         marker, line = style.get(method, ("x", "-"))
         ax1.plot(wall, excess, marker=marker, linestyle=line, label=method)
-        for k, (r, x, y) in enumerate(zip(mine, wall, excess)):
-            if method == IPOPT:           # same COUNTs as the SQP rows beside it: labels would collide
-                continue
-            offset, ha = nudge.get(method, ((0, 6 if k % 2 == 0 or method != GRID else -11), "center"))
-            ax1.annotate(str(r["count"]), (x, y), textcoords="offset points", xytext=offset, ha=ha, fontsize=7)
+        if method in side:           # the IPOPT row has the SQP rows' COUNTs beside them
+            for k in sorted({0, len(mine) - 1}):
+                ax1.annotate(f"COUNT {mine[k]['count']}", (wall[k], excess[k]), textcoords="offset points",
+                             xytext=(0, side[method]), ha="center", fontsize=7)
         ax2.plot([r["count"] for r in mine], wall, marker=marker, linestyle=line, label=method)
     ax1.set(xscale="log", yscale="log", xlabel="wall time per call, median [s]",
             ylabel="max_deviation_mm - best minimax + 1e-7 [mm]",
-            title=f"Work-precision (labels: COUNT); best minimax deviation {best:.6f} mm\n"
-                  "deviation Euclidean-verified on the continuous path")
+            title=f"Work-precision (COUNT at the ends of each line)\nbest minimax {best:.6f} mm; "
+                  "deviations verified on the continuous path")
     ax2.set(xscale="log", yscale="log", xlabel="COUNT (nodes on the ideal path)",
             ylabel="wall time per call, median [s]", title="Wall time against COUNT")
     for ax, where in ((ax1, "lower right"), (ax2, "best")):
