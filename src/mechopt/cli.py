@@ -204,11 +204,7 @@ def run_exit_code(run) -> int:
 
 def _validate(args) -> int:
     _check_outputs(json_file=args.json)
-    if args.refs:
-        scenes, problems = registry.select(args.refs)
-    else:
-        catalogue = registry.catalogue()
-        scenes, problems = list(catalogue.scenes), list(catalogue.problems)
+    scenes, problems = registry.select(args.refs)
     rows, runs = [], []
     for scene in scenes:
         print(f"running {scene.id} ...", file=sys.stderr, flush=True)
@@ -293,11 +289,7 @@ def _sweep(args) -> int:
 def _report(args) -> int:
     from mechopt.report import write_report
     _check_outputs(plot_dir=args.out)
-    if args.case:
-        scenes, problems = registry.select(args.case)
-    else:
-        catalogue = registry.catalogue()
-        scenes, problems = list(catalogue.scenes), list(catalogue.problems)
+    scenes, problems = registry.select(args.case)
     _warn(problems)
     path = write_report(args.out, scenes=scenes, bench_dir=args.bench, sweeps=args.sweep,
                         progress=lambda line: print(line, file=sys.stderr, flush=True),

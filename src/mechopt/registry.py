@@ -205,9 +205,12 @@ def find(ref) -> Scene:
                      + " (`mechopt cases` lists the ids; a scene file is named by its path, e.g. ./my.toml)")
 
 
-def select(refs) -> tuple[list[Scene], list[str]]:
-    """Scenes for several references (ids, files, folders of *.toml): the scenes, and one line per
-    file of a folder that could not be loaded (the others still run)."""
+def select(refs=()) -> tuple[list[Scene], list[str]]:
+    """Scenes for several references (ids, files, folders of *.toml), or the whole registry when
+    none is given: the scenes, and one line per file that could not be loaded (the others run)."""
+    if not refs:
+        catalogue_now = catalogue()
+        return list(catalogue_now.scenes), list(catalogue_now.problems)
     scenes, problems = [], []
     for ref in refs:
         path = Path(str(ref)).expanduser()
