@@ -139,7 +139,8 @@ def _sweep_section(path, table, meta, folder):
     statuses = table.column("status").to_pylist()
     counts = ", ".join(f"{statuses.count(s)} {s}" for s in sorted(set(statuses)))
     scene = next((s for s in registry.all_scenes() if s.id == meta["case"]), None)
-    stale = ("<p class='fail'>this case is no longer in the registry</p>" if scene is None
+    stale = ("<p class='fail'>this case is not in the registry (a scene file of your own? add its folder "
+             "with --cases DIR); the maps are drawn from the table alone</p>" if scene is None
              else "<p class='fail'>swept an earlier version of the scene file (its sha256 differs): "
                   "the maps may not match the validation above</p>" if scene_hash(scene) != meta["scene_sha256"]
              else "")
