@@ -316,11 +316,11 @@ COMMANDS = {"cases": _cases, "describe": _describe, "new": _new, "run": _run, "v
 
 def _check_outputs(*, json_file=None, plot_dir=None, table_file=None):
     """Refuse an output that cannot be written before any work is done."""
-    for flag, path in (("--json", json_file), ("--out/--csv", table_file)):
+    for flag, path, example in (("--json", json_file, "result.json"), ("--out/--csv", table_file, "table.parquet")):
         if path is None:
             continue
         if path.is_dir() or str(path).endswith(os.sep) or path.name in ("", ".", ".."):
-            raise SceneError(f"{flag} {path}: a folder; give a file name, e.g. {path / 'result.json'}")
+            raise SceneError(f"{flag} {path}: a folder; give a file name, e.g. {path / example}")
         _writable_folder(flag, path.parent)
     if plot_dir is not None:
         if plot_dir.exists() and not plot_dir.is_dir():
