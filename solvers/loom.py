@@ -139,7 +139,11 @@ def plan_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] = "
     limiting_op_deg (machines) and sens_* sensitivities (see SENSITIVITY_CONVENTION);
     diagnostics: float_deg, critical_ops, critical_chain, binding (with duals), sens_min_deg.
     An infeasible problem names its conflicting chain (a positive cycle of the difference
-    constraints) in `message` and `violated`.
+    constraints) in `message` and `violated`, its events and excess [deg] in `diagnostics`.
+
+    The back end's answer is checked against the exact certificate, whatever it says: a positive
+    cycle (above 1e-12 of the largest angle: round-off) makes the result INFEASIBLE, an optimum
+    differing from the longest path by more than tol_deg * max(1, |longest path|) INACCURATE.
 
     Examples
     --------
