@@ -6,6 +6,7 @@ Published: a(3,7) = -0.003 t(3,7) + 0.208 mm and the +-0.1 mm transfer accuracy 
 import dataclasses
 
 import cvxpy as cp
+import networkx as nx
 import numpy as np
 import pytest
 
@@ -60,14 +61,28 @@ def test_group1_meets_the_published_amplitude_limit_exactly():
     assert r.values["sigma_9_10_MPa"] == pytest.approx(800.0)
 
 
+def nx_longest_path_deg(task):
+    """The minimal span, by networkx directly on the arcs weighted with their lower bounds."""
+    g = nx.DiGraph()
+    g.add_weighted_edges_from((x, y, w) for (x, y), w in zip(task.arcs, task.lower_bounds_deg()[0]))
+    return nx.dag_longest_path_length(g)
+
+
 def test_event_times_satisfy_every_operation_and_angles_are_time_differences():
     task = scene_task("loom/group1")
     r = plan_cyclogram(task)
+    assert r.status is Status.SOLVED
     lb, _ = task.lower_bounds_deg()
     for (x, y), w in zip(task.arcs, lb):
         t = r.values[f"p_{y}_deg"] - r.values[f"p_{x}_deg"]
         assert t == pytest.approx(r.values[f"t_{x}_{y}_deg"]) and t >= w - 1e-7
     assert r.values["p_1_deg"] == 0.0
+    # optimal, not only feasible: the span is the longest path, and the last event moved 1e-6 deg
+    # earlier breaks an operation (no better times exist)
+    assert r.values["span_deg"] == pytest.approx(nx_longest_path_deg(task), abs=1e-7)
+    last = task.last_event
+    earlier = r.values[f"p_{last}_deg"] - 1e-6
+    assert any(earlier - r.values[f"p_{x}_deg"] < w - 1e-9 for (x, y), w in zip(task.arcs, lb) if y == last)
 
 
 def test_float_is_latest_minus_earliest_minus_duration():
@@ -142,15 +157,30 @@ def test_sign_convention_looser_limits_shorten_the_span():
 
 def test_lp_certificate_primal_feasible_dual_nonnegative_complementary():
     task = scene_task("loom/group1")
+    clear_caches()
     r = plan_cyclogram(task)
-    lp = next(v for v in cyclogram_lp._BUILDS.values() if v.problem.value == pytest.approx(r.values["span_deg"]))
+    [lp] = cyclogram_lp._BUILDS.values()
+    duals = {}
     for name in ("min_angle", "contact_stress", "amplitude"):
         con = lp.blocks[name]
-        dual = np.asarray(con.dual_value).ravel()
+        dual = duals[name] = np.asarray(con.dual_value).ravel()
         slack = np.abs(np.asarray(con.expr.value).ravel())     # cvxpy keeps each as expr <= 0 (or >= rearranged)
         assert (dual >= -1e-9).all(), name
         assert np.max(np.asarray(con.violation()).ravel()) <= 1e-7, name
         assert np.max(np.abs(dual * slack)) <= 1e-6, name
+    # stationarity, the part that makes it optimal: the duals' flow into each event (incidence built
+    # here from the task's arcs) is the objective's gradient, 1 at the last event, 0 elsewhere
+    # (the first event's is the anchor's multiplier)
+    names = task.event_names
+    D = np.zeros((len(task.arcs), len(names)))
+    for k, (x, y) in enumerate(task.arcs):
+        D[k, names.index(y)], D[k, names.index(x)] = 1.0, -1.0
+    flow = D.T @ duals["min_angle"] + D[task.stress_arcs()].T @ duals["contact_stress"]
+    flow -= task.amplitude_slope_mm_per_deg * D[task.amplitude_arcs()].T @ duals["amplitude"]
+    gradient = np.array([1.0 if v == task.last_event else 0.0 for v in names])
+    keep = [i for i, v in enumerate(names) if v != task.first_event]
+    assert np.allclose(flow[keep], gradient[keep], atol=1e-6)
+    assert r.values["span_deg"] == pytest.approx(nx_longest_path_deg(task), abs=1e-7)
 
 
 # ---------------------------------------------------------------- DPP re-solve
@@ -353,7 +383,6 @@ def test_a_cycle_1e7_deg_too_short_is_infeasible_whatever_the_back_end_says(back
     task = scene_task("loom/machine")
     lb = dict(zip(task.arcs, task.lower_bounds_deg()[0]))
     # independent: the longest chain through the flight at its 100 deg floor, by networkx directly
-    import networkx as nx
     g = nx.DiGraph()
     g.add_weighted_edges_from((x, y, w) for (x, y), w in lb.items())
     need = nx.dag_longest_path_length(g)
