@@ -162,8 +162,10 @@ class Cyclogram:
             if g.has_edge(x, y):
                 raise ModelError(f"{key}: given twice; one operation per pair of events", key=key)
             phi = _number(op["min_deg"], f"{key}.min_deg")
-            if not 0 <= phi <= MAX_DEG:
-                raise ModelError(f"{key}.min_deg={phi}: a minimum phase angle must be in [0, {MAX_DEG:g}] deg",
+            if phi < 0:
+                raise ModelError(f"{key}.min_deg={phi}: a minimum phase angle must be >= 0", key=f"{key}.min_deg")
+            if phi > MAX_DEG:
+                raise ModelError(f"{key}.min_deg={phi}: a minimum phase angle must be <= {MAX_DEG:g} deg",
                                  key=f"{key}.min_deg")
             stress, amplitude = op.get("stress"), op.get("amplitude")
             if stress is not None:
