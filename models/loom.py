@@ -40,6 +40,11 @@ from mechopt.models.effects import Effect
 from mechopt.models.errors import ModelError
 
 STRESS_FORMS = ("exact", "linear")
+# stated limits of the inputs: past 1e6 deg (a thousand turns) the LP's feasibility tolerance
+# (1e-7 relative) is coarser than the 1e-6 deg its answer is certified to; stresses past 1e6 MPa
+# are no material's (and square past the float range in the sensitivities)
+MAX_DEG = 1e6
+MAX_MPA = 1e6
 AMPLITUDE_LAWS = ("linear",)
 _NOTE_KEYS = {"mark", "why", "where", "what"}         # provenance and description, not physics
 _EVENT_KEYS = {"mechanism", "group"} | _NOTE_KEYS
@@ -120,6 +125,19 @@ class Cyclogram:
     def __post_init__(self):
         _check_numbers(self)
         self.graph          # builds and validates the network (cached)
+        self._check_bounds()
+
+    def _check_bounds(self):
+        """Every derived lower bound inside the stated range, named by the inputs that set it."""
+        for form in STRESS_FORMS:
+            lb, why = self.lower_bounds_deg(form)
+            for k in np.flatnonzero(~(np.abs(lb) <= MAX_DEG)):
+                x, y = self.arcs[k]
+                keys = {"contact_stress": f"stress_models.{self.arc_data(k)['stress']} and sigma_H_limit_MPa",
+                        "amplitude": "amplitude_slope_mm_per_deg, amplitude_intercept_mm and amplitude_limit_mm"
+                        }.get(why[k], f"operations[{x}->{y}].min_deg")
+                raise ModelError(f"operations[{x}->{y}]: its {why[k]} bound {lb[k]:.6g} deg ({form} form), set by "
+                                 f"{keys}, is outside the allowed +-{MAX_DEG:g} deg", key=keys.split(" and ")[0].split(",")[0])
 
     # ------------------------------------------------------------------ the network
 
@@ -146,6 +164,9 @@ class Cyclogram:
             phi = _number(op["min_deg"], f"{key}.min_deg")
             if phi < 0:
                 raise ModelError(f"{key}.min_deg={phi}: a minimum phase angle must be >= 0", key=f"{key}.min_deg")
+            if phi > MAX_DEG:
+                raise ModelError(f"{key}.min_deg={phi}: a minimum phase angle must be <= {MAX_DEG:g} deg",
+                                 key=f"{key}.min_deg")
             stress, amplitude = op.get("stress"), op.get("amplitude")
             if stress is not None:
                 self._check_stress_ref(stress, key)
@@ -169,9 +190,10 @@ class Cyclogram:
                              key="sigma_H_limit_MPa")
         model = self.stress_models[name]
         _entry(model, f"stress_models.{name}", _STRESS_KEYS, required=("sigma_ref_MPa", "t_ref_deg"))
-        for k in ("sigma_ref_MPa", "t_ref_deg"):
-            if _number(model[k], f"stress_models.{name}.{k}") <= 0:
-                raise ModelError(f"stress_models.{name}.{k}={model[k]} must be > 0", key=f"stress_models.{name}.{k}")
+        for k, top in (("sigma_ref_MPa", MAX_MPA), ("t_ref_deg", MAX_DEG)):
+            if not 0 < _number(model[k], f"stress_models.{name}.{k}") <= top:
+                raise ModelError(f"stress_models.{name}.{k}={model[k]} must be in (0, {top:g}]",
+                                 key=f"stress_models.{name}.{k}")
 
     def _check_amplitude_ref(self, law, key):
         if law not in AMPLITUDE_LAWS:
@@ -190,12 +212,15 @@ class Cyclogram:
         if len(starts) != 1 or len(ends) != 1:
             raise ModelError(f"operations: a cyclogram needs one first and one last event; found first "
                              f"{starts} and last {ends} (join them with zero-angle operations)", key="operations")
+        _table(self.windows, "windows", list)
         for k, w in enumerate(self.windows):
             key = f"windows[{k}]"
             _entry(w, key, _WINDOW_KEYS, required=("from", "to", "max_deg"))
             for end in (w["from"], w["to"]):
                 _linked_event(g, str(end), key)
-            _number(w["max_deg"], f"{key}.max_deg")
+            if not abs(_number(w["max_deg"], f"{key}.max_deg")) <= MAX_DEG:
+                raise ModelError(f"{key}.max_deg={w['max_deg']}: must be within +-{MAX_DEG:g} deg", key=f"{key}.max_deg")
+        _table(self.syncs, "syncs", list)
         for k, s in enumerate(self.syncs):
             key = f"syncs[{k}]"
             _entry(s, key, _SYNC_KEYS, required=("events",))
@@ -305,10 +330,11 @@ class Cyclogram:
 
 
 def _check_numbers(task):
-    for key in ("cycle_deg", "sigma_H_limit_MPa", "amplitude_limit_mm"):
+    for key, top in (("cycle_deg", MAX_DEG), ("sigma_H_limit_MPa", MAX_MPA), ("amplitude_limit_mm", math.inf)):
         value = getattr(task, key)
-        if value is not None and not (math.isfinite(value) and value > 0):
-            raise ModelError(f"{key}={value} must be a finite number > 0", key=key)
+        if value is not None and not (math.isfinite(value) and 0 < value <= top):
+            raise ModelError(f"{key}={value} must be a finite number > 0" + (f" and <= {top:g}" if top < math.inf
+                                                                               else ""), key=key)
     slope = task.amplitude_slope_mm_per_deg
     if slope is not None and not (math.isfinite(slope) and slope < 0):
         raise ModelError(f"amplitude_slope_mm_per_deg={slope} must be < 0: the rebound amplitude falls as "

@@ -151,9 +151,13 @@ class LeverStop:
                  "must be in [0, 1] (a coefficient of restitution)")
         _require(self, "damping_ratio", self.damping_ratio is None or self.damping_ratio >= 0, "must be >= 0")
         _require(self, "preload_mm", self.preload_mm is None or self.preload_mm >= 0, "must be >= 0")
-        bad = [s for s in self.speeds_rpm if not s > 0]
+        for key, (lo, hi) in STATED_RANGE.items():      # the range the model and its solvers are tested over
+            value = getattr(self, key)
+            _require(self, key, value is None or lo <= value <= hi, f"is outside the stated range [{lo:g}, {hi:g}]")
+        top = STATED_RANGE["speed_nominal_rpm"][1]
+        bad = [s for s in self.speeds_rpm if not 0 < s <= top]
         if bad:
-            raise ModelError(f"speeds_rpm={list(self.speeds_rpm)}: every speed must be > 0 (got {bad})",
+            raise ModelError(f"speeds_rpm={list(self.speeds_rpm)}: every speed must be > 0 and <= {top:g} (got {bad})",
                              key="speeds_rpm")
 
     # ---------------------------------------------------------------- stiffness and frequencies
@@ -252,6 +256,18 @@ def _names_or_numbers(task, key, *, number):
             raise ModelError(f"{key}={list(value)}: {v!r} is not " + ("a number" if number else "an effect name"),
                              key=key)
     return tuple(float(v) for v in value) if number else tuple(value)
+
+
+# Stated ranges of the inputs: a lever of a machine, generously (a micro-mechanism to a press
+# frame). Past them the beam formulas and eq. (2)'s closed form overflow, divide by zero or
+# lose every digit, so an input outside is refused before any work.
+STATED_RANGE = {
+    "E_GPa": (1e-3, 1e4), "J_x_mm4": (1e-6, 1e12), "a_mm": (1e-3, 1e5), "b_mm": (1e-3, 1e5),
+    "a_stop_mm": (1e-3, 1e5), "b_stop_mm": (1e-3, 1e5), "mass_kg": (1e-6, 1e6), "stroke_mm": (1e-6, 1e5),
+    "velocity_factor": (1e-6, 1e3), "t_deg": (1e-3, 360.0), "speed_nominal_rpm": (1e-3, 1e6),
+    "amplitude_limit_mm": (1e-9, 1e5), "inertia_A_kgm2": (1e-12, 1e6), "damping_ratio": (0.0, 1e3),
+    "preload_mm": (0.0, 1e5),
+}
 
 
 def _require(task, key, ok, what):

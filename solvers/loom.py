@@ -16,7 +16,9 @@ change of the objective (span_deg, or limiting_op_deg on a machine) per unit *in
 limit. Raising [sigma_H] or the amplitude limit loosens a bound: the span falls (<= 0); raising a
 critical [phi] lengthens it (+1 deg/deg).
 """
+import math
 import time
+from collections import deque
 from dataclasses import dataclass
 from typing import Literal
 
@@ -137,7 +139,11 @@ def plan_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] = "
     limiting_op_deg (machines) and sens_* sensitivities (see SENSITIVITY_CONVENTION);
     diagnostics: float_deg, critical_ops, critical_chain, binding (with duals), sens_min_deg.
     An infeasible problem names its conflicting chain (a positive cycle of the difference
-    constraints) in `message` and `violated`.
+    constraints) in `message` and `violated`, its events and excess [deg] in `diagnostics`.
+
+    The back end's answer is checked against the exact certificate, whatever it says: a positive
+    cycle (above 1e-12 of the largest angle: round-off) makes the result INFEASIBLE, an optimum
+    differing from the longest path by more than tol_deg * max(1, |longest path|) INACCURATE.
 
     Examples
     --------
@@ -171,21 +177,29 @@ def plan_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] = "
     diagnostics = {"backend": backend, "stress_form": stress_form, "compiled_now": fresh,
                    "events": len(net.names), "operations": len(net.tails), "isolated_events": task.isolated_events,
                    "solver_status": lp.problem.status, "solve_time_backend_s": lp.problem.solver_stats.solve_time}
+    timing = lambda: Timing(build_s, time.perf_counter() - start - build_s)      # noqa: E731
+    # the certificate: an optimum is only trusted when the difference constraints hold no positive cycle
+    chain = conflict_chain(net) if status is Status.INFEASIBLE or _may_conflict(net) else []
+    if chain:
+        excess = math.fsum(w for _, _, w in chain)
+        diagnostics |= {"conflict_events": [v for v, _, _ in chain], "conflict_excess_deg": excess}
+        message = "infeasible: conflicting chain " + "; ".join(label for _, label, _ in chain)
+        message += f" (needs {excess:.6g} deg more than its limits allow)"
+        if status is not Status.INFEASIBLE:
+            message += f"; {backend} reported {lp.problem.status}, the longest-path certificate overrules it"
+        return Result(Status.INFEASIBLE, {}, timing(), message=message,
+                      violated=tuple(label for _, label, _ in chain), diagnostics=diagnostics)
     if status is not Status.SOLVED:
-        message, violated = f"{backend}: {lp.problem.status}", ()
+        message = f"{backend}: {lp.problem.status}"
         if status is Status.INFEASIBLE:
-            chain = conflict_chain(net)
-            if chain:
-                violated = tuple(label for _, label in chain)
-                message = "infeasible: conflicting chain " + "; ".join(f"{label}" for _, label in chain)
-                diagnostics["conflict_events"] = [v for v, _ in chain]
-            else:
-                message += " (no positive cycle among the difference constraints: a numerical failure?)"
-        return Result(status, {}, Timing(build_s, time.perf_counter() - start - build_s),
-                      message=message, violated=violated, diagnostics=diagnostics)
-    values, more, overstressed = _report(task, net, lp, tol_deg)
+            message += " (no positive cycle among the difference constraints: a numerical failure?)"
+        return Result(status, {}, timing(), message=message, diagnostics=diagnostics)
+    values, more, overstressed, disagreement = _report(task, net, lp, tol_deg)
     diagnostics |= more
     solve_s = time.perf_counter() - start - build_s
+    if disagreement:
+        return Result(Status.INACCURATE, values, Timing(build_s, solve_s), message=disagreement,
+                      violated=overstressed, diagnostics=diagnostics)
     objective = "limiting_op_deg" if net.limiting else "span_deg"
     message = (f"{objective} = {values[objective]:.6g} ({backend}, {stress_form} stress, "
                f"{'compiled' if fresh else 'DPP re-solve'}); {SENSITIVITY_CONVENTION}")
@@ -193,6 +207,18 @@ def plan_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] = "
         message += f"; the linearised stress limit lets sigma_max exceed [sigma_H] on {', '.join(overstressed)}"
     return Result(Status.SOLVED, values, Timing(build_s, solve_s), message=message, violated=overstressed,
                   diagnostics=diagnostics)
+
+
+def _may_conflict(net) -> bool:
+    """Whether the constraints can hold a positive cycle: windows and syncs can; a DAG of
+    operations only with its cycle, when its longest path (linear time) is longer than it."""
+    task = net.task
+    if task.windows or task.syncs:
+        return True
+    if task.cycle_deg is None:
+        return False
+    early, _ = _dag_times(len(net.names), net.tails, net.heads, net.lb, net.first, net.last, 0.0)
+    return early[net.last] > task.cycle_deg
 
 
 def set_parameters(lp: EventTimeLP, task: Cyclogram, net) -> None:
@@ -249,32 +275,92 @@ class _Net:
         return f"t({x}->{y}) >= {self.lb[k]:.6g} deg ({self.lb_why[k]})"
 
 
-def conflict_chain(net) -> list[tuple[str, str]]:
-    """A positive cycle of the difference constraints, as [(event, label of the arc leaving it)];
-    empty when there is none. Found by Bellman-Ford on the negated weights (networkx)."""
-    g = nx.DiGraph()
+def conflict_chain(net) -> list[tuple[str, str, float]]:
+    """A positive cycle of the difference constraints (operations with their bounds, windows,
+    syncs and the machine cycle), as [(event, label and bound [deg] of the arc leaving it)]: the
+    bounds sum to more than 0 (a cycle cannot hold them, p(v) - p(u) >= w all round); empty when there is
+    none. Our own Bellman-Ford: networkx's find_negative_cycle can detect a cycle and then fail
+    to extract it ("Negative cycle is detected but not found", networkx issue #5916)."""
+    tight: dict = {}                       # (u, v) -> (w, label): the tightest constraint per pair
 
-    def add(u, v, weight, label):          # keep the tightest constraint per ordered pair
-        if not g.has_edge(u, v) or weight < g.edges[u, v]["weight"]:
-            g.add_edge(u, v, weight=weight, label=label)
+    def add(u, v, w, label):               # p(v) - p(u) >= w
+        if (u, v) not in tight or w > tight[u, v][0]:
+            tight[u, v] = (w, label)
 
     for k, (x, y) in enumerate(net.arcs):
-        add(x, y, -net.lb[k], net.arc_label(k))
+        add(x, y, float(net.lb[k]), net.arc_label(k))
     for a, b, w in net.task.window_arcs():
-        add(b, a, w, f"window p({b}) - p({a}) <= {w:.6g} deg")
+        add(b, a, -w, f"window p({b}) - p({a}) <= {w:.6g} deg")
     for a, b in net.task.sync_pairs():
         add(a, b, 0.0, f"sync p({a}) = p({b})")
         add(b, a, 0.0, f"sync p({b}) = p({a})")
     if net.task.cycle_deg is not None:
         first, last = net.names[net.first], net.names[net.last]
-        add(last, first, net.task.cycle_deg, f"cycle p({last}) - p({first}) <= {net.task.cycle_deg:.6g} deg")
-    root = object()
-    g.add_edges_from(((root, v) for v in list(g.nodes)), weight=0.0, label="")
-    try:
-        cycle = nx.find_negative_cycle(g, root)
-    except nx.NetworkXError:
+        add(last, first, -net.task.cycle_deg, f"cycle p({last}) - p({first}) <= {net.task.cycle_deg:.6g} deg")
+    arcs = [(u, v, w, label) for (u, v), (w, label) in tight.items()]
+    return [(u, label, w) for u, _, w, label in positive_cycle(arcs)]
+
+
+def positive_cycle(arcs) -> list[tuple]:
+    """A cycle of difference constraints (u, v, w, label), p(v) - p(u) >= w, whose w sum to more
+    than 0, in order around the cycle; [] when there is none.
+
+    Longest-path Bellman-Ford from a virtual root (every distance starts at 0), queue order; a
+    relaxation counts only when it gains more than 1e-12 of the largest |w| (round-off, so a
+    zero cycle of windows or syncs is not taken for a positive one): cycles above that are
+    found. Every n relaxations the predecessor arcs are searched for a cycle, which (all
+    relaxations strict) is a positive one; its sum is re-checked with math.fsum.
+    """
+    if not arcs:
         return []
-    return [(u, g.edges[u, v]["label"]) for u, v in zip(cycle[:-1], cycle[1:])]
+    nodes = list(dict.fromkeys(v for a in arcs for v in a[:2]))
+    index = {v: i for i, v in enumerate(nodes)}
+    n = len(nodes)
+    out = [[] for _ in range(n)]
+    for k, (u, v, w, _) in enumerate(arcs):
+        out[index[u]].append((index[v], float(w), k))
+    eps = 1e-12 * max(1.0, max(abs(float(a[2])) for a in arcs))
+    dist, pred = [0.0] * n, [-1] * n
+    queue, queued = deque(range(n)), [True] * n
+    relaxed, cap = 0, n * len(arcs) + n         # Bellman-Ford's bound: past it a cycle must exist
+    while queue:
+        u = queue.popleft()
+        queued[u] = False
+        for v, w, k in out[u]:
+            if dist[u] + w > dist[v] + eps:
+                dist[v], pred[v] = dist[u] + w, k
+                relaxed += 1
+                if relaxed % n == 0 or relaxed > cap:
+                    cycle = _predecessor_cycle(arcs, index, pred)
+                    if cycle:
+                        return cycle
+                if not queued[v]:
+                    queue.append(v)
+                    queued[v] = True
+    return []
+
+
+def _predecessor_cycle(arcs, index, pred):
+    """A cycle of the predecessor arcs with a positive sum, in forward order, or []."""
+    seen = [0] * len(pred)                       # 0 unseen, else the walk that reached it
+    for start in range(len(pred)):
+        walk, v = start + 1, start
+        while v != -1 and not seen[v]:
+            seen[v] = walk
+            v = -1 if pred[v] < 0 else index[arcs[pred[v]][0]]
+        if v == -1 or seen[v] != walk:
+            continue
+        cycle, u = [], v                         # v lies on a cycle of this walk: unroll it
+        while True:
+            k = pred[u]
+            cycle.append(arcs[k])
+            u = index[arcs[k][0]]
+            if u == v:
+                break
+        cycle.reverse()
+        if math.fsum(a[2] for a in cycle) > 0:
+            return cycle
+    return []
 
 
 def _report(task, net, lp, tol):
@@ -302,7 +388,9 @@ def _report(task, net, lp, tol):
     overstressed = [f"contact_stress[{x}->{y}]" for k, (x, y) in ((k, net.arcs[k]) for k in net.stress_rows)
                     if values[f"sigma_{x}_{y}_MPa"] > task.sigma_H_limit_MPa * (1 + 1e-9)]
 
-    values["longest_path_deg"] = _cross_check(task, net, values, tol)
+    longest, disagreement = _cross_check(task, net, values, tol)
+    if longest is not None:
+        values["longest_path_deg"] = longest
     sens, binding, sens_min = _sensitivities(task, net, lp, t, tol)
     values |= sens
     floats = _floats(task, net, p, values, tol)
@@ -311,7 +399,7 @@ def _report(task, net, lp, tol):
                    "stress_gap_deg": {f"{x}->{y}": _stress_gap(task, k) for k, (x, y) in
                                       ((k, net.arcs[k]) for k in net.stress_rows)}}
     diagnostics |= floats
-    return values, diagnostics, tuple(overstressed)
+    return values, diagnostics, tuple(overstressed), disagreement
 
 
 def _stress_gap(task, k):
@@ -322,35 +410,49 @@ def _stress_gap(task, k):
 
 
 def _cross_check(task, net, values, tol):
-    """Longest path by networkx (no windows/syncs) or Bellman-Ford; raise if the LP disagrees."""
+    """The LP's optimum against the exact longest-path certificate: (longest first -> last [deg],
+    None or why the LP is not to be trusted). Tolerance: tol * max(1, |certificate|) [deg].
+
+    Without windows or syncs: networkx's DAG longest path (span), and for a machine the cycle
+    minus the longest chains before and after the limiting operation. With them: Bellman-Ford
+    on every difference constraint; max t(x*, y*) is minus the longest path y* -> x* through
+    the cycle's arc (the shortest-path dual of the LP)."""
     lb = net.lb
     if np.array_equal(lb, task.min_angles_deg()):      # no stress or amplitude bound: the model's graph as it is
         g, weight = task.graph, "min_deg"
     else:
         g, weight = nx.DiGraph(), "weight"
         g.add_weighted_edges_from((x, y, lb[k]) for k, (x, y) in enumerate(net.arcs))
-    if task.windows or task.syncs:
-        try:
-            longest = _longest(_constraint_arcs(net, lb), net.names[net.first])[net.names[net.last]]
-        except nx.NetworkXUnbounded:
-            raise SolverError("cross-check failed: the LP reports an optimum but the difference constraints "
-                              "hold a positive cycle (no feasible times exist)") from None
-        route = "Bellman-Ford on the difference constraints"
-    else:
-        longest = nx.dag_longest_path_length(g, weight=weight)
-        route = "networkx dag_longest_path_length"
-    if net.limiting:
-        x, y = net.names[net.limiting[0]], net.names[net.limiting[1]]
-        before = nx.dag_longest_path_length(g.subgraph(nx.ancestors(g, x) | {x}), weight=weight)
-        after = nx.dag_longest_path_length(g.subgraph(nx.descendants(g, y) | {y}), weight=weight)
-        expected, got, what = task.cycle_deg - before - after, values["limiting_op_deg"], "limiting_op_deg"
+    first, last = net.names[net.first], net.names[net.last]
+    arcs = _constraint_arcs(net, lb)
+    try:
         if task.windows or task.syncs:
-            return float(longest)             # windows may cut the limiting op further: no closed form
-    else:
-        expected, got, what = longest, values["span_deg"], "span_deg"
-    if abs(expected - got) > tol * max(1.0, abs(expected)):
-        raise SolverError(f"cross-check failed: LP {what} = {got!r} but {route} gives {expected!r}")
-    return float(longest)
+            longest = _longest(arcs, first)[last]
+            route = "Bellman-Ford on the difference constraints"
+        else:
+            longest = nx.dag_longest_path_length(g, weight=weight)
+            route = "networkx dag_longest_path_length"
+        if net.limiting:
+            x, y = net.names[net.limiting[0]], net.names[net.limiting[1]]
+            got, what = values["limiting_op_deg"], "limiting_op_deg"
+            if task.windows or task.syncs:
+                cycle = [] if task.cycle_deg is None else [(last, first, -task.cycle_deg)]
+                back = _longest(arcs + cycle, y).get(x)
+                expected = np.inf if back is None else -back
+            else:
+                before = nx.dag_longest_path_length(g.subgraph(nx.ancestors(g, x) | {x}), weight=weight)
+                after = nx.dag_longest_path_length(g.subgraph(nx.descendants(g, y) | {y}), weight=weight)
+                expected = task.cycle_deg - before - after
+        else:
+            expected, got, what = longest, values["span_deg"], "span_deg"
+    except nx.NetworkXUnbounded:       # a cycle within round-off of zero that Bellman-Ford takes as positive
+        return None, ("cross-check failed: the LP reports an optimum but Bellman-Ford finds a positive cycle "
+                      "that the conflict search (1e-12 round-off margin) does not: not certified")
+    longest = float(longest) if np.isfinite(longest) else None
+    if not abs(expected - got) <= tol * max(1.0, abs(expected)):
+        return longest, (f"cross-check failed: LP {what} = {got!r} but {route} gives {expected!r} "
+                         f"(tolerance {tol:g} deg per degree above 1): not certified")
+    return longest, None
 
 
 def _constraint_arcs(net, lb):

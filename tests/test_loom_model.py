@@ -86,6 +86,25 @@ OPS = [{"from": "1", "to": "2", "min_deg": 10.0}, {"from": "2", "to": "3", "min_
     (dict(operations=OPS + [{"from": "3", "to": "1", "min_deg": 1.0}]), r"operations: precedence cycle 1 -> 2 -> 3 -> 1"),
     (dict(operations=[{"from": "1", "to": "2", "min_deg": -5.0}, OPS[1]]),
      r"operations\[1->2\]\.min_deg=-5\.0: a minimum phase angle must be >= 0"),
+    (dict(operations=[{"from": "1", "to": "2", "min_deg": 1e300}, OPS[1]]),
+     r"operations\[1->2\]\.min_deg=1e\+300: a minimum phase angle must be <= 1e\+06 deg"),
+    (dict(operations=OPS, sigma_H_limit_MPa=1e300), r"sigma_H_limit_MPa=1e\+300 must be a finite number > 0 and <= 1e\+06"),
+    (dict(operations=OPS, cycle_deg=float("inf")), r"cycle_deg=inf must be a finite number > 0 and <= 1e\+06"),
+    (dict(operations=[{"from": "1", "to": "2", "min_deg": 1.0, "stress": "cam"}, OPS[1]], sigma_H_limit_MPa=1e-300,
+          stress_models={"cam": {"sigma_ref_MPa": 900.0, "t_ref_deg": 30.0}}),
+     r"operations\[1->2\]: its contact_stress bound 2\.7e\+304 deg \(exact form\), set by stress_models\.cam and "
+     r"sigma_H_limit_MPa, is outside the allowed \+-1e\+06 deg"),
+    (dict(operations=[{"from": "1", "to": "2", "min_deg": 1.0, "amplitude": "linear"}, OPS[1]],
+          amplitude_slope_mm_per_deg=-0.003, amplitude_intercept_mm=1e300, amplitude_limit_mm=0.1),
+     r"operations\[1->2\]: its amplitude bound 3\.33333e\+302 deg \(exact form\), set by amplitude_slope_mm_per_deg, "
+     r"amplitude_intercept_mm and amplitude_limit_mm"),
+    (dict(operations=[{"from": "1", "to": "2", "min_deg": 1.0, "stress": "cam"}, OPS[1]], sigma_H_limit_MPa=800.0,
+          stress_models={"cam": {"sigma_ref_MPa": 900.0, "t_ref_deg": 1e300}}),
+     r"stress_models\.cam\.t_ref_deg=1e\+300 must be in \(0, 1e\+06\]"),
+    (dict(operations=OPS, windows=[{"from": "1", "to": "3", "max_deg": 1e300}]),
+     r"windows\[0\]\.max_deg=1e\+300: must be within \+-1e\+06 deg"),
+    (dict(operations=OPS, windows=1.0), r"windows: expected a list of tables, got 1\.0"),
+    (dict(operations=OPS, syncs="2,3"), r"syncs: expected a list of tables, got '2,3'"),
     (dict(operations=[{"from": "1", "to": "2", "min_deg": "ten"}, OPS[1]]), r"operations\[1->2\]\.min_deg='ten': expected a finite number"),
     (dict(operations=[{"from": "1", "to": "2", "min_deg": 1.0, "stress": "cam"}, OPS[1]], sigma_H_limit_MPa=800.0),
      r"operations\[1->2\]\.stress='cam': no such stress model; defined: none"),
@@ -94,7 +113,7 @@ OPS = [{"from": "1", "to": "2", "min_deg": 10.0}, {"from": "2", "to": "3", "min_
      r"operations\[1->2\]\.stress='cam' needs sigma_H_limit_MPa \(effect contact_stress\)"),
     (dict(operations=[{"from": "1", "to": "2", "min_deg": 1.0, "stress": "cam"}, OPS[1]], sigma_H_limit_MPa=800.0,
           stress_models={"cam": {"sigma_ref_MPa": -900.0, "t_ref_deg": 30.0}}),
-     r"stress_models\.cam\.sigma_ref_MPa=-900\.0 must be > 0"),
+     r"stress_models\.cam\.sigma_ref_MPa=-900\.0 must be in \(0, 1e\+06\]"),
     (dict(operations=[{"from": "1", "to": "2", "min_deg": 1.0, "stress": "cam"}, OPS[1]], sigma_H_limit_MPa=800.0,
           stress_models={"cam": {"sigma_ref_MPa": 900.0}}), r"stress_models\.cam: missing t_ref_deg"),
     (dict(operations=[{"from": "1", "to": "2", "min_deg": 1.0, "amplitude": "cubic"}, OPS[1]]),
@@ -150,3 +169,13 @@ def test_isolated_event_is_kept_apart_and_not_a_first_event():
 def test_chain_helper_lower_bounds_are_the_min_angles():
     lb, why = chain(3.0, 0.0, 7.5).lower_bounds_deg()
     assert list(lb) == [3.0, 0.0, 7.5] and why == ["min_angle"] * 3
+
+
+@pytest.mark.parametrize("override, match", [
+    ({"windows": 1.0}, r"machine\.toml: params\.windows: windows: expected a list of tables, got 1\.0"),
+    ({"operations[from=12,to=13].min_deg": 1e300}, r"operations\[12->13\]\.min_deg=1e\+300: a minimum phase angle"),
+    ({"sigma_H_limit_MPa": 1e-300}, r"its contact_stress bound .* is outside the allowed \+-1e\+06 deg"),
+])
+def test_a_bad_override_of_the_machine_is_one_error_naming_the_key(override, match):
+    with pytest.raises(SceneError, match=match):
+        registry.run(registry.find("loom/machine"), override)

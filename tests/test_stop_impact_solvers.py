@@ -244,6 +244,11 @@ def test_amplitude_law_beside_the_published_one():
     assert v["t_3_7_min_exact_deg"] == pytest.approx(a0 * 35.0 / LIMIT_MM, rel=1e-10)
     published_bound = (INTERCEPT_MM - LIMIT_MM) / -SLOPE_MM_PER_DEG          # 36.0 deg
     assert v["t_3_7_min_deg"] == pytest.approx(published_bound, rel=0.05)
+    # each bound is where its law crosses the limit: the tangent exactly, the exact law by quadrature
+    assert v["slope_mm_per_deg"] * v["t_3_7_min_deg"] + v["intercept_mm"] == pytest.approx(LIMIT_MM, abs=1e-12)
+    law = task_of("stop-impact/amplitude-law", t_deg=v["t_3_7_min_exact_deg"])
+    amplitude_m, status = quadrature_amplitude_m(law.impact(law.speed_nominal_rpm))
+    assert status is Status.SOLVED and amplitude_m * 1e3 == pytest.approx(LIMIT_MM, rel=1e-8)
     assert v["span_gain_deg"] > 0                     # a(t) is convex: its tangent lies below it
 
 
@@ -318,3 +323,44 @@ def test_operating_point_whose_ode_check_fails_is_inaccurate_not_solved(monkeypa
     got = at(280.0, 35.0)
     assert got.status is Status.INACCURATE and "unconfirmed" in got.message
     assert "methods_rel_diff" not in got.values
+
+
+def _piecewise_linear_rebound(task, speed_rpm):
+    """The plate-contact rebound by hand: two damped linear oscillators joined where x rises
+    through 0 (root of the closed form by brentq on a fine grid) and the free peak where x' = 0
+    (first root of tan): (rebound_mm, separation time [s]) or (0, None) when C stays on the plate."""
+    from scipy.optimize import brentq
+    m, cf, cs = task.mass_kg, task.c_free_N_per_m, task.c_stop_N_per_m
+    zeta = task.damping_ratio if "damping" in task.effects else 0.0
+    delta = task.preload_mm * 1e-3 if "preload" in task.effects else 0.0
+    v0 = float(task.approach_velocity_m_s(speed_rpm))
+    ws = math.sqrt(cs / m)
+    wd = ws * math.sqrt(1 - zeta**2)
+    x_eq = -cf * delta / cs                              # rest position on the plate
+    A = -x_eq                                            # x(0) = 0
+    B = (-v0 + zeta * ws * A) / wd                       # x'(0) = -v0
+    x = lambda t: x_eq + math.exp(-zeta * ws * t) * (A * math.cos(wd * t) + B * math.sin(wd * t))  # noqa: E731
+    grid = np.linspace(1e-9 / ws, 4 * math.pi / ws, 20001)
+    values = np.array([x(t) for t in grid])
+    up = np.nonzero((values[:-1] < 0) & (values[1:] >= 0))[0]
+    if not up.size:
+        return 0.0, None
+    t_sep = brentq(x, grid[up[0]], grid[up[0] + 1], xtol=1e-16, rtol=1e-15)
+    h = 1e-7 / ws
+    v_sep = (x(t_sep + h) - x(t_sep - h)) / (2 * h)
+    wf = math.sqrt(cf / m)
+    wdf = wf * math.sqrt(1 - zeta**2)
+    A2, B2 = delta, (v_sep + zeta * wf * delta) / wdf    # y = x + delta about the free rest position
+    s = math.atan2(wdf * B2 - zeta * wf * A2, zeta * wf * B2 + wdf * A2) % math.pi
+    y_peak = math.exp(-zeta * wf * s / wdf) * (A2 * math.cos(s) + B2 * math.sin(s))
+    return (y_peak - delta) * 1e3, t_sep
+
+
+@pytest.mark.parametrize("preload_mm", [0.25, 0.1, 0.0])
+def test_event_driven_contact_separates_and_peaks_where_the_hand_solution_does(pressed, preload_mm):
+    task = dataclasses.replace(pressed, preload_mm=preload_mm)
+    rebound_mm, contact_s, status, _ = simulate_contact(task, 177.0)
+    want_mm, want_sep_s = _piecewise_linear_rebound(task, 177.0)
+    assert status is Status.SOLVED and want_sep_s is not None
+    assert contact_s == pytest.approx(want_sep_s, rel=1e-7)
+    assert rebound_mm == pytest.approx(want_mm, rel=1e-6)
