@@ -157,7 +157,7 @@ def test_bad_scene_network_is_refused_naming_file_and_key(tmp_path):
     good = registry.cases_dir() / "loom" / "group1.toml"
     bad = tmp_path / "bad.toml"
     bad.write_text(good.read_text().replace('from = "9"\nto = "10"', 'from = "9"\nto = "99"'))
-    with pytest.raises(SceneError, match=r"bad\.toml: params\.operations\[9->99\]: operations\[9->99\]: unknown event '99'"):
+    with pytest.raises(SceneError, match=r"bad\.toml: structure\.operations\[9->99\]: operations\[9->99\]: unknown event '99'"):
         load(bad)
 
 

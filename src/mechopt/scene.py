@@ -401,7 +401,8 @@ def _build_task(path, task_class, effects, params, structure=None):
     try:
         return task_class(**{k: float(v) for k, v in params.items()}, **structure)
     except MechoptError as exc:
-        raise SceneError(f"{path}: params.{exc.key}: {exc}" if exc.key else f"{path}: {exc}", key=exc.key) from None
+        table = "structure" if exc.key and _path_head(exc.key) in structure else "params"
+        raise SceneError(f"{path}: {table}.{exc.key}: {exc}" if exc.key else f"{path}: {exc}", key=exc.key) from None
 
 
 @memoised(maxsize=256)
