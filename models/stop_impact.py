@@ -45,7 +45,7 @@ import math
 from dataclasses import dataclass
 from typing import ClassVar
 
-from mechopt.models.effects import Effect
+from mechopt.models.effects import Effect, check_effects
 from mechopt.models.errors import ModelError
 
 
@@ -130,17 +130,7 @@ class LeverStop:
     def __post_init__(self):
         object.__setattr__(self, "speeds_rpm", _names_or_numbers(self, "speeds_rpm", number=True))
         object.__setattr__(self, "effects", _names_or_numbers(self, "effects", number=False))
-        unknown = [e for e in self.effects if e not in self.EFFECTS]
-        if unknown:
-            raise ModelError(f"effects={list(self.effects)}: unknown {unknown}; known: {', '.join(self.EFFECTS)}",
-                             key="effects")
-        for effect, spec in self.EFFECTS.items():
-            for key in spec.params:
-                if (getattr(self, key) is None) == (effect in self.effects):
-                    raise ModelError(f"{key}={getattr(self, key)}: effect '{effect}' is "
-                                     + ("listed, give its parameter" if effect in self.effects
-                                        else "not listed in effects, drop the parameter or list the effect"),
-                                     key=key)
+        check_effects(self)
         for key in ("E_GPa", "J_x_mm4", "a_mm", "b_mm", "a_stop_mm", "b_stop_mm", "mass_kg"):
             _require(self, key, getattr(self, key) > 0, "must be > 0")
         for key in ("stroke_mm", "velocity_factor", "t_deg", "speed_nominal_rpm", "amplitude_limit_mm",
