@@ -244,3 +244,14 @@ def test_one_door_per_question_takes_method():
 def test_units_are_read_from_names_and_axes_say_them(name, unit, words):
     from mechopt.units import label, unit_of
     assert unit_of(name) == unit and label(name) == words
+
+
+def test_a_calibration_typo_in_a_users_scene_is_named_and_the_others_load(own):
+    text = SIX_EVENTS.replace('id = "my/loom-six"', 'id = "my/typo"').replace(
+        'sigma_H_limit_MPa = { value = 800.0, mark = "assumed", why = "a hardened steel cam" }',
+        'sigma_H_limit_MPa = { value = 800.0, mark = "calibrated", on = "spam_deg", why = "fitted" }')
+    (own / "typo.toml").write_text(text, encoding="utf-8")
+    mechopt.add_cases(own)
+    catalogue = registry.catalogue()
+    assert any("typo.toml: params.sigma_H_limit_MPa.on = 'spam_deg'" in p for p in catalogue.problems)
+    assert "my/loom-six" in {s.id for s in catalogue.scenes} and "my/typo" not in {s.id for s in catalogue.scenes}
