@@ -147,3 +147,18 @@ def test_bad_input_is_refused_by_name():
         loads(force_direction="up")
     with pytest.raises(ModelError, match=r"count=4: allowed"):
         joint_loads(loads(), count=4)
+
+
+def test_scene_speed_is_the_papers_cutting_speed_and_its_figure_draws(tmp_path):
+    from mechopt import registry
+    from mechopt.plots import plot_run
+    run = registry.run(registry.find("cam-cutter/joint-reactions"))
+    # the crank speed was chosen (assumed) so that the torch averages 2.1 m/min (Sec. II); the mean of
+    # |dT/dt| = sqrt(H^2 + L^2 + 2 H L cos t) over a cycle, by quadrature apart from the solver
+    t = np.linspace(0, 2 * np.pi, 200_001)
+    speed_mm_rad = np.hypot(*real_velocity(t, H, L))
+    mean_m_min = np.trapezoid(speed_mm_rad, t) / (2 * np.pi) * run.task.crank_speed_rad_s / 2 / 1000 * 60
+    assert mean_m_min == pytest.approx(2.1, abs=0.01)
+    assert run.result.diagnostics["mean_torch_speed_m_min"] == pytest.approx(mean_m_min, rel=1e-3)
+    paths = plot_run(run, tmp_path)
+    assert [p.name for p in paths] == ["cam-cutter_joint-reactions_loads.png"] and paths[0].stat().st_size > 10_000

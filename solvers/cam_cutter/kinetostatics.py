@@ -19,7 +19,7 @@ from mechopt.solvers.settings import Annotated, Interval, check_settings
 
 __all__ = ["joint_loads", "load_system"]
 
-Angles = Annotated[int, Interval(ge=8, le=1_000_000)]
+Angles = Annotated[int, Interval(ge=8, le=200_000)]      # A alone is 648 bytes an angle
 ConditionLimit = Annotated[float, Interval(ge=1e3, le=1e15)]
 
 _POINTS = ("P", "C1", "C2", "T")
