@@ -246,3 +246,96 @@ def _fill_scaled_default(task, key):
 def _require(task, key, ok, what):
     if not ok:
         raise ModelError(f"{key}={getattr(task, key)} {what}", key=key)
+
+
+# --- Kinetostatics of the linkage (paper 000, Sec. V, re-derived; issue 13) -------------------
+#
+# Reading of Fig. 2 taken here (the figure is not in the text): a slotted-link ("wings" =
+# kulisa) mechanism. Frame pivots O = (0, 0) and O1 = (H/2, 0) (frame of eq. (7)); the crank O1P,
+# of length H/2, turns at phi = 2t, so P runs on the circle (5); the wing link is pinned to the
+# crank at P, slides through a swivel block pivoted at O and carries the torch T at L from P
+# along its axis (6), at angle t. The triangle O O1 P is isosceles (O O1 = O1 P = H/2), which is
+# why the link turns at exactly half the crank speed and T runs on the limaçon (7). "H" is the
+# diameter of the crank-pin circle, the longest distance between the pairs O and P. Another
+# reading (a crank of length H, "H := AB" of Sec. V) does not give eq. (5) and is not taken.
+#
+# Bodies: 1 crank, 2 wing link, 3 swivel block. Unknowns (`LOAD_UNKNOWNS`): frame on crank at O1,
+# crank on link at P, block on link (normal force N at O, couple Mp), frame on block at O, the
+# driving torque M on the crank. Couples are solved as couple / H and moment rows divided by H,
+# so that the matrix is dimensionless and its condition number says something about the mechanism.
+
+LOAD_UNKNOWNS = ("R01x_N", "R01y_N", "R12x_N", "R12y_N", "N_N", "Mp_N_m", "R03x_N", "R03y_N", "M_N_m")
+FORCE_DIRECTIONS = ("against_velocity", "normal_to_link")
+
+
+@dataclass(frozen=True)
+class LinkageLoads:
+    """Joint reactions and driving torque of the torch-guiding linkage (H, L) over a cycle.
+
+    Links [mm]; `force_N` the torch force, opposing the torch's velocity ("against_velocity", a
+    resistance to the feed) or normal to the wing link ("normal_to_link", Sec. V's b rows 7-8);
+    crank at constant `crank_speed_rad_s`; masses [kg], inertias about the centre of mass
+    [kg m2]; centres: the crank's at `crank_centre_mm` from O1 towards P, the link's at
+    `link_centre_mm` from P towards the torch (negative: behind P); the block's at O. Gravity
+    `gravity_m_s2` acts along -y (0: the linkage lies in a horizontal plane).
+    """
+    H_mm: float
+    L_mm: float
+    force_N: float
+    crank_speed_rad_s: float
+    crank_mass_kg: float
+    crank_centre_mm: float
+    crank_inertia_kgm2: float
+    link_mass_kg: float
+    link_centre_mm: float
+    link_inertia_kgm2: float
+    block_mass_kg: float = 0.0
+    block_inertia_kgm2: float = 0.0
+    gravity_m_s2: float = 0.0
+    force_direction: str = "against_velocity"
+
+    def __post_init__(self):
+        for key in ("H_mm", "L_mm", "crank_speed_rad_s"):
+            _require_range(self, key, 0.0, 1e6, low_open=True)
+        for key in ("force_N", "crank_mass_kg", "crank_inertia_kgm2", "link_mass_kg", "link_inertia_kgm2",
+                    "block_mass_kg", "block_inertia_kgm2", "gravity_m_s2"):
+            _require_range(self, key, 0.0, 1e6)
+        span = 10 * (self.H_mm + self.L_mm)
+        for key in ("crank_centre_mm", "link_centre_mm"):
+            _require_range(self, key, -span, span)
+        if self.force_direction not in FORCE_DIRECTIONS:
+            raise ModelError(f"force_direction={self.force_direction!r}: allowed {', '.join(FORCE_DIRECTIONS)}",
+                             key="force_direction")
+
+
+def _require_range(task, key, low, high, low_open=False):
+    value = getattr(task, key)
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and np.isfinite(value) and (
+        (low < value if low_open else low <= value) and value <= high)
+    if not ok:
+        raise ModelError(f"{key}={value!r} must be within {'(' if low_open else '['}{low:g}, {high:g}]", key=key)
+
+
+def linkage_positions(phi, H, L, c1, c2, m=np):
+    """Positions [m] at crank angle phi [rad] of the linkage (H, L) [m], eqs. (5)-(7) in the frame
+    of (7): a dict of (x, y) pairs P (crank pin), C1 (crank centre, c1 from O1 towards P), C2 (link
+    centre, c2 from P towards the torch), T (torch), and the angles "phi" and "theta" (the link's
+    angle t = phi / 2). O = (0, 0) and O1 = (H/2, 0) are fixed."""
+    theta = phi / 2
+    ex, ey = m.cos(phi), m.sin(phi)
+    ux, uy = m.cos(theta), m.sin(theta)
+    P = (H / 2 + H / 2 * ex, H / 2 * ey)
+    return {"P": P, "C1": (H / 2 + c1 * ex, c1 * ey), "C2": (P[0] + c2 * ux, P[1] + c2 * uy),
+            "T": (P[0] + L * ux, P[1] + L * uy), "phi": phi, "theta": theta}
+
+
+def linkage_energy(positions, velocities, task: LinkageLoads):
+    """Kinetic plus potential energy [J] of the linkage, from `linkage_positions` [m] and their
+    time derivatives [m/s, rad/s]; gravity along -y, the block's centre O does not move."""
+    def sq(v):
+        return v[0] * v[0] + v[1] * v[1]
+    kinetic = 0.5 * (task.crank_mass_kg * sq(velocities["C1"]) + task.crank_inertia_kgm2 * velocities["phi"] ** 2
+                     + task.link_mass_kg * sq(velocities["C2"])
+                     + (task.link_inertia_kgm2 + task.block_inertia_kgm2) * velocities["theta"] ** 2)
+    return kinetic + task.gravity_m_s2 * (task.crank_mass_kg * positions["C1"][1]
+                                          + task.link_mass_kg * positions["C2"][1])

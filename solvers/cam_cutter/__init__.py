@@ -1,13 +1,15 @@
 """The torch-guiding linkage (paper 000): fit H, L to the ideal path, check a given linkage.
 
 `fit` holds the solvers a scene names (`cam_cutter.minimax`, ...); `deviation` measures how far
-a limaçon is from the ideal path. `fit_linkage(task, method=...)` is the one door to the four
+a limaçon is from the ideal path; `kinetostatics.joint_loads` the reactions and driving torque
+over the cycle (Sec. V re-derived). `fit_linkage(task, method=...)` is the one door to the four
 ways of finding the linkage, as `scipy.integrate.solve_ivp` has one for its methods.
 """
 from mechopt.models.errors import SceneError
 from mechopt.solvers.cam_cutter.fit import check, evolve, grid_scan, minimax, robust
+from mechopt.solvers.cam_cutter.kinetostatics import joint_loads
 
-__all__ = ["grid_scan", "minimax", "robust", "evolve", "check", "fit_linkage", "METHODS"]
+__all__ = ["grid_scan", "minimax", "robust", "evolve", "check", "joint_loads", "fit_linkage", "METHODS"]
 
 METHODS = {"grid_scan": grid_scan, "minimax": minimax, "robust": robust, "evolve": evolve}
 

@@ -2,7 +2,7 @@
 import numpy as np
 
 from mechopt.figures.registry import new_figure, register
-from mechopt.models.cam_cutter import LinkageCheck, LinkageFit, ideal_point, real_point
+from mechopt.models.cam_cutter import LinkageCheck, LinkageFit, LinkageLoads, ideal_point, real_point
 from mechopt.solvers.cam_cutter.deviation import path_distance
 
 
@@ -51,3 +51,30 @@ def paths_and_deviation(run):
     right.set_title(f"max {run.result.values['max_deviation_mm'] * 1000:.2f} µm ({run.result.status.value})")
     right.legend(fontsize=8)
     return {"paths": fig}
+
+
+@register(LinkageLoads)
+def reactions_and_torque(run):
+    """Reactions in the pairs and the driving torque over the cycle, with the condition number."""
+    arrays = run.result.arrays
+    if not arrays.get("phi_rad", np.empty(0)).size:
+        return {}             # no regular angle: nothing to draw
+    phi = np.degrees(arrays["phi_rad"])
+    fig = new_figure(figsize=(12, 7))
+    top, middle, bottom = fig.subplots(3, 1, sharex=True, gridspec_kw={"height_ratios": [2, 1, 1]})
+    for pair, label in (("O1", "crank bearing O1"), ("P", "crank pin P"), ("O", "block pivot O"),
+                        ("O_slide", "block on link (normal force)")):
+        top.semilogy(phi, arrays[f"R_{pair}_N"], lw=1.0, label=label)
+    top.set_ylabel("reaction [N]")
+    top.set_title(f"{run.scene.id}: reactions grow as 1/|cos(phi/2)| where the crank pin crosses O "
+                  f"({run.result.status.value})", fontsize=9)
+    top.legend(fontsize=8, ncol=2)
+    middle.plot(phi, arrays["M_N_m"], color="black", lw=1.0)
+    middle.set_ylabel("driving torque [N m]")
+    bottom.semilogy(phi, arrays["condition_number"], color="tab:red", lw=1.0)
+    bottom.set_ylabel("cond A")
+    bottom.set_xlabel("crank angle phi [deg] (the link turns once in two crank turns)")
+    for ax in (top, middle, bottom):
+        for singular in (180, 540):
+            ax.axvline(singular, color="grey", ls=":", lw=0.8)
+    return {"loads": fig}
