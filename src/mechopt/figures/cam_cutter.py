@@ -45,7 +45,7 @@ def paths_and_deviation(run):
     left.set_title(run.scene.id)
 
     right.plot(t, dist * 1000, color="tab:orange", label="distance ideal -> real path")
-    right.axhline(task.err_width_mm * 1000, color="tab:red", ls=":", label=f"err_width_mm = {task.err_width_mm:g}")
+    right.axhline(task.err_width_mm * 1000, color="tab:red", ls=":", label=f"band: err_width = {task.err_width_mm * 1000:g} µm")
     right.set_xlabel("ideal path parameter t [rad]")
     right.set_ylabel("deviation [µm]")
     right.set_title(f"max {run.result.values['max_deviation_mm'] * 1000:.2f} µm ({run.result.status.value})")

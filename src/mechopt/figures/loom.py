@@ -20,6 +20,7 @@ def gantt(run):
     label = {(x, y): d["name"] or mechanism[x] or "-" for x, y, d in task.graph.edges(data=True)}
     arcs = sorted(task.arcs, key=lambda a: (label[a], values[f"p_{a[0]}_deg"]))
 
+    end = task.cycle_deg or values["span_deg"]
     fig = new_figure(figsize=(11, 0.35 * len(arcs) + 1.8))
     ax = fig.subplots()
     for row, (x, y) in enumerate(arcs):
@@ -31,12 +32,18 @@ def gantt(run):
         slack = floats.get(key, 0.0)
         if slack > 1e-9 and not hot:
             ax.barh(row, slack, left=start + angle, height=0.25, color="tab:blue", alpha=0.25)
-        ax.text(start + angle / 2, row, f"{x}-{y}", ha="center", va="center", fontsize=7,
-                color="white" if angle > 0.05 * max(values["span_deg"], 1e-9) else "black")
+        inside = angle > 0.06 * max(end, 1e-9)          # a narrow bar gets its label beside it
+        ax.text(start + angle / 2 if inside else start + angle + 0.005 * end, row, f"{x}-{y}",
+                ha="center" if inside else "left", va="center", fontsize=7,
+                color="white" if inside else "black")
     ax.set_yticks(range(len(arcs)))
     ax.set_yticklabels([f"{label[x, y]} ({x}-{y})" for x, y in arcs], fontsize=7)
     ax.invert_yaxis()
-    end = task.cycle_deg or values["span_deg"]
+    from matplotlib.patches import Patch
+    ax.legend(handles=[Patch(color="tab:red", label="critical operation (no float)"),
+                       Patch(color="tab:blue", label="operation, at its event times"),
+                       Patch(color="tab:blue", alpha=0.25, label="its total float")],
+              loc="lower right", fontsize=8)
     ax.set_xlim(0, end * 1.02 if end > 0 else 1.0)
     ax.set_xlabel("main shaft angle [deg]")
     chain = diag.get("critical_chain") or []
