@@ -1,8 +1,9 @@
 """The README's command examples, run in order as written, in a fresh folder: every one must
 work. Grids are shrunk to 3 points a key and random draws to 5 (the README's sizes are for a
 designer's machine); the Dask example runs on a local cluster standing in for `scheduler-host`.
-The `bench` lines are timed studies of minutes, measured by `mechopt bench`, and the `dask
-scheduler` / `dask worker` lines start services: those are named here and left out."""
+The `bench` lines run with `--repeats 1` (a missed timing target, exit 1, is a measurement on a
+busy machine, not a fault), and the `dask scheduler` / `dask worker` lines start services: those
+two are named here and left out."""
 import re
 import shlex
 import shutil
@@ -13,7 +14,7 @@ import pytest
 from mechopt.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
-LEFT_OUT = ("mechopt bench ", "dask scheduler", "dask worker")
+LEFT_OUT = ("dask scheduler", "dask worker")
 
 
 def readme_commands():
@@ -38,7 +39,7 @@ def shrunk(argv):
 def test_the_readme_names_its_commands():
     commands = readme_commands()
     assert len(commands) >= 20 and commands[0].startswith("python -m pip install")
-    assert sum(c.startswith(LEFT_OUT) for c in commands) <= 6
+    assert sum(c.startswith(LEFT_OUT) for c in commands) == 2
 
 
 @pytest.mark.slow
@@ -54,8 +55,13 @@ def test_every_readme_command_runs_in_order(tmp_path, monkeypatch):
                 continue
             command = command.replace("tcp://scheduler-host:8786", cluster.scheduler_address)
             argv = shrunk(shlex.split(command)[1:])
-            assert main(argv) == 0, command
+            if argv[0] == "bench":
+                argv += ["--repeats", "1"]
+                assert main(argv) in (0, 1), command
+            else:
+                assert main(argv) == 0, command
             ran.append(argv[0])
     finally:
         cluster.close()
-    assert {"cases", "describe", "run", "validate", "sweep", "report", "new", "fit-force"} <= set(ran)
+    assert {"cases", "describe", "run", "validate", "sweep", "report", "new", "fit-force", "bench"} <= set(ran)
+    assert (tmp_path / "out" / "bench" / "cam_cutter_work_precision.png").is_file()
