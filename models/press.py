@@ -91,6 +91,37 @@ def coefficient_k(phi, lam, m=np):
     return lam**2 * m.cos(phi) ** 2
 
 
+def rod_angle_rad(phi, lam, kinematics="paper", m=np):
+    """Rod angle beta from the stroke line [rad]: the direction along which both rod ends move alike
+    (v_pin - v_tool is normal to the rod, so the rod neither stretches nor shortens). Exact
+    crank-slider: sin beta = lambda sin phi; the paper's X implies tan beta = lambda sin phi (its
+    X' = r sin(phi + beta) / cos beta); the two differ by O(lambda^3)."""
+    if kinematics == "paper":
+        return m.arctan(lam * m.sin(phi))
+    return m.arcsin(lam * m.sin(phi))
+
+
+def linkage_forces(phi, beta, Q, rod_x, rod_y, r_m, m=np):
+    """Joint forces of the crank-slider from the rod's Newton-Euler equations [N, N m].
+
+    x horizontal (towards the crank pin at phi = 90 deg), y down the stroke. Q: the force the rod
+    exerts on the tool along the stroke (down +); (rod_x, rod_y) = m_rod (a_mid - g), what the rod's
+    mass at its middle needs (no moment of inertia about it, as in J_k). The rod's ends then carry
+    equal transverse forces, half the rod's need each. Returns (rod force at the tool end, at the
+    crank pin (compression +), crank torque (the shaft drives the linkage, +), main-bearing load
+    |pin force|, guide force on the tool (x)). With the crank balanced by its counterweight and the
+    belt pull left out (its geometry is not given), the main bearing carries the pin force."""
+    c, s = m.cos(beta), m.sin(beta)
+    half_normal = 0.5 * (rod_x * c + rod_y * s)
+    Bx = (half_normal + Q * s) / c          # the tool's force on the rod: y component -Q
+    By = -Q
+    Ax, Ay = rod_x - Bx, rod_y - By         # the crank pin's force on the rod
+    rod_tool = Bx * s - By * c              # (rod on tool) . e, e = (-sin beta, cos beta) pin to tool
+    rod_pin = -Ax * s + Ay * c              # (crank on rod) . e
+    torque = r_m * (Ax * m.cos(phi) + Ay * m.sin(phi))      # power into the rod at the pin / omega
+    return rod_tool, rod_pin, torque, m.sqrt(Ax**2 + Ay**2), Bx
+
+
 def cutting_force_N(penetration_mm, c1, c2, c3, c4):
     """Cutting force, eq. (1) [N], for the tool's penetration into the blank [mm]."""
     x = penetration_mm
@@ -353,7 +384,9 @@ class Dynamics:
     n_states: int
 
     OUTPUT_NAMES: ClassVar[tuple[str, ...]] = ("belt_torque_Nm", "motor_torque_Nm", "force_N", "Q_N", "travel_mm",
-                                               "penetration_mm", "kinetic_J", "potential_J", "drive_torque_Nm")
+                                               "penetration_mm", "kinetic_J", "potential_J", "drive_torque_Nm",
+                                               "alpha_rad_s2", "rod_force_N", "rod_force_pin_N", "crank_torque_Nm",
+                                               "main_bearing_load_N", "guide_force_N")
 
 
 def dynamics(task: PressDrive) -> Dynamics:
@@ -429,8 +462,13 @@ def dynamics(task: PressDrive) -> Dynamics:
 
     kinetic = 0.5 * J * w**2 + (0.5 * task.reduced_motor_inertia_kgm2() * w_p**2 if task.motor else 0.0)
     Q = force + task.tool_mass_kg * (ddX * dphi**2 + dX * acc - (task.gravity_m_s2 or 0.0))
+    xm, ym = rod_middle_m(phi, r, lam, kin, ca)
+    g = task.gravity_m_s2 or 0.0             # as in Q
+    rod_x, rod_y = (task.rod_mass_kg * (ca.jacobian(ca.jacobian(p, phi), phi) * dphi**2 + ca.jacobian(p, phi) * acc)
+                    for p in (xm, ym))
+    loads = linkage_forces(phi, rod_angle_rad(phi, lam, kin, ca), Q, rod_x, rod_y - task.rod_mass_kg * g, r, ca)
     outputs = ca.vertcat(belt_torque, motor_torque, force, Q, X * 1000, penetration_mm, kinetic,
-                         potential + belt_energy, drive_torque)
+                         potential + belt_energy, drive_torque, acc, *loads)
 
     switched_mode = ca.vertcat(U_paper, ca.sign(w), 0)
     rhs = ca.Function("rhs", [x, mode], [xdot])
