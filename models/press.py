@@ -104,21 +104,26 @@ def rod_angle_rad(phi, lam, kinematics="paper", m=np):
 def linkage_forces(phi, beta, Q, rod_x, rod_y, r_m, m=np):
     """Joint forces of the crank-slider from the rod's Newton-Euler equations [N, N m].
 
-    x horizontal (towards the crank pin at phi = 90 deg), y down the stroke. Q: the force the rod
-    exerts on the tool along the stroke (down +); (rod_x, rod_y) = m_rod (a_mid - g), what the rod's
-    mass at its middle needs (no moment of inertia about it, as in J_k). The rod's ends then carry
-    equal transverse forces, half the rod's need each. Returns (rod force at the tool end, at the
-    crank pin (compression +), crank torque (the shaft drives the linkage, +), main-bearing load
-    |pin force|, guide force on the tool (x)). With the crank balanced by its counterweight and the
-    belt pull left out (its geometry is not given), the main bearing carries the pin force."""
+    y along the stroke (+X), x across it; crank pin at r (sin phi, -cos phi), so its velocity is
+    omega r (cos phi, sin phi). The model's X (paper's or exact, both with + lambda) is the tool
+    moving towards the crank axis: the rod runs from the tool to the pin along u = (sin beta, cos
+    beta), and pulls the tool through the cut. Q: the force of the rod on the tool along +X;
+    (rod_x, rod_y) = m_rod (a_mid - g): what the rod's mass at its middle needs (no moment of
+    inertia about it, as in J_k), so both ends carry the same force across the rod, half of it.
+
+    Returns (axial rod force at the tool end, at the crank pin (each + when it drives the tool along
+    +X: tension here, compression on a press whose crank sits above the slide), crank torque (what
+    the shaft gives the linkage: power at the pin / omega), main-bearing load |pin force|, guide
+    force across the stroke). With the crank balanced by its counterweight and the belt pull left
+    out (its geometry is not given), the main bearing carries the pin force."""
     c, s = m.cos(beta), m.sin(beta)
-    half_normal = 0.5 * (rod_x * c + rod_y * s)
-    Bx = (half_normal + Q * s) / c          # the tool's force on the rod: y component -Q
-    By = -Q
-    Ax, Ay = rod_x - Bx, rod_y - By         # the crank pin's force on the rod
-    rod_tool = Bx * s - By * c              # (rod on tool) . e, e = (-sin beta, cos beta) pin to tool
-    rod_pin = -Ax * s + Ay * c              # (crank on rod) . e
-    torque = r_m * (Ax * m.cos(phi) + Ay * m.sin(phi))      # power into the rod at the pin / omega
+    half_across = 0.5 * (rod_x * c - rod_y * s)
+    By = -Q                                  # the tool's force on the rod
+    Bx = (half_across + By * s) / c
+    Ax, Ay = rod_x - Bx, rod_y - By          # the crank pin's force on the rod
+    rod_tool = -(Bx * s + By * c)            # (rod on tool) . u
+    rod_pin = Ax * s + Ay * c                # (pin on rod) . u
+    torque = r_m * (Ax * m.cos(phi) + Ay * m.sin(phi))
     return rod_tool, rod_pin, torque, m.sqrt(Ax**2 + Ay**2), Bx
 
 

@@ -40,16 +40,15 @@ def loads(task: PressDrive, *, tol: Tolerance = 1e-10, samples: Samples = 60,
         return result
     arrays = dict(a)
     arrays["motor_shaft_torque_Nm"] = a["motor_torque_Nm"] / task.gear_ratio
-    phi_deg = np.degrees(a["phi_rad"])
     values = dict(result.values)
     for name, stem in LOADS.items():
         if name.startswith("motor") and not task.motor:
             continue
-        i = int(np.argmax(np.abs(arrays[name])))
+        peak, at = _peak(a["phi_rad"], arrays[name], a["cutting"])
         base = stem.rsplit("_", 1)[0]            # peak_rod_force_N, peak_rod_force_at_deg, ..._at_mm
-        values[f"peak_{stem}"] = float(abs(arrays[name][i]))
-        values[f"peak_{base}_at_deg"] = float(phi_deg[i])
-        values[f"peak_{base}_at_mm"] = float(a["travel_mm"][i])
+        values[f"peak_{stem}"] = peak
+        values[f"peak_{base}_at_deg"] = float(np.degrees(at))
+        values[f"peak_{base}_at_mm"] = float(task.travel(at) * 1000)
     values["peak_belt_torque_Nm"] = result.values["peak_belt_torque_Nm"]
     cut = a["cutting"] > 0
     if cut.any():
@@ -58,3 +57,17 @@ def loads(task: PressDrive, *, tol: Tolerance = 1e-10, samples: Samples = 60,
         values["Q_reading_spread"] = (max(readings) - min(readings)) / readings[1]
     return Result(result.status, values, result.timing, result.message, result.violated, result.diagnostics,
                   arrays)
+
+
+def _peak(phi, y, mode):
+    """(largest |y|, crank angle [rad]): the largest sample, refined by the parabola through it and
+    its neighbours when all three lie in one piece (a smooth peak; a peak at the jump is a sample)."""
+    i = int(np.argmax(np.abs(y)))
+    best, at = float(abs(y[i])), float(phi[i])
+    if 0 < i < len(y) - 1 and mode[i - 1] == mode[i] == mode[i + 1] and phi[i - 1] < phi[i] < phi[i + 1]:
+        c = np.polyfit(phi[i - 1:i + 2] - phi[i], y[i - 1:i + 2], 2)
+        if c[0] != 0:
+            vertex = -c[1] / (2 * c[0])
+            if phi[i - 1] - phi[i] < vertex < phi[i + 1] - phi[i] and abs(np.polyval(c, vertex)) > best:
+                best, at = float(abs(np.polyval(c, vertex))), float(phi[i] + vertex)
+    return best, at
