@@ -141,3 +141,20 @@ def test_a_failed_steady_state_comes_back_without_peaks(paper_task):
     result = loads(weak)
     assert result.status.value == "INFEASIBLE"
     assert not any(k.startswith("peak_rod") for k in result.values)
+
+
+def test_the_loads_scene_draws_loads_against_crank_angle_and_tool_travel_with_units(tmp_path):
+    from mechopt import registry
+    from mechopt.plots import plot_run
+    run = registry.run(registry.find("press/loads"))
+    figures = run.figures()
+    assert set(figures) == {"cycle", "loads"}
+    axes = figures["loads"].axes
+    labels = {ax.get_xlabel() for ax in axes}
+    assert labels == {"crank angle from top dead centre [deg]", "tool travel X [mm]"}
+    assert all(ax.get_ylabel() in ("force [N]", "torque [N m]") and ax.get_legend() is not None for ax in axes)
+    rod = next(line for line in axes[0].lines if line.get_label() == "rod force, tool end")
+    assert max(rod.get_ydata()) == pytest.approx(run.values["peak_rod_force_N"], rel=1e-12)
+    assert [p.name for p in plot_run(run, tmp_path)] == ["press_loads_cycle.png", "press_loads_loads.png"]
+    kd = registry.run(registry.find("press/kd2322"))      # a plain steady state keeps its one figure
+    assert set(kd.figures()) == {"cycle"}
