@@ -43,7 +43,7 @@ def cycle(run):
     fig.suptitle(f"{run.scene.id}: {run.result.status.value}", fontsize=10)
     figures = {"cycle": fig}
     if "peak_rod_force_N" in run.result.values:         # the loads of one steady revolution (press.loads)
-        figures["loads"] = _loads(run, phi_deg)
+        figures["loads"] = _loads(run, np.degrees(run.result.arrays["phi_rad"]))     # 0 to 360, not wrapped
     return figures
 
 
