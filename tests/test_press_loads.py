@@ -11,7 +11,7 @@ from mechopt.solvers.press import loads
 
 @pytest.fixture(scope="module")
 def paper_task():
-    return load("press/loads").build()[0]
+    return load("press/kd2322").build()[0]          # the press/loads scene's parameters
 
 
 @pytest.fixture(scope="module")
@@ -146,7 +146,10 @@ def test_a_failed_steady_state_comes_back_without_peaks(paper_task):
 def test_the_loads_scene_draws_loads_against_crank_angle_and_tool_travel_with_units(tmp_path):
     from mechopt import registry
     from mechopt.plots import plot_run
-    run = registry.run(registry.find("press/loads"))
+    from mechopt.registry import Run
+    scene = registry.find("press/kd2322")
+    task = scene.build()[0]
+    run = Run(scene, loads(task), [], task=task)
     figures = run.figures()
     assert set(figures) == {"cycle", "loads"}
     axes = figures["loads"].axes
@@ -155,6 +158,6 @@ def test_the_loads_scene_draws_loads_against_crank_angle_and_tool_travel_with_un
     assert all(ax.get_ylabel() in ("force [N]", "torque [N m]") and ax.get_legend() is not None for ax in axes)
     rod = next(line for line in axes[0].lines if line.get_label() == "rod force, tool end")
     assert max(rod.get_ydata()) == pytest.approx(run.values["peak_rod_force_N"], rel=1e-12)
-    assert [p.name for p in plot_run(run, tmp_path)] == ["press_loads_cycle.png", "press_loads_loads.png"]
+    assert [p.name for p in plot_run(run, tmp_path)] == ["press_kd2322_cycle.png", "press_kd2322_loads.png"]
     kd = registry.run(registry.find("press/kd2322"))      # a plain steady state keeps its one figure
     assert set(kd.figures()) == {"cycle"}
