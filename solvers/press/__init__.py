@@ -11,14 +11,16 @@ Every result reports the energy balance over the run (motor work = cutting + fri
 damping work + change of kinetic and potential energy; `energy_residual`, relative), the events
 located, the speed fluctuation coefficient and the peaks of force, Q and belt torque, and carries
 the run's samples in `Result.arrays` (`t_s`, the states, `cutting`, the outputs).
+`loads` (loads.py) adds the peaks of the loads a designer sizes parts with (Figs. 9-10).
 `force_fit.fit_force` fits the force law (1) to load-travel data.
 """
 from mechopt.solvers.press.event_driven import events
 from mechopt.solvers.press.fixed_step import rk4
+from mechopt.solvers.press.loads import loads
 from mechopt.solvers.press.periodic import steady_state
 from mechopt.solvers.press.scipy_peer import ivp
 
-__all__ = ["rk4", "events", "steady_state", "ivp", "simulate", "METHODS"]
+__all__ = ["rk4", "events", "steady_state", "ivp", "loads", "simulate", "METHODS"]
 
 METHODS = {"rk4": rk4, "events": events, "steady_state": steady_state, "ivp": ivp}
 

@@ -41,4 +41,47 @@ def cycle(run):
     for a in ax.ravel():
         a.grid(alpha=0.3)
     fig.suptitle(f"{run.scene.id}: {run.result.status.value}", fontsize=10)
-    return {"cycle": fig}
+    figures = {"cycle": fig}
+    if "peak_rod_force_N" in run.result.values:         # the loads of one steady revolution (press.loads)
+        figures["loads"] = _loads(run, np.degrees(run.result.arrays["phi_rad"]))     # 0 to 360, not wrapped
+    return figures
+
+
+def _loads(run, phi_deg):
+    """Forces and torques against crank angle over the revolution and against tool travel (down and
+    up strokes apart), the cut's Q readings as in Figs. 9-10; the peaks marked."""
+    a, v = run.result.arrays, run.result.values
+    X = a["travel_mm"]
+    down = np.gradient(X) >= 0
+    forces = [("rod_force_N", "rod force, tool end"), ("main_bearing_load_N", "main-bearing load |pin force|"),
+              ("Q_N", "Q = F + m (X'' - g), our reading of Figs. 9-10"), ("force_N", "F, eq. (1)")]
+    torques = [("crank_torque_Nm", "crank torque (shaft to linkage)"), ("belt_torque_Nm", "belt torque"),
+               ("motor_torque_Nm", "motor torque, reduced to the crank")]
+    fig = new_figure(figsize=(12, 8))
+    ax = fig.subplots(2, 2)
+    for key, label in forces:
+        ax[0, 0].plot(phi_deg, a[key], lw=1, label=label)
+        ax[1, 0].plot(np.where(down, X, np.nan), a[key], lw=1, label=f"{label} (down)")
+    for key, label in torques:
+        ax[0, 1].plot(phi_deg, a[key], lw=1, label=label)
+        ax[1, 1].plot(np.where(down, X, np.nan), a[key], lw=1, label=f"{label} (down)")
+        ax[1, 1].plot(np.where(down, np.nan, X), a[key], lw=1, ls="--", label=f"{label} (up)")
+    ax[0, 0].plot(v["peak_rod_force_at_deg"], v["peak_rod_force_N"], "kv", label="peak rod force")
+    ax[0, 1].plot(v["peak_crank_torque_at_deg"], v["peak_crank_torque_Nm"], "kv", label="peak crank torque")
+    ax[1, 0].plot(v["peak_rod_force_at_mm"], v["peak_rod_force_N"], "kv", label="peak rod force")
+    for row in ax:
+        row[0].set_ylabel("force [N]")
+        row[1].set_ylabel("torque [N m]")
+    for a_ in ax[0]:
+        a_.set_xlabel("crank angle from top dead centre [deg]")
+    for a_ in ax[1]:
+        a_.set_xlabel("tool travel X [mm]")
+    ax[0, 0].set_title("forces over the revolution")
+    ax[0, 1].set_title("torques over the revolution")
+    ax[1, 0].set_title("forces against tool travel, down stroke (Figs. 9-10)")
+    ax[1, 1].set_title("torques against tool travel")
+    for a_ in ax.ravel():
+        a_.grid(alpha=0.3)
+        a_.legend(fontsize=7)
+    fig.suptitle(f"{run.scene.id}: loads over one steady revolution ({run.result.status.value})", fontsize=10)
+    return fig
