@@ -140,7 +140,7 @@ def plot(rows, out_dir):
 
 
 def cli(repeats, out_dir, progress=None) -> str:
-    """What `mechopt bench rebound` prints: per-evaluation table, the 10^6-point sweep, the plot."""
+    """What `mechopt bench stop-impact` prints: per-evaluation table, the 10^6-point sweep, the plot."""
     rows = evaluations(repeats=repeats, progress=progress)
     swept = sweep(repeats=max(1, min(repeats, 3)), progress=progress)
     return "\n".join([table(rows), "", sweep_table(swept), *(f"plot: {p}" for p in plot(rows, out_dir))])

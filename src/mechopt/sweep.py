@@ -49,6 +49,7 @@ import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
 from mechopt import registry
+from mechopt.files import write_bytes_atomic
 from mechopt.models.cache import BuildCache
 from mechopt.models.errors import MechoptError, SceneError, SolverError
 from mechopt.scene import Scene, loads, solver_options, task_fields
@@ -481,8 +482,8 @@ class _Store:
         sink = pa.BufferOutputStream()
         pq.write_table(_table(rows, _keys(self.meta), self.meta), sink)
         data = sink.getvalue().to_pybytes()
-        _write_atomic(path, data)      # a part is whole or absent, even if the sweep is killed mid-write
-        _write_atomic(path.with_name(path.name + ".sha256"),
+        write_bytes_atomic(path, data)      # a part is whole or absent, even if the sweep is killed mid-write
+        write_bytes_atomic(path.with_name(path.name + ".sha256"),
                       f"{hashlib.sha256(data).hexdigest()} {len(rows)}\n".encode())
 
     def consolidate(self) -> pa.Table:
@@ -501,7 +502,7 @@ class _Store:
             {META_KEY: json.dumps(self.meta, sort_keys=True).encode()})
         sink = pa.BufferOutputStream()
         pq.write_table(table, sink)
-        _write_atomic(self.path, sink.getvalue().to_pybytes())
+        write_bytes_atomic(self.path, sink.getvalue().to_pybytes())
         shutil.rmtree(self.parts, ignore_errors=True)     # all of it is in the file now
         return table
 
@@ -517,21 +518,6 @@ def _unique_variants(table):
     variants = table.column("variant").to_numpy()
     _, first = np.unique(variants, return_index=True)
     return table if len(first) == len(variants) else table.take(np.sort(first))
-
-
-def _write_atomic(path: Path, data: bytes):
-    """`data` into `path` whole or not at all: a temporary file beside it, fsynced, renamed over it."""
-    tmp = path.with_name(path.name + f".{os.getpid()}.tmp")
-    with open(tmp, "wb") as f:
-        f.write(data)
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
-    folder = os.open(path.parent, os.O_RDONLY)
-    try:
-        os.fsync(folder)               # the rename itself survives a power cut
-    finally:
-        os.close(folder)
 
 
 def _on_dask(client, source, chunks, lost):
