@@ -228,6 +228,10 @@ def sensitivity(task: PressDrive, *, tol: Tolerance = 1e-10, max_iter: Annotated
     y = y.ravel()
     if status is Status.SOLVED and miss > 1e3 * tol:
         status = Status.INACCURATE
+    strayed = [e[0] for k, e in enumerate(orbit.extremes) if e[3] is None
+               and not orbit.bounds[e[2]] <= orbit_z[orbit.m + k] <= orbit.bounds[e[2] + 1]]
+    if status is Status.SOLVED and strayed:     # its condition was solved on the wrong piece's equations
+        status = Status.INACCURATE
     elasticity = D * values0[None, :] / np.where(y == 0, np.inf, y)[:, None]
     rows = [*names, ROD_SIGN]
     values = dict(zip(OUTPUTS, map(float, y)))
@@ -259,7 +263,10 @@ def sensitivity(task: PressDrive, *, tol: Tolerance = 1e-10, max_iter: Annotated
     message = (f"d(output)/d(parameter) through the periodic orbit ({diagnostics['newton_iterations']} Newton "
                f"iterations, residual {miss:.3g}); largest |elasticity| of the speed fluctuation: "
                f"{rows[int(np.argmax(np.abs(elasticity[0])))]} ({np.max(np.abs(elasticity[0])):.3g})")
-    if status is not Status.SOLVED:
+    if strayed:
+        message = (f"the extremes {', '.join(strayed)} left the piece of the revolution they were sampled on: "
+                   "their derivatives are not to trust")
+    if status is not Status.SOLVED and not strayed:
         message = f"the orbit's rootfinder stopped after {iterations} iterations (residual {miss:.3g}): not to trust"
     return Result(status, values, Timing(build, time.perf_counter() - t_start - build), message, (), diagnostics,
                   arrays)
