@@ -95,3 +95,17 @@ def test_without_the_motor_the_sensitivity_is_refused_naming_the_key():
                                 motor_breakdown_slip=None)
     with pytest.raises(ModelError, match=r"effects lack 'motor_characteristic'"):
         sensitivity(ideal)
+
+
+def test_the_elasticities_figure_has_a_bar_per_parameter_and_a_panel_per_output_that_moves(checked, tmp_path):
+    from mechopt.figures.press import elasticities
+    from mechopt.registry import Run
+    run = Run(registry.find("press/sensitivity"), checked, [], task=PAPER)
+    fig = elasticities(run)["elasticities"]
+    assert len(fig.axes) == len(OUTPUTS) - 1                       # the cut work moves with none of them
+    bars = fig.axes[0].patches
+    assert len(bars) == len(checked.diagnostics["parameters"])
+    assert sorted(abs(b.get_width()) for b in bars) == pytest.approx(
+        sorted(np.abs(checked.arrays["elasticity_speed_fluctuation"])), rel=1e-12)
+    fig.savefig(tmp_path / "e.png")
+    assert (tmp_path / "e.png").stat().st_size > 20_000
