@@ -85,3 +85,25 @@ def _loads(run, phi_deg):
         a_.legend(fontsize=7)
     fig.suptitle(f"{run.scene.id}: loads over one steady revolution ({run.result.status.value})", fontsize=10)
     return fig
+
+
+def elasticities(run):
+    """Bar chart of the elasticities (p / y) dy/dp of press.sensitivity: one panel per output, one bar
+    per assumed parameter, longest first in the speed fluctuation's panel."""
+    a, rows = run.result.arrays, run.result.diagnostics.get("parameters", [])
+    outputs = [k.removeprefix("elasticity_") for k in a if k.startswith("elasticity_")
+               and np.any(a[k] != 0)]                          # an output no parameter moves has no panel
+    if not rows or not outputs:
+        return {}
+    order = np.argsort(np.abs(a["elasticity_speed_fluctuation"]))
+    fig = new_figure(figsize=(4 * len(outputs), 6))
+    for ax, name in zip(fig.subplots(1, len(outputs), sharey=True), outputs):
+        ax.barh(np.arange(len(rows)), a[f"elasticity_{name}"][order])
+        ax.set_title(name, fontsize=9)
+        ax.axvline(0, color="k", lw=0.5)
+        ax.grid(alpha=0.3, axis="x")
+    fig.axes[0].set_yticks(np.arange(len(rows)), [rows[i] for i in order], fontsize=8)
+    fig.supxlabel("elasticity: % change of the output per % change of the parameter")
+    fig.suptitle(f"{run.scene.id}: what the periodic motion owes to each assumed value "
+                 f"({run.result.status.value})", fontsize=10)
+    return {"elasticities": fig}

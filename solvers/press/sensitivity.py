@@ -1,0 +1,274 @@
+"""How much each assumed parameter moves the press's periodic motion: d(output)/d(parameter) by
+CasADi AD through the periodic solution (the implicit function theorem of CasADi's rootfinder).
+
+The unknowns are the periodic orbit's states at phi = 0 and the crank angles of the extremes
+(slowest and fastest crank speed, peak belt torque); the residuals are periodicity over the
+revolution (three CVODES pieces in the crank angle, as `steady_state` has them) and d(g)/d(phi) = 0
+at each extreme. The rootfinder's derivatives with respect to the parameters are then exact to
+the integration tolerance: the speed fluctuation (omega_max - omega_min) / omega_mean, the angle
+of the slowest speed, the peak belt torque, the mean crank speed and the works of a revolution.
+"""
+import time
+from dataclasses import fields
+from types import SimpleNamespace
+
+import casadi as ca
+import numpy as np
+
+from mechopt.models.errors import ModelError
+from mechopt.models.press import PressDrive, cutting_force_N, kloss_torque_Nm, rod_middle_m, travel_m
+from mechopt.solvers.press.common import TWO_PI, check_task
+from mechopt.solvers.press.periodic import steady_state
+from mechopt.solvers.result import Result, Status, Timing, from_rootfinder
+from mechopt.solvers.settings import Annotated, Interval, Tolerance
+
+ROD_SIGN = "rod_weight_sign"        # +1: the rod's weight helps on the way down (the model's reading); -1: the table's
+OUTPUTS = ("speed_fluctuation", "omega_min_deg", "peak_belt_torque_Nm", "omega_mean_rad_s", "cut_work_J",
+           "motor_work_J")
+_BY_EFFECT = {"belt_elasticity": ("belt_stiffness_Nm_rad", "belt_damping_Nms_rad"),
+              "friction": ("friction_torque_Nm",),
+              "motor_characteristic": ("motor_breakdown_torque_Nm", "motor_breakdown_slip", "motor_sync_speed_rad_s")}
+_ALWAYS = ("flywheel_inertia_kgm2", "tool_mass_kg", "rod_mass_kg", "crank_mass_kg", "motor_inertia_kgm2",
+           "gear_ratio")
+
+
+def assumed_parameters(task: PressDrive) -> tuple[str, ...]:
+    """The parameters the paper does not give that the task's effects use (and the calibrated gear ratio)."""
+    names = list(_ALWAYS)
+    for effect, keys in _BY_EFFECT.items():
+        if effect in task.effects:
+            names += keys
+    return tuple(names)
+
+
+def _parametric_rhs(task: PressDrive, names):
+    """Eqs. (2) for forward motion (friction sign +1, not stuck) with `names` (and `ROD_SIGN`) as the
+    input p: f(x, U, p) -> (dx/dt, belt torque), x = the task's states then motor and cut work.
+    It restates `models.press.dynamics` with the task's numbers as symbols (CasADi refuses free
+    symbols in a Function); a test holds the two equal."""
+    p = ca.SX.sym("p", len(names) + 1)
+    t = SimpleNamespace(**{f.name: getattr(task, f.name) for f in fields(task)})
+    for name, sym in zip(names, ca.vertsplit(p)):
+        setattr(t, name, sym)
+    rod_sign = p[-1]
+    x = ca.SX.sym("x", len(task.state_names) + 2)
+    U = ca.SX.sym("U")
+    s = dict(zip(task.state_names, ca.vertsplit(x)))
+    phi, w = s["phi_rad"], s["omega_rad_s"]
+    r, lam, kin = task.r_m, task.rod_ratio, task.kinematics
+
+    X = travel_m(phi, r, lam, kin, ca)
+    dX = ca.jacobian(X, phi)
+    xm, ym = rod_middle_m(phi, r, lam, kin, ca)
+    J = (t.flywheel_inertia_kgm2 + r**2 * t.crank_mass_kg + t.tool_mass_kg * dX**2
+         + t.rod_mass_kg * (ca.jacobian(xm, phi) ** 2 + ca.jacobian(ym, phi) ** 2))
+    if "variable_inertia" in task.effects:
+        dJ = ca.jacobian(J, phi)
+    else:                   # the mean over a revolution, as the model takes it
+        grid = np.linspace(0, 2 * np.pi, 720, endpoint=False)
+        J = ca.sum1(ca.vertcat(*[ca.substitute(J, phi, a) for a in grid])) / len(grid)
+        dJ = 0.0
+    moment = 0.0
+    if "gravity" in task.effects:
+        potential = -t.gravity_m_s2 * (t.tool_mass_kg * X + rod_sign * t.rod_mass_kg * ym)
+        moment = -ca.jacobian(potential, phi)
+    force = 0.0
+    if task.cutting:
+        penetration_mm = X * 1000 - (task.stroke_mm - task.blank_thickness_mm - task.shortfall_mm)
+        force = U * cutting_force_N(penetration_mm, task.force_c1_N_mm, task.force_c2_N_mm2, task.force_c3_N_mm3,
+                                    task.force_c4_N_mm4)
+    friction = t.friction_torque_Nm if task.friction else 0.0
+    j_motor = t.motor_inertia_kgm2 * t.gear_ratio**2
+    if task.motor:
+        w_p = s["omega_p_rad_s"] if task.belt else w
+        slip = 1 - t.gear_ratio * w_p / t.motor_sync_speed_rad_s
+        motor = t.gear_ratio * kloss_torque_Nm(slip, t.motor_breakdown_torque_Nm, t.motor_breakdown_slip)
+    else:
+        w_p, motor = task.nominal_speed_rad_s, 0.0
+    if task.belt:
+        belt = t.belt_stiffness_Nm_rad * s["twist_rad"] + t.belt_damping_Nms_rad * (w_p - w)
+        J_total = J
+    else:
+        belt, J_total = motor, J + j_motor
+    acc = (belt + moment - force * dX - friction - 0.5 * dJ * w**2) / J_total
+    derivs = {"phi_rad": w, "omega_rad_s": acc, "twist_rad": w_p - w,
+              "omega_p_rad_s": (motor - belt) / j_motor if task.motor and task.belt else 0.0}
+    power = (motor if task.motor else belt) * w_p
+    xdot = ca.vertcat(*[derivs[k] for k in task.state_names], power, force * dX * w)
+    return ca.Function("rhs_p", [x, U, p], [xdot, belt]), p.numel()
+
+
+class _Orbit:
+    """The periodic orbit and its extremes as a rootfinder in (orbit unknowns z; parameters p)."""
+
+    def __init__(self, task, names, tol, guess_arrays):
+        rhs, n_p = _parametric_rhs(task, names)
+        n = len(task.state_names)
+        self.iphi, self.iw = task.state_names.index("phi_rad"), task.state_names.index("omega_rad_s")
+        keep = [i for i in range(n) if i != self.iphi]
+        self.m = len(keep)
+        # one CVODES piece in s in [0, 1] over crank angles a..b: d/ds = (b - a) d/dphi = (b - a) (d/dt) / omega
+        y = ca.SX.sym("y", self.m + 3)                 # other states, time, motor work, cut work
+        s, q = ca.SX.sym("s"), ca.SX.sym("q", 3 + n_p)  # q = (a, b, U, p)
+        a, b, U, p = q[0], q[1], q[2], q[3:]
+        phi = a + s * (b - a)
+        x = ca.vertcat(*[y[keep.index(i)] if i != self.iphi else phi for i in range(n)], y[self.m + 1:])
+        xdot, _ = rhs(x, U, p)
+        dy = ca.vertcat(*[xdot[i] for i in keep], 1, xdot[n:]) / x[self.iw]
+        self.piece = ca.integrator("piece", "cvodes", {"x": y, "t": s, "p": q, "ode": (b - a) * dy}, 0.0, 1.0,
+                                   {"abstol": tol, "reltol": tol, "max_num_steps": 100000})
+        # d(g)/d(phi) along the motion for g = crank speed and belt torque (x_full with its derivative)
+        xf, pf, Uf = ca.SX.sym("xf", n + 2), ca.SX.sym("pf", n_p), ca.SX.sym("Uf")
+        xdot, belt = rhs(xf, Uf, pf)
+        self.g = ca.Function("g", [xf, Uf, pf], [ca.vertcat(xf[self.iw], belt),
+                                                 ca.jtimes(ca.vertcat(xf[self.iw], belt), xf, xdot)])
+        self.keep, self.n = keep, n
+        window = task.cut_window_rad()
+        self.bounds = [0.0, *window, TWO_PI] if window is not None and window[0] < window[1] else [0.0, TWO_PI]
+        self.extremes = self._classify(guess_arrays)
+
+    def _classify(self, arrays):
+        """(name, sign, piece, fixed angle or None, guess) of each extreme from the sampled orbit."""
+        phi = np.asarray(arrays["phi_rad"]) % TWO_PI
+        phi[-1] = TWO_PI if phi[-1] < 1e-9 else phi[-1]
+        out = []
+        for name, series, sign in (("omega_min", arrays["omega_rad_s"], -1.0), ("omega_max", arrays["omega_rad_s"], 1.0),
+                                   ("belt_peak", arrays["belt_torque_Nm"], None)):
+            series = np.asarray(series)
+            sign = sign if sign is not None else (1.0 if abs(series.max()) >= abs(series.min()) else -1.0)
+            k = int(np.argmax(sign * series))
+            angle = float(phi[k])
+            on_bound = [bd for bd in self.bounds if abs(angle - bd) < 1e-9]
+            piece = max(j for j in range(len(self.bounds) - 1) if self.bounds[j] <= angle + 1e-12)
+            piece = min(piece, len(self.bounds) - 2)
+            out.append((name, sign, piece, on_bound[0] if on_bound else None, angle))
+        return out
+
+    def residual_and_outputs(self, z, p):
+        """(residual, outputs) as MX of the unknowns z = (orbit states at phi = 0, extreme angles) and p."""
+        y0 = z[:self.m]
+        y = ca.vertcat(y0, ca.MX.zeros(3))
+        starts = []
+        for j, (a, b) in enumerate(zip(self.bounds[:-1], self.bounds[1:])):
+            starts.append(y)
+            u = float(len(self.bounds) == 4 and j == 1)
+            y = self.piece(x0=y, p=ca.vertcat(a, b, u, p))["xf"]
+        residual = [y[:self.m] - y0]
+        values = {}
+        for k, (name, sign, piece, fixed, _) in enumerate(self.extremes):
+            angle = z[self.m + k]
+            a = self.bounds[piece]
+            u = float(len(self.bounds) == 4 and piece == 1)
+            ya = self.piece(x0=starts[piece], p=ca.vertcat(a, angle, u, p))["xf"]
+            x = ca.vertcat(*[ya[self.keep.index(i)] if i != self.iphi else angle for i in range(self.n)],
+                           ya[self.m + 1:])
+            g, dg = self.g(x, u, p)
+            which = 0 if name.startswith("omega") else 1
+            # d(g)/d(phi) relative to g: the angle rows weigh like the periodicity rows
+            residual.append(angle - fixed if fixed is not None else dg[which] / (x[self.iw] * g[which]))
+            values[name] = sign * g[which] if name == "belt_peak" else g[which]
+            values[name + "_angle"] = angle
+        period = y[self.m]
+        mean = TWO_PI / period
+        outputs = ca.vertcat((values["omega_max"] - values["omega_min"]) / mean, values["omega_min_angle"] * 180 / np.pi,
+                             values["belt_peak"], mean, y[self.m + 2], y[self.m + 1])
+        return ca.vertcat(*residual), outputs
+
+
+def sensitivity(task: PressDrive, *, tol: Tolerance = 1e-10, max_iter: Annotated[int, Interval(ge=1, le=100)] = 30,
+                verify_step: Annotated[float, Interval(ge=0, le=0.1)] = 0.0) -> Result:
+    """d(output)/d(parameter) of the periodic steady motion, by CasADi AD (implicit function theorem
+    through the rootfinder), for every assumed parameter (`assumed_parameters`) and the rod-weight
+    sign reading.
+
+    Outputs (`OUTPUTS`): speed fluctuation (omega_max - omega_min) / omega_mean, crank angle of the
+    slowest speed [deg], peak belt torque [N m] (the reduced motor torque without a belt), mean crank
+    speed [rad/s], cut work and motor work of a revolution [J]. `arrays` hold the table, one row per
+    parameter (`diagnostics["parameters"]` names them): `d_<output>` and `elasticity_<output>`
+    (p/y dy/dp: 0.1 means 1 % more of the parameter gives 0.1 % more output). `values` hold the
+    outputs, the speed fluctuation's elasticities, the fluctuation under the other rod-weight reading
+    and the slide's weight swing m_tool g H. With `verify_step` > 0 every derivative is also taken by
+    central differences of re-solves at p (1 +- verify_step): `ad_fd_mismatch` is the largest
+    gap between the two elasticities (arrays `fd_elasticity_<output>`).
+
+    Parameters
+    ----------
+    tol : CVODES tolerance (the orbit's periodicity to 100 tol).  max_iter : Newton iterations.
+    verify_step : relative step of the finite-difference check (0: none).
+    """
+    check_task(task)
+    if not task.motor:
+        raise ModelError("effects lack 'motor_characteristic': without the motor the crank's mean speed is "
+                         "not set by the drive; add the effect", key="effects")
+    t_start = time.perf_counter()
+    base = steady_state(task, tol=tol, samples=200)
+    if base.status is not Status.SOLVED:
+        return Result(base.status, base.values, base.timing, f"no periodic orbit to differentiate: {base.message}",
+                      base.violated, base.diagnostics)
+    names = assumed_parameters(task)
+    orbit = _Orbit(task, names, tol, base.arrays)
+    n_p = len(names) + 1
+    z, p = ca.MX.sym("z", orbit.m + 3), ca.MX.sym("p", n_p)
+    residual, outputs = orbit.residual_and_outputs(z, p)
+    rf = ca.rootfinder("orbit", "newton", ca.Function("G", [z, p], [residual]),
+                       {"max_iter": max_iter, "error_on_fail": False, "abstol": 100 * tol})
+    z0, p0 = ca.MX.sym("z0", orbit.m + 3), ca.MX.sym("p0", n_p)
+    zs = rf(z0, p0)
+    out = ca.Function("out", [z, p], [outputs])(zs, p0)
+    solve = ca.Function("solve", [z0, p0], [out, zs])
+    derivative = ca.Function("derivative", [z0, p0], [out, ca.jacobian(out, p0)])
+    guess = np.r_[base.diagnostics["initial_state"], [e[3] if e[3] is not None else e[4] for e in orbit.extremes]]
+    values0 = np.r_[[getattr(task, k) for k in names], 1.0]
+    build = time.perf_counter() - t_start
+    orbit_z = np.asarray(rf(guess, values0)).ravel()
+    status, iterations = from_rootfinder(rf.stats()["return_status"]), rf.stats()["iter_count"]
+    periodic = ca.Function("G", [z, p], [residual])
+    miss = float(np.max(np.abs(np.asarray(periodic(orbit_z, values0)))))
+    guess = orbit_z             # the derivatives and re-solves start on the orbit
+    y, D = (np.asarray(v) for v in derivative(guess, values0))
+    y = y.ravel()
+    if status is Status.SOLVED and miss > 1e3 * tol:
+        status = Status.INACCURATE
+    strayed = [e[0] for k, e in enumerate(orbit.extremes) if e[3] is None
+               and not orbit.bounds[e[2]] <= orbit_z[orbit.m + k] <= orbit.bounds[e[2] + 1]]
+    if status is Status.SOLVED and strayed:     # its condition was solved on the wrong piece's equations
+        status = Status.INACCURATE
+    elasticity = D * values0[None, :] / np.where(y == 0, np.inf, y)[:, None]
+    rows = [*names, ROD_SIGN]
+    values = dict(zip(OUTPUTS, map(float, y)))
+    values |= {f"speed_fluctuation_elasticity_{k}": float(elasticity[0, i]) for i, k in enumerate(rows)}
+    opposing, z_opposing = (np.asarray(v).ravel() for v in solve(guess, np.r_[values0[:-1], -1.0]))
+    if np.max(np.abs(np.asarray(periodic(z_opposing, np.r_[values0[:-1], -1.0])))) <= 1e3 * tol:
+        values["speed_fluctuation_rod_weight_opposing"] = float(opposing[0])    # else left out: no orbit found
+        values["rod_weight_reading_spread"] = float(opposing[0] / y[0] - 1)
+    g = task.gravity_m_s2 if "gravity" in task.effects else 0.0
+    values["slide_weight_swing_J"] = float(task.tool_mass_kg * g * (task.travel(np.pi) - task.travel(0.0)))
+    values["periodicity_residual"] = miss
+    diagnostics = {"parameters": rows, "parameter_values": values0.tolist(), "outputs": list(OUTPUTS),
+                   "extremes": {e[0]: ("kink at an event" if e[3] is not None else "smooth") for e in orbit.extremes},
+                   "newton_iterations": iterations}
+    arrays = {"parameter_value": values0}
+    for j, name in enumerate(OUTPUTS):
+        arrays[f"d_{name}"] = D[j]
+        arrays[f"elasticity_{name}"] = elasticity[j]
+    if verify_step > 0:
+        fd = np.empty_like(D)
+        for i in range(n_p):
+            step = verify_step * (values0[i] if values0[i] != 0 else 1.0)
+            up, down = values0.copy(), values0.copy()
+            up[i] += step
+            down[i] -= step
+            fd[:, i] = (np.asarray(solve(guess, up)[0]).ravel() - np.asarray(solve(guess, down)[0]).ravel()) / (2 * step)
+        fd_elasticity = fd * values0[None, :] / np.where(y == 0, np.inf, y)[:, None]
+        values["ad_fd_mismatch"] = float(np.max(np.abs(fd_elasticity - elasticity)))
+        arrays |= {f"fd_elasticity_{name}": fd_elasticity[j] for j, name in enumerate(OUTPUTS)}
+    message = (f"d(output)/d(parameter) through the periodic orbit ({diagnostics['newton_iterations']} Newton "
+               f"iterations, residual {miss:.3g}); largest |elasticity| of the speed fluctuation: "
+               f"{rows[int(np.argmax(np.abs(elasticity[0])))]} ({np.max(np.abs(elasticity[0])):.3g})")
+    if strayed:
+        message = (f"the extremes {', '.join(strayed)} left the piece of the revolution they were sampled on: "
+                   "their derivatives are not to trust")
+    if status is not Status.SOLVED and not strayed:
+        message = f"the orbit's rootfinder stopped after {iterations} iterations (residual {miss:.3g}): not to trust"
+    return Result(status, values, Timing(build, time.perf_counter() - t_start - build), message, (), diagnostics,
+                  arrays)
