@@ -91,7 +91,7 @@ def own(tmp_path, monkeypatch):
     copy_scene("cam-cutter/pure-cardioid", folder, "my/cardioid-30", [("a_mm = { value = 25.0", "a_mm = { value = 30.0")])
     (folder / "loom-six.toml").write_text(SIX_EVENTS, encoding="utf-8")
     copy_scene("press/kd2322", folder, "my/press-heavy-flywheel",
-               [("flywheel_inertia_kgm2 = { value = 2.0", "flywheel_inertia_kgm2 = { value = 3.0")])
+               [("flywheel_inertia_kgm2 = { value = 5.0", "flywheel_inertia_kgm2 = { value = 7.5")])
     monkeypatch.setattr(registry, "_USER_FOLDERS", [])
     mechopt.clear_caches()
     yield folder
