@@ -75,7 +75,7 @@ def _build(law, points, reltol):
             ca.integrator("cam_end", "cvodes", dae, 0.0, 1.0, opts))
 
 
-def follow_cam(task: LeverStop, speed_rpm, t_deg=None, *, reltol: float = 1e-10, points: int = 201) -> CamRise:
+def follow_cam(task: LeverStop, speed_rpm, t_deg=None, *, reltol: float = 1e-10, points: int = 1001) -> CamRise:
     """One rise of the lift cam at `speed_rpm` over the phase angle `t_deg` (the task's by default).
 
     Returns a `CamRise`; its status is SOLVED, INFEASIBLE when the roller leaves the cam (the
@@ -137,7 +137,18 @@ def follow_cam(task: LeverStop, speed_rpm, t_deg=None, *, reltol: float = 1e-10,
                    f"{task.closure_force_N:g} does not hold it")
     v0 = float(dX[-1]) * H / T if contact is not None else 0.0
     return CamRise(float(speed_rpm), float(t_deg), xi, X, dX, ddX, contact, v0,
-                   float(np.max(np.abs(e))) * H * 1e3, float(force.min()), leaves, status, message, build_s)
+                   _largest(xi, e, de, dde) * H * 1e3, float(force.min()), leaves, status, message, build_s)
+
+
+def _largest(xi, e, de, dde):
+    """max |e| over the samples, polished by one Taylor step to e' = 0 inside the sample's cells
+    (the error of the step is (lambda dxi)^3 / 6 relative, below 1e-6 at 1001 samples)."""
+    i = int(np.argmax(np.abs(e)))
+    best = abs(float(e[i]))
+    if 0 < i < xi.size - 1 and dde[i] != 0:
+        step = float(np.clip(-de[i] / dde[i], xi[i - 1] - xi[i], xi[i + 1] - xi[i]))
+        best = max(best, abs(float(e[i] + de[i] * step + 0.5 * dde[i] * step * step)))
+    return best
 
 
 def _contact_force_N(task, H, T, ddX):

@@ -9,7 +9,7 @@ import numpy as np
 
 from mechopt.figures.registry import new_figure, register
 from mechopt.models.stop_impact import LeverStop
-from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
+from mechopt.solvers.stop_impact.law import impact_at, rebound_amplitude_mm
 from mechopt.solvers.stop_impact.response import closed_form_response
 
 
@@ -33,7 +33,7 @@ def _histories(run, speeds=None, limit_mm=None):
     fig = new_figure(figsize=(8, 4.5))
     ax = fig.subplots()
     for n in task.speeds_rpm if speeds is None else speeds:
-        imp = task.impact(n)
+        imp = impact_at(task, n)
         t = np.linspace(0.0, 3 * imp.window_s, 1500)
         ax.plot(t * 1e3, closed_form_response(imp, t)[0] * 1e3, lw=1.2, label=f"n = {n:g} rpm, t = {task.t_deg:g} deg")
     if limit_mm is not None:
