@@ -9,7 +9,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from mechopt.models.cam_follower import law_values
-from mechopt.models.errors import ModelError
+from mechopt.models.errors import ModelError, SolverError
 from mechopt.models.stop_impact import LeverStop
 from mechopt.solvers.result import Result, Status, Timing
 from mechopt.solvers.settings import Annotated, Interval, Tolerance
@@ -38,7 +38,8 @@ def natural_frequencies(task: LeverStop) -> Result:
 
 def impact_forces(task: LeverStop) -> Result:
     """Impact force F_ud = J_A omega_0 (1 + k) / (l tau) at each speed of `speeds_rpm`, with the
-    impulse S_C = F tau and the approach velocity; `impact_force_N_<rpm>` etc."""
+    impulse S_C = F tau, the approach velocity and the impulse over the lever's momentum m v0
+    (1 + k when J_A = m l^2: the plate reverses the momentum); `impact_force_N_<rpm>` etc."""
     task.need_effect("impact_pulse")
     _need_speeds(task)
     start = time.perf_counter()
@@ -47,7 +48,8 @@ def impact_forces(task: LeverStop) -> Result:
         v0 = approach_velocity_m_s(task, n)
         F = float(task.impact_force_N(v0))
         values |= {f"impact_force_N_{_tag(n)}": F, f"impulse_Ns_{_tag(n)}": F * task.contact_time_s,
-                   f"approach_velocity_m_s_{_tag(n)}": v0}
+                   f"approach_velocity_m_s_{_tag(n)}": v0,
+                   f"impulse_over_momentum_{_tag(n)}": F * task.contact_time_s / (task.mass_kg * v0)}
     return Result(Status.SOLVED, values, Timing(0.0, time.perf_counter() - start),
                   message="tau = half the natural period on the plate")
 
@@ -107,10 +109,7 @@ def linearise_amplitude(task: LeverStop) -> Result:
     limit = task.amplitude_limit_mm
     n = task.speed_nominal_rpm
     exact = lambda t: float(rebound_amplitude_mm(task, n, t)) - limit      # noqa: E731
-    lo, hi = 1e-3 * task.t_deg, 359.0
-    if exact(lo) < 0 or exact(hi) > 0:
-        raise ModelError(f"amplitude_limit_mm={limit}: a(t) at {n:g} rpm does not cross it for t in "
-                         f"({lo:g}, {hi:g}) deg", key="amplitude_limit_mm")
+    lo, hi = _bracket(exact, task.t_deg, limit, n)
     t_exact = brentq(exact, lo, hi, xtol=1e-12, rtol=1e-14)
     t_linear = (limit - intercept) / slope
     values = {"slope_mm_per_deg": slope, "intercept_mm": intercept, "t_3_7_min_deg": t_linear,
@@ -154,6 +153,29 @@ def operating_point(task: LeverStop) -> Result:
                   message=f"{amplitude_mm:.4g} mm at {n:g} rpm, t = {t:g} deg: "
                           f"{'within' if within else 'above'} amplitude_limit_mm={limit:g}; "
                           f"the ODE agrees to {spread:.1e}")
+
+
+def _bracket(excess, t_deg, limit, speed_rpm, factor=1.25, steps=40):
+    """(lo, hi) around the root of a(t) = limit, grown geometrically from t_deg (a falls with t)."""
+    lo = hi = t_deg
+    try:
+        if excess(t_deg) > 0:
+            for _ in range(steps):
+                hi = min(hi * factor, 359.0)
+                if excess(hi) <= 0:
+                    return lo, hi
+                lo = hi
+        else:
+            for _ in range(steps):
+                lo = lo / factor
+                if excess(lo) >= 0:
+                    return lo, hi
+                hi = lo
+    except SolverError as exc:          # e.g. the roller leaves its cam on the way: no exact bound there
+        raise ModelError(f"amplitude_limit_mm={limit}: no exact bound on t at {speed_rpm:g} rpm: {exc}",
+                         key="amplitude_limit_mm") from None
+    raise ModelError(f"amplitude_limit_mm={limit}: a(t) at {speed_rpm:g} rpm does not cross it for t in "
+                     f"({t_deg / factor**steps:g}, 359) deg", key="amplitude_limit_mm")
 
 
 def _by_closed_form(imp):
