@@ -13,7 +13,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mechopt import registry
+from stop_impact_fitted import fitted_task
 from mechopt.models.errors import ModelError
 from mechopt.models.stop_impact import Impact
 from mechopt.solvers.result import Status, from_casadi_integrator, from_quadpack
@@ -37,8 +37,9 @@ REBOUND_SCENES = ("stop-impact/rebound-280-420", "stop-impact/rebound-177rpm")
 
 
 def task_of(scene_id, **change):
-    task, _ = registry.find(scene_id).build()
-    return dataclasses.replace(task, **change) if change else task
+    """The earlier fitted reading of what the scene held (tests/stop_impact_fitted.py): eq. (2)'s
+    methods are pinned on it; the chain's scenes have tests/test_stop_impact_chain.py."""
+    return fitted_task(scene_id, **change)
 
 
 @pytest.fixture(scope="module")
