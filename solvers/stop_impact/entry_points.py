@@ -15,7 +15,13 @@ from mechopt.solvers.result import Result, Status, Timing
 from mechopt.solvers.settings import Annotated, Interval, Tolerance
 from mechopt.solvers.stop_impact.cam_follower import follow_cam, follow_cam_reference, follower_data
 from mechopt.solvers.stop_impact.contact import simulate_contact
-from mechopt.solvers.stop_impact.law import amplitude_law, approach_velocity_m_s, impact_at, rebound_amplitude_mm
+from mechopt.solvers.stop_impact.law import (
+    RollerLeftCam,
+    amplitude_law,
+    approach_velocity_m_s,
+    impact_at,
+    rebound_amplitude_mm,
+)
 from mechopt.solvers.stop_impact.response import closed_form_amplitude_m, ode_amplitude_m, quadrature_amplitude_m
 
 __all__ = ["natural_frequencies", "impact_forces", "rebound", "linearise_amplitude", "operating_point",
@@ -67,7 +73,10 @@ def rebound(task: LeverStop, *, method: Literal["closed_form", "quadrature", "od
     start = time.perf_counter()
     build_s, values, diagnostics, status, notes = 0.0, {}, {}, Status.SOLVED, []
     for n in task.speeds_rpm:
-        imp = impact_at(task, n)
+        try:
+            imp = impact_at(task, n)
+        except RollerLeftCam as exc:
+            return _without_cam(exc, values, Timing(build_s, time.perf_counter() - start - build_s))
         runs = {name: methods[name](imp) for name in ([method] + [k for k in methods if k != method]
                                                       if cross_check else [method])}
         build_s += sum(r[2] for r in runs.values())
@@ -130,8 +139,11 @@ def operating_point(task: LeverStop) -> Result:
     task.need("speed_nominal_rpm", "t_deg", "amplitude_limit_mm")
     start = time.perf_counter()
     n, t, limit = task.speed_nominal_rpm, task.t_deg, task.amplitude_limit_mm
+    try:
+        imp = impact_at(task, n)
+    except RollerLeftCam as exc:
+        return _without_cam(exc, {}, Timing(0.0, time.perf_counter() - start))
     amplitude_mm = float(rebound_amplitude_mm(task, n, t))
-    imp = impact_at(task, n)
     ode_m, ode_status, build_s = ode_amplitude_m(imp)
     values = {"rebound_mm": amplitude_mm, "margin_mm": limit - amplitude_mm,
               "approach_velocity_m_s": imp.v0_m_s, "contact_time_s": task.contact_time_s}
@@ -153,6 +165,13 @@ def operating_point(task: LeverStop) -> Result:
                   message=f"{amplitude_mm:.4g} mm at {n:g} rpm, t = {t:g} deg: "
                           f"{'within' if within else 'above'} amplitude_limit_mm={limit:g}; "
                           f"the ODE agrees to {spread:.1e}")
+
+
+def _without_cam(exc, values, timing):
+    """No rebound where the cam's rise fails: INFEASIBLE (violated cam_contact) when the roller
+    leaves its cam, else the integrator's status; the values found so far are kept."""
+    infeasible = exc.status is Status.INFEASIBLE
+    return Result(exc.status, values, timing, message=str(exc), violated=("cam_contact",) if infeasible else ())
 
 
 def _bracket(excess, t_deg, limit, speed_rpm, factor=1.25, steps=40):

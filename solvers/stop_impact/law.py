@@ -16,6 +16,15 @@ from mechopt.solvers.result import Status
 from mechopt.solvers.stop_impact.cam_follower import follow_cam
 from mechopt.solvers.stop_impact.response import closed_form_amplitude_m, response_parts
 
+class RollerLeftCam(SolverError):
+    """The cam's rise at some (n, t) is not SOLVED (the roller leaves its cam, or CVODES gave up):
+    no approach velocity, so no rebound. `status` says which."""
+
+    def __init__(self, message, status):
+        super().__init__(message)
+        self.status = status
+
+
 CHAIN_RELTOL = 1e-12            # CVODES on the rise for the law: its tangent is a difference quotient
 TANGENT_STEP_DEG = 1e-2         # central differences of a(t) at +-1, +-2 steps (fourth order)
 
@@ -28,7 +37,8 @@ def approach_velocity_m_s(task: LeverStop, speed_rpm: float, t_deg: float | None
         return float(task.approach_velocity_m_s(speed_rpm, t_deg))
     rise = follow_cam(task, speed_rpm, t_deg, reltol=CHAIN_RELTOL)
     if rise.status is not Status.SOLVED or rise.contact_xi is None:
-        raise SolverError(f"speed {speed_rpm:g} rpm, t = {rise.t_deg:g} deg: no approach velocity: {rise.message}")
+        raise RollerLeftCam(f"speed {speed_rpm:g} rpm, t = {rise.t_deg:g} deg: no approach velocity: {rise.message}",
+                            rise.status)
     return rise.approach_velocity_m_s
 
 
