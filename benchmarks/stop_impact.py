@@ -56,13 +56,13 @@ def evaluations(repeats=5, progress=None, quick=False):
         task, _ = registry.find(scene_id).build()
         imp = impact_at(task, speed)
         ode_amplitude_m(imp)                        # build the CVODES functions outside the timing
-        base_s, (ref, _) = _median_time(lambda: closed_form_amplitude_m(imp), repeats)
-        methods = [("closed form", "-", lambda: closed_form_amplitude_m(imp)[0])]
-        methods += [("quadrature", f"epsrel={e:g}", lambda e=e: quadrature_amplitude_m(imp, epsrel=e)[0])
+        base_s, (ref, _) = _median_time(lambda imp=imp: closed_form_amplitude_m(imp), repeats)
+        methods = [("closed form", "-", lambda imp=imp: closed_form_amplitude_m(imp)[0])]
+        methods += [("quadrature", f"epsrel={e:g}", lambda e=e, imp=imp: quadrature_amplitude_m(imp, epsrel=e)[0])
                     for e in QUAD_EPSREL[1::2 if quick else 1]]
         for r in ODE_RELTOL[1::2 if quick else 1]:
             ode_amplitude_m(imp, reltol=r)          # cached build
-            methods.append(("ODE (CVODES)", f"reltol={r:g}", lambda r=r: ode_amplitude_m(imp, reltol=r)[0]))
+            methods.append(("ODE (CVODES)", f"reltol={r:g}", lambda r=r, imp=imp: ode_amplitude_m(imp, reltol=r)[0]))
         for method, knob, call in methods:
             wall, amp = _median_time(call, repeats)
             rows.append({"case": case, "method": method, "knob": knob, "wall_s": wall, "amplitude_mm": amp * 1e3,
@@ -83,10 +83,11 @@ def cam_rows(repeats=5, progress=None, quick=False):
         ref = follow_cam_reference(task, speed, rtol=REFERENCE_RTOL)[1]
         for r in cvodes:
             follow_cam(task, speed, reltol=r)             # build the CVODES functions outside the timing
-        base_s, _ = _median_time(lambda: follow_cam(task, speed, reltol=1e-10), repeats)
-        runs = [("CVODES", f"reltol={r:g}", lambda r=r: follow_cam(task, speed, reltol=r).approach_velocity_m_s)
-                for r in cvodes]
-        runs += [("DOP853", f"rtol={r:g}", lambda r=r: follow_cam_reference(task, speed, rtol=r)[1]) for r in dop]
+        base_s, _ = _median_time(lambda speed=speed: follow_cam(task, speed, reltol=1e-10), repeats)
+        runs = [("CVODES", f"reltol={r:g}",
+                 lambda r=r, speed=speed: follow_cam(task, speed, reltol=r).approach_velocity_m_s) for r in cvodes]
+        runs += [("DOP853", f"rtol={r:g}", lambda r=r, speed=speed: follow_cam_reference(task, speed, rtol=r)[1])
+                 for r in dop]
         for method, knob, call in runs:
             wall, v0 = _median_time(call, repeats)
             rows.append({"case": f"rise {speed:g} rpm", "method": method, "knob": knob, "wall_s": wall,

@@ -20,10 +20,17 @@ Readings taken where the paper is silent or inconsistent (each pinned by a test)
   computes (both the arrested approach and the plate's push throw C back).
 * The Duhamel term runs over the whole pulse Q_F (rise to F at tau, fall to zero at 2 tau): its
   impulse is then F tau = S_C, as the paper's S_C = F tau says. The printed upper limit tau of
-  the integral (half the pulse, half the impulse) is read as a misprint.
-* Approach velocity: omega_0 l = v0 = velocity_factor * stroke * Omega / t, Omega = 2 pi n / 60
-  the main shaft's speed, t the phase angle of the lift's travel; for a given motion law the
-  velocity scales as n / t.
+  the integral (half the pulse, half the impulse) is read as a misprint. In the scenes' chain the
+  first rebound peaks at 0.29 ... 0.44 tau, before the pulse's top: both readings give it alike.
+* Approach velocity, two sources. With the effect `cam_drive` (the scenes' chain) the cam's rise
+  through the elastic lever gives v0 at the located contact with the plate (models/cam_follower.py,
+  solvers/stop_impact/cam_follower.py). Without it, the earlier fitted proportionality
+  v0 = velocity_factor * stroke * Omega / t (Omega = 2 pi n / 60, t the phase angle of the lift's
+  travel), kept for comparison: for one motion law on a rigid lever v0 scales as n / t.
+* J_A of S_C: m l^2 unless `inertia_A_kgm2` is given, the reduced mass at C seen from the pivot
+  A, so that mass, inertia and frequency belong to one lever; the pulse's impulse is then
+  (1 + k) m v0, the plate reversing the lever's momentum. (A separately fitted J_A = 1.9e-4 kg m^2,
+  172 times below m l^2, made F_ud = 4.137 N and the pulse carry 0.9 % of the momentum.)
 * Preload (effect `preload`): the cam drives the lever `preload_mm` past the plate; the moving
   lever (Fig. 5) holds that as a constant force P = c_free * preload pressing C onto the plate,
   a constant -P added to Q_F in eq. (2).
@@ -37,6 +44,7 @@ initial_velocity  q0' = omega_0 l: the arrested approach velocity of C          
 impact_pulse      the triangular force Q_F of peak F = J_A omega_0 (1+k)/(l tau)  S_C, F_ud, Fig. 7
 damping           viscous damping n = zeta omega_c                               eq. (1)-(2), n
 preload           constant force -c_free * preload_mm pressing C on the plate    Sec. Results (177 rpm)
+cam_drive         v0 from the cam law through the elastic lever; roller force   Fig. 4
 ================  ============================================================  ===============
 
 Units: the names say so (mm, GPa, kg, rpm, deg); the functions return SI (m, s, N, rad/s).
@@ -96,8 +104,11 @@ class LeverStop:
     t(3,7) at which rebounds are computed; `speeds_rpm` main-shaft speeds to report (structure);
     `speed_nominal_rpm`, `amplitude_limit_mm` the operating speed (where the amplitude law is
     linearised, where `operating_point` is measured) and the limit the rebound must keep;
-    `inertia_A_kgm2` J_A and `restitution` k (effect impact_pulse); `damping_ratio` zeta (effect
-    damping); `preload_mm` (effect preload); `effects` the effects the scene calls for (structure:
+    `restitution` k (effect impact_pulse) and `inertia_A_kgm2` J_A (optional: m l^2 when not
+    given); `damping_ratio` zeta (effect damping, of the link in the rise and of the plate);
+    `preload_mm` (effect preload); `closure_force_N` the force holding the roller on its cam and
+    `law` the cam's motion law (structure; effect cam_drive, which replaces `velocity_factor`);
+    `effects` the effects the scene calls for (structure:
     the scene's own list, repeated, until the spine hands it to the task).
     """
     E_GPa: float

@@ -62,7 +62,7 @@ def radau_rise(task, speed_rpm, law_of_xi):
 # ---------------------------------------------------------------- the rise, cross-checked
 
 def test_cycloidal_rise_meets_the_plate_where_an_independent_integrator_does(cam):
-    cycloid = lambda u: (u - math.sin(2 * math.pi * u) / (2 * math.pi), 1 - math.cos(2 * math.pi * u))  # noqa: E731
+    cycloid = lambda u: (u - math.sin(2 * math.pi * u) / (2 * math.pi), 1 - math.cos(2 * math.pi * u))
     for n in (280.0, 420.0):
         xi, v0 = radau_rise(cam, n, cycloid)
         rise = follow_cam(cam, n)
@@ -126,7 +126,7 @@ def test_a_plate_at_the_cams_end_is_met_by_the_overshoot(cam, law, speed_rpm, in
 def test_critical_and_overdamped_links_still_meet_the_plate(cam, zeta):
     task = dataclasses.replace(cam, damping_ratio=zeta)
     rise = follow_cam(task, 420.0)
-    xi, v0, status = follow_cam_reference(task, 420.0)
+    _, v0, status = follow_cam_reference(task, 420.0)
     assert rise.status is status is Status.SOLVED
     assert rise.approach_velocity_m_s == pytest.approx(v0, rel=1e-7)
     # the heavier the damping, the closer C keeps to the cam: the dynamic error falls
@@ -173,7 +173,7 @@ def test_one_lever_its_impulse_reverses_the_momentum(chain):
 
 
 def test_the_chains_rebound_is_eq_2_with_the_independently_integrated_approach_velocity(chain):
-    cycloid = lambda u: (u - math.sin(2 * math.pi * u) / (2 * math.pi), 1 - math.cos(2 * math.pi * u))  # noqa: E731
+    cycloid = lambda u: (u - math.sin(2 * math.pi * u) / (2 * math.pi), 1 - math.cos(2 * math.pi * u))
     for n, t in ((177.0, 35.0), (300.0, 42.0)):
         task = dataclasses.replace(chain, t_deg=t)
         _, v0 = radau_rise(task, n, cycloid)
@@ -193,7 +193,7 @@ def test_predictions_beside_the_published_rebounds(chain):
 
 def test_tangent_is_the_slope_of_the_exact_chain(chain):
     slope, intercept = amplitude_law(chain)
-    a = lambda t: float(rebound_amplitude_mm(chain, chain.speed_nominal_rpm, t))     # noqa: E731
+    a = lambda t: float(rebound_amplitude_mm(chain, chain.speed_nominal_rpm, t))
     secant = (a(chain.t_deg + 0.02) - a(chain.t_deg - 0.02)) / 0.04
     assert slope == pytest.approx(secant, rel=1e-3)
     # strongly curved at 420 rpm (the lever's dynamic error swings with t): the secant over +0.5 deg is 40 % flatter

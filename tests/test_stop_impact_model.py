@@ -12,11 +12,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.integrate import cumulative_trapezoid
+from stop_impact_fitted import fitted_task
 
 from mechopt import registry
 from mechopt.models.errors import ModelError, SceneError
 from mechopt.models.stop_impact import LeverStop, reduced_stiffness_N_per_m
-from stop_impact_fitted import fitted_task
 
 PROPERTY = settings(max_examples=25, deadline=None)
 F_FREE_HZ, F_FREE_EXPERIMENT_HZ = 297.0, 268.0          # Sec. Results

@@ -18,5 +18,11 @@ from mechopt.solvers.stop_impact.entry_points import (
                                                       rebound,
 )
 
-__all__ = ["natural_frequencies", "impact_forces", "rebound", "linearise_amplitude", "operating_point",
-           "cam_dynamics"]
+__all__ = [
+                                                      "cam_dynamics",
+                                                      "impact_forces",
+                                                      "linearise_amplitude",
+                                                      "natural_frequencies",
+                                                      "operating_point",
+                                                      "rebound",
+]

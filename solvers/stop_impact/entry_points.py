@@ -24,8 +24,14 @@ from mechopt.solvers.stop_impact.law import (
 )
 from mechopt.solvers.stop_impact.response import closed_form_amplitude_m, ode_amplitude_m, quadrature_amplitude_m
 
-__all__ = ["natural_frequencies", "impact_forces", "rebound", "linearise_amplitude", "operating_point",
-           "cam_dynamics"]
+__all__ = [
+    "cam_dynamics",
+    "impact_forces",
+    "linearise_amplitude",
+    "natural_frequencies",
+    "operating_point",
+    "rebound",
+]
 
 AGREEMENT_REL = 1e-8            # the three methods must agree this well on every scene
 CAM_AGREEMENT_REL = 1e-7        # CVODES (reltol 1e-10) and DOP853 (1e-12) on the approach velocity
@@ -117,7 +123,7 @@ def linearise_amplitude(task: LeverStop) -> Result:
     slope, intercept = amplitude_law(task)
     limit = task.amplitude_limit_mm
     n = task.speed_nominal_rpm
-    exact = lambda t: float(rebound_amplitude_mm(task, n, t)) - limit      # noqa: E731
+    exact = lambda t: float(rebound_amplitude_mm(task, n, t)) - limit
     lo, hi = _bracket(exact, task.t_deg, limit, n)
     t_exact = brentq(exact, lo, hi, xtol=1e-12, rtol=1e-14)
     t_linear = (limit - intercept) / slope
@@ -261,7 +267,7 @@ def cam_dynamics(task: LeverStop, *, reltol: Tolerance = 1e-10,
     arrays = {"phi_deg": nominal.xi * task.t_deg, "x_mm": nominal.X * H_mm, "s_mm": S * H_mm,
               "dx_dphi_mm_per_rad": nominal.dX * H_mm / rad, "d2x_dphi2_mm_per_rad2": nominal.ddX * H_mm / rad**2}
     ref_xi, ref_v0, ref_status = follow_cam_reference(task, task.speed_nominal_rpm)
-    timing = lambda: Timing(build_s, time.perf_counter() - start - build_s)      # noqa: E731
+    timing = lambda: Timing(build_s, time.perf_counter() - start - build_s)
     spread = abs(ref_v0 - nominal.approach_velocity_m_s) / max(abs(ref_v0), 1e-300)
     values["reference_rel_diff"] = spread
     if left:

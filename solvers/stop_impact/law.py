@@ -16,6 +16,7 @@ from mechopt.solvers.result import Status
 from mechopt.solvers.stop_impact.cam_follower import follow_cam
 from mechopt.solvers.stop_impact.response import closed_form_amplitude_m, response_parts
 
+
 class RollerLeftCam(SolverError):
     """The cam's rise at some (n, t) is not SOLVED (the roller leaves its cam, or CVODES gave up):
     no approach velocity, so no rebound. `status` says which."""
