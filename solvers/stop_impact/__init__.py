@@ -18,11 +18,4 @@ from mechopt.solvers.stop_impact.entry_points import (
                                                       rebound,
 )
 
-__all__ = [
-                                                      "cam_dynamics",
-                                                      "impact_forces",
-                                                      "linearise_amplitude",
-                                                      "natural_frequencies",
-                                                      "operating_point",
-                                                      "rebound",
-]
+__all__ = ["cam_dynamics", "impact_forces", "linearise_amplitude", "natural_frequencies", "operating_point", "rebound"]

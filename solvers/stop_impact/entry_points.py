@@ -24,14 +24,7 @@ from mechopt.solvers.stop_impact.law import (
 )
 from mechopt.solvers.stop_impact.response import closed_form_amplitude_m, ode_amplitude_m, quadrature_amplitude_m
 
-__all__ = [
-    "cam_dynamics",
-    "impact_forces",
-    "linearise_amplitude",
-    "natural_frequencies",
-    "operating_point",
-    "rebound",
-]
+__all__ = ["cam_dynamics", "impact_forces", "linearise_amplitude", "natural_frequencies", "operating_point", "rebound"]
 
 AGREEMENT_REL = 1e-8            # the three methods must agree this well on every scene
 CAM_AGREEMENT_REL = 1e-7        # CVODES (reltol 1e-10) and DOP853 (1e-12) on the approach velocity
