@@ -20,7 +20,13 @@ from mechopt.models.errors import ModelError, SceneError, SolverError
 from mechopt.models.stop_impact import LeverStop
 from mechopt.solvers.result import Status
 from mechopt.solvers.stop_impact.cam_follower import follow_cam, follow_cam_reference
-from mechopt.solvers.stop_impact.entry_points import _rigid_approach_m_s, cam_dynamics, impact_forces
+from mechopt.solvers.stop_impact.entry_points import (
+    _rigid_approach_m_s,
+    cam_dynamics,
+    impact_forces,
+    operating_point,
+    rebound,
+)
 from mechopt.solvers.stop_impact.law import amplitude_law, impact_at, rebound_amplitude_mm
 from mechopt.solvers.stop_impact.response import closed_form_amplitude_m
 
@@ -157,6 +163,15 @@ def test_a_follower_that_leaves_its_cam_is_infeasible_and_says_where(cam):
     with pytest.raises(SolverError, match=r"520 rpm.*the roller leaves the cam"):
         rebound_amplitude_mm(dataclasses.replace(registry.find("stop-impact/amplitude-law").build()[0]), 520.0,
                              cam.t_deg)
+
+
+def test_rebound_and_operating_point_say_so_when_the_roller_leaves_its_cam(chain):
+    result = rebound(dataclasses.replace(chain, speeds_rpm=(177.0, 600.0)), cross_check=False)
+    assert result.status is Status.INFEASIBLE and result.violated == ("cam_contact",)
+    assert "600 rpm" in result.message and set(result.values) == {"rebound_mm_177"}
+    point = operating_point(registry.find("stop-impact/rebound-map").build({"speed_nominal_rpm": 450.0,
+                                                                             "t_deg": 25.0})[0])
+    assert point.status is Status.INFEASIBLE and point.violated == ("cam_contact",) and not point.values
 
 
 # ---------------------------------------------------------------- the chain: impact and rebound

@@ -33,11 +33,11 @@ TANGENT_STEP_DEG = 1e-2         # central differences of a(t) at +-1, +-2 steps 
 def approach_velocity_m_s(task: LeverStop, speed_rpm: float, t_deg: float | None = None) -> float:
     """v0 at one speed [rpm] and phase angle [deg]: from the cam's rise with the effect
     `cam_drive` (a rise that is not SOLVED, e.g. the roller leaving its cam, is an error naming
-    it), else the task's fitted proportionality."""
+    it; a C that only settles onto its plate has v0 = 0), else the task's fitted proportionality."""
     if "cam_drive" not in task.effects:
         return float(task.approach_velocity_m_s(speed_rpm, t_deg))
     rise = follow_cam(task, speed_rpm, t_deg, reltol=CHAIN_RELTOL)
-    if rise.status is not Status.SOLVED or rise.contact_xi is None:
+    if rise.status is not Status.SOLVED:        # (no contact at all: C settles onto the plate, v0 = 0)
         raise RollerLeftCam(f"speed {speed_rpm:g} rpm, t = {rise.t_deg:g} deg: no approach velocity: {rise.message}",
                             rise.status)
     return rise.approach_velocity_m_s
