@@ -40,8 +40,7 @@ def _cam_rises(run):
     speeds = sorted({*task.speeds_rpm, task.speed_nominal_rpm})
     rad = np.radians(task.t_deg)
     scales = (task.stroke_mm, task.stroke_mm / rad, task.stroke_mm / rad**2)
-    labels = ("displacement analogue x [mm]", "velocity analogue dx/dphi [mm/rad]",
-              "acceleration analogue d2x/dphi2 [mm/rad^2]")
+    labels = ("displacement x [mm]", "velocity analogue\ndx/dphi [mm/rad]", "acceleration analogue\nd2x/dphi2 [mm/rad^2]")
     figs = [new_figure(figsize=(8, 9)) for _ in range(2)]
     axes = [fig.subplots(3, 1, sharex=True) for fig in figs]
     xi = np.linspace(0.0, 1.0, 400)
@@ -57,7 +56,7 @@ def _cam_rises(run):
             axes[0][0].plot(rise.contact_xi * task.t_deg, rise.X[-1] * task.stroke_mm, "o", ms=4, color="0.3")
     for which, (fig, rows) in enumerate(zip(figs, axes)):
         for ax, label in zip(rows, labels):
-            ax.set_ylabel(("dynamic error of the " if which else "") + label, fontsize=8)
+            ax.set_ylabel(("error of the " if which else "") + label, fontsize=8)
             ax.grid(alpha=0.3)
         rows[-1].set_xlabel("cam angle into the rise phi [deg] (to the contact with the plate)")
         rows[0].legend(fontsize=7)
