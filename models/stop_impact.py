@@ -20,10 +20,17 @@ Readings taken where the paper is silent or inconsistent (each pinned by a test)
   computes (both the arrested approach and the plate's push throw C back).
 * The Duhamel term runs over the whole pulse Q_F (rise to F at tau, fall to zero at 2 tau): its
   impulse is then F tau = S_C, as the paper's S_C = F tau says. The printed upper limit tau of
-  the integral (half the pulse, half the impulse) is read as a misprint.
-* Approach velocity: omega_0 l = v0 = velocity_factor * stroke * Omega / t, Omega = 2 pi n / 60
-  the main shaft's speed, t the phase angle of the lift's travel; for a given motion law the
-  velocity scales as n / t.
+  the integral (half the pulse, half the impulse) is read as a misprint. In the scenes' chain the
+  first rebound peaks at 0.29 ... 0.44 tau, before the pulse's top: both readings give it alike.
+* Approach velocity, two sources. With the effect `cam_drive` (the scenes' chain) the cam's rise
+  through the elastic lever gives v0 at the located contact with the plate (models/cam_follower.py,
+  solvers/stop_impact/cam_follower.py). Without it, the earlier fitted proportionality
+  v0 = velocity_factor * stroke * Omega / t (Omega = 2 pi n / 60, t the phase angle of the lift's
+  travel), kept for comparison: for one motion law on a rigid lever v0 scales as n / t.
+* J_A of S_C: m l^2 unless `inertia_A_kgm2` is given, the reduced mass at C seen from the pivot
+  A, so that mass, inertia and frequency belong to one lever; the pulse's impulse is then
+  (1 + k) m v0, the plate reversing the lever's momentum. (A separately fitted J_A = 1.9e-4 kg m^2,
+  172 times below m l^2, made F_ud = 4.137 N and the pulse carry 0.9 % of the momentum.)
 * Preload (effect `preload`): the cam drives the lever `preload_mm` past the plate; the moving
   lever (Fig. 5) holds that as a constant force P = c_free * preload pressing C onto the plate,
   a constant -P added to Q_F in eq. (2).
@@ -37,6 +44,7 @@ initial_velocity  q0' = omega_0 l: the arrested approach velocity of C          
 impact_pulse      the triangular force Q_F of peak F = J_A omega_0 (1+k)/(l tau)  S_C, F_ud, Fig. 7
 damping           viscous damping n = zeta omega_c                               eq. (1)-(2), n
 preload           constant force -c_free * preload_mm pressing C on the plate    Sec. Results (177 rpm)
+cam_drive         v0 from the cam law through the elastic lever; roller force   Fig. 4
 ================  ============================================================  ===============
 
 Units: the names say so (mm, GPa, kg, rpm, deg); the functions return SI (m, s, N, rad/s).
@@ -45,6 +53,7 @@ import math
 from dataclasses import dataclass
 from typing import ClassVar
 
+from mechopt.models.cam_follower import LAWS
 from mechopt.models.effects import Effect, check_effects
 from mechopt.models.errors import ModelError
 
@@ -95,8 +104,11 @@ class LeverStop:
     t(3,7) at which rebounds are computed; `speeds_rpm` main-shaft speeds to report (structure);
     `speed_nominal_rpm`, `amplitude_limit_mm` the operating speed (where the amplitude law is
     linearised, where `operating_point` is measured) and the limit the rebound must keep;
-    `inertia_A_kgm2` J_A and `restitution` k (effect impact_pulse); `damping_ratio` zeta (effect
-    damping); `preload_mm` (effect preload); `effects` the effects the scene calls for (structure:
+    `restitution` k (effect impact_pulse) and `inertia_A_kgm2` J_A (optional: m l^2 when not
+    given); `damping_ratio` zeta (effect damping, of the link in the rise and of the plate);
+    `preload_mm` (effect preload); `closure_force_N` the force holding the roller on its cam and
+    `law` the cam's motion law (structure; effect cam_drive, which replaces `velocity_factor`);
+    `effects` the effects the scene calls for (structure:
     the scene's own list, repeated, until the spine hands it to the task).
     """
     E_GPa: float
@@ -115,16 +127,21 @@ class LeverStop:
     restitution: float | None = None
     damping_ratio: float | None = None
     preload_mm: float | None = None
+    closure_force_N: float | None = None
+    law: str = ""
     speeds_rpm: tuple = ()
     effects: tuple = ()
 
     EFFECTS: ClassVar[dict[str, Effect]] = {
         "initial_velocity": Effect(adds="q0' = omega_0 l, the approach velocity of C", equation="(2)"),
         "impact_pulse": Effect(adds="triangular pulse Q_F, peak F = J_A omega_0 (1+k)/(l tau)",
-                               equation="S_C, F_ud, Fig. 7, (2)", params=("inertia_A_kgm2", "restitution")),
+                               equation="S_C, F_ud, Fig. 7, (2)", params=("restitution",)),
         "damping": Effect(adds="viscous damping n = zeta omega_c", equation="(1)-(2)", params=("damping_ratio",)),
         "preload": Effect(adds="constant force c_free * preload_mm pressing C onto the plate",
                           equation="Sec. Results, 177 rpm", params=("preload_mm",)),
+        "cam_drive": Effect(adds="approach velocity from the cam's motion law through the elastic lever "
+                                 "(models/cam_follower.py), the roller's contact force against its closure",
+                            equation="Fig. 4", params=("closure_force_N",)),
     }
 
     def __post_init__(self):
@@ -141,6 +158,15 @@ class LeverStop:
                  "must be in [0, 1] (a coefficient of restitution)")
         _require(self, "damping_ratio", self.damping_ratio is None or self.damping_ratio >= 0, "must be >= 0")
         _require(self, "preload_mm", self.preload_mm is None or self.preload_mm >= 0, "must be >= 0")
+        _require(self, "closure_force_N", self.closure_force_N is None or self.closure_force_N >= 0, "must be >= 0")
+        _require(self, "law", self.law in ("", *LAWS), f"is not a motion law; allowed: {', '.join(LAWS)}")
+        if "cam_drive" in self.effects:      # one source of the approach velocity: the cam, not a fitted factor
+            _require(self, "velocity_factor", self.velocity_factor is None,
+                     "is not used with the effect 'cam_drive' (the cam computes the approach velocity); drop it")
+            for key in ("law", "stroke_mm", "t_deg"):
+                _require(self, key, bool(getattr(self, key)), "is needed by the effect 'cam_drive'")
+        _require(self, "inertia_A_kgm2", self.inertia_A_kgm2 is None or "impact_pulse" in self.effects,
+                 "belongs to effect 'impact_pulse', which is not listed in effects; add it or drop the parameter")
         for key, (lo, hi) in STATED_RANGE.items():      # the range the model and its solvers are tested over
             value = getattr(self, key)
             _require(self, key, value is None or lo <= value <= hi, f"is outside the stated range [{lo:g}, {hi:g}]")
@@ -193,26 +219,37 @@ class LeverStop:
     # ---------------------------------------------------------------- impact
 
     def approach_velocity_m_s(self, speed_rpm, t_deg=None):
-        """v0 = omega_0 l = velocity_factor * stroke * Omega / t [m/s], Omega = 2 pi n / 60 (arrays allowed)."""
+        """v0 = omega_0 l = velocity_factor * stroke * Omega / t [m/s], Omega = 2 pi n / 60 (arrays allowed).
+        With the effect `cam_drive` the cam computes v0 (solvers/stop_impact/cam_follower.py), not this."""
+        if "cam_drive" in self.effects:
+            raise ModelError("effects lists 'cam_drive': the approach velocity comes from the cam's rise "
+                             "(solvers.stop_impact.cam_follower.follow_cam), not from velocity_factor", key="effects")
         t_deg = self.t_deg if t_deg is None else t_deg
         self.need("velocity_factor", "stroke_mm", "t_deg" if t_deg is None else None)
         omega_shaft = 2 * math.pi * speed_rpm / 60.0
         return self.velocity_factor * self.stroke_mm * 1e-3 * omega_shaft / (t_deg * math.pi / 180.0)
 
+    @property
+    def inertia_A_used_kgm2(self) -> float:
+        """J_A of S_C: the scene's `inertia_A_kgm2` when given (the paper's separate figure), else
+        m l^2, the reduced mass at C seen from the pivot A (one lever: mass and inertia agree)."""
+        return self.inertia_A_kgm2 if self.inertia_A_kgm2 is not None else self.mass_kg * self.lever_length_m**2
+
     def impact_force_N(self, v0_m_s):
         """F_ud = J_A omega_0 (1 + k) / (l tau), omega_0 = v0 / l [N] (Sec. Results; S_C = F tau)."""
         self.need_effect("impact_pulse")
         l = self.lever_length_m
-        return self.inertia_A_kgm2 * (v0_m_s / l) * (1 + self.restitution) / (l * self.contact_time_s)
+        return self.inertia_A_used_kgm2 * (v0_m_s / l) * (1 + self.restitution) / (l * self.contact_time_s)
 
     @property
     def preload_N(self) -> float:
         """P = c_free * preload: the cam's interference held by the moving lever [N]; 0 without the effect."""
         return self.c_free_N_per_m * self.preload_mm * 1e-3 if "preload" in self.effects else 0.0
 
-    def impact(self, speed_rpm, t_deg=None) -> Impact:
-        """The inputs of eq. (2) at one speed and phase angle, with only the listed effects."""
-        v0 = self.approach_velocity_m_s(speed_rpm, t_deg)
+    def impact(self, speed_rpm, t_deg=None, *, v0_m_s=None) -> Impact:
+        """The inputs of eq. (2) at one speed and phase angle, with only the listed effects; `v0_m_s`
+        the approach velocity when the cam computed it (effect cam_drive)."""
+        v0 = self.approach_velocity_m_s(speed_rpm, t_deg) if v0_m_s is None else v0_m_s
         omega = self.omega_stop_rad_s
         return Impact(omega_rad_s=omega,
                       damping_rad_s=self.damping_ratio * omega if "damping" in self.effects else 0.0,
@@ -256,7 +293,7 @@ STATED_RANGE = {
     "a_stop_mm": (1e-3, 1e5), "b_stop_mm": (1e-3, 1e5), "mass_kg": (1e-6, 1e6), "stroke_mm": (1e-6, 1e5),
     "velocity_factor": (1e-6, 1e3), "t_deg": (1e-3, 360.0), "speed_nominal_rpm": (1e-3, 1e6),
     "amplitude_limit_mm": (1e-9, 1e5), "inertia_A_kgm2": (1e-12, 1e6), "damping_ratio": (0.0, 1e3),
-    "preload_mm": (0.0, 1e5),
+    "preload_mm": (0.0, 1e5), "closure_force_N": (0.0, 1e7),
 }
 
 

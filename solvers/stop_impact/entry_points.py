@@ -5,18 +5,29 @@ import math
 import time
 from typing import Literal
 
+import numpy as np
 from scipy.optimize import brentq
 
-from mechopt.models.errors import ModelError
+from mechopt.models.cam_follower import law_values
+from mechopt.models.errors import ModelError, SolverError
 from mechopt.models.stop_impact import LeverStop
 from mechopt.solvers.result import Result, Status, Timing
+from mechopt.solvers.settings import Annotated, Interval, Tolerance
+from mechopt.solvers.stop_impact.cam_follower import follow_cam, follow_cam_reference, follower_data
 from mechopt.solvers.stop_impact.contact import simulate_contact
-from mechopt.solvers.stop_impact.law import amplitude_law, rebound_amplitude_mm
+from mechopt.solvers.stop_impact.law import (
+    RollerLeftCam,
+    amplitude_law,
+    approach_velocity_m_s,
+    impact_at,
+    rebound_amplitude_mm,
+)
 from mechopt.solvers.stop_impact.response import closed_form_amplitude_m, ode_amplitude_m, quadrature_amplitude_m
 
-__all__ = ["natural_frequencies", "impact_forces", "rebound", "linearise_amplitude", "operating_point"]
+__all__ = ["cam_dynamics", "impact_forces", "linearise_amplitude", "natural_frequencies", "operating_point", "rebound"]
 
 AGREEMENT_REL = 1e-8            # the three methods must agree this well on every scene
+CAM_AGREEMENT_REL = 1e-7        # CVODES (reltol 1e-10) and DOP853 (1e-12) on the approach velocity
 
 
 def natural_frequencies(task: LeverStop) -> Result:
@@ -32,16 +43,18 @@ def natural_frequencies(task: LeverStop) -> Result:
 
 def impact_forces(task: LeverStop) -> Result:
     """Impact force F_ud = J_A omega_0 (1 + k) / (l tau) at each speed of `speeds_rpm`, with the
-    impulse S_C = F tau and the approach velocity; `impact_force_N_<rpm>` etc."""
+    impulse S_C = F tau, the approach velocity and the impulse over the lever's momentum m v0
+    (1 + k when J_A = m l^2: the plate reverses the momentum); `impact_force_N_<rpm>` etc."""
     task.need_effect("impact_pulse")
     _need_speeds(task)
     start = time.perf_counter()
     values = {"contact_time_s": task.contact_time_s}
     for n in task.speeds_rpm:
-        v0 = float(task.approach_velocity_m_s(n))
+        v0 = approach_velocity_m_s(task, n)
         F = float(task.impact_force_N(v0))
         values |= {f"impact_force_N_{_tag(n)}": F, f"impulse_Ns_{_tag(n)}": F * task.contact_time_s,
-                   f"approach_velocity_m_s_{_tag(n)}": v0}
+                   f"approach_velocity_m_s_{_tag(n)}": v0,
+                   f"impulse_over_momentum_{_tag(n)}": F * task.contact_time_s / (task.mass_kg * v0)}
     return Result(Status.SOLVED, values, Timing(0.0, time.perf_counter() - start),
                   message="tau = half the natural period on the plate")
 
@@ -59,7 +72,10 @@ def rebound(task: LeverStop, *, method: Literal["closed_form", "quadrature", "od
     start = time.perf_counter()
     build_s, values, diagnostics, status, notes = 0.0, {}, {}, Status.SOLVED, []
     for n in task.speeds_rpm:
-        imp = task.impact(n)
+        try:
+            imp = impact_at(task, n)
+        except RollerLeftCam as exc:
+            return _without_cam(exc, values, Timing(build_s, time.perf_counter() - start - build_s))
         runs = {name: methods[name](imp) for name in ([method] + [k for k in methods if k != method]
                                                       if cross_check else [method])}
         build_s += sum(r[2] for r in runs.values())
@@ -79,7 +95,7 @@ def rebound(task: LeverStop, *, method: Literal["closed_form", "quadrature", "od
                 status = Status.INACCURATE
                 notes.append(f"{n:g} rpm: methods differ by {spread:.2e} relative"
                              + (f", {bad} not solved" if bad else ""))
-            event_mm, contact_s, ev_status, ev_message = simulate_contact(task, n)
+            event_mm, contact_s, ev_status, ev_message = simulate_contact(task, n, v0_m_s=imp.v0_m_s)
             if ev_status is Status.SOLVED:
                 values[f"rebound_event_mm_{_tag(n)}"] = event_mm
                 values[f"contact_time_event_s_{_tag(n)}"] = contact_s
@@ -100,11 +116,8 @@ def linearise_amplitude(task: LeverStop) -> Result:
     slope, intercept = amplitude_law(task)
     limit = task.amplitude_limit_mm
     n = task.speed_nominal_rpm
-    exact = lambda t: float(rebound_amplitude_mm(task, n, t)) - limit      # noqa: E731
-    lo, hi = 1e-3 * task.t_deg, 359.0
-    if exact(lo) < 0 or exact(hi) > 0:
-        raise ModelError(f"amplitude_limit_mm={limit}: a(t) at {n:g} rpm does not cross it for t in "
-                         f"({lo:g}, {hi:g}) deg", key="amplitude_limit_mm")
+    exact = lambda t: float(rebound_amplitude_mm(task, n, t)) - limit
+    lo, hi = _bracket(exact, task.t_deg, limit, n)
     t_exact = brentq(exact, lo, hi, xtol=1e-12, rtol=1e-14)
     t_linear = (limit - intercept) / slope
     values = {"slope_mm_per_deg": slope, "intercept_mm": intercept, "t_3_7_min_deg": t_linear,
@@ -125,10 +138,14 @@ def operating_point(task: LeverStop) -> Result:
     task.need("speed_nominal_rpm", "t_deg", "amplitude_limit_mm")
     start = time.perf_counter()
     n, t, limit = task.speed_nominal_rpm, task.t_deg, task.amplitude_limit_mm
+    try:
+        imp = impact_at(task, n)
+    except RollerLeftCam as exc:
+        return _without_cam(exc, {}, Timing(0.0, time.perf_counter() - start))
     amplitude_mm = float(rebound_amplitude_mm(task, n, t))
-    ode_m, ode_status, build_s = ode_amplitude_m(task.impact(n))
+    ode_m, ode_status, build_s = ode_amplitude_m(imp)
     values = {"rebound_mm": amplitude_mm, "margin_mm": limit - amplitude_mm,
-              "approach_velocity_m_s": float(task.approach_velocity_m_s(n)), "contact_time_s": task.contact_time_s}
+              "approach_velocity_m_s": imp.v0_m_s, "contact_time_s": task.contact_time_s}
     if "impact_pulse" in task.effects:
         values["impact_force_N"] = float(task.impact_force_N(values["approach_velocity_m_s"]))
     timing = Timing(build_s, time.perf_counter() - start - build_s)
@@ -147,6 +164,36 @@ def operating_point(task: LeverStop) -> Result:
                   message=f"{amplitude_mm:.4g} mm at {n:g} rpm, t = {t:g} deg: "
                           f"{'within' if within else 'above'} amplitude_limit_mm={limit:g}; "
                           f"the ODE agrees to {spread:.1e}")
+
+
+def _without_cam(exc, values, timing):
+    """No rebound where the cam's rise fails: INFEASIBLE (violated cam_contact) when the roller
+    leaves its cam, else the integrator's status; the values found so far are kept."""
+    infeasible = exc.status is Status.INFEASIBLE
+    return Result(exc.status, values, timing, message=str(exc), violated=("cam_contact",) if infeasible else ())
+
+
+def _bracket(excess, t_deg, limit, speed_rpm, factor=1.25, steps=40):
+    """(lo, hi) around the root of a(t) = limit, grown geometrically from t_deg (a falls with t)."""
+    lo = hi = t_deg
+    try:
+        if excess(t_deg) > 0:
+            for _ in range(steps):
+                hi = min(hi * factor, 359.0)
+                if excess(hi) <= 0:
+                    return lo, hi
+                lo = hi
+        else:
+            for _ in range(steps):
+                lo = lo / factor
+                if excess(lo) >= 0:
+                    return lo, hi
+                hi = lo
+    except SolverError as exc:          # e.g. the roller leaves its cam on the way: no exact bound there
+        raise ModelError(f"amplitude_limit_mm={limit}: no exact bound on t at {speed_rpm:g} rpm: {exc}",
+                         key="amplitude_limit_mm") from None
+    raise ModelError(f"amplitude_limit_mm={limit}: a(t) at {speed_rpm:g} rpm does not cross it for t in "
+                     f"({t_deg / factor**steps:g}, 359) deg", key="amplitude_limit_mm")
 
 
 def _by_closed_form(imp):
@@ -169,3 +216,69 @@ def _need_speeds(task):
 def _tag(speed_rpm):
     """Speed as a value-name suffix: 280.0 -> '280', 177.5 -> '177p5'."""
     return f"{speed_rpm:g}".replace(".", "p")
+
+
+def cam_dynamics(task: LeverStop, *, reltol: Tolerance = 1e-10,
+                 points: Annotated[int, Interval(ge=11, le=100_000)] = 1001) -> Result:
+    """The lift cam's rise with the elastic lever (paper 004, Fig. 4) at each speed of
+    `speeds_rpm` and at `speed_nominal_rpm`: the approach velocity at the located contact with
+    the plate (`approach_velocity_m_s`, and `_<rpm>`), the largest dynamic error of the
+    displacement, velocity and acceleration analogues over the rise up to the contact, the rigid
+    lever's (kinematic) approach velocity beside it, and the roller's least contact force.
+
+    The nominal rise is checked by scipy's DOP853 with its own event location (within 1e-7
+    relative, else INACCURATE). A roller that leaves its cam (contact force < 0) at any speed
+    makes the answer INFEASIBLE (violated `cam_contact`), naming where and at which speed.
+    """
+    task.need("speed_nominal_rpm", "law")
+    task.need_effect("cam_drive")
+    start = time.perf_counter()
+    speeds = [task.speed_nominal_rpm] + [n for n in task.speeds_rpm if n != task.speed_nominal_rpm]
+    values, build_s, left, arrays = {}, 0.0, [], {}
+    for n in speeds:
+        rise = follow_cam(task, n, reltol=reltol, points=points)
+        build_s += rise.build_s
+        if rise.status not in (Status.SOLVED, Status.INFEASIBLE):
+            return Result(rise.status, values, Timing(build_s, time.perf_counter() - start - build_s),
+                          message=f"{n:g} rpm: {rise.message}")
+        if rise.status is Status.INFEASIBLE:
+            left.append(rise.message)
+        suffix = "" if n == task.speed_nominal_rpm else f"_{_tag(n)}"
+        values[f"approach_velocity_m_s{suffix}"] = rise.approach_velocity_m_s
+        values[f"dynamic_error_mm{suffix}"] = rise.dynamic_error_mm
+        values[f"min_contact_force_N{suffix}"] = rise.min_contact_force_N
+        if n == task.speed_nominal_rpm:
+            nominal = rise
+    rad = math.radians(task.t_deg)
+    S, dS, ddS = law_values(task.law, nominal.xi)
+    H_mm = task.stroke_mm
+    values |= {"velocity_analogue_error_mm_per_rad": float(np.max(np.abs(nominal.dX - dS))) * H_mm / rad,
+               "acceleration_analogue_error_mm_per_rad2": float(np.max(np.abs(nominal.ddX - ddS))) * H_mm / rad**2,
+               "approach_velocity_rigid_m_s": _rigid_approach_m_s(task, task.speed_nominal_rpm)}
+    if nominal.contact_xi is not None:
+        values["contact_angle_deg"] = nominal.contact_xi * task.t_deg
+    arrays = {"phi_deg": nominal.xi * task.t_deg, "x_mm": nominal.X * H_mm, "s_mm": S * H_mm,
+              "dx_dphi_mm_per_rad": nominal.dX * H_mm / rad, "d2x_dphi2_mm_per_rad2": nominal.ddX * H_mm / rad**2}
+    ref_xi, ref_v0, ref_status = follow_cam_reference(task, task.speed_nominal_rpm)
+    timing = lambda: Timing(build_s, time.perf_counter() - start - build_s)
+    spread = abs(ref_v0 - nominal.approach_velocity_m_s) / max(abs(ref_v0), 1e-300)
+    values["reference_rel_diff"] = spread
+    if left:
+        return Result(Status.INFEASIBLE, values, timing(), violated=("cam_contact",), message="; ".join(left),
+                      arrays=arrays)
+    if ref_status is not Status.SOLVED or (ref_xi is None) != (nominal.contact_xi is None) or spread > CAM_AGREEMENT_REL:
+        return Result(Status.INACCURATE, values, timing(), arrays=arrays,
+                      message=f"CVODES and DOP853 differ on the approach velocity by {spread:.2e} relative")
+    return Result(Status.SOLVED, values, timing(), arrays=arrays,
+                  message=f"{task.law} rise, {nominal.message} at {nominal.contact_xi * task.t_deg:.4f} deg; "
+                          f"DOP853 agrees to {spread:.1e}" if nominal.contact_xi is not None else nominal.message)
+
+
+def _rigid_approach_m_s(task, speed_rpm):
+    """The approach velocity of a rigid lever: H S'(xi) / T where S(xi) = 1 - preload / H (0 at the
+    rise's end when there is no preload)."""
+    _, _, H, target, T = follower_data(task, speed_rpm, task.t_deg)
+    if target >= 1.0:
+        return 0.0
+    xi = brentq(lambda x: law_values(task.law, x)[0][0] - target, 0.0, 1.0, xtol=1e-15)
+    return float(law_values(task.law, xi)[1][0]) * H / T

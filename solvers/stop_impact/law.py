@@ -1,10 +1,51 @@
 """The exact amplitude law a(t, n) of the first rebound (eq. (2)), vectorised over speed and phase
-angle, and its tangent: the linear constraint the loom's LP takes."""
+angle, and its tangent: the linear constraint the loom's LP takes.
+
+Two sources of the approach velocity v0, by the task's effects:
+
+* `cam_drive` (the chain): cam law -> elastic lever (solvers/stop_impact/cam_follower.py) ->
+  v0 at the located contact -> impact pulse and eq. (2) -> first rebound. v0 is no longer
+  proportional to n / t (the dynamic error grows with speed), so each (n, t) is its own rise.
+* otherwise the fitted proportionality v0 = velocity_factor * stroke * Omega / t.
+"""
 import numpy as np
 
-from mechopt.models.errors import ModelError
-from mechopt.models.stop_impact import LeverStop
+from mechopt.models.errors import ModelError, SolverError
+from mechopt.models.stop_impact import Impact, LeverStop
+from mechopt.solvers.result import Status
+from mechopt.solvers.stop_impact.cam_follower import follow_cam
 from mechopt.solvers.stop_impact.response import closed_form_amplitude_m, response_parts
+
+
+class RollerLeftCam(SolverError):
+    """The cam's rise at some (n, t) is not SOLVED (the roller leaves its cam, or CVODES gave up):
+    no approach velocity, so no rebound. `status` says which."""
+
+    def __init__(self, message, status):
+        super().__init__(message)
+        self.status = status
+
+
+CHAIN_RELTOL = 1e-12            # CVODES on the rise for the law: its tangent is a difference quotient
+TANGENT_STEP_DEG = 1e-2         # central differences of a(t) at +-1, +-2 steps (fourth order)
+
+
+def approach_velocity_m_s(task: LeverStop, speed_rpm: float, t_deg: float | None = None) -> float:
+    """v0 at one speed [rpm] and phase angle [deg]: from the cam's rise with the effect
+    `cam_drive` (a rise that is not SOLVED, e.g. the roller leaving its cam, is an error naming
+    it; a C that only settles onto its plate has v0 = 0), else the task's fitted proportionality."""
+    if "cam_drive" not in task.effects:
+        return float(task.approach_velocity_m_s(speed_rpm, t_deg))
+    rise = follow_cam(task, speed_rpm, t_deg, reltol=CHAIN_RELTOL)
+    if rise.status is not Status.SOLVED:        # (no contact at all: C settles onto the plate, v0 = 0)
+        raise RollerLeftCam(f"speed {speed_rpm:g} rpm, t = {rise.t_deg:g} deg: no approach velocity: {rise.message}",
+                            rise.status)
+    return rise.approach_velocity_m_s
+
+
+def impact_at(task: LeverStop, speed_rpm: float, t_deg: float | None = None) -> Impact:
+    """The inputs of eq. (2) at one speed and phase angle, v0 from `approach_velocity_m_s`."""
+    return task.impact(speed_rpm, t_deg, v0_m_s=approach_velocity_m_s(task, speed_rpm, t_deg))
 
 
 def rebound_amplitude_mm(task: LeverStop, speed_rpm, t_deg, *, grid_points: int = 4097):
@@ -20,6 +61,10 @@ def rebound_amplitude_mm(task: LeverStop, speed_rpm, t_deg, *, grid_points: int 
     step is kept inside the cells either side of the grid maximum, the value never below it.
     """
     speed, t = np.broadcast_arrays(np.asarray(speed_rpm, float), np.asarray(t_deg, float))
+    if "cam_drive" in task.effects:                   # each (n, t) its own rise, each pair once
+        pairs = {(n, tt) for n, tt in zip(speed.ravel(), t.ravel())}
+        amp = {pair: closed_form_amplitude_m(impact_at(task, *pair))[0] * 1e3 for pair in pairs}
+        return np.array([amp[pair] for pair in zip(speed.ravel(), t.ravel())]).reshape(speed.shape)
     unit = task.impact(1.0, 1.0)                      # v0 and F per unit n / t
     r = (speed / t).ravel()
     if unit.preload_N == 0.0:                         # q = r g(s): the peak's time does not move with r
@@ -71,6 +116,8 @@ def amplitude_law(task: LeverStop):
     scale as 1/t, the preload does not: da/dt = -(a + P/m U(t*)) / t.
     """
     task.need("t_deg", "speed_nominal_rpm")
+    if "cam_drive" in task.effects:
+        return _chain_tangent(task)
     imp = task.impact(task.speed_nominal_rpm)
     a_m, when = closed_form_amplitude_m(imp)
     if a_m <= 0:
@@ -79,3 +126,15 @@ def amplitude_law(task: LeverStop):
     moving, _ = response_parts(imp, when)
     slope = -float(moving[0]) / task.t_deg * 1e3
     return slope, a_m * 1e3 - slope * task.t_deg
+
+
+def _chain_tangent(task):
+    """The tangent of the chain's a(t) at (t_deg, speed_nominal_rpm): fourth-order central
+    differences (the peak moves with t, and so does the contact on the cam)."""
+    n, t, h = task.speed_nominal_rpm, task.t_deg, TANGENT_STEP_DEG
+    a = rebound_amplitude_mm(task, n, np.array([t - 2 * h, t - h, t, t + h, t + 2 * h]))
+    if a[2] <= 0:
+        raise ModelError(f"at t_deg={t}, speed_nominal_rpm={n} the lever does not leave the plate (amplitude 0): "
+                         "no tangent to linearise", key="t_deg")
+    slope = (a[0] - 8 * a[1] + 8 * a[3] - a[4]) / (12 * h)
+    return float(slope), float(a[2] - slope * t)

@@ -3,13 +3,16 @@
 Rebound scenes: the time histories of eq. (2) at each speed (as the paper's Fig. 8) and the
 first-rebound amplitude against speed, with the source's points taken from the scene's own
 expectations. The amplitude-law scene: the exact a(t) beside its tangent and the limit. The
-operating-point scene: the history at its speed and phase angle against the limit.
+operating-point scene: the history at its speed and phase angle against the limit. The
+cam-dynamics scene: the rise's analogues and their dynamic errors at each speed (Fig. 4).
 """
 import numpy as np
 
 from mechopt.figures.registry import new_figure, register
+from mechopt.models.cam_follower import law_values
 from mechopt.models.stop_impact import LeverStop
-from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
+from mechopt.solvers.stop_impact.cam_follower import follow_cam
+from mechopt.solvers.stop_impact.law import impact_at, rebound_amplitude_mm
 from mechopt.solvers.stop_impact.response import closed_form_response
 
 
@@ -23,7 +26,43 @@ def rebound_figures(run):
         return {"law": _law(run)}
     if solver == "operating_point" and "rebound_mm" in run.result.values:
         return {"histories": _histories(run, [run.task.speed_nominal_rpm], run.task.amplitude_limit_mm)}
+    if solver == "cam_dynamics" and "approach_velocity_m_s" in run.result.values:
+        analogues, errors = _cam_rises(run)
+        return {"analogues": analogues, "dynamic_errors": errors}
     return {}
+
+
+def _cam_rises(run):
+    """Fig. 4: the displacement, velocity and acceleration analogues of C over the rise (against
+    the cam angle, up to the contact with the plate) at each speed, beside the law's own; and
+    their dynamic errors (elastic minus kinematic)."""
+    task = run.task
+    speeds = sorted({*task.speeds_rpm, task.speed_nominal_rpm})
+    rad = np.radians(task.t_deg)
+    scales = (task.stroke_mm, task.stroke_mm / rad, task.stroke_mm / rad**2)
+    labels = ("displacement x [mm]", "velocity analogue\ndx/dphi [mm/rad]", "acceleration analogue\nd2x/dphi2 [mm/rad^2]")
+    figs = [new_figure(figsize=(8, 9)) for _ in range(2)]
+    axes = [fig.subplots(3, 1, sharex=True) for fig in figs]
+    xi = np.linspace(0.0, 1.0, 400)
+    for ax, scale, kin in zip(axes[0], scales, law_values(task.law, xi)):
+        ax.plot(xi * task.t_deg, kin * scale, "k--", lw=1, label=f"{task.law} law (rigid lever)")
+    for n in speeds:
+        rise = follow_cam(task, n)
+        kinematic = law_values(task.law, rise.xi)
+        for row, (got, kin, scale) in enumerate(zip((rise.X, rise.dX, rise.ddX), kinematic, scales)):
+            axes[0][row].plot(rise.xi * task.t_deg, got * scale, lw=1.1, label=f"n = {n:g} rpm")
+            axes[1][row].plot(rise.xi * task.t_deg, (got - kin) * scale, lw=1.1, label=f"n = {n:g} rpm")
+        if rise.contact_xi is not None:
+            axes[0][0].plot(rise.contact_xi * task.t_deg, rise.X[-1] * task.stroke_mm, "o", ms=4, color="0.3")
+    for which, (fig, rows) in enumerate(zip(figs, axes)):
+        for ax, label in zip(rows, labels):
+            ax.set_ylabel(("error of the " if which else "") + label, fontsize=8)
+            ax.grid(alpha=0.3)
+        rows[-1].set_xlabel("cam angle into the rise phi [deg] (to the contact with the plate)")
+        rows[0].legend(fontsize=7)
+        fig.suptitle(f"{run.scene.id}: " + ("dynamic errors of the motion law" if which else
+                                            "analogues with the elastic lever (cf. paper's Fig. 4)"))
+    return figs[0], figs[1]
 
 
 def _histories(run, speeds=None, limit_mm=None):
@@ -33,7 +72,7 @@ def _histories(run, speeds=None, limit_mm=None):
     fig = new_figure(figsize=(8, 4.5))
     ax = fig.subplots()
     for n in task.speeds_rpm if speeds is None else speeds:
-        imp = task.impact(n)
+        imp = impact_at(task, n)
         t = np.linspace(0.0, 3 * imp.window_s, 1500)
         ax.plot(t * 1e3, closed_form_response(imp, t)[0] * 1e3, lw=1.2, label=f"n = {n:g} rpm, t = {task.t_deg:g} deg")
     if limit_mm is not None:

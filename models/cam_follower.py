@@ -1,0 +1,90 @@
+"""The lift cam driving the lever through an elastic link (paper 004, Fig. 4; Dresig and Vulfson's
+one-mass model of a cam mechanism with an elastic follower).
+
+The cam's motion law moves the lever's end C kinematically by s(phi) = H S(xi), xi = phi / t the
+fraction of the rise (t the phase angle of operation (3,7), H the stroke at C). The lever bends
+between its roller and C with the stiffness c of Fig. 5, so C (reduced mass m) follows
+
+    m x'' + b (x' - s') + c (x - s) = 0,        b = 2 zeta sqrt(c m),
+
+which in the rise's own time xi = Omega tt / t (Omega the shaft speed, tt the time) reads, with
+X = x / H, the relative (dynamic) error e = X - S and lambda = omega T, T = t / Omega the rise's
+duration, omega = sqrt(c / m):
+
+    e'' = -S''(xi) - 2 zeta lambda e' - lambda^2 e                      ( ' = d/dxi )
+
+After the rise the cam dwells (S = 1). The plate stands `preload_mm` below the cam's end
+position: C meets it where X = 1 - preload / H. The roller stays on its cam while the contact
+force N = F_closure + m x'' stays >= 0 (the closing spring's force, reacted by the cam).
+
+Laws (S over xi in [0, 1]; each written once, as CasADi expressions, derivatives by AD):
+
+================  =======================================  ===========================
+law               S(xi)                                    continuity at the ends
+================  =======================================  ===========================
+cycloidal         xi - sin(2 pi xi) / (2 pi)               acceleration 0, jerk jumps
+modified_sine     Kloomok-Muffley, 3 pieces (1/8, 7/8)     acceleration 0, jerk jumps
+polynomial_345    10 xi^3 - 15 xi^4 + 6 xi^5               acceleration 0, jerk jumps
+harmonic          (1 - cos(pi xi)) / 2                     acceleration jumps (pi^2 / 2)
+================  =======================================  ===========================
+"""
+import math
+
+import casadi as ca
+import numpy as np
+
+from mechopt.models.cache import memoised
+from mechopt.models.errors import ModelError
+
+LAWS = ("cycloidal", "modified_sine", "polynomial_345", "harmonic")
+
+
+def law_displacement(law: str, xi):
+    """S(xi), the normalised displacement of the motion law `law` over the rise xi in [0, 1]
+    (a CasADi expression of the CasADi symbol `xi`)."""
+    if law == "cycloidal":
+        return xi - ca.sin(2 * math.pi * xi) / (2 * math.pi)
+    if law == "polynomial_345":
+        return xi**3 * (10 - 15 * xi + 6 * xi**2)
+    if law == "harmonic":
+        return (1 - ca.cos(math.pi * xi)) / 2
+    if law == "modified_sine":
+        k = 4 + math.pi
+        first = (math.pi * xi - ca.sin(4 * math.pi * xi) / 4) / k
+        middle = (2 + math.pi * xi - 9 * ca.sin(math.pi * (4 * xi + 1) / 3) / 4) / k
+        last = (4 + math.pi * xi - ca.sin(4 * math.pi * xi) / 4) / k
+        return ca.if_else(xi < 0.125, first, ca.if_else(xi < 0.875, middle, last))
+    raise ModelError(f"law={law!r}: unknown motion law; allowed: {', '.join(LAWS)}", key="law")
+
+
+@memoised(maxsize=16)
+def law_function(law: str) -> ca.Function:
+    """CasADi function xi -> (S, S', S'') of the law during the rise (derivatives by AD)."""
+    xi = ca.SX.sym("xi")
+    s = law_displacement(law, xi)
+    ds = ca.gradient(s, xi)
+    return ca.Function(f"law_{law}", [xi], [s, ds, ca.gradient(ds, xi)], ["xi"], ["S", "dS", "ddS"])
+
+
+def law_values(law: str, xi):
+    """(S, S', S'') at the phases `xi` (array), the dwell (S = 1, S' = S'' = 0) past xi = 1 and
+    rest (S = 0) before 0: numbers for plots and the scipy reference."""
+    xi = np.atleast_1d(np.asarray(xi, dtype=float))
+    inside = np.clip(xi, 0.0, 1.0)
+    out = law_function(law).map(xi.size)(inside[None, :])
+    s, ds, dds = (np.asarray(v, dtype=float).ravel() for v in out)
+    after, before = xi > 1.0, xi < 0.0
+    s = np.where(after, 1.0, np.where(before, 0.0, s))
+    ds, dds = (np.where(after | before, 0.0, v) for v in (ds, dds))
+    return s, ds, dds
+
+
+def rise_duration_s(speed_rpm, t_deg):
+    """T = t / Omega: how long the rise over the phase angle t [deg] lasts at n [rpm] [s]."""
+    return (np.asarray(t_deg, float) * math.pi / 180.0) / (2 * math.pi * np.asarray(speed_rpm, float) / 60.0)
+
+
+def relative_acceleration(law_s2, e, de, lam, zeta):
+    """e'' of the elastic follower in the rise's own time (module docstring); works for numbers
+    and CasADi symbols alike."""
+    return -law_s2 - 2 * zeta * lam * de - lam * lam * e
