@@ -174,6 +174,15 @@ def test_rebound_and_operating_point_say_so_when_the_roller_leaves_its_cam(chain
     assert point.status is Status.INFEASIBLE and point.violated == ("cam_contact",) and not point.values
 
 
+def test_a_figure_asks_for_a_gap_where_the_roller_leaves_its_cam(chain):
+    """`lost=nan`: the points past the cam's hold are NaN, the others the values raised-for ones give."""
+    amplitude = rebound_amplitude_mm(chain, 420.0, np.array([20.0, chain.t_deg]), lost=np.nan)
+    assert math.isnan(amplitude[0])
+    assert amplitude[1] == pytest.approx(float(rebound_amplitude_mm(chain, 420.0, chain.t_deg)), rel=1e-12)
+    with pytest.raises(SolverError, match="the roller leaves the cam"):
+        rebound_amplitude_mm(chain, 420.0, 20.0)
+
+
 # ---------------------------------------------------------------- the chain: impact and rebound
 
 def test_one_lever_its_impulse_reverses_the_momentum(chain):

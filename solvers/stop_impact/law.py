@@ -48,9 +48,11 @@ def impact_at(task: LeverStop, speed_rpm: float, t_deg: float | None = None) -> 
     return task.impact(speed_rpm, t_deg, v0_m_s=approach_velocity_m_s(task, speed_rpm, t_deg))
 
 
-def rebound_amplitude_mm(task: LeverStop, speed_rpm, t_deg, *, grid_points: int = 4097):
+def rebound_amplitude_mm(task: LeverStop, speed_rpm, t_deg, *, grid_points: int = 4097, lost=None):
     """The exact first-rebound amplitude a(t, n) of eq. (2) [mm], vectorised over speed [rpm]
-    and phase angle [deg] (broadcast).
+    and phase angle [deg] (broadcast). Where the roller leaves its cam (effect `cam_drive`) there
+    is no rebound: `RollerLeftCam` is raised, or, with `lost` a number (a figure's NaN), that
+    number stands there.
 
     v0 and F scale as r = n / t and the preload does not, so q(s) = r g(s) + p(s) with g, p the
     responses per unit r and to the preload alone. Without preload a = r max g exactly. With it,
@@ -63,7 +65,7 @@ def rebound_amplitude_mm(task: LeverStop, speed_rpm, t_deg, *, grid_points: int 
     speed, t = np.broadcast_arrays(np.asarray(speed_rpm, float), np.asarray(t_deg, float))
     if "cam_drive" in task.effects:                   # each (n, t) its own rise, each pair once
         pairs = {(n, tt) for n, tt in zip(speed.ravel(), t.ravel())}
-        amp = {pair: closed_form_amplitude_m(impact_at(task, *pair))[0] * 1e3 for pair in pairs}
+        amp = {pair: _amplitude_or(lost, task, *pair) for pair in pairs}
         return np.array([amp[pair] for pair in zip(speed.ravel(), t.ravel())]).reshape(speed.shape)
     unit = task.impact(1.0, 1.0)                      # v0 and F per unit n / t
     r = (speed / t).ravel()
@@ -83,6 +85,16 @@ def rebound_amplitude_mm(task: LeverStop, speed_rpm, t_deg, *, grid_points: int 
     moving, pressed = response_parts(unit, s)
     peak = np.maximum(r * moving[0] + pressed[0], best)
     return (np.maximum(peak, 0.0) * 1e3).reshape(speed.shape)
+
+
+def _amplitude_or(lost, task, speed_rpm, t_deg):
+    """One (n, t) of the chain [mm]; `lost` where the roller leaves its cam, unless it is None."""
+    try:
+        return closed_form_amplitude_m(impact_at(task, speed_rpm, t_deg))[0] * 1e3
+    except RollerLeftCam:
+        if lost is None:
+            raise
+        return lost
 
 
 def _upper_envelope(slopes, offsets):

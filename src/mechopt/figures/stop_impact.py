@@ -90,7 +90,9 @@ def _amplitude_vs_speed(run):
     speeds = np.linspace(0.5 * min(task.speeds_rpm), 1.2 * max(task.speeds_rpm), 200)
     fig = new_figure(figsize=(7, 4.5))
     ax = fig.subplots()
-    ax.plot(speeds, rebound_amplitude_mm(task, speeds, task.t_deg), label=f"eq. (2), t = {task.t_deg:g} deg")
+    amplitude = rebound_amplitude_mm(task, speeds, task.t_deg, lost=np.nan)
+    ax.plot(speeds, amplitude, label=f"eq. (2), t = {task.t_deg:g} deg")
+    _mark_lost(ax, speeds, amplitude)
     got = {k: v for k, v in run.result.values.items() if k.startswith("rebound_mm_")}
     ax.plot([task.speeds_rpm[i] for i in range(len(got))], list(got.values()), "o", mfc="none", label="computed")
     published = [(name, e.value) for name, e in run.scene.spec.expect.items()
@@ -114,7 +116,9 @@ def _law(run):
     t = np.linspace(0.5 * task.t_deg, 2.0 * task.t_deg, 300)
     fig = new_figure(figsize=(7, 4.5))
     ax = fig.subplots()
-    ax.plot(t, rebound_amplitude_mm(task, task.speed_nominal_rpm, t), label="exact a(t), eq. (2)")
+    amplitude = rebound_amplitude_mm(task, task.speed_nominal_rpm, t, lost=np.nan)
+    ax.plot(t, amplitude, label="exact a(t), eq. (2)")
+    _mark_lost(ax, t, amplitude)
     ax.plot(t, v["slope_mm_per_deg"] * t + v["intercept_mm"], "--",
             label=f"tangent: {v['slope_mm_per_deg']:.4f} t + {v['intercept_mm']:.4f}")
     ax.axhline(task.amplitude_limit_mm, color="tab:red", ls=":", label=f"limit {task.amplitude_limit_mm:g} mm")
@@ -123,3 +127,11 @@ def _law(run):
            title=f"{run.scene.id}: n = {task.speed_nominal_rpm:g} rpm")
     ax.legend(fontsize=8)
     return fig
+
+
+def _mark_lost(ax, x, amplitude):
+    """Shade where the roller leaves its cam (no rebound is defined there), and say so."""
+    lost = np.isnan(amplitude)
+    if lost.any():
+        ax.fill_between(x, 0, 1, where=lost, transform=ax.get_xaxis_transform(), color="0.85",
+                        label="roller leaves its cam: no rebound")
