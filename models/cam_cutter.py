@@ -116,6 +116,28 @@ class _OnIdealPath:
         """Exact end of the ideal path in the upper half-plane [rad]."""
         return finish_angle(self.a_mm, self.h_mm)
 
+    # the path protocol the minimax shares with models.cam_profile.ProfileFit (any curve)
+    @property
+    def size_mm(self) -> float:
+        """The cam's size, the unit the solvers measure lengths in [mm]."""
+        return self.a_mm
+
+    @property
+    def t_start_rad(self) -> float:
+        return 0.0
+
+    @property
+    def t_end_rad(self) -> float:
+        return self.t_finish_rad
+
+    def path_point(self, t):
+        """The ideal path (9) at t [mm]."""
+        return ideal_point(t, self.a_mm, self.h_mm)
+
+    def path_values(self) -> dict:
+        """What a fit reports of the path itself: t_FINISH as the paper reads it."""
+        return {"t_finish_rad": self.t_finish_read_rad}
+
     @cached_property
     def t_finish_read_rad(self) -> float:
         """t_FINISH as the paper reads it, to `y_tol_mm` in Y (see `decimal_reading`) [rad]."""
