@@ -29,7 +29,7 @@ from mechopt.solvers.cam_cutter.fit import _NLP_OPTIONS, ROUND_VERTICES
 from mechopt.solvers.result import Result, Status, Timing, from_ipopt, from_sqpmethod
 from mechopt.solvers.settings import Annotated, Interval, check_settings
 
-__all__ = ["readjustable", "family_minimax", "served_range"]
+__all__ = ["readjustable", "family_minimax", "served_range", "fixed_H_deviation", "evolve_family"]
 
 BOX_PAD_PER_A = 0.5          # default box: the members' matched linkages +- a/2
 BOX_WIDEN_FACTOR = 4.0
@@ -308,3 +308,49 @@ def served_range(task: ToolFamily, H, *, count=400, slots=4, max_rounds=40, tol_
         ends.append(float(good))
     info = {"evaluations": len(evaluations), "tol_mm": tol, "note": "; ".join(notes) or "both ends found"}
     return ends[0], ends[1], info
+
+
+def evolve_family(task: ToolFamily, *, count: Annotated[int, Interval(ge=20, le=100_000)] = 400,
+                  target_mm: float | None = None, popsize: Annotated[int, Interval(ge=5, le=1000)] = 15,
+                  maxiter: Annotated[int, Interval(ge=1, le=100_000)] = 3000, seed: int = 1) -> Result:
+    """The peer: scipy's differential evolution over (H, L_1 .. L_M) on the family's largest node
+    deviation (the batched along-normal quartic of `normal_deviation`, as `fit.evolve` does), in
+    the default box. With `target_mm` it stops once the best member of the population is within
+    it (to time it to another method's answer); LIMIT if maxiter ends first. Verified densely."""
+    from scipy.optimize import differential_evolution
+
+    from mechopt.models.cam_cutter import ideal_normal
+    from mechopt.solvers.cam_cutter.deviation import normal_deviation
+
+    start = time.perf_counter()
+    members = task.members
+    box, _, _ = _default_box(members, BOX_PAD_PER_A, task.H_min_mm, task.H_max_mm)
+    nodes = []
+    for a, h in members:
+        t = np.linspace(0.0, finish_angle(a, h), count)
+        nodes.append((*ideal_point(t, a, h), *ideal_normal(t)))
+    px, py, nx, ny = (np.stack([n[j] for n in nodes]) for j in range(4))      # (M, count)
+
+    def objective(population):                  # (M + 1, S): every candidate in one call
+        H, L = population[0], population[1:]
+        d = normal_deviation(px[None], py[None], nx[None], ny[None], H[:, None, None], L.T[:, :, None])
+        worst = np.abs(d).max(axis=(1, 2))
+        return np.where(np.isfinite(worst), worst, 1e9)
+
+    reached = {}
+
+    def stop(intermediate_result):
+        reached["best"] = float(intermediate_result.fun)
+        return target_mm is not None and intermediate_result.fun <= target_mm
+
+    found = differential_evolution(objective, [(box[0], box[1])] + list(zip(box[2], box[3])), popsize=popsize,
+                                   tol=0.0, atol=0.0, maxiter=maxiter, seed=seed, polish=False, vectorized=True,
+                                   updating="deferred", callback=stop)
+    H, L = float(found.x[0]), found.x[1:]
+    deviation = max(verified_deviation(a, h, H, L_i, finish_angle(a, h))[0] for (a, h), L_i in zip(members, L))
+    hit = target_mm is not None and found.fun <= target_mm
+    return Result(Status.SOLVED if hit or (target_mm is None and found.success) else Status.LIMIT,
+                  {"H_mm": H, "worst_deviation_mm": deviation, "nodes_max_deviation_mm": float(found.fun)},
+                  Timing(0.0, time.perf_counter() - start), message=str(found.message),
+                  diagnostics={"generations": int(found.nit), "evaluations": int(found.nfev)},
+                  arrays={"L_mm": L})
