@@ -233,7 +233,9 @@ class TableCurve(_Curve):
                              f"turns back by {turn[back[0]]:.0f} degrees; the points are not in path order "
                              f"(sort them along the curve)", key="points")
         t = np.r_[0.0, np.cumsum(chord)]
-        spline = (CubicSpline(t, np.c_[x, y], bc_type="periodic") if closed else CubicSpline(t, np.c_[x, y]))
+        if closed:              # the closing point repeats the first to within 1e-9: make it exact
+            x[-1], y[-1] = x[0], y[0]
+        spline = CubicSpline(t, np.c_[x, y], bc_type="periodic" if closed else "not-a-knot")
         object.__setattr__(self, "_spline", spline)
         object.__setattr__(self, "closed", closed)
         object.__setattr__(self, "t0", 0.0)
