@@ -152,7 +152,7 @@ def _default_box(members, pad_per_a, H_min, H_max):
     L0 = span - H0
     spread = H_hi - H_lo
     L_lo = np.maximum(L0 - pad - spread, 0.01 * a)
-    L_hi = L0 + pad + spread
+    L_hi = np.maximum(L0 + pad + spread, L_lo + pad)     # an H far from the cam's own leaves L0 <= 0
     return (H_lo, H_hi, L_lo, L_hi), H0, np.clip(L0, L_lo, L_hi)
 
 
@@ -241,6 +241,9 @@ def readjustable(task: ToolFamily, *, count: Annotated[int, Interval(ge=20, le=1
         message += f"; within the band at the {count} nodes but {deviation[worst]:.4g} mm between them: raise count"
     else:
         message += f"; worst {deviation[worst]:.4g} mm at {where}"
+    given = [side for side in got.get("sides", []) if side not in got.get("derived_sides", [])]
+    if given:               # a bound the user gave is a constraint: the answer stands, named
+        message += "; " + ", ".join(f"H at its given bound {side} = {getattr(task, side):g}" for side in given)
     diagnostics = {"exchange_rounds": got["rounds"], "nlp_back_ends": got["back_ends"],
                    "nodes_max_deviation_mm": nodes_max, "active_sides": got.get("sides", []),
                    "box_widenings": got["widened"], "members": len(members)}
