@@ -22,8 +22,15 @@ import casadi as ca
 import numpy as np
 
 from mechopt.models.cache import BuildCache
-from mechopt.models.cam_cutter import PAPER_A_MM, ToolFamily, finish_angle, ideal_point, matched_linkage
-from mechopt.models.cam_cutter import real_point, real_velocity
+from mechopt.models.cam_cutter import (
+    PAPER_A_MM,
+    ToolFamily,
+    finish_angle,
+    ideal_point,
+    matched_linkage,
+    real_point,
+    real_velocity,
+)
 from mechopt.solvers.cam_cutter.deviation import foot_points, verified_deviation
 from mechopt.solvers.cam_cutter.fit import _NLP_OPTIONS, ROUND_VERTICES
 from mechopt.solvers.result import Result, Status, Timing, from_ipopt, from_sqpmethod

@@ -41,10 +41,10 @@ from mechopt.solvers.cam_cutter.deviation import (
     verified_deviation,
     verified_deviation_on,
 )
+from mechopt.solvers.result import Result, Status, Timing, from_ipopt, from_sqpmethod
 from mechopt.solvers.settings import Annotated, Ge, Interval, Tolerance, check_settings
 
 Nodes = Annotated[int, Interval(ge=2, le=1_000_000)]      # COUNT: nodes on the ideal path
-from mechopt.solvers.result import Result, Status, Timing, from_ipopt, from_sqpmethod
 
 __all__ = ["grid_scan", "minimax", "robust", "evolve", "check"]
 
