@@ -29,11 +29,10 @@ from mechopt.models.cam_cutter import (
     ideal_point,
     matched_linkage,
     real_point,
-    real_velocity,
 )
 from mechopt.solvers.cam_cutter.deviation import foot_points, verified_deviation
-from mechopt.solvers.cam_cutter.fit import _NLP_OPTIONS, ROUND_VERTICES
-from mechopt.solvers.result import Result, Status, Timing, from_ipopt, from_sqpmethod
+from mechopt.solvers.cam_cutter.fit import _NLP_OPTIONS, ROUND_VERTICES, _solve_round, foot_and_band
+from mechopt.solvers.result import Result, Status, Timing
 from mechopt.solvers.settings import Annotated, Interval, check_settings
 
 __all__ = ["readjustable", "family_minimax", "served_range", "fixed_H_deviation", "evolve_family"]
@@ -53,30 +52,15 @@ def _build(members, k, method):
     n = members * k
     H, L, delta, s = ca.SX.sym("H"), ca.SX.sym("L", members), ca.SX.sym("delta"), ca.SX.sym("s", n)
     p = ca.SX.sym("p", 2 * n + 1)
-    px, py, a = p[:n], p[n:2 * n], p[2 * n]
     L_slot = ca.vertcat(*[L[i] for i in range(members) for _ in range(k)])
-    rx, ry = real_point(s, H, L_slot, m=ca)
-    vx, vy = real_velocity(s, H, L_slot, m=ca)
-    ex, ey = rx - px, ry - py
-    signed = (ex * vy - ey * vx) / ca.sqrt(vx * vx + vy * vy + (1e-9 * a) ** 2)
-    g = ca.vertcat(ex * vx + ey * vy, delta + signed, delta - signed)
+    g = foot_and_band(s, H, L_slot, p[:n], p[n:2 * n], p[2 * n], delta)
     nlp = {"x": ca.vertcat(H, L, delta, s), "p": p, "f": delta, "g": g}
     return ca.nlpsol("cam_family", "sqpmethod" if method == "sqp" else "ipopt", nlp, _OPTIONS[method])
 
 
-def _solve(members, k, nlp, args, cold):
-    """One round: SQP first (when asked and warm), IPOPT where it does not converge and on the
-    cold first round. (solution, Status, back end's word, back end, build s)."""
-    build_s = 0.0
-    for name in (("sqp", "ipopt") if nlp == "sqp" and not cold else ("ipopt",)):
-        solver, built = _BUILDS.get((members, k, name), lambda name=name: _build(members, k, name))
-        build_s += built
-        sol = solver(**args)
-        stats = solver.stats()
-        status = (from_sqpmethod(stats["return_status"], stats["success"]) if name == "sqp"
-                  else from_ipopt(stats["return_status"]))
-        if status is Status.SOLVED or name == "ipopt":
-            return sol, status, stats["return_status"], name, build_s
+def _family_nlp(shape, method):
+    """The built family NLP for shape (members, k) and the seconds its build took now (0 cached)."""
+    return _BUILDS.get((*shape, method), lambda: _build(*shape, method))
 
 
 def family_minimax(members, box, H0, L0, *, count=400, slots=4, max_rounds=40, nlp="ipopt"):
@@ -105,7 +89,7 @@ def family_minimax(members, box, H0, L0, *, count=400, slots=4, max_rounds=40, n
         dist = np.concatenate([every[i][0][c] for i, c in enumerate(chosen)])
         s0 = np.concatenate([every[i][1][c] for i, c in enumerate(chosen)])
         n = M * k
-        sol, status, word, used, built = _solve(M, k, nlp, cold=rounds == 1, args=dict(
+        sol, status, word, used, built = _solve_round((M, k), nlp, solver_of=_family_nlp, cold=rounds == 1, bounds=dict(
             x0=np.r_[H, L, dist.max(), s0], p=np.r_[px, py, PAPER_A_MM],
             lbx=np.r_[H_lo, L_lo, 0.0, np.full(n, -np.inf)], ubx=np.r_[H_hi, L_hi, np.inf, np.full(n, np.inf)],
             lbg=np.zeros(3 * n), ubg=np.r_[np.zeros(n), np.full(2 * n, np.inf)]))

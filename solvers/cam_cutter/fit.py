@@ -493,23 +493,29 @@ def _minimax_nlp(k: int, method: str):
 def _build_minimax_nlp(k, method):
     H, L, delta, s = ca.SX.sym("H"), ca.SX.sym("L"), ca.SX.sym("delta"), ca.SX.sym("s", k)
     p = ca.SX.sym("p", 2 * k + 1)
-    px, py, a = p[:k], p[k:2 * k], p[2 * k]
+    g = foot_and_band(s, H, L, p[:k], p[k:2 * k], p[2 * k], delta)
+    nlp = {"x": ca.vertcat(H, L, delta, s), "p": p, "f": delta, "g": g}
+    return ca.nlpsol("cam_minimax", "sqpmethod" if method == "sqp" else "ipopt", nlp, _NLP_OPTIONS[method])
+
+
+def foot_and_band(s, H, L, px, py, a, delta):
+    """The minimax constraints for nodes (px, py) and limaçon points s (CasADi symbols): the foot
+    condition (= 0), then delta + and - the signed distance (>= 0). L may differ per node."""
     rx, ry = real_point(s, H, L, m=ca)
     vx, vy = real_velocity(s, H, L, m=ca)
     ex, ey = rx - px, ry - py
     # |R'| vanishes only at the plain cardioid's cusp, where the cross product does too
     signed = (ex * vy - ey * vx) / ca.sqrt(vx * vx + vy * vy + (1e-9 * a) ** 2)
-    g = ca.vertcat(ex * vx + ey * vy, delta + signed, delta - signed)
-    nlp = {"x": ca.vertcat(H, L, delta, s), "p": p, "f": delta, "g": g}
-    return ca.nlpsol("cam_minimax", "sqpmethod" if method == "sqp" else "ipopt", nlp, _NLP_OPTIONS[method])
+    return ca.vertcat(ex * vx + ey * vy, delta + signed, delta - signed)
 
 
-def _solve_round(k, method, bounds):
+def _solve_round(k, method, bounds, *, solver_of=None, cold=False):
     """One exchange round's NLP: (solution, Status, the back end's word, the back end, build s).
-    SQP first when asked; a round it does not solve is solved again by IPOPT from the same start."""
+    SQP first when asked (and not `cold`); a round it does not solve is solved again by IPOPT from
+    the same start. `solver_of(k, name)` gives the built NLP (default: this module's minimax)."""
     build_s = 0.0
-    for name in (("sqp", "ipopt") if method == "sqp" else ("ipopt",)):
-        solver, built_s = _minimax_nlp(k, name)
+    for name in (("sqp", "ipopt") if method == "sqp" and not cold else ("ipopt",)):
+        solver, built_s = (solver_of or _minimax_nlp)(k, name)
         build_s += built_s
         sol = solver(**bounds)
         stats = solver.stats()
