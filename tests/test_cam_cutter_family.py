@@ -68,13 +68,14 @@ def test_a_family_no_H_can_serve_is_infeasible_with_the_best_band_and_where():
     assert "a_served_min_mm" not in run.values                 # nothing is served
 
 
-def test_a_wide_family_is_infeasible_and_its_band_is_the_nested_minimum():
-    task = ToolFamily(a_min_mm=23.0, a_max_mm=27.0, err_width_mm=0.075, a_count=3, h_values_mm=(2.0,))
-    run = readjustable(task)
-    assert run.status is Status.INFEASIBLE
-    H = run.values["H_mm"]
-    assert family_worst(task.members, H) == pytest.approx(run.values["worst_deviation_mm"], abs=2e-5)
-    assert min(family_worst(task.members, H + d) for d in (-0.1, 0.1)) > run.values["worst_deviation_mm"]
+def test_family_too_wide_scene_is_infeasible_at_the_nested_minimum():
+    run = registry.run("cam-cutter/family-too-wide")
+    expect = run.scene.spec.expect
+    assert run.status is Status.INFEASIBLE and "set by member a = 23 mm, h = 2 mm at t = " in run.result.message
+    members, H = run.task.members, expect["H_mm"].value
+    worst = family_worst(members, H)
+    assert worst == pytest.approx(expect["worst_deviation_mm"].value, abs=2e-5)
+    assert min(family_worst(members, H + d) for d in (-0.05, 0.05)) > worst + 1e-4
 
 
 def test_an_H_bound_that_binds_is_named_and_a_served_range_at_its_limit_is_not_solved():
