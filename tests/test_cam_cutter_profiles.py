@@ -183,3 +183,12 @@ def test_the_placement_reading_matters_and_start_at_origin_is_taken():
     run = minimax(task, count=400)
     assert run.status is not Status.SOLVED and run.values["max_deviation_mm"] > 40
     assert scene.spec.structure["placement"] == "start_at_origin"
+
+
+def test_an_optimum_on_the_default_box_is_limit_not_solved():
+    # an ellipse longer than it is tall wants H < 0 (the egg turned round): the box floor stops it
+    task = ProfileFit(err_width_mm=2.0, x_expr="A*cos(t)", y_expr="B*sin(t)", t1_rad=np.pi,
+                      constants={"A": 50.0, "B": 47.5}, h_mm=2.0)
+    run = minimax(task, count=400)
+    assert run.status is Status.LIMIT
+    assert "H at its lower bound H_min_mm" in run.message and "the default box" in run.message
