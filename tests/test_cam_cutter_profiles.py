@@ -82,12 +82,18 @@ def test_closed_table_is_a_periodic_spline_through_its_points():
     assert np.min(nx * x / 30 + ny * y / 30) > 1 - 1e-6          # counter-clockwise: outward normal
 
 
-def test_csv_table_reads_the_example_and_names_bad_rows():
+def test_csv_table_of_a_limacon_gives_back_its_linkage():
+    # the example: 37 rows (4 decimals) of r = 50 + 4 cos(theta) about the origin, a limaçon:
+    # eq. (10) with H = 4, L = 50 in closed form, so the spline's path must find them again
     path = ROOT / "examples" / "cam-profile-table.csv"
     curve = TableCurve.from_csv_text(path.read_text(encoding="utf-8"), name=str(path))
-    task = ProfileFit(err_width_mm=0.5, points_mm=tuple(zip(curve.x_mm, curve.y_mm)), h_mm=2.0)
+    task = ProfileFit(err_width_mm=0.01, points_mm=tuple(zip(curve.x_mm, curve.y_mm)))
     run = minimax(task, count=400)
-    assert run.status is Status.SOLVED and run.values["max_deviation_mm"] < 0.5
+    assert run.status is Status.SOLVED and run.values["max_deviation_mm"] < 3e-4
+    assert run.values["H_mm"] == pytest.approx(4.0, abs=5e-3) and run.values["L_mm"] == pytest.approx(50.0, abs=1e-3)
+
+
+def test_csv_rows_that_are_not_numbers_are_named():
     with pytest.raises(ModelError, match=r"bad\.csv: row 2 .*expected numbers"):
         TableCurve.from_csv_text("x_mm,y_mm\n1,2\n1,x\n", name="bad.csv")
 
