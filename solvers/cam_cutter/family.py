@@ -31,7 +31,7 @@ from mechopt.models.cam_cutter import (
     real_point,
 )
 from mechopt.solvers.cam_cutter.deviation import foot_points, verified_deviation
-from mechopt.solvers.cam_cutter.fit import _NLP_OPTIONS, ROUND_VERTICES, _solve_round, foot_and_band
+from mechopt.solvers.cam_cutter.fit import _NLP_OPTIONS, ROUND_VERTICES, _pad, _solve_round, foot_and_band
 from mechopt.solvers.result import Result, Status, Timing
 from mechopt.solvers.settings import Annotated, Interval, check_settings
 
@@ -83,7 +83,7 @@ def family_minimax(members, box, H0, L0, *, count=400, slots=4, max_rounds=40, n
         k = max(slots, max(len(w) for w in kept))
         k = 1 << (k - 1).bit_length()                     # powers of two: few distinct builds
         k = min(k, count)
-        chosen = [np.array(_spread(kept[i], k, count)) for i in range(M)]
+        chosen = [np.array(_pad(kept[i], k, count)) for i in range(M)]
         px = np.concatenate([paths[i][0][c] for i, c in enumerate(chosen)])
         py = np.concatenate([paths[i][1][c] for i, c in enumerate(chosen)])
         dist = np.concatenate([every[i][0][c] for i, c in enumerate(chosen)])
@@ -118,17 +118,6 @@ def family_minimax(members, box, H0, L0, *, count=400, slots=4, max_rounds=40, n
     nodes_max = np.array([e[0].max() for e in every]) * scale
     return {"H": H * scale, "L": L * scale, "status": status, "word": word, "rounds": rounds,
             "build_s": build_s, "nodes_max": nodes_max, "back_ends": back_ends, "slots": k}
-
-
-def _spread(working, k, count):
-    """The member's working nodes plus evenly spread others, k in all (never a duplicate)."""
-    chosen = list(dict.fromkeys(working))
-    for i in np.linspace(0, count - 1, k + len(chosen)).round().astype(int):
-        if len(chosen) >= min(k, count):
-            break
-        if int(i) not in chosen:
-            chosen.append(int(i))
-    return chosen
 
 
 def _default_box(members, pad_per_a, H_min, H_max):
