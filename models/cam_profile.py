@@ -385,7 +385,8 @@ class ProfileFit:
     """Link lengths H, L so that the limaçon (10) stays within `err_width_mm` of a cam of any shape.
 
     The cam side is a parametric curve (`x_expr`, `y_expr` in t over `t0_rad` .. `t1_rad`, with
-    named `constants` [mm]) or a table of points `points_mm` ([[x, y], ...] in path order); the
+    named `constants` [mm]) or a table of points `points_mm` ([[x, y], ...] in path order, its
+    parameter the chord length [mm] over the whole table: t0_rad, t1_rad are then unused); the
     torch path is its offset by the kerf `h_mm` (effect torch_offset, eq. (2) generalised),
     placed by `placement` (PLACEMENTS). `H_min_mm` ... `L_max_mm` the search box; a side not given
     is the brute-force start (`coarse_start`) +- size/2, with size = the path's reach / 4 (the
