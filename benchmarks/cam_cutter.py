@@ -126,7 +126,7 @@ def family_table(loads, family, peer):
     lines += ["", f"peer: differential evolution on the family objective, {peer['cams']} cams, stopped at the NLP's "
               f"worst deviation +0.1 %",
               f"  NLP {peer['nlp_wall_s']:.4f} s (median of {peer['nlp_runs']}), worst {peer['nlp_worst_mm']:.6f} mm; "
-              f"DE {peer['de_wall_s']:.3f} s ({peer['de_runs']} run, {peer['de_generations']} generations, "
+              f"DE {peer['de_wall_s']:.3f} s (median of {peer['de_runs']}, {peer['de_generations']} generations, "
               f"{peer['de_status']}), worst {peer['de_worst_mm']:.6f} mm; DE / NLP = {peer['de_over_nlp']:.0f}x"]
     return "\n".join(lines)
 
