@@ -198,3 +198,22 @@ def test_an_optimum_on_the_default_box_is_limit_not_solved():
     run = minimax(task, count=400)
     assert run.status is Status.LIMIT
     assert "H at its lower bound H_min_mm" in run.message and "the default box" in run.message
+
+
+def test_a_users_scene_takes_a_point_table_in_its_structure(tmp_path):
+    s = np.linspace(0.0, np.pi, 25)
+    r = 50 + 4 * np.cos(s)                                    # the limaçon H = 4, L = 50 again
+    rows = ", ".join(f"[{x:.6f}, {y:.6f}]" for x, y in zip(r * np.cos(s), r * np.sin(s)))
+    path = tmp_path / "table.toml"
+    path.write_text(f'''id = "mine/table"
+title = "a cam given as a point table"
+source = "a test"
+task = "cam_profile.ProfileFit"
+solver = "cam_cutter.minimax"
+[params]
+err_width_mm = {{ value = 0.01, mark = "assumed", why = "a test" }}
+[structure]
+points_mm = [{rows}]
+''', encoding="utf-8")
+    run = registry.run(str(path))
+    assert run.status is Status.SOLVED and run.values["H_mm"] == pytest.approx(4.0, abs=0.02)
