@@ -217,3 +217,11 @@ points_mm = [{rows}]
 ''', encoding="utf-8")
     run = registry.run(str(path))
     assert run.status is Status.SOLVED and run.values["H_mm"] == pytest.approx(4.0, abs=0.02)
+
+
+@pytest.mark.parametrize("method", ["grid_scan", "robust", "evolve"])
+def test_the_cardioid_only_methods_refuse_a_general_curve(method):
+    from mechopt.solvers.cam_cutter import fit_linkage
+    task, _ = registry.find("cam-cutter/other-profile").build()
+    with pytest.raises(ModelError, match=f"{method} solves the cardioid .* by cam_cutter.minimax"):
+        fit_linkage(task, method=method)

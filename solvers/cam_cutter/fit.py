@@ -81,6 +81,7 @@ def grid_scan(task: LinkageFit, *, count: Nodes = 1000,
     below the axis just before the ideal path does: the node at t = t_FINISH ("closed",
     "open_start") then fails everywhere at the paper's width. `diagnostics` reports this.
     """
+    _cardioid_only(task, "grid_scan")
     start = time.perf_counter()
     H_grid, L_grid = _lattice(task)             # first: a lattice too large is refused before any work
     t_finish = task.t_finish_read_rad
@@ -342,6 +343,7 @@ def robust(task: LinkageFit, *, count: Nodes = 1000, max_moves: Annotated[int, I
     corners (a test bounds what a finer box sampling adds). The search is a descent over lattice
     points from the minimax optimum; lattice deviations are memoised, neighbours share them.
     """
+    _cardioid_only(task, "robust")
     _check_count(count)
     check_settings(robust, max_moves=max_moves)
     lattice = _lattice_indices(task)            # a box with no lattice point is refused before any work
@@ -403,6 +405,7 @@ def evolve(task: LinkageFit, *, count: Nodes = 1000, popsize: Annotated[int, Int
     about 1e-5 mm. No polish: the objective is a maximum with kinks, where L-BFGS-B stalls.
     Its answer gets the status rule of `minimax` (`_verdict`): outside err_width_mm is INFEASIBLE
     with the best values kept, on a side of the default box LIMIT (no widening here)."""
+    _cardioid_only(task, "evolve")
     _check_count(count)
     check_settings(evolve, popsize=popsize, tol=tol, maxiter=maxiter, seed=seed)
     start = time.perf_counter()
@@ -551,6 +554,13 @@ def _node_times(task, count, nodes):
         raise ModelError(f"nodes={nodes!r} is not a node rule; known: {', '.join(NODE_RULES)}", key="nodes")
     first, extra = NODE_RULES[nodes]
     return np.arange(first, count + extra) * (task.t_finish_read_rad / count)
+
+
+def _cardioid_only(task, name):
+    """The lattice and the along-normal solvers know the cardioid's closed forms only."""
+    if isinstance(task, ProfileFit):
+        raise ModelError(f"{name} solves the cardioid (LinkageFit) only; a cam of any shape (ProfileFit) is "
+                         "solved by cam_cutter.minimax", key="solver")
 
 
 def _check_count(count):
