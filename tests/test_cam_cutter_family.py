@@ -83,7 +83,7 @@ def test_an_H_bound_that_binds_is_named_and_a_served_range_at_its_limit_is_not_s
     assert run.values["H_mm"] == pytest.approx(59.0, abs=1e-6)
     assert "H_max_mm" in run.result.message
     wide = registry.run("cam-cutter/readjustable", {"err_width_mm": 30.0})      # serves everything it tries
-    assert wide.status is Status.LIMIT and "search limit" in wide.result.message
+    assert wide.status is Status.LIMIT and "still served (search limit a_min / 4" in wide.result.message
     assert "a_served_max_mm" not in wide.values
 
 
@@ -102,3 +102,11 @@ def test_the_differential_evolution_peer_runs_and_reports_its_status():
     short = evolve_family(task, count=50, maxiter=3)
     assert short.status is Status.LIMIT and np.isfinite(short.values["worst_deviation_mm"])
     assert short.values["worst_deviation_mm"] >= readjustable(task, served=False).values["worst_deviation_mm"] - 1e-9
+
+
+def test_a_served_range_needs_the_family_served_first():
+    from mechopt.solvers.cam_cutter.family import served_range
+    task, _ = registry.find("cam-cutter/readjustable").build()
+    low, high, info = served_range(task, 59.2)          # 0.23 mm below the family's H: a = 25.1 mm is lost
+    assert low is None and high is None
+    assert "the family's own cam a = 25.1 mm is not served at H = 59.2 mm" in info["note"]

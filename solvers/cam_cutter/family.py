@@ -232,7 +232,8 @@ def readjustable(task: ToolFamily, *, count: Annotated[int, Interval(ge=20, le=1
         diagnostics["served_range"] = info
         if low is None or high is None:
             status = Status.LIMIT
-            message += f"; the served range reached its search limit ({info['note']})"
+            message += f"; served range not determined: {info['note']} (search limit a_min / {SEARCH_FACTOR:g} .. " \
+                       f"a_max x {SEARCH_FACTOR:g})"
         else:
             values |= {"a_served_min_mm": low, "a_served_max_mm": high}
     return Result(status, values, Timing(build_s, time.perf_counter() - start - build_s), message=message,
@@ -257,7 +258,8 @@ def served_range(task: ToolFamily, H, *, count=400, slots=4, max_rounds=40, tol_
     keeps every nozzle h within err_width_mm (each with its best L), ends to `tol_mm` (default
     a_min / 2500, the paper's lattice step scaled). An end not found within the search limit
     (a_min / SEARCH_FACTOR but above the widest kerf, a_max * SEARCH_FACTOR) is None; `info`
-    says which. The deviation is taken to rise monotonically away from the family (a test samples it)."""
+    says which; so is a range whose family end is not served itself. The deviation is taken to
+    rise monotonically away from the family (a test samples it)."""
     band, tol = task.err_width_mm, tol_mm or task.a_min_mm / 2500
     evaluations = []
 
@@ -267,6 +269,10 @@ def served_range(task: ToolFamily, H, *, count=400, slots=4, max_rounds=40, tol_
         return d is not None and d <= band
 
     ends, notes = [], []
+    for a in dict.fromkeys((task.a_min_mm, task.a_max_mm)):
+        if not serves(a):       # the range grows from the family: it must be served itself
+            return None, None, {"evaluations": len(evaluations), "tol_mm": tol,
+                                "note": f"the family's own cam a = {a:g} mm is not served at H = {H:.6g} mm"}
     lowest = max(task.a_min_mm / SEARCH_FACTOR, 1.01 * max(task.h_values_mm))     # a cam must outgrow its kerf
     for inner, limit in ((task.a_min_mm, lowest), (task.a_max_mm, task.a_max_mm * SEARCH_FACTOR)):
         good, step = inner, 0.05 * inner
