@@ -290,7 +290,7 @@ def cli(repeats, out_dir, progress=None, quick=False) -> str:
         rows = run(repeats=repeats, progress=progress)
         loads = kinetostatics_rows(repeats=repeats, progress=progress)
         family = family_rows(repeats=repeats, progress=progress)
-        peer = family_peer(cams=4, repeats=repeats, progress=progress)
+        peer = family_peer(cams=4, repeats=repeats, progress=progress, de_repeats=3)
     paths = plot(rows, out_dir)
     timing = grid_box_timing(repeats=repeats, progress=progress)
     timing["family_20_cams_s"] = next(r["wall_s_median"] for r in family if r["cams"] == 20)
