@@ -15,23 +15,120 @@ compares methods fairly. The methods, all on the paper's task (`PAPER_TASK`):
 
 Timings are measured here and only here; tests never assert them (they depend on the machine
 and its load). `grid_box_timing` measures the headline numbers against their targets.
+
+Issue 13 adds two studies: `kinetostatics_rows` (joint loads of the paper's linkage against the
+number of crank angles; the largest driving torque beside the finest grid's) and `family_rows`
+(the readjustable tool's family NLP against the number of cams, the target 20 cams < 1 s), with
+its peer `family_peer`: scipy's differential evolution on the same family objective, stopped
+when its node objective reaches the NLP's worst deviation, both answers verified densely.
 """
 import statistics
 import time
 
 from mechopt import registry
 from mechopt.models.cache import clear as clear_caches
+from mechopt.models.cam_cutter import ToolFamily
 from mechopt.plots import save_figure
+from mechopt.solvers.cam_cutter import family as family_fit
 from mechopt.solvers.cam_cutter import fit as trajectory_fit
+from mechopt.solvers.cam_cutter import joint_loads
 
-__all__ = ["cli", "run", "table", "ratios", "plot", "grid_box_timing", "targets_table", "PAPER_TASK", "TARGETS"]
+__all__ = ["cli", "run", "table", "ratios", "plot", "grid_box_timing", "targets_table", "PAPER_TASK", "TARGETS",
+           "kinetostatics_rows", "family_rows", "family_peer", "family_table"]
 
 PAPER_TASK, _ = registry.find("cam-cutter/paper-grid").build()   # the paper's cardioid, band and box
 COUNTS = (20, 50, 100, 200, 500, 1000, 2000, 5000)
 GRID, COLD, WARM, DE = "grid_scan (paper)", "minimax NLP (cold)", "minimax NLP (warm)", "differential evolution"
 IPOPT = "minimax IPOPT (warm)"
 TARGETS = {"grid_scan_1000_s": 0.1, "minimax_1000_cold_s": 0.05, "minimax_1000_warm_s": 0.05,
-           "minimax_10000_cold_s": 0.5}
+           "minimax_10000_cold_s": 0.5, "family_20_cams_s": 1.0}
+LOADS_TASK, _ = registry.find("cam-cutter/joint-reactions").build()
+ANGLES = (91, 181, 361, 721, 1441, 2881, 5761)
+FAMILY_SIZES = (1, 2, 5, 10, 20)
+
+
+def family_task(cams, *, nozzles=(1.8, 2.0, 2.2), band_mm=0.2):
+    """`cams` cardioid cams about the readjustable scene's: a over 24.9 .. 25.1 mm, the nozzles
+    taken in turn (a_count x len(h) = cams; a single cam is a = 25 mm, h = 2 mm)."""
+    if cams == 1:
+        return ToolFamily(a_min_mm=25.0, a_max_mm=25.0, err_width_mm=band_mm, a_count=1, h_values_mm=(2.0,))
+    h = nozzles if cams % len(nozzles) == 0 else nozzles[:1] if cams % 2 else nozzles[::2]
+    return ToolFamily(a_min_mm=24.9, a_max_mm=25.1, err_width_mm=band_mm, a_count=cams // len(h), h_values_mm=h)
+
+
+def kinetostatics_rows(angles=ANGLES, repeats=5, progress=None):
+    """Joint loads of the paper's linkage (scene joint-reactions) at rising angle counts: median
+    wall, the largest driving torque (and its difference from the finest count's) and reaction."""
+    rows = [_measure("joint_loads", n, lambda n=n: joint_loads(LOADS_TASK, count=n), repeats, progress)
+            | {k: joint_loads(LOADS_TASK, count=n).values[k] for k in ("max_driving_torque_N_m", "max_joint_reaction_N")}
+            for n in angles]
+    finest = rows[-1]["max_driving_torque_N_m"]
+    return [r | {"torque_vs_finest_N_m": r["max_driving_torque_N_m"] - finest} for r in rows]
+
+
+def family_rows(sizes=FAMILY_SIZES, repeats=5, progress=None):
+    """The family NLP (`readjustable`, served range off) at rising numbers of cams, build cached
+    after the first call (cold: the first run of each size is in `wall_s_max`)."""
+    rows = []
+    for cams in sizes:
+        task = family_task(cams)
+        walls, last = [], None
+        for k in range(repeats):
+            start = time.perf_counter()
+            last = family_fit.readjustable(task, served=False)
+            walls.append(time.perf_counter() - start)
+            if progress:
+                progress(f"family NLP cams={cams:<4} run {k + 1}/{repeats}: {walls[-1]:.4f} s")
+        rows.append({"method": "family NLP (IPOPT)", "cams": cams, "wall_s_median": statistics.median(walls),
+                     "wall_s_max": max(walls), "runs": repeats, "H_mm": last.values["H_mm"],
+                     "worst_deviation_mm": last.values["worst_deviation_mm"], "status": last.status.value,
+                     "rounds": last.diagnostics["exchange_rounds"]})
+    return rows
+
+
+def _timed(call, repeats, progress, label):
+    walls, result = [], None
+    for k in range(repeats):
+        start = time.perf_counter()
+        result = call()
+        walls.append(time.perf_counter() - start)
+        if progress:
+            progress(f"{label} run {k + 1}/{repeats}: {walls[-1]:.4f} s")
+    return statistics.median(walls), result
+
+
+def family_peer(cams=4, repeats=3, progress=None, *, de_count=200, de_repeats=1):
+    """Differential evolution on the family objective against the family NLP, for `cams` cams:
+    DE stopped when its node objective reaches the NLP's dense worst deviation (+0.1 %); both
+    answers' worst deviations verified densely (`worst_deviation_mm`)."""
+    task = family_task(cams)
+    nlp_s, nlp = _timed(lambda: family_fit.readjustable(task, served=False), repeats, progress, f"family NLP cams={cams}")
+    target = nlp.values["worst_deviation_mm"] * 1.001
+    de_s, de = _timed(lambda: family_fit.evolve_family(task, count=de_count, target_mm=target), de_repeats, progress,
+                      f"family DE  cams={cams}")
+    return {"cams": cams, "nlp_wall_s": nlp_s, "de_wall_s": de_s, "de_over_nlp": de_s / nlp_s,
+            "nlp_worst_mm": nlp.values["worst_deviation_mm"], "de_worst_mm": de.values["worst_deviation_mm"],
+            "de_status": de.status.value, "de_generations": de.diagnostics["generations"], "de_runs": de_repeats,
+            "nlp_runs": repeats}
+
+
+def family_table(loads, family, peer):
+    """The issue-13 studies as fixed-width text: kinetostatics, family NLP, the DE peer."""
+    lines = ["", "kinetostatics (scene joint-reactions) against the number of crank angles",
+             f"{'angles':>8}{'wall med s':>12}{'max torque N m':>16}{'vs finest N m':>15}{'max reaction N':>16}  status",
+             "  (the torque peaks at phi = 0, on every grid; the reaction grows as the grid nears the singular phi = pi)"]
+    lines += [f"{r['count']:>8}{r['wall_s_median']:>12.4f}{r['max_driving_torque_N_m']:>16.6f}"
+              f"{r['torque_vs_finest_N_m']:>15.2e}{r['max_joint_reaction_N']:>16.1f}  {r['status']}" for r in loads]
+    lines += ["", "readjustable tool: family NLP against the number of cams (served range off)",
+              f"{'cams':>6}{'wall med s':>12}{'wall max s':>12}{'rounds':>8}{'H mm':>10}{'worst mm':>12}  status"]
+    lines += [f"{r['cams']:>6}{r['wall_s_median']:>12.4f}{r['wall_s_max']:>12.4f}{r['rounds']:>8}{r['H_mm']:>10.4f}"
+              f"{r['worst_deviation_mm']:>12.6f}  {r['status']}" for r in family]
+    lines += ["", f"peer: differential evolution on the family objective, {peer['cams']} cams, stopped at the NLP's "
+              f"worst deviation +0.1 %",
+              f"  NLP {peer['nlp_wall_s']:.4f} s (median of {peer['nlp_runs']}), worst {peer['nlp_worst_mm']:.6f} mm; "
+              f"DE {peer['de_wall_s']:.3f} s (median of {peer['de_runs']}, {peer['de_generations']} generations, "
+              f"{peer['de_status']}), worst {peer['de_worst_mm']:.6f} mm; DE / NLP = {peer['de_over_nlp']:.0f}x"]
+    return "\n".join(lines)
 
 
 def _cold_minimax(task, count):
@@ -179,9 +276,23 @@ def plot(rows, out_dir):
     return [str(path)]
 
 
-def cli(repeats, out_dir, progress=None) -> str:
-    """What `mechopt bench cam-cutter` prints: the work-precision table, the targets, the plot."""
-    rows = run(repeats=repeats, progress=progress)
+def cli(repeats, out_dir, progress=None, quick=False) -> str:
+    """What `mechopt bench cam-cutter` prints: the work-precision table, the targets, the plot,
+    then the kinetostatics, family and peer studies. `quick`: a few counts, one run each, the
+    DE peer on two cams (about half a minute)."""
+    if quick:
+        repeats = max(1, min(repeats, 3))
+        rows = run(counts=(100, 1000), repeats=repeats, de_counts=(100,), progress=progress)
+        loads = kinetostatics_rows(angles=(181, 721, 2881), repeats=repeats, progress=progress)
+        family = family_rows(sizes=(5, 20), repeats=repeats, progress=progress)
+        peer = family_peer(cams=2, repeats=repeats, progress=progress)
+    else:
+        rows = run(repeats=repeats, progress=progress)
+        loads = kinetostatics_rows(repeats=repeats, progress=progress)
+        family = family_rows(repeats=repeats, progress=progress)
+        peer = family_peer(cams=4, repeats=repeats, progress=progress, de_repeats=3)
     paths = plot(rows, out_dir)
-    return "\n".join([table(rows), targets_table(grid_box_timing(repeats=repeats, progress=progress)),
+    timing = grid_box_timing(repeats=repeats, progress=progress)
+    timing["family_20_cams_s"] = next(r["wall_s_median"] for r in family if r["cams"] == 20)
+    return "\n".join([table(rows), targets_table(timing), family_table(loads, family, peer),
                       *(f"plot: {p}" for p in paths)])

@@ -116,6 +116,28 @@ class _OnIdealPath:
         """Exact end of the ideal path in the upper half-plane [rad]."""
         return finish_angle(self.a_mm, self.h_mm)
 
+    # the path protocol the minimax shares with models.cam_profile.ProfileFit (any curve)
+    @property
+    def size_mm(self) -> float:
+        """The cam's size, the unit the solvers measure lengths in [mm]."""
+        return self.a_mm
+
+    @property
+    def t_start_rad(self) -> float:
+        return 0.0
+
+    @property
+    def t_end_rad(self) -> float:
+        return self.t_finish_rad
+
+    def path_point(self, t):
+        """The ideal path (9) at t [mm]."""
+        return ideal_point(t, self.a_mm, self.h_mm)
+
+    def path_values(self) -> dict:
+        """What a fit reports of the path itself: t_FINISH as the paper reads it."""
+        return {"t_finish_rad": self.t_finish_read_rad}
+
     @cached_property
     def t_finish_read_rad(self) -> float:
         """t_FINISH as the paper reads it, to `y_tol_mm` in Y (see `decimal_reading`) [rad]."""
@@ -339,3 +361,66 @@ def linkage_energy(positions, velocities, task: LinkageLoads):
                      + (task.link_inertia_kgm2 + task.block_inertia_kgm2) * velocities["theta"] ** 2)
     return kinetic + task.gravity_m_s2 * (task.crank_mass_kg * positions["C1"][1]
                                           + task.link_mass_kg * positions["C2"][1])
+
+
+# --- Readjustable tool (issue 13, Sec. 2): one frame distance H for a family of cams ---------
+
+FAMILY_MAX_MEMBERS = 400
+
+
+@dataclass(frozen=True)
+class ToolFamily:
+    """A readjustable linkage: one frame distance H for a family of cardioid cams, the wing length
+    L set per cam (paper 000, Sec. VII's "readjustable machine tool for a range of shapes and sizes").
+
+    The family is every a in `a_count` equal steps over `a_min_mm` .. `a_max_mm` with every kerf h
+    of `h_values_mm` (several nozzles); each member's path is eq. (9) up to its axis crossing.
+    `err_width_mm` is the band every member must keep. `H_min_mm`, `H_max_mm` bound H (not given:
+    the members' matched H +- a/2, widened by the solver when the optimum lies on a side).
+    """
+    a_min_mm: float
+    a_max_mm: float
+    err_width_mm: float
+    a_count: float = 5
+    h_values_mm: tuple = (2.0,)
+    H_min_mm: float | None = None
+    H_max_mm: float | None = None
+
+    EFFECTS: ClassVar[dict[str, Effect]] = {}
+
+    def __post_init__(self):
+        a_lo, a_hi = A_RANGE_MM
+        for key in ("a_min_mm", "a_max_mm"):
+            _require_range(self, key, a_lo, a_hi)
+        _require(self, "a_max_mm", self.a_max_mm >= self.a_min_mm, f"must be >= a_min_mm={self.a_min_mm}")
+        count = self.a_count
+        _require(self, "a_count", float(count).is_integer() and 1 <= count <= 200, "must be a whole number 1 .. 200")
+        object.__setattr__(self, "a_count", int(count))
+        _require(self, "a_count", self.a_count == 1 or self.a_max_mm > self.a_min_mm,
+                 "must be 1 when a_min_mm = a_max_mm")
+        h = self.h_values_mm
+        ok = isinstance(h, (list, tuple)) and len(h) >= 1 and all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v) for v in h)
+        _require(self, "h_values_mm", ok, "must be a list of one or more numbers [mm]")
+        object.__setattr__(self, "h_values_mm", tuple(float(v) for v in h))
+        _require(self, "h_values_mm", len(set(self.h_values_mm)) == len(self.h_values_mm), "must not repeat a value")
+        _require(self, "h_values_mm", min(self.h_values_mm) >= 0 and max(self.h_values_mm) < self.a_min_mm,
+                 f"every h must be >= 0 and < a_min_mm={self.a_min_mm} (the torch runs outside the cam)")
+        _require(self, "a_count", self.a_count * len(self.h_values_mm) <= FAMILY_MAX_MEMBERS,
+                 f"a_count x len(h_values_mm) = {self.a_count * len(self.h_values_mm)} members; at most {FAMILY_MAX_MEMBERS}")
+        _require_range(self, "err_width_mm", 0.0, LINK_MAX_PER_A * self.a_min_mm, low_open=True)
+        for key in ("H_min_mm", "H_max_mm"):
+            if getattr(self, key) is not None:
+                _require_range(self, key, 0.0, LINK_MAX_PER_A * self.a_max_mm, low_open=True)
+        if self.H_min_mm is not None and self.H_max_mm is not None:
+            _require(self, "H_min_mm", self.H_min_mm <= self.H_max_mm, f"must be <= H_max_mm={self.H_max_mm}")
+
+    @cached_property
+    def members(self) -> tuple[tuple[float, float], ...]:
+        """(a, h) of every cam of the family [mm], a ascending, then h in the given order."""
+        a = np.linspace(self.a_min_mm, self.a_max_mm, self.a_count)
+        return tuple((float(x), h) for x in a for h in self.h_values_mm)
+
+    def member_fit(self, a, h, **bounds) -> LinkageFit:
+        """The single cam (a, h) as a `LinkageFit` in this band (bounds as keywords)."""
+        return LinkageFit(a_mm=a, err_width_mm=self.err_width_mm, h_mm=h, **bounds)

@@ -37,6 +37,15 @@ def test_a_bad_value_in_a_scene_file_is_refused_at_load(tmp_path, case_id, old, 
     ("press/kd2322", {"duration_s": 1.0}, r"--set duration_s: unknown key"),
     ("loom/group1", {"tol_deg": -1.0}, r"solver_settings\.tol_deg = -1\.0: allowed > 0"),
     ("loom/machine", {"operations[from=10.1,to=99].min_deg": 5.0}, r"matches 0 entries of 'operations', not one"),
+    ("cam-cutter/readjustable", {"a_count": 2.5}, r"params\.a_count: a_count=2\.5 must be a whole number 1 \.\. 200"),
+    ("cam-cutter/readjustable", {"a_min_mm": 26.0}, r"params\.a_max_mm: a_max_mm=25\.1 must be >= a_min_mm=26"),
+    ("cam-cutter/readjustable", {"h_values_mm": [2.0, 30.0]}, r"structure\.h_values_mm: .*every h must be >= 0 and < a_min_mm"),
+    ("cam-cutter/readjustable", {"h_values_mm": [2.0, 2.0]}, r"h_values_mm=.*must not repeat a value"),
+    ("cam-cutter/readjustable", {"count": 5}, r"solver_settings\.count = 5: allowed 20 \.\.\. 100,000"),
+    ("cam-cutter/other-profile", {"x_expr": "__import__('os')"}, r"structure\.x_expr: .*is not allowed"),
+    ("cam-cutter/other-profile", {"constants.B_mm.value": "wide"}, r"constants\.B_mm='wide': expected a finite number"),
+    ("cam-cutter/other-profile", {"placement": "centred"}, r"placement='centred': allowed start_at_origin, as_given"),
+    ("cam-cutter/other-profile", {"t1_rad": -1.0}, r"params\.t1_rad: t1_rad=-1\.0 must be > t0_rad=0"),
 ])
 def test_a_bad_override_is_refused_before_work_and_changes_nothing(case_id, overrides, match):
     scene = registry.find(case_id)

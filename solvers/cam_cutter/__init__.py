@@ -2,14 +2,17 @@
 
 `fit` holds the solvers a scene names (`cam_cutter.minimax`, ...); `deviation` measures how far
 a limaçon is from the ideal path; `kinetostatics.joint_loads` the reactions and driving torque
-over the cycle (Sec. V re-derived). `fit_linkage(task, method=...)` is the one door to the four
+over the cycle (Sec. V re-derived); `family.readjustable` one H for a family of cams (Sec. VII).
+`minimax` also takes a cam of any shape (`models.cam_profile.ProfileFit`). `fit_linkage(task, method=...)` is the one door to the four
 ways of finding the linkage, as `scipy.integrate.solve_ivp` has one for its methods.
 """
 from mechopt.models.errors import SceneError
+from mechopt.solvers.cam_cutter.family import evolve_family, readjustable
 from mechopt.solvers.cam_cutter.fit import check, evolve, grid_scan, minimax, robust
 from mechopt.solvers.cam_cutter.kinetostatics import joint_loads
 
-__all__ = ["grid_scan", "minimax", "robust", "evolve", "check", "joint_loads", "fit_linkage", "METHODS"]
+__all__ = ["grid_scan", "minimax", "robust", "evolve", "check", "joint_loads", "readjustable", "evolve_family",
+           "fit_linkage", "METHODS"]
 
 METHODS = {"grid_scan": grid_scan, "minimax": minimax, "robust": robust, "evolve": evolve}
 

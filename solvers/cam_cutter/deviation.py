@@ -137,23 +137,31 @@ def foot_points(px, py, H, L, *, vertices=2**14, newton_steps=4):
 
 
 def verified_deviation(a, h, H, L, t_end, *, samples=2048, peaks=6, levels=5, points=33):
-    """Largest Euclidean distance [mm] from the ideal path t in [0, t_end] to the limaçon, and
-    the t where it occurs: sampled, then the leading local maxima refined together by zooming,
+    """Largest Euclidean distance [mm] from the ideal path (9) of the cardioid (a, h), t in
+    [0, t_end], to the limaçon, and the t where it occurs (`verified_deviation_on` that path)."""
+    return verified_deviation_on(lambda t: ideal_point(t, a, h), 0.0, t_end, H, L,
+                                 samples=samples, peaks=peaks, levels=levels, points=points)
+
+
+def verified_deviation_on(path, t_start, t_end, H, L, *, samples=2048, peaks=6, levels=5, points=33):
+    """Largest Euclidean distance [mm] from a path (a function t -> (x, y) [mm], vectorised), t
+    in [t_start, t_end], to the limaçon, and the t where it occurs: sampled, then the leading
+    local maxima refined together by zooming,
     each level resampling +-1 spacing around every peak's best point (16x finer a level, so
     5 levels resolve t to ~1e-9 rad, enough for a maximum at a kink as well as a smooth one).
     The deviation's peaks are wide: 1024 samples find the same maximum as 16384 to 3e-14 mm
     at and around minimax optima of a = 20..30 mm, h = 0..3 mm; 2048 keep a margin."""
-    t = np.linspace(0.0, t_end, samples)
-    dist = path_distance(*ideal_point(t, a, h), H, L)
+    t = np.linspace(t_start, t_end, samples)
+    dist = path_distance(*path(t), H, L)
     padded = np.r_[-np.inf, dist, -np.inf]
     tops = np.flatnonzero((padded[1:-1] >= padded[:-2]) & (padded[1:-1] >= padded[2:]))
     centre = t[tops[np.argsort(dist[tops])[::-1][:peaks]]]
-    half = t_end / (samples - 1)
+    half = (t_end - t_start) / (samples - 1)
     best_value, best_t = float(dist.max()), float(t[dist.argmax()])
     offsets = np.linspace(-1.0, 1.0, points)
     for _ in range(levels):
-        grid = np.clip(centre[:, None] + half * offsets[None, :], 0.0, t_end)
-        near = path_distance(*ideal_point(grid.ravel(), a, h), H, L).reshape(grid.shape)
+        grid = np.clip(centre[:, None] + half * offsets[None, :], t_start, t_end)
+        near = path_distance(*path(grid.ravel()), H, L).reshape(grid.shape)
         pick = near.argmax(axis=1)
         centre = grid[np.arange(len(grid)), pick]
         k = int(near.max(axis=1).argmax())

@@ -30,6 +30,7 @@ from mechopt.models.cam_cutter import (
     real_point,
     real_velocity,
 )
+from mechopt.models.cam_profile import ProfileFit
 from mechopt.models.errors import ModelError
 from mechopt.solvers.cam_cutter.deviation import (
     foot_points,
@@ -38,11 +39,12 @@ from mechopt.solvers.cam_cutter.deviation import (
     normal_deviation,
     path_distance,
     verified_deviation,
+    verified_deviation_on,
 )
+from mechopt.solvers.result import Result, Status, Timing, from_ipopt, from_sqpmethod
 from mechopt.solvers.settings import Annotated, Ge, Interval, Tolerance, check_settings
 
 Nodes = Annotated[int, Interval(ge=2, le=1_000_000)]      # COUNT: nodes on the ideal path
-from mechopt.solvers.result import Result, Status, Timing, from_ipopt, from_sqpmethod
 
 __all__ = ["grid_scan", "minimax", "robust", "evolve", "check"]
 
@@ -79,6 +81,7 @@ def grid_scan(task: LinkageFit, *, count: Nodes = 1000,
     below the axis just before the ideal path does: the node at t = t_FINISH ("closed",
     "open_start") then fails everywhere at the paper's width. `diagnostics` reports this.
     """
+    _cardioid_only(task, "grid_scan")
     start = time.perf_counter()
     H_grid, L_grid = _lattice(task)             # first: a lattice too large is refused before any work
     t_finish = task.t_finish_read_rad
@@ -136,7 +139,7 @@ def grid_scan(task: LinkageFit, *, count: Nodes = 1000,
                   diagnostics=diagnostics)
 
 
-def minimax(task: LinkageFit, *, count: Nodes = 1000, slots: Annotated[int, Interval(ge=1, le=4096)] = 8,
+def minimax(task: LinkageFit | ProfileFit, *, count: Nodes = 1000, slots: Annotated[int, Interval(ge=1, le=4096)] = 8,
             max_rounds: Annotated[int, Interval(ge=1, le=10_000)] = 40,
             nlp: Literal["sqp", "ipopt"] = "sqp", widen: Annotated[int, Interval(ge=0, le=10)] = 3) -> Result:
     """(H, L) in the box minimising the largest distance from COUNT nodes of the ideal path to
@@ -155,7 +158,8 @@ def minimax(task: LinkageFit, *, count: Nodes = 1000, slots: Annotated[int, Inte
     is measured by `foot_points`; the worst joins the kept set, and the round repeats, each s_k
     restarted on its nearest foot point, until the worst node is kept and no foot point the NLP
     followed has stopped being the nearest. The start matches the limaçon's double point and
-    vertex curvature to the ideal path (`matched_linkage`), exact for h = 0.
+    vertex curvature to the ideal path (`matched_linkage`), exact for h = 0. A cam of any shape
+    (`ProfileFit`) is solved the same way on its own path, from a brute-force start.
 
     Lengths are solved in units of a / 25 mm (`_scale`), so the tolerances tuned on the paper's
     cam hold at every size. A side of the default box (not given) that the optimum lies on is
@@ -171,17 +175,17 @@ def minimax(task: LinkageFit, *, count: Nodes = 1000, slots: Annotated[int, Inte
     if nlp not in _NLP_OPTIONS:
         raise ModelError(f"nlp={nlp!r} is not an NLP back end; known: {', '.join(_NLP_OPTIONS)}", key="nlp")
     start = time.perf_counter()
-    t_end = task.t_finish_rad
+    t_start, t_end = task.t_start_rad, task.t_end_rad
     scale = _scale(task)
-    t = np.linspace(0.0, t_end, count)
-    px, py = (v / scale for v in ideal_point(t, task.a_mm, task.h_mm))
+    t = np.linspace(t_start, t_end, count)
+    px, py = (v / scale for v in task.path_point(t))
     pad, widened = BOX_PAD_PER_A, 0
     H, L = task.matched
     build_s, back_ends, unsolved, rounds_in_all = 0.0, [], {}, 0
     while True:
         box = task.bounds(pad)
         H, L = (float(v) for v in np.clip((H, L), box[::2], box[1::2]))
-        got = _exchange_rounds(px, py, task.a_mm / scale, np.divide(box, scale), H / scale, L / scale,
+        got = _exchange_rounds(px, py, task.size_mm / scale, np.divide(box, scale), H / scale, L / scale,
                                count, slots, max_rounds, nlp)
         build_s += got["build_s"]
         back_ends += got["back_ends"]
@@ -198,10 +202,11 @@ def minimax(task: LinkageFit, *, count: Nodes = 1000, slots: Annotated[int, Inte
         pad, widened = pad * BOX_WIDEN_FACTOR, widened + 1     # the default box cut it short: widen, re-solve
     rounds = rounds_in_all
     if status is Status.FAILED:
-        return Result(Status.FAILED, {"t_finish_rad": task.t_finish_read_rad},
+        return Result(Status.FAILED, task.path_values(),
                       Timing(build_s, time.perf_counter() - start - build_s),
                       message=f"{back_ends[-1] if back_ends else nlp} failed ({status_word}) after {rounds} round(s)")
-    deviation, where = verified_deviation(task.a_mm, task.h_mm, H, L, t_end)
+    deviation, where = verified_deviation_on(task.path_point, t_start, t_end, H, L)
+    where_xy = [float(v[0]) for v in task.path_point(np.array([where]))]
     solve_s = time.perf_counter() - start - build_s       # the verification is part of the answer
     nodes_max = got["nodes_max"] * scale
     message = (f"{status_word} after {rounds} exchange round(s) ({', '.join(back_ends)}), "
@@ -210,8 +215,9 @@ def minimax(task: LinkageFit, *, count: Nodes = 1000, slots: Annotated[int, Inte
     if earlier:             # a later round started from it; only the last round's answer counts
         message += f"; earlier rounds not solved ({', '.join(earlier)})"
     status, violated, message = _verdict(task, status, message, nodes_max, deviation, count, H, L, box, on_bounds)
-    return Result(status, {"H_mm": H, "L_mm": L, "max_deviation_mm": deviation,
-                           "t_finish_rad": task.t_finish_read_rad},
+    if violated:            # where the band is set: the path's point farthest from the best limaçon
+        message += f"; set at t = {where:.6g} rad, (x, y) = ({where_xy[0]:.6g}, {where_xy[1]:.6g}) mm"
+    return Result(status, {"H_mm": H, "L_mm": L, "max_deviation_mm": deviation, **task.path_values()},
                   Timing(build_s, solve_s), message=message, violated=violated,
                   diagnostics={"nodes_max_deviation_mm": nodes_max, "nlp_nodes": got["nlp_nodes"],
                                "kept_nodes": got["kept_nodes"], "exchange_rounds": rounds,
@@ -219,7 +225,8 @@ def minimax(task: LinkageFit, *, count: Nodes = 1000, slots: Annotated[int, Inte
                                "nlp_unsolved_rounds": {str(r): w for r, w in unsolved.items()},
                                "active_bounds": on_bounds, "box_mm": [float(b) for b in box],
                                "box_widenings": widened,
-                               "max_deviation_at_rad": where, "t_finish_exact_rad": t_end})
+                               "max_deviation_at_rad": where, "max_deviation_at_mm": where_xy,
+                               "t_finish_exact_rad": t_end})
 
 
 def _exchange_rounds(px, py, a, box, H, L, count, slots, max_rounds, nlp):
@@ -270,7 +277,7 @@ def _exchange_rounds(px, py, a, box, H, L, count, slots, max_rounds, nlp):
 def _scale(task):
     """The cam's size in units of the paper's (a / 25 mm, exactly 1 there): the solvers measure
     lengths in it, so tolerances tuned on the paper's cam hold for a 1 um and a 1 m cam alike."""
-    return task.a_mm / PAPER_A_MM
+    return task.size_mm / PAPER_A_MM
 
 
 def _bounds_hit(task, H, L, box):
@@ -336,6 +343,7 @@ def robust(task: LinkageFit, *, count: Nodes = 1000, max_moves: Annotated[int, I
     corners (a test bounds what a finer box sampling adds). The search is a descent over lattice
     points from the minimax optimum; lattice deviations are memoised, neighbours share them.
     """
+    _cardioid_only(task, "robust")
     _check_count(count)
     check_settings(robust, max_moves=max_moves)
     lattice = _lattice_indices(task)            # a box with no lattice point is refused before any work
@@ -397,6 +405,7 @@ def evolve(task: LinkageFit, *, count: Nodes = 1000, popsize: Annotated[int, Int
     about 1e-5 mm. No polish: the objective is a maximum with kinks, where L-BFGS-B stalls.
     Its answer gets the status rule of `minimax` (`_verdict`): outside err_width_mm is INFEASIBLE
     with the best values kept, on a side of the default box LIMIT (no widening here)."""
+    _cardioid_only(task, "evolve")
     _check_count(count)
     check_settings(evolve, popsize=popsize, tol=tol, maxiter=maxiter, seed=seed)
     start = time.perf_counter()
@@ -487,23 +496,29 @@ def _minimax_nlp(k: int, method: str):
 def _build_minimax_nlp(k, method):
     H, L, delta, s = ca.SX.sym("H"), ca.SX.sym("L"), ca.SX.sym("delta"), ca.SX.sym("s", k)
     p = ca.SX.sym("p", 2 * k + 1)
-    px, py, a = p[:k], p[k:2 * k], p[2 * k]
+    g = foot_and_band(s, H, L, p[:k], p[k:2 * k], p[2 * k], delta)
+    nlp = {"x": ca.vertcat(H, L, delta, s), "p": p, "f": delta, "g": g}
+    return ca.nlpsol("cam_minimax", "sqpmethod" if method == "sqp" else "ipopt", nlp, _NLP_OPTIONS[method])
+
+
+def foot_and_band(s, H, L, px, py, a, delta):
+    """The minimax constraints for nodes (px, py) and limaçon points s (CasADi symbols): the foot
+    condition (= 0), then delta + and - the signed distance (>= 0). L may differ per node."""
     rx, ry = real_point(s, H, L, m=ca)
     vx, vy = real_velocity(s, H, L, m=ca)
     ex, ey = rx - px, ry - py
     # |R'| vanishes only at the plain cardioid's cusp, where the cross product does too
     signed = (ex * vy - ey * vx) / ca.sqrt(vx * vx + vy * vy + (1e-9 * a) ** 2)
-    g = ca.vertcat(ex * vx + ey * vy, delta + signed, delta - signed)
-    nlp = {"x": ca.vertcat(H, L, delta, s), "p": p, "f": delta, "g": g}
-    return ca.nlpsol("cam_minimax", "sqpmethod" if method == "sqp" else "ipopt", nlp, _NLP_OPTIONS[method])
+    return ca.vertcat(ex * vx + ey * vy, delta + signed, delta - signed)
 
 
-def _solve_round(k, method, bounds):
+def _solve_round(k, method, bounds, *, solver_of=None, cold=False):
     """One exchange round's NLP: (solution, Status, the back end's word, the back end, build s).
-    SQP first when asked; a round it does not solve is solved again by IPOPT from the same start."""
+    SQP first when asked (and not `cold`); a round it does not solve is solved again by IPOPT from
+    the same start. `solver_of(k, name)` gives the built NLP (default: this module's minimax)."""
     build_s = 0.0
-    for name in (("sqp", "ipopt") if method == "sqp" else ("ipopt",)):
-        solver, built_s = _minimax_nlp(k, name)
+    for name in (("sqp", "ipopt") if method == "sqp" and not cold else ("ipopt",)):
+        solver, built_s = (solver_of or _minimax_nlp)(k, name)
         build_s += built_s
         sol = solver(**bounds)
         stats = solver.stats()
@@ -539,6 +554,13 @@ def _node_times(task, count, nodes):
         raise ModelError(f"nodes={nodes!r} is not a node rule; known: {', '.join(NODE_RULES)}", key="nodes")
     first, extra = NODE_RULES[nodes]
     return np.arange(first, count + extra) * (task.t_finish_read_rad / count)
+
+
+def _cardioid_only(task, name):
+    """The lattice and the along-normal solvers know the cardioid's closed forms only."""
+    if isinstance(task, ProfileFit):
+        raise ModelError(f"{name} solves the cardioid (LinkageFit) only; a cam of any shape (ProfileFit) is "
+                         "solved by cam_cutter.minimax", key="solver")
 
 
 def _check_count(count):

@@ -2,7 +2,8 @@
 import numpy as np
 
 from mechopt.figures.registry import new_figure, register
-from mechopt.models.cam_cutter import LinkageCheck, LinkageFit, LinkageLoads, ideal_point, real_point
+from mechopt.models.cam_cutter import LinkageCheck, LinkageFit, LinkageLoads, ToolFamily, ideal_point, real_point
+from mechopt.models.cam_profile import ProfileFit
 from mechopt.solvers.cam_cutter.deviation import path_distance
 
 
@@ -78,3 +79,62 @@ def reactions_and_torque(run):
         for singular in (180, 540):
             ax.axvline(singular, color="grey", ls=":", lw=0.8)
     return {"loads": fig}
+
+
+@register(ProfileFit)
+def profile_path_and_band(run):
+    """A cam of any shape: its torch path (and mirror), the limaçon, the deviation with the band
+    and the point that sets it."""
+    task, values = run.task, run.result.values
+    if "H_mm" not in values:
+        return {}             # the NLP failed: no linkage to draw
+    H, L = values["H_mm"], values["L_mm"]
+    t = np.linspace(task.t_start_rad, task.t_end_rad, 2000)
+    ix, iy = task.path_point(t)
+    rx, ry = real_point(np.linspace(0, 2 * np.pi, 4000), H, L)
+    dist = path_distance(ix, iy, H, L)
+    fig = new_figure(figsize=(12, 5))
+    left, right = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1, 1.3]})
+    left.plot(rx, ry, lw=1.0, color="tab:orange", label=f"limaçon H={H:.3f}, L={L:.3f} mm")
+    left.plot(ix, iy, lw=1.0, ls="--", color="tab:blue", label=f"torch path (kerf h = {task.h_mm:g} mm) and mirror")
+    left.plot(ix, -iy, lw=1.0, ls="--", color="tab:blue")
+    where = run.result.diagnostics.get("max_deviation_at_mm")
+    if where:
+        left.plot(*where, "x", color="tab:red", ms=9, label="largest deviation")
+    left.set_aspect("equal")
+    left.set(xlabel="x [mm]", ylabel="y [mm]", title=run.scene.id)
+    left.legend(loc="upper left", fontsize=8)
+    right.plot(t, dist * 1000, color="tab:orange", label="distance path -> limaçon")
+    right.axhline(task.err_width_mm * 1000, color="tab:red", ls=":", label=f"band {task.err_width_mm * 1000:g} µm")
+    right.set(xlabel="curve parameter t", ylabel="deviation [µm]",
+              title=f"max {values['max_deviation_mm'] * 1000:.2f} µm ({run.result.status.value})")
+    right.legend(fontsize=8)
+    return {"paths": fig}
+
+
+@register(ToolFamily)
+def family_settings(run):
+    """The readjustable tool: the wing length L(a) per nozzle h at the one H, and each cam's
+    deviation against the band."""
+    arrays, values = run.result.arrays, run.result.values
+    if "H_mm" not in values or not len(arrays.get("a_mm", ())):
+        return {}
+    a, h, L, dev = (np.asarray(arrays[k]) for k in ("a_mm", "h_mm", "L_mm", "deviation_mm"))
+    fig = new_figure(figsize=(12, 5))
+    left, right = fig.subplots(1, 2)
+    for nozzle in dict.fromkeys(h):
+        mine = h == nozzle
+        left.plot(a[mine], L[mine], "o-", label=f"h = {nozzle:g} mm")
+        right.plot(a[mine], dev[mine] * 1000, "o-", label=f"h = {nozzle:g} mm")
+    left.set(xlabel="cam size a [mm]", ylabel="wing length L [mm]",
+             title=f"{run.scene.id}: settings at one H = {values['H_mm']:.4f} mm")
+    right.axhline(run.task.err_width_mm * 1000, color="tab:red", ls=":", label="band")
+    served = [values.get(k) for k in ("a_served_min_mm", "a_served_max_mm")]
+    if None not in served:
+        right.axvspan(*served, color="tab:green", alpha=0.1, label=f"a served: {served[0]:.3f} .. {served[1]:.3f} mm")
+    right.set(xlabel="cam size a [mm]", ylabel="deviation [µm]",
+              title=f"family worst {values['worst_deviation_mm'] * 1000:.1f} µm ({run.result.status.value})")
+    for ax in (left, right):
+        ax.legend(fontsize=8)
+        ax.grid(alpha=0.3)
+    return {"settings": fig}
