@@ -241,29 +241,6 @@ class TableCurve(_Curve):
         object.__setattr__(self, "t0", 0.0)
         object.__setattr__(self, "t1", float(t[-1]))
 
-    @classmethod
-    def from_csv_text(cls, text, name="table"):
-        """A table from CSV text with a header naming x_mm and y_mm (any case, comma or semicolon);
-        `name` (the file) is named in every error. The caller reads the file: models do no I/O."""
-        lines = [line for line in text.splitlines() if line.strip()]
-        if not lines:
-            raise ModelError(f"{name}: empty table", key="points")
-        sep = ";" if ";" in lines[0] else ","
-        head = [h.strip().lower() for h in lines[0].split(sep)]
-        if "x_mm" not in head or "y_mm" not in head:
-            raise ModelError(f"{name}: header {lines[0]!r} must name columns x_mm and y_mm", key="points")
-        ix, iy = head.index("x_mm"), head.index("y_mm")
-        xs, ys = [], []
-        for row, line in enumerate(lines[1:], start=1):
-            cells = line.split(sep)
-            try:
-                xs.append(float(cells[ix]))
-                ys.append(float(cells[iy]))
-            except (ValueError, IndexError):
-                raise ModelError(f"{name}: row {row} ({line.strip()!r}): expected numbers in x_mm and y_mm",
-                                 key="points") from None
-        return cls(tuple(xs), tuple(ys), name)
-
     def point(self, t, m=np):
         xy = self._spline(np.asarray(t, dtype=float))
         return xy[..., 0], xy[..., 1]

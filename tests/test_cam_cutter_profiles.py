@@ -1,5 +1,6 @@
 """Cams of any shape (issue 13, Sec. 2): the safe curve parser, the point table, the kerf offset,
 the cusp, and the minimax on a general curve against independent computations."""
+import shutil
 from pathlib import Path
 
 import casadi as ca
@@ -18,7 +19,7 @@ from mechopt.models.cam_profile import (
     place,
     unit_normal,
 )
-from mechopt.models.errors import ModelError
+from mechopt.models.errors import ModelError, SceneError
 from mechopt.solvers.cam_cutter import minimax
 from mechopt.solvers.result import Status
 
@@ -82,20 +83,43 @@ def test_closed_table_is_a_periodic_spline_through_its_points():
     assert np.min(nx * x / 30 + ny * y / 30) > 1 - 1e-6          # counter-clockwise: outward normal
 
 
-def test_csv_table_of_a_limacon_gives_back_its_linkage():
+TABLE_SCENE = """id = "mine/table-csv"
+title = "a cam given as a CSV point table"
+source = "a test"
+task = "cam_profile.ProfileFit"
+solver = "cam_cutter.minimax"
+[params]
+err_width_mm = {{ value = 0.01, mark = "assumed", why = "a test" }}
+[solver_settings]
+count = 400
+[structure]
+points_mm = {{ csv = "{csv}", columns = ["x_mm", "y_mm"] }}
+"""
+
+
+def test_csv_table_of_a_limacon_gives_back_its_linkage(tmp_path):
     # the example: 37 rows (4 decimals) of r = 50 + 4 cos(theta) about the origin, a limaçon:
-    # eq. (10) with H = 4, L = 50 in closed form, so the spline's path must find them again
-    path = ROOT / "examples" / "cam-profile-table.csv"
-    curve = TableCurve.from_csv_text(path.read_text(encoding="utf-8"), name=str(path))
-    task = ProfileFit(err_width_mm=0.01, points_mm=tuple(zip(curve.x_mm, curve.y_mm)))
-    run = minimax(task, count=400)
+    # eq. (10) with H = 4, L = 50 in closed form, so the spline's path must find them again;
+    # the scene names the CSV relative to its own folder
+    (tmp_path / "tables").mkdir()
+    shutil.copy(ROOT / "examples" / "cam-profile-table.csv", tmp_path / "tables" / "cam.csv")
+    (tmp_path / "cam.toml").write_text(TABLE_SCENE.format(csv="tables/cam.csv"), encoding="utf-8")
+    run = registry.run(str(tmp_path / "cam.toml"))
     assert run.status is Status.SOLVED and run.values["max_deviation_mm"] < 3e-4
     assert run.values["H_mm"] == pytest.approx(4.0, abs=5e-3) and run.values["L_mm"] == pytest.approx(50.0, abs=1e-3)
 
 
-def test_csv_rows_that_are_not_numbers_are_named():
-    with pytest.raises(ModelError, match=r"bad\.csv: row 2 .*expected numbers"):
-        TableCurve.from_csv_text("x_mm,y_mm\n1,2\n1,x\n", name="bad.csv")
+@pytest.mark.parametrize("table, match", [
+    ("x_mm,y_mm\n1,2\n1,x\n", r"cam\.csv: line 3 \('1,x'\): expected numbers in x_mm, y_mm"),
+    ("x,y\n1,2\n", r"cam\.csv: header \['x', 'y'\] lacks x_mm, y_mm"),
+    (None, r"cam\.csv: cannot read the table for structure\.points_mm"),
+])
+def test_a_bad_csv_table_is_named_with_its_line(tmp_path, table, match):
+    if table is not None:
+        (tmp_path / "cam.csv").write_text(table, encoding="utf-8")
+    (tmp_path / "cam.toml").write_text(TABLE_SCENE.format(csv="cam.csv"), encoding="utf-8")
+    with pytest.raises(SceneError, match=match):
+        registry.find(str(tmp_path / "cam.toml"))
 
 
 def test_duplicate_points_are_refused_naming_file_and_rows():

@@ -214,8 +214,8 @@ class Scene:
         params, settings = self.split_overrides(overrides or {})
         paths = {k: v for k, v in params.items() if _path_head(k) in self.spec.structure}
         params = {k: v for k, v in params.items() if k not in paths}
-        return (_build_task(self.path, self.task_class, self.spec.effects, self.params() | params,
-                            _set_paths(self.path, self.spec.structure, paths)),
+        structure = _read_tables(self.path, _set_paths(self.path, self.spec.structure, paths))
+        return (_build_task(self.path, self.task_class, self.spec.effects, self.params() | params, structure),
                 _check_settings(self.path, self.solver, self.settings() | settings))
 
 
@@ -337,6 +337,50 @@ def _set_paths(path, structure, assignments):
             else:
                 node = node[name]
     return out
+
+
+def _read_tables(path, structure):
+    """Structure entries given as `{ csv = "file.csv", columns = ["x_mm", "y_mm"] }` become the
+    file's rows of those columns (a path relative to the scene file's folder): a designer's point
+    table stays in the CSV their CAD system wrote. Errors name the CSV, its row and column."""
+    out = dict(structure)
+    for key, value in structure.items():
+        if not (isinstance(value, dict) and "csv" in value):
+            continue
+        if set(value) - {"csv", "columns"} or not isinstance(value["csv"], str) or not (
+                isinstance(value.get("columns"), list) and value["columns"]
+                and all(isinstance(c, str) for c in value["columns"])):
+            raise SceneError(f'{path}: structure.{key}: a table from a file is {{ csv = "file.csv", '
+                             f'columns = ["x_mm", "y_mm"] }}; got {value!r}', key=key)
+        out[key] = _csv_rows(path.parent / value["csv"], value["columns"], key)
+    return out
+
+
+def _csv_rows(csv_path, columns, key):
+    try:
+        lines = [line for line in csv_path.read_text(encoding="utf-8").splitlines() if line.strip()]
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SceneError(f"{csv_path}: cannot read the table for structure.{key}: "
+                         f"{getattr(exc, 'strerror', None) or exc}", key=key) from None
+    if not lines:
+        raise SceneError(f"{csv_path}: empty table (structure.{key})", key=key)
+    sep = ";" if ";" in lines[0] else ","
+    header = [h.strip() for h in lines[0].split(sep)]
+    missing = [c for c in columns if c not in header]
+    if missing:
+        raise SceneError(f"{csv_path}: header {header} lacks {', '.join(missing)} (structure.{key}.columns)", key=key)
+    rows = []
+    for number, line in enumerate(lines[1:], start=2):
+        cells = [c.strip() for c in line.split(sep)]
+        try:
+            row = [float(cells[header.index(c)]) for c in columns]
+        except (ValueError, IndexError):
+            raise SceneError(f"{csv_path}: line {number} ({line.strip()!r}): expected numbers in "
+                             f"{', '.join(columns)}", key=key) from None
+        if not all(math.isfinite(v) for v in row):
+            raise SceneError(f"{csv_path}: line {number}: expected finite numbers", key=key)
+        rows.append(row)
+    return rows
 
 
 def _resolve(path, field, dotted, package):
