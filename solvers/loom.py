@@ -16,11 +16,12 @@ change of the objective (span_deg, or limiting_op_deg on a machine) per unit *in
 limit. Raising [sigma_H] or the amplitude limit loosens a bound: the span falls (<= 0); raising a
 critical [phi] lengthens it (+1 deg/deg).
 """
+import dataclasses
 import math
 import time
 from collections import deque
 from dataclasses import dataclass
-from typing import Literal
+from typing import Annotated, Literal
 
 import cvxpy as cp
 import networkx as nx
@@ -28,12 +29,13 @@ import numpy as np
 import scipy.sparse as sp
 
 from mechopt.models.cache import BuildCache
-from mechopt.models.errors import SolverError
+from mechopt.models.errors import ModelError, SolverError
 from mechopt.models.loom import Cyclogram, amplitude_mm, stress_bound_deg, stress_MPa
 from mechopt.solvers.result import Result, Status, Timing, from_cvxpy
-from mechopt.solvers.settings import Tolerance
+from mechopt.solvers.settings import Interval, Tolerance
+from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
 
-__all__ = ["plan_cyclogram"]
+__all__ = ["plan_cyclogram", "repair_cyclogram", "max_machine_speed"]
 
 SENSITIVITY_CONVENTION = ("sens_* = d(objective)/d(limit): change of the objective [deg] per unit increase "
                           "of the limit; negative means a looser limit shortens the span")
@@ -257,6 +259,10 @@ class _Net:
         refs = [task.stress_reference(k) for k in self.stress_rows]
         self.stress_ref = (np.array([r[0] for r in refs]), np.array([r[1] for r in refs]))
         self.amp_rows = task.amplitude_arcs()
+        if self.amp_rows and not task.has_linear_amplitude:
+            raise ModelError("amplitude_slope_mm_per_deg: the LP needs the linear amplitude law; with the lever's "
+                             "exact law alone use loom.repair_cyclogram or loom.max_machine_speed",
+                             key="amplitude_slope_mm_per_deg")
         self.window_idx = [(index[a], index[b]) for a, b, _ in task.window_arcs()]
         self.sync_idx = [(index[a], index[b]) for a, b in task.sync_pairs()]
         lim = task.limiting_op
@@ -578,3 +584,137 @@ def _dag_times(n, tails, heads, lb, first, last, span):
             if late[hl[k]] - lbl[k] < late[u]:
                 late[u] = late[hl[k]] - lbl[k]
     return np.array(early), np.array(late)
+
+
+# ------------------------------------------------------------------ check and repair after the LP (issue 14, part 4)
+
+def exact_amplitude_mm(task: Cyclogram, t_deg, speed_rpm=None):
+    """The lever's exact first rebound a(t, n) [mm] (eq. (2), solvers/stop_impact/law.py) at
+    `speed_rpm`, by default the task's speed; vectorised over t and n."""
+    speed = task.speed_rpm if speed_rpm is None else speed_rpm
+    if speed is None:
+        raise ModelError("speed_rpm: the exact rebound law needs the main shaft's speed", key="speed_rpm")
+    return rebound_amplitude_mm(task.lever_model, speed, t_deg)
+
+
+@dataclass
+class _ExactLimit:
+    """One exact limit f(t) <= limit on arc k (f convex, falling in t), the tangent the LP takes
+    of it (slope, intercept) and the lower bound on t that tangent gives."""
+    kind: str                 # "amplitude" [mm] or "contact_stress" [MPa]
+    k: int
+    limit: float
+    exact: object             # t [deg] -> f(t)
+    slope: float
+    intercept: float
+
+    def bound_deg(self) -> float:
+        return (self.limit - self.intercept) / self.slope if self.slope < 0 else -np.inf
+
+    def relinearise(self, t: float) -> None:
+        """The tangent at t; a central difference (the laws are smooth away from the preload's kinks)."""
+        h = 1e-6 * max(t, 1e-3)
+        lo, mid, hi = (float(v) for v in np.ravel(self.exact(np.array([t - h, t, t + h]))))
+        self.slope = (hi - lo) / (2 * h)
+        self.intercept = mid - self.slope * t
+
+
+def _exact_limits(task: Cyclogram, stress_form: str) -> list[_ExactLimit]:
+    """The limits the LP linearised, each with its exact law and the tangent the first LP takes."""
+    out = []
+    for k in task.stress_arcs():
+        sigma_ref, t_ref = task.stress_reference(k)
+        exact = lambda t, ref=(sigma_ref, t_ref): stress_MPa(*ref, t)        # noqa: E731
+        at = t_ref if stress_form == "linear" else stress_bound_deg(sigma_ref, t_ref, task.sigma_H_limit_MPa)
+        law = _ExactLimit("contact_stress", k, task.sigma_H_limit_MPa, exact, 0.0, 0.0)
+        law.relinearise(at)
+        if stress_form == "linear":     # exactly the model's tangent, not its difference quotient
+            law.slope, law.intercept = -sigma_ref / t_ref, 2.0 * sigma_ref
+        out.append(law)
+    for k in task.amplitude_arcs():
+        law = _ExactLimit("amplitude", k, task.amplitude_limit_mm, lambda t: exact_amplitude_mm(task, t), 0.0, 0.0)
+        if task.has_linear_amplitude:
+            law.slope, law.intercept = task.amplitude_slope_mm_per_deg, task.amplitude_intercept_mm
+        else:                           # the lever alone: start from the tangent at the arc's [phi]
+            law.relinearise(max(float(task.min_angles_deg()[k]), 1e-3))
+        out.append(law)
+    return out
+
+
+def repair_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] = "HIGHS",
+                     stress_form: Literal["exact", "linear"] = "linear",
+                     max_rounds: Annotated[int, Interval(ge=1, le=100)] = 20,
+                     tol_mm: Tolerance = 1e-9, tol_MPa: Tolerance = 1e-6, tol_deg: Tolerance = 1e-6) -> Result:
+    """The LP of `plan_cyclogram`, checked against the exact laws at its optimum and repaired by
+    sequential LP (issue 14, part 4).
+
+    Round 1 solves the LP with the linear laws the task gives (the amplitude tangent; the stress
+    tangent at t_ref when stress_form = "linear"). At its optimum each linearised limit is
+    evaluated exactly: the rebound a(t, n) of eq. (2) with the lever's table, sigma_max =
+    sigma_ref t_ref / t. While one exceeds its limit by more than tol_mm / tol_MPa, every limit is
+    re-linearised at the current angle and the LP re-solved with the tangent's bound (the largest
+    met so far) as the arc's lower bound: a DPP re-solve. The laws are convex and fall in t, so
+    each tangent lies under its law: the bounds only tighten, never past the exact root, and the
+    rounds are Newton steps on it (quadratic convergence).
+
+    Returns the last round's event times (p_*, t_*, span_deg ...), rounds, exact_amplitude_*_mm,
+    exact_sigma_*_MPa and linearisation_error_*: exact minus linear at round 1's optimum;
+    diagnostics["rounds"]: per round and limit t, exact, linear, error, excess and the cut.
+    SOLVED when the exact laws hold to the tolerances; LIMIT after max_rounds without it; an LP
+    that fails in a round returns its status, with the rounds so far.
+    """
+    start = time.perf_counter()
+    laws = _exact_limits(task, stress_form)
+    unit = {"amplitude": "mm", "contact_stress": "MPa"}
+    tol = {"amplitude": tol_mm, "contact_stress": tol_MPa}
+    op_of = {(str(op["from"]), str(op["to"])): i for i, op in enumerate(task.operations)}
+    cuts: dict[int, float] = {}
+    history, current = [], task
+    for round_ in range(1, max_rounds + 1):
+        result = plan_cyclogram(current, backend=backend, stress_form=stress_form, tol_deg=tol_deg)
+        if result.status is not Status.SOLVED:
+            return dataclasses.replace(result, message=f"round {round_}: {result.message}",
+                                       diagnostics=result.diagnostics | {"rounds": history})
+        rows = []
+        for law in laws:
+            x, y = task.arcs[law.k]
+            t = result.values[f"t_{x}_{y}_deg"]
+            exact, linear = float(law.exact(t)), law.slope * t + law.intercept
+            rows.append({"limit": f"{law.kind}[{x}->{y}]", "t_deg": t, f"exact_{unit[law.kind]}": exact,
+                         f"linear_{unit[law.kind]}": linear, "error": exact - linear, "excess": exact - law.limit})
+        history.append({"round": round_, "span_deg": result.values["span_deg"], "limits": rows})
+        over = [r["limit"] for r, law in zip(rows, laws) if r["excess"] > tol[law.kind]]
+        if not over:
+            return _repaired(task, result, laws, history, start, Status.SOLVED,
+                             f"exact laws hold after {round_} round(s) (tol {tol_mm:g} mm, {tol_MPa:g} MPa)")
+        if round_ == max_rounds:
+            break
+        for row, law in zip(rows, laws):
+            law.relinearise(row["t_deg"])
+            cuts[law.k] = max(cuts.get(law.k, -np.inf), law.bound_deg())
+            row["cut_deg"] = cuts[law.k]
+        ops = [dict(op) for op in task.operations]
+        for k, bound in cuts.items():
+            op = ops[op_of[task.arcs[k]]]
+            op["min_deg"] = max(float(op["min_deg"]), bound)
+        current = dataclasses.replace(task, operations=ops)
+    worst = max((r for r in history[-1]["limits"]), key=lambda r: r["excess"])
+    return _repaired(task, result, laws, history, start, Status.LIMIT,
+                     f"not converged in {max_rounds} round(s): exact {worst['limit']} exceeds its limit by "
+                     f"{worst['excess']:.3g} (raise max_rounds or loosen the tolerances)", violated=tuple(over))
+
+
+def _repaired(task, result, laws, history, start, status, message, violated=()):
+    """The last LP round's values with the linear-law readings replaced by the exact ones."""
+    values = {k: v for k, v in result.values.items() if not k.startswith(("amplitude_", "sigma_", "sens_"))}
+    values["rounds"] = float(len(history))
+    for law, first, last in zip(laws, history[0]["limits"], history[-1]["limits"]):
+        x, y = task.arcs[law.k]
+        name, unit = ("amplitude", "mm") if law.kind == "amplitude" else ("sigma", "MPa")
+        values[f"exact_{name}_{x}_{y}_{unit}"] = last[f"exact_{unit}"]
+        values[f"linearisation_error_{name}_{x}_{y}_{unit}"] = first["error"]
+    diagnostics = {k: v for k, v in result.diagnostics.items() if k not in ("binding", "sens_min_deg",
+                                                                            "sensitivity_convention")}
+    diagnostics["rounds"] = history
+    return Result(status, values, Timing(result.timing.build_s, time.perf_counter() - start - result.timing.build_s),
+                  message=message, violated=violated, diagnostics=diagnostics)
