@@ -27,10 +27,11 @@ import cvxpy as cp
 import networkx as nx
 import numpy as np
 import scipy.sparse as sp
+from scipy.optimize import brentq
 
 from mechopt.models.cache import BuildCache
 from mechopt.models.errors import ModelError, SolverError
-from mechopt.models.loom import Cyclogram, amplitude_mm, stress_bound_deg, stress_MPa
+from mechopt.models.loom import MAX_RPM, Cyclogram, amplitude_mm, stress_bound_deg, stress_MPa
 from mechopt.solvers.result import Result, Status, Timing, from_cvxpy
 from mechopt.solvers.settings import Interval, Tolerance
 from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
@@ -245,7 +246,27 @@ class _Net:
     """The task as index arrays (events in graph order, isolated events left out)."""
 
     def __init__(self, task: Cyclogram, stress_form: str):
-        self.task, self.stress_form = task, stress_form
+        self.stress_form = stress_form
+        self._index_arrays(task)
+        self.stress_rows = task.stress_arcs()
+        refs = [task.stress_reference(k) for k in self.stress_rows]
+        self.stress_ref = (np.array([r[0] for r in refs]), np.array([r[1] for r in refs]))
+        self.amp_rows = task.amplitude_arcs()
+        if self.amp_rows and not task.has_linear_amplitude:
+            raise ModelError("amplitude_slope_mm_per_deg: the LP needs the linear amplitude law; with the lever's "
+                             "exact law alone use loom.repair_cyclogram or loom.max_machine_speed",
+                             key="amplitude_slope_mm_per_deg")
+        self.lb, self.lb_why = task.lower_bounds_deg(stress_form)
+
+    @classmethod
+    def structure(cls, task: Cyclogram) -> "_Net":
+        """The index arrays alone (events, arcs, ends, windows, syncs), for LPs with their own bounds."""
+        net = cls.__new__(cls)
+        net._index_arrays(task)
+        return net
+
+    def _index_arrays(self, task):
+        self.task = task
         isolated = set(task.isolated_events)
         self.names = [v for v in task.event_names if v not in isolated]
         index = {v: i for i, v in enumerate(self.names)}
@@ -255,19 +276,10 @@ class _Net:
         self.tails = np.fromiter((index[x] for x, _ in arcs), dtype=np.int64, count=len(arcs))
         self.heads = np.fromiter((index[y] for _, y in arcs), dtype=np.int64, count=len(arcs))
         self.first, self.last = index[task.first_event], index[task.last_event]
-        self.stress_rows = task.stress_arcs()
-        refs = [task.stress_reference(k) for k in self.stress_rows]
-        self.stress_ref = (np.array([r[0] for r in refs]), np.array([r[1] for r in refs]))
-        self.amp_rows = task.amplitude_arcs()
-        if self.amp_rows and not task.has_linear_amplitude:
-            raise ModelError("amplitude_slope_mm_per_deg: the LP needs the linear amplitude law; with the lever's "
-                             "exact law alone use loom.repair_cyclogram or loom.max_machine_speed",
-                             key="amplitude_slope_mm_per_deg")
         self.window_idx = [(index[a], index[b]) for a, b, _ in task.window_arcs()]
         self.sync_idx = [(index[a], index[b]) for a, b in task.sync_pairs()]
         lim = task.limiting_op
         self.limiting = None if lim is None else (index[str(lim[0])], index[str(lim[1])])
-        self.lb, self.lb_why = task.lower_bounds_deg(stress_form)
 
     def signature(self):
         """What the compiled problem depends on (everything except the Parameters' values)."""
@@ -718,3 +730,279 @@ def _repaired(task, result, laws, history, start, status, message, violated=()):
     diagnostics["rounds"] = history
     return Result(status, values, Timing(result.timing.build_s, time.perf_counter() - start - result.timing.build_s),
                   message=message, violated=violated, diagnostics=diagnostics)
+
+
+# ------------------------------------------------------------------ the whole machine at its highest speed (part 5)
+
+def _angle_floors_deg(task: Cyclogram) -> np.ndarray:
+    """Each arc's [phi] as given, without the time floor of `min_ms` (that one grows with n) [deg]."""
+    return np.fromiter((phi for _, _, phi in task.graph.edges(data="min_deg")), dtype=float, count=len(task.arcs))
+
+
+def largest_ratio_rpm_per_deg(task: Cyclogram) -> float:
+    """The largest n / t at which the lever's exact rebound keeps the amplitude limit [rpm/deg]:
+    a(t, n) = h(n / t) (v0 and F scale as n / t, the preload does not), h convex, h(0) = 0, so
+    h(r) <= limit exactly for r <= r*; r* by brentq on h. inf when no ratio breaks the limit."""
+    h = lambda r: float(np.ravel(rebound_amplitude_mm(task.lever_model, r, 1.0))[0]) - task.amplitude_limit_mm  # noqa: E731
+    hi = 1.0
+    while h(hi) <= 0:
+        hi *= 2.0
+        if hi > MAX_RATIO_RPM_PER_DEG:
+            return math.inf
+    return brentq(h, 0.0, hi, xtol=1e-15 * hi, rtol=4 * np.finfo(float).eps)
+
+
+MAX_RATIO_RPM_PER_DEG = 1e12     # n / t past any machine: 10^6 rpm over 10^-6 deg
+
+
+def speed_coeffs_deg_per_rpm(task: Cyclogram) -> tuple[np.ndarray, list[str]]:
+    """Per arc, the angle every rpm of speed asks for [deg/rpm], and which law sets it ("min_time",
+    "contact_stress", "amplitude" or "" for none). Each law is f(n / t) <= limit, f increasing, so
+    it is t >= n / r*: a bound proportional to n (module docstring of `max_machine_speed`)."""
+    g = task.time_coeffs_deg_per_rpm()
+    why = ["min_time" if c > 0 else "" for c in g]
+    for k in task.stress_arcs():
+        c = task.stress_coeff_deg_per_rpm(k)
+        if c > g[k]:
+            g[k], why[k] = c, "contact_stress"
+    if task.amplitude_arcs():
+        ratio = largest_ratio_rpm_per_deg(task)
+        for k in task.amplitude_arcs():
+            if 1.0 / ratio > g[k]:
+                g[k], why[k] = 1.0 / ratio, "amplitude"
+    return g, why
+
+
+def max_machine_speed(task: Cyclogram, *, method: Literal["lp", "bisection"] = "lp",
+                      backend: Literal["HIGHS", "CLARABEL"] = "HIGHS",
+                      tol_rpm: Annotated[float, Interval(ge=1e-9, le=1e-2)] = 1e-7) -> Result:
+    """The largest main-shaft speed n at which every group fits the machine's cycle (issue 14,
+    part 5), with the event times there.
+
+    Every limit is a lower bound on a phase angle. [phi] does not depend on n; a time `min_ms`
+    (the microshuttle's flight) asks for 0.006 n T deg; the contact stress, sigma_ref (t_ref / t)
+    (n / speed_rpm) <= [sigma_H], and the lever's exact rebound a(t, n) = h(n / t) <= a_lim depend
+    on n and t only through r = n / t and grow with it. Each is then r <= r*, i.e.
+
+        t(x, y) >= g(x, y) n,      g = 1 / r*  [deg/rpm]  (0.006 T; sigma_ref t_ref / ([sigma_H] speed_rpm); 1 / r*_a)
+
+    homogeneous and linear in (p, n): maximise n s.t. D p >= [phi], D p >= g n, windows, syncs,
+    p(first) = 0, p(last) - p(first) <= cycle is an LP (method "lp"). (In times rather than
+    angles, tau = t / (6 n), the same bounds read tau >= [phi] / 6 (1/n) and tau >= g / 6 and the
+    cycle 60 (1/n): an LP in (tau, 1/n), minimising 1/n.) A law that is not a function of n / t
+    alone (a dwell over which a vibration must decay, a time with an angle) breaks this; then
+    method "bisection" is the general route: bisection on n, each step the exact bounds at that n
+    (the rebound's root in t by brentq, not through r*) and the event-time LP's feasibility, its
+    status checked. It is also the independent check of the LP. tol_rpm is relative: the answer
+    is certified by the longest-path certificate at n (1 - tol) (fits) and n (1 + tol) (does not);
+    below 1e-9 the LP's own feasibility tolerance (1e-7 deg on a 360 deg cycle) decides.
+
+    Returns max_speed_rpm, cycle_time_ms, span_deg, p_*, t_*, amplitude_*_mm and sigma_*_MPa
+    (exact, at max speed), limiting_op_deg (machines with one); diagnostics: limiting_group,
+    limiting_constraint, limiting (the speed-bound constraints on the critical chain, each with
+    its group and deg/rpm), critical_chain, sens_cycle_rpm_per_deg. INFEASIBLE when the cycle
+    cannot hold the groups at any speed (the conflicting chain named, as in plan_cyclogram),
+    UNBOUNDED when no limit grows with n on a chain the cycle closes, LIMIT when bisection finds
+    every speed up to its search bound feasible.
+    """
+    if task.cycle_deg is None:
+        raise ModelError("cycle_deg: the machine's speed is limited by its cycle; give cycle_deg", key="cycle_deg")
+    start = time.perf_counter()
+    net = _Net.structure(task)        # the speed LP has its own bounds
+    phi = _angle_floors_deg(task)
+    g, why = speed_coeffs_deg_per_rpm(task)
+    if method == "lp":
+        n_max, status, message, build_s, extra = _speed_lp(task, net, phi, g, backend)
+    else:
+        n_max, status, message, build_s, extra = _speed_bisection(task, net, phi, tol_rpm, backend)
+    timing = lambda: Timing(build_s, time.perf_counter() - start - build_s)      # noqa: E731
+    diagnostics = {"method": method, "backend": backend, "speed_coeffs_deg_per_rpm":
+                   {f"{x}->{y}": float(g[k]) for k, (x, y) in enumerate(task.arcs) if g[k] > 0}} | extra
+    if status is Status.INFEASIBLE:
+        chain = _conflict_at(task, net, phi)
+        groups = list(dict.fromkeys(task.graph.nodes[v]["group"] or "-" for v, _, _ in chain))
+        diagnostics["conflict_groups"] = groups
+        message = ("no speed fits: conflicting chain " + "; ".join(label for _, label, _ in chain)
+                   + f" (needs {math.fsum(w for _, _, w in chain):.6g} deg more than its limits allow at n -> 0;"
+                   + f" groups {', '.join(groups)})")
+        return Result(Status.INFEASIBLE, {}, timing(), message=message,
+                      violated=tuple(label for _, label, _ in chain), diagnostics=diagnostics)
+    if status is Status.UNBOUNDED:
+        message += ": no limit grows with the speed on a chain the cycle closes (no stress, rebound or min_ms there)"
+    if status is not Status.SOLVED:
+        return Result(status, {}, timing(), message=message, diagnostics=diagnostics)
+    lb = np.maximum(phi, g * n_max)
+    certified = _certify_speed(task, net, phi, g, n_max, tol_rpm)
+    values, more = _speed_report(task, net, lb, g, why, n_max, tol_rpm)
+    diagnostics |= more
+    if certified:
+        return Result(Status.INACCURATE, values, timing(), message=certified, diagnostics=diagnostics)
+    message = (f"max_speed_rpm = {n_max:.6g} ({method}); limiting group {more['limiting_group']}, "
+               f"constraint {more['limiting_constraint']}")
+    return Result(Status.SOLVED, values, timing(), message=message, diagnostics=diagnostics)
+
+
+def _speed_lp(task, net, phi, g, backend):
+    """maximise n over (p, n): the LP of the docstring, built once per structure (DPP)."""
+    rows = np.flatnonzero(g > 0)
+    key = ("speed", backend, len(net.names), net.tails.tobytes(), net.heads.tobytes(), net.first, net.last,
+           rows.tobytes(), tuple(net.window_idx), tuple(net.sync_idx))
+
+    def build():
+        D = incidence(len(net.names), net.tails, net.heads)
+        p, n = cp.Variable(len(net.names), name="p_deg"), cp.Variable(nonneg=True, name="n_rpm")
+        prm = {"min_deg": cp.Parameter(len(net.tails), name="min_deg"),
+               "g": cp.Parameter(len(rows), nonneg=True, name="g_deg_per_rpm"),
+               "cycle_deg": cp.Parameter(nonneg=True, name="cycle_deg")}
+        cons = [D @ p >= prm["min_deg"], p[net.first] == 0, p[net.last] - p[net.first] <= prm["cycle_deg"]]
+        if len(rows):
+            cons.append(D[rows] @ p >= cp.multiply(prm["g"], n))
+        if net.window_idx:
+            w = np.asarray(net.window_idx)
+            prm["window_deg"] = cp.Parameter(len(w), name="window_deg")
+            cons.append(incidence(len(net.names), w[:, 0], w[:, 1]) @ p <= prm["window_deg"])
+        if net.sync_idx:
+            s = np.asarray(net.sync_idx)
+            cons.append(incidence(len(net.names), s[:, 0], s[:, 1]) @ p == 0)
+        problem = cp.Problem(cp.Maximize(n), cons)
+        return problem, n, prm
+    start = time.perf_counter()
+    (problem, n, prm), _ = _BUILDS.get(key, build)
+    prm["min_deg"].value, prm["g"].value, prm["cycle_deg"].value = phi, g[rows], task.cycle_deg
+    if "window_deg" in prm:
+        prm["window_deg"].value = np.array([w for _, _, w in task.window_arcs()])
+    if key not in _COMPILED:
+        problem.get_problem_data(backend)
+        _COMPILED.add(key)
+    build_s = time.perf_counter() - start
+    try:
+        problem.solve(solver=backend, warm_start=False)
+    except cp.error.SolverError as exc:
+        return None, Status.FAILED, f"{backend} failed: {exc}", build_s, {}
+    status = from_cvxpy(problem.status)
+    extra = {"solver_status": problem.status}
+    if status is Status.SOLVED:
+        return float(n.value), status, "", build_s, extra
+    return None, status, f"{backend}: {problem.status}", build_s, extra
+
+
+_COMPILED: set = set()
+
+
+def _exact_bounds_at(task, phi, n_rpm):
+    """Each arc's smallest angle at speed n from the exact laws directly [deg]: the time floor,
+    the stress bound sigma_ref t_ref n / ([sigma_H] speed_rpm), the rebound's root in t (brentq)."""
+    lb = np.maximum(phi, task.time_coeffs_deg_per_rpm() * n_rpm)
+    for k in task.stress_arcs():
+        lb[k] = max(lb[k], stress_bound_deg(*task.stress_reference(k), task.sigma_H_limit_MPa) * n_rpm / task.speed_rpm)
+    for k in task.amplitude_arcs():
+        a = lambda t: float(np.ravel(exact_amplitude_mm(task, t, n_rpm))[0]) - task.amplitude_limit_mm  # noqa: E731
+        if n_rpm > 0 and a(lb[k]) > 0:
+            hi = 2.0 * lb[k]
+            while a(hi) > 0:
+                hi *= 2.0
+            lb[k] = brentq(a, lb[k], hi, xtol=1e-13 * hi, rtol=4 * np.finfo(float).eps)
+    return lb
+
+
+def _speed_bisection(task, net, phi, tol_rpm, backend):
+    """Bisection on n: feasible when the event-time LP with the exact bounds at n fits the cycle."""
+    lp = build_event_time_lp(len(net.names), net.tails, net.heads, first=net.first, last=net.last,
+                             window_arcs=net.window_idx, sync_arcs=net.sync_idx, with_cycle=True)
+    lp.params["cycle_deg"].value = task.cycle_deg
+    if "window_deg" in lp.params:
+        lp.params["window_deg"].value = np.array([w for _, _, w in task.window_arcs()])
+    steps = []
+
+    def feasible(n_rpm):
+        lp.params["min_deg"].value = _exact_bounds_at(task, phi, n_rpm)
+        lp.problem.solve(solver=backend, warm_start=False)
+        steps.append((n_rpm, lp.problem.status))
+        status = from_cvxpy(lp.problem.status)
+        if status not in (Status.SOLVED, Status.INFEASIBLE):
+            raise _Undecided(f"{backend}: {lp.problem.status} at n = {n_rpm:.9g} rpm")
+        return status is Status.SOLVED
+    build_s = 0.0
+    try:
+        if not feasible(0.0):
+            return None, Status.INFEASIBLE, "", build_s, {"bisection_steps": len(steps)}
+        lo, hi = 0.0, 1.0
+        while feasible(hi):
+            lo, hi = hi, 2.0 * hi
+            if hi > MAX_RPM:
+                return None, Status.LIMIT, (f"every speed up to the search bound {MAX_RPM:g} rpm fits: no limit "
+                                            f"grows with the speed"), build_s, {"bisection_steps": len(steps)}
+        while hi - lo > 0.25 * tol_rpm * hi:          # a quarter: the certificate's margin is tol_rpm
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if feasible(mid) else (lo, mid)
+    except _Undecided as exc:
+        return None, Status.FAILED, str(exc), build_s, {"bisection_steps": len(steps)}
+    return lo, Status.SOLVED, "", build_s, {"bisection_steps": len(steps), "bisection_bracket_rpm": [lo, hi]}
+
+
+class _Undecided(Exception):
+    """A feasibility LP that was neither optimal nor infeasible: bisection cannot go on."""
+
+
+def _arcs_at(task, net, lb):
+    """The difference constraints with the arcs' bounds `lb` and the cycle, for `positive_cycle`."""
+    first, last = net.names[net.first], net.names[net.last]
+    arcs = [(u, v, w, f"t({u}->{v}) >= {w:.6g} deg") for u, v, w in _constraint_arcs(net, lb)]
+    return arcs + [(last, first, -task.cycle_deg, f"cycle p({last}) - p({first}) <= {task.cycle_deg:.6g} deg")]
+
+
+def _conflict_at(task, net, lb):
+    return [(u, label, w) for u, _, w, label in positive_cycle(_arcs_at(task, net, lb))]
+
+
+def _certify_speed(task, net, phi, g, n_max, tol):
+    """'' when the bounds at n_max (1 - tol) leave no positive cycle and those at n_max (1 + tol)
+    do (so n_max is the largest speed to tol); else why not."""
+    below, above = n_max * (1 - tol), n_max * (1 + tol) + tol
+    if _conflict_at(task, net, np.maximum(phi, g * below)):
+        return f"certificate failed: n = {below:.9g} rpm (just under the answer) does not fit the cycle"
+    if not _conflict_at(task, net, np.maximum(phi, g * above)):
+        return f"certificate failed: n = {above:.9g} rpm (just over the answer) still fits the cycle"
+    return ""
+
+
+def _speed_report(task, net, lb, g, why, n_max, tol):
+    """Event times at max speed (earliest start), exact readings, and which constraints limit it."""
+    first, last = net.names[net.first], net.names[net.last]
+    if task.windows or task.syncs:
+        early = _longest(_constraint_arcs(net, lb), first)
+        p = np.array([early.get(v, 0.0) for v in net.names])
+    else:
+        p, _ = _dag_times(len(net.names), net.tails, net.heads, lb, net.first, net.last, task.cycle_deg)
+    t = p[net.heads] - p[net.tails]
+    values = {"max_speed_rpm": n_max, "cycle_time_ms": 60_000.0 / n_max, "span_deg": float(p[net.last] - p[net.first])}
+    if task.limiting_op is not None:
+        x, y = (net.index[str(v)] for v in task.limiting_op)
+        values["limiting_op_deg"] = float(p[y] - p[x])
+    values |= {f"p_{v}_deg": float(p[i]) for i, v in enumerate(net.names)}
+    values |= {f"t_{x}_{y}_deg": float(t[k]) for k, (x, y) in enumerate(net.arcs)}
+    for k in task.amplitude_arcs():
+        x, y = net.arcs[k]
+        values[f"amplitude_{x}_{y}_mm"] = float(np.ravel(exact_amplitude_mm(task, t[k], n_max))[0])
+    for k in task.stress_arcs():
+        x, y = net.arcs[k]
+        values[f"sigma_{x}_{y}_MPa"] = float(stress_MPa(*task.stress_reference(k), t[k]) * n_max / task.speed_rpm)
+    span = task.cycle_deg
+    e, l_ = (_dag_times(len(net.names), net.tails, net.heads, lb, net.first, net.last, span)
+             if not (task.windows or task.syncs) else (p, p))
+    group = dict(task.graph.nodes(data="group"))
+    limiting = []
+    for k, (x, y) in enumerate(net.arcs):
+        float_deg = l_[net.index[y]] - e[net.index[x]] - lb[k]
+        if g[k] > 0 and float_deg <= tol * max(1.0, span) and g[k] * n_max >= lb[k] - tol * max(1.0, lb[k]):
+            limiting.append({"constraint": f"{why[k]}[{x}->{y}]", "group": group[x] or group[y] or "-",
+                             "deg_per_rpm": float(g[k]), "deg": float(g[k] * n_max)})
+    by_group: dict = {}
+    for row in limiting:
+        by_group[row["group"]] = by_group.get(row["group"], 0.0) + row["deg_per_rpm"]
+    slope = sum(by_group.values())
+    more = {"limiting": limiting,
+            "limiting_group": max(by_group, key=by_group.get) if by_group else "-",
+            "limiting_constraint": max(limiting, key=lambda r: r["deg_per_rpm"])["constraint"] if limiting else "-",
+            "sens_cycle_rpm_per_deg": 1.0 / slope if slope > 0 else math.inf}
+    return values, more
