@@ -173,7 +173,7 @@ class Cyclogram:
     def __post_init__(self):
         _check_numbers(self)
         if self.lever is not None:
-            self.lever_model        # builds and validates the lever (cached)
+            _ = self.lever_model    # builds and validates the lever (cached)
         self.graph          # builds and validates the network (cached)
         self._check_bounds()
 

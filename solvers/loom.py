@@ -17,6 +17,7 @@ limit. Raising [sigma_H] or the amplitude limit loosens a bound: the span falls 
 critical [phi] lengthens it (+1 deg/deg).
 """
 import dataclasses
+import functools
 import math
 import time
 from collections import deque
@@ -36,7 +37,7 @@ from mechopt.solvers.result import Result, Status, Timing, from_cvxpy
 from mechopt.solvers.settings import Interval, Tolerance
 from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
 
-__all__ = ["plan_cyclogram", "repair_cyclogram", "max_machine_speed"]
+__all__ = ["max_machine_speed", "plan_cyclogram", "repair_cyclogram"]
 
 SENSITIVITY_CONVENTION = ("sens_* = d(objective)/d(limit): change of the objective [deg] per unit increase "
                           "of the limit; negative means a looser limit shortens the span")
@@ -636,7 +637,7 @@ def _exact_limits(task: Cyclogram, stress_form: str) -> list[_ExactLimit]:
     out = []
     for k in task.stress_arcs():
         sigma_ref, t_ref = task.stress_reference(k)
-        exact = lambda t, ref=(sigma_ref, t_ref): stress_MPa(*ref, t)        # noqa: E731
+        exact = functools.partial(stress_MPa, sigma_ref, t_ref)
         at = t_ref if stress_form == "linear" else stress_bound_deg(sigma_ref, t_ref, task.sigma_H_limit_MPa)
         law = _ExactLimit("contact_stress", k, task.sigma_H_limit_MPa, exact, 0.0, 0.0)
         law.relinearise(at)
@@ -644,7 +645,7 @@ def _exact_limits(task: Cyclogram, stress_form: str) -> list[_ExactLimit]:
             law.slope, law.intercept = -sigma_ref / t_ref, 2.0 * sigma_ref
         out.append(law)
     for k in task.amplitude_arcs():
-        law = _ExactLimit("amplitude", k, task.amplitude_limit_mm, lambda t: exact_amplitude_mm(task, t), 0.0, 0.0)
+        law = _ExactLimit("amplitude", k, task.amplitude_limit_mm, functools.partial(exact_amplitude_mm, task), 0.0, 0.0)
         if task.has_linear_amplitude:
             law.slope, law.intercept = task.amplitude_slope_mm_per_deg, task.amplitude_intercept_mm
         else:                           # the lever alone: start from the tangent at the arc's [phi]
@@ -743,7 +744,8 @@ def largest_ratio_rpm_per_deg(task: Cyclogram) -> float:
     """The largest n / t at which the lever's exact rebound keeps the amplitude limit [rpm/deg]:
     a(t, n) = h(n / t) (v0 and F scale as n / t, the preload does not), h convex, h(0) = 0, so
     h(r) <= limit exactly for r <= r*; r* by brentq on h. inf when no ratio breaks the limit."""
-    h = lambda r: float(np.ravel(rebound_amplitude_mm(task.lever_model, r, 1.0))[0]) - task.amplitude_limit_mm  # noqa: E731
+    def h(r):
+        return float(np.ravel(rebound_amplitude_mm(task.lever_model, r, 1.0))[0]) - task.amplitude_limit_mm
     hi = 1.0
     while h(hi) <= 0:
         hi *= 2.0
@@ -815,7 +817,8 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["lp", "bisection"] = "
         n_max, status, message, build_s, extra = _speed_lp(task, net, phi, g, backend)
     else:
         n_max, status, message, build_s, extra = _speed_bisection(task, net, phi, tol_rpm, backend)
-    timing = lambda: Timing(build_s, time.perf_counter() - start - build_s)      # noqa: E731
+    def timing():
+        return Timing(build_s, time.perf_counter() - start - build_s)
     diagnostics = {"method": method, "backend": backend, "speed_coeffs_deg_per_rpm":
                    {f"{x}->{y}": float(g[k]) for k, (x, y) in enumerate(task.arcs) if g[k] > 0}} | extra
     if status is Status.INFEASIBLE:
@@ -896,7 +899,8 @@ def _exact_bounds_at(task, phi, n_rpm):
     for k in task.stress_arcs():
         lb[k] = max(lb[k], stress_bound_deg(*task.stress_reference(k), task.sigma_H_limit_MPa) * n_rpm / task.speed_rpm)
     for k in task.amplitude_arcs():
-        a = lambda t: float(np.ravel(exact_amplitude_mm(task, t, n_rpm))[0]) - task.amplitude_limit_mm  # noqa: E731
+        def a(t, n_rpm=n_rpm):
+            return float(np.ravel(exact_amplitude_mm(task, t, n_rpm))[0]) - task.amplitude_limit_mm
         if n_rpm > 0 and a(lb[k]) > 0:
             hi = 2.0 * lb[k]
             while a(hi) > 0:
@@ -968,7 +972,7 @@ def _certify_speed(task, net, phi, g, n_max, tol):
 
 def _speed_report(task, net, lb, g, why, n_max, tol):
     """Event times at max speed (earliest start), exact readings, and which constraints limit it."""
-    first, last = net.names[net.first], net.names[net.last]
+    first = net.names[net.first]
     if task.windows or task.syncs:
         early = _longest(_constraint_arcs(net, lb), first)
         p = np.array([early.get(v, 0.0) for v in net.names])

@@ -129,3 +129,14 @@ def test_bench_quick_is_offered_where_a_study_has_it_and_the_long_one_says_its_t
     with pytest.raises(KeyboardInterrupt):
         sweep_bench.cli(5, tmp_path, progress=said.append)
     assert said and "expect about 13 min" in said[0] and "--quick" in said[0]
+
+
+def test_a_reader_that_leaves_early_is_not_an_error(monkeypatch, capsys):
+    """`mechopt cases | head -1`: the pipe is closed under the listing; exit 0, not a traceback."""
+    import io
+    import os
+    read_end, write_end = os.pipe()
+    os.close(read_end)                      # the reader has left before the first line
+    closed_pipe = io.TextIOWrapper(open(write_end, "wb", buffering=0), write_through=True)
+    monkeypatch.setattr("sys.stdout", closed_pipe)
+    assert main(["cases"]) == 0

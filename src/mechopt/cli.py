@@ -42,6 +42,9 @@ def main(argv=None) -> int:
         print("interrupted (a sweep keeps its finished chunks: re-run the same command to resume)",
               file=sys.stderr)
         return INTERRUPTED
+    except BrokenPipeError:             # `mechopt cases | head`: the reader left, not an error of ours
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return OK
 
 
 def _parser():
