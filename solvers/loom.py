@@ -683,6 +683,10 @@ def repair_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] =
     op_of = {(str(op["from"]), str(op["to"])): i for i, op in enumerate(task.operations)}
     cuts: dict[int, float] = {}
     history, current = [], task
+    amplitude = [law for law in laws if law.kind == "amplitude"]
+    if amplitude and not task.has_linear_amplitude:     # the lever alone: round 1 takes its tangent at [phi]
+        current = dataclasses.replace(task, amplitude_slope_mm_per_deg=amplitude[0].slope,
+                                      amplitude_intercept_mm=amplitude[0].intercept)
     for round_ in range(1, max_rounds + 1):
         result = plan_cyclogram(current, backend=backend, stress_form=stress_form, tol_deg=tol_deg)
         if result.status is not Status.SOLVED:
@@ -710,7 +714,7 @@ def repair_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] =
         for k, bound in cuts.items():
             op = ops[op_of[task.arcs[k]]]
             op["min_deg"] = max(float(op["min_deg"]), bound)
-        current = dataclasses.replace(task, operations=ops)
+        current = dataclasses.replace(current, operations=ops)
     worst = max((r for r in history[-1]["limits"]), key=lambda r: r["excess"])
     return _repaired(task, result, laws, history, start, Status.LIMIT,
                      f"not converged in {max_rounds} round(s): exact {worst['limit']} exceeds its limit by "
