@@ -5,6 +5,7 @@ Independent references: the root of the exact law a(t, 420 rpm) = 0.1 mm by bren
 the LP); the stress root sigma_ref t_ref / [sigma_H] in closed form; the span as the longest path
 with those bounds, relaxed by hand."""
 import dataclasses
+import itertools
 
 import numpy as np
 import pytest
@@ -67,8 +68,8 @@ def test_rounds_converge_quadratically_and_bounds_only_tighten(repaired):
     for limit, value in (("amplitude[3->7]", LIMIT_MM), ("contact_stress[9->10]", SIGMA_H_MPA)):
         excess = [next(r["excess"] for r in rnd["limits"] if r["limit"] == limit) / value for rnd in rounds]
         t = [next(r["t_deg"] for r in rnd["limits"] if r["limit"] == limit) for rnd in rounds]
-        assert all(b >= a for a, b in zip(t, t[1:]))                      # never loosened
-        assert all(b <= 2.0 * a * a for a, b in zip(excess, excess[1:]))  # Newton: relative excess squares
+        assert all(b >= a for a, b in itertools.pairwise(t))                      # never loosened
+        assert all(b <= 2.0 * a * a for a, b in itertools.pairwise(excess))  # Newton: relative excess squares
         assert excess[0] > 1e-3 and abs(excess[-1]) < 1e-12
 
 
