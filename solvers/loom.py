@@ -999,17 +999,21 @@ def _speed_report(task, net, lb, g, why, n_max, tol):
     e, l_ = (_dag_times(len(net.names), net.tails, net.heads, lb, net.first, net.last, span)
              if not (task.windows or task.syncs) else (p, p))
     group = dict(task.graph.nodes(data="group"))
+    floats = {f"{x}->{y}": float(l_[net.index[y]] - e[net.index[x]] - lb[k]) for k, (x, y) in enumerate(net.arcs)}
+    critical = [a for a, f in floats.items() if f <= tol * max(1.0, span)]
+    crit = nx.DiGraph([tuple(a.split("->")) for a in critical])
+    end = net.names[net.last]
+    chain = nx.shortest_path(crit, first, end) if first in crit and end in crit and nx.has_path(crit, first, end) else []
     limiting = []
     for k, (x, y) in enumerate(net.arcs):
-        float_deg = l_[net.index[y]] - e[net.index[x]] - lb[k]
-        if g[k] > 0 and float_deg <= tol * max(1.0, span) and g[k] * n_max >= lb[k] - tol * max(1.0, lb[k]):
+        if g[k] > 0 and f"{x}->{y}" in critical and g[k] * n_max >= lb[k] - tol * max(1.0, lb[k]):
             limiting.append({"constraint": f"{why[k]}[{x}->{y}]", "group": group[x] or group[y] or "-",
                              "deg_per_rpm": float(g[k]), "deg": float(g[k] * n_max)})
     by_group: dict = {}
     for row in limiting:
         by_group[row["group"]] = by_group.get(row["group"], 0.0) + row["deg_per_rpm"]
     slope = sum(by_group.values())
-    more = {"limiting": limiting,
+    more = {"limiting": limiting, "float_deg": floats, "critical_ops": critical, "critical_chain": chain,
             "limiting_group": max(by_group, key=by_group.get) if by_group else "-",
             "limiting_constraint": max(limiting, key=lambda r: r["deg_per_rpm"])["constraint"] if limiting else "-",
             "sens_cycle_rpm_per_deg": 1.0 / slope if slope > 0 else math.inf}
