@@ -759,6 +759,7 @@ def largest_ratio_rpm_per_deg(task: Cyclogram) -> float:
 
 
 MAX_RATIO_RPM_PER_DEG = 1e12     # n / t past any machine: 10^6 rpm over 10^-6 deg
+MIN_RPM = 1e-6                   # bisection: below it the machine is at rest
 
 
 def speed_coeffs_deg_per_rpm(task: Cyclogram) -> tuple[np.ndarray, list[str]]:
@@ -781,7 +782,7 @@ def speed_coeffs_deg_per_rpm(task: Cyclogram) -> tuple[np.ndarray, list[str]]:
 
 def max_machine_speed(task: Cyclogram, *, method: Literal["lp", "bisection"] = "lp",
                       backend: Literal["HIGHS", "CLARABEL"] = "HIGHS",
-                      tol_rpm: Annotated[float, Interval(ge=1e-9, le=1e-2)] = 1e-7) -> Result:
+                      rtol: Annotated[float, Interval(ge=1e-9, le=1e-2)] = 1e-7) -> Result:
     """The largest main-shaft speed n at which every group fits the machine's cycle (issue 14,
     part 5), with the event times there.
 
@@ -799,7 +800,7 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["lp", "bisection"] = "
     alone (a dwell over which a vibration must decay, a time with an angle) breaks this; then
     method "bisection" is the general route: bisection on n, each step the exact bounds at that n
     (the rebound's root in t by brentq, not through r*) and the event-time LP's feasibility, its
-    status checked. It is also the independent check of the LP. tol_rpm is relative: the answer
+    status checked. It is also the independent check of the LP. rtol (relative) on n: the answer
     is certified by the longest-path certificate at n (1 - tol) (fits) and n (1 + tol) (does not);
     below 1e-9 the LP's own feasibility tolerance (1e-7 deg on a 360 deg cycle) decides.
 
@@ -820,17 +821,19 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["lp", "bisection"] = "
     if method == "lp":
         n_max, status, message, build_s, extra = _speed_lp(task, net, phi, g, backend)
     else:
-        n_max, status, message, build_s, extra = _speed_bisection(task, net, phi, tol_rpm, backend)
+        n_max, status, message, build_s, extra = _speed_bisection(task, net, phi, rtol, backend)
     def timing():
         return Timing(build_s, time.perf_counter() - start - build_s)
     diagnostics = {"method": method, "backend": backend, "speed_coeffs_deg_per_rpm":
                    {f"{x}->{y}": float(g[k]) for k, (x, y) in enumerate(task.arcs) if g[k] > 0}} | extra
+    if status is Status.SOLVED and n_max * g.max(initial=0.0) <= 1e-6:   # below a micro-degree: at rest
+        status = Status.INFEASIBLE
     if status is Status.INFEASIBLE:
-        chain = _conflict_at(task, net, phi)
+        chain = _conflict_at(task, net, phi) or _conflict_at(task, net, np.maximum(phi, g * rtol))
         groups = list(dict.fromkeys(task.graph.nodes[v]["group"] or "-" for v, _, _ in chain))
         diagnostics["conflict_groups"] = groups
         message = ("no speed fits: conflicting chain " + "; ".join(label for _, label, _ in chain)
-                   + f" (needs {math.fsum(w for _, _, w in chain):.6g} deg more than its limits allow at n -> 0;"
+                   + f" (needs {math.fsum(w for _, _, w in chain):.6g} deg more than its limits allow as n -> 0;"
                    + f" groups {', '.join(groups)})")
         return Result(Status.INFEASIBLE, {}, timing(), message=message,
                       violated=tuple(label for _, label, _ in chain), diagnostics=diagnostics)
@@ -839,8 +842,8 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["lp", "bisection"] = "
     if status is not Status.SOLVED:
         return Result(status, {}, timing(), message=message, diagnostics=diagnostics)
     lb = np.maximum(phi, g * n_max)
-    certified = _certify_speed(task, net, phi, g, n_max, tol_rpm)
-    values, more = _speed_report(task, net, lb, g, why, n_max, tol_rpm)
+    certified = _certify_speed(task, net, phi, g, n_max, rtol)
+    values, more = _speed_report(task, net, lb, g, why, n_max, rtol)
     diagnostics |= more
     if certified:
         return Result(Status.INACCURATE, values, timing(), message=certified, diagnostics=diagnostics)
@@ -872,15 +875,17 @@ def _speed_lp(task, net, phi, g, backend):
             s = np.asarray(net.sync_idx)
             cons.append(incidence(len(net.names), s[:, 0], s[:, 1]) @ p == 0)
         problem = cp.Problem(cp.Maximize(n), cons)
+        set_values(prm)
+        problem.get_problem_data(backend)          # compile now, so build and solve time separate
         return problem, n, prm
+
+    def set_values(prm):
+        prm["min_deg"].value, prm["g"].value, prm["cycle_deg"].value = phi, g[rows], task.cycle_deg
+        if "window_deg" in prm:
+            prm["window_deg"].value = np.array([w for _, _, w in task.window_arcs()])
     start = time.perf_counter()
     (problem, n, prm), _ = _BUILDS.get(key, build)
-    prm["min_deg"].value, prm["g"].value, prm["cycle_deg"].value = phi, g[rows], task.cycle_deg
-    if "window_deg" in prm:
-        prm["window_deg"].value = np.array([w for _, _, w in task.window_arcs()])
-    if key not in _COMPILED:
-        problem.get_problem_data(backend)
-        _COMPILED.add(key)
+    set_values(prm)
     build_s = time.perf_counter() - start
     try:
         problem.solve(solver=backend, warm_start=False)
@@ -891,9 +896,6 @@ def _speed_lp(task, net, phi, g, backend):
     if status is Status.SOLVED:
         return float(n.value), status, "", build_s, extra
     return None, status, f"{backend}: {problem.status}", build_s, extra
-
-
-_COMPILED: set = set()
 
 
 def _exact_bounds_at(task, phi, n_rpm):
@@ -913,7 +915,7 @@ def _exact_bounds_at(task, phi, n_rpm):
     return lb
 
 
-def _speed_bisection(task, net, phi, tol_rpm, backend):
+def _speed_bisection(task, net, phi, rtol, backend):
     """Bisection on n: feasible when the event-time LP with the exact bounds at n fits the cycle."""
     lp = build_event_time_lp(len(net.names), net.tails, net.heads, first=net.first, last=net.last,
                              window_arcs=net.window_idx, sync_arcs=net.sync_idx, with_cycle=True)
@@ -940,12 +942,13 @@ def _speed_bisection(task, net, phi, tol_rpm, backend):
             if hi > MAX_RPM:
                 return None, Status.LIMIT, (f"every speed up to the search bound {MAX_RPM:g} rpm fits: no limit "
                                             f"grows with the speed"), build_s, {"bisection_steps": len(steps)}
-        while hi - lo > 0.25 * tol_rpm * hi:          # a quarter: the certificate's margin is tol_rpm
+        while hi - lo > 0.25 * rtol * hi and hi > MIN_RPM:   # a quarter: the certificate's margin is rtol
             mid = 0.5 * (lo + hi)
             lo, hi = (mid, hi) if feasible(mid) else (lo, mid)
     except _Undecided as exc:
         return None, Status.FAILED, str(exc), build_s, {"bisection_steps": len(steps)}
-    return lo, Status.SOLVED, "", build_s, {"bisection_steps": len(steps), "bisection_bracket_rpm": [lo, hi]}
+    return (lo if hi > MIN_RPM else 0.0), Status.SOLVED, "", build_s, {"bisection_steps": len(steps),
+                                                                     "bisection_bracket_rpm": [lo, hi]}
 
 
 class _Undecided(Exception):
@@ -966,7 +969,7 @@ def _conflict_at(task, net, lb):
 def _certify_speed(task, net, phi, g, n_max, tol):
     """'' when the bounds at n_max (1 - tol) leave no positive cycle and those at n_max (1 + tol)
     do (so n_max is the largest speed to tol); else why not."""
-    below, above = n_max * (1 - tol), n_max * (1 + tol) + tol
+    below, above = n_max * (1 - tol), n_max * (1 + tol)
     if _conflict_at(task, net, np.maximum(phi, g * below)):
         return f"certificate failed: n = {below:.9g} rpm (just under the answer) does not fit the cycle"
     if not _conflict_at(task, net, np.maximum(phi, g * above)):

@@ -64,7 +64,7 @@ def exact_bounds(task, n_rpm):
 
 
 def test_lp_and_bisection_agree_with_the_closed_form_of_the_critical_chain(task, lp):
-    bis = max_machine_speed(task, method="bisection", tol_rpm=1e-8)
+    bis = max_machine_speed(task, method="bisection", rtol=1e-8)
     assert lp.status is Status.SOLVED and bis.status is Status.SOLVED
     g_amp = root_deg(task.lever, 420.0) / 420.0          # a = h(n / t): the root grows as n
     closed = (360.0 - CHAIN_FIXED_DEG) / (g_amp + 900 * 30 / (800 * 420) + 0.006 * 60.0)
@@ -114,7 +114,7 @@ def test_with_preload_the_rebound_is_not_proportional_and_the_lp_still_holds(tas
     """With the preload a(t, n) = h(n / t) is no longer h' r: the LP's r* comes from brentq on h."""
     lever = task.lever | {"effects": [*task.lever["effects"], "preload"], "preload_mm": 0.05}
     pre = dataclasses.replace(task, lever=lever)
-    lp, bis = (max_machine_speed(pre, method=m, tol_rpm=1e-8) for m in ("lp", "bisection"))
+    lp, bis = (max_machine_speed(pre, method=m, rtol=1e-8) for m in ("lp", "bisection"))
     assert lp.status is Status.SOLVED and bis.status is Status.SOLVED
     assert lp.values["max_speed_rpm"] == pytest.approx(bis.values["max_speed_rpm"], rel=1e-7)
     lever = lever_stop(lever)
@@ -133,6 +133,14 @@ def test_a_machine_whose_groups_cannot_fit_any_speed_is_infeasible_naming_the_ch
         assert r.message.startswith("no speed fits: conflicting chain")
         assert "cycle p(24) - p(1) <= 100 deg" in r.violated
         assert "needs 120 deg more" in r.message and "flight" in r.diagnostics["conflict_groups"]
+
+
+def test_a_cycle_only_a_machine_at_rest_fits_is_infeasible():
+    ops = [{"from": "a", "to": "b", "min_deg": 10.0}, {"from": "b", "to": "c", "min_deg": 0.0, "min_ms": 10.0}]
+    task = Cyclogram(events={"a": {}, "b": {}, "c": {}}, operations=ops, speed_rpm=100.0, cycle_deg=10.0)
+    for method in ("lp", "bisection"):
+        r = max_machine_speed(task, method=method)
+        assert r.status is Status.INFEASIBLE and r.message.startswith("no speed fits: conflicting chain t(a->b)")
 
 
 def test_no_limit_growing_with_speed_is_unbounded_or_a_search_limit(task):
