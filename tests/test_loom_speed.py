@@ -168,3 +168,17 @@ def test_a_time_floor_is_an_angle_at_the_task_s_speed():
     assert r.diagnostics["bound_source"]["a->b"] == "min_time"
     with pytest.raises(ModelError, match=r"min_ms=-1\.0: a minimum duration must be in \[0"):
         Cyclogram(events={"a": {}, "b": {}}, operations=[{"from": "a", "to": "b", "min_deg": 1.0, "min_ms": -1.0}])
+
+
+def test_held_highs_model_agrees_with_the_cvxpy_lp_and_says_infeasible():
+    from mechopt.solvers.loom import HeldLP, _Net
+    task = registry.find("loom/group1").build()[0]
+    net = _Net(task, "exact")
+    held = HeldLP(len(net.names), net.tails, net.heads, first=net.first, last=net.last, with_cycle=True)
+    status, p = held.solve(net.lb, cycle_deg=360.0)
+    assert status is Status.SOLVED
+    assert p[net.last] - p[net.first] == pytest.approx(plan_cyclogram(task).values["span_deg"], abs=1e-9)
+    status, p = held.solve(net.lb * 1.1, cycle_deg=360.0)            # a re-solve on changed bounds
+    assert status is Status.SOLVED and p[net.last] == pytest.approx(1.1 * 114.75, abs=1e-9)
+    status, p = held.solve(net.lb, cycle_deg=100.0)
+    assert status is Status.INFEASIBLE and p is None
