@@ -11,6 +11,12 @@ cycle. Constraints are built from the incidence matrix (one vectorised row block
 limit is a cvxpy Parameter, so a what-if re-solve reuses the compiled problem (DPP). The anchor
 p(1) = 0 removes the shift invariance that otherwise slows HiGHS a hundredfold.
 
+Entry points: `plan_cyclogram` (this LP); `repair_cyclogram` (its optimum checked against the
+exact rebound and contact stress, re-linearised and re-solved until they hold: issue 14, part
+4); `max_machine_speed` (the largest main-shaft speed, an LP in (p, n) because every law is a
+function of n / t; bisection on n as the general route and its check: part 5). `HeldLP` keeps
+the LP in HiGHS for many solves that change bounds only.
+
 Sensitivities are reported in user terms with one sign convention: d(objective)/d(limit), the
 change of the objective (span_deg, or limiting_op_deg on a machine) per unit *increase* of the
 limit. Raising [sigma_H] or the amplitude limit loosens a bound: the span falls (<= 0); raising a
