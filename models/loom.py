@@ -22,8 +22,8 @@ stop_vibration  a(t) = slope t + intercept <= amplitude limit on       linearise
                 a(t, n), eq. (2), from the lever table `lever`         eq. (2) for the exact law)
 ==============  =====================================================  =====================
 
-Speed (`speed_rpm`, the main shaft's n): the stress references (sigma_ref at t_ref) and the
-exact rebound law are taken at n. An operation may also need a time rather than an angle
+Speed (`speed_rpm`, the main shaft's n): the stresses and the exact rebound law are taken at
+n; the stress references (sigma_ref at t_ref) hold at `stress_speed_rpm` (default n). An operation may also need a time rather than an angle
 (`min_ms`, e.g. the microshuttle's flight): at n it spans at least 6 n T deg (360 deg per
 60/n s), so its lower bound is max(min_deg, 0.006 n min_ms).
 
@@ -34,7 +34,8 @@ reference point (t_ref, sigma_ref) per cam pair fixes the curve. sigma_max <= [s
 exactly t >= sigma_ref t_ref / [sigma_H] ("turned into a bound on the phase angle"); its tangent
 at t_ref, `stress_bound_deg(..., form="linear")`, is the linearisation a linear design asks for.
 At another speed n the inertial load scales as n^2, so sigma_max(t, n) = sigma_ref (t_ref / t)
-(n / speed_rpm): a function of n / t alone, as the rebound (its v0 and F scale as n / t).
+(n / n_ref), n_ref the speed of the references: a function of n / t alone, as the rebound (its
+v0 and F scale as n / t).
 """
 import dataclasses
 import math
@@ -143,7 +144,8 @@ class Cyclogram:
     `sigma_H_limit_MPa` allowable contact stress [sigma_H] (effect contact_stress);
     `amplitude_slope_mm_per_deg`, `amplitude_intercept_mm`, `amplitude_limit_mm` the amplitude
     law and its limit (effect stop_vibration); `speed_rpm` the main shaft's speed n at which the
-    stress references hold, the exact rebound is evaluated and `min_ms` turns into degrees.
+    exact rebound and the stresses are evaluated and `min_ms` turns into degrees;
+    `stress_speed_rpm` the speed the stress references were taken at (default: speed_rpm).
     `lever` (structure): the lift lever's table (see `lever_stop`), the exact law a(t, n) behind
     the linear one; a task may give it instead of the linear law's slope and intercept.
     """
@@ -159,6 +161,7 @@ class Cyclogram:
     amplitude_intercept_mm: float | None = None
     amplitude_limit_mm: float | None = None
     speed_rpm: float | None = None
+    stress_speed_rpm: float | None = None
     lever: dict | None = None
 
     EFFECTS: ClassVar[dict[str, Effect]] = {
@@ -379,12 +382,26 @@ class Cyclogram:
             out[k] = time_floor_deg(self.arc_data(k)["min_ms"], 1.0)
         return out
 
+    @property
+    def stress_reference_rpm(self) -> float | None:
+        """The speed the stress references hold at: stress_speed_rpm, else speed_rpm."""
+        return self.speed_rpm if self.stress_speed_rpm is None else self.stress_speed_rpm
+
+    def stress_at_MPa(self, k: int, t_deg, speed_rpm):
+        """sigma_max of arc k's cam pair over t at speed n [MPa]: sigma_ref (t_ref / t) (n / n_ref)."""
+        model = self.stress_models[self.arc_data(k)["stress"]]
+        return stress_MPa(float(model["sigma_ref_MPa"]), float(model["t_ref_deg"]), t_deg) * speed_rpm \
+            / self.stress_reference_rpm
+
     def stress_coeff_deg_per_rpm(self, k: int) -> float:
-        """sigma_max(t, n) <= [sigma_H] as t >= coeff n: sigma_ref t_ref / ([sigma_H] speed_rpm)
-        [deg/rpm] (the stress references hold at speed_rpm)."""
-        if self.speed_rpm is None:
-            raise ModelError("speed_rpm: the stress references need the speed they hold at", key="speed_rpm")
-        return stress_bound_deg(*self.stress_reference(k), self.sigma_H_limit_MPa) / self.speed_rpm
+        """sigma_max(t, n) <= [sigma_H] as t >= coeff n: sigma_ref t_ref / ([sigma_H] n_ref)
+        [deg/rpm], n_ref the speed the references hold at (`stress_reference_rpm`)."""
+        if self.stress_reference_rpm is None:
+            raise ModelError("stress_speed_rpm: the stress references need the speed they hold at",
+                             key="stress_speed_rpm")
+        model = self.stress_models[self.arc_data(k)["stress"]]
+        return stress_bound_deg(float(model["sigma_ref_MPa"]), float(model["t_ref_deg"]),
+                                self.sigma_H_limit_MPa) / self.stress_reference_rpm
 
     def stress_arcs(self) -> list[int]:
         """Indices (in `arcs` order) of the operations with a contact-stress model."""
@@ -401,9 +418,11 @@ class Cyclogram:
                 [k for k, e in enumerate(self.arcs) if edges[e]["amplitude"] is not None])
 
     def stress_reference(self, k: int) -> tuple[float, float]:
-        """(sigma_ref_MPa, t_ref_deg) of arc k's cam pair."""
+        """(sigma_ref_MPa, t_ref_deg) of arc k's cam pair at the task's speed: the reference
+        stress scaled by speed_rpm / stress_speed_rpm when both are given (sigma ~ n / t)."""
         model = self.stress_models[self.arc_data(k)["stress"]]
-        return float(model["sigma_ref_MPa"]), float(model["t_ref_deg"])
+        scale = 1.0 if self.stress_speed_rpm is None or self.speed_rpm is None else self.speed_rpm / self.stress_speed_rpm
+        return float(model["sigma_ref_MPa"]) * scale, float(model["t_ref_deg"])
 
     def arc_data(self, k: int) -> dict:
         x, y = self.arcs[k]
@@ -431,7 +450,7 @@ class Cyclogram:
 
 def _check_numbers(task):
     for key, top in (("cycle_deg", MAX_DEG), ("sigma_H_limit_MPa", MAX_MPA), ("amplitude_limit_mm", math.inf),
-                     ("speed_rpm", MAX_RPM)):
+                     ("speed_rpm", MAX_RPM), ("stress_speed_rpm", MAX_RPM)):
         value = getattr(task, key)
         if value is not None and not (math.isfinite(value) and 0 < value <= top):
             raise ModelError(f"{key}={value} must be a finite number > 0" + (f" and <= {top:g}" if top < math.inf

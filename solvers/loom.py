@@ -847,10 +847,11 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["lp", "bisection"] = "
 
     Every limit is a lower bound on a phase angle. [phi] does not depend on n; a time `min_ms`
     (the microshuttle's flight) asks for 0.006 n T deg; the contact stress, sigma_ref (t_ref / t)
-    (n / speed_rpm) <= [sigma_H], and the lever's exact rebound a(t, n) = h(n / t) <= a_lim depend
-    on n and t only through r = n / t and grow with it. Each is then r <= r*, i.e.
+    (n / n_ref) <= [sigma_H] (n_ref = stress_speed_rpm), and the lever's exact rebound
+    a(t, n) = h(n / t) <= a_lim depend on n and t only through r = n / t and grow with it. Each
+    is then r <= r*, i.e.
 
-        t(x, y) >= g(x, y) n,      g = 1 / r*  [deg/rpm]  (0.006 T; sigma_ref t_ref / ([sigma_H] speed_rpm); 1 / r*_a)
+        t(x, y) >= g(x, y) n,      g = 1 / r*  [deg/rpm]  (0.006 T; sigma_ref t_ref / ([sigma_H] n_ref); 1 / r*_a)
 
     homogeneous and linear in (p, n): maximise n s.t. D p >= [phi], D p >= g n, windows, syncs,
     p(first) = 0, p(last) - p(first) <= cycle is an LP (method "lp"). (In times rather than
@@ -959,10 +960,10 @@ def _speed_lp(task, net, phi, g, backend):
 
 def _exact_bounds_at(task, phi, n_rpm):
     """Each arc's smallest angle at speed n from the exact laws directly [deg]: the time floor,
-    the stress bound sigma_ref t_ref n / ([sigma_H] speed_rpm), the rebound's root in t (brentq)."""
+    the stress bound sigma_ref t_ref n / ([sigma_H] n_ref), the rebound's root in t (brentq)."""
     lb = np.maximum(phi, task.time_coeffs_deg_per_rpm() * n_rpm)
     for k in task.stress_arcs():
-        lb[k] = max(lb[k], stress_bound_deg(*task.stress_reference(k), task.sigma_H_limit_MPa) * n_rpm / task.speed_rpm)
+        lb[k] = max(lb[k], task.stress_coeff_deg_per_rpm(k) * n_rpm)
     for k in task.amplitude_arcs():
         def a(t, n_rpm=n_rpm):
             return float(np.ravel(exact_amplitude_mm(task, t, n_rpm))[0]) - task.amplitude_limit_mm
@@ -1054,7 +1055,7 @@ def _speed_report(task, net, lb, g, why, n_max, tol):
         values[f"amplitude_{x}_{y}_mm"] = float(np.ravel(exact_amplitude_mm(task, t[k], n_max))[0])
     for k in task.stress_arcs():
         x, y = net.arcs[k]
-        values[f"sigma_{x}_{y}_MPa"] = float(stress_MPa(*task.stress_reference(k), t[k]) * n_max / task.speed_rpm)
+        values[f"sigma_{x}_{y}_MPa"] = float(task.stress_at_MPa(k, t[k], n_max))
     span = task.cycle_deg
     e, l_ = (_dag_times(len(net.names), net.tails, net.heads, lb, net.first, net.last, span)
              if not (task.windows or task.syncs) else (p, p))

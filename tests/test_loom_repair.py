@@ -146,3 +146,18 @@ def test_lever_table_is_stop_impact_amplitude_law_s_lever(task):
             assert entry["value"] == source[key], key
     assert np.isclose(rebound_amplitude_mm(lever_stop(task.lever), 420.0, 35.0),
                       registry.run("stop-impact/amplitude-law").result.values["intercept_mm"] / 2, rtol=1e-9)
+
+
+def test_at_another_speed_the_rebound_and_stress_scale_as_n_over_t(task):
+    """At 300 rpm with the lever alone (the 420 rpm tangent would be kept: conservative there)."""
+    slow = dataclasses.replace(task, speed_rpm=300.0, amplitude_slope_mm_per_deg=None, amplitude_intercept_mm=None)
+    r = repair_cyclogram(slow, stress_form="exact")
+    assert r.status is Status.SOLVED
+    root = exact_root_deg(task.lever, 300.0)
+    assert root == pytest.approx(exact_root_deg(task.lever) * 300 / 420, rel=1e-9)     # a = h(n / t)
+    # the root 26.25 deg falls under the lift's [phi] = 30 deg, which then sets the angle
+    assert r.values["t_3_7_deg"] == pytest.approx(30.0, abs=1e-9)
+    assert r.values["exact_amplitude_3_7_mm"] == pytest.approx(LIMIT_MM * root / 30.0, rel=1e-9)
+    # the returner's stress bound 33.75 deg at 420 rpm falls to 24.1 deg: its [phi] = 30 deg sets the angle
+    assert r.values["t_9_10_deg"] == pytest.approx(30.0, abs=1e-9)
+    assert r.values["exact_sigma_9_10_MPa"] == pytest.approx(900 * 30 / 30 * 300 / 420, rel=1e-9)

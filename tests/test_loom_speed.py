@@ -182,3 +182,17 @@ def test_held_highs_model_agrees_with_the_cvxpy_lp_and_says_infeasible():
     assert status is Status.SOLVED and p[net.last] == pytest.approx(1.1 * 114.75, abs=1e-9)
     status, p = held.solve(net.lb, cycle_deg=100.0)
     assert status is Status.INFEASIBLE and p is None
+
+
+def test_at_its_highest_speed_the_machine_s_longest_flight_is_the_flight_time(task, lp):
+    """The other question at a given n (loom.repair_cyclogram, exact laws): the longest limiting
+    operation. At the highest speed it shrinks to the flight's own 60 ms; at 420 rpm it is the
+    cycle minus the chain's exact bounds."""
+    from mechopt.solvers.loom import repair_cyclogram
+    n = lp.values["max_speed_rpm"]
+    at_max = repair_cyclogram(dataclasses.replace(task, speed_rpm=n), stress_form="exact")
+    assert at_max.status is Status.SOLVED
+    assert at_max.values["limiting_op_deg"] == pytest.approx(0.006 * 60.0 * n, rel=1e-7)
+    at_420 = repair_cyclogram(task, stress_form="exact")
+    assert at_420.values["limiting_op_deg"] == pytest.approx(360.0 - CHAIN_FIXED_DEG - root_deg(task.lever, 420.0)
+                                                            - 900 * 30 / 800, abs=1e-6)
