@@ -18,8 +18,14 @@ effect          adds                                                   paper
 contact_stress  sigma_max(t) <= [sigma_H] on operations naming a       constraint after (1)
                 stress model; sigma_max = sigma_ref t_ref / t
 stop_vibration  a(t) = slope t + intercept <= amplitude limit on       linearised a(3,7) (Results
-                operations with amplitude = "linear"                   and discussion, last formula)
+                operations with amplitude = "linear"; its exact law    and discussion, last formula;
+                a(t, n), eq. (2), from the lever table `lever`         eq. (2) for the exact law)
 ==============  =====================================================  =====================
+
+Speed (`speed_rpm`, the main shaft's n): the stresses and the exact rebound law are taken at
+n; the stress references (sigma_ref at t_ref) hold at `stress_speed_rpm` (default n). An operation may also need a time rather than an angle
+(`min_ms`, e.g. the microshuttle's flight): at n it spans at least 6 n T deg (360 deg per
+60/n s), so its lower bound is max(min_deg, 0.006 n min_ms).
 
 Contact stress (our reading; the paper gives no law): a cam pair under inertial load carries
 F = m h omega^2 C / t^2 (lift h over phase angle t, C the law's acceleration coefficient), and
@@ -27,7 +33,11 @@ the Hertz line-contact stress grows as sqrt(F), so sigma_max(t) = sigma_ref t_re
 reference point (t_ref, sigma_ref) per cam pair fixes the curve. sigma_max <= [sigma_H] is then
 exactly t >= sigma_ref t_ref / [sigma_H] ("turned into a bound on the phase angle"); its tangent
 at t_ref, `stress_bound_deg(..., form="linear")`, is the linearisation a linear design asks for.
+At another speed n the inertial load scales as n^2, so sigma_max(t, n) = sigma_ref (t_ref / t)
+(n / n_ref), n_ref the speed of the references: a function of n / t alone, as the rebound (its
+v0 and F scale as n / t).
 """
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -37,7 +47,8 @@ import networkx as nx
 import numpy as np
 
 from mechopt.models.effects import Effect
-from mechopt.models.errors import ModelError
+from mechopt.models.errors import MechoptError, ModelError
+from mechopt.models.stop_impact import LeverStop
 
 STRESS_FORMS = ("exact", "linear")
 # stated limits of the inputs: past 1e6 deg (a thousand turns) the LP's feasibility tolerance
@@ -45,10 +56,12 @@ STRESS_FORMS = ("exact", "linear")
 # are no material's (and square past the float range in the sensitivities)
 MAX_DEG = 1e6
 MAX_MPA = 1e6
+MAX_RPM = 1e6           # the lever model's stated range (models/stop_impact.py)
+MAX_MS = 1e6
 AMPLITUDE_LAWS = ("linear",)
 _NOTE_KEYS = {"mark", "why", "where", "what"}         # provenance and description, not physics
 _EVENT_KEYS = {"mechanism", "group"} | _NOTE_KEYS
-_OP_KEYS = {"from", "to", "min_deg", "stress", "amplitude", "name"} | _NOTE_KEYS
+_OP_KEYS = {"from", "to", "min_deg", "min_ms", "stress", "amplitude", "name"} | _NOTE_KEYS
 _STRESS_KEYS = {"sigma_ref_MPa", "t_ref_deg"} | _NOTE_KEYS
 _WINDOW_KEYS = {"from", "to", "max_deg"} | _NOTE_KEYS
 _SYNC_KEYS = {"events"} | _NOTE_KEYS
@@ -85,6 +98,37 @@ def amplitude_bound_deg(slope_mm_per_deg, intercept_mm, limit_mm):
     return (limit_mm - intercept_mm) / slope_mm_per_deg
 
 
+def time_floor_deg(min_ms, speed_rpm):
+    """Angle the main shaft turns in `min_ms` at `speed_rpm` [deg]: 360 n / 60 deg/s times T."""
+    return 0.006 * speed_rpm * min_ms
+
+
+def lever_stop(table) -> LeverStop:
+    """The lift lever of the stop-impact model (models/stop_impact.py) from a scene's
+    [structure.lever] table: LeverStop's parameters, each a number or {value, mark, why / where /
+    on}, and its `effects`. The one place the cyclogram couples to the stop model."""
+    _table(table, "lever", dict)
+    args = {}
+    for key, entry in table.items():
+        if key == "effects":
+            args[key] = entry
+            continue
+        if isinstance(entry, dict):
+            _entry(entry, f"lever.{key}", {"value", "on"} | _NOTE_KEYS, required=("value",))
+            entry = entry["value"]
+        args[key] = _number(entry, f"lever.{key}")
+    known = {f.name for f in dataclasses.fields(LeverStop)}
+    unknown = sorted(set(args) - known)
+    if unknown:
+        raise ModelError(f"lever: unknown {', '.join(unknown)}; allowed: {', '.join(sorted(known))}", key="lever")
+    try:
+        return LeverStop(**args)
+    except MechoptError as exc:
+        raise ModelError(f"lever.{exc}", key=f"lever.{exc.key}" if exc.key else "lever") from None
+    except TypeError as exc:            # a required parameter missing
+        raise ModelError(f"lever: {exc}", key="lever") from None
+
+
 @dataclass(frozen=True)
 class Cyclogram:
     """A machine's network cyclogram and the question asked of it.
@@ -99,7 +143,11 @@ class Cyclogram:
     Parameters: `cycle_deg` machine cycle [deg] (p(last) - p(first) <= cycle_deg);
     `sigma_H_limit_MPa` allowable contact stress [sigma_H] (effect contact_stress);
     `amplitude_slope_mm_per_deg`, `amplitude_intercept_mm`, `amplitude_limit_mm` the amplitude
-    law and its limit (effect stop_vibration).
+    law and its limit (effect stop_vibration); `speed_rpm` the main shaft's speed n at which the
+    exact rebound and the stresses are evaluated and `min_ms` turns into degrees;
+    `stress_speed_rpm` the speed the stress references were taken at (default: speed_rpm).
+    `lever` (structure): the lift lever's table (see `lever_stop`), the exact law a(t, n) behind
+    the linear one; a task may give it instead of the linear law's slope and intercept.
     """
     events: dict
     operations: list
@@ -112,6 +160,9 @@ class Cyclogram:
     amplitude_slope_mm_per_deg: float | None = None
     amplitude_intercept_mm: float | None = None
     amplitude_limit_mm: float | None = None
+    speed_rpm: float | None = None
+    stress_speed_rpm: float | None = None
+    lever: dict | None = None
 
     EFFECTS: ClassVar[dict[str, Effect]] = {
         "contact_stress": Effect(adds="sigma_max(t) <= [sigma_H] on operations naming a stress model",
@@ -124,6 +175,8 @@ class Cyclogram:
 
     def __post_init__(self):
         _check_numbers(self)
+        if self.lever is not None:
+            _ = self.lever_model    # builds and validates the lever (cached)
         self.graph          # builds and validates the network (cached)
         self._check_bounds()
 
@@ -167,12 +220,17 @@ class Cyclogram:
             if phi > MAX_DEG:
                 raise ModelError(f"{key}.min_deg={phi}: a minimum phase angle must be <= {MAX_DEG:g} deg",
                                  key=f"{key}.min_deg")
+            min_ms = op.get("min_ms")
+            if min_ms is not None and not 0 <= _number(min_ms, f"{key}.min_ms") <= MAX_MS:
+                raise ModelError(f"{key}.min_ms={min_ms}: a minimum duration must be in [0, {MAX_MS:g}] ms",
+                                 key=f"{key}.min_ms")
             stress, amplitude = op.get("stress"), op.get("amplitude")
             if stress is not None:
                 self._check_stress_ref(stress, key)
             if amplitude is not None:
                 self._check_amplitude_ref(amplitude, key)
-            g.add_edge(x, y, min_deg=phi, stress=stress, amplitude=amplitude, name=str(op.get("name", "")))
+            g.add_edge(x, y, min_deg=phi, min_ms=None if min_ms is None else float(min_ms), stress=stress,
+                       amplitude=amplitude, name=str(op.get("name", "")))
         if not nx.is_directed_acyclic_graph(g):
             cycle = nx.find_cycle(g)
             chain = " -> ".join([cycle[0][0]] + [v for _, v in cycle])
@@ -199,11 +257,27 @@ class Cyclogram:
         if law not in AMPLITUDE_LAWS:
             raise ModelError(f"{key}.amplitude={law!r}: no such amplitude model; known: "
                              f"{', '.join(AMPLITUDE_LAWS)}", key=f"{key}.amplitude")
-        missing = [k for k in ("amplitude_slope_mm_per_deg", "amplitude_intercept_mm", "amplitude_limit_mm")
-                   if getattr(self, k) is None]
+        missing = [k for k in ("amplitude_slope_mm_per_deg", "amplitude_intercept_mm") if getattr(self, k) is None]
+        if len(missing) == 2 and self.lever is not None:
+            missing = []                # the lever's exact law stands in for the linear one
+        missing += ["amplitude_limit_mm"] if self.amplitude_limit_mm is None else []
         if missing:
-            raise ModelError(f"{key}.amplitude={law!r} needs {', '.join(missing)} (effect stop_vibration)",
-                             key=missing[0])
+            raise ModelError(f"{key}.amplitude={law!r} needs {', '.join(missing)} (effect stop_vibration)"
+                             + (" (or, for slope and intercept, the exact law's table `lever`)"
+                                if len(missing) > 1 else ""), key=missing[0])
+
+    @property
+    def has_linear_amplitude(self) -> bool:
+        """Whether the linear law a = slope t + intercept is given (else only the lever's exact law)."""
+        return self.amplitude_slope_mm_per_deg is not None
+
+    @cached_property
+    def lever_model(self) -> LeverStop:
+        """The lever of the exact rebound law, from the `lever` table (ModelError without one)."""
+        if self.lever is None:
+            raise ModelError("lever: the exact rebound law needs the lift lever's table [structure.lever]",
+                             key="lever")
+        return lever_stop(self.lever)
 
     def _check_ends(self, g):
         linked = [v for v in g if g.degree(v) > 0]
@@ -286,8 +360,48 @@ class Cyclogram:
 
     @cached_property
     def _min_angles(self) -> np.ndarray:
-        return np.fromiter((phi for _, _, phi in self.graph.edges(data="min_deg")), dtype=float,
-                           count=self.graph.number_of_edges())
+        phi = np.fromiter((phi for _, _, phi in self.graph.edges(data="min_deg")), dtype=float,
+                          count=self.graph.number_of_edges())
+        timed = self.time_arcs()
+        if timed and self.speed_rpm is None:
+            x, y = self.arcs[timed[0]]
+            raise ModelError(f"operations[{x}->{y}].min_ms needs speed_rpm (a time becomes an angle at a speed)",
+                             key="speed_rpm")
+        if timed:
+            phi[timed] = np.maximum(phi[timed], self.time_coeffs_deg_per_rpm()[timed] * self.speed_rpm)
+        return phi
+
+    def time_arcs(self) -> list[int]:
+        """Indices (in `arcs` order) of the operations with a minimum duration `min_ms`."""
+        return [k for k, e in enumerate(self.arcs) if self.graph.edges[e]["min_ms"] is not None]
+
+    def time_coeffs_deg_per_rpm(self) -> np.ndarray:
+        """Per arc, the angle its `min_ms` asks for per rpm of main-shaft speed [deg/rpm] (0: none)."""
+        out = np.zeros(len(self.arcs))
+        for k in self.time_arcs():
+            out[k] = time_floor_deg(self.arc_data(k)["min_ms"], 1.0)
+        return out
+
+    @property
+    def stress_reference_rpm(self) -> float | None:
+        """The speed the stress references hold at: stress_speed_rpm, else speed_rpm."""
+        return self.speed_rpm if self.stress_speed_rpm is None else self.stress_speed_rpm
+
+    def stress_at_MPa(self, k: int, t_deg, speed_rpm):
+        """sigma_max of arc k's cam pair over t at speed n [MPa]: sigma_ref (t_ref / t) (n / n_ref)."""
+        model = self.stress_models[self.arc_data(k)["stress"]]
+        return stress_MPa(float(model["sigma_ref_MPa"]), float(model["t_ref_deg"]), t_deg) * speed_rpm \
+            / self.stress_reference_rpm
+
+    def stress_coeff_deg_per_rpm(self, k: int) -> float:
+        """sigma_max(t, n) <= [sigma_H] as t >= coeff n: sigma_ref t_ref / ([sigma_H] n_ref)
+        [deg/rpm], n_ref the speed the references hold at (`stress_reference_rpm`)."""
+        if self.stress_reference_rpm is None:
+            raise ModelError("stress_speed_rpm: the stress references need the speed they hold at",
+                             key="stress_speed_rpm")
+        model = self.stress_models[self.arc_data(k)["stress"]]
+        return stress_bound_deg(float(model["sigma_ref_MPa"]), float(model["t_ref_deg"]),
+                                self.sigma_H_limit_MPa) / self.stress_reference_rpm
 
     def stress_arcs(self) -> list[int]:
         """Indices (in `arcs` order) of the operations with a contact-stress model."""
@@ -304,9 +418,11 @@ class Cyclogram:
                 [k for k, e in enumerate(self.arcs) if edges[e]["amplitude"] is not None])
 
     def stress_reference(self, k: int) -> tuple[float, float]:
-        """(sigma_ref_MPa, t_ref_deg) of arc k's cam pair."""
+        """(sigma_ref_MPa, t_ref_deg) of arc k's cam pair at the task's speed: the reference
+        stress scaled by speed_rpm / stress_speed_rpm when both are given (sigma ~ n / t)."""
         model = self.stress_models[self.arc_data(k)["stress"]]
-        return float(model["sigma_ref_MPa"]), float(model["t_ref_deg"])
+        scale = 1.0 if self.stress_speed_rpm is None or self.speed_rpm is None else self.speed_rpm / self.stress_speed_rpm
+        return float(model["sigma_ref_MPa"]) * scale, float(model["t_ref_deg"])
 
     def arc_data(self, k: int) -> dict:
         x, y = self.arcs[k]
@@ -314,14 +430,17 @@ class Cyclogram:
 
     def lower_bounds_deg(self, stress_form: str = "exact") -> tuple[np.ndarray, list[str]]:
         """Each arc's smallest phase angle [deg] under every limit, and which limit sets it
-        ("min_angle", "contact_stress" or "amplitude")."""
+        ("min_angle", "min_time", "contact_stress" or "amplitude")."""
         lb = self.min_angles_deg()
         why = ["min_angle"] * lb.size
+        for k in self.time_arcs():
+            if lb[k] > self.arc_data(k)["min_deg"]:
+                why[k] = "min_time"
         for k in self.stress_arcs():
             bound = stress_bound_deg(*self.stress_reference(k), self.sigma_H_limit_MPa, stress_form)
             if bound > lb[k]:
                 lb[k], why[k] = bound, "contact_stress"
-        for k in self.amplitude_arcs():
+        for k in self.amplitude_arcs() if self.has_linear_amplitude else ():
             bound = amplitude_bound_deg(self.amplitude_slope_mm_per_deg, self.amplitude_intercept_mm,
                                         self.amplitude_limit_mm)
             if bound > lb[k]:
@@ -330,7 +449,8 @@ class Cyclogram:
 
 
 def _check_numbers(task):
-    for key, top in (("cycle_deg", MAX_DEG), ("sigma_H_limit_MPa", MAX_MPA), ("amplitude_limit_mm", math.inf)):
+    for key, top in (("cycle_deg", MAX_DEG), ("sigma_H_limit_MPa", MAX_MPA), ("amplitude_limit_mm", math.inf),
+                     ("speed_rpm", MAX_RPM), ("stress_speed_rpm", MAX_RPM)):
         value = getattr(task, key)
         if value is not None and not (math.isfinite(value) and 0 < value <= top):
             raise ModelError(f"{key}={value} must be a finite number > 0" + (f" and <= {top:g}" if top < math.inf

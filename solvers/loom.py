@@ -11,29 +11,41 @@ cycle. Constraints are built from the incidence matrix (one vectorised row block
 limit is a cvxpy Parameter, so a what-if re-solve reuses the compiled problem (DPP). The anchor
 p(1) = 0 removes the shift invariance that otherwise slows HiGHS a hundredfold.
 
+Entry points: `plan_cyclogram` (this LP); `repair_cyclogram` (its optimum checked against the
+exact rebound and contact stress, re-linearised and re-solved until they hold: issue 14, part
+4); `max_machine_speed` (the largest main-shaft speed, an LP in (p, n) because every law is a
+function of n / t; bisection on n as the general route and its check: part 5). `HeldLP` keeps
+the LP in HiGHS for many solves that change bounds only.
+
 Sensitivities are reported in user terms with one sign convention: d(objective)/d(limit), the
 change of the objective (span_deg, or limiting_op_deg on a machine) per unit *increase* of the
 limit. Raising [sigma_H] or the amplitude limit loosens a bound: the span falls (<= 0); raising a
 critical [phi] lengthens it (+1 deg/deg).
 """
+import dataclasses
+import functools
 import math
 import time
 from collections import deque
 from dataclasses import dataclass
-from typing import Literal
+from typing import Annotated, Literal
 
 import cvxpy as cp
+import highspy
 import networkx as nx
 import numpy as np
 import scipy.sparse as sp
+from cvxpy.reductions.solvers.conic_solvers.highs_conif import HIGHS as HIGHS_SOLVER
+from scipy.optimize import brentq
 
 from mechopt.models.cache import BuildCache
-from mechopt.models.errors import SolverError
-from mechopt.models.loom import Cyclogram, amplitude_mm, stress_bound_deg, stress_MPa
+from mechopt.models.errors import ModelError, SolverError
+from mechopt.models.loom import MAX_RPM, Cyclogram, amplitude_mm, stress_bound_deg, stress_MPa
 from mechopt.solvers.result import Result, Status, Timing, from_cvxpy
-from mechopt.solvers.settings import Tolerance
+from mechopt.solvers.settings import Interval, Tolerance
+from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
 
-__all__ = ["plan_cyclogram"]
+__all__ = ["max_machine_speed", "plan_cyclogram", "repair_cyclogram"]
 
 SENSITIVITY_CONVENTION = ("sens_* = d(objective)/d(limit): change of the objective [deg] per unit increase "
                           "of the limit; negative means a looser limit shortens the span")
@@ -111,6 +123,57 @@ def build_event_time_lp(n, tails, heads, *, first, last, stress_rows=(), stress_
     if not problem.is_dpp():       # a re-solve would recompile: a bug in this builder, not in the input
         raise SolverError("event-time LP is not DPP; what-if re-solves would recompile")
     return EventTimeLP(problem, p, params, blocks, coeffs, sign)
+
+
+class HeldLP:
+    """The event-time LP held in HiGHS itself (highspy) with its basis: for many solves that change
+    only bounds ([phi] per arc, the cycle), as bisection and what-if re-solves do. A re-solve is
+    a hot-started dual simplex on the bounds changed in place: no cvxpy parameter application,
+    no model hand-over (about 0.07 ms against cvxpy's 1 ms on group 1; benchmarks/loom.py).
+
+    Rows: arcs p(y) - p(x) >= lb, windows <= w, syncs = 0, the cycle p(last) - p(first) <=
+    cycle; p(first) = 0 as a column bound. Minimises the span. HiGHS's status words are read
+    through cvxpy's own table (HIGHS.STATUS_MAP) and `from_cvxpy`: one table of them.
+    """
+
+    def __init__(self, n, tails, heads, *, first, last, window_arcs=(), sync_arcs=(), with_cycle=False):
+        rows = [incidence(n, tails, heads)]
+        self.arcs, self.windows = len(tails), len(window_arcs)
+        for pairs in (window_arcs, sync_arcs):
+            if len(pairs):
+                pairs = np.asarray(pairs)
+                rows.append(incidence(n, pairs[:, 0], pairs[:, 1]))
+        if with_cycle:
+            rows.append(sp.csr_matrix(([1.0, -1.0], ([0, 0], [last, first])), shape=(1, n)))
+        A = sp.vstack(rows, format="csr")
+        inf = highspy.kHighsInf
+        self.upper = np.r_[np.full(self.arcs, inf), np.zeros(self.windows), np.zeros(len(sync_arcs)),
+                           np.zeros(int(with_cycle))]
+        self.lower = np.r_[np.zeros(self.arcs), np.full(self.windows, -inf), np.zeros(len(sync_arcs)),
+                           np.full(int(with_cycle), -inf)]
+        self.highs = highspy.Highs()
+        self.highs.setOptionValue("output_flag", False)
+        col_lo, col_hi = np.full(n, -inf), np.full(n, inf)
+        col_lo[first] = col_hi[first] = 0.0                      # the anchor
+        self.highs.addVars(n, col_lo, col_hi)
+        cost = np.zeros(n)
+        cost[last], cost[first] = 1.0, -1.0
+        self.highs.changeColsCost(n, np.arange(n, dtype=np.int32), cost)
+        self.highs.addRows(A.shape[0], self.lower, self.upper, A.nnz, A.indptr[:-1].astype(np.int32),
+                           A.indices.astype(np.int32), A.data)
+        self.index = np.arange(A.shape[0], dtype=np.int32)
+
+    def solve(self, lb_deg, window_deg=(), cycle_deg=None):
+        """(Status, event times or None) with the arcs' lower bounds `lb_deg` [deg]."""
+        self.lower[:self.arcs] = lb_deg
+        if self.windows:
+            self.upper[self.arcs:self.arcs + self.windows] = window_deg
+        if cycle_deg is not None:
+            self.upper[-1] = cycle_deg
+        self.highs.changeRowsBounds(len(self.index), self.index, self.lower, self.upper)
+        self.highs.run()
+        status = from_cvxpy(HIGHS_SOLVER.STATUS_MAP.get(self.highs.getModelStatus().name, "unknown"))
+        return status, (np.array(self.highs.getSolution().col_value) if status is Status.SOLVED else None)
 
 
 # structural signature -> EventTimeLP, compiled once and re-solved with new Parameters; the newest
@@ -243,7 +306,27 @@ class _Net:
     """The task as index arrays (events in graph order, isolated events left out)."""
 
     def __init__(self, task: Cyclogram, stress_form: str):
-        self.task, self.stress_form = task, stress_form
+        self.stress_form = stress_form
+        self._index_arrays(task)
+        self.stress_rows = task.stress_arcs()
+        refs = [task.stress_reference(k) for k in self.stress_rows]
+        self.stress_ref = (np.array([r[0] for r in refs]), np.array([r[1] for r in refs]))
+        self.amp_rows = task.amplitude_arcs()
+        if self.amp_rows and not task.has_linear_amplitude:
+            raise ModelError("amplitude_slope_mm_per_deg: the LP needs the linear amplitude law; with the lever's "
+                             "exact law alone use loom.repair_cyclogram or loom.max_machine_speed",
+                             key="amplitude_slope_mm_per_deg")
+        self.lb, self.lb_why = task.lower_bounds_deg(stress_form)
+
+    @classmethod
+    def structure(cls, task: Cyclogram) -> "_Net":
+        """The index arrays alone (events, arcs, ends, windows, syncs), for LPs with their own bounds."""
+        net = cls.__new__(cls)
+        net._index_arrays(task)
+        return net
+
+    def _index_arrays(self, task):
+        self.task = task
         isolated = set(task.isolated_events)
         self.names = [v for v in task.event_names if v not in isolated]
         index = {v: i for i, v in enumerate(self.names)}
@@ -253,15 +336,10 @@ class _Net:
         self.tails = np.fromiter((index[x] for x, _ in arcs), dtype=np.int64, count=len(arcs))
         self.heads = np.fromiter((index[y] for _, y in arcs), dtype=np.int64, count=len(arcs))
         self.first, self.last = index[task.first_event], index[task.last_event]
-        self.stress_rows = task.stress_arcs()
-        refs = [task.stress_reference(k) for k in self.stress_rows]
-        self.stress_ref = (np.array([r[0] for r in refs]), np.array([r[1] for r in refs]))
-        self.amp_rows = task.amplitude_arcs()
         self.window_idx = [(index[a], index[b]) for a, b, _ in task.window_arcs()]
         self.sync_idx = [(index[a], index[b]) for a, b in task.sync_pairs()]
         lim = task.limiting_op
         self.limiting = None if lim is None else (index[str(lim[0])], index[str(lim[1])])
-        self.lb, self.lb_why = task.lower_bounds_deg(stress_form)
 
     def signature(self):
         """What the compiled problem depends on (everything except the Parameters' values)."""
@@ -578,3 +656,426 @@ def _dag_times(n, tails, heads, lb, first, last, span):
             if late[hl[k]] - lbl[k] < late[u]:
                 late[u] = late[hl[k]] - lbl[k]
     return np.array(early), np.array(late)
+
+
+# ------------------------------------------------------------------ check and repair after the LP (issue 14, part 4)
+
+def exact_amplitude_mm(task: Cyclogram, t_deg, speed_rpm=None):
+    """The lever's exact first rebound a(t, n) [mm] (eq. (2), solvers/stop_impact/law.py) at
+    `speed_rpm`, by default the task's speed; vectorised over t and n."""
+    speed = task.speed_rpm if speed_rpm is None else speed_rpm
+    if speed is None:
+        raise ModelError("speed_rpm: the exact rebound law needs the main shaft's speed", key="speed_rpm")
+    return rebound_amplitude_mm(task.lever_model, speed, t_deg)
+
+
+@dataclass
+class _ExactLimit:
+    """One exact limit f(t) <= limit on arc k (f convex, falling in t), the tangent the LP takes
+    of it (slope, intercept) and the lower bound on t that tangent gives."""
+    kind: str                 # "amplitude" [mm] or "contact_stress" [MPa]
+    k: int
+    limit: float
+    exact: object             # t [deg] -> f(t)
+    slope: float
+    intercept: float
+
+    def bound_deg(self) -> float:
+        return (self.limit - self.intercept) / self.slope if self.slope < 0 else -np.inf
+
+    def relinearise(self, t: float) -> None:
+        """The tangent at t; a central difference (the laws are smooth away from the preload's kinks)."""
+        h = 1e-6 * max(t, 1e-3)
+        lo, mid, hi = (float(v) for v in np.ravel(self.exact(np.array([t - h, t, t + h]))))
+        self.slope = (hi - lo) / (2 * h)
+        self.intercept = mid - self.slope * t
+
+
+def _exact_limits(task: Cyclogram, stress_form: str) -> list[_ExactLimit]:
+    """The limits the LP linearised, each with its exact law and the tangent the first LP takes."""
+    out = []
+    for k in task.stress_arcs():
+        sigma_ref, t_ref = task.stress_reference(k)
+        exact = functools.partial(stress_MPa, sigma_ref, t_ref)
+        at = t_ref if stress_form == "linear" else stress_bound_deg(sigma_ref, t_ref, task.sigma_H_limit_MPa)
+        law = _ExactLimit("contact_stress", k, task.sigma_H_limit_MPa, exact, 0.0, 0.0)
+        law.relinearise(at)
+        if stress_form == "linear":     # exactly the model's tangent, not its difference quotient
+            law.slope, law.intercept = -sigma_ref / t_ref, 2.0 * sigma_ref
+        out.append(law)
+    for k in task.amplitude_arcs():
+        law = _ExactLimit("amplitude", k, task.amplitude_limit_mm, functools.partial(exact_amplitude_mm, task), 0.0, 0.0)
+        if task.has_linear_amplitude:
+            law.slope, law.intercept = task.amplitude_slope_mm_per_deg, task.amplitude_intercept_mm
+        else:                           # the lever alone: start from the tangent at the arc's [phi]
+            law.relinearise(max(float(task.min_angles_deg()[k]), 1e-3))
+        out.append(law)
+    return out
+
+
+def repair_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] = "HIGHS",
+                     stress_form: Literal["exact", "linear"] = "linear",
+                     max_rounds: Annotated[int, Interval(ge=1, le=100)] = 20,
+                     tol_mm: Tolerance = 1e-9, tol_MPa: Tolerance = 1e-6, tol_deg: Tolerance = 1e-6) -> Result:
+    """The LP of `plan_cyclogram`, checked against the exact laws at its optimum and repaired by
+    sequential LP (issue 14, part 4).
+
+    Round 1 solves the LP with the linear laws the task gives (the amplitude tangent; the stress
+    tangent at t_ref when stress_form = "linear"). At its optimum each linearised limit is
+    evaluated exactly: the rebound a(t, n) of eq. (2) with the lever's table, sigma_max =
+    sigma_ref t_ref / t. While one exceeds its limit by more than tol_mm / tol_MPa, every limit is
+    re-linearised at the current angle and the LP re-solved with the tangent's bound (the largest
+    met so far) as the arc's lower bound: a DPP re-solve. The laws are convex and fall in t, so
+    each tangent lies under its law: the bounds only tighten, never past the exact root, and the
+    rounds are Newton steps on it (quadratic convergence).
+
+    Returns the last round's event times (p_*, t_*, span_deg ...), rounds, exact_amplitude_*_mm,
+    exact_sigma_*_MPa and linearisation_error_*: exact minus linear at round 1's optimum;
+    diagnostics["rounds"]: per round and limit t, exact, linear, error, excess and the cut.
+    SOLVED when the exact laws hold to the tolerances; LIMIT after max_rounds without it; an LP
+    that fails in a round returns its status, with the rounds so far.
+    """
+    start = time.perf_counter()
+    laws = _exact_limits(task, stress_form)
+    unit = {"amplitude": "mm", "contact_stress": "MPa"}
+    tol = {"amplitude": tol_mm, "contact_stress": tol_MPa}
+    op_of = {(str(op["from"]), str(op["to"])): i for i, op in enumerate(task.operations)}
+    cuts: dict[int, float] = {}
+    history, current = [], task
+    amplitude = [law for law in laws if law.kind == "amplitude"]
+    if amplitude and not task.has_linear_amplitude:     # the lever alone: round 1 takes its tangent at [phi]
+        current = dataclasses.replace(task, amplitude_slope_mm_per_deg=amplitude[0].slope,
+                                      amplitude_intercept_mm=amplitude[0].intercept)
+    for round_ in range(1, max_rounds + 1):
+        result = plan_cyclogram(current, backend=backend, stress_form=stress_form, tol_deg=tol_deg)
+        if result.status is not Status.SOLVED:
+            return dataclasses.replace(result, message=f"round {round_}: {result.message}",
+                                       diagnostics=result.diagnostics | {"rounds": history})
+        rows = []
+        for law in laws:
+            x, y = task.arcs[law.k]
+            t = result.values[f"t_{x}_{y}_deg"]
+            exact, linear = float(law.exact(t)), law.slope * t + law.intercept
+            rows.append({"limit": f"{law.kind}[{x}->{y}]", "t_deg": t, f"exact_{unit[law.kind]}": exact,
+                         f"linear_{unit[law.kind]}": linear, "error": exact - linear, "excess": exact - law.limit})
+        history.append({"round": round_, "span_deg": result.values["span_deg"], "limits": rows})
+        over = [r["limit"] for r, law in zip(rows, laws) if r["excess"] > tol[law.kind]]
+        if not over:
+            return _repaired(task, result, laws, history, start, Status.SOLVED,
+                             f"exact laws hold after {round_} round(s) (tol {tol_mm:g} mm, {tol_MPa:g} MPa)")
+        if round_ == max_rounds:
+            break
+        for row, law in zip(rows, laws):
+            law.relinearise(row["t_deg"])
+            cuts[law.k] = max(cuts.get(law.k, -np.inf), law.bound_deg())
+            row["cut_deg"] = cuts[law.k]
+        ops = [dict(op) for op in task.operations]
+        for k, bound in cuts.items():
+            op = ops[op_of[task.arcs[k]]]
+            op["min_deg"] = max(float(op["min_deg"]), bound)
+        current = dataclasses.replace(current, operations=ops)
+    worst = max((r for r in history[-1]["limits"]), key=lambda r: r["excess"])
+    return _repaired(task, result, laws, history, start, Status.LIMIT,
+                     f"not converged in {max_rounds} round(s): exact {worst['limit']} exceeds its limit by "
+                     f"{worst['excess']:.3g} (raise max_rounds or loosen the tolerances)", violated=tuple(over))
+
+
+def _repaired(task, result, laws, history, start, status, message, violated=()):
+    """The last LP round's values with the linear-law readings replaced by the exact ones."""
+    values = {k: v for k, v in result.values.items() if not k.startswith(("amplitude_", "sigma_", "sens_"))}
+    values["rounds"] = float(len(history))
+    for law, first, last in zip(laws, history[0]["limits"], history[-1]["limits"]):
+        x, y = task.arcs[law.k]
+        name, unit = ("amplitude", "mm") if law.kind == "amplitude" else ("sigma", "MPa")
+        values[f"exact_{name}_{x}_{y}_{unit}"] = last[f"exact_{unit}"]
+        values[f"linearisation_error_{name}_{x}_{y}_{unit}"] = first["error"]
+    diagnostics = {k: v for k, v in result.diagnostics.items() if k not in ("binding", "sens_min_deg",
+                                                                            "sensitivity_convention")}
+    diagnostics["rounds"] = history
+    return Result(status, values, Timing(result.timing.build_s, time.perf_counter() - start - result.timing.build_s),
+                  message=message, violated=violated, diagnostics=diagnostics)
+
+
+# ------------------------------------------------------------------ the whole machine at its highest speed (part 5)
+
+def _angle_floors_deg(task: Cyclogram) -> np.ndarray:
+    """Each arc's [phi] as given, without the time floor of `min_ms` (that one grows with n) [deg]."""
+    return np.fromiter((phi for _, _, phi in task.graph.edges(data="min_deg")), dtype=float, count=len(task.arcs))
+
+
+def largest_ratio_rpm_per_deg(task: Cyclogram) -> float:
+    """The largest n / t at which the lever's exact rebound keeps the amplitude limit [rpm/deg]:
+    a(t, n) = h(n / t) (v0 and F scale as n / t, the preload does not), h convex, h(0) = 0, so
+    h(r) <= limit exactly for r <= r*; r* by brentq on h. inf when no ratio breaks the limit."""
+    def h(r):
+        return float(np.ravel(rebound_amplitude_mm(task.lever_model, r, 1.0))[0]) - task.amplitude_limit_mm
+    hi = 1.0
+    while h(hi) <= 0:
+        hi *= 2.0
+        if hi > MAX_RATIO_RPM_PER_DEG:
+            return math.inf
+    return brentq(h, 0.0, hi, xtol=1e-15 * hi, rtol=4 * np.finfo(float).eps)
+
+
+MAX_RATIO_RPM_PER_DEG = 1e12     # n / t past any machine: 10^6 rpm over 10^-6 deg
+MIN_RPM = 1e-6                   # bisection: below it the machine is at rest
+
+
+def speed_coeffs_deg_per_rpm(task: Cyclogram) -> tuple[np.ndarray, list[str]]:
+    """Per arc, the angle every rpm of speed asks for [deg/rpm], and which law sets it ("min_time",
+    "contact_stress", "amplitude" or "" for none). Each law is f(n / t) <= limit, f increasing, so
+    it is t >= n / r*: a bound proportional to n (module docstring of `max_machine_speed`)."""
+    g = task.time_coeffs_deg_per_rpm()
+    why = ["min_time" if c > 0 else "" for c in g]
+    for k in task.stress_arcs():
+        c = task.stress_coeff_deg_per_rpm(k)
+        if c > g[k]:
+            g[k], why[k] = c, "contact_stress"
+    if task.amplitude_arcs():
+        ratio = largest_ratio_rpm_per_deg(task)
+        for k in task.amplitude_arcs():
+            if 1.0 / ratio > g[k]:
+                g[k], why[k] = 1.0 / ratio, "amplitude"
+    return g, why
+
+
+def max_machine_speed(task: Cyclogram, *, method: Literal["lp", "bisection"] = "lp",
+                      backend: Literal["HIGHS", "CLARABEL"] = "HIGHS",
+                      rtol: Annotated[float, Interval(ge=1e-9, le=1e-2)] = 1e-7) -> Result:
+    """The largest main-shaft speed n at which every group fits the machine's cycle (issue 14,
+    part 5), with the event times there.
+
+    Every limit is a lower bound on a phase angle. [phi] does not depend on n; a time `min_ms`
+    (the microshuttle's flight) asks for 0.006 n T deg; the contact stress, sigma_ref (t_ref / t)
+    (n / n_ref) <= [sigma_H] (n_ref = stress_speed_rpm), and the lever's exact rebound
+    a(t, n) = h(n / t) <= a_lim depend on n and t only through r = n / t and grow with it. Each
+    is then r <= r*, i.e.
+
+        t(x, y) >= g(x, y) n,      g = 1 / r*  [deg/rpm]  (0.006 T; sigma_ref t_ref / ([sigma_H] n_ref); 1 / r*_a)
+
+    homogeneous and linear in (p, n): maximise n s.t. D p >= [phi], D p >= g n, windows, syncs,
+    p(first) = 0, p(last) - p(first) <= cycle is an LP (method "lp"). (In times rather than
+    angles, tau = t / (6 n), the same bounds read tau >= [phi] / 6 (1/n) and tau >= g / 6 and the
+    cycle 60 (1/n): an LP in (tau, 1/n), minimising 1/n.) A law that is not a function of n / t
+    alone (a dwell over which a vibration must decay, a time with an angle) breaks this; then
+    method "bisection" is the general route: bisection on n, each step the exact bounds at that n
+    (the rebound's root in t by brentq, not through r*) and the event-time LP's feasibility, its
+    status checked. It is also the independent check of the LP. rtol (relative) on n: the answer
+    is certified by the longest-path certificate at n (1 - tol) (fits) and n (1 + tol) (does not);
+    below 1e-9 the LP's own feasibility tolerance (1e-7 deg on a 360 deg cycle) decides.
+
+    Returns max_speed_rpm, cycle_time_ms, span_deg, p_*, t_*, amplitude_*_mm and sigma_*_MPa
+    (exact, at max speed), limiting_op_deg (machines with one); diagnostics: limiting_group,
+    limiting_constraint, limiting (the speed-bound constraints on the critical chain, each with
+    its group and deg/rpm), critical_chain, sens_cycle_rpm_per_deg. INFEASIBLE when the cycle
+    cannot hold the groups at any speed (the conflicting chain named, as in plan_cyclogram),
+    UNBOUNDED when no limit grows with n on a chain the cycle closes, LIMIT when bisection finds
+    every speed up to its search bound feasible.
+    """
+    if task.cycle_deg is None:
+        raise ModelError("cycle_deg: the machine's speed is limited by its cycle; give cycle_deg", key="cycle_deg")
+    start = time.perf_counter()
+    net = _Net.structure(task)        # the speed LP has its own bounds
+    phi = _angle_floors_deg(task)
+    g, why = speed_coeffs_deg_per_rpm(task)
+    if method == "lp":
+        n_max, status, message, build_s, extra = _speed_lp(task, net, phi, g, backend)
+    else:
+        n_max, status, message, build_s, extra = _speed_bisection(task, net, phi, rtol)
+    def timing():
+        return Timing(build_s, time.perf_counter() - start - build_s)
+    diagnostics = {"method": method, "backend": backend, "speed_coeffs_deg_per_rpm":
+                   {f"{x}->{y}": float(g[k]) for k, (x, y) in enumerate(task.arcs) if g[k] > 0}} | extra
+    if status is Status.SOLVED and n_max * g.max(initial=0.0) <= 1e-6:   # below a micro-degree: at rest
+        status = Status.INFEASIBLE
+    if status is Status.INFEASIBLE:
+        chain = _conflict_at(task, net, phi) or _conflict_at(task, net, np.maximum(phi, g * rtol))
+        groups = list(dict.fromkeys(task.graph.nodes[v]["group"] or "-" for v, _, _ in chain))
+        diagnostics["conflict_groups"] = groups
+        message = ("no speed fits: conflicting chain " + "; ".join(label for _, label, _ in chain)
+                   + f" (needs {math.fsum(w for _, _, w in chain):.6g} deg more than its limits allow as n -> 0;"
+                   + f" groups {', '.join(groups)})")
+        return Result(Status.INFEASIBLE, {}, timing(), message=message,
+                      violated=tuple(label for _, label, _ in chain), diagnostics=diagnostics)
+    if status is Status.UNBOUNDED:
+        message += ": no limit grows with the speed on a chain the cycle closes (no stress, rebound or min_ms there)"
+    if status is not Status.SOLVED:
+        return Result(status, {}, timing(), message=message, diagnostics=diagnostics)
+    lb = np.maximum(phi, g * n_max)
+    certified = _certify_speed(task, net, phi, g, n_max, rtol)
+    values, more = _speed_report(task, net, lb, g, why, n_max, rtol)
+    diagnostics |= more
+    if certified:
+        return Result(Status.INACCURATE, values, timing(), message=certified, diagnostics=diagnostics)
+    message = (f"max_speed_rpm = {n_max:.6g} ({method}); limiting group {more['limiting_group']}, "
+               f"constraint {more['limiting_constraint']}")
+    return Result(Status.SOLVED, values, timing(), message=message, diagnostics=diagnostics)
+
+
+def _speed_lp(task, net, phi, g, backend):
+    """maximise n over (p, n): the LP of the docstring, built once per structure (DPP)."""
+    rows = np.flatnonzero(g > 0)
+    key = ("speed", backend, len(net.names), net.tails.tobytes(), net.heads.tobytes(), net.first, net.last,
+           rows.tobytes(), tuple(net.window_idx), tuple(net.sync_idx))
+
+    def build():
+        D = incidence(len(net.names), net.tails, net.heads)
+        p, n = cp.Variable(len(net.names), name="p_deg"), cp.Variable(nonneg=True, name="n_rpm")
+        prm = {"min_deg": cp.Parameter(len(net.tails), name="min_deg"),
+               "g": cp.Parameter(len(rows), nonneg=True, name="g_deg_per_rpm"),
+               "cycle_deg": cp.Parameter(nonneg=True, name="cycle_deg")}
+        cons = [D @ p >= prm["min_deg"], p[net.first] == 0, p[net.last] - p[net.first] <= prm["cycle_deg"]]
+        if len(rows):
+            cons.append(D[rows] @ p >= cp.multiply(prm["g"], n))
+        if net.window_idx:
+            w = np.asarray(net.window_idx)
+            prm["window_deg"] = cp.Parameter(len(w), name="window_deg")
+            cons.append(incidence(len(net.names), w[:, 0], w[:, 1]) @ p <= prm["window_deg"])
+        if net.sync_idx:
+            s = np.asarray(net.sync_idx)
+            cons.append(incidence(len(net.names), s[:, 0], s[:, 1]) @ p == 0)
+        problem = cp.Problem(cp.Maximize(n), cons)
+        set_values(prm)
+        problem.get_problem_data(backend)          # compile now, so build and solve time separate
+        return problem, n, prm
+
+    def set_values(prm):
+        prm["min_deg"].value, prm["g"].value, prm["cycle_deg"].value = phi, g[rows], task.cycle_deg
+        if "window_deg" in prm:
+            prm["window_deg"].value = np.array([w for _, _, w in task.window_arcs()])
+    start = time.perf_counter()
+    (problem, n, prm), _ = _BUILDS.get(key, build)
+    set_values(prm)
+    build_s = time.perf_counter() - start
+    try:
+        problem.solve(solver=backend, warm_start=False)
+    except cp.error.SolverError as exc:
+        return None, Status.FAILED, f"{backend} failed: {exc}", build_s, {}
+    status = from_cvxpy(problem.status)
+    extra = {"solver_status": problem.status}
+    if status is Status.SOLVED:
+        return float(n.value), status, "", build_s, extra
+    return None, status, f"{backend}: {problem.status}", build_s, extra
+
+
+def _exact_bounds_at(task, phi, n_rpm):
+    """Each arc's smallest angle at speed n from the exact laws directly [deg]: the time floor,
+    the stress bound sigma_ref t_ref n / ([sigma_H] n_ref), the rebound's root in t (brentq)."""
+    lb = np.maximum(phi, task.time_coeffs_deg_per_rpm() * n_rpm)
+    for k in task.stress_arcs():
+        lb[k] = max(lb[k], task.stress_coeff_deg_per_rpm(k) * n_rpm)
+    for k in task.amplitude_arcs():
+        def a(t, n_rpm=n_rpm):
+            return float(np.ravel(exact_amplitude_mm(task, t, n_rpm))[0]) - task.amplitude_limit_mm
+        if n_rpm > 0 and a(lb[k]) > 0:
+            hi = 2.0 * lb[k]
+            while a(hi) > 0:
+                hi *= 2.0
+            lb[k] = brentq(a, lb[k], hi, xtol=1e-13 * hi, rtol=4 * np.finfo(float).eps)
+    return lb
+
+
+def _speed_bisection(task, net, phi, rtol):
+    """Bisection on n: feasible when the event-time LP with the exact bounds at n fits the cycle
+    (one HiGHS model held through the steps, `HeldLP`; `backend` is the LP method's)."""
+    start = time.perf_counter()
+    lp = HeldLP(len(net.names), net.tails, net.heads, first=net.first, last=net.last,
+                window_arcs=net.window_idx, sync_arcs=net.sync_idx, with_cycle=True)
+    windows = [w for _, _, w in task.window_arcs()]
+    build_s = time.perf_counter() - start
+    steps = []
+
+    def feasible(n_rpm):
+        status, _ = lp.solve(_exact_bounds_at(task, phi, n_rpm), windows, task.cycle_deg)
+        steps.append((n_rpm, status.value))
+        if status not in (Status.SOLVED, Status.INFEASIBLE):
+            raise _Undecided(f"HiGHS: {status.value} at n = {n_rpm:.9g} rpm")
+        return status is Status.SOLVED
+    try:
+        if not feasible(0.0):
+            return None, Status.INFEASIBLE, "", build_s, {"bisection_steps": len(steps)}
+        lo, hi = 0.0, 1.0
+        while feasible(hi):
+            lo, hi = hi, 2.0 * hi
+            if hi > MAX_RPM:
+                return None, Status.LIMIT, (f"every speed up to the search bound {MAX_RPM:g} rpm fits: no limit "
+                                            f"grows with the speed"), build_s, {"bisection_steps": len(steps)}
+        while hi - lo > 0.25 * rtol * hi and hi > MIN_RPM:   # a quarter: the certificate's margin is rtol
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if feasible(mid) else (lo, mid)
+    except _Undecided as exc:
+        return None, Status.FAILED, str(exc), build_s, {"bisection_steps": len(steps)}
+    return (lo if hi > MIN_RPM else 0.0), Status.SOLVED, "", build_s, {"bisection_steps": len(steps),
+                                                                     "bisection_bracket_rpm": [lo, hi]}
+
+
+class _Undecided(Exception):
+    """A feasibility LP that was neither optimal nor infeasible: bisection cannot go on."""
+
+
+def _arcs_at(task, net, lb):
+    """The difference constraints with the arcs' bounds `lb` and the cycle, for `positive_cycle`."""
+    first, last = net.names[net.first], net.names[net.last]
+    arcs = [(u, v, w, f"t({u}->{v}) >= {w:.6g} deg") for u, v, w in _constraint_arcs(net, lb)]
+    return arcs + [(last, first, -task.cycle_deg, f"cycle p({last}) - p({first}) <= {task.cycle_deg:.6g} deg")]
+
+
+def _conflict_at(task, net, lb):
+    return [(u, label, w) for u, _, w, label in positive_cycle(_arcs_at(task, net, lb))]
+
+
+def _certify_speed(task, net, phi, g, n_max, tol):
+    """'' when the bounds at n_max (1 - tol) leave no positive cycle and those at n_max (1 + tol)
+    do (so n_max is the largest speed to tol); else why not."""
+    below, above = n_max * (1 - tol), n_max * (1 + tol)
+    if _conflict_at(task, net, np.maximum(phi, g * below)):
+        return f"certificate failed: n = {below:.9g} rpm (just under the answer) does not fit the cycle"
+    if not _conflict_at(task, net, np.maximum(phi, g * above)):
+        return f"certificate failed: n = {above:.9g} rpm (just over the answer) still fits the cycle"
+    return ""
+
+
+def _speed_report(task, net, lb, g, why, n_max, tol):
+    """Event times at max speed (earliest start), exact readings, and which constraints limit it."""
+    first = net.names[net.first]
+    if task.windows or task.syncs:
+        early = _longest(_constraint_arcs(net, lb), first)
+        p = np.array([early.get(v, 0.0) for v in net.names])
+    else:
+        p, _ = _dag_times(len(net.names), net.tails, net.heads, lb, net.first, net.last, task.cycle_deg)
+    t = p[net.heads] - p[net.tails]
+    values = {"max_speed_rpm": n_max, "cycle_time_ms": 60_000.0 / n_max, "span_deg": float(p[net.last] - p[net.first])}
+    if task.limiting_op is not None:
+        x, y = (net.index[str(v)] for v in task.limiting_op)
+        values["limiting_op_deg"] = float(p[y] - p[x])
+    values |= {f"p_{v}_deg": float(p[i]) for i, v in enumerate(net.names)}
+    values |= {f"t_{x}_{y}_deg": float(t[k]) for k, (x, y) in enumerate(net.arcs)}
+    for k in task.amplitude_arcs():
+        x, y = net.arcs[k]
+        values[f"amplitude_{x}_{y}_mm"] = float(np.ravel(exact_amplitude_mm(task, t[k], n_max))[0])
+    for k in task.stress_arcs():
+        x, y = net.arcs[k]
+        values[f"sigma_{x}_{y}_MPa"] = float(task.stress_at_MPa(k, t[k], n_max))
+    span = task.cycle_deg
+    e, l_ = (_dag_times(len(net.names), net.tails, net.heads, lb, net.first, net.last, span)
+             if not (task.windows or task.syncs) else (p, p))
+    group = dict(task.graph.nodes(data="group"))
+    floats = {f"{x}->{y}": float(l_[net.index[y]] - e[net.index[x]] - lb[k]) for k, (x, y) in enumerate(net.arcs)}
+    critical = [a for a, f in floats.items() if f <= tol * max(1.0, span)]
+    crit = nx.DiGraph([tuple(a.split("->")) for a in critical])
+    end = net.names[net.last]
+    chain = nx.shortest_path(crit, first, end) if first in crit and end in crit and nx.has_path(crit, first, end) else []
+    limiting = []
+    for k, (x, y) in enumerate(net.arcs):
+        if g[k] > 0 and f"{x}->{y}" in critical and g[k] * n_max >= lb[k] - tol * max(1.0, lb[k]):
+            limiting.append({"constraint": f"{why[k]}[{x}->{y}]", "group": group[x] or group[y] or "-",
+                             "deg_per_rpm": float(g[k]), "deg": float(g[k] * n_max)})
+    by_group: dict = {}
+    for row in limiting:
+        by_group[row["group"]] = by_group.get(row["group"], 0.0) + row["deg_per_rpm"]
+    slope = sum(by_group.values())
+    more = {"limiting": limiting, "float_deg": floats, "critical_ops": critical, "critical_chain": chain,
+            "limiting_group": max(by_group, key=by_group.get) if by_group else "-",
+            "limiting_constraint": max(limiting, key=lambda r: r["deg_per_rpm"])["constraint"] if limiting else "-",
+            "sens_cycle_rpm_per_deg": 1.0 / slope if slope > 0 else math.inf}
+    return values, more

@@ -1,4 +1,5 @@
-"""Figures for the loom cyclogram scenes (models/loom.py): the cyclogram as a Gantt chart."""
+"""Figures for the loom cyclogram scenes (models/loom.py): the cyclogram as a Gantt chart, and
+for a repaired LP (loom.repair_cyclogram) each exact limit's excess over the rounds."""
 from mechopt.figures.registry import new_figure, register
 from mechopt.models.loom import Cyclogram
 
@@ -47,8 +48,29 @@ def gantt(run):
     ax.set_xlim(0, end * 1.02 if end > 0 else 1.0)
     ax.set_xlabel("main shaft angle [deg]")
     chain = diag.get("critical_chain") or []
-    headline = (f"limiting op {values['limiting_op_deg']:.2f} deg" if "limiting_op_deg" in values
+    headline = (f"max speed {values['max_speed_rpm']:.2f} rpm" if "max_speed_rpm" in values
+                else f"limiting op {values['limiting_op_deg']:.2f} deg" if "limiting_op_deg" in values
                 else f"span {values['span_deg']:.2f} deg")
     ax.set_title(f"{run.scene.id}: {headline}; critical chain (red) {' - '.join(chain)}", fontsize=9)
     ax.grid(True, axis="x", alpha=0.3)
-    return {"cyclogram": fig}
+    rounds = diag.get("rounds")
+    return {"cyclogram": fig} | ({"repair_rounds": _repair_rounds(run, rounds)} if rounds else {})
+
+
+def _repair_rounds(run, rounds):
+    """|exact - limit| / limit of every limit that was ever exceeded, per round (log scale): the
+    sequential LP's Newton steps square it."""
+    fig = new_figure(figsize=(7, 4.5))
+    ax = fig.subplots()
+    limits = {row["limit"] for rnd in rounds for row in rnd["limits"] if row["excess"] > 0}
+    for name in sorted(limits):
+        rows = [next(r for r in rnd["limits"] if r["limit"] == name) for rnd in rounds]
+        value = rows[0].get("exact_mm", rows[0].get("exact_MPa")) - rows[0]["excess"]     # the limit
+        ax.semilogy([rnd["round"] for rnd in rounds], [max(abs(r["excess"]) / value, 1e-17) for r in rows],
+                    marker="o", label=name)
+    ax.set(xlabel="LP round", ylabel="|exact - limit| / limit at the round's optimum",
+           title=f"{run.scene.id}: exact laws at each round's optimum")
+    ax.set_xticks([rnd["round"] for rnd in rounds])
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    return fig
