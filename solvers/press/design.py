@@ -1,0 +1,472 @@
+"""The press drive designed by optimisation (issue 16, Sec. 3): an NLP whose constraints contain
+the periodic steady motion itself.
+
+Multiple shooting over one revolution in the crank angle (shooting.py): the cut's start and end
+are interval boundaries, so the switched force is kept exactly; the crank-speed extremes found on
+the way are boundaries too, so the speed fluctuation the NLP limits is the continuous one, not a
+sampled one. IPOPT solves it with exact first derivatives (CVODES forward sensitivities through
+the integrators) and a limited-memory Hessian.
+
+Every answer is then simulated again by the event-located integrator (`events`' march from the
+optimum's state at phi = 0, one period): its period, mean speed, speed fluctuation, RMS motor
+torque and energy per stroke must agree with the NLP's to `VERIFY_REL` or the answer is at best
+INACCURATE. Active limits are reported with their multipliers in the user's terms (what a unit
+more of the limit is worth in the objective), and a variable on its bound is named.
+"""
+import time
+from dataclasses import dataclass, replace
+
+import casadi as ca
+import numpy as np
+from scipy.integrate import simpson
+
+from mechopt.models.cache import memoised
+from mechopt.models.errors import ModelError
+from mechopt.models.press import (
+    BOUNDS,
+    DESIGN_VARIABLES,
+    PressDesign,
+    breakdown_torque_at_crank_Nm,
+    required_mean_torque_Nm,
+    single_stroke_margin_J,
+)
+from mechopt.solvers.press.common import TWO_PI, Samples, Trace, belt_mode, belt_too_fast, dynamics_of, summarise
+from mechopt.solvers.press.event_driven import _march, _piece
+from mechopt.solvers.press.periodic import STEPS_PER_REVOLUTION, steady_state
+from mechopt.solvers.press.periodic import _revolution, _revolution_trace
+from mechopt.solvers.press.shooting import intervals, probe, stage_angles
+from mechopt.solvers.result import Result, Status, Timing, from_ipopt
+from mechopt.solvers.settings import Annotated, Interval, Tolerance
+
+VERIFY_REL = 1e-6            # the event-located simulation must give the NLP's figures to this
+NODE_MOVE_RAD = 1e-4         # a speed extreme further than this from every node becomes a node
+DENSE = 400                  # samples per interval when locating the speed extremes (error ~1e-5 rad)
+MIN_SPEED_SHARE = 0.05       # omega >= this x nominal everywhere: the crank turns forward (d/dphi = d/dt / omega)
+UNITS = {"least_flywheel_inertia": ("flywheel_inertia_kgm2", "kg m2"),
+         "least_motor_rms_torque": ("motor_rms_torque_N_m", "N m"),
+         "least_energy_per_stroke": ("energy_per_stroke_J", "J")}
+KNOBS = {"speed_fluctuation": ("max_speed_fluctuation", ""), "belt_slip": ("belt_slip_torque_Nm", "N m"),
+         "motor_breakdown": ("motor_safety_factor", ""), "single_stroke": ("single_stroke_energy_J", "J"),
+         "mean_speed": ("nominal_speed_rad_s", "rad/s")}
+
+
+@dataclass(frozen=True)
+class _Block:
+    """Constraints of one physical name: rows [start, stop) of g."""
+    name: str
+    start: int
+    stop: int
+
+
+@memoised(maxsize=8)
+def _nlp(task: PressDesign, nodes: tuple, tol: float, samples: int, scales: tuple, elastic: bool, max_iter: int):
+    """(nlpsol, blocks, (lbg, ubg), Function w -> figures, number of slacks). With `elastic`, the
+    limits (not the motion's equations) get one slack each and the objective is their sum: the
+    least violation, for an INFEASIBLE answer's best achievable."""
+    ints = intervals(task, nodes, tol, samples)
+    look = probe(task, samples)
+    nd, K = len(task.variables), len(ints)
+    m = len(task.state_names) - 1
+    dsc, ysc, fsc = np.array(scales[0]), np.array(scales[1]), scales[2]
+    fluct = task.max_speed_fluctuation is not None
+    rows = []                                   # (name, expression, low, high, a limit the user set)
+
+    w = ca.MX.sym("w", nd + K * m + 2 * fluct)
+    d = w[:nd] * dsc
+    Y = [w[nd + k * m:nd + (k + 1) * m] * ysc for k in range(K)]
+    totals = 0
+    omega, belt, shaft = [], [], []
+    for k, (integ, grid, u) in enumerate(ints):
+        run = integ(x0=Y[k], p=ca.vertcat(u, d))
+        xs = run["xf"]
+        rows.append((f"periodicity[{k}]", (xs[:, -1] - Y[(k + 1) % K]) / ysc, 0, 0, False))
+        totals = totals + run["qf"][:, -1]
+        out = look(xs, ca.DM(grid).T, u, d)
+        omega.append(out[0, :].T)
+        belt.append(out[1, :].T)
+        shaft.append(out[2, :].T)
+    period = totals[0]
+    omega, belt, shaft = ca.vertcat(*omega), ca.vertcat(*belt), ca.vertcat(*shaft)
+    design = dict(zip(task.variables, ca.vertsplit(d)))
+    rms = ca.sqrt(totals[-1] / period)
+    energy = task.motor_sync_speed_rad_s * totals[-2] if task.motor else 0 * period
+    speed = task.nominal_speed_rad_s
+    rows.append(("forward_motion", omega / (MIN_SPEED_SHARE * speed), 1, ca.inf, False))
+    if "gear_ratio" in task.variables:      # the strokes per minute are the press's, whatever the ratio
+        rows.append(("mean_speed", (TWO_PI / period - speed) / speed, 0, 0, False))
+    if fluct:
+        hi, lo = w[nd + K * m] * speed, w[nd + K * m + 1] * speed
+        rows.append(("speed_samples", ca.vertcat(omega - hi, lo - omega) / speed, -ca.inf, 0, False))
+        rows.append(("speed_fluctuation", (hi - lo) * period / TWO_PI / task.max_speed_fluctuation, -ca.inf, 1, True))
+    if task.belt_slip_torque_Nm is not None:
+        rows.append(("belt_slip", belt / task.belt_slip_torque_Nm, -1, 1, True))
+    if task.motor_safety_factor is not None:
+        allowed = design.get("motor_scale", 1.0) * task.motor_breakdown_torque_Nm / task.motor_safety_factor
+        rows.append(("motor_breakdown", shaft / allowed, -1, 1, True))
+    if task.single_stroke_speed_drop is not None:
+        a = stage_angles(task)[1]
+        entry = Y[nodes.index(a)][task.state_names.index("omega_rad_s") - 1]
+        margin = single_stroke_margin_J(task, design.get("flywheel_inertia_kgm2", task.flywheel_inertia_kgm2),
+                                        entry, task.single_stroke_speed_drop, ca)
+        rows.append(("single_stroke", margin / scales[3], 0, ca.inf, True))
+    objective = {"least_flywheel_inertia": design.get("flywheel_inertia_kgm2", 0),
+                 "least_motor_rms_torque": rms, "least_energy_per_stroke": energy}[task.objective] / fsc
+    x, slacks = w, 0
+    if elastic:                 # phase 1: least violation of the limits, one slack per limit
+        soft = [r for r in rows if r[4]]
+        slack = ca.MX.sym("slack", len(soft))
+        x, slacks, objective = ca.vertcat(w, slack), len(soft), ca.sum1(slack)
+        relaxed = [r for r in rows if not r[4]]
+        for i, (name, e, low, high, _) in enumerate(soft):
+            if np.isfinite(high):
+                relaxed.append((name, e - slack[i], -ca.inf, high, True))
+            if np.isfinite(low):
+                relaxed.append((name, e + slack[i], low, ca.inf, True))
+        rows = relaxed
+    blocks, start = [], 0
+    for name, e, _, _, _ in rows:
+        blocks.append(_Block(name, start, start + e.numel()))
+        start += e.numel()
+    g = ca.vertcat(*[ca.vec(r[1]) for r in rows])
+    lbg = np.concatenate([np.full(r[1].numel(), float(r[2])) for r in rows])
+    ubg = np.concatenate([np.full(r[1].numel(), float(r[3])) for r in rows])
+    solver = ca.nlpsol("design", "ipopt", {"x": x, "f": objective, "g": g},
+                       {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
+                        "ipopt.hessian_approximation": "limited-memory", "ipopt.tol": 1e-10,
+                        "ipopt.constr_viol_tol": 1e-10, "ipopt.mu_strategy": "adaptive", "ipopt.max_iter": max_iter,
+                        "error_on_fail": False})
+    figures = ca.Function("figures", [x], [d, ca.vertcat(*Y), period, rms, energy, g, omega])
+    return solver, tuple(blocks), (lbg, ubg), figures, slacks
+
+
+def design(task: PressDesign, *, tol: Tolerance = 1e-10, samples: Samples = 16,
+           max_iter: Annotated[int, Interval(ge=1, le=3000)] = 500) -> Result:
+    """The drive that minimises `task.objective` over `task.variables` subject to its limits, on
+    the periodic steady motion (see the module doc and `models.press.PressDesign`).
+
+    Parameters
+    ----------
+    tol : CVODES tolerance inside the NLP and (times 1e-2) in the event-located check.
+    samples : outputs per shooting interval at which the limits are imposed (the speed extremes are
+        interval boundaries, so the fluctuation is exact whatever this is).
+    max_iter : IPOPT iterations.
+
+    Returns a Result: SOLVED (IPOPT's Solve_Succeeded and the event-located check within
+    `VERIFY_REL`); values: the design (`flywheel_inertia_kgm2`, ...), `speed_fluctuation`,
+    `motor_rms_torque_N_m`, `energy_per_stroke_J`, the sensitivities `d_<objective>_d_<limit>` of
+    each active limit and bound; INFEASIBLE with the best achievable (least violation) and the
+    limits and bounds that conflict, or with the least motor when the motor cannot carry the cycle
+    (stall); INACCURATE, LIMIT or FAILED otherwise, with the reason.
+
+    >>> import mechopt
+    >>> run = mechopt.solve("press/flywheel-design")
+    >>> run.status.value, run.values["speed_fluctuation"] <= 0.01 + 1e-9
+    ('SOLVED', True)
+    """
+    if not isinstance(task, PressDesign):
+        raise ModelError(f"task={type(task).__name__}: expected a PressDesign", key="task")
+    t_start = time.perf_counter()
+    timing = lambda build=0.0: Timing(build, time.perf_counter() - t_start - build)     # noqa: E731
+    stall = _stall(task)
+    if stall is not None:
+        return Result(Status.INFEASIBLE, stall[0], timing(), stall[1], ("stall",))
+    start = task.start()
+    too_fast = _belt_too_fast(task.drive(start))
+    if too_fast:
+        return _on_rigid_belt(task, too_fast, tol=tol, samples=samples, max_iter=max_iter, t_start=t_start)
+    orbit = steady_state(task.drive(start), tol=tol)
+    if orbit.status is not Status.SOLVED:
+        return Result(orbit.status if orbit.status is not Status.SOLVED else Status.FAILED, dict(orbit.values),
+                      timing(), f"no periodic motion at the starting design {start}: {orbit.message}", orbit.violated)
+    y0 = np.asarray(orbit.diagnostics["initial_state"])         # the states other than phi at phi = 0
+    scales = _scales(task, start)
+    nodes = _nodes(task, *_dense_speed(task, tuple(stage_angles(task)), tol, _vector(task, start), y0), DENSE)
+    build = 0.0
+    for _ in range(4):        # the speed extremes move with the design: make them nodes, re-solve
+        b0 = time.perf_counter()
+        solver, blocks, (lbg, ubg), figures, _ = _nlp(task, nodes, tol, samples, scales, False, max_iter)
+        build += time.perf_counter() - b0
+        guess = _guess(task, nodes, tol, samples, start, y0, scales)
+        lbx, ubx = _box(task, nodes, scales, 0)
+        sol = solver(x0=guess, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
+        word = solver.stats()["return_status"]
+        d, Y, period, rms, energy, g, omega = (np.asarray(v).ravel() for v in figures(sol["x"]))
+        start, y0 = dict(zip(task.variables, map(float, d))), Y[:len(task.state_names) - 1]
+        moved = _nodes(task, *_dense_speed(task, nodes, tol, d, y0), DENSE)
+        if from_ipopt(word) is not Status.SOLVED or _same(moved, nodes):
+            break
+        nodes = moved
+    status = from_ipopt(word)
+    if status is not Status.SOLVED:
+        return _not_solved(task, status, word, nodes, tol, samples, scales, sol, timing(build), max_iter)
+    drive = task.drive(start)
+    values, diagnostics, arrays = summarise(drive, _revolution_trace(drive, *_revolution(drive, tol, 60), y0),
+                                            cut_angles=task.cut_window_rad())
+    # the extremes are nodes, so the NLP's samples hold them: no parabola through coarse samples here
+    values["speed_fluctuation"] = float((omega.max() - omega.min()) * period[0] / TWO_PI)
+    values |= {k: float(v) for k, v in start.items()}
+    if task.motor:
+        values["motor_breakdown_torque_Nm"] = start.get("motor_scale", 1.0) * task.motor_breakdown_torque_Nm
+        values["motor_rms_torque_N_m"] = float(rms[0])
+        values["energy_per_stroke_J"] = float(energy[0])
+        values["peak_motor_shaft_torque_Nm"] = float(np.max(np.abs(arrays["motor_torque_Nm"])) / drive.gear_ratio)
+    values["period_s"] = float(period[0])
+    lam_g, lam_x = np.asarray(sol["lam_g"]).ravel(), np.asarray(sol["lam_x"]).ravel()
+    active, said = _active(task, blocks, g, lam_g, lam_x, scales, values)
+    values |= active
+    check = _verify(drive, np.r_[y0[:task.state_names.index("phi_rad")], 0.0,
+                                 y0[task.state_names.index("phi_rad"):]], values, tol)
+    values["verification_rel_error"] = check[0]
+    diagnostics |= {"ipopt": word, "iterations": solver.stats()["iter_count"], "nodes_deg": np.degrees(nodes).tolist(),
+                    "verification": check[1], "active": said}
+    status, message = Status.SOLVED, f"IPOPT {word} in {solver.stats()['iter_count']} iterations; " + "; ".join(said)
+    if check[0] > VERIFY_REL:
+        status = Status.INACCURATE
+        message += (f"; the event-located simulation of the optimum differs by {check[0]:.3g} (relative) > "
+                    f"{VERIFY_REL:g}: {check[1]}")
+    else:
+        message += f"; verified by the event-located simulation to {check[0]:.2g} relative"
+    return Result(status, values, timing(build), message, (), diagnostics, arrays)
+
+
+# --- the pieces ----------------------------------------------------------------------------------
+
+def _scales(task, start):
+    """(design variable scales, state scales, objective scale, energy scale): the NLP sees numbers near 1."""
+    speed = task.nominal_speed_rad_s
+    torque = max(required_mean_torque_Nm(task), 1.0)
+    stiffness = start.get("belt_stiffness_Nm_rad", task.belt_stiffness_Nm_rad or 1.0)
+    states = tuple(torque / stiffness if k == "twist_rad" else speed
+                   for k in task.state_names if k != "phi_rad")
+    gear = start.get("gear_ratio", task.gear_ratio)
+    objective = {"least_flywheel_inertia": start.get("flywheel_inertia_kgm2", 1.0),
+                 "least_motor_rms_torque": torque / gear, "least_energy_per_stroke": torque * TWO_PI}[task.objective]
+    energy = max(required_mean_torque_Nm(task) * TWO_PI, 1.0)
+    return tuple(abs(v) for v in start.values()), states, float(objective), energy
+
+
+def _nodes(task, phi, omega, samples):
+    """Stage boundaries plus the angles of the crank speed's largest and smallest values where these
+    fall inside an interval (a smooth extreme: the samples' parabola; a kink at a boundary is a node
+    already). `phi`, `omega`: `samples` per interval, each interval's end last."""
+    stages = stage_angles(task)
+    extra = []
+    for pick in (np.argmax, np.argmin):
+        i = int(pick(omega))
+        at = float(phi[i])                  # at a node already (an earlier pass's extreme, or a kink)
+        if 0 < i < len(omega) - 1 and i % samples != samples - 1:
+            c = np.polyfit(phi[i - 1:i + 2] - phi[i], omega[i - 1:i + 2], 2)
+            at = float(np.clip(phi[i] - c[1] / (2 * c[0]) if c[0] != 0 else phi[i], phi[i - 1], phi[i + 1]))
+        if min(abs(at - s) for s in stages) > NODE_MOVE_RAD:
+            extra.append(at)
+    return tuple(sorted(set(stages) | set(extra)))
+
+
+def _dense_speed(task, nodes, tol, d, y0):
+    """(angles, crank speed) at `DENSE` samples per interval from y0 at design d: where the extremes are."""
+    speeds, y = [], y0
+    for integ, _, u in intervals(task, nodes, tol, DENSE):
+        ys = np.asarray(integ(x0=y, p=np.r_[u, d])["xf"])
+        speeds.append(ys[task.state_names.index("omega_rad_s") - 1])
+        y = ys[:, -1]
+    return _angles(nodes, DENSE), np.concatenate(speeds)
+
+
+def _same(a, b):
+    return len(a) == len(b) and np.max(np.abs(np.subtract(a, b))) <= NODE_MOVE_RAD
+
+
+def _vector(task, design):
+    return np.array([design[k] for k in task.variables])
+
+
+def _angles(nodes, samples):
+    """The angles of the NLP's samples: `samples` per interval, each interval's end included [rad]."""
+    return np.concatenate([np.linspace(a, b, samples + 1)[1:] for a, b in zip(nodes[:-1], nodes[1:])])
+
+
+def _guess(task, nodes, tol, samples, start, y0, scales):
+    """The NLP's starting point: the design `start`, and the states at the nodes from integrating
+    the revolution from y0 (a periodic orbit's state at phi = 0)."""
+    d = np.array([start[k] for k in task.variables])
+    Y, speeds, y = [], [], y0
+    for integ, _, u in intervals(task, nodes, tol, samples):
+        Y.append(y)
+        ys = np.asarray(integ(x0=y, p=np.r_[u, d])["xf"])
+        speeds.append(ys[task.state_names.index("omega_rad_s") - 1])
+        y = ys[:, -1]
+    w = [d / np.array(scales[0])] + [y / np.array(scales[1]) for y in Y]
+    if task.max_speed_fluctuation is not None:
+        speeds = np.concatenate(speeds)
+        w.append(np.array([speeds.max(), speeds.min()]) / task.nominal_speed_rad_s)
+    return np.concatenate(w)
+
+
+def _box(task, nodes, scales, slacks):
+    """Bounds of the NLP's variables: the design's box, free states, nonnegative slacks."""
+    low = [task.bounds(k)[0] / s for k, s in zip(task.variables, scales[0])]
+    high = [task.bounds(k)[1] / s for k, s in zip(task.variables, scales[0])]
+    free = (len(nodes) - 1) * (len(task.state_names) - 1) + 2 * (task.max_speed_fluctuation is not None)
+    return (np.r_[low, np.full(free, -np.inf), np.zeros(slacks)],
+            np.r_[high, np.full(free, np.inf), np.full(slacks, np.inf)])
+
+
+def _stall(task):
+    """(values, message) when even the biggest motor the bounds allow cannot deliver the cycle's work
+    (mean load torque above i M_k: no forward periodic motion exists), with the least motor that could."""
+    most = {k: task.bounds(k)[1] for k in ("gear_ratio", "motor_scale") if k in task.variables}
+    drive = task.drive(most)
+    need, can = required_mean_torque_Nm(task), breakdown_torque_at_crank_Nm(drive)
+    if need <= can:
+        return None
+    least = need / drive.gear_ratio
+    values = {"required_mean_torque_Nm": need, "breakdown_torque_at_crank_Nm": can,
+              "min_motor_breakdown_torque_Nm": least, "min_motor_scale": least / task.motor_breakdown_torque_Nm}
+    return values, (f"stall: the motor cannot deliver the cycle's work at any design within the bounds: mean load "
+                    f"torque {need:.4g} N m at the crank against the breakdown torque {can:.4g} N m (i {drive.gear_ratio:.4g}"
+                    f" x {drive.motor_breakdown_torque_Nm:.4g} N m); the least motor that could has breakdown torque "
+                    f"above {least:.4g} N m at its shaft (motor_scale > {values['min_motor_scale']:.4g}), necessary "
+                    f"and approached as the flywheel grows (at exactly that the motor would sit at its breakdown slip)")
+
+
+def _belt_too_fast(drive):
+    """The message of `steady_state`'s refusal when the belt mode is too fast to follow, else None."""
+    hz, _ = belt_mode(drive)
+    if hz == 0:
+        return None
+    step = 0.1 / hz
+    return belt_too_fast(drive, step, TWO_PI / drive.nominal_speed_rad_s / step, STEPS_PER_REVOLUTION, "the design NLP",
+                         why=" (a tenth of its period)", over=" per revolution")
+
+
+def _on_rigid_belt(task, why, *, tol, samples, max_iter, t_start):
+    """The design on the rigid-belt model, the stiff belt's limit, said so (no minutes of CVODES)."""
+    if "belt_stiffness_Nm_rad" in task.variables:
+        return Result(Status.LIMIT, {}, Timing(0.0, time.perf_counter() - t_start),
+                      why + "; the belt stiffness cannot be a design variable there: bound it below "
+                      "belt_stiffness_max_Nm_rad", ("belt_mode",))
+    belt = ("belt_stiffness_Nm_rad", "belt_damping_Nms_rad", "belt_slip_torque_Nm")
+    rigid = replace(task, effects=tuple(e for e in task.effects if e != "belt_elasticity"), **dict.fromkeys(belt))
+    result = design(rigid, tol=tol, samples=samples, max_iter=max_iter)
+    dropped = " (the belt slip limit is not checked: the rigid model has no belt)" if task.belt_slip_torque_Nm else ""
+    hz, _ = belt_mode(task.drive(task.start()))
+    return Result(result.status, result.values | {"belt_mode_Hz": hz}, Timing(0.0, time.perf_counter() - t_start),
+                  f"rigid-belt limit: {why}; designed on that model{dropped}: {result.message}", result.violated,
+                  result.diagnostics | {"model": "rigid belt (the stiff belt's limit)"}, result.arrays)
+
+
+def _active(task, blocks, g, lam_g, lam_x, scales, values):
+    """Sensitivities d objective / d limit of the active limits and bounds (values), and sentences in
+    the user's terms."""
+    name, unit = UNITS[task.objective]
+    fsc = scales[2]
+    out, said = {}, []
+    for b in blocks:
+        if b.name not in KNOBS:
+            continue
+        knob, knob_unit = KNOBS[b.name]
+        lam, gg = lam_g[b.start:b.stop], g[b.start:b.stop]
+        if np.max(np.abs(lam)) < 1e-9:
+            continue
+        setting = getattr(task, knob, None)
+        dg = {"speed_fluctuation": lambda: -gg / setting, "belt_slip": lambda: -gg / setting,
+              "motor_breakdown": lambda: gg / setting, "single_stroke": lambda: np.full(len(gg), -1 / scales[3]),
+              "mean_speed": lambda: -(gg + 1) / setting}[b.name]()
+        sens = float(fsc * lam @ dg)
+        out[f"d_{name}_d_{knob}"] = sens
+        per = f" per {knob_unit}" if knob_unit else ""
+        said.append(f"{b.name} active: d {name} / d {knob} = {sens:.4g} {unit}{per}"
+                    + (f" (1 {unit} more {name.rsplit('_', 1)[0]} buys {abs(1 / sens):.4g}{' ' + knob_unit if knob_unit else ''}"
+                       f" of {knob})" if sens else ""))
+    for i, key in enumerate(task.variables):
+        low, high = task.bounds(key)
+        v = values[key]
+        side = "lower" if abs(v - low) <= 1e-7 * max(abs(low), 1) else "upper" if abs(v - high) <= 1e-7 * abs(high) else None
+        if side:
+            bound = BOUNDS[key][0 if side == "lower" else 1]
+            sens = float(-lam_x[i] * fsc / scales[0][i])
+            out[f"d_{name}_d_{bound}"] = sens
+            said.append(f"{key} is at its {side} bound {bound} = {v:.6g} (the bound is active: d {name} / d {bound} "
+                        f"= {sens:.4g}): the optimum is the bound's")
+    return out, said
+
+
+def _verify(drive, x0, values, tol):
+    """(largest relative difference, per figure) between the NLP's figures and the event-located
+    simulation of one period from the optimum's state at phi = 0."""
+    period = values["period_s"]
+    trace = Trace()
+    try:
+        _march(drive, _piece(drive, max(tol * 1e-2, 1e-13), 2000), trace, np.r_[x0, np.zeros(4)],
+               period * (1 + 1e-9), period / 8, 1000)
+    except Exception as exc:            # a failed check is a finding, reported, not a crash
+        return float("inf"), {"error": str(exc)[:200]}
+    got, _, arrays = summarise(drive, trace)
+    if drive.motor:
+        t_rev = next(t for kind, t, _ in trace.events if kind == "revolution")
+        shaft = arrays["motor_torque_Nm"] / drive.gear_ratio
+        integrals = np.zeros(2)
+        at = 0
+        for k, chunk in enumerate(trace.t):
+            if k and chunk[-1] <= t_rev * (1 + 1e-12):
+                span = slice(at - 1, at + len(chunk))
+                integrals += [simpson(shaft[span], x=arrays["t_s"][span]),
+                              simpson(shaft[span] ** 2, x=arrays["t_s"][span])]
+            at += len(chunk)
+        got["motor_rms_torque_N_m"] = float(np.sqrt(integrals[1] / got["period_s"]))
+        got["energy_per_stroke_J"] = float(drive.motor_sync_speed_rad_s * integrals[0])
+    diffs = {k: abs(values[k] - got[k]) / max(abs(got[k]), 1e-12) for k in
+             ("period_s", "omega_mean_rad_s", "speed_fluctuation", "motor_rms_torque_N_m", "energy_per_stroke_J")
+             if k in values and k in got}
+    return max(diffs.values()), diffs
+
+
+def _not_solved(task, status, word, nodes, tol, samples, scales, sol, timing, max_iter):
+    """IPOPT did not succeed: find the least violation of the limits (phase 1). Violated limits there
+    conflict with each other, the motion and the bounds: INFEASIBLE with the best achievable. When
+    none is violated, a feasible design exists and IPOPT's status stands."""
+    solver, blocks, (lbg, ubg), figures, slacks = _nlp(task, nodes, tol, samples, scales, True, max_iter)
+    lbx, ubx = _box(task, nodes, scales, slacks)
+    guess = np.r_[np.asarray(sol["x"]).ravel(), np.ones(slacks)]
+    phase1 = solver(x0=guess, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
+    x = np.asarray(phase1["x"]).ravel()
+    d, _, period, rms, energy, _ = (np.asarray(v).ravel() for v in figures(x))
+    slack = dict(zip(dict.fromkeys(b.name for b in blocks if b.name in KNOBS), x[len(x) - slacks:]))
+    values = {k: float(v) for k, v in zip(task.variables, d)} | {"period_s": float(period[0])}
+    if task.motor:
+        values |= {"motor_rms_torque_N_m": float(rms[0]), "energy_per_stroke_J": float(energy[0])}
+    phase1_word = solver.stats()["return_status"]
+    broken = {k: v for k, v in slack.items() if v > 1e-6}
+    if from_ipopt(phase1_word) is not Status.SOLVED or not broken:
+        why = ("phase 1 (least violation) finds every limit can be met, so the design problem is feasible"
+               if not broken else f"phase 1 (least violation) did not converge either ({phase1_word})")
+        return Result(status if status is not Status.SOLVED else Status.FAILED, values, timing,
+                      f"IPOPT stopped with {word}: no optimum to trust; {why}", tuple(broken), {"ipopt": word})
+    limits = {"speed_fluctuation": ("max_speed_fluctuation", "speed_fluctuation"),
+              "belt_slip": ("belt_slip_torque_Nm", "peak belt torque"),
+              "motor_breakdown": ("motor_safety_factor", "motor torque / allowed"),
+              "single_stroke": ("single_stroke_speed_drop", "single-stroke energy margin")}
+    parts = []
+    for name, over in broken.items():
+        knob, what = limits[name]
+        values[f"least_{name}_violation"] = float(over)
+        if name == "speed_fluctuation":
+            values["speed_fluctuation"] = float((1 + over) * task.max_speed_fluctuation)
+            parts.append(f"speed_fluctuation >= {values['speed_fluctuation']:.4g} at best against the limit "
+                         f"max_speed_fluctuation = {task.max_speed_fluctuation:g}")
+        else:
+            parts.append(f"{name} missed by {over:.3g} of its limit ({what}; {knob} = {getattr(task, knob):g})")
+    bounds = []
+    for key in task.variables:
+        low, high = task.bounds(key)
+        v = values[key]
+        if abs(v - low) <= 1e-6 * max(abs(low), 1):
+            bounds.append(f"{key} at its lower bound {BOUNDS[key][0]} = {low:g}")
+        elif abs(v - high) <= 1e-6 * abs(high):
+            bounds.append(f"{key} at its upper bound {BOUNDS[key][1]} = {high:g}")
+    conflict = list(broken) + [b.split(" ")[0] for b in bounds]
+    message = (f"INFEASIBLE: the limits conflict ({', '.join(conflict)}; IPOPT: {word}); the least violation: "
+               + "; ".join(parts) + (" with " + ", ".join(bounds) if bounds else " (no bound active: the motion "
+                                     "itself conflicts with them)"))
+    return Result(Status.INFEASIBLE, values, timing, message, tuple(conflict),
+                  {"ipopt": word, "phase1": phase1_word, "least_violation": slack})
