@@ -34,7 +34,7 @@ from mechopt.solvers.press.common import TWO_PI, Samples, Trace, belt_mode, belt
 from mechopt.solvers.press.event_driven import _march, _piece
 from mechopt.solvers.press.periodic import STEPS_PER_REVOLUTION, steady_state
 from mechopt.solvers.press.periodic import _revolution, _revolution_trace
-from mechopt.solvers.press.shooting import intervals, probe, stage_angles
+from mechopt.solvers.press.shooting import QUADRATURES, intervals, probe, stage_angles
 from mechopt.solvers.result import Result, Status, Timing, from_ipopt
 from mechopt.solvers.settings import Annotated, Interval, Tolerance
 
@@ -42,12 +42,15 @@ VERIFY_REL = 1e-6            # the event-located simulation must give the NLP's 
 NODE_MOVE_RAD = 1e-4         # a speed extreme further than this from every node becomes a node
 DENSE = 400                  # samples per interval when locating the speed extremes (error ~1e-5 rad)
 MIN_SPEED_SHARE = 0.05       # omega >= this x nominal everywhere: the crank turns forward (d/dphi = d/dt / omega)
-UNITS = {"least_flywheel_inertia": ("flywheel_inertia_kgm2", "kg m2"),
-         "least_motor_rms_torque": ("motor_rms_torque_N_m", "N m"),
-         "least_energy_per_stroke": ("energy_per_stroke_J", "J")}
-KNOBS = {"speed_fluctuation": ("max_speed_fluctuation", ""), "belt_slip": ("belt_slip_torque_Nm", "N m"),
-         "motor_breakdown": ("motor_safety_factor", ""), "single_stroke": ("single_stroke_energy_J", "J"),
-         "mean_speed": ("nominal_speed_rad_s", "rad/s")}
+UNITS = {"least_flywheel_inertia": ("flywheel_inertia_kgm2", "kg m2", "flywheel inertia"),
+         "least_motor_rms_torque": ("motor_rms_torque_N_m", "N m", "motor RMS torque"),
+         "least_energy_per_stroke": ("energy_per_stroke_J", "J", "energy per stroke")}
+# constraint block -> (the task's knob it is measured against, its unit, what the knob limits)
+KNOBS = {"speed_fluctuation": ("max_speed_fluctuation", "", "speed fluctuation"),
+         "belt_slip": ("belt_slip_torque_Nm", "N m", "belt torque"),
+         "motor_breakdown": ("motor_safety_factor", "", "motor safety factor"),
+         "single_stroke": ("single_stroke_energy_J", "J", "energy the single stroke needs"),
+         "mean_speed": ("nominal_speed_rad_s", "rad/s", "mean crank speed")}
 
 
 @dataclass(frozen=True)
@@ -71,16 +74,21 @@ def _nlp(task: PressDesign, nodes: tuple, tol: float, samples: int, scales: tupl
     fluct = task.max_speed_fluctuation is not None
     rows = []                                   # (name, expression, low, high, a limit the user set)
 
-    w = ca.MX.sym("w", nd + K * m + 2 * fluct)
+    # each interval's quadratures are variables too: no row then reaches every interval's integrator,
+    # so the Jacobian's columns colour into few directions for CVODES' forward sensitivities
+    w = ca.MX.sym("w", nd + K * m + 2 * fluct + K * len(QUADRATURES))
     d = w[:nd] * dsc
     Y = [w[nd + k * m:nd + (k + 1) * m] * ysc for k in range(K)]
-    totals = 0
+    qsc = _quadrature_scales(task, scales)
+    base = nd + K * m + 2 * fluct
+    q = [w[base + k * len(qsc):base + (k + 1) * len(qsc)] * qsc for k in range(K)]
+    totals = sum(q[1:], q[0])
     omega, belt, shaft = [], [], []
     for k, (integ, grid, u) in enumerate(ints):
         run = integ(x0=Y[k], p=ca.vertcat(u, d))
         xs = run["xf"]
         rows.append((f"periodicity[{k}]", (xs[:, -1] - Y[(k + 1) % K]) / ysc, 0, 0, False))
-        totals = totals + run["qf"][:, -1]
+        rows.append((f"quadratures[{k}]", (run["qf"][:, -1] - q[k]) / qsc, 0, 0, False))
         out = look(xs, ca.DM(grid).T, u, d)
         omega.append(out[0, :].T)
         belt.append(out[1, :].T)
@@ -204,9 +212,13 @@ def design(task: PressDesign, *, tol: Tolerance = 1e-10, samples: Samples = 16,
                                             cut_angles=task.cut_window_rad())
     # the extremes are nodes, so the NLP's samples hold them: no parabola through coarse samples here
     values["speed_fluctuation"] = float((omega.max() - omega.min()) * period[0] / TWO_PI)
-    values |= {k: float(v) for k, v in start.items()}
+    values |= _sizing_values(task, start)
+    if task.single_stroke_speed_drop is not None:
+        values["single_stroke_margin_J"] = float(single_stroke_margin_J(
+            task, values["flywheel_inertia_kgm2"], Y[(len(task.state_names) - 1) * nodes.index(stage_angles(task)[1])
+                                                     + task.state_names.index("omega_rad_s") - 1],
+            task.single_stroke_speed_drop))
     if task.motor:
-        values["motor_breakdown_torque_Nm"] = start.get("motor_scale", 1.0) * task.motor_breakdown_torque_Nm
         values["motor_rms_torque_N_m"] = float(rms[0])
         values["energy_per_stroke_J"] = float(energy[0])
         values["peak_motor_shaft_torque_Nm"] = float(np.max(np.abs(arrays["motor_torque_Nm"])) / drive.gear_ratio)
@@ -276,6 +288,13 @@ def _same(a, b):
     return len(a) == len(b) and np.max(np.abs(np.subtract(a, b))) <= NODE_MOVE_RAD
 
 
+def _quadrature_scales(task, scales):
+    """Scales of an interval's time [s], motor torque integral [N m s] and its square's [N2 m2 s]."""
+    turn = TWO_PI / task.nominal_speed_rad_s
+    torque = max(required_mean_torque_Nm(task), 1.0) / task.gear_ratio
+    return np.array([turn, torque * turn, torque**2 * turn])
+
+
 def _vector(task, design):
     return np.array([design[k] for k in task.variables])
 
@@ -289,24 +308,27 @@ def _guess(task, nodes, tol, samples, start, y0, scales):
     """The NLP's starting point: the design `start`, and the states at the nodes from integrating
     the revolution from y0 (a periodic orbit's state at phi = 0)."""
     d = np.array([start[k] for k in task.variables])
-    Y, speeds, y = [], [], y0
+    Y, Q, speeds, y = [], [], [], y0
     for integ, _, u in intervals(task, nodes, tol, samples):
         Y.append(y)
-        ys = np.asarray(integ(x0=y, p=np.r_[u, d])["xf"])
+        run = integ(x0=y, p=np.r_[u, d])
+        ys = np.asarray(run["xf"])
+        Q.append(np.asarray(run["qf"])[:, -1] / _quadrature_scales(task, scales))
         speeds.append(ys[task.state_names.index("omega_rad_s") - 1])
         y = ys[:, -1]
     w = [d / np.array(scales[0])] + [y / np.array(scales[1]) for y in Y]
     if task.max_speed_fluctuation is not None:
         speeds = np.concatenate(speeds)
         w.append(np.array([speeds.max(), speeds.min()]) / task.nominal_speed_rad_s)
-    return np.concatenate(w)
+    return np.concatenate(w + Q)
 
 
 def _box(task, nodes, scales, slacks):
     """Bounds of the NLP's variables: the design's box, free states, nonnegative slacks."""
     low = [task.bounds(k)[0] / s for k, s in zip(task.variables, scales[0])]
     high = [task.bounds(k)[1] / s for k, s in zip(task.variables, scales[0])]
-    free = (len(nodes) - 1) * (len(task.state_names) - 1) + 2 * (task.max_speed_fluctuation is not None)
+    free = ((len(nodes) - 1) * (len(task.state_names) - 1 + len(QUADRATURES))
+            + 2 * (task.max_speed_fluctuation is not None))
     return (np.r_[low, np.full(free, -np.inf), np.zeros(slacks)],
             np.r_[high, np.full(free, np.inf), np.full(slacks, np.inf)])
 
@@ -358,13 +380,13 @@ def _on_rigid_belt(task, why, *, tol, samples, max_iter, t_start):
 def _active(task, blocks, g, lam_g, lam_x, scales, values):
     """Sensitivities d objective / d limit of the active limits and bounds (values), and sentences in
     the user's terms."""
-    name, unit = UNITS[task.objective]
+    name, unit, label = UNITS[task.objective]
     fsc = scales[2]
     out, said = {}, []
     for b in blocks:
         if b.name not in KNOBS:
             continue
-        knob, knob_unit = KNOBS[b.name]
+        knob, knob_unit, limits = KNOBS[b.name]
         lam, gg = lam_g[b.start:b.stop], g[b.start:b.stop]
         if np.max(np.abs(lam)) < 1e-9:
             continue
@@ -375,9 +397,11 @@ def _active(task, blocks, g, lam_g, lam_x, scales, values):
         sens = float(fsc * lam @ dg)
         out[f"d_{name}_d_{knob}"] = sens
         per = f" per {knob_unit}" if knob_unit else ""
-        said.append(f"{b.name} active: d {name} / d {knob} = {sens:.4g} {unit}{per}"
-                    + (f" (1 {unit} more {name.rsplit('_', 1)[0]} buys {abs(1 / sens):.4g}{' ' + knob_unit if knob_unit else ''}"
-                       f" of {knob})" if sens else ""))
+        trade = ""
+        if sens and b.name != "mean_speed":     # along the active limit: what one unit of the objective buys
+            way = "lowers" if (sens < 0) == (b.name != "motor_breakdown") else "raises"
+            trade = f": 1 {unit} more {label} {way} the {limits} it can meet by {abs(1 / sens):.4g} {knob_unit}".rstrip()
+        said.append(f"{b.name} active (d {name} / d {knob} = {sens:.4g} {unit}{per}){trade}")
     for i, key in enumerate(task.variables):
         low, high = task.bounds(key)
         v = values[key]
@@ -389,6 +413,18 @@ def _active(task, blocks, g, lam_g, lam_x, scales, values):
             said.append(f"{key} is at its {side} bound {bound} = {v:.6g} (the bound is active: d {name} / d {bound} "
                         f"= {sens:.4g}): the optimum is the bound's")
     return out, said
+
+
+def _sizing_values(task, design):
+    """The drive's sizing at a design, every one of them (free or not), named with units."""
+    drive = task.drive(design)
+    out = {"flywheel_inertia_kgm2": drive.flywheel_inertia_kgm2, "gear_ratio": drive.gear_ratio}
+    if task.belt:
+        out["belt_stiffness_Nm_rad"] = drive.belt_stiffness_Nm_rad
+    if task.motor:
+        out |= {"motor_scale": design.get("motor_scale", 1.0), "motor_breakdown_torque_Nm": drive.motor_breakdown_torque_Nm,
+                "motor_inertia_kgm2": drive.motor_inertia_kgm2}
+    return {k: float(v) for k, v in out.items()}
 
 
 def _verify(drive, x0, values, tol):
@@ -432,7 +468,7 @@ def _not_solved(task, status, word, nodes, tol, samples, scales, sol, timing, ma
     x = np.asarray(phase1["x"]).ravel()
     d, _, period, rms, energy, _ = (np.asarray(v).ravel() for v in figures(x))
     slack = dict(zip(dict.fromkeys(b.name for b in blocks if b.name in KNOBS), x[len(x) - slacks:]))
-    values = {k: float(v) for k, v in zip(task.variables, d)} | {"period_s": float(period[0])}
+    values = _sizing_values(task, dict(zip(task.variables, map(float, d)))) | {"period_s": float(period[0])}
     if task.motor:
         values |= {"motor_rms_torque_N_m": float(rms[0]), "energy_per_stroke_J": float(energy[0])}
     phase1_word = solver.stats()["return_status"]
