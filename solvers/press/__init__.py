@@ -13,14 +13,16 @@ located, the speed fluctuation coefficient and the peaks of force, Q and belt to
 the run's samples in `Result.arrays` (`t_s`, the states, `cutting`, the outputs).
 `loads` (loads.py) adds the peaks of the loads a designer sizes parts with (Figs. 9-10).
 `force_fit.fit_force` fits the force law (1) to load-travel data.
+`design` (design.py) chooses the drive by optimisation over the periodic steady motion.
 """
+from mechopt.solvers.press.design import design
 from mechopt.solvers.press.event_driven import events
 from mechopt.solvers.press.fixed_step import rk4
 from mechopt.solvers.press.loads import loads
 from mechopt.solvers.press.periodic import steady_state
 from mechopt.solvers.press.scipy_peer import ivp
 
-__all__ = ["rk4", "events", "steady_state", "ivp", "loads", "simulate", "METHODS"]
+__all__ = ["rk4", "events", "steady_state", "ivp", "loads", "design", "simulate", "METHODS"]
 
 METHODS = {"rk4": rk4, "events": events, "steady_state": steady_state, "ivp": ivp}
 

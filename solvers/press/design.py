@@ -148,7 +148,7 @@ def _nlp(task: PressDesign, nodes: tuple, tol: float, samples: int, scales: tupl
 
 
 def design(task: PressDesign, *, tol: Tolerance = 1e-10, samples: Samples = 16,
-           max_iter: Annotated[int, Interval(ge=1, le=3000)] = 500) -> Result:
+           max_iter: Annotated[int, Interval(ge=1, le=3000)] = 500, check_sensitivity: bool = False) -> Result:
     """The drive that minimises `task.objective` over `task.variables` subject to its limits, on
     the periodic steady motion (see the module doc and `models.press.PressDesign`).
 
@@ -158,6 +158,8 @@ def design(task: PressDesign, *, tol: Tolerance = 1e-10, samples: Samples = 16,
     samples : outputs per shooting interval at which the limits are imposed (the speed extremes are
         interval boundaries, so the fluctuation is exact whatever this is).
     max_iter : IPOPT iterations.
+    check_sensitivity : re-solve with the first active limit 0.1 % looser and tighter and compare the
+        central difference with the multiplier's sensitivity (`sensitivity_fd_rel_error`).
 
     Returns a Result: SOLVED (IPOPT's Solve_Succeeded and the event-located check within
     `VERIFY_REL`); values: the design (`flywheel_inertia_kgm2`, ...), `speed_fluctuation`,
@@ -173,6 +175,11 @@ def design(task: PressDesign, *, tol: Tolerance = 1e-10, samples: Samples = 16,
     """
     if not isinstance(task, PressDesign):
         raise ModelError(f"task={type(task).__name__}: expected a PressDesign", key="task")
+    return _design(task, tol, samples, max_iter, check_sensitivity, None)
+
+
+def _design(task, tol, samples, max_iter, check_sensitivity, warm):
+    """`design`; `warm` = (nodes, design, states at phi = 0) of a nearby optimum to start from."""
     t_start = time.perf_counter()
     timing = lambda build=0.0: Timing(build, time.perf_counter() - t_start - build)     # noqa: E731
     stall = _stall(task)
@@ -182,13 +189,16 @@ def design(task: PressDesign, *, tol: Tolerance = 1e-10, samples: Samples = 16,
     too_fast = _belt_too_fast(task.drive(start))
     if too_fast:
         return _on_rigid_belt(task, too_fast, tol=tol, samples=samples, max_iter=max_iter, t_start=t_start)
-    orbit = steady_state(task.drive(start), tol=tol)
-    if orbit.status is not Status.SOLVED:
-        return Result(orbit.status if orbit.status is not Status.SOLVED else Status.FAILED, dict(orbit.values),
-                      timing(), f"no periodic motion at the starting design {start}: {orbit.message}", orbit.violated)
-    y0 = np.asarray(orbit.diagnostics["initial_state"])         # the states other than phi at phi = 0
     scales = _scales(task, start)
-    nodes = _nodes(task, *_dense_speed(task, tuple(stage_angles(task)), tol, _vector(task, start), y0), DENSE)
+    if warm is None:
+        orbit = steady_state(task.drive(start), tol=tol)
+        if orbit.status is not Status.SOLVED:
+            return Result(orbit.status, dict(orbit.values), timing(),
+                          f"no periodic motion at the starting design {start}: {orbit.message}", orbit.violated)
+        y0 = np.asarray(orbit.diagnostics["initial_state"])         # the states other than phi at phi = 0
+        nodes = _nodes(task, *_dense_speed(task, tuple(stage_angles(task)), tol, _vector(task, start), y0), DENSE)
+    else:
+        nodes, start, y0 = warm
     build = 0.0
     for _ in range(4):        # the speed extremes move with the design: make them nodes, re-solve
         b0 = time.perf_counter()
@@ -238,7 +248,27 @@ def design(task: PressDesign, *, tol: Tolerance = 1e-10, samples: Samples = 16,
                     f"{VERIFY_REL:g}: {check[1]}")
     else:
         message += f"; verified by the event-located simulation to {check[0]:.2g} relative"
+    if check_sensitivity and status is Status.SOLVED:
+        values |= _fd_check(task, values, tol, samples, max_iter, (nodes, start, y0))
     return Result(status, values, timing(build), message, (), diagnostics, arrays)
+
+
+def _fd_check(task, values, tol, samples, max_iter, warm):
+    """The first active limit's sensitivity against the central difference of two re-solves with the
+    limit 0.1 % looser and tighter: {`sensitivity_fd_rel_error`, `sensitivity_fd`}, or {} without one."""
+    name = UNITS[task.objective][0]
+    for block in ("speed_fluctuation", "belt_slip", "motor_breakdown"):
+        knob = KNOBS[block][0]
+        sens = values.get(f"d_{name}_d_{knob}")
+        if sens:
+            limit = getattr(task, knob)
+            ends = [_design(replace(task, **{knob: limit * (1 + s)}), tol, samples, max_iter, False, warm)
+                    for s in (1e-3, -1e-3)]
+            if any(r.status is not Status.SOLVED for r in ends):
+                return {}
+            fd = (ends[0].values[name] - ends[1].values[name]) / (2e-3 * limit)
+            return {"sensitivity_fd": fd, "sensitivity_fd_rel_error": abs(fd - sens) / abs(fd)}
+    return {}
 
 
 # --- the pieces ----------------------------------------------------------------------------------
@@ -369,7 +399,7 @@ def _on_rigid_belt(task, why, *, tol, samples, max_iter, t_start):
                       "belt_stiffness_max_Nm_rad", ("belt_mode",))
     belt = ("belt_stiffness_Nm_rad", "belt_damping_Nms_rad", "belt_slip_torque_Nm")
     rigid = replace(task, effects=tuple(e for e in task.effects if e != "belt_elasticity"), **dict.fromkeys(belt))
-    result = design(rigid, tol=tol, samples=samples, max_iter=max_iter)
+    result = _design(rigid, tol, samples, max_iter, False, None)
     dropped = " (the belt slip limit is not checked: the rigid model has no belt)" if task.belt_slip_torque_Nm else ""
     hz, _ = belt_mode(task.drive(task.start()))
     return Result(result.status, result.values | {"belt_mode_Hz": hz}, Timing(0.0, time.perf_counter() - t_start),
