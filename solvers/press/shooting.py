@@ -45,7 +45,8 @@ def _symbols(task: PressDesign):
     y = ca.SX.sym("y", dyn.n_states - 1)
     phi, u = ca.SX.sym("phi"), ca.SX.sym("u")
     p = ca.SX.sym("p", len(task.variables))
-    x = ca.vertcat(y[:iphi], phi, y[iphi:], ca.DM.zeros(len(WORK_NAMES)))
+    others = ca.vertsplit(y)                    # (slicing y[:0] gives a 1-by-0 that vertcat miscounts)
+    x = ca.vertcat(*others[:iphi], phi, *others[iphi:], ca.DM.zeros(len(WORK_NAMES)))
     gear = sizing(task, dict(zip(task.variables, ca.vertsplit(p))))["gear_ratio"]
     return y, phi, u, p, x, ca.vertcat(u, 1, 0), dyn, gear
 
@@ -61,7 +62,7 @@ def intervals(task: PressDesign, nodes: tuple[float, ...], tol: float, samples: 
     xdot = dyn.rhs(x, mode, p)
     shaft = dyn.outputs(x, mode, p)[1] / gear if task.motor else 0 * phi       # motor torque at its shaft
     w = x[task.state_names.index("omega_rad_s")]
-    ode = ca.vertcat(xdot[:iphi], xdot[iphi + 1:n]) / w
+    ode = ca.vertcat(*[xdot[i] for i in range(n) if i != iphi]) / w
     quad = ca.vertcat(1, shaft, shaft**2) / w
     out = []
     for k, (a, b) in enumerate(zip(nodes[:-1], nodes[1:])):
