@@ -46,10 +46,10 @@ UNITS = {"least_flywheel_inertia": ("flywheel_inertia_kgm2", "kg m2", "flywheel 
          "least_motor_rms_torque": ("motor_rms_torque_N_m", "N m", "motor RMS torque"),
          "least_energy_per_stroke": ("energy_per_stroke_J", "J", "energy per stroke")}
 # constraint block -> (the task's knob it is measured against, its unit, what the knob limits)
-KNOBS = {"speed_fluctuation": ("max_speed_fluctuation", "", "speed fluctuation"),
-         "belt_slip": ("belt_slip_torque_Nm", "N m", "belt torque"),
-         "motor_breakdown": ("motor_safety_factor", "", "motor safety factor"),
-         "single_stroke": ("single_stroke_energy_J", "J", "energy the single stroke needs"),
+KNOBS = {"speed_fluctuation": ("max_speed_fluctuation", "", "speed fluctuation it can keep"),
+         "belt_slip": ("belt_slip_torque_Nm", "N m", "belt torque it can keep"),
+         "motor_breakdown": ("motor_safety_factor", "", "motor safety factor it can keep"),
+         "single_stroke": ("single_stroke_energy_J", "J", "energy it can carry through a single stroke"),
          "mean_speed": ("nominal_speed_rad_s", "rad/s", "mean crank speed")}
 
 
@@ -234,7 +234,7 @@ def _design(task, tol, samples, max_iter, check_sensitivity, warm):
         values["peak_motor_shaft_torque_Nm"] = float(np.max(np.abs(arrays["motor_torque_Nm"])) / drive.gear_ratio)
     values["period_s"] = float(period[0])
     lam_g, lam_x = np.asarray(sol["lam_g"]).ravel(), np.asarray(sol["lam_x"]).ravel()
-    active, said = _active(task, blocks, g, lam_g, lam_x, scales, values)
+    active, said = _active(task, blocks, (lbg, ubg), g, lam_g, lam_x, scales, values)
     values |= active
     check = _verify(drive, np.r_[y0[:task.state_names.index("phi_rad")], 0.0,
                                  y0[task.state_names.index("phi_rad"):]], values, tol)
@@ -267,7 +267,7 @@ def _fd_check(task, values, tol, samples, max_iter, warm):
             if any(r.status is not Status.SOLVED for r in ends):
                 return {}
             fd = (ends[0].values[name] - ends[1].values[name]) / (2e-3 * limit)
-            return {"sensitivity_fd": fd, "sensitivity_fd_rel_error": abs(fd - sens) / abs(fd)}
+            return {"sensitivity_fd": fd, "sensitivity_fd_rel_error": abs(fd - sens) / max(abs(fd), abs(sens))}
     return {}
 
 
@@ -407,7 +407,7 @@ def _on_rigid_belt(task, why, *, tol, samples, max_iter, t_start):
                   result.diagnostics | {"model": "rigid belt (the stiff belt's limit)"}, result.arrays)
 
 
-def _active(task, blocks, g, lam_g, lam_x, scales, values):
+def _active(task, blocks, bounds, g, lam_g, lam_x, scales, values):
     """Sensitivities d objective / d limit of the active limits and bounds (values), and sentences in
     the user's terms."""
     name, unit, label = UNITS[task.objective]
@@ -418,7 +418,8 @@ def _active(task, blocks, g, lam_g, lam_x, scales, values):
             continue
         knob, knob_unit, limits = KNOBS[b.name]
         lam, gg = lam_g[b.start:b.stop], g[b.start:b.stop]
-        if np.max(np.abs(lam)) < 1e-9:
+        at_bound = np.minimum(np.abs(gg - bounds[0][b.start:b.stop]), np.abs(gg - bounds[1][b.start:b.stop])) < 1e-6
+        if not np.any(at_bound & (np.abs(lam) > 1e-8)):      # a limit with room left, or a degenerate zero multiplier
             continue
         setting = getattr(task, knob, None)
         dg = {"speed_fluctuation": lambda: -gg / setting, "belt_slip": lambda: -gg / setting,
@@ -430,7 +431,7 @@ def _active(task, blocks, g, lam_g, lam_x, scales, values):
         trade = ""
         if sens and b.name != "mean_speed":     # along the active limit: what one unit of the objective buys
             way = "lowers" if (sens < 0) == (b.name != "motor_breakdown") else "raises"
-            trade = f": 1 {unit} more {label} {way} the {limits} it can meet by {abs(1 / sens):.4g} {knob_unit}".rstrip()
+            trade = f": 1 {unit} more {label} {way} the {limits} by {abs(1 / sens):.4g} {knob_unit}".rstrip()
         said.append(f"{b.name} active (d {name} / d {knob} = {sens:.4g} {unit}{per}){trade}")
     for i, key in enumerate(task.variables):
         low, high = task.bounds(key)

@@ -69,7 +69,7 @@ def intervals(task: PressDesign, nodes: tuple[float, ...], tol: float, samples: 
         grid = np.linspace(a, b, samples + 1)[1:]
         integ = ca.integrator(f"shoot{k}", "cvodes", {"x": y, "t": phi, "p": ca.vertcat(u, p), "ode": ode,
                                                      "quad": quad}, a, grid,
-                              {"abstol": tol, "reltol": tol, "max_num_steps": 100000, "fsens_err_con": False})
+                              {"abstol": tol, "reltol": tol, "max_num_steps": 100000, "quad_err_con": True})
         out.append((integ, grid, cutting_on(task, a, b)))
     return out
 
