@@ -32,14 +32,16 @@ from mechopt.models.press import (
 )
 from mechopt.solvers.press.common import TWO_PI, Samples, Trace, belt_mode, belt_too_fast, dynamics_of, summarise
 from mechopt.solvers.press.event_driven import _march, _piece
-from mechopt.solvers.press.periodic import STEPS_PER_REVOLUTION, steady_state
-from mechopt.solvers.press.periodic import _revolution, _revolution_trace
+from mechopt.solvers.press.periodic import _revolution, _revolution_trace, steady_state
 from mechopt.solvers.press.shooting import QUADRATURES, intervals, probe, stage_angles
 from mechopt.solvers.result import Result, Status, Timing, from_ipopt
 from mechopt.solvers.settings import Annotated, Interval, Tolerance
 
 VERIFY_REL = 1e-6            # the event-located simulation must give the NLP's figures to this
 NODE_MOVE_RAD = 1e-4         # a speed extreme further than this from every node becomes a node
+STEPS_PER_REVOLUTION = 300   # belt-mode steps (a tenth of its period) per revolution the NLP takes on (~120 Hz)
+RIGID_RATIO = 1000           # belt mode / revolution frequency past which the rigid belt is its limit (SOLVED there)
+MAX_WALL_S = 60.0            # IPOPT's wall-time limit per solve: LIMIT past it
 DENSE = 400                  # samples per interval when locating the speed extremes (error ~1e-5 rad)
 MIN_SPEED_SHARE = 0.05       # omega >= this x nominal everywhere: the crank turns forward (d/dphi = d/dt / omega)
 UNITS = {"least_flywheel_inertia": ("flywheel_inertia_kgm2", "kg m2", "flywheel inertia"),
@@ -142,7 +144,7 @@ def _nlp(task: PressDesign, nodes: tuple, tol: float, samples: int, scales: tupl
                        {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
                         "ipopt.hessian_approximation": "limited-memory", "ipopt.tol": 1e-8,
                         "ipopt.constr_viol_tol": 1e-10, "ipopt.mu_strategy": "adaptive", "ipopt.max_iter": max_iter,
-                        "error_on_fail": False})
+                        "ipopt.max_wall_time": MAX_WALL_S, "error_on_fail": False})
     figures = ca.Function("figures", [x], [d, ca.vertcat(*Y), period, rms, energy, g, omega])
     return solver, tuple(blocks), (lbg, ubg), figures, slacks
 
@@ -402,9 +404,13 @@ def _on_rigid_belt(task, why, *, tol, samples, max_iter, t_start):
     result = _design(rigid, tol, samples, max_iter, False, None)
     dropped = " (the belt slip limit is not checked: the rigid model has no belt)" if task.belt_slip_torque_Nm else ""
     hz, _ = belt_mode(task.drive(task.start()))
-    return Result(result.status, result.values | {"belt_mode_Hz": hz}, Timing(0.0, time.perf_counter() - t_start),
-                  f"rigid-belt limit: {why}; designed on that model{dropped}: {result.message}", result.violated,
-                  result.diagnostics | {"model": "rigid belt (the stiff belt's limit)"}, result.arrays)
+    ratio = hz / (task.nominal_speed_rad_s / TWO_PI)
+    status, close = result.status, f"the belt mode is {ratio:.3g} times the revolution frequency"
+    if ratio < RIGID_RATIO and status is Status.SOLVED:     # stiff, but not so stiff that the limit is exact
+        status, close = Status.INACCURATE, close + f", less than {RIGID_RATIO}: the rigid belt only approximates it"
+    return Result(status, result.values | {"belt_mode_Hz": hz}, Timing(0.0, time.perf_counter() - t_start),
+                  f"rigid-belt limit: {why}; {close}; designed on that model{dropped}: {result.message}",
+                  result.violated, result.diagnostics | {"model": "rigid belt (the stiff belt's limit)"}, result.arrays)
 
 
 def _active(task, blocks, bounds, g, lam_g, lam_x, scales, values):
