@@ -33,8 +33,8 @@ from mechopt.models import cache
 from mechopt.plots import save_figure
 from mechopt.solvers import press as pd
 
-__all__ = ["cli", "run", "table", "at_accuracy", "observed_order", "plot", "cycle_timing", "design_rows", "peer_design",
-           "design_table", "PAPER_TASK", "DURATION_S", "DESIGN_SCENES"]
+__all__ = ["DESIGN_SCENES", "DURATION_S", "PAPER_TASK", "at_accuracy", "cli", "cycle_timing", "design_rows",
+           "design_table", "observed_order", "peer_design", "plot", "run", "table"]
 
 PAPER_TASK, _ = registry.find("press/kd2322").build()
 DURATION_S = 0.25           # about one revolution at 25 rad/s, with one cut
@@ -231,7 +231,7 @@ def design_rows(repeats=3, *, scenes=DESIGN_SCENES, progress=None):
             result = pd.design(task)
             walls.append(time.perf_counter() - start)
         start = time.perf_counter()
-        found, objective, evaluations = peer_design(task)
+        _, objective, evaluations = peer_design(task)
         peer_s = time.perf_counter() - start
         name = {"least_flywheel_inertia": "flywheel_inertia_kgm2", "least_motor_rms_torque": "motor_rms_torque_N_m",
                 "least_energy_per_stroke": "energy_per_stroke_J"}[task.objective]
@@ -247,17 +247,18 @@ def design_rows(repeats=3, *, scenes=DESIGN_SCENES, progress=None):
 
 
 def design_table(rows):
-    lines = [f"\n{'design scene':<22} {'NLP [s]':>8} {'cold [s]':>8} {'peer [s]':>9} {'evals':>6} {'ratio':>7} "
-             f"{'objective NLP':>14} {'peer':>14} {'rel diff':>9} status"]
+    header = (f"\n{'design scene':<22} {'NLP [s]':>8} {'cold [s]':>8} {'peer [s]':>9} {'evals':>6} {'ratio':>7} "
+              f"{'objective NLP':>14} {'peer':>14} {'rel diff':>9} status")
+    lines = [header]
     for r in rows:
         ratio = r["peer_s"] / r["nlp_s_median"]
         lines.append(f"{r['scene']:<22} {r['nlp_s_median']:>8.3g} {r['nlp_cold_s']:>8.3g} {r['peer_s']:>9.3g} "
                      f"{r['peer_evaluations']:>6d} {ratio:>7.3g} {r['nlp_objective']:>14.8g} {r['peer_objective']:>14.8g} "
                      f"{r['objective_rel_diff']:>9.2g} {r['status']}")
-        met = lambda ok: "met" if ok else "MISSED"        # noqa: E731
-        lines.append(f"  targets: NLP / Nelder-Mead speed-up {ratio:.3g} (>= {SPEEDUP_TARGET:g}: {met(ratio >= SPEEDUP_TARGET)}),"
+        met = {True: "met", False: "MISSED"}
+        lines.append(f"  targets: NLP / Nelder-Mead speed-up {ratio:.3g} (>= {SPEEDUP_TARGET:g}: {met[ratio >= SPEEDUP_TARGET]}),"
                      f" whole design cold {r['nlp_cold_s']:.3g} s (< {DESIGN_TARGET_S:g} s: "
-                     f"{met(r['nlp_cold_s'] < DESIGN_TARGET_S)})")
+                     f"{met[r['nlp_cold_s'] < DESIGN_TARGET_S]})")
     return "\n".join(lines)
 
 

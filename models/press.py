@@ -607,7 +607,7 @@ class PressDesign(PressDrive):
                   "single_stroke_speed_drop": (0, 1, "a fraction of the speed at the cut's start")}
         for key, (low, high, what) in limits.items():
             value = getattr(self, key)
-            _require(self, key, value is None or (low <= value <= high and value == value and value != 0),
+            _require(self, key, value is None or (low <= value <= high and value != 0),     # NaN fails <=
                      f"is outside ({low:g}, {high:g}] ({what})")
         for name, (low_key, high_key) in BOUNDS.items():
             low, high = getattr(self, low_key), getattr(self, high_key)

@@ -131,8 +131,8 @@ def test_a_bad_design_question_is_refused_naming_the_key(flywheel_task, change, 
 
 
 def test_a_design_input_needs_its_effect(flywheel_task):
-    no_belt = dict(effects=tuple(e for e in flywheel_task.effects if e != "belt_elasticity"),
-                   belt_stiffness_Nm_rad=None, belt_damping_Nms_rad=None)
+    no_belt = {"effects": tuple(e for e in flywheel_task.effects if e != "belt_elasticity"),
+               "belt_stiffness_Nm_rad": None, "belt_damping_Nms_rad": None}
     with pytest.raises(ModelError, match=r"belt_slip_torque_Nm needs effect 'belt_elasticity'"):
         dataclasses.replace(flywheel_task, belt_slip_torque_Nm=30.0, **no_belt)
     with pytest.raises(ModelError, match=r"task=PressDrive: expected a PressDesign"):

@@ -22,7 +22,7 @@ from mechopt.solvers.press.loads import loads
 from mechopt.solvers.press.periodic import steady_state
 from mechopt.solvers.press.scipy_peer import ivp
 
-__all__ = ["rk4", "events", "steady_state", "ivp", "loads", "design", "simulate", "METHODS"]
+__all__ = ["METHODS", "design", "events", "ivp", "loads", "rk4", "simulate", "steady_state"]
 
 METHODS = {"rk4": rk4, "events": events, "steady_state": steady_state, "ivp": ivp}
 

@@ -15,6 +15,7 @@ more of the limit is worth in the objective), and a variable on its bound is nam
 """
 import time
 from dataclasses import dataclass, replace
+from itertools import pairwise
 
 import casadi as ca
 import numpy as np
@@ -24,7 +25,6 @@ from mechopt.models.cache import memoised
 from mechopt.models.errors import ModelError
 from mechopt.models.press import (
     BOUNDS,
-    DESIGN_VARIABLES,
     PressDesign,
     breakdown_torque_at_crank_Nm,
     required_mean_torque_Nm,
@@ -38,10 +38,13 @@ from mechopt.solvers.result import Result, Status, Timing, from_ipopt
 from mechopt.solvers.settings import Annotated, Interval, Tolerance
 
 VERIFY_REL = 1e-6            # the event-located simulation must give the NLP's figures to this
-NODE_MOVE_RAD = 1e-4         # a speed extreme further than this from every node becomes a node
+NODE_MOVE_RAD = 1e-4         # a speed extreme further than this from a stage boundary becomes a node
+MISSED_SPREAD = 3e-7         # re-solve while the samples' speed spread misses the dense one by more (relative)
 STEPS_PER_REVOLUTION = 300   # belt-mode steps (a tenth of its period) per revolution the NLP takes on (~120 Hz)
 RIGID_RATIO = 1000           # belt mode / revolution frequency past which the rigid belt is its limit (SOLVED there)
 MAX_WALL_S = 60.0            # IPOPT's wall-time limit per solve: LIMIT past it
+COARSE_TOL = 1e-7             # CVODES tolerance of the first pass, which only finds where the extremes go
+COARSE_ITER = 60              # and its IPOPT iterations
 DENSE = 400                  # samples per interval when locating the speed extremes (error ~1e-5 rad)
 MIN_SPEED_SHARE = 0.05       # omega >= this x nominal everywhere: the crank turns forward (d/dphi = d/dt / omega)
 UNITS = {"least_flywheel_inertia": ("flywheel_inertia_kgm2", "kg m2", "flywheel inertia"),
@@ -64,10 +67,13 @@ class _Block:
 
 
 @memoised(maxsize=8)
-def _nlp(task: PressDesign, nodes: tuple, tol: float, samples: int, scales: tuple, elastic: bool, max_iter: int):
+def _nlp(task: PressDesign, nodes: tuple, tol: float, samples: int, scales: tuple, elastic: bool, max_iter: int,
+         near: bool = False, coarse: bool = False):
     """(nlpsol, blocks, (lbg, ubg), Function w -> figures, number of slacks). With `elastic`, the
     limits (not the motion's equations) get one slack each and the objective is their sum: the
-    least violation, for an INFEASIBLE answer's best achievable."""
+    least violation, for an INFEASIBLE answer's best achievable. `near`: the start is close to the
+    optimum (a small initial barrier parameter keeps IPOPT there). `coarse`: a first pass that only
+    places the nodes (loose IPOPT tolerances, `COARSE_ITER` iterations)."""
     ints = intervals(task, nodes, tol, samples)
     look = probe(task, samples)
     nd, K = len(task.variables), len(ints)
@@ -142,9 +148,11 @@ def _nlp(task: PressDesign, nodes: tuple, tol: float, samples: int, scales: tupl
     ubg = np.concatenate([np.full(r[1].numel(), float(r[3])) for r in rows])
     solver = ca.nlpsol("design", "ipopt", {"x": x, "f": objective, "g": g},
                        {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
-                        "ipopt.hessian_approximation": "limited-memory", "ipopt.tol": 1e-8,
-                        "ipopt.constr_viol_tol": 1e-10, "ipopt.mu_strategy": "adaptive", "ipopt.max_iter": max_iter,
-                        "ipopt.max_wall_time": MAX_WALL_S, "error_on_fail": False})
+                        "ipopt.hessian_approximation": "limited-memory",
+                        "ipopt.tol": 1e-5 if coarse else 1e-8, "ipopt.constr_viol_tol": 1e-7 if coarse else 1e-10,
+                        "ipopt.mu_strategy": "adaptive", "ipopt.max_iter": min(max_iter, COARSE_ITER) if coarse else max_iter,
+                        "ipopt.max_wall_time": MAX_WALL_S, "ipopt.mu_init": 1e-6 if near else 0.1,
+                        "error_on_fail": False})
     figures = ca.Function("figures", [x], [d, ca.vertcat(*Y), period, rms, energy, g, omega])
     return solver, tuple(blocks), (lbg, ubg), figures, slacks
 
@@ -183,7 +191,9 @@ def design(task: PressDesign, *, tol: Tolerance = 1e-10, samples: Samples = 16,
 def _design(task, tol, samples, max_iter, check_sensitivity, warm):
     """`design`; `warm` = (nodes, design, states at phi = 0) of a nearby optimum to start from."""
     t_start = time.perf_counter()
-    timing = lambda build=0.0: Timing(build, time.perf_counter() - t_start - build)     # noqa: E731
+    def timing(build=0.0):
+        return Timing(build, time.perf_counter() - t_start - build)
+
     stall = _stall(task)
     if stall is not None:
         return Result(Status.INFEASIBLE, stall[0], timing(), stall[1], ("stall",))
@@ -202,20 +212,32 @@ def _design(task, tol, samples, max_iter, check_sensitivity, warm):
     else:
         nodes, start, y0 = warm
     build = 0.0
-    for _ in range(4):        # the speed extremes move with the design: make them nodes, re-solve
+    # the speed extremes move with the design: make them nodes and re-solve from there (a first pass
+    # from afar at a coarse CVODES tolerance only places them; the last pass is at `tol`)
+    coarse, near = warm is None and tol < COARSE_TOL, warm is not None
+    passes = []
+    for _ in range(4):
+        step_tol = COARSE_TOL if coarse else tol
         b0 = time.perf_counter()
-        solver, blocks, (lbg, ubg), figures, _ = _nlp(task, nodes, tol, samples, scales, False, max_iter)
+        solver, blocks, (lbg, ubg), figures, _ = _nlp(task, nodes, step_tol, samples, scales, False, max_iter,
+                                                      near, coarse)
         build += time.perf_counter() - b0
-        guess = _guess(task, nodes, tol, samples, start, y0, scales)
+        guess = _guess(task, nodes, step_tol, samples, start, y0, scales)
         lbx, ubx = _box(task, nodes, scales, 0)
         sol = solver(x0=guess, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
         word = solver.stats()["return_status"]
+        passes.append({"tol": step_tol, "nodes": len(nodes), "ipopt": word, "iterations": solver.stats()["iter_count"]})
+        if coarse and from_ipopt(word) is not Status.SOLVED:       # no better guess: the fine pass starts afresh
+            coarse = False
+            continue
         d, Y, period, rms, energy, g, omega = (np.asarray(v).ravel() for v in figures(sol["x"]))
         start, y0 = dict(zip(task.variables, map(float, d))), Y[:len(task.state_names) - 1]
-        moved = _nodes(task, *_dense_speed(task, nodes, tol, d, y0), DENSE)
-        if from_ipopt(word) is not Status.SOLVED or _same(moved, nodes):
+        dense = _dense_speed(task, nodes, step_tol, d, y0)
+        (_, top), (_, bottom) = _extremes(*dense, DENSE)
+        missed = abs((top - bottom) - (omega.max() - omega.min())) / max(omega.max() - omega.min(), 1e-12)
+        if from_ipopt(word) is not Status.SOLVED or (not coarse and missed < MISSED_SPREAD):
             break
-        nodes = moved
+        nodes, coarse, near = _nodes(task, *dense, DENSE), False, True
     status = from_ipopt(word)
     if status is not Status.SOLVED:
         return _not_solved(task, status, word, nodes, tol, samples, scales, sol, timing(build), max_iter)
@@ -241,7 +263,7 @@ def _design(task, tol, samples, max_iter, check_sensitivity, warm):
     check = _verify(drive, np.r_[y0[:task.state_names.index("phi_rad")], 0.0,
                                  y0[task.state_names.index("phi_rad"):]], values, tol)
     values["verification_rel_error"] = check[0]
-    diagnostics |= {"ipopt": word, "iterations": solver.stats()["iter_count"], "nodes_deg": np.degrees(nodes).tolist(),
+    diagnostics |= {"ipopt": word, "iterations": solver.stats()["iter_count"], "passes": passes, "nodes_deg": np.degrees(nodes).tolist(),
                     "verification": check[1], "active": said}
     status, message = Status.SOLVED, f"IPOPT {word} in {solver.stats()['iter_count']} iterations; " + "; ".join(said)
     if check[0] > VERIFY_REL:
@@ -289,20 +311,27 @@ def _scales(task, start):
     return tuple(abs(v) for v in start.values()), states, float(objective), energy
 
 
-def _nodes(task, phi, omega, samples):
-    """Stage boundaries plus the angles of the crank speed's largest and smallest values where these
-    fall inside an interval (a smooth extreme: the samples' parabola; a kink at a boundary is a node
-    already). `phi`, `omega`: `samples` per interval, each interval's end last."""
-    stages = stage_angles(task)
-    extra = []
+def _extremes(phi, omega, samples):
+    """[(angle, value)] of the crank speed's largest and smallest values: a sample's parabola where the
+    sample lies inside an interval (a smooth extreme), the sample itself at an interval's end (a node:
+    a kink, or an earlier pass's extreme). `phi`, `omega`: `samples` per interval, each one's end last."""
+    out = []
     for pick in (np.argmax, np.argmin):
         i = int(pick(omega))
-        at = float(phi[i])                  # at a node already (an earlier pass's extreme, or a kink)
+        at, value = float(phi[i]), float(omega[i])
         if 0 < i < len(omega) - 1 and i % samples != samples - 1:
             c = np.polyfit(phi[i - 1:i + 2] - phi[i], omega[i - 1:i + 2], 2)
-            at = float(np.clip(phi[i] - c[1] / (2 * c[0]) if c[0] != 0 else phi[i], phi[i - 1], phi[i + 1]))
-        if min(abs(at - s) for s in stages) > NODE_MOVE_RAD:
-            extra.append(at)
+            if c[0] != 0:
+                shift = float(np.clip(-c[1] / (2 * c[0]), phi[i - 1] - phi[i], phi[i + 1] - phi[i]))
+                at, value = float(phi[i] + shift), float(np.polyval(c, shift))
+        out.append((at, value))
+    return out
+
+
+def _nodes(task, phi, omega, samples):
+    """Stage boundaries plus the angles of the crank speed's extremes away from them (see `_extremes`)."""
+    stages = stage_angles(task)
+    extra = [at for at, _ in _extremes(phi, omega, samples) if min(abs(at - s) for s in stages) > NODE_MOVE_RAD]
     return tuple(sorted(set(stages) | set(extra)))
 
 
@@ -314,10 +343,6 @@ def _dense_speed(task, nodes, tol, d, y0):
         speeds.append(ys[task.state_names.index("omega_rad_s") - 1])
         y = ys[:, -1]
     return _angles(nodes, DENSE), np.concatenate(speeds)
-
-
-def _same(a, b):
-    return len(a) == len(b) and np.max(np.abs(np.subtract(a, b))) <= NODE_MOVE_RAD
 
 
 def _quadrature_scales(task, scales):
@@ -333,7 +358,7 @@ def _vector(task, design):
 
 def _angles(nodes, samples):
     """The angles of the NLP's samples: `samples` per interval, each interval's end included [rad]."""
-    return np.concatenate([np.linspace(a, b, samples + 1)[1:] for a, b in zip(nodes[:-1], nodes[1:])])
+    return np.concatenate([np.linspace(a, b, samples + 1)[1:] for a, b in pairwise(nodes)])
 
 
 def _guess(task, nodes, tol, samples, start, y0, scales):
@@ -445,9 +470,12 @@ def _active(task, blocks, bounds, g, lam_g, lam_x, scales, values):
         if not np.any(at_bound & (np.abs(lam) > 1e-8)):      # a limit with room left, or a degenerate zero multiplier
             continue
         setting = getattr(task, knob, None)
-        dg = {"speed_fluctuation": lambda: -gg / setting, "belt_slip": lambda: -gg / setting,
-              "motor_breakdown": lambda: gg / setting, "single_stroke": lambda: np.full(len(gg), -1 / scales[3]),
-              "mean_speed": lambda: -(gg + 1) / setting}[b.name]()
+        if b.name == "single_stroke":       # d g / d (the knob) of each row: g = margin - extra energy, scaled
+            dg = np.full(len(gg), -1 / scales[3])
+        elif b.name == "mean_speed":        # g = (2 pi / T - omega) / omega
+            dg = -(gg + 1) / setting
+        else:                               # g = quantity / limit, or x safety factor for the motor
+            dg = (gg if b.name == "motor_breakdown" else -gg) / setting
         sens = float(fsc * lam @ dg)
         out[f"d_{name}_d_{knob}"] = sens
         per = f" per {knob_unit}" if knob_unit else ""
@@ -489,7 +517,7 @@ def _verify(drive, x0, values, tol):
     try:
         _march(drive, _piece(drive, max(tol * 1e-2, 1e-13), 2000), trace, np.r_[x0, np.zeros(4)],
                period * (1 + 1e-6), period / 8, 1000)
-    except Exception as exc:            # a failed check is a finding, reported, not a crash
+    except (RuntimeError, ArithmeticError) as exc:      # a failed check is a finding, reported, not a crash
         return float("inf"), {"error": str(exc)[:200]}
     got, _, arrays = summarise(drive, trace)
     if drive.motor:

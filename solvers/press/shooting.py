@@ -8,6 +8,8 @@ integrator of the same equations `steady_state` uses (`models.press.dynamics`, h
 design variables left free), with three quadratures beside the states (`QUADRATURES`): time, and
 the integrals of the motor shaft torque and of its square (energy and RMS torque).
 """
+from itertools import pairwise
+
 import casadi as ca
 import numpy as np
 
@@ -65,7 +67,7 @@ def intervals(task: PressDesign, nodes: tuple[float, ...], tol: float, samples: 
     ode = ca.vertcat(*[xdot[i] for i in range(n) if i != iphi]) / w
     quad = ca.vertcat(1, shaft, shaft**2) / w
     out = []
-    for k, (a, b) in enumerate(zip(nodes[:-1], nodes[1:])):
+    for k, (a, b) in enumerate(pairwise(nodes)):
         grid = np.linspace(a, b, samples + 1)[1:]
         integ = ca.integrator(f"shoot{k}", "cvodes", {"x": y, "t": phi, "p": ca.vertcat(u, p), "ode": ode,
                                                      "quad": quad}, a, grid,
