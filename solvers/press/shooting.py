@@ -85,3 +85,24 @@ def probe(task: PressDesign, samples: int) -> ca.Function:
     w = x[task.state_names.index("omega_rad_s")]
     one = ca.Function("probe", [y, phi, u, p], [ca.vertcat(w, out[0], out[1] / gear if task.motor else 0 * phi)])
     return one.map(samples)
+
+
+@memoised(maxsize=8)
+def reach(task: PressDesign, tol: float) -> ca.Function:
+    """(states other than phi at angle a, U, design p, a, angle L further) -> (those states at a + L,
+    the crank's angular acceleration there [rad/s2]): CVODES over s in [0, 1] with phi = a + s L, to
+    place a speed extreme (acceleration 0) to the integrator's accuracy."""
+    y, phi, u, p, x, mode, dyn, _ = _symbols(task)
+    n = dyn.n_states
+    iphi = task.state_names.index("phi_rad")
+    a, span, s = ca.SX.sym("a"), ca.SX.sym("span"), ca.SX.sym("s")
+    xdot = dyn.rhs(x, mode, p)
+    ode = ca.vertcat(*[xdot[i] for i in range(n) if i != iphi]) / x[task.state_names.index("omega_rad_s")]
+    ode = ca.substitute(ode, phi, a + s * span) * span
+    integ = ca.integrator("reach", "cvodes", {"x": y, "t": s, "p": ca.vertcat(u, p, a, span), "ode": ode}, 0.0, 1.0,
+                          {"abstol": tol, "reltol": tol, "max_num_steps": 100000})
+    y0, p_all = ca.MX.sym("y0", y.numel()), ca.MX.sym("p", 1 + p.numel() + 2)
+    end = integ(x0=y0, p=p_all)["xf"]
+    alpha = dyn.OUTPUT_NAMES.index("alpha_rad_s2")
+    accel = ca.Function("accel", [y, phi, u, p], [dyn.outputs(x, mode, p)[alpha]])
+    return ca.Function("reach", [y0, p_all], [end, accel(end, p_all[-2] + p_all[-1], p_all[0], p_all[1:-2])])
