@@ -29,6 +29,13 @@ Readings the paper leaves open (each pinned by a test):
   s = 1 - omega_motor / omega_sync: it holds from standstill (s = 1, start-up) to idle (s = 0),
   where a linear characteristic overstates the starting torque several times.
 
+The design question (issue 16, Sec. 3) is its own task, `PressDesign`: the same press with some of
+its drive (`DESIGN_VARIABLES`: flywheel inertia, gear ratio, belt stiffness, a motor scale) left to
+an optimiser within bounds, an objective (`OBJECTIVES`) and limits. `dynamics(task, free)` keeps
+those variables symbolic, so the design NLP differentiates through the very equations the
+simulators integrate. Single stroke is read as `single_stroke_margin_J` says (motor at rest, the
+crank shaft alone carries one cut).
+
 Effects a scene may call for (the model is assembled from these only):
 
 ====================  ========================================================  ==============
