@@ -262,12 +262,10 @@ def design_table(rows):
     return "\n".join(lines)
 
 
-def cli(repeats, out_dir, progress=None, quick=False) -> str:
+def cli(repeats, out_dir, progress=None) -> str:
     """What `mechopt bench press` prints: the work-precision table, the targets, the plot, and the
-    design problem against its derivative-free peer (`quick`: the design problem alone, 3 repeats)."""
-    design = design_table(design_rows(repeats=3 if quick else max(repeats, 3), progress=progress))
-    if quick:
-        return design
+    design problem against its derivative-free peer (NLP: median of max(repeats, 3); peer: one run)."""
     rows = run(repeats=repeats, progress=progress)
     paths = plot(rows, out_dir)
+    design = design_table(design_rows(repeats=max(repeats, 3), progress=progress))
     return "\n".join([table(rows, at_accuracy(rows), cycle_timing()), design, *(f"plot: {p}" for p in paths)])
