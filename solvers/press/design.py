@@ -171,7 +171,7 @@ def _nlp(task: PressDesign, nodes: tuple, tol: float, samples: int, scales: tupl
 
 
 def design(task: PressDesign, *, tol: Tolerance = 1e-10, samples: Samples = 16,
-           max_iter: Annotated[int, Interval(ge=1, le=3000)] = 500, check_sensitivity: bool = False) -> Result:
+           max_iter: Annotated[int, Interval(ge=1, le=3000)] = 200, check_sensitivity: bool = False) -> Result:
     """The drive that minimises `task.objective` over `task.variables` subject to its limits, on
     the periodic steady motion (see the module doc and `models.press.PressDesign`).
 
@@ -204,6 +204,7 @@ def design(task: PressDesign, *, tol: Tolerance = 1e-10, samples: Samples = 16,
 def _design(task, tol, samples, max_iter, check_sensitivity, warm):
     """`design`; `warm` = (nodes, design, states at phi = 0) of a nearby optimum to start from."""
     t_start = time.perf_counter()
+
     def timing(build=0.0):
         return Timing(build, time.perf_counter() - t_start - build)
 
@@ -224,6 +225,7 @@ def _design(task, tol, samples, max_iter, check_sensitivity, warm):
         nodes = _nodes(task, _extremes(task, tuple(stage_angles(task)), tol, _vector(task, start), y0))
     else:
         nodes, start, y0 = warm[:3]
+    origin = (dict(start), y0)
     build = 0.0
     # the speed extremes move with the design: make them nodes and re-solve from there (a first pass
     # from afar at a coarse CVODES tolerance only places them; the last pass is at `tol`)
@@ -240,7 +242,14 @@ def _design(task, tol, samples, max_iter, check_sensitivity, warm):
         sol = solver(x0=guess, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
         word = solver.stats()["return_status"]
         passes.append({"tol": step_tol, "nodes": len(nodes), "ipopt": word, "iterations": solver.stats()["iter_count"]})
-        if coarse and from_ipopt(word) is not Status.SOLVED:       # no better guess: the fine pass starts afresh
+        if coarse and from_ipopt(word) is not Status.SOLVED:
+            # the limits may conflict: the least violation says (phase 1); if it meets them all, its
+            # design is where the fine pass starts
+            phase1 = _phase1(task, nodes, tol, samples, scales, origin, max_iter)
+            if from_ipopt(phase1[0]) is not Status.SOLVED or any(v > 1e-6 for v in phase1[-1].values()):
+                return _not_solved(task, from_ipopt(word), word, nodes, tol, samples, scales, origin, timing(build),
+                                   max_iter, phase1)
+            start, y0 = dict(zip(task.variables, map(float, phase1[1]))), phase1[2][:len(task.state_names) - 1]
             coarse = False
             continue
         d, Y, period, rms, energy, g, omega = (np.asarray(v).ravel() for v in figures(sol["x"]))
@@ -253,7 +262,7 @@ def _design(task, tol, samples, max_iter, check_sensitivity, warm):
         nodes, coarse, near = _nodes(task, extremes, () if coarse else nodes), False, True
     status = from_ipopt(word)
     if status is not Status.SOLVED:
-        return _not_solved(task, status, word, nodes, tol, samples, scales, sol, timing(build), max_iter)
+        return _not_solved(task, status, word, nodes, tol, samples, scales, origin, timing(build), max_iter)
     drive = task.drive(start)
     values, diagnostics, arrays = summarise(drive, _revolution_trace(drive, *_revolution(drive, tol, 60), y0),
                                             cut_angles=task.cut_window_rad())
@@ -623,21 +632,28 @@ def _verify(drive, x0, values, tol):
     return max(diffs.values()), diffs
 
 
-def _not_solved(task, status, word, nodes, tol, samples, scales, sol, timing, max_iter):
-    """IPOPT did not succeed: find the least violation of the limits (phase 1). Violated limits there
-    conflict with each other, the motion and the bounds: INFEASIBLE with the best achievable. When
-    none is violated, a feasible design exists and IPOPT's status stands."""
+def _phase1(task, nodes, tol, samples, scales, origin, max_iter):
+    """The least violation of the limits (the elastic NLP) from the starting design's own orbit (a failed
+    solve's last iterate can sit anywhere): (IPOPT's word, design, node states, period, RMS torque,
+    energy, {limit: its least relative violation})."""
     solver, blocks, (lbg, ubg), figures, slacks = _nlp(task, nodes, tol, samples, scales, True, max_iter)
     lbx, ubx = _box(task, nodes, scales, slacks)
-    guess = np.r_[np.asarray(sol["x"]).ravel(), np.ones(slacks)]
-    phase1 = solver(x0=guess, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
-    x = np.asarray(phase1["x"]).ravel()
-    d, _, period, rms, energy, _, _ = (np.asarray(v).ravel() for v in figures(x))
+    guess = np.r_[_guess(task, nodes, tol, samples, *origin, scales), np.ones(slacks)]
+    x = np.asarray(solver(x0=guess, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)["x"]).ravel()
+    d, Y, period, rms, energy, _, _ = (np.asarray(v).ravel() for v in figures(x))
     slack = dict(zip(dict.fromkeys(b.name for b in blocks if b.name in KNOBS), x[len(x) - slacks:]))
+    return solver.stats()["return_status"], d, Y, period, rms, energy, slack
+
+
+def _not_solved(task, status, word, nodes, tol, samples, scales, origin, timing, max_iter, phase1=None):
+    """IPOPT did not succeed: find the least violation of the limits (`_phase1`, unless given). Violated
+    limits there conflict with each other, the motion and the bounds: INFEASIBLE with the best
+    achievable. When none is violated, a feasible design exists and IPOPT's status stands."""
+    phase1_word, d, _, period, rms, energy, slack = phase1 or _phase1(task, nodes, tol, samples, scales, origin,
+                                                                       max_iter)
     values = _sizing_values(task, dict(zip(task.variables, map(float, d)))) | {"period_s": float(period[0])}
     if task.motor:
         values |= {"motor_rms_torque_N_m": float(rms[0]), "energy_per_stroke_J": float(energy[0])}
-    phase1_word = solver.stats()["return_status"]
     broken = {k: v for k, v in slack.items() if v > 1e-6}
     if from_ipopt(phase1_word) is not Status.SOLVED or not broken:
         why = ("phase 1 (least violation) finds every limit can be met, so the design problem is feasible"
