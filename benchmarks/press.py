@@ -15,17 +15,26 @@ build cached (a first warm-up call builds it). Methods:
 `at_accuracy` interpolates each method's time to reach 1e-8 on phi (log-log); for RK4 it
 extrapolates along its measured first-order line (said so in the table). Timings live here
 only; tests never assert them.
+
+The design problem (issue 16, Sec. 3; `design_rows`): `press.design` (the shooting NLP, IPOPT with
+exact first derivatives) against a derivative-free peer, scipy's Nelder-Mead over the same
+simulation (a `steady_state` periodic solve per evaluation, the limits as an exact penalty), each
+to its own tolerance; the peer's objective is compared with the NLP's. Targets: the NLP >= 20x
+faster, and the whole design (a cold build included) under 2 s.
 """
 import statistics
 import time
 
 import numpy as np
+from scipy.optimize import minimize
 
 from mechopt import registry
+from mechopt.models import cache
 from mechopt.plots import save_figure
 from mechopt.solvers import press as pd
 
-__all__ = ["cli", "run", "table", "at_accuracy", "observed_order", "plot", "cycle_timing", "PAPER_TASK", "DURATION_S"]
+__all__ = ["DESIGN_SCENES", "DURATION_S", "PAPER_TASK", "at_accuracy", "cli", "cycle_timing", "design_rows",
+           "design_table", "observed_order", "peer_design", "plot", "run", "table"]
 
 PAPER_TASK, _ = registry.find("press/kd2322").build()
 DURATION_S = 0.25           # about one revolution at 25 rad/s, with one cut
@@ -154,8 +163,109 @@ def plot(rows, out_dir):
     return [path]
 
 
+# --- the design problem: exact derivatives against a derivative-free peer --------------------------
+
+DESIGN_SCENES = ("press/flywheel-design", "press/motor-design")
+SPEEDUP_TARGET, DESIGN_TARGET_S = 20.0, 2.0
+
+
+def _objective(task, run, design):
+    """The design objective of `task` from a steady_state run at `design` (the NLP's definitions):
+    J [kg m2], RMS motor shaft torque [N m] or air-gap energy per stroke [J] (trapezoid, dense samples)."""
+    if task.objective == "least_flywheel_inertia":
+        return design["flywheel_inertia_kgm2"]
+    a = run.arrays
+    shaft = a["motor_torque_Nm"] / task.drive(design).gear_ratio
+    if task.objective == "least_motor_rms_torque":
+        return float(np.sqrt(np.trapezoid(shaft**2, a["t_s"]) / run.values["period_s"]))
+    return float(task.motor_sync_speed_rad_s * np.trapezoid(shaft, a["t_s"]))
+
+
+def peer_design(task, *, samples=400, xatol=1e-7, weight=1e3):
+    """Nelder-Mead over the design variables (scaled by their starting values), each evaluation a
+    steady_state solve; limits by an exact penalty (weight x relative violation), the mean speed too
+    when the gear ratio is free. Returns (design, objective, evaluations)."""
+    names, start = task.variables, task.start()
+    scale = task.objective != "least_flywheel_inertia" and 1.0 or start.get("flywheel_inertia_kgm2", 1.0)
+    count = [0]
+
+    def cost(x):
+        count[0] += 1
+        design = {k: v * start[k] for k, v in zip(names, x)}
+        if any(not task.bounds(k)[0] <= v <= task.bounds(k)[1] for k, v in design.items()):
+            return 1e9
+        run = pd.steady_state(task.drive(design), samples=samples)
+        if run.status.value != "SOLVED":
+            return 1e9
+        v = run.values
+        shaft = np.abs(run.arrays["motor_torque_Nm"]) / task.drive(design).gear_ratio
+        over = [v["speed_fluctuation"] / task.max_speed_fluctuation - 1 if task.max_speed_fluctuation else 0.0,
+                v["peak_belt_torque_Nm"] / task.belt_slip_torque_Nm - 1 if task.belt_slip_torque_Nm else 0.0,
+                shaft.max() * task.motor_safety_factor / task.drive(design).motor_breakdown_torque_Nm - 1
+                if task.motor_safety_factor else 0.0]
+        penalty = sum(max(0.0, o) for o in over)
+        if "gear_ratio" in names:
+            penalty += abs(v["omega_mean_rad_s"] / task.nominal_speed_rad_s - 1)
+        return _objective(task, run, design) / scale + weight * penalty
+
+    found = minimize(cost, np.ones(len(names)), method="Nelder-Mead",
+                     options={"xatol": xatol, "fatol": 1e-12, "maxfev": 4000})
+    design = {k: v * start[k] for k, v in zip(names, found.x)}
+    run = pd.steady_state(task.drive(design), samples=samples)
+    return design, _objective(task, run, design), count[0]
+
+
+def design_rows(repeats=3, *, scenes=DESIGN_SCENES, progress=None):
+    """Per scene: the NLP's median wall time (warm: builds cached), one cold run (caches cleared),
+    the peer's wall time and evaluations, both objectives."""
+    rows = []
+    for scene in scenes:
+        task = registry.find(scene).build()[0]
+        cache.clear()
+        start = time.perf_counter()
+        result = pd.design(task)
+        cold = time.perf_counter() - start
+        walls = []
+        for _ in range(repeats):
+            start = time.perf_counter()
+            result = pd.design(task)
+            walls.append(time.perf_counter() - start)
+        start = time.perf_counter()
+        _, objective, evaluations = peer_design(task)
+        peer_s = time.perf_counter() - start
+        name = {"least_flywheel_inertia": "flywheel_inertia_kgm2", "least_motor_rms_torque": "motor_rms_torque_N_m",
+                "least_energy_per_stroke": "energy_per_stroke_J"}[task.objective]
+        rows.append({"scene": scene, "status": result.status.value, "nlp_s_median": statistics.median(walls),
+                     "nlp_cold_s": cold, "nlp_objective": result.values[name], "peer_s": peer_s,
+                     "peer_objective": objective, "peer_evaluations": evaluations,
+                     "objective_rel_diff": abs(objective - result.values[name]) / abs(result.values[name])})
+        if progress:
+            r = rows[-1]
+            progress(f"{scene:<22} NLP {r['nlp_s_median']:.3g} s (cold {cold:.3g} s), Nelder-Mead {peer_s:.3g} s "
+                     f"({evaluations} periodic solves)")
+    return rows
+
+
+def design_table(rows):
+    header = (f"\n{'design scene':<22} {'NLP [s]':>8} {'cold [s]':>8} {'peer [s]':>9} {'evals':>6} {'ratio':>7} "
+              f"{'objective NLP':>14} {'peer':>14} {'rel diff':>9} status")
+    lines = [header]
+    for r in rows:
+        ratio = r["peer_s"] / r["nlp_s_median"]
+        lines.append(f"{r['scene']:<22} {r['nlp_s_median']:>8.3g} {r['nlp_cold_s']:>8.3g} {r['peer_s']:>9.3g} "
+                     f"{r['peer_evaluations']:>6d} {ratio:>7.3g} {r['nlp_objective']:>14.8g} {r['peer_objective']:>14.8g} "
+                     f"{r['objective_rel_diff']:>9.2g} {r['status']}")
+        met = {True: "met", False: "MISSED"}
+        lines.append(f"  targets: NLP / Nelder-Mead speed-up {ratio:.3g} (>= {SPEEDUP_TARGET:g}: {met[ratio >= SPEEDUP_TARGET]}),"
+                     f" whole design cold {r['nlp_cold_s']:.3g} s (< {DESIGN_TARGET_S:g} s: "
+                     f"{met[r['nlp_cold_s'] < DESIGN_TARGET_S]})")
+    return "\n".join(lines)
+
+
 def cli(repeats, out_dir, progress=None) -> str:
-    """What `mechopt bench press` prints: the work-precision table, the targets, the plot."""
+    """What `mechopt bench press` prints: the work-precision table, the targets, the plot, and the
+    design problem against its derivative-free peer (NLP: median of max(repeats, 3); peer: one run)."""
     rows = run(repeats=repeats, progress=progress)
     paths = plot(rows, out_dir)
-    return "\n".join([table(rows, at_accuracy(rows), cycle_timing()), *(f"plot: {p}" for p in paths)])
+    design = design_table(design_rows(repeats=max(repeats, 3), progress=progress))
+    return "\n".join([table(rows, at_accuracy(rows), cycle_timing()), design, *(f"plot: {p}" for p in paths)])

@@ -29,6 +29,13 @@ Readings the paper leaves open (each pinned by a test):
   s = 1 - omega_motor / omega_sync: it holds from standstill (s = 1, start-up) to idle (s = 0),
   where a linear characteristic overstates the starting torque several times.
 
+The design question (issue 16, Sec. 3) is its own task, `PressDesign`: the same press with some of
+its drive (`DESIGN_VARIABLES`: flywheel inertia, gear ratio, belt stiffness, a motor scale) left to
+an optimiser within bounds, an objective (`OBJECTIVES`) and limits. `dynamics(task, free)` keeps
+those variables symbolic, so the design NLP differentiates through the very equations the
+simulators integrate. Single stroke is read as `single_stroke_margin_J` says (motor at rest, the
+crank shaft alone carries one cut).
+
 Effects a scene may call for (the model is assembled from these only):
 
 ====================  ========================================================  ==============
@@ -45,7 +52,7 @@ motor_characteristic  Kloss torque of the motor, reduced by i; without it the   
                       pulley turns at the nominal speed (an ideal drive)
 ====================  ========================================================  ==============
 """
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import ClassVar
 
 import casadi as ca
@@ -356,6 +363,15 @@ def belt_mode_rad_s(task: PressDrive) -> float:
 
 # --- reduced inertia and moments (CasADi) -------------------------------------------------------
 
+def potential_J(task: PressDrive, phi, m=np):
+    """Potential energy of the weights [J], 0 without effect gravity: both weights do work on the way
+    down, V = -g (m_tool X + m_rod y_mid)."""
+    if "gravity" not in task.effects:
+        return 0.0 * phi
+    rod_drop = rod_middle_m(phi, task.r_m, task.rod_ratio, task.kinematics, m)[1]
+    return -task.gravity_m_s2 * (task.tool_mass_kg * task.travel(phi, m) + task.rod_mass_kg * rod_drop)
+
+
 def crank_inertia(task: PressDrive):
     """J_k(phi) and dJ_k/dphi as CasADi Functions [kg m2], table row 1, from the kinetic energy:
     J_k = J + r^2 m_k + m_tool X'^2 + m_rod (x_mid'^2 + y_mid'^2); derivative by AD."""
@@ -397,13 +413,49 @@ class Dynamics:
                                                "penetration_mm", "kinetic_J", "potential_J", "drive_torque_Nm",
                                                "alpha_rad_s2", "rod_force_N", "rod_force_pin_N", "crank_torque_Nm",
                                                "main_bearing_load_N", "guide_force_N")
+    free: tuple[str, ...] = ()
+    """Design variables (`DESIGN_VARIABLES`) left symbolic: the Functions then take them as a third input p."""
 
 
-def dynamics(task: PressDrive) -> Dynamics:
-    """Build eqs. (2) for `task` from its listed effects only (see the module's effect table)."""
+# --- sizing: what a design may change --------------------------------------------------------------
+
+DESIGN_VARIABLES = {
+    "flywheel_inertia_kgm2": "flywheel inertia J [kg m2]",
+    "gear_ratio": "belt drive ratio i = motor speed / crank speed [-]",
+    "belt_stiffness_Nm_rad": "belt stiffness C_p reduced to the crank shaft [N m/rad]",
+    "motor_scale": "motor size: breakdown torque M_k and rotor inertia J_0 + J_shk both times this factor [-]",
+}
+
+
+def sizing(task: PressDrive, design: dict) -> dict:
+    """The drive's sizing parameters with `design` (`DESIGN_VARIABLES` -> numbers or CasADi symbols)
+    applied: flywheel inertia, gear ratio, belt stiffness, motor breakdown torque and inertia.
+    `motor_scale` multiplies the motor's breakdown torque and its inertia alike (one reading of
+    "a bigger motor": catalogue rotor inertia grows about as fast as the torque within a frame series)."""
+    scale = design.get("motor_scale", 1.0)
+    return {"flywheel_inertia_kgm2": design.get("flywheel_inertia_kgm2", task.flywheel_inertia_kgm2),
+            "gear_ratio": design.get("gear_ratio", task.gear_ratio),
+            "belt_stiffness_Nm_rad": design.get("belt_stiffness_Nm_rad", task.belt_stiffness_Nm_rad),
+            "motor_breakdown_torque_Nm": (None if task.motor_breakdown_torque_Nm is None
+                                          else scale * task.motor_breakdown_torque_Nm),
+            "motor_inertia_kgm2": scale * task.motor_inertia_kgm2}
+
+
+def dynamics(task: PressDrive, free: tuple[str, ...] = ()) -> Dynamics:
+    """Build eqs. (2) for `task` from its listed effects only (see the module's effect table).
+    With `free` design variables (`DESIGN_VARIABLES`), those are symbols: every Function takes
+    them as a third input p, in the order of `free` (the design NLP's exact derivatives)."""
+    unknown = [k for k in free if k not in DESIGN_VARIABLES]
+    if unknown:
+        raise ModelError(f"free={list(free)}: unknown {unknown}; allowed: {', '.join(DESIGN_VARIABLES)}", key="free")
     n = len(task.state_names)
     x = ca.SX.sym("x", n + len(WORK_NAMES))
     mode = ca.SX.sym("mode", 3)
+    p = ca.SX.sym("p", len(free))
+    size = sizing(task, dict(zip(free, ca.vertsplit(p))))
+    gear, stiffness, breakdown = (size[k] for k in ("gear_ratio", "belt_stiffness_Nm_rad", "motor_breakdown_torque_Nm"))
+    reduced_motor_inertia = size["motor_inertia_kgm2"] * gear**2       # table row 4
+    extra_flywheel = size["flywheel_inertia_kgm2"] - task.flywheel_inertia_kgm2     # J_k is linear in J
     U, sgn, stuck = mode[0], mode[1], mode[2]
     s = dict(zip(task.state_names, ca.vertsplit(x[:n])))
     phi, w = s["phi_rad"], s["omega_rad_s"]
@@ -411,17 +463,14 @@ def dynamics(task: PressDrive) -> Dynamics:
 
     J_fun, dJ_fun = crank_inertia(task)
     if "variable_inertia" in task.effects:
-        J, dJ = J_fun(phi), dJ_fun(phi)
+        J, dJ = J_fun(phi) + extra_flywheel, dJ_fun(phi)
     else:
-        J, dJ = mean_crank_inertia_kgm2(task), 0.0
+        J, dJ = mean_crank_inertia_kgm2(task) + extra_flywheel, 0.0
 
     X = travel_m(phi, r, lam, kin, ca)
     dX = ca.jacobian(X, phi)
     ddX = ca.jacobian(dX, phi)
-    potential = 0.0
-    if "gravity" in task.effects:       # both weights do work on the way down: V = -g (m_tool X + m_rod y_mid)
-        rod_drop = rod_middle_m(phi, r, lam, kin, ca)[1]
-        potential = -task.gravity_m_s2 * (task.tool_mass_kg * X + task.rod_mass_kg * rod_drop)
+    potential = potential_J(task, phi, ca)
     gravity_moment = -ca.jacobian(potential, phi) if "gravity" in task.effects else 0.0
 
     penetration_mm = 0.0 * phi
@@ -438,21 +487,20 @@ def dynamics(task: PressDrive) -> Dynamics:
     # motor side
     if task.motor:
         w_p = s["omega_p_rad_s"] if task.belt else w
-        slip = 1 - task.gear_ratio * w_p / task.motor_sync_speed_rad_s
-        motor_torque = task.gear_ratio * kloss_torque_Nm(slip, task.motor_breakdown_torque_Nm,
-                                                        task.motor_breakdown_slip)
+        slip = 1 - gear * w_p / task.motor_sync_speed_rad_s
+        motor_torque = gear * kloss_torque_Nm(slip, breakdown, task.motor_breakdown_slip)
     else:
         w_p, motor_torque = task.nominal_speed_rad_s, 0.0 * phi
     if task.belt:
         twist = s["twist_rad"]
-        belt_torque = task.belt_stiffness_Nm_rad * twist + task.belt_damping_Nms_rad * (w_p - w)
+        belt_torque = stiffness * twist + task.belt_damping_Nms_rad * (w_p - w)
         damping_power = task.belt_damping_Nms_rad * (w_p - w) ** 2
         drive = belt_torque
         J_total = J
-        belt_energy = 0.5 * task.belt_stiffness_Nm_rad * twist**2
+        belt_energy = 0.5 * stiffness * twist**2
     else:
         belt_torque, damping_power, drive = motor_torque, 0.0 * phi, motor_torque
-        J_total = J + task.reduced_motor_inertia_kgm2()
+        J_total = J + reduced_motor_inertia
         belt_energy = 0.0
 
     load = gravity_moment - force * dX          # M_pc without friction, table row 2
@@ -465,12 +513,12 @@ def dynamics(task: PressDrive) -> Dynamics:
     if task.belt:
         derivs["twist_rad"] = w_p - dphi
         if task.motor:
-            derivs["omega_p_rad_s"] = (motor_torque - belt_torque) / task.reduced_motor_inertia_kgm2()
+            derivs["omega_p_rad_s"] = (motor_torque - belt_torque) / reduced_motor_inertia
     motor_power = motor_torque * w_p if task.motor else belt_torque * w_p
     works = [motor_power, force * dX * dphi, sgn * friction * dphi, damping_power]
     xdot = ca.vertcat(*[derivs[k] for k in task.state_names], *works)
 
-    kinetic = 0.5 * J * w**2 + (0.5 * task.reduced_motor_inertia_kgm2() * w_p**2 if task.motor else 0.0)
+    kinetic = 0.5 * J * w**2 + (0.5 * reduced_motor_inertia * w_p**2 if task.motor else 0.0)
     Q = force + task.tool_mass_kg * (ddX * dphi**2 + dX * acc - (task.gravity_m_s2 or 0.0))
     xm, ym = rod_middle_m(phi, r, lam, kin, ca)
     g = task.gravity_m_s2 or 0.0             # as in Q
@@ -481,7 +529,129 @@ def dynamics(task: PressDrive) -> Dynamics:
                          potential + belt_energy, drive_torque, acc, *loads)
 
     switched_mode = ca.vertcat(U_paper, ca.sign(w), 0)
-    rhs = ca.Function("rhs", [x, mode], [xdot])
-    switched = ca.Function("switched", [x], [rhs(x, switched_mode)])
-    out = ca.Function("outputs", [x, mode], [outputs])
-    return Dynamics(task, rhs, switched, out, n)
+    given = [p] if free else []
+    rhs = ca.Function("rhs", [x, mode, *given], [xdot])
+    switched = ca.Function("switched", [x, *given], [rhs(x, switched_mode, *given)])
+    out = ca.Function("outputs", [x, mode, *given], [outputs])
+    return Dynamics(task, rhs, switched, out, n, tuple(free))
+
+
+# --- the design question: which drive, by optimisation (issue 16, Sec. 3) ------------------------
+
+OBJECTIVES = {
+    "least_flywheel_inertia": "the smallest flywheel inertia J [kg m2]",
+    "least_motor_rms_torque": "the smallest RMS torque at the motor shaft over the steady revolution [N m] (what "
+                              "heats the motor: its rated torque must cover it)",
+    "least_energy_per_stroke": "the least energy the motor draws per stroke, read as air-gap energy "
+                               "(motor shaft torque x synchronous speed, integrated: the shaft work plus the rotor's "
+                               "slip loss) [J]",
+}
+BOUNDS = {"flywheel_inertia_kgm2": ("flywheel_inertia_min_kgm2", "flywheel_inertia_max_kgm2"),
+          "gear_ratio": ("gear_ratio_min", "gear_ratio_max"),
+          "belt_stiffness_Nm_rad": ("belt_stiffness_min_Nm_rad", "belt_stiffness_max_Nm_rad"),
+          "motor_scale": ("motor_scale_min", "motor_scale_max")}
+
+
+@dataclass(frozen=True)
+class PressDesign(PressDrive):
+    """The drive of a `PressDrive` chosen by optimisation over its periodic steady motion.
+
+    `variables` (any of `DESIGN_VARIABLES`) are free within their bounds (`BOUNDS`: e.g.
+    `flywheel_inertia_min_kgm2` ... `flywheel_inertia_max_kgm2`); the press's own values of them
+    are the starting design. `objective` is one of `OBJECTIVES`. Limits, each on when given:
+    `max_speed_fluctuation` ((omega_max - omega_min) / omega_mean over the revolution),
+    `belt_slip_torque_Nm` (|belt torque| at the crank shaft), `motor_safety_factor` (|motor shaft
+    torque| <= M_k / factor), `single_stroke_speed_drop` (see `single_stroke_margin_J`). With the
+    gear ratio free, the mean crank speed is held at `nominal_speed_rad_s` (the strokes per minute).
+    """
+    objective: str = "least_flywheel_inertia"
+    variables: tuple[str, ...] = ("flywheel_inertia_kgm2",)
+    max_speed_fluctuation: float | None = None
+    belt_slip_torque_Nm: float | None = None
+    motor_safety_factor: float | None = None
+    single_stroke_speed_drop: float | None = None
+    flywheel_inertia_min_kgm2: float = 0.01
+    flywheel_inertia_max_kgm2: float = 100.0
+    gear_ratio_min: float = 1.0
+    gear_ratio_max: float = 50.0
+    belt_stiffness_min_Nm_rad: float = 1e3
+    belt_stiffness_max_Nm_rad: float = 1e7
+    motor_scale_min: float = 0.1
+    motor_scale_max: float = 10.0
+
+    # (needs, why) of each design input: the effect it acts through
+    NEEDS: ClassVar[dict[str, tuple[str, str]]] = {
+        "gear_ratio": ("motor_characteristic", "without a motor the pulley turns at the nominal speed whatever i is"),
+        "motor_scale": ("motor_characteristic", "there is no motor to size"),
+        "belt_stiffness_Nm_rad": ("belt_elasticity", "there is no elastic belt"),
+        "belt_slip_torque_Nm": ("belt_elasticity", "there is no elastic belt"),
+        "motor_safety_factor": ("motor_characteristic", "there is no motor"),
+        "least_motor_rms_torque": ("motor_characteristic", "there is no motor"),
+        "least_energy_per_stroke": ("motor_characteristic", "there is no motor"),
+        "single_stroke_speed_drop": ("cutting_force", "there is no cut to carry"),
+    }
+
+    def __post_init__(self):
+        object.__setattr__(self, "variables", tuple(self.variables))
+        super().__post_init__()
+        if self.objective not in OBJECTIVES:
+            raise ModelError(f"objective={self.objective!r}; allowed: {', '.join(OBJECTIVES)}", key="objective")
+        unknown = [v for v in self.variables if v not in DESIGN_VARIABLES]
+        if unknown or not self.variables or len(set(self.variables)) < len(self.variables):
+            raise ModelError(f"variables={list(self.variables)}: expected one or more of "
+                             f"{', '.join(DESIGN_VARIABLES)}, each once", key="variables")
+        if self.objective == "least_flywheel_inertia" and "flywheel_inertia_kgm2" not in self.variables:
+            raise ModelError("objective='least_flywheel_inertia' needs 'flywheel_inertia_kgm2' in variables",
+                             key="variables")
+        used = [*self.variables, self.objective, *(k for k in ("belt_slip_torque_Nm", "motor_safety_factor",
+                                                                 "single_stroke_speed_drop") if getattr(self, k))]
+        for key in used:
+            need = self.NEEDS.get(key)
+            if need and need[0] not in self.effects:
+                raise ModelError(f"{key} needs effect '{need[0]}': {need[1]}", key=key)
+        limits = {"max_speed_fluctuation": (0, 2, "a fraction of the mean speed"),
+                  "belt_slip_torque_Nm": (0, 1e6, "N m"), "motor_safety_factor": (1, 100, "M_k / the torque allowed"),
+                  "single_stroke_speed_drop": (0, 1, "a fraction of the speed at the cut's start")}
+        for key, (low, high, what) in limits.items():
+            value = getattr(self, key)
+            _require(self, key, value is None or (low <= value <= high and value != 0),     # NaN fails <=
+                     f"is outside ({low:g}, {high:g}] ({what})")
+        for name, (low_key, high_key) in BOUNDS.items():
+            low, high = getattr(self, low_key), getattr(self, high_key)
+            most = self.RANGES.get(name, (1e3, "times the motor's size"))[0]
+            _require(self, low_key, 0 < low <= most, f"is outside (0, {most:g}]")
+            _require(self, high_key, low < high <= most, f"is outside ({low_key}={low:g}, {most:g}]")
+
+    def bounds(self, name: str) -> tuple[float, float]:
+        """(lowest, highest) allowed value of a design variable."""
+        return tuple(getattr(self, key) for key in BOUNDS[name])
+
+    def start(self) -> dict[str, float]:
+        """The starting design: the press's own values (motor_scale 1), clipped into the bounds."""
+        own = {"flywheel_inertia_kgm2": self.flywheel_inertia_kgm2, "gear_ratio": self.gear_ratio,
+               "belt_stiffness_Nm_rad": self.belt_stiffness_Nm_rad or 0.0, "motor_scale": 1.0}
+        return {k: float(np.clip(own[k], *self.bounds(k))) for k in self.variables}
+
+    def drive(self, design: dict) -> PressDrive:
+        """The press (a plain `PressDrive`) built with numbers for the design variables."""
+        own = {f.name: getattr(self, f.name) for f in fields(PressDrive)}
+        return PressDrive(**(own | {k: float(v) for k, v in sizing(self, design).items() if v is not None}))
+
+
+def single_stroke_margin_J(task: PressDrive, flywheel_inertia_kgm2, omega_start_rad_s, speed_drop, m=np):
+    """Single-stroke reading (issue 16): the motor at rest gives no torque (and the slack belt none),
+    so the crank shaft alone, entering the cut at omega_start, must carry the cut's work, the friction
+    and the weights to the cut's end and still turn at (1 - speed_drop) omega_start there. Energy
+    balance from cut start a to cut end b (exact: no integration):
+    1/2 J_k(a) w_a^2 - V(b) + V(a) - W_cut - M_tr (b - a) - 1/2 J_k(b) ((1 - drop) w_a)^2 [J];
+    >= 0 when the flywheel is big enough. J_k is linear in the flywheel's J."""
+    a, b = task.cut_window_rad()
+    J_fun, _ = crank_inertia(task)
+    if "variable_inertia" in task.effects:
+        J_a, J_b = (float(J_fun(angle)) for angle in (a, b))
+    else:
+        J_a = J_b = mean_crank_inertia_kgm2(task)
+    extra = flywheel_inertia_kgm2 - task.flywheel_inertia_kgm2
+    friction = task.friction_torque_Nm if task.friction else 0.0
+    lost = cut_work_J(task) + friction * (b - a) + float(potential_J(task, b) - potential_J(task, a))
+    return 0.5 * (J_a + extra) * omega_start_rad_s**2 - lost - 0.5 * (J_b + extra) * ((1 - speed_drop) * omega_start_rad_s)**2

@@ -14,7 +14,9 @@ the run's samples in `Result.arrays` (`t_s`, the states, `cutting`, the outputs)
 `loads` (loads.py) adds the peaks of the loads a designer sizes parts with (Figs. 9-10).
 `force_fit.fit_force` fits the force law (1) to load-travel data.
 `sensitivity` (sensitivity.py): d(output)/d(assumed parameter) through the periodic orbit by AD.
+`design` (design.py) chooses the drive by optimisation over the periodic steady motion.
 """
+from mechopt.solvers.press.design import design
 from mechopt.solvers.press.event_driven import events
 from mechopt.solvers.press.fixed_step import rk4
 from mechopt.solvers.press.loads import loads
@@ -22,7 +24,7 @@ from mechopt.solvers.press.periodic import steady_state
 from mechopt.solvers.press.scipy_peer import ivp
 from mechopt.solvers.press.sensitivity import sensitivity
 
-__all__ = ["rk4", "events", "steady_state", "ivp", "loads", "sensitivity", "simulate", "METHODS"]
+__all__ = ["METHODS", "design", "events", "ivp", "loads", "rk4", "sensitivity", "simulate", "steady_state"]
 
 METHODS = {"rk4": rk4, "events": events, "steady_state": steady_state, "ivp": ivp}
 

@@ -190,8 +190,8 @@ def summarise(task: PressDrive, trace: Trace, *, cut_angles=None) -> tuple[dict,
         inside = (t >= t0 - 1e-12) & (t <= t1 + 1e-12)
         mean = TWO_PI / (t1 - t0)
         values |= {"omega_mean_rad_s": float(mean),
-                   "speed_fluctuation": float((_extreme(t[inside], w[inside], max)
-                                               - _extreme(t[inside], w[inside], min)) / mean),
+                   "speed_fluctuation": float((_extreme(t[inside], w[inside], max, mode[inside, 0])
+                                               - _extreme(t[inside], w[inside], min, mode[inside, 0])) / mean),
                    "period_s": float(t1 - t0)}
     cuts_on = [e for e in trace.events if e[0] == "cut_start"]
     cuts_off = [e for e in trace.events if e[0] == "cut_end"]
@@ -224,11 +224,12 @@ def summarise(task: PressDrive, trace: Trace, *, cut_angles=None) -> tuple[dict,
     return values, diagnostics, arrays
 
 
-def _extreme(t, w, pick):
+def _extreme(t, w, pick, cutting):
     """The largest (pick=max) or smallest sample of w, refined by a parabola through it and its
-    neighbours when it lies between samples (a smooth extremum, not a kink at an event)."""
+    neighbours when all three lie in one mode of U (a smooth extremum: at the cut's start or end
+    omega has a kink, and a parabola across it overshoots by ~1e-3 relative)."""
     i = int(np.argmax(w) if pick is max else np.argmin(w))
-    if 0 < i < len(w) - 1 and t[i - 1] < t[i] < t[i + 1]:
+    if 0 < i < len(w) - 1 and t[i - 1] < t[i] < t[i + 1] and cutting[i - 1] == cutting[i] == cutting[i + 1]:
         c = np.polyfit(t[i - 1:i + 2] - t[i], w[i - 1:i + 2], 2)
         if c[0] != 0:
             vertex = -c[1] / (2 * c[0])

@@ -2,7 +2,7 @@
 import numpy as np
 
 from mechopt.figures.registry import new_figure, register
-from mechopt.models.press import PressDrive
+from mechopt.models.press import PressDesign, PressDrive
 
 
 @register(PressDrive)
@@ -10,6 +10,8 @@ def cycle(run):
     """Force F and load Q against tool travel and crank angle (Figs. 8-10), crank speed and belt
     torque against time; one PNG per scene."""
     arrays = run.result.arrays
+    if "elasticity_speed_fluctuation" in arrays:        # press.sensitivity: a table, not a revolution
+        return elasticities(run)
     if not len(arrays.get("t_s", ())):
         return {}
     t, w, out = arrays["t_s"], arrays["omega_rad_s"], arrays
@@ -107,3 +109,45 @@ def elasticities(run):
     fig.suptitle(f"{run.scene.id}: what the periodic motion owes to each assumed value "
                  f"({run.result.status.value})", fontsize=10)
     return {"elasticities": fig}
+
+
+@register(PressDesign)
+def designed(run):
+    """The designed drive's steady revolution (the cycle figure) and its limits: crank speed against
+    crank angle with the fluctuation band the design keeps, belt and motor torque with their limits."""
+    figures = cycle(run)
+    arrays, task, values = run.result.arrays, run.task, run.result.values
+    if not figures:
+        return figures
+    phi_deg = np.degrees(arrays["phi_rad"])
+    fig = new_figure(figsize=(12, 5))
+    ax = fig.subplots(1, 2)
+    w = arrays["omega_rad_s"]
+    ax[0].plot(phi_deg, w, lw=1, label="crank speed at the optimum")
+    if task.max_speed_fluctuation is not None:
+        mean = values["omega_mean_rad_s"]
+        top = w.max()
+        ax[0].axhspan(top - task.max_speed_fluctuation * mean, top, color="C2", alpha=0.15,
+                      label=f"allowed band: max_speed_fluctuation = {task.max_speed_fluctuation:g}")
+    ax[0].set_xlabel("crank angle [deg]")
+    ax[0].set_ylabel("omega_k [rad/s]")
+    ax[0].set_title("speed over the steady revolution")
+    ax[1].plot(phi_deg, arrays["belt_torque_Nm"], lw=1, label="belt torque at the crank shaft")
+    if task.belt_slip_torque_Nm is not None:
+        ax[1].axhline(task.belt_slip_torque_Nm, color="C0", ls="--", lw=1, label="belt slip limit")
+    if task.motor:
+        shaft = arrays["motor_torque_Nm"] / values["gear_ratio"]
+        ax[1].plot(phi_deg, shaft, lw=1, label="motor shaft torque")
+        ax[1].axhline(values["motor_rms_torque_N_m"], color="C1", ls=":", lw=1, label="motor RMS torque")
+        if task.motor_safety_factor is not None:
+            ax[1].axhline(values["motor_breakdown_torque_Nm"] / task.motor_safety_factor, color="C1", ls="--", lw=1,
+                          label="breakdown torque / safety factor")
+    ax[1].set_xlabel("crank angle [deg]")
+    ax[1].set_ylabel("torque [N m]")
+    ax[1].set_title("torques and their limits")
+    for a in ax:
+        a.grid(alpha=0.3)
+        a.legend(fontsize=7)
+    design = ", ".join(f"{k} = {values[k]:.4g}" for k in task.variables)
+    fig.suptitle(f"{run.scene.id}: {task.objective} -> {design} ({run.result.status.value})", fontsize=10)
+    return figures | {"design": fig}

@@ -1,0 +1,153 @@
+"""The press drive designed by optimisation (issue 16, Sec. 3): each optimum against another solver
+(steady_state's Newton shooting, press.events), closed forms written here, or re-solves; and the hard
+cases (stall, a rigid-belt limit, an empty constraint set, no cut)."""
+import dataclasses
+import time
+
+import numpy as np
+import pytest
+
+from mechopt import load
+from mechopt.models.errors import ModelError
+from mechopt.models.press import dynamics
+from mechopt.solvers.press import design, steady_state
+from mechopt.solvers.result import Status
+
+
+@pytest.fixture(scope="module")
+def flywheel_task():
+    return load("press/flywheel-design").build()[0]
+
+
+@pytest.fixture(scope="module")
+def flywheel(flywheel_task):
+    return design(flywheel_task)
+
+
+def _fluctuation(drive):
+    """Speed fluctuation by steady_state (Newton shooting over three CVODES pieces, no NLP) with
+    dense samples: the largest and smallest sampled speeds over the mean."""
+    run = steady_state(drive, samples=1500)
+    w = run.arrays["omega_rad_s"]
+    return (w.max() - w.min()) / run.values["omega_mean_rad_s"]
+
+
+def test_free_design_variables_give_the_numeric_equations(flywheel_task):
+    """dynamics(task, free) with p = a design equals dynamics of the press built with those numbers."""
+    task = dataclasses.replace(flywheel_task, variables=("flywheel_inertia_kgm2", "gear_ratio",
+                                                          "belt_stiffness_Nm_rad", "motor_scale"))
+    values = {"flywheel_inertia_kgm2": 0.9, "gear_ratio": 7.1, "belt_stiffness_Nm_rad": 3.3e4, "motor_scale": 1.7}
+    free, fixed = dynamics(task, task.variables), dynamics(task.drive(values))
+    rng = np.random.default_rng(3)
+    for _ in range(5):
+        x = np.r_[rng.normal(0, 1e-3), 25 + rng.normal(0, 1), rng.uniform(0, 2 * np.pi), 25 + rng.normal(0, 1),
+                  np.zeros(4)]
+        mode = [float(rng.integers(0, 2)), 1.0, 0.0]
+        p = [values[k] for k in task.variables]
+        assert np.allclose(np.asarray(free.rhs(x, mode, p)), np.asarray(fixed.rhs(x, mode)), rtol=1e-12, atol=1e-12)
+        assert np.allclose(np.asarray(free.outputs(x, mode, p)), np.asarray(fixed.outputs(x, mode)), rtol=1e-12)
+
+
+def test_least_flywheel_meets_the_limit_exactly_and_a_smaller_one_does_not(flywheel_task, flywheel):
+    assert flywheel.status is Status.SOLVED, flywheel.message
+    J = flywheel.values["flywheel_inertia_kgm2"]
+    limit = flywheel_task.max_speed_fluctuation
+    at = _fluctuation(flywheel_task.drive({"flywheel_inertia_kgm2": J}))
+    below = _fluctuation(flywheel_task.drive({"flywheel_inertia_kgm2": 0.99 * J}))
+    assert at == pytest.approx(limit, rel=1e-6)
+    assert below > limit * 1.005                 # 1 % less flywheel breaks the limit: J is the least
+    assert "speed_fluctuation active" in flywheel.message and "verified by the event-located" in flywheel.message
+
+
+def test_the_fluctuation_multiplier_is_the_slope_of_the_least_flywheel(flywheel_task, flywheel):
+    """d J*/d limit from IPOPT's multiplier against 1 / (d fluctuation / d J) at J*, the fluctuation's
+    slope by a central difference of steady_state runs (no NLP): along the active limit they are one."""
+    J = flywheel.values["flywheel_inertia_kgm2"]
+    ends = [_fluctuation(flywheel_task.drive({"flywheel_inertia_kgm2": J * (1 + s)})) for s in (1e-4, -1e-4)]
+    slope = (ends[0] - ends[1]) / (2e-4 * J)
+    assert flywheel.values["d_flywheel_inertia_kgm2_d_max_speed_fluctuation"] == pytest.approx(1 / slope, rel=1e-3)
+
+
+def test_stall_is_infeasible_and_names_the_least_motor(flywheel_task):
+    weak = dataclasses.replace(flywheel_task, motor_breakdown_torque_Nm=0.5)
+    result = design(weak)
+    assert result.status is Status.INFEASIBLE and result.violated == ("stall",)
+    coeffs = [weak.force_c1_N_mm, weak.force_c2_N_mm2, weak.force_c3_N_mm3, weak.force_c4_N_mm4]
+    cut_J = sum(c * 3.0 ** (i + 2) / (i + 2) for i, c in enumerate(coeffs)) / 1000     # eq. (1) over 0 ... Z = 3 mm
+    least = (cut_J / (2 * np.pi) + weak.friction_torque_Nm) / weak.gear_ratio
+    assert result.values["min_motor_breakdown_torque_Nm"] == pytest.approx(least, rel=1e-9)
+    assert "least motor" in result.message
+    # the bound is tight: 5 % above it a heavy flywheel runs, 1 % below nothing does
+    for share, status in ((1.05, Status.SOLVED), (0.99, Status.INFEASIBLE)):
+        press = dataclasses.replace(weak, motor_breakdown_torque_Nm=share * least).drive({"flywheel_inertia_kgm2": 20.0})
+        assert steady_state(press).status is status
+
+
+def test_a_belt_a_million_times_stiffer_is_designed_on_the_rigid_belt_limit_fast(flywheel_task):
+    stiff = dataclasses.replace(flywheel_task, belt_stiffness_Nm_rad=2e10)
+    start = time.perf_counter()
+    result = design(stiff)
+    assert time.perf_counter() - start < 20
+    assert result.status is Status.SOLVED and result.message.startswith("rigid-belt limit")
+    assert result.diagnostics["model"].startswith("rigid belt") and result.values["belt_mode_Hz"] > 1e4
+    rigid = dataclasses.replace(stiff, effects=tuple(e for e in stiff.effects if e != "belt_elasticity"),
+                                belt_stiffness_Nm_rad=None, belt_damping_Nms_rad=None)
+    assert result.values["flywheel_inertia_kgm2"] == pytest.approx(
+        design(rigid).values["flywheel_inertia_kgm2"], rel=1e-9)
+
+
+def test_an_empty_constraint_set_is_infeasible_naming_the_conflict_and_the_best_achievable(flywheel_task):
+    tight = dataclasses.replace(flywheel_task, max_speed_fluctuation=0.001, flywheel_inertia_max_kgm2=5.0)
+    result = design(tight, samples=8)
+    assert result.status is Status.INFEASIBLE
+    assert set(result.violated) == {"speed_fluctuation", "flywheel_inertia_kgm2"}
+    assert "flywheel_inertia_max_kgm2 = 5" in result.message
+    assert result.values["flywheel_inertia_kgm2"] == pytest.approx(5.0, rel=1e-6)
+    # the best achievable is the heaviest flywheel's own fluctuation, by steady_state
+    assert result.values["speed_fluctuation"] == pytest.approx(_fluctuation(tight.drive({"flywheel_inertia_kgm2": 5.0})),
+                                                               rel=1e-4)
+
+
+def test_without_a_cut_the_least_flywheel_is_the_lower_bound_and_says_so(flywheel_task):
+    result = design(dataclasses.replace(flywheel_task, blank_thickness_mm=0.0))
+    assert result.status is Status.SOLVED
+    assert result.values["flywheel_inertia_kgm2"] == pytest.approx(flywheel_task.flywheel_inertia_min_kgm2, rel=1e-6)
+    assert "at its lower bound flywheel_inertia_min_kgm2" in result.message
+    assert result.values["cut_work_J"] == 0 and result.values["verification_rel_error"] < 1e-6
+    assert "single_stroke_margin_J" not in result.values
+
+
+@pytest.mark.parametrize("change, match", [
+    ({"objective": "cheapest"}, r"objective='cheapest'; allowed: least_flywheel_inertia"),
+    ({"variables": ("mass",)}, r"variables=\['mass'\]: expected one or more of flywheel_inertia_kgm2"),
+    ({"variables": ("gear_ratio",)}, r"objective='least_flywheel_inertia' needs 'flywheel_inertia_kgm2'"),
+    ({"max_speed_fluctuation": -0.1}, r"max_speed_fluctuation=-0.1 is outside \(0, 2\]"),
+    ({"flywheel_inertia_max_kgm2": 0.01}, r"flywheel_inertia_max_kgm2=0.01 is outside \(flywheel_inertia_min_kgm2"),
+    ({"motor_safety_factor": 0.5}, r"motor_safety_factor=0.5 is outside \(1, 100\]"),
+])
+def test_a_bad_design_question_is_refused_naming_the_key(flywheel_task, change, match):
+    with pytest.raises(ModelError, match=match):
+        dataclasses.replace(flywheel_task, **change)
+
+
+def test_a_design_input_needs_its_effect(flywheel_task):
+    no_belt = {"effects": tuple(e for e in flywheel_task.effects if e != "belt_elasticity"),
+               "belt_stiffness_Nm_rad": None, "belt_damping_Nms_rad": None}
+    with pytest.raises(ModelError, match=r"belt_slip_torque_Nm needs effect 'belt_elasticity'"):
+        dataclasses.replace(flywheel_task, belt_slip_torque_Nm=30.0, **no_belt)
+    with pytest.raises(ModelError, match=r"task=PressDrive: expected a PressDesign"):
+        design(flywheel_task.drive({}))
+
+
+def test_motor_design_holds_the_speed_and_its_rms_torque_is_the_orbits(flywheel_task):
+    task = load("press/motor-design").build()[0]
+    result = design(task)
+    assert result.status is Status.SOLVED, result.message
+    assert result.values["omega_mean_rad_s"] == pytest.approx(task.nominal_speed_rad_s, rel=1e-9)
+    assert "mean_speed active" in result.message and "speed_fluctuation active" in result.message
+    # the RMS motor torque again, by the trapezoid rule over a dense steady_state orbit of the design found
+    found = {k: result.values[k] for k in task.variables}
+    run = steady_state(task.drive(found), samples=2000)
+    shaft = run.arrays["motor_torque_Nm"] / result.values["gear_ratio"]
+    rms = np.sqrt(np.trapezoid(shaft**2, run.arrays["t_s"]) / run.values["period_s"])
+    assert result.values["motor_rms_torque_N_m"] == pytest.approx(rms, rel=1e-6)
