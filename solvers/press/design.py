@@ -322,6 +322,10 @@ def _fd_check(task, values, tol, samples, max_iter, warm):
             limit = getattr(task, knob)
             ends = [_design(replace(task, **{knob: limit * (1 + s)}), tol, samples, max_iter, False, warm)
                     for s in (1e-3, -1e-3)]
+            # a start from the optimum's nodes may miss where the extremes move to: then from scratch
+            ends = [end if end.status is Status.SOLVED else
+                    _design(replace(task, **{knob: limit * (1 + s)}), tol, samples, max_iter, False, None)
+                    for end, s in zip(ends, (1e-3, -1e-3))]
             if any(r.status is not Status.SOLVED for r in ends):
                 return {}
             fd = (ends[0].values[name] - ends[1].values[name]) / (2e-3 * limit)
