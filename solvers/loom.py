@@ -24,6 +24,7 @@ critical [phi] lengthens it (+1 deg/deg).
 """
 import dataclasses
 import functools
+import json
 import math
 import time
 from collections import deque
@@ -920,53 +921,85 @@ def _angle_floors_deg(task: Cyclogram) -> np.ndarray:
     return np.fromiter((phi for _, _, phi in task.graph.edges(data="min_deg")), dtype=float, count=len(task.arcs))
 
 
-def largest_ratio_rpm_per_deg(task: Cyclogram) -> float:
-    """The largest n / t at which the lever's exact rebound keeps the amplitude limit [rpm/deg]:
-    a(t, n) = h(n / t) (v0 and F scale as n / t, the preload does not), h convex, h(0) = 0, so
-    h(r) <= limit exactly for r <= r*; r* by brentq on h. inf when no ratio breaks the limit."""
-    def h(r):
-        return float(np.ravel(rebound_amplitude_mm(task.lever_model, r, 1.0))[0]) - task.amplitude_limit_mm
-    hi = 1.0
-    while h(hi) <= 0:
-        hi *= 2.0
-        if hi > MAX_RATIO_RPM_PER_DEG:
-            return math.inf
-    return brentq(h, 0.0, hi, xtol=1e-15 * hi, rtol=4 * np.finfo(float).eps)
-
-
-MAX_RATIO_RPM_PER_DEG = 1e12     # n / t past any machine: 10^6 rpm over 10^-6 deg
 MIN_RPM = 1e-6                   # bisection: below it the machine is at rest
+N_OVER_T_RTOL = 1e-9             # the probe: a(c t, c n) = a(t, n) to this (the chain meets it to 1e-16)
+N_OVER_T_FACTORS = (0.5, 2.0)
+_AMPLITUDE_BOUNDS = BuildCache("loom.amplitude_bound", maxsize=64)
 
 
-def speed_coeffs_deg_per_rpm(task: Cyclogram) -> tuple[np.ndarray, list[str]]:
-    """Per arc, the angle every rpm of speed asks for [deg/rpm], and which law sets it ("min_time",
-    "contact_stress", "amplitude" or "" for none). Each law is f(n / t) <= limit, f increasing, so
-    it is t >= n / r*: a bound proportional to n (module docstring of `max_machine_speed`)."""
+def cached_amplitude_bound(task: Cyclogram, speed_rpm: float, lo_deg: float, to_deg: float,
+                           step_deg: float) -> AmplitudeBound:
+    """`exact_amplitude_bound`, kept per lever, limit, speed and range (a scan of the chain is
+    about a hundred rises: a second)."""
+    key = (json.dumps(task.lever, sort_keys=True), task.amplitude_limit_mm, float(speed_rpm), float(lo_deg),
+           float(to_deg), float(step_deg))
+    return _AMPLITUDE_BOUNDS.get(key, lambda: exact_amplitude_bound(task, speed_rpm, lo_deg, to_deg, step_deg))[0]
+
+
+def n_over_t_probe(task: Cyclogram, scan_to_deg: float) -> tuple[bool, float]:
+    """Whether every speed-dependent law is a function of n / t alone, and the largest relative
+    change seen. The time floor (0.006 n T) and the stress (sigma_ref t_ref n / (t n_ref)) are by
+    their form; the rebound is probed: a(c t, c n) against a(t, n) for c = 0.5, 2 at t =
+    scan_to_deg and 3/4 of it, n the task's speed. (The chain passes: its rise in its own time
+    depends on lambda = omega t / Omega only, and the impact on v0 only; see models/loom.py.)"""
+    if not task.amplitude_arcs():
+        return True, 0.0
+    n, worst = _reference_rpm(task), 0.0
+    for t in (scan_to_deg, 0.75 * scan_to_deg):
+        base = float(np.ravel(exact_amplitude_mm(task, t, n, lost=np.nan))[0])
+        for c in N_OVER_T_FACTORS:
+            other = float(np.ravel(exact_amplitude_mm(task, c * t, c * n, lost=np.nan))[0])
+            if np.isnan(base) and np.isnan(other):
+                continue
+            worst = max(worst, abs(other - base) / max(abs(base), 1e-300) if np.isfinite(other - base) else math.inf)
+    return worst <= N_OVER_T_RTOL, worst
+
+
+def _reference_rpm(task):
+    if task.speed_rpm is None:
+        raise ModelError("speed_rpm: the rebound's exact bound is found at a reference speed; give speed_rpm",
+                         key="speed_rpm")
+    return task.speed_rpm
+
+
+def speed_coeffs_deg_per_rpm(task: Cyclogram, scan_to_deg: float = 60.0, scan_step_deg: float = 0.25
+                             ) -> tuple[np.ndarray, list[str], dict]:
+    """Per arc, the angle every rpm of speed asks for [deg/rpm], which law sets it ("min_time",
+    "contact_stress", "amplitude" or "" for none), and per amplitude arc its exact bound at the
+    task's speed. Each law is f(n / t) <= limit, so it is t >= n / r*: a bound proportional to n.
+    For the wavy rebound r* = n_ref / T, T the exact bound at n_ref on [phi, scan_to_deg]
+    (`exact_amplitude_bound`): a <= limit for every n / t in [n_ref / scan_to_deg, r*]."""
     g = task.time_coeffs_deg_per_rpm()
     why = ["min_time" if c > 0 else "" for c in g]
     for k in task.stress_arcs():
         c = task.stress_coeff_deg_per_rpm(k)
         if c > g[k]:
             g[k], why[k] = c, "contact_stress"
-    if task.amplitude_arcs():
-        ratio = largest_ratio_rpm_per_deg(task)
-        for k in task.amplitude_arcs():
-            if 1.0 / ratio > g[k]:
-                g[k], why[k] = 1.0 / ratio, "amplitude"
-    return g, why
+    bounds, phi = {}, _angle_floors_deg(task)
+    for k in task.amplitude_arcs():
+        n_ref = _reference_rpm(task)
+        bounds[k] = cached_amplitude_bound(task, n_ref, float(phi[k]), scan_to_deg, scan_step_deg)
+        c = math.inf if bounds[k].from_deg is None else bounds[k].from_deg / n_ref
+        if c > g[k]:
+            g[k], why[k] = c, "amplitude"
+    return g, why, bounds
 
 
-def max_machine_speed(task: Cyclogram, *, method: Literal["lp", "bisection"] = "lp",
+def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "lp", "bisection"] = "auto",
                       backend: Literal["HIGHS", "CLARABEL"] = "HIGHS",
-                      rtol: Annotated[float, Interval(ge=1e-9, le=1e-2)] = 1e-7) -> Result:
+                      rtol: Annotated[float, Interval(ge=1e-9, le=1e-2)] = 1e-7,
+                      scan_to_deg: Annotated[float, Interval(gt=0.0, le=360.0)] = 60.0,
+                      scan_step_deg: Annotated[float, Interval(ge=1e-3, le=10.0)] = 0.25) -> Result:
     """The largest main-shaft speed n at which every group fits the machine's cycle (issue 14,
     part 5), with the event times there.
 
     Every limit is a lower bound on a phase angle. [phi] does not depend on n; a time `min_ms`
     (the microshuttle's flight) asks for 0.006 n T deg; the contact stress, sigma_ref (t_ref / t)
     (n / n_ref) <= [sigma_H] (n_ref = stress_speed_rpm), and the lever's exact rebound
-    a(t, n) = h(n / t) <= a_lim depend on n and t only through r = n / t and grow with it. Each
-    is then r <= r*, i.e.
+    a(t, n) = h(n / t) <= a_lim depend on n and t only through r = n / t. The first two grow with
+    r; the chain's h is wavy, so its r* is where h first crosses the limit going up from the
+    stated range's start (`speed_coeffs_deg_per_rpm`): a <= limit for every r in [n_ref /
+    scan_to_deg, r*], n_ref = speed_rpm. Each law is then r <= r*, i.e.
 
         t(x, y) >= g(x, y) n,      g = 1 / r*  [deg/rpm]  (0.006 T; sigma_ref t_ref / ([sigma_H] n_ref); 1 / r*_a)
 
@@ -976,8 +1009,10 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["lp", "bisection"] = "
     cycle 60 (1/n): an LP in (tau, 1/n), minimising 1/n.) A law that is not a function of n / t
     alone (a dwell over which a vibration must decay, a time with an angle) breaks this; then
     method "bisection" is the general route: bisection on n, each step the exact bounds at that n
-    (the rebound's root in t by brentq, not through r*) and the event-time LP's feasibility, its
-    status checked. It is also the independent check of the LP. rtol (relative) on n: the answer
+    (the rebound's by `exact_amplitude_bound` at that n on [phi, scan_to_deg], not through r*)
+    and the event-time LP's feasibility, its status checked. It is also the independent check of
+    the LP. Method "auto" takes the LP when `n_over_t_probe` finds the rebound a function of n / t
+    (diagnostics: method, n_over_t_probe_rel), else bisection. rtol (relative) on n: the answer
     is certified by the longest-path certificate at n (1 - tol) (fits) and n (1 + tol) (does not);
     below 1e-9 the LP's own feasibility tolerance (1e-7 deg on a 360 deg cycle) decides.
 
@@ -987,22 +1022,37 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["lp", "bisection"] = "
     its group and deg/rpm), critical_chain, sens_cycle_rpm_per_deg. INFEASIBLE when the cycle
     cannot hold the groups at any speed (the conflicting chain named, as in plan_cyclogram),
     UNBOUNDED when no limit grows with n on a chain the cycle closes, LIMIT when bisection finds
-    every speed up to its search bound feasible.
+    every speed up to its search bound feasible or the rebound exceeds its limit on the whole
+    stated range. With a rebound: amplitude_holds_from_*_deg and amplitude_holds_to_*_deg, the
+    range of t at the answer on which a <= limit is shown.
     """
     if task.cycle_deg is None:
         raise ModelError("cycle_deg: the machine's speed is limited by its cycle; give cycle_deg", key="cycle_deg")
     start = time.perf_counter()
     net = _Net.structure(task)        # the speed LP has its own bounds
     phi = _angle_floors_deg(task)
-    g, why = speed_coeffs_deg_per_rpm(task)
-    if method == "lp":
+    g, why, amp_bounds = speed_coeffs_deg_per_rpm(task, scan_to_deg, scan_step_deg)
+    scales, probe = n_over_t_probe(task, scan_to_deg)
+    chosen = ("lp" if scales else "bisection") if method == "auto" else method
+    def timing():
+        return Timing(0.0, time.perf_counter() - start)
+    diagnostics = {"method": chosen, "method_asked": method, "n_over_t_probe_rel": probe, "backend": backend,
+                   "amplitude_bounds_at_reference": {f"{task.arcs[k][0]}->{task.arcs[k][1]}": b.statement()
+                                                     for k, b in amp_bounds.items()}}
+    unreached = [b for b in amp_bounds.values() if b.from_deg is None]
+    if unreached:
+        return Result(Status.LIMIT, {}, timing(), message=f"the rebound's bound is not on the stated range: "
+                      f"{unreached[0].statement()} (raise scan_to_deg)", diagnostics=diagnostics)
+    if chosen == "lp":
         n_max, status, message, build_s, extra = _speed_lp(task, net, phi, g, backend)
+        bounds_at = functools.partial(_lp_bounds_at, phi, g, why)
     else:
-        n_max, status, message, build_s, extra = _speed_bisection(task, net, phi, rtol)
+        bounds_at = functools.partial(_exact_bounds_at, task, phi, scan_to_deg, scan_step_deg)
+        n_max, status, message, build_s, extra = _speed_bisection(task, net, bounds_at, rtol)
     def timing():
         return Timing(build_s, time.perf_counter() - start - build_s)
-    diagnostics = {"method": method, "backend": backend, "speed_coeffs_deg_per_rpm":
-                   {f"{x}->{y}": float(g[k]) for k, (x, y) in enumerate(task.arcs) if g[k] > 0}} | extra
+    diagnostics |= {"speed_coeffs_deg_per_rpm":
+                    {f"{x}->{y}": float(g[k]) for k, (x, y) in enumerate(task.arcs) if g[k] > 0}} | extra
     if status is Status.SOLVED and n_max * g.max(initial=0.0) <= 1e-6:   # below a micro-degree: at rest
         status = Status.INFEASIBLE
     if status is Status.INFEASIBLE:
@@ -1018,14 +1068,22 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["lp", "bisection"] = "
         message += ": no limit grows with the speed on a chain the cycle closes (no stress, rebound or min_ms there)"
     if status is not Status.SOLVED:
         return Result(status, {}, timing(), message=message, diagnostics=diagnostics)
-    lb = np.maximum(phi, g * n_max)
-    certified = _certify_speed(task, net, phi, g, n_max, rtol)
-    values, more = _speed_report(task, net, lb, g, why, n_max, rtol)
+    lb, why_at = bounds_at(n_max)
+    certified = _certify_speed(task, net, bounds_at, n_max, rtol)
+    values, more = _speed_report(task, net, lb, why_at, n_max, rtol)
+    for k, b in amp_bounds.items():      # the range of t on which the rebound was shown to hold, at n_max
+        x, y = task.arcs[k]
+        at = b if chosen == "lp" else _exact_amplitude_bounds(task, phi, scan_to_deg, scan_step_deg, n_max)[k]
+        scale = n_max / b.speed_rpm if chosen == "lp" else 1.0
+        values[f"amplitude_holds_from_{x}_{y}_deg"] = at.from_deg * scale
+        values[f"amplitude_holds_to_{x}_{y}_deg"] = at.to_deg * scale
     diagnostics |= more
     if certified:
         return Result(Status.INACCURATE, values, timing(), message=certified, diagnostics=diagnostics)
-    message = (f"max_speed_rpm = {n_max:.6g} ({method}); limiting group {more['limiting_group']}, "
-               f"constraint {more['limiting_constraint']}")
+    reason = ("every law a function of n / t" if scales else "the rebound is not a function of n / t") \
+        + f" (probe {probe:.2g})"
+    message = (f"max_speed_rpm = {n_max:.6g} ({chosen}{': ' + reason if method == 'auto' else ''}); limiting "
+               f"group {more['limiting_group']}, constraint {more['limiting_constraint']}")
     return Result(Status.SOLVED, values, timing(), message=message, diagnostics=diagnostics)
 
 
@@ -1075,24 +1133,37 @@ def _speed_lp(task, net, phi, g, backend):
     return None, status, f"{backend}: {problem.status}", build_s, extra
 
 
-def _exact_bounds_at(task, phi, n_rpm):
-    """Each arc's smallest angle at speed n from the exact laws directly [deg]: the time floor,
-    the stress bound sigma_ref t_ref n / ([sigma_H] n_ref), the rebound's root in t (brentq)."""
+def _lp_bounds_at(phi, g, why, n_rpm):
+    """The LP's bounds at speed n: max([phi], g n) [deg], and which law sets each ("" for [phi])."""
+    lb = np.maximum(phi, g * n_rpm)
+    return lb, [w if g[k] * n_rpm >= phi[k] else "" for k, w in enumerate(why)]
+
+
+def _exact_amplitude_bounds(task, phi, scan_to_deg, scan_step_deg, n_rpm):
+    """Per amplitude arc, the rebound's exact bound at speed n on [phi, scan_to_deg]."""
+    return {k: cached_amplitude_bound(task, n_rpm, float(phi[k]), scan_to_deg, scan_step_deg)
+            for k in task.amplitude_arcs()}
+
+
+def _exact_bounds_at(task, phi, scan_to_deg, scan_step_deg, n_rpm):
+    """Each arc's smallest angle at speed n from the exact laws directly [deg], and which law sets
+    it: the time floor, the stress bound sigma_ref t_ref n / ([sigma_H] n_ref), the rebound's
+    exact bound on [phi, scan_to_deg] (inf where none holds there). At n = 0: [phi]."""
     lb = np.maximum(phi, task.time_coeffs_deg_per_rpm() * n_rpm)
+    why = ["min_time" if b > p else "" for b, p in zip(lb, phi)]
     for k in task.stress_arcs():
-        lb[k] = max(lb[k], task.stress_coeff_deg_per_rpm(k) * n_rpm)
-    for k in task.amplitude_arcs():
-        def a(t, n_rpm=n_rpm):
-            return float(np.ravel(exact_amplitude_mm(task, t, n_rpm))[0]) - task.amplitude_limit_mm
-        if n_rpm > 0 and a(lb[k]) > 0:
-            hi = 2.0 * lb[k]
-            while a(hi) > 0:
-                hi *= 2.0
-            lb[k] = brentq(a, lb[k], hi, xtol=1e-13 * hi, rtol=4 * np.finfo(float).eps)
-    return lb
+        bound = task.stress_coeff_deg_per_rpm(k) * n_rpm
+        if bound > lb[k]:
+            lb[k], why[k] = bound, "contact_stress"
+    if n_rpm > 0:
+        for k, b in _exact_amplitude_bounds(task, phi, scan_to_deg, scan_step_deg, n_rpm).items():
+            bound = math.inf if b.from_deg is None else b.from_deg
+            if bound > lb[k]:
+                lb[k], why[k] = bound, "amplitude"
+    return lb, why
 
 
-def _speed_bisection(task, net, phi, rtol):
+def _speed_bisection(task, net, bounds_at, rtol):
     """Bisection on n: feasible when the event-time LP with the exact bounds at n fits the cycle
     (one HiGHS model held through the steps, `HeldLP`; `backend` is the LP method's)."""
     start = time.perf_counter()
@@ -1103,7 +1174,11 @@ def _speed_bisection(task, net, phi, rtol):
     steps = []
 
     def feasible(n_rpm):
-        status, _ = lp.solve(_exact_bounds_at(task, phi, n_rpm), windows, task.cycle_deg)
+        lb, _ = bounds_at(n_rpm)
+        if not np.all(np.isfinite(lb)):          # a rebound over its limit on the whole stated range
+            steps.append((n_rpm, "no bound on the range"))
+            return False
+        status, _ = lp.solve(lb, windows, task.cycle_deg)
         steps.append((n_rpm, status.value))
         if status not in (Status.SOLVED, Status.INFEASIBLE):
             raise _Undecided(f"HiGHS: {status.value} at n = {n_rpm:.9g} rpm")
@@ -1141,18 +1216,19 @@ def _conflict_at(task, net, lb):
     return [(u, label, w) for u, _, w, label in positive_cycle(_arcs_at(task, net, lb))]
 
 
-def _certify_speed(task, net, phi, g, n_max, tol):
+def _certify_speed(task, net, bounds_at, n_max, tol):
     """'' when the bounds at n_max (1 - tol) leave no positive cycle and those at n_max (1 + tol)
     do (so n_max is the largest speed to tol); else why not."""
     below, above = n_max * (1 - tol), n_max * (1 + tol)
-    if _conflict_at(task, net, np.maximum(phi, g * below)):
+    lb_below, lb_above = bounds_at(below)[0], bounds_at(above)[0]
+    if not np.all(np.isfinite(lb_below)) or _conflict_at(task, net, lb_below):
         return f"certificate failed: n = {below:.9g} rpm (just under the answer) does not fit the cycle"
-    if not _conflict_at(task, net, np.maximum(phi, g * above)):
+    if np.all(np.isfinite(lb_above)) and not _conflict_at(task, net, lb_above):
         return f"certificate failed: n = {above:.9g} rpm (just over the answer) still fits the cycle"
     return ""
 
 
-def _speed_report(task, net, lb, g, why, n_max, tol):
+def _speed_report(task, net, lb, why, n_max, tol):
     """Event times at max speed (earliest start), exact readings, and which constraints limit it."""
     first = net.names[net.first]
     if task.windows or task.syncs:
@@ -1184,9 +1260,9 @@ def _speed_report(task, net, lb, g, why, n_max, tol):
     chain = nx.shortest_path(crit, first, end) if first in crit and end in crit and nx.has_path(crit, first, end) else []
     limiting = []
     for k, (x, y) in enumerate(net.arcs):
-        if g[k] > 0 and f"{x}->{y}" in critical and g[k] * n_max >= lb[k] - tol * max(1.0, lb[k]):
+        if why[k] and f"{x}->{y}" in critical:      # set by a law that grows with n (deg/rpm: its secant)
             limiting.append({"constraint": f"{why[k]}[{x}->{y}]", "group": group[x] or group[y] or "-",
-                             "deg_per_rpm": float(g[k]), "deg": float(g[k] * n_max)})
+                             "deg_per_rpm": float(lb[k] / n_max), "deg": float(lb[k])})
     by_group: dict = {}
     for row in limiting:
         by_group[row["group"]] = by_group.get(row["group"], 0.0) + row["deg_per_rpm"]
