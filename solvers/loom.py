@@ -790,16 +790,16 @@ def _exact_limits(task: Cyclogram, stress_form: str, scan_to_deg: float, scan_st
         out.append(law)
     phi = task.min_angles_deg()
     for k in task.amplitude_arcs():
-        find = functools.partial(exact_amplitude_bound, task, task.speed_rpm, float(phi[k]), scan_to_deg, scan_step_deg)
+        find = functools.partial(cached_amplitude_bound, task, task.speed_rpm, float(phi[k]), scan_to_deg, scan_step_deg)
         law = _ExactLimit("amplitude", k, task.amplitude_limit_mm,
                           functools.partial(exact_amplitude_mm, task, lost=np.inf), 0.0, 0.0, find)
         if task.has_linear_amplitude:
             law.slope, law.intercept = task.amplitude_slope_mm_per_deg, task.amplitude_intercept_mm
-        else:                           # the lever alone: the tangent at the arc's [phi], if it falls there
-            law.relinearise(max(float(phi[k]), 1e-3))
-            if not (np.isfinite(law.slope) and law.slope < 0 and np.isfinite(law.intercept)):
-                at = law.range_bound().from_deg
-                law.relinearise(at if at is not None else scan_to_deg)
+        else:       # the lever alone: the tangent at the exact bound (a tangent elsewhere may overshoot it)
+            at = law.range_bound().from_deg
+            law.relinearise(at if at is not None else scan_to_deg)
+            if at is not None and not law.slope < 0:     # flat or rising there: a line whose bound is it
+                law.slope, law.intercept = -1.0, law.limit + at
         out.append(law)
     return out
 
@@ -814,7 +814,8 @@ def repair_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] =
     sequential LP (issue 14, part 4).
 
     Round 1 solves the LP with the linear laws the task gives (the amplitude tangent; the stress
-    tangent at t_ref when stress_form = "linear"). At its optimum each linearised limit is
+    tangent at t_ref when stress_form = "linear"; with the lever alone, the rebound's tangent at
+    its exact bound). At its optimum each linearised limit is
     evaluated exactly: the lever's rebound a(t, n) (the chain, `exact_amplitude_mm`), sigma_max =
     sigma_ref t_ref / t. While one exceeds its limit by more than tol_mm / tol_MPa, every limit is
     re-linearised at the current angle and the LP re-solved with a cut (the largest met so far) as
@@ -931,6 +932,8 @@ def cached_amplitude_bound(task: Cyclogram, speed_rpm: float, lo_deg: float, to_
                            step_deg: float) -> AmplitudeBound:
     """`exact_amplitude_bound`, kept per lever, limit, speed and range (a scan of the chain is
     about a hundred rises: a second)."""
+    if speed_rpm is None:
+        raise ModelError("speed_rpm: the exact rebound law needs the main shaft's speed", key="speed_rpm")
     key = (json.dumps(task.lever, sort_keys=True), task.amplitude_limit_mm, float(speed_rpm), float(lo_deg),
            float(to_deg), float(step_deg))
     return _AMPLITUDE_BOUNDS.get(key, lambda: exact_amplitude_bound(task, speed_rpm, lo_deg, to_deg, step_deg))[0]
