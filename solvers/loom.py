@@ -930,13 +930,23 @@ _AMPLITUDE_BOUNDS = BuildCache("loom.amplitude_bound", maxsize=64)
 
 def cached_amplitude_bound(task: Cyclogram, speed_rpm: float, lo_deg: float, to_deg: float,
                            step_deg: float) -> AmplitudeBound:
-    """`exact_amplitude_bound`, kept per lever, limit, speed and range (a scan of the chain is
-    about a hundred rises: a second)."""
+    """`exact_amplitude_bound` on [lo_deg, to_deg], from one walk per lever, limit, speed and top
+    (kept: a walk of the chain is about a hundred rises, a second). The walk goes down to
+    WALK_FLOOR_DEG; an arc whose [phi] lies above its crossing is shown to hold from [phi] on
+    (the walk saw a <= limit on all of [phi, to_deg]), so arcs with different [phi] share it."""
     if speed_rpm is None:
         raise ModelError("speed_rpm: the exact rebound law needs the main shaft's speed", key="speed_rpm")
-    key = (json.dumps(task.lever, sort_keys=True), task.amplitude_limit_mm, float(speed_rpm), float(lo_deg),
-           float(to_deg), float(step_deg))
-    return _AMPLITUDE_BOUNDS.get(key, lambda: exact_amplitude_bound(task, speed_rpm, lo_deg, to_deg, step_deg))[0]
+    key = (json.dumps(task.lever, sort_keys=True), task.amplitude_limit_mm, float(speed_rpm), float(to_deg),
+           float(step_deg))
+    walk, _ = _AMPLITUDE_BOUNDS.get(key, lambda: exact_amplitude_bound(task, speed_rpm, min(WALK_FLOOR_DEG, to_deg),
+                                                                       to_deg, step_deg))
+    if walk.from_deg is not None and walk.from_deg <= lo_deg:
+        return dataclasses.replace(walk, from_deg=lo_deg, lo_deg=lo_deg, why="range",
+                                   amplitude_mm=float(np.ravel(exact_amplitude_mm(task, lo_deg, speed_rpm))[0]))
+    return dataclasses.replace(walk, lo_deg=lo_deg)
+
+
+WALK_FLOOR_DEG = 1.0             # the walk's lowest t: below it no cam rise of a loom
 
 
 def n_over_t_probe(task: Cyclogram, scan_to_deg: float) -> tuple[bool, float]:
