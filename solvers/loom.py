@@ -12,9 +12,10 @@ limit is a cvxpy Parameter, so a what-if re-solve reuses the compiled problem (D
 p(1) = 0 removes the shift invariance that otherwise slows HiGHS a hundredfold.
 
 Entry points: `plan_cyclogram` (this LP); `repair_cyclogram` (its optimum checked against the
-exact rebound and contact stress, re-linearised and re-solved until they hold: issue 14, part
-4); `max_machine_speed` (the largest main-shaft speed, an LP in (p, n) because every law is a
-function of n / t; bisection on n as the general route and its check: part 5). `HeldLP` keeps
+exact rebound and contact stress, re-linearised and re-solved until they hold, with the exact
+bound `exact_amplitude_bound` where the wavy rebound's tangent cannot be trusted: issue 14, part
+4); `max_machine_speed` (the largest main-shaft speed: an LP in (p, n) when every law is a
+function of n / t, which a probe checks; bisection on n as the general route and its check: part 5). `HeldLP` keeps
 the LP in HiGHS for many solves that change bounds only.
 
 Sensitivities are reported in user terms with one sign convention: d(objective)/d(limit), the
