@@ -834,7 +834,8 @@ def repair_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] =
     range), exact_sigma_*_MPa and linearisation_error_*: exact minus linear at round 1's optimum;
     diagnostics["rounds"]: per round and limit t, exact, linear, error, excess, the cut and how it
     was found ("newton" or "exact"). SOLVED when the exact laws hold to the tolerances; LIMIT after
-    max_rounds without it; INFEASIBLE when the rebound exceeds its limit even at scan_to_deg; an
+    max_rounds without it; INFEASIBLE when the rebound exceeds its limit even at scan_to_deg (no
+    values; diagnostics best_t_deg and best_amplitude_mm, the least rebound on the range); an
     LP that fails in a round returns its status, with the rounds so far.
     """
     start = time.perf_counter()
@@ -880,9 +881,11 @@ def repair_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] =
             else:
                 bound, how = law.bound_deg(), "newton"
             if bound is None or bound == math.inf:      # the rebound exceeds its limit on all the range
-                best = law.range_bound()
-                return _repaired(task, result, laws, history, start, Status.INFEASIBLE,
-                                 f"round {round_}: {row['limit']}: {best.statement()}", violated=(row["limit"],))
+                best = law.range_bound()        # the least rebound the range offers: at its top
+                return Result(Status.INFEASIBLE, {}, Timing(result.timing.build_s, time.perf_counter() - start),
+                              message=f"round {round_}: {row['limit']}: {best.statement()}", violated=(row["limit"],),
+                              diagnostics={"rounds": history, "best_t_deg": best.to_deg,
+                                           "best_amplitude_mm": best.amplitude_mm})
             cuts[law.k] = max(cuts.get(law.k, -np.inf), bound)
             row["cut_deg"], row["cut"] = cuts[law.k], how
         ops = [dict(op) for op in task.operations]

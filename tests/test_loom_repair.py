@@ -165,7 +165,8 @@ def test_a_range_on_which_no_angle_keeps_the_limit_is_infeasible_with_the_best_r
     assert r.status is Status.INFEASIBLE
     assert "exceeds the limit at the top of the stated range [30, 35] deg" in r.message
     a35 = float(rebound_amplitude_mm(lever_stop(task.lever), 420.0, 35.0))
-    assert f"{a35:.6g} mm" in r.message and r.violated == ("amplitude[3->7]",)
+    assert f"{a35:.6g} mm" in r.message and r.violated == ("amplitude[3->7]",) and r.values == {}
+    assert r.diagnostics["best_amplitude_mm"] == a35 and r.diagnostics["best_t_deg"] == 35.0
 
 
 def test_the_exact_law_needs_a_speed(task):
