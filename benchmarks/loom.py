@@ -14,8 +14,11 @@ with the networkx floor (agreement to 1e-6 deg is required).
 
 The machine-speed study (`machine_speed`) times `max_machine_speed` on a machine of 10 groups of
 100 events (random layered networks run side by side inside one cycle, contact-stress laws on a
-tenth of their arcs, the lever's rebound on one arc each, a timed flight): the (p, n) LP, fresh
-and re-solved, against bisection on n, which must agree to 1e-6. The what-if study re-solves after a
+tenth of their arcs, the lever's rebound on one arc each, a timed flight). With the scenes' chain
+lever (loom/machine-speed's): the (p, n) LP fresh (caches cleared: the chain's walk for its exact
+bound included) and re-solved (walk and compiled LP kept). With the earlier fitted lever (a
+proportional to n / t, closed form; tests/stop_impact_fitted.py): the LP against bisection on n,
+which must agree to 1e-6 (bisection on the chain walks the chain at every step: about 37 s). The what-if study re-solves after a
 parameter change through the compiled problem (DPP) against a fresh build, with cvxpy's warm
 start off and on (with HiGHS it can make re-solves slower), and through `HeldLP`: the LP held
 in HiGHS with its basis, bounds changed in place (the lever for the group re-solve target: the
@@ -218,13 +221,19 @@ def what_if(repeats=5, progress=None, warm_max=WARM_MAX_EVENTS):
     return out
 
 
-def machine(groups=10, per_group=100, seed=0):
+FITTED_LEVER = {"E_GPa": 210.0, "J_x_mm4": 13020.8, "a_mm": 80.0, "b_mm": 120.0, "a_stop_mm": 80.0,
+                "b_stop_mm": 56.2286, "mass_kg": 0.81792, "stroke_mm": 20.0, "velocity_factor": 0.379503,
+                "inertia_A_kgm2": 1.90100e-4, "restitution": 5 / 9, "damping_ratio": 0.05,
+                "effects": ["initial_velocity", "impact_pulse", "damping"]}    # tests/stop_impact_fitted.py's
+
+
+def machine(groups=10, per_group=100, seed=0, lever=None):
     """A machine of `groups` random layered groups (`layered`, layers of 10) side by side between
     a start and an end event, then a timed flight (100 deg, 60 ms), in a 360 deg cycle: contact
     stress on a tenth of the arcs (sigma_ref 500-900 MPa at their angle, [sigma_H] 800 MPa at
-    420 rpm) and the lever's rebound (`lever`, loom/machine-speed's) on each group's first arc."""
+    420 rpm) and the lever's rebound (`lever`, by default loom/machine-speed's) on each group's first arc."""
     rng = np.random.default_rng(seed)
-    lever = registry.find("loom/machine-speed").build()[0].lever
+    lever = registry.find("loom/machine-speed").build()[0].lever if lever is None else lever
     events = {"start": {}, "end": {}, "flight.end": {"group": "flight"}}
     ops, stress = [], {}
     for g in range(groups):
@@ -248,16 +257,19 @@ def machine(groups=10, per_group=100, seed=0):
 
 
 def machine_speed(repeats=3, progress=None):
-    """Median seconds of `max_machine_speed` on `machine()`: the LP fresh (caches cleared) and
-    re-solved (structure kept), and bisection; the speeds must agree to 1e-6."""
-    task = machine()
+    """Median seconds of `max_machine_speed` on `machine()`: with the chain lever the LP fresh
+    (caches cleared) and re-solved (structure and walk kept); with the fitted lever the LP and
+    bisection, whose speeds must agree to 1e-6."""
+    chain, fitted = machine(), machine(lever=FITTED_LEVER)
     rows = []
-    for label, method, fresh in (("LP (p, n), fresh", "lp", True), ("LP (p, n), re-solve", "lp", False),
-                                 ("bisection on n", "bisection", True)):
-        def call(method=method, fresh=fresh):
+    for label, task, method, fresh in (("LP (p, n), chain, fresh", chain, "lp", True),
+                                       ("LP (p, n), chain, re-solve", chain, "lp", False),
+                                       ("LP (p, n), fitted, fresh", fitted, "lp", True),
+                                       ("bisection on n, fitted", fitted, "bisection", True)):
+        def call(task=task, method=method, fresh=fresh):
             if fresh:
                 clear_caches()
-            return max_machine_speed(task, method=method)
+            return max_machine_speed(task, method=method, scan_step_deg=0.25 if task is chain else 2.0)
         if method == "lp":
             call()                        # imports and the structure's first compilation
         start = time.perf_counter()
@@ -268,8 +280,8 @@ def machine_speed(repeats=3, progress=None):
                      "status": result.status.value})
         if progress:
             progress(f"machine speed {label}: {rows[-1]}")
-    return {"events": len(task.graph), "arcs": len(task.arcs), "rows": rows,
-            "limiting": max_machine_speed(task).diagnostics["limiting_constraint"]}
+    return {"events": len(chain.graph), "arcs": len(chain.arcs), "rows": rows,
+            "limiting": max_machine_speed(chain).diagnostics["limiting_constraint"]}
 
 
 def table(rows, whatif, speed=None):
@@ -308,8 +320,10 @@ def table(rows, whatif, speed=None):
         lines += ["", f"machine speed, {speed['events']} events, {speed['arcs']} arcs (limiting: {speed['limiting']})",
                   f"{'method':<28}{'median s':>10}{'speed rpm':>16}  status"]
         lines += [f"{r['case']:<28}{r['seconds']:>10.4f}{r['speed_rpm']:>16.9g}  {r['status']}" for r in speed["rows"]]
-        spread = max(r["speed_rpm"] for r in speed["rows"]) / min(r["speed_rpm"] for r in speed["rows"]) - 1
-        lines.append(f"LP against bisection: {spread:.1e} relative ({'ok' if spread <= 1e-6 else 'OVER 1e-6'})")
+        fitted = [r["speed_rpm"] for r in speed["rows"] if "fitted" in r["case"]]
+        spread = max(fitted) / min(fitted) - 1
+        lines.append(f"LP against bisection (fitted lever): {spread:.1e} relative "
+                     f"({'ok' if spread <= 1e-6 else 'OVER 1e-6'})")
     return "\n".join(lines)
 
 

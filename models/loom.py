@@ -19,7 +19,8 @@ contact_stress  sigma_max(t) <= [sigma_H] on operations naming a       constrain
                 stress model; sigma_max = sigma_ref t_ref / t
 stop_vibration  a(t) = slope t + intercept <= amplitude limit on       linearised a(3,7) (Results
                 operations with amplitude = "linear"; its exact law    and discussion, last formula;
-                a(t, n), eq. (2), from the lever table `lever`         eq. (2) for the exact law)
+                a(t, n) from the lever table `lever` (the chain cam    Fig. 4 and eq. (2) for the
+                -> approach velocity -> impact -> eq. (2))             exact law)
 ==============  =====================================================  =====================
 
 Speed (`speed_rpm`, the main shaft's n): the stresses and the exact rebound law are taken at
@@ -34,8 +35,10 @@ reference point (t_ref, sigma_ref) per cam pair fixes the curve. sigma_max <= [s
 exactly t >= sigma_ref t_ref / [sigma_H] ("turned into a bound on the phase angle"); its tangent
 at t_ref, `stress_bound_deg(..., form="linear")`, is the linearisation a linear design asks for.
 At another speed n the inertial load scales as n^2, so sigma_max(t, n) = sigma_ref (t_ref / t)
-(n / n_ref), n_ref the speed of the references: a function of n / t alone, as the rebound (its
-v0 and F scale as n / t).
+(n / n_ref), n_ref the speed of the references: a function of n / t alone, as the rebound is:
+the cam's rise in its own time depends on t / n only (lambda = omega t / Omega), so v0, the
+pulse and the first rebound are a function h(n / t), not proportional to it, and h is wavy (the
+lever rings during the rise): a(t) <= limit is then not one bound from one tangent.
 """
 import dataclasses
 import math
@@ -106,11 +109,12 @@ def time_floor_deg(min_ms, speed_rpm):
 def lever_stop(table) -> LeverStop:
     """The lift lever of the stop-impact model (models/stop_impact.py) from a scene's
     [structure.lever] table: LeverStop's parameters, each a number or {value, mark, why / where /
-    on}, and its `effects`. The one place the cyclogram couples to the stop model."""
+    on}, its `effects` and the cam's motion `law` (a name, effect cam_drive). The one place the
+    cyclogram couples to the stop model."""
     _table(table, "lever", dict)
     args = {}
     for key, entry in table.items():
-        if key == "effects":
+        if key in ("effects", "law"):
             args[key] = entry
             continue
         if isinstance(entry, dict):

@@ -12,9 +12,10 @@ limit is a cvxpy Parameter, so a what-if re-solve reuses the compiled problem (D
 p(1) = 0 removes the shift invariance that otherwise slows HiGHS a hundredfold.
 
 Entry points: `plan_cyclogram` (this LP); `repair_cyclogram` (its optimum checked against the
-exact rebound and contact stress, re-linearised and re-solved until they hold: issue 14, part
-4); `max_machine_speed` (the largest main-shaft speed, an LP in (p, n) because every law is a
-function of n / t; bisection on n as the general route and its check: part 5). `HeldLP` keeps
+exact rebound and contact stress, re-linearised and re-solved until they hold, with the exact
+bound `exact_amplitude_bound` where the wavy rebound's tangent cannot be trusted: issue 14, part
+4); `max_machine_speed` (the largest main-shaft speed: an LP in (p, n) when every law is a
+function of n / t, which a probe checks; bisection on n as the general route and its check: part 5). `HeldLP` keeps
 the LP in HiGHS for many solves that change bounds only.
 
 Sensitivities are reported in user terms with one sign convention: d(objective)/d(limit), the
@@ -660,25 +661,89 @@ def _dag_times(n, tails, heads, lb, first, last, span):
 
 # ------------------------------------------------------------------ check and repair after the LP (issue 14, part 4)
 
-def exact_amplitude_mm(task: Cyclogram, t_deg, speed_rpm=None):
-    """The lever's exact first rebound a(t, n) [mm] (eq. (2), solvers/stop_impact/law.py) at
-    `speed_rpm`, by default the task's speed; vectorised over t and n."""
+def exact_amplitude_mm(task: Cyclogram, t_deg, speed_rpm=None, lost=None):
+    """The lever's exact first rebound a(t, n) [mm] (the chain cam -> approach velocity -> impact
+    -> eq. (2), solvers/stop_impact/law.py) at `speed_rpm`, by default the task's speed;
+    vectorised over t and n. Where the roller leaves its cam: RollerLeftCam, or `lost`."""
     speed = task.speed_rpm if speed_rpm is None else speed_rpm
     if speed is None:
         raise ModelError("speed_rpm: the exact rebound law needs the main shaft's speed", key="speed_rpm")
-    return rebound_amplitude_mm(task.lever_model, speed, t_deg)
+    return rebound_amplitude_mm(task.lever_model, speed, t_deg, lost=lost)
+
+
+@dataclass(frozen=True)
+class AmplitudeBound:
+    """Where the exact rebound keeps its limit at one speed, on the stated range [lo_deg, to_deg]
+    of t: a(t) <= limit for every t in [from_deg, to_deg] (on the scan's grid of step_deg, the
+    crossing polished by brentq). `why`: "crossing" (a crosses the limit at from_deg),
+    "roller_left" (the roller leaves its cam below from_deg), "range" (a holds on the whole
+    range: from_deg = lo_deg) or "none" (a exceeds the limit already at to_deg: from_deg None)."""
+    speed_rpm: float
+    from_deg: float | None
+    lo_deg: float
+    to_deg: float
+    step_deg: float
+    amplitude_mm: float       # a at from_deg (at to_deg when none holds)
+    why: str
+    evaluations: int
+
+    def statement(self) -> str:
+        if self.from_deg is None:
+            return (f"a({self.to_deg:.6g} deg, {self.speed_rpm:.6g} rpm) = {self.amplitude_mm:.6g} mm exceeds the limit "
+                    f"at the top of the stated range [{self.lo_deg:.6g}, {self.to_deg:.6g}] deg: no t there keeps it")
+        return (f"a <= limit for every t in [{self.from_deg:.9g}, {self.to_deg:.6g}] deg at {self.speed_rpm:.6g} rpm "
+                f"(scan step {self.step_deg:g} deg from {self.to_deg:.6g} down, {self.why}"
+                f"{', brentq' if self.why == 'crossing' else ''}; {self.evaluations} evaluations)")
+
+
+def exact_amplitude_bound(task: Cyclogram, speed_rpm: float, lo_deg: float, to_deg: float,
+                          step_deg: float) -> AmplitudeBound:
+    """The smallest t in [lo_deg, to_deg] beyond which the exact rebound stays <= its limit up to
+    to_deg, at speed n: a walk down from to_deg in steps of step_deg to the first point over the
+    limit (or where the roller leaves its cam), the crossing in that last step by brentq
+    (bisection where the roller leaves: no rebound there to take a root of). a(t) is wavy (the
+    lever rings during the rise), so no tangent can give this bound; wiggles narrower than the
+    step are not resolved (tests/test_loom_repair.py checks the step against a dense scan)."""
+    limit, count = task.amplitude_limit_mm, [0]
+
+    def excess(t):
+        count[0] += 1
+        return float(np.ravel(exact_amplitude_mm(task, t, speed_rpm, lost=np.inf))[0]) - limit
+
+    def bound(from_deg, amplitude, why):
+        return AmplitudeBound(speed_rpm, from_deg, lo_deg, to_deg, step_deg, amplitude, why, count[0])
+    top = excess(to_deg)
+    if top > 0:
+        return bound(None, top + limit, "none")
+    hi = to_deg
+    while hi > lo_deg:
+        lo = max(hi - step_deg, lo_deg)
+        over = excess(lo)
+        if over > 0 and math.isfinite(over):
+            root = brentq(excess, lo, hi, xtol=1e-12 * hi, rtol=4 * np.finfo(float).eps)
+            return bound(root, excess(root) + limit, "crossing")
+        if over > 0:                            # the roller leaves its cam at lo: its edge by bisection
+            while hi - lo > 1e-10 * hi:
+                mid = 0.5 * (lo + hi)
+                lo, hi = (mid, hi) if excess(mid) > 0 else (lo, mid)
+            return bound(hi, excess(hi) + limit, "roller_left")
+        hi = lo
+    return bound(lo_deg, excess(lo_deg) + limit, "range")
 
 
 @dataclass
 class _ExactLimit:
-    """One exact limit f(t) <= limit on arc k (f convex, falling in t), the tangent the LP takes
-    of it (slope, intercept) and the lower bound on t that tangent gives."""
+    """One exact limit f(t) <= limit on arc k (f falls in t: convex for the stress, possibly wavy
+    for the rebound), the tangent the LP takes of it (slope, intercept), the lower bound on t that
+    tangent gives, and for the rebound its exact bound on the stated range (found once, on demand)."""
     kind: str                 # "amplitude" [mm] or "contact_stress" [MPa]
     k: int
     limit: float
     exact: object             # t [deg] -> f(t)
     slope: float
     intercept: float
+    find_range_bound: object = None     # () -> AmplitudeBound (the rebound only)
+    _range_bound: AmplitudeBound | None = None
 
     def bound_deg(self) -> float:
         return (self.limit - self.intercept) / self.slope if self.slope < 0 else -np.inf
@@ -690,8 +755,28 @@ class _ExactLimit:
         self.slope = (hi - lo) / (2 * h)
         self.intercept = mid - self.slope * t
 
+    def range_bound(self) -> AmplitudeBound:
+        if self._range_bound is None:
+            self._range_bound = self.find_range_bound()
+        return self._range_bound
 
-def _exact_limits(task: Cyclogram, stress_form: str) -> list[_ExactLimit]:
+    def cut(self, t: float) -> tuple[float, str]:
+        """The next round's lower bound on t from the tangent at t, and how it was found: "newton"
+        (the tangent's root) where that is safe, else "exact" (the range bound). The stress is
+        convex: always Newton. The rebound may rise or be flat at t (no root ahead), or its tangent
+        may overshoot the range bound (not under a wavy law): then the range bound."""
+        newton = self.bound_deg()
+        if self.kind == "contact_stress":
+            return newton, "newton"
+        exact = self.range_bound().from_deg
+        if exact is None:
+            return math.inf, "exact"
+        if math.isfinite(newton) and t < newton <= exact:
+            return newton, "newton"
+        return exact, "exact"
+
+
+def _exact_limits(task: Cyclogram, stress_form: str, scan_to_deg: float, scan_step_deg: float) -> list[_ExactLimit]:
     """The limits the LP linearised, each with its exact law and the tangent the first LP takes."""
     out = []
     for k in task.stress_arcs():
@@ -703,12 +788,18 @@ def _exact_limits(task: Cyclogram, stress_form: str) -> list[_ExactLimit]:
         if stress_form == "linear":     # exactly the model's tangent, not its difference quotient
             law.slope, law.intercept = -sigma_ref / t_ref, 2.0 * sigma_ref
         out.append(law)
+    phi = task.min_angles_deg()
     for k in task.amplitude_arcs():
-        law = _ExactLimit("amplitude", k, task.amplitude_limit_mm, functools.partial(exact_amplitude_mm, task), 0.0, 0.0)
+        find = functools.partial(cached_amplitude_bound, task, task.speed_rpm, float(phi[k]), scan_to_deg, scan_step_deg)
+        law = _ExactLimit("amplitude", k, task.amplitude_limit_mm,
+                          functools.partial(exact_amplitude_mm, task, lost=np.inf), 0.0, 0.0, find)
         if task.has_linear_amplitude:
             law.slope, law.intercept = task.amplitude_slope_mm_per_deg, task.amplitude_intercept_mm
-        else:                           # the lever alone: start from the tangent at the arc's [phi]
-            law.relinearise(max(float(task.min_angles_deg()[k]), 1e-3))
+        else:       # the lever alone: the tangent at the exact bound (a tangent elsewhere may overshoot it)
+            at = law.range_bound().from_deg
+            law.relinearise(at if at is not None else scan_to_deg)
+            if at is not None and not law.slope < 0:     # flat or rising there: a line whose bound is it
+                law.slope, law.intercept = -1.0, law.limit + at
         out.append(law)
     return out
 
@@ -716,34 +807,46 @@ def _exact_limits(task: Cyclogram, stress_form: str) -> list[_ExactLimit]:
 def repair_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] = "HIGHS",
                      stress_form: Literal["exact", "linear"] = "linear",
                      max_rounds: Annotated[int, Interval(ge=1, le=100)] = 20,
+                     scan_to_deg: Annotated[float, Interval(gt=0.0, le=360.0)] = 60.0,
+                     scan_step_deg: Annotated[float, Interval(ge=1e-3, le=10.0)] = 0.25,
                      tol_mm: Tolerance = 1e-9, tol_MPa: Tolerance = 1e-6, tol_deg: Tolerance = 1e-6) -> Result:
     """The LP of `plan_cyclogram`, checked against the exact laws at its optimum and repaired by
     sequential LP (issue 14, part 4).
 
     Round 1 solves the LP with the linear laws the task gives (the amplitude tangent; the stress
-    tangent at t_ref when stress_form = "linear"). At its optimum each linearised limit is
-    evaluated exactly: the rebound a(t, n) of eq. (2) with the lever's table, sigma_max =
+    tangent at t_ref when stress_form = "linear"; with the lever alone, the rebound's tangent at
+    its exact bound). At its optimum each linearised limit is
+    evaluated exactly: the lever's rebound a(t, n) (the chain, `exact_amplitude_mm`), sigma_max =
     sigma_ref t_ref / t. While one exceeds its limit by more than tol_mm / tol_MPa, every limit is
-    re-linearised at the current angle and the LP re-solved with the tangent's bound (the largest
-    met so far) as the arc's lower bound: a DPP re-solve. The laws are convex and fall in t, so
-    each tangent lies under its law: the bounds only tighten, never past the exact root, and the
-    rounds are Newton steps on it (quadratic convergence).
+    re-linearised at the current angle and the LP re-solved with a cut (the largest met so far) as
+    the arc's lower bound: a DPP re-solve. The stress is convex and falls in t: its tangent lies
+    under it and the cuts are Newton steps on its root (quadratic convergence). The chain's a(t)
+    is wavy, so a tangent is trusted only where it falls and its root lies between t and the
+    exact bound; otherwise the cut is the exact bound itself: the smallest t beyond which a stays
+    <= limit up to scan_to_deg (the stated range [phi, scan_to_deg]; `exact_amplitude_bound`: a
+    walk down in steps of scan_step_deg and brentq). An LP bound t >= b must hold for every t the
+    LP may pick above b, hence a bound on the range and not a root. When the laws hold at t, the
+    rebound is also checked on the range: a t below the exact bound (a Newton step that stopped at
+    a crossing of a wiggle) is cut there too.
 
-    Returns the last round's event times (p_*, t_*, span_deg ...), rounds, exact_amplitude_*_mm,
-    exact_sigma_*_MPa and linearisation_error_*: exact minus linear at round 1's optimum;
-    diagnostics["rounds"]: per round and limit t, exact, linear, error, excess and the cut.
-    SOLVED when the exact laws hold to the tolerances; LIMIT after max_rounds without it; an LP
-    that fails in a round returns its status, with the rounds so far.
+    Returns the last round's event times (p_*, t_*, span_deg ...), rounds, exact_amplitude_*_mm
+    (at the final t), amplitude_holds_from_*_deg and amplitude_holds_to_*_deg (a <= limit on that
+    range), exact_sigma_*_MPa and linearisation_error_*: exact minus linear at round 1's optimum;
+    diagnostics["rounds"]: per round and limit t, exact, linear, error, excess, the cut and how it
+    was found ("newton" or "exact"). SOLVED when the exact laws hold to the tolerances; LIMIT after
+    max_rounds without it; INFEASIBLE when the rebound exceeds its limit even at scan_to_deg (no
+    values; diagnostics best_t_deg and best_amplitude_mm, the least rebound on the range); an
+    LP that fails in a round returns its status, with the rounds so far.
     """
     start = time.perf_counter()
-    laws = _exact_limits(task, stress_form)
+    laws = _exact_limits(task, stress_form, scan_to_deg, scan_step_deg)
     unit = {"amplitude": "mm", "contact_stress": "MPa"}
     tol = {"amplitude": tol_mm, "contact_stress": tol_MPa}
     op_of = {(str(op["from"]), str(op["to"])): i for i, op in enumerate(task.operations)}
     cuts: dict[int, float] = {}
     history, current = [], task
     amplitude = [law for law in laws if law.kind == "amplitude"]
-    if amplitude and not task.has_linear_amplitude:     # the lever alone: round 1 takes its tangent at [phi]
+    if amplitude and not task.has_linear_amplitude:     # the lever alone: round 1 takes its tangent
         current = dataclasses.replace(task, amplitude_slope_mm_per_deg=amplitude[0].slope,
                                       amplitude_intercept_mm=amplitude[0].intercept)
     for round_ in range(1, max_rounds + 1):
@@ -755,20 +858,36 @@ def repair_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] =
         for law in laws:
             x, y = task.arcs[law.k]
             t = result.values[f"t_{x}_{y}_deg"]
-            exact, linear = float(law.exact(t)), law.slope * t + law.intercept
+            exact, linear = float(np.ravel(law.exact(t))[0]), law.slope * t + law.intercept
             rows.append({"limit": f"{law.kind}[{x}->{y}]", "t_deg": t, f"exact_{unit[law.kind]}": exact,
                          f"linear_{unit[law.kind]}": linear, "error": exact - linear, "excess": exact - law.limit})
         history.append({"round": round_, "span_deg": result.values["span_deg"], "limits": rows})
         over = [r["limit"] for r, law in zip(rows, laws) if r["excess"] > tol[law.kind]]
-        if not over:
+        # a rebound that holds at t but not on the whole range above it: cut at the range bound
+        short = [law for r, law in zip(rows, laws) if law.kind == "amplitude" and r["limit"] not in over
+                 and (law.range_bound().from_deg is None or r["t_deg"] < law.range_bound().from_deg - tol_deg)]
+        if not over and not short:
             return _repaired(task, result, laws, history, start, Status.SOLVED,
-                             f"exact laws hold after {round_} round(s) (tol {tol_mm:g} mm, {tol_MPa:g} MPa)")
+                             f"exact laws hold after {round_} round(s) (tol {tol_mm:g} mm, {tol_MPa:g} MPa); "
+                             + "; ".join(law.range_bound().statement() for law in amplitude))
         if round_ == max_rounds:
             break
         for row, law in zip(rows, laws):
             law.relinearise(row["t_deg"])
-            cuts[law.k] = max(cuts.get(law.k, -np.inf), law.bound_deg())
-            row["cut_deg"] = cuts[law.k]
+            if row["limit"] in over:
+                bound, how = law.cut(row["t_deg"])
+            elif law in short:
+                bound, how = law.range_bound().from_deg, "exact"
+            else:
+                bound, how = law.bound_deg(), "newton"
+            if bound is None or bound == math.inf:      # the rebound exceeds its limit on all the range
+                best = law.range_bound()        # the least rebound the range offers: at its top
+                return Result(Status.INFEASIBLE, {}, Timing(result.timing.build_s, time.perf_counter() - start),
+                              message=f"round {round_}: {row['limit']}: {best.statement()}", violated=(row["limit"],),
+                              diagnostics={"rounds": history, "best_t_deg": best.to_deg,
+                                           "best_amplitude_mm": best.amplitude_mm})
+            cuts[law.k] = max(cuts.get(law.k, -np.inf), bound)
+            row["cut_deg"], row["cut"] = cuts[law.k], how
         ops = [dict(op) for op in task.operations]
         for k, bound in cuts.items():
             op = ops[op_of[task.arcs[k]]]
@@ -788,6 +907,9 @@ def _repaired(task, result, laws, history, start, status, message, violated=()):
         x, y = task.arcs[law.k]
         name, unit = ("amplitude", "mm") if law.kind == "amplitude" else ("sigma", "MPa")
         values[f"exact_{name}_{x}_{y}_{unit}"] = last[f"exact_{unit}"]
+        if law.kind == "amplitude" and law._range_bound is not None and law._range_bound.from_deg is not None:
+            values[f"amplitude_holds_from_{x}_{y}_deg"] = law._range_bound.from_deg
+            values[f"amplitude_holds_to_{x}_{y}_deg"] = law._range_bound.to_deg
         values[f"linearisation_error_{name}_{x}_{y}_{unit}"] = first["error"]
     diagnostics = {k: v for k, v in result.diagnostics.items() if k not in ("binding", "sens_min_deg",
                                                                             "sensitivity_convention")}
@@ -803,53 +925,106 @@ def _angle_floors_deg(task: Cyclogram) -> np.ndarray:
     return np.fromiter((phi for _, _, phi in task.graph.edges(data="min_deg")), dtype=float, count=len(task.arcs))
 
 
-def largest_ratio_rpm_per_deg(task: Cyclogram) -> float:
-    """The largest n / t at which the lever's exact rebound keeps the amplitude limit [rpm/deg]:
-    a(t, n) = h(n / t) (v0 and F scale as n / t, the preload does not), h convex, h(0) = 0, so
-    h(r) <= limit exactly for r <= r*; r* by brentq on h. inf when no ratio breaks the limit."""
-    def h(r):
-        return float(np.ravel(rebound_amplitude_mm(task.lever_model, r, 1.0))[0]) - task.amplitude_limit_mm
-    hi = 1.0
-    while h(hi) <= 0:
-        hi *= 2.0
-        if hi > MAX_RATIO_RPM_PER_DEG:
-            return math.inf
-    return brentq(h, 0.0, hi, xtol=1e-15 * hi, rtol=4 * np.finfo(float).eps)
-
-
-MAX_RATIO_RPM_PER_DEG = 1e12     # n / t past any machine: 10^6 rpm over 10^-6 deg
 MIN_RPM = 1e-6                   # bisection: below it the machine is at rest
+N_OVER_T_RTOL = 1e-9             # the probe: a(c t, c n) = a(t, n) to this (the chain meets it to 1e-16)
+N_OVER_T_FACTORS = (0.5, 2.0)
+_AMPLITUDE_BOUNDS = BuildCache("loom.amplitude_bound", maxsize=64)
 
 
-def speed_coeffs_deg_per_rpm(task: Cyclogram) -> tuple[np.ndarray, list[str]]:
-    """Per arc, the angle every rpm of speed asks for [deg/rpm], and which law sets it ("min_time",
-    "contact_stress", "amplitude" or "" for none). Each law is f(n / t) <= limit, f increasing, so
-    it is t >= n / r*: a bound proportional to n (module docstring of `max_machine_speed`)."""
+def cached_amplitude_bound(task: Cyclogram, speed_rpm: float, lo_deg: float, to_deg: float,
+                           step_deg: float) -> AmplitudeBound:
+    """`exact_amplitude_bound` on [lo_deg, to_deg], from one walk per lever, limit, speed and top
+    (kept: a walk of the chain is about a hundred rises, a second). The walk goes down to
+    WALK_FLOOR_DEG; an arc whose [phi] lies above its crossing is shown to hold from [phi] on
+    (the walk saw a <= limit on all of [phi, to_deg]), so arcs with different [phi] share it."""
+    if speed_rpm is None:
+        raise ModelError("speed_rpm: the exact rebound law needs the main shaft's speed", key="speed_rpm")
+    key = (_frozen(task.lever), task.amplitude_limit_mm, float(speed_rpm), float(to_deg),
+           float(step_deg))
+    walk, _ = _AMPLITUDE_BOUNDS.get(key, lambda: exact_amplitude_bound(task, speed_rpm, min(WALK_FLOOR_DEG, to_deg),
+                                                                       to_deg, step_deg))
+    if walk.from_deg is not None and walk.from_deg <= lo_deg:
+        return dataclasses.replace(walk, from_deg=lo_deg, lo_deg=lo_deg, why="range",
+                                   amplitude_mm=float(np.ravel(exact_amplitude_mm(task, lo_deg, speed_rpm))[0]))
+    return dataclasses.replace(walk, lo_deg=lo_deg)
+
+
+WALK_FLOOR_DEG = 1.0             # the walk's lowest t: below it no cam rise of a loom
+
+
+def _frozen(value):
+    """A table (dicts, lists, numbers, names) as a hashable key."""
+    if isinstance(value, dict):
+        return tuple(sorted((k, _frozen(v)) for k, v in value.items()))
+    if isinstance(value, (list, tuple)):
+        return tuple(_frozen(v) for v in value)
+    return value
+
+
+def n_over_t_probe(task: Cyclogram, scan_to_deg: float) -> tuple[bool, float]:
+    """Whether every speed-dependent law is a function of n / t alone, and the largest relative
+    change seen. The time floor (0.006 n T) and the stress (sigma_ref t_ref n / (t n_ref)) are by
+    their form; the rebound is probed: a(c t, c n) against a(t, n) for c = 0.5, 2 at t =
+    scan_to_deg and 3/4 of it, n the task's speed. (The chain passes: its rise in its own time
+    depends on lambda = omega t / Omega only, and the impact on v0 only; see models/loom.py.)"""
+    if not task.amplitude_arcs():
+        return True, 0.0
+    n, worst = _reference_rpm(task), 0.0
+    for t in (scan_to_deg, 0.75 * scan_to_deg):
+        base = float(np.ravel(exact_amplitude_mm(task, t, n, lost=np.nan))[0])
+        for c in N_OVER_T_FACTORS:
+            other = float(np.ravel(exact_amplitude_mm(task, c * t, c * n, lost=np.nan))[0])
+            if np.isnan(base) and np.isnan(other):
+                continue
+            worst = max(worst, abs(other - base) / max(abs(base), 1e-300) if np.isfinite(other - base) else math.inf)
+    return worst <= N_OVER_T_RTOL, worst
+
+
+def _reference_rpm(task):
+    if task.speed_rpm is None:
+        raise ModelError("speed_rpm: the rebound's exact bound is found at a reference speed; give speed_rpm",
+                         key="speed_rpm")
+    return task.speed_rpm
+
+
+def speed_coeffs_deg_per_rpm(task: Cyclogram, scan_to_deg: float = 60.0, scan_step_deg: float = 0.25
+                             ) -> tuple[np.ndarray, list[str], dict]:
+    """Per arc, the angle every rpm of speed asks for [deg/rpm], which law sets it ("min_time",
+    "contact_stress", "amplitude" or "" for none), and per amplitude arc its exact bound at the
+    task's speed. Each law is f(n / t) <= limit, so it is t >= n / r*: a bound proportional to n.
+    For the wavy rebound r* = n_ref / T, T the exact bound at n_ref on [phi, scan_to_deg]
+    (`exact_amplitude_bound`): a <= limit for every n / t in [n_ref / scan_to_deg, r*]."""
     g = task.time_coeffs_deg_per_rpm()
     why = ["min_time" if c > 0 else "" for c in g]
     for k in task.stress_arcs():
         c = task.stress_coeff_deg_per_rpm(k)
         if c > g[k]:
             g[k], why[k] = c, "contact_stress"
-    if task.amplitude_arcs():
-        ratio = largest_ratio_rpm_per_deg(task)
-        for k in task.amplitude_arcs():
-            if 1.0 / ratio > g[k]:
-                g[k], why[k] = 1.0 / ratio, "amplitude"
-    return g, why
+    bounds, phi = {}, _angle_floors_deg(task)
+    for k in task.amplitude_arcs():
+        n_ref = _reference_rpm(task)
+        bounds[k] = cached_amplitude_bound(task, n_ref, float(phi[k]), scan_to_deg, scan_step_deg)
+        c = math.inf if bounds[k].from_deg is None else bounds[k].from_deg / n_ref
+        if c > g[k]:
+            g[k], why[k] = c, "amplitude"
+    return g, why, bounds
 
 
-def max_machine_speed(task: Cyclogram, *, method: Literal["lp", "bisection"] = "lp",
+def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "lp", "bisection"] = "auto",
                       backend: Literal["HIGHS", "CLARABEL"] = "HIGHS",
-                      rtol: Annotated[float, Interval(ge=1e-9, le=1e-2)] = 1e-7) -> Result:
+                      rtol: Annotated[float, Interval(ge=1e-9, le=1e-2)] = 1e-7,
+                      scan_to_deg: Annotated[float, Interval(gt=0.0, le=360.0)] = 60.0,
+                      scan_step_deg: Annotated[float, Interval(ge=1e-3, le=10.0)] = 0.25) -> Result:
     """The largest main-shaft speed n at which every group fits the machine's cycle (issue 14,
     part 5), with the event times there.
 
     Every limit is a lower bound on a phase angle. [phi] does not depend on n; a time `min_ms`
     (the microshuttle's flight) asks for 0.006 n T deg; the contact stress, sigma_ref (t_ref / t)
     (n / n_ref) <= [sigma_H] (n_ref = stress_speed_rpm), and the lever's exact rebound
-    a(t, n) = h(n / t) <= a_lim depend on n and t only through r = n / t and grow with it. Each
-    is then r <= r*, i.e.
+    a(t, n) = h(n / t) <= a_lim depend on n and t only through r = n / t. The first two grow with
+    r; the chain's h is wavy, so its r* is where h first crosses the limit going up from the
+    stated range's start (`speed_coeffs_deg_per_rpm`): a <= limit for every r in [n_ref /
+    scan_to_deg, r*], n_ref = speed_rpm. Each law is then r <= r*, i.e.
 
         t(x, y) >= g(x, y) n,      g = 1 / r*  [deg/rpm]  (0.006 T; sigma_ref t_ref / ([sigma_H] n_ref); 1 / r*_a)
 
@@ -859,8 +1034,10 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["lp", "bisection"] = "
     cycle 60 (1/n): an LP in (tau, 1/n), minimising 1/n.) A law that is not a function of n / t
     alone (a dwell over which a vibration must decay, a time with an angle) breaks this; then
     method "bisection" is the general route: bisection on n, each step the exact bounds at that n
-    (the rebound's root in t by brentq, not through r*) and the event-time LP's feasibility, its
-    status checked. It is also the independent check of the LP. rtol (relative) on n: the answer
+    (the rebound's by `exact_amplitude_bound` at that n on [phi, scan_to_deg], not through r*)
+    and the event-time LP's feasibility, its status checked. It is also the independent check of
+    the LP. Method "auto" takes the LP when `n_over_t_probe` finds the rebound a function of n / t
+    (diagnostics: method, n_over_t_probe_rel), else bisection. rtol (relative) on n: the answer
     is certified by the longest-path certificate at n (1 - tol) (fits) and n (1 + tol) (does not);
     below 1e-9 the LP's own feasibility tolerance (1e-7 deg on a 360 deg cycle) decides.
 
@@ -870,22 +1047,37 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["lp", "bisection"] = "
     its group and deg/rpm), critical_chain, sens_cycle_rpm_per_deg. INFEASIBLE when the cycle
     cannot hold the groups at any speed (the conflicting chain named, as in plan_cyclogram),
     UNBOUNDED when no limit grows with n on a chain the cycle closes, LIMIT when bisection finds
-    every speed up to its search bound feasible.
+    every speed up to its search bound feasible or the rebound exceeds its limit on the whole
+    stated range. With a rebound: amplitude_holds_from_*_deg and amplitude_holds_to_*_deg, the
+    range of t at the answer on which a <= limit is shown.
     """
     if task.cycle_deg is None:
         raise ModelError("cycle_deg: the machine's speed is limited by its cycle; give cycle_deg", key="cycle_deg")
     start = time.perf_counter()
     net = _Net.structure(task)        # the speed LP has its own bounds
     phi = _angle_floors_deg(task)
-    g, why = speed_coeffs_deg_per_rpm(task)
-    if method == "lp":
+    g, why, amp_bounds = speed_coeffs_deg_per_rpm(task, scan_to_deg, scan_step_deg)
+    scales, probe = n_over_t_probe(task, scan_to_deg)
+    chosen = ("lp" if scales else "bisection") if method == "auto" else method
+    def timing():
+        return Timing(0.0, time.perf_counter() - start)
+    diagnostics = {"method": chosen, "method_asked": method, "n_over_t_probe_rel": probe, "backend": backend,
+                   "amplitude_bounds_at_reference": {f"{task.arcs[k][0]}->{task.arcs[k][1]}": b.statement()
+                                                     for k, b in amp_bounds.items()}}
+    unreached = [b for b in amp_bounds.values() if b.from_deg is None]
+    if unreached:
+        return Result(Status.LIMIT, {}, timing(), message=f"the rebound's bound is not on the stated range: "
+                      f"{unreached[0].statement()} (raise scan_to_deg)", diagnostics=diagnostics)
+    if chosen == "lp":
         n_max, status, message, build_s, extra = _speed_lp(task, net, phi, g, backend)
+        bounds_at = functools.partial(_lp_bounds_at, phi, g, why)
     else:
-        n_max, status, message, build_s, extra = _speed_bisection(task, net, phi, rtol)
+        bounds_at = functools.partial(_exact_bounds_at, task, phi, scan_to_deg, scan_step_deg)
+        n_max, status, message, build_s, extra = _speed_bisection(task, net, bounds_at, rtol)
     def timing():
         return Timing(build_s, time.perf_counter() - start - build_s)
-    diagnostics = {"method": method, "backend": backend, "speed_coeffs_deg_per_rpm":
-                   {f"{x}->{y}": float(g[k]) for k, (x, y) in enumerate(task.arcs) if g[k] > 0}} | extra
+    diagnostics |= {"speed_coeffs_deg_per_rpm":
+                    {f"{x}->{y}": float(g[k]) for k, (x, y) in enumerate(task.arcs) if g[k] > 0}} | extra
     if status is Status.SOLVED and n_max * g.max(initial=0.0) <= 1e-6:   # below a micro-degree: at rest
         status = Status.INFEASIBLE
     if status is Status.INFEASIBLE:
@@ -901,14 +1093,22 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["lp", "bisection"] = "
         message += ": no limit grows with the speed on a chain the cycle closes (no stress, rebound or min_ms there)"
     if status is not Status.SOLVED:
         return Result(status, {}, timing(), message=message, diagnostics=diagnostics)
-    lb = np.maximum(phi, g * n_max)
-    certified = _certify_speed(task, net, phi, g, n_max, rtol)
-    values, more = _speed_report(task, net, lb, g, why, n_max, rtol)
+    lb, why_at = bounds_at(n_max)
+    certified = _certify_speed(task, net, bounds_at, n_max, rtol)
+    values, more = _speed_report(task, net, lb, why_at, n_max, rtol)
+    for k, b in amp_bounds.items():      # the range of t on which the rebound was shown to hold, at n_max
+        x, y = task.arcs[k]
+        at = b if chosen == "lp" else _exact_amplitude_bounds(task, phi, scan_to_deg, scan_step_deg, n_max)[k]
+        scale = n_max / b.speed_rpm if chosen == "lp" else 1.0
+        values[f"amplitude_holds_from_{x}_{y}_deg"] = at.from_deg * scale
+        values[f"amplitude_holds_to_{x}_{y}_deg"] = at.to_deg * scale
     diagnostics |= more
     if certified:
         return Result(Status.INACCURATE, values, timing(), message=certified, diagnostics=diagnostics)
-    message = (f"max_speed_rpm = {n_max:.6g} ({method}); limiting group {more['limiting_group']}, "
-               f"constraint {more['limiting_constraint']}")
+    reason = ("every law a function of n / t" if scales else "the rebound is not a function of n / t") \
+        + f" (probe {probe:.2g})"
+    message = (f"max_speed_rpm = {n_max:.6g} ({chosen}{': ' + reason if method == 'auto' else ''}); limiting "
+               f"group {more['limiting_group']}, constraint {more['limiting_constraint']}")
     return Result(Status.SOLVED, values, timing(), message=message, diagnostics=diagnostics)
 
 
@@ -958,24 +1158,37 @@ def _speed_lp(task, net, phi, g, backend):
     return None, status, f"{backend}: {problem.status}", build_s, extra
 
 
-def _exact_bounds_at(task, phi, n_rpm):
-    """Each arc's smallest angle at speed n from the exact laws directly [deg]: the time floor,
-    the stress bound sigma_ref t_ref n / ([sigma_H] n_ref), the rebound's root in t (brentq)."""
+def _lp_bounds_at(phi, g, why, n_rpm):
+    """The LP's bounds at speed n: max([phi], g n) [deg], and which law sets each ("" for [phi])."""
+    lb = np.maximum(phi, g * n_rpm)
+    return lb, [w if g[k] * n_rpm >= phi[k] else "" for k, w in enumerate(why)]
+
+
+def _exact_amplitude_bounds(task, phi, scan_to_deg, scan_step_deg, n_rpm):
+    """Per amplitude arc, the rebound's exact bound at speed n on [phi, scan_to_deg]."""
+    return {k: cached_amplitude_bound(task, n_rpm, float(phi[k]), scan_to_deg, scan_step_deg)
+            for k in task.amplitude_arcs()}
+
+
+def _exact_bounds_at(task, phi, scan_to_deg, scan_step_deg, n_rpm):
+    """Each arc's smallest angle at speed n from the exact laws directly [deg], and which law sets
+    it: the time floor, the stress bound sigma_ref t_ref n / ([sigma_H] n_ref), the rebound's
+    exact bound on [phi, scan_to_deg] (inf where none holds there). At n = 0: [phi]."""
     lb = np.maximum(phi, task.time_coeffs_deg_per_rpm() * n_rpm)
+    why = ["min_time" if b > p else "" for b, p in zip(lb, phi)]
     for k in task.stress_arcs():
-        lb[k] = max(lb[k], task.stress_coeff_deg_per_rpm(k) * n_rpm)
-    for k in task.amplitude_arcs():
-        def a(t, n_rpm=n_rpm):
-            return float(np.ravel(exact_amplitude_mm(task, t, n_rpm))[0]) - task.amplitude_limit_mm
-        if n_rpm > 0 and a(lb[k]) > 0:
-            hi = 2.0 * lb[k]
-            while a(hi) > 0:
-                hi *= 2.0
-            lb[k] = brentq(a, lb[k], hi, xtol=1e-13 * hi, rtol=4 * np.finfo(float).eps)
-    return lb
+        bound = task.stress_coeff_deg_per_rpm(k) * n_rpm
+        if bound > lb[k]:
+            lb[k], why[k] = bound, "contact_stress"
+    if n_rpm > 0:
+        for k, b in _exact_amplitude_bounds(task, phi, scan_to_deg, scan_step_deg, n_rpm).items():
+            bound = math.inf if b.from_deg is None else b.from_deg
+            if bound > lb[k]:
+                lb[k], why[k] = bound, "amplitude"
+    return lb, why
 
 
-def _speed_bisection(task, net, phi, rtol):
+def _speed_bisection(task, net, bounds_at, rtol):
     """Bisection on n: feasible when the event-time LP with the exact bounds at n fits the cycle
     (one HiGHS model held through the steps, `HeldLP`; `backend` is the LP method's)."""
     start = time.perf_counter()
@@ -986,7 +1199,11 @@ def _speed_bisection(task, net, phi, rtol):
     steps = []
 
     def feasible(n_rpm):
-        status, _ = lp.solve(_exact_bounds_at(task, phi, n_rpm), windows, task.cycle_deg)
+        lb, _ = bounds_at(n_rpm)
+        if not np.all(np.isfinite(lb)):          # a rebound over its limit on the whole stated range
+            steps.append((n_rpm, "no bound on the range"))
+            return False
+        status, _ = lp.solve(lb, windows, task.cycle_deg)
         steps.append((n_rpm, status.value))
         if status not in (Status.SOLVED, Status.INFEASIBLE):
             raise _Undecided(f"HiGHS: {status.value} at n = {n_rpm:.9g} rpm")
@@ -1024,18 +1241,19 @@ def _conflict_at(task, net, lb):
     return [(u, label, w) for u, _, w, label in positive_cycle(_arcs_at(task, net, lb))]
 
 
-def _certify_speed(task, net, phi, g, n_max, tol):
+def _certify_speed(task, net, bounds_at, n_max, tol):
     """'' when the bounds at n_max (1 - tol) leave no positive cycle and those at n_max (1 + tol)
     do (so n_max is the largest speed to tol); else why not."""
     below, above = n_max * (1 - tol), n_max * (1 + tol)
-    if _conflict_at(task, net, np.maximum(phi, g * below)):
+    lb_below, lb_above = bounds_at(below)[0], bounds_at(above)[0]
+    if not np.all(np.isfinite(lb_below)) or _conflict_at(task, net, lb_below):
         return f"certificate failed: n = {below:.9g} rpm (just under the answer) does not fit the cycle"
-    if not _conflict_at(task, net, np.maximum(phi, g * above)):
+    if np.all(np.isfinite(lb_above)) and not _conflict_at(task, net, lb_above):
         return f"certificate failed: n = {above:.9g} rpm (just over the answer) still fits the cycle"
     return ""
 
 
-def _speed_report(task, net, lb, g, why, n_max, tol):
+def _speed_report(task, net, lb, why, n_max, tol):
     """Event times at max speed (earliest start), exact readings, and which constraints limit it."""
     first = net.names[net.first]
     if task.windows or task.syncs:
@@ -1067,9 +1285,9 @@ def _speed_report(task, net, lb, g, why, n_max, tol):
     chain = nx.shortest_path(crit, first, end) if first in crit and end in crit and nx.has_path(crit, first, end) else []
     limiting = []
     for k, (x, y) in enumerate(net.arcs):
-        if g[k] > 0 and f"{x}->{y}" in critical and g[k] * n_max >= lb[k] - tol * max(1.0, lb[k]):
+        if why[k] and f"{x}->{y}" in critical:      # set by a law that grows with n (deg/rpm: its secant)
             limiting.append({"constraint": f"{why[k]}[{x}->{y}]", "group": group[x] or group[y] or "-",
-                             "deg_per_rpm": float(g[k]), "deg": float(g[k] * n_max)})
+                             "deg_per_rpm": float(lb[k] / n_max), "deg": float(lb[k])})
     by_group: dict = {}
     for row in limiting:
         by_group[row["group"]] = by_group.get(row["group"], 0.0) + row["deg_per_rpm"]

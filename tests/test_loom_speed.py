@@ -1,23 +1,32 @@
 """The whole machine at its highest speed (issue 14, part 5): the LP in (p, n) against bisection on
 n with LP feasibility, against the closed form along the critical chain, and the hard cases.
 
-Independent references: the rebound's root in t at 420 rpm by brentq on eq. (2) (the chain's
-closed form uses it once, the bisection at every speed), the stress bound in closed form, the
-flight's 0.006 n T, and the longest path of the exact bounds just above and below the answer."""
+The scene's lever is the chain (cam -> approach velocity -> impact -> eq. (2)): a(t, n) = h(n / t),
+wavy. Independent references: the chain's crossing T of 0.1 mm at 420 rpm by brentq in [38.6,
+38.7] deg, with a <= 0.1 mm checked on a 0.5 deg grid above it and a > 0.1 mm at the wiggle's
+minimum below; the stress bound in closed form; the flight's 0.006 n T; the longest path of the
+exact bounds just above and below the answer. The bisection route (the general one, for laws not
+of n / t) on the earlier fitted lever (tests/stop_impact_fitted.py) and on a law of n^2 / t."""
 import dataclasses
 
 import numpy as np
 import pytest
 from scipy.optimize import brentq
+from stop_impact_fitted import FREE, J_A_FITTED_KGM2, LEVER
 
-from mechopt import registry
+import mechopt.solvers.loom as loom_solver
+from mechopt import clear_caches, registry
 from mechopt.models.errors import ModelError
 from mechopt.models.loom import Cyclogram, lever_stop
-from mechopt.solvers.loom import max_machine_speed, plan_cyclogram
+from mechopt.solvers.loom import exact_amplitude_bound, max_machine_speed, plan_cyclogram
 from mechopt.solvers.result import Status
-from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
+from mechopt.solvers.stop_impact.law import RollerLeftCam, rebound_amplitude_mm
 
 CHAIN_FIXED_DEG = 20 + 10 + 15 + 5 + 20 + 15 + 25     # [phi] along 1-3-7-8-9-10-10.1-10.2-11-12-13-24
+STRESS_9_10_DEG_PER_RPM = 900 * 30 / (800 * 420)
+FLIGHT_DEG_PER_RPM = 0.006 * 60.0
+FITTED_LEVER = {k: v for k, v in LEVER.items() if k != "t_deg"} | {
+    "inertia_A_kgm2": J_A_FITTED_KGM2, "damping_ratio": 0.05, "effects": list(FREE)}
 
 
 @pytest.fixture(scope="module")
@@ -27,12 +36,25 @@ def task():
 
 @pytest.fixture(scope="module")
 def lp(task):
-    return max_machine_speed(task, method="lp")
+    return max_machine_speed(task)
 
 
-def root_deg(lever_table, speed_rpm, limit_mm=0.1):
-    lever = lever_stop(lever_table)
-    return brentq(lambda t: rebound_amplitude_mm(lever, speed_rpm, t) - limit_mm, 1.0, 300.0, xtol=1e-13)
+@pytest.fixture(scope="module")
+def chain_T(task):
+    """The smallest t beyond which the chain keeps a <= 0.1 mm up to 60 deg at 420 rpm [deg]."""
+    lever = lever_stop(task.lever)
+
+    def a(t):
+        return float(rebound_amplitude_mm(lever, 420.0, t))
+    root = brentq(lambda t: a(t) - 0.1, 38.6, 38.7, xtol=1e-13)
+    assert all(a(t) <= 0.1 for t in np.arange(38.7, 60.01, 0.5))
+    assert a(36.4) > 0.1 and a(38.0) > 0.1          # the wiggle: over the limit below the root
+    return root
+
+
+def closed_form_rpm(g_amp_deg_per_rpm, span_deg=360.0 - CHAIN_FIXED_DEG):
+    """n along the critical chain: [phi] plus n (g_amp + g_stress + g_flight) fills the cycle."""
+    return span_deg / (g_amp_deg_per_rpm + STRESS_9_10_DEG_PER_RPM + FLIGHT_DEG_PER_RPM)
 
 
 def longest_path(task, lb):
@@ -48,8 +70,9 @@ def longest_path(task, lb):
     return dist[task.last_event]
 
 
-def exact_bounds(task, n_rpm):
-    """Each arc's exact lower bound at speed n, computed here from the laws directly."""
+def exact_bounds(task, n_rpm, T_deg):
+    """Each arc's exact lower bound at speed n, computed here from the laws directly (the
+    rebound's: T n / 420, as a = h(n / t))."""
     lb = np.array([d["min_deg"] for _, _, d in task.graph.edges(data=True)])
     for k, (x, y) in enumerate(task.arcs):
         d = task.graph.edges[x, y]
@@ -59,31 +82,37 @@ def exact_bounds(task, n_rpm):
             ref = task.stress_models[d["stress"]]
             lb[k] = max(lb[k], ref["sigma_ref_MPa"] * ref["t_ref_deg"] * n_rpm / (800.0 * 420.0))
         if d["amplitude"] is not None:
-            lb[k] = max(lb[k], root_deg(task.lever, n_rpm))
+            lb[k] = max(lb[k], T_deg * n_rpm / 420.0)
     return lb
 
 
-def test_lp_and_bisection_agree_with_the_closed_form_of_the_critical_chain(task, lp):
-    bis = max_machine_speed(task, method="bisection", rtol=1e-8)
-    assert lp.status is Status.SOLVED and bis.status is Status.SOLVED
-    g_amp = root_deg(task.lever, 420.0) / 420.0          # a = h(n / t): the root grows as n
-    closed = (360.0 - CHAIN_FIXED_DEG) / (g_amp + 900 * 30 / (800 * 420) + 0.006 * 60.0)
-    assert lp.values["max_speed_rpm"] == pytest.approx(closed, rel=1e-9)
-    assert bis.values["max_speed_rpm"] == pytest.approx(closed, rel=1e-7)
-    assert bis.diagnostics["bisection_steps"] > 20
+def test_auto_takes_the_lp_because_the_chain_is_a_function_of_n_over_t(task, lp):
+    assert lp.status is Status.SOLVED and lp.diagnostics["method"] == "lp"
+    assert lp.diagnostics["n_over_t_probe_rel"] <= 1e-9 and "every law a function of n / t" in lp.message
+    lever = lever_stop(task.lever)                       # an independent point: (45 deg, 500 rpm) against half
+    assert float(rebound_amplitude_mm(lever, 250.0, 22.5)) == pytest.approx(
+        float(rebound_amplitude_mm(lever, 500.0, 45.0)), rel=1e-12)
 
 
-def test_the_answer_fits_the_cycle_and_a_hair_more_does_not(task, lp):
+def test_lp_agrees_with_the_closed_form_of_the_critical_chain(lp, chain_T):
+    assert lp.values["max_speed_rpm"] == pytest.approx(closed_form_rpm(chain_T / 420.0), rel=1e-9)
+    assert lp.values["t_3_7_deg"] == pytest.approx(chain_T * lp.values["max_speed_rpm"] / 420.0, rel=1e-9)
+
+
+def test_the_answer_fits_the_cycle_and_a_hair_more_does_not(task, lp, chain_T):
     n = lp.values["max_speed_rpm"]
-    assert longest_path(task, exact_bounds(task, n * (1 - 1e-7))) <= 360.0
-    assert longest_path(task, exact_bounds(task, n * (1 + 1e-6))) > 360.0
+    assert longest_path(task, exact_bounds(task, n * (1 - 1e-7), chain_T)) <= 360.0
+    assert longest_path(task, exact_bounds(task, n * (1 + 1e-6), chain_T)) > 360.0
 
 
-def test_exact_laws_hold_at_the_highest_speed(task, lp):
+def test_exact_laws_hold_at_the_highest_speed_on_the_stated_range(task, lp):
     v, n = lp.values, lp.values["max_speed_rpm"]
     lever = lever_stop(task.lever)
     assert float(rebound_amplitude_mm(lever, n, v["t_3_7_deg"])) == pytest.approx(0.1, rel=1e-9)
     assert v["amplitude_3_7_mm"] == pytest.approx(0.1, rel=1e-9)
+    assert v["amplitude_holds_from_3_7_deg"] == pytest.approx(v["t_3_7_deg"], rel=1e-12)
+    assert v["amplitude_holds_to_3_7_deg"] == pytest.approx(60.0 * n / 420.0, rel=1e-12)
+    assert max(float(rebound_amplitude_mm(lever, n, t)) for t in (45.0, 50.0, 60.0)) <= 0.1
     assert v["sigma_9_10_MPa"] == pytest.approx(800.0, rel=1e-9)
     assert v["t_10.1_10.2_deg"] == pytest.approx(0.006 * 60.0 * n, rel=1e-9)
     assert v["cycle_time_ms"] == pytest.approx(60_000.0 / n)
@@ -101,28 +130,51 @@ def test_limiting_group_constraint_and_cycle_sensitivity(task, lp):
         d["sens_cycle_rpm_per_deg"], rel=1e-6)
 
 
-def test_a_window_can_limit_the_speed_instead_of_the_cycle(task):
-    windowed = dataclasses.replace(task, windows=[{"from": "1", "to": "10.1", "max_deg": 120.0}])
-    lp, bis = (max_machine_speed(windowed, method=m) for m in ("lp", "bisection"))
-    assert lp.status is Status.SOLVED and bis.status is Status.SOLVED
+def test_the_roller_leaving_its_cam_bounds_the_angle_and_says_so(task):
+    """With a 10 mm limit the rebound never binds: the walk down from 60 deg stops where the
+    roller leaves its cam (about 420 / 14.36 rpm/deg = 29.2 deg, 1500 N closure)."""
+    loose = dataclasses.replace(task, amplitude_limit_mm=10.0)
+    b = exact_amplitude_bound(loose, 420.0, 20.0, 40.0, 1.0)
+    assert b.why == "roller_left" and "roller_left" in b.statement()
+    assert 28.0 < b.from_deg < 30.5
+    lever = lever_stop(task.lever)
+    with pytest.raises(RollerLeftCam):
+        rebound_amplitude_mm(lever, 420.0, b.from_deg * (1 - 1e-6))
+    assert float(rebound_amplitude_mm(lever, 420.0, b.from_deg * (1 + 1e-6))) < 10.0
+
+
+def test_on_the_fitted_n_over_t_lever_lp_and_bisection_agree_with_the_closed_form(task):
+    fitted = dataclasses.replace(task, lever=FITTED_LEVER)
+    lp, bis = max_machine_speed(fitted), max_machine_speed(fitted, method="bisection", rtol=1e-8, scan_step_deg=2.0)
+    assert lp.diagnostics["method"] == "lp" and bis.status is Status.SOLVED
+    root = brentq(lambda t: float(rebound_amplitude_mm(lever_stop(FITTED_LEVER), 420.0, t)) - 0.1, 1.0, 300.0,
+                  xtol=1e-13)
+    assert lp.values["max_speed_rpm"] == pytest.approx(closed_form_rpm(root / 420.0), rel=1e-9)
+    assert bis.values["max_speed_rpm"] == pytest.approx(closed_form_rpm(root / 420.0), rel=1e-7)
+    assert bis.diagnostics["bisection_steps"] > 20
+    windowed = dataclasses.replace(fitted, windows=[{"from": "1", "to": "10.1", "max_deg": 120.0}])
+    lp, bis = (max_machine_speed(windowed, method=m, scan_step_deg=2.0) for m in ("lp", "bisection"))
     assert lp.values["max_speed_rpm"] == pytest.approx(bis.values["max_speed_rpm"], rel=1e-6)
-    g_amp = root_deg(task.lever, 420.0) / 420.0
-    assert lp.values["max_speed_rpm"] == pytest.approx((120.0 - 50.0) / (g_amp + 900 * 30 / (800 * 420)), rel=1e-9)
+    assert lp.values["max_speed_rpm"] == pytest.approx((120.0 - 50.0) / (root / 420.0 + STRESS_9_10_DEG_PER_RPM),
+                                                       rel=1e-9)
 
 
-def test_with_preload_the_rebound_is_not_proportional_and_the_lp_still_holds(task):
-    """With the preload a(t, n) = h(n / t) is no longer h' r: the LP's r* comes from brentq on h."""
-    lever = task.lever | {"effects": [*task.lever["effects"], "preload"], "preload_mm": 0.05}
-    pre = dataclasses.replace(task, lever=lever)
-    lp, bis = (max_machine_speed(pre, method=m, rtol=1e-8) for m in ("lp", "bisection"))
-    assert lp.status is Status.SOLVED and bis.status is Status.SOLVED
-    assert lp.values["max_speed_rpm"] == pytest.approx(bis.values["max_speed_rpm"], rel=1e-7)
-    lever = lever_stop(lever)
-
-    def a(n, t):
-        return float(rebound_amplitude_mm(lever, n, t))
-    assert abs(a(840.0, 40.0) / a(420.0, 40.0) - 2.0) > 1e-2      # not proportional to n / t: r* is a real root
-    assert a(840.0, 80.0) == pytest.approx(a(420.0, 40.0), rel=1e-9)   # but a function of n / t alone
+def test_a_law_not_of_n_over_t_is_solved_by_bisection_and_the_lp_would_be_wrong(task, monkeypatch):
+    """a = 0.1 (n / 420)^2 (40 / t): the bound 40 (n / 420)^2 deg grows as n^2, so along the
+    chain 250 = 40 n^2 / 420^2 + (g_stress + g_flight) n, a quadratic."""
+    def squared(lever, speed_rpm, t_deg, lost=None):
+        return 0.1 * (np.asarray(speed_rpm, float) / 420.0) ** 2 * 40.0 / np.asarray(t_deg, float)
+    monkeypatch.setattr(loom_solver, "rebound_amplitude_mm", squared)
+    clear_caches()
+    auto, forced = max_machine_speed(task, rtol=1e-9), max_machine_speed(task, method="lp")
+    clear_caches()
+    qa, qb = 40.0 / 420.0**2, STRESS_9_10_DEG_PER_RPM + FLIGHT_DEG_PER_RPM
+    exact = (-qb + np.sqrt(qb * qb + 4 * qa * 250.0)) / (2 * qa)
+    assert auto.diagnostics["method"] == "bisection" and "not a function of n / t" in auto.message
+    assert auto.diagnostics["n_over_t_probe_rel"] > 0.1
+    assert auto.values["max_speed_rpm"] == pytest.approx(exact, rel=1e-7)
+    assert auto.values["t_3_7_deg"] == pytest.approx(40.0 * (exact / 420.0) ** 2, rel=1e-6)
+    assert abs(forced.values["max_speed_rpm"] / exact - 1) > 1e-3          # the (p, n) LP assumes n / t
 
 
 def test_a_machine_whose_groups_cannot_fit_any_speed_is_infeasible_naming_the_chain(task):
@@ -184,7 +236,7 @@ def test_held_highs_model_agrees_with_the_cvxpy_lp_and_says_infeasible():
     assert status is Status.INFEASIBLE and p is None
 
 
-def test_at_its_highest_speed_the_machine_s_longest_flight_is_the_flight_time(task, lp):
+def test_at_its_highest_speed_the_machine_s_longest_flight_is_the_flight_time(task, lp, chain_T):
     """The other question at a given n (loom.repair_cyclogram, exact laws): the longest limiting
     operation. At the highest speed it shrinks to the flight's own 60 ms; at 420 rpm it is the
     cycle minus the chain's exact bounds."""
@@ -194,5 +246,5 @@ def test_at_its_highest_speed_the_machine_s_longest_flight_is_the_flight_time(ta
     assert at_max.status is Status.SOLVED
     assert at_max.values["limiting_op_deg"] == pytest.approx(0.006 * 60.0 * n, rel=1e-7)
     at_420 = repair_cyclogram(task, stress_form="exact")
-    assert at_420.values["limiting_op_deg"] == pytest.approx(360.0 - CHAIN_FIXED_DEG - root_deg(task.lever, 420.0)
+    assert at_420.values["limiting_op_deg"] == pytest.approx(360.0 - CHAIN_FIXED_DEG - chain_T
                                                             - 900 * 30 / 800, abs=1e-6)

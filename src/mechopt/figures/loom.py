@@ -59,15 +59,20 @@ def gantt(run):
 
 def _repair_rounds(run, rounds):
     """|exact - limit| / limit of every limit that was ever exceeded, per round (log scale): the
-    sequential LP's Newton steps square it."""
+    sequential LP's Newton steps square it; a round whose next cut was the exact bound (the wavy
+    rebound: scan and brentq, no tangent trusted) is marked with a square."""
     fig = new_figure(figsize=(7, 4.5))
     ax = fig.subplots()
     limits = {row["limit"] for rnd in rounds for row in rnd["limits"] if row["excess"] > 0}
     for name in sorted(limits):
         rows = [next(r for r in rnd["limits"] if r["limit"] == name) for rnd in rounds]
         value = rows[0].get("exact_mm", rows[0].get("exact_MPa")) - rows[0]["excess"]     # the limit
-        ax.semilogy([rnd["round"] for rnd in rounds], [max(abs(r["excess"]) / value, 1e-17) for r in rows],
-                    marker="o", label=name)
+        excess = [max(abs(r["excess"]) / value, 1e-17) for r in rows]
+        line, = ax.semilogy([rnd["round"] for rnd in rounds], excess, marker="o", label=name)
+        exact = [(rnd["round"], e) for rnd, r, e in zip(rounds, rows, excess) if r.get("cut") == "exact"]
+        if exact:
+            ax.semilogy(*zip(*exact), linestyle="none", marker="s", markersize=11, markerfacecolor="none",
+                        color=line.get_color(), label=f"{name}: next cut at the exact bound")
     ax.set(xlabel="LP round", ylabel="|exact - limit| / limit at the round's optimum",
            title=f"{run.scene.id}: exact laws at each round's optimum")
     ax.set_xticks([rnd["round"] for rnd in rounds])
