@@ -83,8 +83,8 @@ def test_closed_table_is_a_periodic_spline_through_its_points():
     assert np.min(nx * x / 30 + ny * y / 30) > 1 - 1e-6          # counter-clockwise: outward normal
 
 
-TABLE_SCENE = """id = "mine/table-csv"
-title = "a cam given as a CSV point table"
+TABLE_SCENE = """id = "mine/table"
+title = "a cam given as a point table"
 source = "a test"
 task = "cam_profile.ProfileFit"
 solver = "cam_cutter.minimax"
@@ -93,8 +93,9 @@ err_width_mm = {{ value = 0.01, mark = "assumed", why = "a test" }}
 [solver_settings]
 count = 400
 [structure]
-points_mm = {{ csv = "{csv}", columns = ["x_mm", "y_mm"] }}
+points_mm = {points}
 """
+CSV_TABLE = '{{ csv = "{csv}", columns = ["x_mm", "y_mm"] }}'
 
 
 def test_csv_table_of_a_limacon_gives_back_its_linkage(tmp_path):
@@ -103,7 +104,7 @@ def test_csv_table_of_a_limacon_gives_back_its_linkage(tmp_path):
     # the scene names the CSV relative to its own folder
     (tmp_path / "tables").mkdir()
     shutil.copy(ROOT / "examples" / "cam-profile-table.csv", tmp_path / "tables" / "cam.csv")
-    (tmp_path / "cam.toml").write_text(TABLE_SCENE.format(csv="tables/cam.csv"), encoding="utf-8")
+    (tmp_path / "cam.toml").write_text(TABLE_SCENE.format(points=CSV_TABLE.format(csv="tables/cam.csv")), encoding="utf-8")
     run = registry.run(str(tmp_path / "cam.toml"))
     assert run.status is Status.SOLVED and run.values["max_deviation_mm"] < 3e-4
     assert run.values["H_mm"] == pytest.approx(4.0, abs=5e-3) and run.values["L_mm"] == pytest.approx(50.0, abs=1e-3)
@@ -117,7 +118,7 @@ def test_csv_table_of_a_limacon_gives_back_its_linkage(tmp_path):
 def test_a_bad_csv_table_is_named_with_its_line(tmp_path, table, match):
     if table is not None:
         (tmp_path / "cam.csv").write_text(table, encoding="utf-8")
-    (tmp_path / "cam.toml").write_text(TABLE_SCENE.format(csv="cam.csv"), encoding="utf-8")
+    (tmp_path / "cam.toml").write_text(TABLE_SCENE.format(points=CSV_TABLE.format(csv="cam.csv")), encoding="utf-8")
     with pytest.raises(SceneError, match=match):
         registry.find(str(tmp_path / "cam.toml"))
 
@@ -229,16 +230,7 @@ def test_a_users_scene_takes_a_point_table_in_its_structure(tmp_path):
     r = 50 + 4 * np.cos(s)                                    # the limaçon H = 4, L = 50 again
     rows = ", ".join(f"[{x:.6f}, {y:.6f}]" for x, y in zip(r * np.cos(s), r * np.sin(s)))
     path = tmp_path / "table.toml"
-    path.write_text(f'''id = "mine/table"
-title = "a cam given as a point table"
-source = "a test"
-task = "cam_profile.ProfileFit"
-solver = "cam_cutter.minimax"
-[params]
-err_width_mm = {{ value = 0.01, mark = "assumed", why = "a test" }}
-[structure]
-points_mm = [{rows}]
-''', encoding="utf-8")
+    path.write_text(TABLE_SCENE.format(points=f"[{rows}]"), encoding="utf-8")
     run = registry.run(str(path))
     assert run.status is Status.SOLVED and run.values["H_mm"] == pytest.approx(4.0, abs=0.02)
 
