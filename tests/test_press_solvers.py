@@ -153,6 +153,15 @@ def test_a_motor_too_weak_to_cut_stalls_as_a_status():
     assert start < r.diagnostics["events"][-1][2] < end and r.diagnostics["events"][-1][0] == "stop"
 
 
+def test_a_crank_that_swings_half_a_turn_and_stops_says_how_far_it_got():
+    """The 55 kg slide of the scene falls past the cut with a motor too weak to lift it again."""
+    weak = _task(flywheel_inertia_kgm2=1e-4, crank_mass_kg=0.0, motor_breakdown_torque_Nm=1.0, motor_inertia_kgm2=1e-4)
+    r = pd.events(weak, duration_s=0.5)
+    assert r.status is Status.INFEASIBLE and r.violated == ("stall",)
+    turned = float(np.degrees(r.values["final_phi_rad"] - r.arrays["phi_rad"][0]))
+    assert 90 < turned < 360 and f"turned only {turned:.1f} deg" in r.message
+
+
 def test_a_motor_below_friction_never_turns_the_crank():
     r = pd.events(_task(motor_breakdown_torque_Nm=0.3), start="rest", duration_s=0.3)
     assert r.status is Status.INFEASIBLE and r.violated == ("stall",) and "never turned" in r.message

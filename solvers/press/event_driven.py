@@ -115,7 +115,10 @@ def events(task: PressDrive, *, tol: Tolerance = 1e-10, duration_s: Duration = 1
     diagnostics |= failure
     if status is Status.SOLVED and values["revolutions"] < 1 and values["final_omega_rad_s"] <= 0:
         status, violated = Status.INFEASIBLE, ("stall",)
-        message = f"the crank never turned in {duration_s} s: the drive cannot overcome friction and the load"
+        turned = float(np.degrees(values["final_phi_rad"] - arrays["phi_rad"][0]))
+        message = ((f"the crank turned only {turned:.1f} deg in {duration_s} s and ended at rest or going back"
+                    if turned > 1.0 else f"the crank never turned in {duration_s} s")
+                   + ": the drive cannot overcome friction and the load")
     held = [e for e in trace.events if e[0] in ("stick", "slip")]
     if status is Status.SOLVED and held and held[-1][0] == "stick":
         status, violated = Status.INFEASIBLE, ("stall",)
