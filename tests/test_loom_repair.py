@@ -15,7 +15,7 @@ import pytest
 from scipy.optimize import brentq
 from stop_impact_fitted import FREE, J_A_FITTED_KGM2, LEVER
 
-import mechopt.solvers.loom as loom_solver
+import mechopt.solvers.loom.repair as loom_solver
 from mechopt import clear_caches, registry
 from mechopt.models.errors import ModelError, SceneError
 from mechopt.models.loom import lever_stop

@@ -15,7 +15,7 @@ from mechopt.benchmarks.loom import layered
 from mechopt.models.cache import clear as clear_caches
 from mechopt.models.errors import SolverError
 from mechopt.models.loom import Cyclogram
-from mechopt.solvers import loom as cyclogram_lp
+from mechopt.solvers.loom import plan as cyclogram_lp
 from mechopt.solvers.loom import plan_cyclogram
 from mechopt.solvers.result import Status
 

@@ -14,7 +14,7 @@ import pytest
 from scipy.optimize import brentq
 from stop_impact_fitted import FREE, J_A_FITTED_KGM2, LEVER
 
-import mechopt.solvers.loom as loom_solver
+import mechopt.solvers.loom.repair as loom_solver
 from mechopt import clear_caches, registry
 from mechopt.models.errors import ModelError
 from mechopt.models.loom import Cyclogram, lever_stop
@@ -223,7 +223,8 @@ def test_a_time_floor_is_an_angle_at_the_task_s_speed():
 
 
 def test_held_highs_model_agrees_with_the_cvxpy_lp_and_says_infeasible():
-    from mechopt.solvers.loom import HeldLP, _Net
+    from mechopt.solvers.loom import HeldLP
+    from mechopt.solvers.loom.plan import _Net
     task = registry.find("loom/group1").build()[0]
     net = _Net(task, "exact")
     held = HeldLP(len(net.names), net.tails, net.heads, first=net.first, last=net.last, with_cycle=True)

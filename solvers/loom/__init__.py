@@ -1,0 +1,22 @@
+"""Event times of a network cyclogram (paper 004, problem (1)) as a linear program.
+
+    minimise p(N) - p(1)   subject to   p(y) - p(x) >= [phi(x, y)]                 every operation
+                                        p(y) - p(x) >= sigma-bound(x, y; [sigma_H])  cam pairs
+                                        slope (p(7) - p(3)) + intercept <= a_lim    amplitude law
+                                        p(y) - p(x) <= w,  p(a) = p(b)             windows, syncs
+                                        p(1) = 0                                     anchor
+
+* `plan.plan_cyclogram`: this LP in cvxpy, checked against the longest-path certificate;
+* `repair.repair_cyclogram`: its optimum checked on the exact rebound and contact stress, re-cut
+  and re-solved until they hold (issue 14, part 4);
+* `speed.max_machine_speed`: the whole machine's largest speed, an LP in (p, n) or bisection on n
+  (part 5);
+* `event_time`: the LP's matrices, and `HeldLP`, the LP held in HiGHS for many bound changes.
+"""
+from mechopt.solvers.loom.event_time import HeldLP, build_event_time_lp, incidence
+from mechopt.solvers.loom.plan import conflict_chain, plan_cyclogram, positive_cycle
+from mechopt.solvers.loom.repair import exact_amplitude_bound, repair_cyclogram
+from mechopt.solvers.loom.speed import max_machine_speed
+
+__all__ = ["HeldLP", "build_event_time_lp", "conflict_chain", "exact_amplitude_bound", "incidence",
+           "max_machine_speed", "plan_cyclogram", "positive_cycle", "repair_cyclogram"]

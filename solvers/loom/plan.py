@@ -1,0 +1,517 @@
+"""Event times of a network cyclogram as a linear program in cvxpy (paper 004, problem (1)).
+
+    minimise p(N) - p(1)   subject to   p(y) - p(x) >= [phi(x, y)]                 every operation
+                                        p(y) - p(x) >= sigma-bound(x, y; [sigma_H])  cam pairs
+                                        slope (p(7) - p(3)) + intercept <= a_lim    amplitude law
+                                        p(y) - p(x) <= w,  p(a) = p(b)             windows, syncs
+                                        p(1) = 0                                     anchor
+
+or, for a machine with a limiting operation (x*, y*), maximise p(y*) - p(x*) with p(N) - p(1) <=
+cycle. Constraints are built from the incidence matrix (one vectorised row block per kind); every
+limit is a cvxpy Parameter, so a what-if re-solve reuses the compiled problem (DPP). The anchor
+p(1) = 0 removes the shift invariance that otherwise slows HiGHS a hundredfold.
+
+Sensitivities are reported in user terms with one sign convention: d(objective)/d(limit), the
+change of the objective (span_deg, or limiting_op_deg on a machine) per unit *increase* of the
+limit. Raising [sigma_H] or the amplitude limit loosens a bound: the span falls (<= 0); raising a
+critical [phi] lengthens it (+1 deg/deg).
+"""
+import math
+import time
+from collections import deque
+from typing import Literal
+
+import cvxpy as cp
+import networkx as nx
+import numpy as np
+
+from mechopt.models.cache import BuildCache
+from mechopt.models.errors import ModelError
+from mechopt.models.loom import Cyclogram, amplitude_mm, stress_bound_deg, stress_MPa
+from mechopt.solvers.loom.event_time import EventTimeLP, build_event_time_lp
+from mechopt.solvers.result import Result, Status, Timing, from_cvxpy
+from mechopt.solvers.settings import Tolerance
+
+SENSITIVITY_CONVENTION = ("sens_* = d(objective)/d(limit): change of the objective [deg] per unit increase "
+                          "of the limit; negative means a looser limit shortens the span")
+
+_BUILDS = BuildCache("loom.event_time_lp", maxsize=8)
+
+
+def plan_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] = "HIGHS",
+                   stress_form: Literal["exact", "linear"] = "exact", warm_start: bool = False,
+                   tol_deg: Tolerance = 1e-6) -> Result:
+    """Event times minimising the span p(N) - p(1) of a cyclogram (paper 004, problem (1)), or
+    maximising the machine's limiting operation inside its cycle.
+
+    Parameters
+    ----------
+    task : the network and its limits (models/loom.py).
+    backend : LP solver behind cvxpy.
+    stress_form : "exact" sigma_max(t) <= [sigma_H] as t >= K/[sigma_H]; "linear" its tangent at t_ref.
+    warm_start : pass cvxpy's warm start to the back end (with HiGHS it can slow re-solves).
+    tol_deg : tolerance [deg] for float = 0 (critical), binding constraints and the cross-check.
+
+    Returns
+    -------
+    Result with values span_deg, longest_path_deg (networkx / Bellman-Ford cross-check),
+    p_<event>_deg, t_<x>_<y>_deg, amplitude_<x>_<y>_mm, sigma_<x>_<y>_MPa, span_<group>_deg,
+    limiting_op_deg (machines) and sens_* sensitivities (see SENSITIVITY_CONVENTION);
+    diagnostics: float_deg, critical_ops, critical_chain, binding (with duals), sens_min_deg.
+    An infeasible problem names its conflicting chain (a positive cycle of the difference
+    constraints) in `message` and `violated`, its events and excess [deg] in `diagnostics`.
+
+    The back end's answer is checked against the exact certificate, whatever it says: a positive
+    cycle (above 1e-12 of the largest angle: round-off) makes the result INFEASIBLE, an optimum
+    differing from the longest path by more than tol_deg * max(1, |longest path|) INACCURATE.
+
+    Examples
+    --------
+    >>> from mechopt import registry
+    >>> r = plan_cyclogram(registry.find("loom/group1").build()[0])
+    >>> r.status.value, r.diagnostics["critical_chain"][:3]                             # doctest: +SKIP
+    ('SOLVED', ['1', '3', '7'])
+    """
+    start = time.perf_counter()
+    net = _Net(task, stress_form)
+    def build():
+        lp = build_event_time_lp(len(net.names), net.tails, net.heads, first=net.first, last=net.last,
+                                 stress_rows=net.stress_rows, stress_ref=net.stress_ref, stress_form=stress_form,
+                                 amplitude_rows=net.amp_rows, window_arcs=net.window_idx, sync_arcs=net.sync_idx,
+                                 limiting=net.limiting, with_cycle=task.cycle_deg is not None)
+        set_parameters(lp, task, net)
+        lp.problem.get_problem_data(backend)      # compile now, so build and solve time separate
+        return lp
+    # cvxpy caches one compiled chain per problem and solver
+    key = (backend, *net.signature())
+    fresh = key not in _BUILDS
+    lp, _ = _BUILDS.get(key, build)
+    set_parameters(lp, task, net)
+    build_s = time.perf_counter() - start
+    try:
+        lp.problem.solve(solver=backend, warm_start=warm_start)
+    except cp.error.SolverError as exc:
+        return Result(Status.FAILED, {}, Timing(build_s, time.perf_counter() - start - build_s),
+                      message=f"{backend} failed: {exc}")
+    status = from_cvxpy(lp.problem.status)
+    diagnostics = {"backend": backend, "stress_form": stress_form, "compiled_now": fresh,
+                   "events": len(net.names), "operations": len(net.tails), "isolated_events": task.isolated_events,
+                   "solver_status": lp.problem.status, "solve_time_backend_s": lp.problem.solver_stats.solve_time}
+    timing = lambda: Timing(build_s, time.perf_counter() - start - build_s)      # noqa: E731
+    # the certificate: an optimum is only trusted when the difference constraints hold no positive cycle
+    chain = conflict_chain(net) if status is Status.INFEASIBLE or _may_conflict(net) else []
+    if chain:
+        excess = math.fsum(w for _, _, w in chain)
+        diagnostics |= {"conflict_events": [v for v, _, _ in chain], "conflict_excess_deg": excess}
+        message = "infeasible: conflicting chain " + "; ".join(label for _, label, _ in chain)
+        message += f" (needs {excess:.6g} deg more than its limits allow)"
+        if status is not Status.INFEASIBLE:
+            message += f"; {backend} reported {lp.problem.status}, the longest-path certificate overrules it"
+        return Result(Status.INFEASIBLE, {}, timing(), message=message,
+                      violated=tuple(label for _, label, _ in chain), diagnostics=diagnostics)
+    if status is not Status.SOLVED:
+        message = f"{backend}: {lp.problem.status}"
+        if status is Status.INFEASIBLE:
+            message += " (no positive cycle among the difference constraints: a numerical failure?)"
+        return Result(status, {}, timing(), message=message, diagnostics=diagnostics)
+    values, more, overstressed, disagreement = _report(task, net, lp, tol_deg)
+    diagnostics |= more
+    solve_s = time.perf_counter() - start - build_s
+    if disagreement:
+        return Result(Status.INACCURATE, values, Timing(build_s, solve_s), message=disagreement,
+                      violated=overstressed, diagnostics=diagnostics)
+    objective = "limiting_op_deg" if net.limiting else "span_deg"
+    message = (f"{objective} = {values[objective]:.6g} ({backend}, {stress_form} stress, "
+               f"{'compiled' if fresh else 'DPP re-solve'}); {SENSITIVITY_CONVENTION}")
+    if overstressed:      # the tangent under-estimates sigma_max: the linearised optimum breaks the true limit
+        message += f"; the linearised stress limit lets sigma_max exceed [sigma_H] on {', '.join(overstressed)}"
+    return Result(Status.SOLVED, values, Timing(build_s, solve_s), message=message, violated=overstressed,
+                  diagnostics=diagnostics)
+
+
+def _may_conflict(net) -> bool:
+    """Whether the constraints can hold a positive cycle: windows and syncs can; a DAG of
+    operations only with its cycle, when its longest path (linear time) is longer than it."""
+    task = net.task
+    if task.windows or task.syncs:
+        return True
+    if task.cycle_deg is None:
+        return False
+    early, _ = _dag_times(len(net.names), net.tails, net.heads, net.lb, net.first, net.last, 0.0)
+    return early[net.last] > task.cycle_deg
+
+
+def set_parameters(lp: EventTimeLP, task: Cyclogram, net) -> None:
+    """Write the task's limits into the LP's Parameters (no recompilation)."""
+    prm = lp.params
+    prm["min_deg"].value = task.min_angles_deg()
+    if "sigma_H_MPa" in prm:
+        prm["sigma_H_MPa"].value = task.sigma_H_limit_MPa
+    if "inv_sigma_H_per_MPa" in prm:
+        prm["inv_sigma_H_per_MPa"].value = 1.0 / task.sigma_H_limit_MPa
+    if "slope_mm_per_deg" in prm:
+        prm["slope_mm_per_deg"].value = task.amplitude_slope_mm_per_deg
+        prm["intercept_mm"].value = task.amplitude_intercept_mm
+        prm["amplitude_limit_mm"].value = task.amplitude_limit_mm
+    if "window_deg" in prm:
+        prm["window_deg"].value = np.array([w for _, _, w in task.window_arcs()])
+    if "cycle_deg" in prm:
+        prm["cycle_deg"].value = task.cycle_deg
+
+
+class _Net:
+    """The task as index arrays (events in graph order, isolated events left out)."""
+
+    def __init__(self, task: Cyclogram, stress_form: str):
+        self.stress_form = stress_form
+        self._index_arrays(task)
+        self.stress_rows = task.stress_arcs()
+        refs = [task.stress_reference(k) for k in self.stress_rows]
+        self.stress_ref = (np.array([r[0] for r in refs]), np.array([r[1] for r in refs]))
+        self.amp_rows = task.amplitude_arcs()
+        if self.amp_rows and not task.has_linear_amplitude:
+            raise ModelError("amplitude_slope_mm_per_deg: the LP needs the linear amplitude law; with the lever's "
+                             "exact law alone use loom.repair_cyclogram or loom.max_machine_speed",
+                             key="amplitude_slope_mm_per_deg")
+        self.lb, self.lb_why = task.lower_bounds_deg(stress_form)
+
+    @classmethod
+    def structure(cls, task: Cyclogram) -> "_Net":
+        """The index arrays alone (events, arcs, ends, windows, syncs), for LPs with their own bounds."""
+        net = cls.__new__(cls)
+        net._index_arrays(task)
+        return net
+
+    def _index_arrays(self, task):
+        self.task = task
+        isolated = set(task.isolated_events)
+        self.names = [v for v in task.event_names if v not in isolated]
+        index = {v: i for i, v in enumerate(self.names)}
+        self.index = index
+        arcs = task.arcs
+        self.arcs = arcs
+        self.tails = np.fromiter((index[x] for x, _ in arcs), dtype=np.int64, count=len(arcs))
+        self.heads = np.fromiter((index[y] for _, y in arcs), dtype=np.int64, count=len(arcs))
+        self.first, self.last = index[task.first_event], index[task.last_event]
+        self.window_idx = [(index[a], index[b]) for a, b, _ in task.window_arcs()]
+        self.sync_idx = [(index[a], index[b]) for a, b in task.sync_pairs()]
+        lim = task.limiting_op
+        self.limiting = None if lim is None else (index[str(lim[0])], index[str(lim[1])])
+
+    def signature(self):
+        """What the compiled problem depends on (everything except the Parameters' values)."""
+        return (self.stress_form, len(self.names), self.tails.tobytes(), self.heads.tobytes(), self.first,
+                self.last, tuple(self.stress_rows), self.stress_ref[0].tobytes(), self.stress_ref[1].tobytes(),
+                tuple(self.amp_rows), tuple(self.window_idx), tuple(self.sync_idx), self.limiting,
+                self.task.cycle_deg is not None)
+
+    def arc_label(self, k):
+        x, y = self.arcs[k]
+        return f"t({x}->{y}) >= {self.lb[k]:.6g} deg ({self.lb_why[k]})"
+
+
+def conflict_chain(net) -> list[tuple[str, str, float]]:
+    """A positive cycle of the difference constraints (operations with their bounds, windows,
+    syncs and the machine cycle), as [(event, label and bound [deg] of the arc leaving it)]: the
+    bounds sum to more than 0 (a cycle cannot hold them, p(v) - p(u) >= w all round); empty when there is
+    none. Our own Bellman-Ford: networkx's find_negative_cycle can detect a cycle and then fail
+    to extract it ("Negative cycle is detected but not found", networkx issue #5916)."""
+    tight: dict = {}                       # (u, v) -> (w, label): the tightest constraint per pair
+
+    def add(u, v, w, label):               # p(v) - p(u) >= w
+        if (u, v) not in tight or w > tight[u, v][0]:
+            tight[u, v] = (w, label)
+
+    for k, (x, y) in enumerate(net.arcs):
+        add(x, y, float(net.lb[k]), net.arc_label(k))
+    for a, b, w in net.task.window_arcs():
+        add(b, a, -w, f"window p({b}) - p({a}) <= {w:.6g} deg")
+    for a, b in net.task.sync_pairs():
+        add(a, b, 0.0, f"sync p({a}) = p({b})")
+        add(b, a, 0.0, f"sync p({b}) = p({a})")
+    if net.task.cycle_deg is not None:
+        first, last = net.names[net.first], net.names[net.last]
+        add(last, first, -net.task.cycle_deg, f"cycle p({last}) - p({first}) <= {net.task.cycle_deg:.6g} deg")
+    arcs = [(u, v, w, label) for (u, v), (w, label) in tight.items()]
+    return [(u, label, w) for u, _, w, label in positive_cycle(arcs)]
+
+
+def positive_cycle(arcs) -> list[tuple]:
+    """A cycle of difference constraints (u, v, w, label), p(v) - p(u) >= w, whose w sum to more
+    than 0, in order around the cycle; [] when there is none.
+
+    Longest-path Bellman-Ford from a virtual root (every distance starts at 0), queue order; a
+    relaxation counts only when it gains more than 1e-12 of the largest |w| (round-off, so a
+    zero cycle of windows or syncs is not taken for a positive one): cycles above that are
+    found. Every n relaxations the predecessor arcs are searched for a cycle, which (all
+    relaxations strict) is a positive one; its sum is re-checked with math.fsum.
+    """
+    if not arcs:
+        return []
+    nodes = list(dict.fromkeys(v for a in arcs for v in a[:2]))
+    index = {v: i for i, v in enumerate(nodes)}
+    n = len(nodes)
+    out = [[] for _ in range(n)]
+    for k, (u, v, w, _) in enumerate(arcs):
+        out[index[u]].append((index[v], float(w), k))
+    eps = 1e-12 * max(1.0, max(abs(float(a[2])) for a in arcs))
+    dist, pred = [0.0] * n, [-1] * n
+    queue, queued = deque(range(n)), [True] * n
+    relaxed, cap = 0, n * len(arcs) + n         # Bellman-Ford's bound: past it a cycle must exist
+    while queue:
+        u = queue.popleft()
+        queued[u] = False
+        for v, w, k in out[u]:
+            if dist[u] + w > dist[v] + eps:
+                dist[v], pred[v] = dist[u] + w, k
+                relaxed += 1
+                if relaxed % n == 0 or relaxed > cap:
+                    cycle = _predecessor_cycle(arcs, index, pred)
+                    if cycle:
+                        return cycle
+                if not queued[v]:
+                    queue.append(v)
+                    queued[v] = True
+    return []
+
+
+def _predecessor_cycle(arcs, index, pred):
+    """A cycle of the predecessor arcs with a positive sum, in forward order, or []."""
+    seen = [0] * len(pred)                       # 0 unseen, else the walk that reached it
+    for start in range(len(pred)):
+        walk, v = start + 1, start
+        while v != -1 and not seen[v]:
+            seen[v] = walk
+            v = -1 if pred[v] < 0 else index[arcs[pred[v]][0]]
+        if v == -1 or seen[v] != walk:
+            continue
+        cycle, u = [], v                         # v lies on a cycle of this walk: unroll it
+        while True:
+            k = pred[u]
+            cycle.append(arcs[k])
+            u = index[arcs[k][0]]
+            if u == v:
+                break
+        cycle.reverse()
+        if math.fsum(a[2] for a in cycle) > 0:
+            return cycle
+    return []
+
+
+def _report(task, net, lp, tol):
+    """Values and diagnostics of a solved LP: times, angles, floats, duals, the cross-check."""
+    p = lp.p.value
+    p = p - p[net.first]                      # the anchor holds to solver precision; make it exact
+    t = p[net.heads] - p[net.tails]
+    span = float(p[net.last] - p[net.first])
+    values = {"span_deg": span}
+    if net.limiting:
+        values["limiting_op_deg"] = float(p[net.limiting[1]] - p[net.limiting[0]])
+    values |= {f"p_{v}_deg": float(p[i]) for i, v in enumerate(net.names)}
+    values |= {f"t_{x}_{y}_deg": float(t[k]) for k, (x, y) in enumerate(net.arcs)}
+    for k in net.amp_rows:
+        x, y = net.arcs[k]
+        values[f"amplitude_{x}_{y}_mm"] = float(amplitude_mm(task.amplitude_slope_mm_per_deg,
+                                                              task.amplitude_intercept_mm, t[k]))
+    for k in net.stress_rows:
+        x, y = net.arcs[k]
+        values[f"sigma_{x}_{y}_MPa"] = float(stress_MPa(*task.stress_reference(k), t[k]))
+    for group, members in task.groups.items():
+        times = [p[net.index[v]] for v in members if v in net.index]
+        if times:
+            values[f"span_{group}_deg"] = float(max(times) - min(times))
+    overstressed = [f"contact_stress[{x}->{y}]" for k, (x, y) in ((k, net.arcs[k]) for k in net.stress_rows)
+                    if values[f"sigma_{x}_{y}_MPa"] > task.sigma_H_limit_MPa * (1 + 1e-9)]
+
+    longest, disagreement = _cross_check(task, net, values, tol)
+    if longest is not None:
+        values["longest_path_deg"] = longest
+    sens, binding, sens_min = _sensitivities(task, net, lp, t, tol)
+    values |= sens
+    floats = _floats(task, net, p, values, tol)
+    diagnostics = {"binding": binding, "sens_min_deg": sens_min, "sensitivity_convention": SENSITIVITY_CONVENTION,
+                   "bound_source": {f"{x}->{y}": net.lb_why[k] for k, (x, y) in enumerate(net.arcs)},
+                   "stress_gap_deg": {f"{x}->{y}": _stress_gap(task, k) for k, (x, y) in
+                                      ((k, net.arcs[k]) for k in net.stress_rows)}}
+    diagnostics |= floats
+    return values, diagnostics, tuple(overstressed), disagreement
+
+
+def _stress_gap(task, k):
+    """Exact minus linearised stress bound of arc k [deg]: >= 0, the tangent lies under sigma_max."""
+    ref = task.stress_reference(k)
+    return float(stress_bound_deg(*ref, task.sigma_H_limit_MPa, "exact")
+                 - stress_bound_deg(*ref, task.sigma_H_limit_MPa, "linear"))
+
+
+def _cross_check(task, net, values, tol):
+    """The LP's optimum against the exact longest-path certificate: (longest first -> last [deg],
+    None or why the LP is not to be trusted). Tolerance: tol * max(1, |certificate|) [deg].
+
+    Without windows or syncs: networkx's DAG longest path (span), and for a machine the cycle
+    minus the longest chains before and after the limiting operation. With them: Bellman-Ford
+    on every difference constraint; max t(x*, y*) is minus the longest path y* -> x* through
+    the cycle's arc (the shortest-path dual of the LP)."""
+    lb = net.lb
+    if np.array_equal(lb, task.min_angles_deg()):      # no stress or amplitude bound: the model's graph as it is
+        g, weight = task.graph, "min_deg"
+    else:
+        g, weight = nx.DiGraph(), "weight"
+        g.add_weighted_edges_from((x, y, lb[k]) for k, (x, y) in enumerate(net.arcs))
+    first, last = net.names[net.first], net.names[net.last]
+    arcs = _constraint_arcs(net, lb)
+    try:
+        if task.windows or task.syncs:
+            longest = _longest(arcs, first)[last]
+            route = "Bellman-Ford on the difference constraints"
+        else:
+            longest = nx.dag_longest_path_length(g, weight=weight)
+            route = "networkx dag_longest_path_length"
+        if net.limiting:
+            x, y = net.names[net.limiting[0]], net.names[net.limiting[1]]
+            got, what = values["limiting_op_deg"], "limiting_op_deg"
+            if task.windows or task.syncs:
+                cycle = [] if task.cycle_deg is None else [(last, first, -task.cycle_deg)]
+                back = _longest(arcs + cycle, y).get(x)
+                expected = np.inf if back is None else -back
+            else:
+                before = nx.dag_longest_path_length(g.subgraph(nx.ancestors(g, x) | {x}), weight=weight)
+                after = nx.dag_longest_path_length(g.subgraph(nx.descendants(g, y) | {y}), weight=weight)
+                expected = task.cycle_deg - before - after
+        else:
+            expected, got, what = longest, values["span_deg"], "span_deg"
+    except nx.NetworkXUnbounded:       # a cycle within round-off of zero that Bellman-Ford takes as positive
+        return None, ("cross-check failed: the LP reports an optimum but Bellman-Ford finds a positive cycle "
+                      "that the conflict search (1e-12 round-off margin) does not: not certified")
+    longest = float(longest) if np.isfinite(longest) else None
+    if not abs(expected - got) <= tol * max(1.0, abs(expected)):
+        return longest, (f"cross-check failed: LP {what} = {got!r} but {route} gives {expected!r} "
+                         f"(tolerance {tol:g} deg per degree above 1): not certified")
+    return longest, None
+
+
+def _constraint_arcs(net, lb):
+    """Every difference constraint as (u, v, w): p(v) - p(u) >= w [deg]."""
+    arcs = [(x, y, float(lb[k])) for k, (x, y) in enumerate(net.arcs)]
+    arcs += [(b, a, -w) for a, b, w in net.task.window_arcs()]
+    arcs += [arc for a, b in net.task.sync_pairs() for arc in ((a, b, 0.0), (b, a, 0.0))]
+    return arcs
+
+
+def _longest(arcs, source, reverse=False):
+    """Longest distances from `source` over difference constraints (u, v, w) by Bellman-Ford on
+    negated weights [deg]; `reverse` follows the arcs backwards (distances *to* source)."""
+    g = nx.DiGraph()
+    for u, v, w in arcs:
+        u, v = (v, u) if reverse else (u, v)
+        if not g.has_edge(u, v) or g.edges[u, v]["weight"] > -w:      # keep the tightest
+            g.add_edge(u, v, weight=-w)
+    return {v: -d for v, d in nx.single_source_bellman_ford_path_length(g, source).items()}
+
+
+def _sensitivities(task, net, lp, t, tol):
+    """d(objective)/d(limit) from the duals, and the binding constraints by name."""
+    s, blocks = lp.sign, lp.blocks
+    sens, binding = {}, []
+    dual_phi = np.asarray(blocks["min_angle"].dual_value, dtype=float).ravel()
+    sens_min, phi = {}, task.min_angles_deg()
+    for k, (x, y) in enumerate(net.arcs):
+        if t[k] - phi[k] <= tol:
+            binding.append({"constraint": f"min_angle[{x}->{y}]", "dual_deg_per_deg": float(s * dual_phi[k]) + 0.0})
+        if abs(dual_phi[k]) > tol:
+            sens_min[f"{x}->{y}"] = float(s * dual_phi[k])
+    if "contact_stress" in blocks:
+        dual = np.asarray(blocks["contact_stress"].dual_value, dtype=float).ravel()
+        sigma = task.sigma_H_limit_MPa
+        if "sigma_H_MPa" in lp.params:
+            drhs = lp.stress_coeffs[1]                       # d(rhs)/d(sigma_H), tangent form
+        else:
+            drhs = -lp.stress_coeffs[0] / sigma**2           # d(K / sigma_H)/d(sigma_H)
+        sens["sens_sigma_H_deg_per_MPa"] = float(s * np.dot(dual, drhs))
+        rhs = (lp.stress_coeffs[0] + lp.stress_coeffs[1] * sigma if len(lp.stress_coeffs) == 2
+               else lp.stress_coeffs[0] / sigma)
+        for j, k in enumerate(net.stress_rows):
+            if t[k] - rhs[j] <= tol:
+                x, y = net.arcs[k]
+                binding.append({"constraint": f"contact_stress[{x}->{y}]",
+                                "dual_deg_per_MPa": float(s * dual[j] * drhs[j])})
+    if "amplitude" in blocks:
+        dual = np.asarray(blocks["amplitude"].dual_value, dtype=float).ravel()
+        sens["sens_amplitude_limit_deg_per_mm"] = float(-s * dual.sum())     # <= form: d/d(limit) = -dual
+        for j, k in enumerate(net.amp_rows):
+            a = amplitude_mm(task.amplitude_slope_mm_per_deg, task.amplitude_intercept_mm, t[k])
+            if task.amplitude_limit_mm - a <= tol * abs(task.amplitude_slope_mm_per_deg):
+                x, y = net.arcs[k]
+                binding.append({"constraint": f"amplitude[{x}->{y}]", "dual_deg_per_mm": float(-s * dual[j])})
+    if "window" in blocks:
+        dual = np.asarray(blocks["window"].dual_value, dtype=float).ravel()
+        for j, (a, b, w) in enumerate(task.window_arcs()):
+            sens[f"sens_window_{a}_{b}_deg_per_deg"] = float(-s * dual[j])
+            if w - (lp.p.value[net.index[b]] - lp.p.value[net.index[a]]) <= tol:
+                binding.append({"constraint": f"window[{a}->{b}]", "dual_deg_per_deg": float(-s * dual[j])})
+    if "cycle" in blocks:
+        dual = float(np.asarray(blocks["cycle"].dual_value))
+        sens["sens_cycle_deg_per_deg"] = -s * dual
+        binding.append({"constraint": "cycle", "dual_deg_per_deg": -s * dual}) if abs(dual) > tol else None
+    return sens, binding, sens_min
+
+
+def _floats(task, net, p, values, tol):
+    """Total float of every operation, LS(y) - ES(x) - lb, for the found span (a machine: with the
+    limiting operation held at its optimum); critical = float <= tol."""
+    names, lb = net.names, net.lb.copy()
+    if net.limiting:
+        k = next(k for k, (x, y) in enumerate(net.arcs) if (net.index[x], net.index[y]) == net.limiting)
+        lb[k] = values["limiting_op_deg"] - tol / 10      # held at its optimum (a hair under: no 0+ cycle)
+    first, last = names[net.first], names[net.last]
+    span = values["span_deg"]
+    try:
+        if task.windows or task.syncs:
+            arcs = _constraint_arcs(net, lb)
+            early = _longest(arcs, first)
+            to_last, to_first = _longest(arcs, last, reverse=True), _longest(arcs, first, reverse=True)
+            late = {v: min(span - to_last.get(v, -np.inf), -to_first.get(v, -np.inf)) for v in names}
+        else:
+            e, l = _dag_times(len(names), net.tails, net.heads, lb, net.first, net.last, span)
+            early, late = dict(zip(names, e.tolist())), dict(zip(names, l.tolist()))
+    except nx.NetworkXUnbounded:
+        return {"floats": "not available: round-off made a zero cycle positive"}
+    floats = {f"{x}->{y}": float(late[y] - early[x] - lb[k]) for k, (x, y) in enumerate(net.arcs)}
+    critical = [k for k, v in floats.items() if v <= tol]
+    crit = nx.DiGraph([tuple(k.split("->")) for k in critical])
+    linked = first in crit and last in crit and nx.has_path(crit, first, last)
+    chain = nx.shortest_path(crit, first, last) if linked else []     # one of the critical chains
+    return {"float_deg": floats, "critical_ops": critical, "critical_chain": chain}
+
+
+def _dag_times(n, tails, heads, lb, first, last, span):
+    """Earliest and latest event times of a DAG (arcs tails -> heads, durations lb) [deg], by
+    Kahn's topological order on index arrays: no graph objects, linear in the arcs."""
+    out_start = np.r_[0, np.cumsum(np.bincount(tails, minlength=n))]
+    by_tail = np.argsort(tails, kind="stable")
+    indeg = np.bincount(heads, minlength=n)
+    order, stack = [], [v for v in range(n) if indeg[v] == 0]
+    succ, lbl, hl = by_tail.tolist(), lb.tolist(), heads.tolist()
+    bounds = out_start.tolist()
+    indeg = indeg.tolist()
+    while stack:
+        u = stack.pop()
+        order.append(u)
+        for k in succ[bounds[u]:bounds[u + 1]]:
+            v = hl[k]
+            indeg[v] -= 1
+            if indeg[v] == 0:
+                stack.append(v)
+    early, late = [-np.inf] * n, [np.inf] * n
+    early[first], late[last] = 0.0, span
+    for u in order:
+        for k in succ[bounds[u]:bounds[u + 1]]:
+            if early[u] + lbl[k] > early[hl[k]]:
+                early[hl[k]] = early[u] + lbl[k]
+    for u in reversed(order):
+        for k in succ[bounds[u]:bounds[u + 1]]:
+            if late[hl[k]] - lbl[k] < late[u]:
+                late[u] = late[hl[k]] - lbl[k]
+    return np.array(early), np.array(late)
+
+

@@ -1,0 +1,310 @@
+"""Check and repair after the LP (issue 14, part 4): the optimum evaluated on the exact rebound and
+contact stress, re-cut and re-solved until they hold; `exact_amplitude_bound` where the wavy
+rebound's tangent cannot be trusted."""
+import dataclasses
+import functools
+import math
+import time
+from dataclasses import dataclass
+from typing import Annotated, Literal
+
+import numpy as np
+from scipy.optimize import brentq
+
+from mechopt.models.cache import BuildCache
+from mechopt.models.errors import ModelError
+from mechopt.models.loom import Cyclogram, stress_bound_deg, stress_MPa
+from mechopt.solvers.loom.plan import plan_cyclogram
+from mechopt.solvers.result import Result, Status, Timing
+from mechopt.solvers.settings import Interval, Tolerance
+from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
+
+
+def exact_amplitude_mm(task: Cyclogram, t_deg, speed_rpm=None, lost=None):
+    """The lever's exact first rebound a(t, n) [mm] (the chain cam -> approach velocity -> impact
+    -> eq. (2), solvers/stop_impact/law.py) at `speed_rpm`, by default the task's speed;
+    vectorised over t and n. Where the roller leaves its cam: RollerLeftCam, or `lost`."""
+    speed = task.speed_rpm if speed_rpm is None else speed_rpm
+    if speed is None:
+        raise ModelError("speed_rpm: the exact rebound law needs the main shaft's speed", key="speed_rpm")
+    return rebound_amplitude_mm(task.lever_model, speed, t_deg, lost=lost)
+
+
+@dataclass(frozen=True)
+class AmplitudeBound:
+    """Where the exact rebound keeps its limit at one speed, on the stated range [lo_deg, to_deg]
+    of t: a(t) <= limit for every t in [from_deg, to_deg] (on the scan's grid of step_deg, the
+    crossing polished by brentq). `why`: "crossing" (a crosses the limit at from_deg),
+    "roller_left" (the roller leaves its cam below from_deg), "range" (a holds on the whole
+    range: from_deg = lo_deg) or "none" (a exceeds the limit already at to_deg: from_deg None)."""
+    speed_rpm: float
+    from_deg: float | None
+    lo_deg: float
+    to_deg: float
+    step_deg: float
+    amplitude_mm: float       # a at from_deg (at to_deg when none holds)
+    why: str
+    evaluations: int
+
+    def statement(self) -> str:
+        if self.from_deg is None:
+            return (f"a({self.to_deg:.6g} deg, {self.speed_rpm:.6g} rpm) = {self.amplitude_mm:.6g} mm exceeds the limit "
+                    f"at the top of the stated range [{self.lo_deg:.6g}, {self.to_deg:.6g}] deg: no t there keeps it")
+        return (f"a <= limit for every t in [{self.from_deg:.9g}, {self.to_deg:.6g}] deg at {self.speed_rpm:.6g} rpm "
+                f"(scan step {self.step_deg:g} deg from {self.to_deg:.6g} down, {self.why}"
+                f"{', brentq' if self.why == 'crossing' else ''}; {self.evaluations} evaluations)")
+
+
+def exact_amplitude_bound(task: Cyclogram, speed_rpm: float, lo_deg: float, to_deg: float,
+                          step_deg: float) -> AmplitudeBound:
+    """The smallest t in [lo_deg, to_deg] beyond which the exact rebound stays <= its limit up to
+    to_deg, at speed n: a walk down from to_deg in steps of step_deg to the first point over the
+    limit (or where the roller leaves its cam), the crossing in that last step by brentq
+    (bisection where the roller leaves: no rebound there to take a root of). a(t) is wavy (the
+    lever rings during the rise), so no tangent can give this bound; wiggles narrower than the
+    step are not resolved (tests/test_loom_repair.py checks the step against a dense scan)."""
+    limit, count = task.amplitude_limit_mm, [0]
+
+    def excess(t):
+        count[0] += 1
+        return float(np.ravel(exact_amplitude_mm(task, t, speed_rpm, lost=np.inf))[0]) - limit
+
+    def bound(from_deg, amplitude, why):
+        return AmplitudeBound(speed_rpm, from_deg, lo_deg, to_deg, step_deg, amplitude, why, count[0])
+    top = excess(to_deg)
+    if top > 0:
+        return bound(None, top + limit, "none")
+    hi = to_deg
+    while hi > lo_deg:
+        lo = max(hi - step_deg, lo_deg)
+        over = excess(lo)
+        if over > 0 and math.isfinite(over):
+            root = brentq(excess, lo, hi, xtol=1e-12 * hi, rtol=4 * np.finfo(float).eps)
+            return bound(root, excess(root) + limit, "crossing")
+        if over > 0:                            # the roller leaves its cam at lo: its edge by bisection
+            while hi - lo > 1e-10 * hi:
+                mid = 0.5 * (lo + hi)
+                lo, hi = (mid, hi) if excess(mid) > 0 else (lo, mid)
+            return bound(hi, excess(hi) + limit, "roller_left")
+        hi = lo
+    return bound(lo_deg, excess(lo_deg) + limit, "range")
+
+
+@dataclass
+class _ExactLimit:
+    """One exact limit f(t) <= limit on arc k (f falls in t: convex for the stress, possibly wavy
+    for the rebound), the tangent the LP takes of it (slope, intercept), the lower bound on t that
+    tangent gives, and for the rebound its exact bound on the stated range (found once, on demand)."""
+    kind: str                 # "amplitude" [mm] or "contact_stress" [MPa]
+    k: int
+    limit: float
+    exact: object             # t [deg] -> f(t)
+    slope: float
+    intercept: float
+    find_range_bound: object = None     # () -> AmplitudeBound (the rebound only)
+    _range_bound: AmplitudeBound | None = None
+
+    def bound_deg(self) -> float:
+        return (self.limit - self.intercept) / self.slope if self.slope < 0 else -np.inf
+
+    def relinearise(self, t: float) -> None:
+        """The tangent at t; a central difference (the laws are smooth away from the preload's kinks)."""
+        h = 1e-6 * max(t, 1e-3)
+        lo, mid, hi = (float(v) for v in np.ravel(self.exact(np.array([t - h, t, t + h]))))
+        self.slope = (hi - lo) / (2 * h)
+        self.intercept = mid - self.slope * t
+
+    def range_bound(self) -> AmplitudeBound:
+        if self._range_bound is None:
+            self._range_bound = self.find_range_bound()
+        return self._range_bound
+
+    def cut(self, t: float) -> tuple[float, str]:
+        """The next round's lower bound on t from the tangent at t, and how it was found: "newton"
+        (the tangent's root) where that is safe, else "exact" (the range bound). The stress is
+        convex: always Newton. The rebound may rise or be flat at t (no root ahead), or its tangent
+        may overshoot the range bound (not under a wavy law): then the range bound."""
+        newton = self.bound_deg()
+        if self.kind == "contact_stress":
+            return newton, "newton"
+        exact = self.range_bound().from_deg
+        if exact is None:
+            return math.inf, "exact"
+        if math.isfinite(newton) and t < newton <= exact:
+            return newton, "newton"
+        return exact, "exact"
+
+
+def _exact_limits(task: Cyclogram, stress_form: str, scan_to_deg: float, scan_step_deg: float) -> list[_ExactLimit]:
+    """The limits the LP linearised, each with its exact law and the tangent the first LP takes."""
+    out = []
+    for k in task.stress_arcs():
+        sigma_ref, t_ref = task.stress_reference(k)
+        exact = functools.partial(stress_MPa, sigma_ref, t_ref)
+        at = t_ref if stress_form == "linear" else stress_bound_deg(sigma_ref, t_ref, task.sigma_H_limit_MPa)
+        law = _ExactLimit("contact_stress", k, task.sigma_H_limit_MPa, exact, 0.0, 0.0)
+        law.relinearise(at)
+        if stress_form == "linear":     # exactly the model's tangent, not its difference quotient
+            law.slope, law.intercept = -sigma_ref / t_ref, 2.0 * sigma_ref
+        out.append(law)
+    phi = task.min_angles_deg()
+    for k in task.amplitude_arcs():
+        find = functools.partial(cached_amplitude_bound, task, task.speed_rpm, float(phi[k]), scan_to_deg, scan_step_deg)
+        law = _ExactLimit("amplitude", k, task.amplitude_limit_mm,
+                          functools.partial(exact_amplitude_mm, task, lost=np.inf), 0.0, 0.0, find)
+        if task.has_linear_amplitude:
+            law.slope, law.intercept = task.amplitude_slope_mm_per_deg, task.amplitude_intercept_mm
+        else:       # the lever alone: the tangent at the exact bound (a tangent elsewhere may overshoot it)
+            at = law.range_bound().from_deg
+            law.relinearise(at if at is not None else scan_to_deg)
+            if at is not None and not law.slope < 0:     # flat or rising there: a line whose bound is it
+                law.slope, law.intercept = -1.0, law.limit + at
+        out.append(law)
+    return out
+
+
+def repair_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] = "HIGHS",
+                     stress_form: Literal["exact", "linear"] = "linear",
+                     max_rounds: Annotated[int, Interval(ge=1, le=100)] = 20,
+                     scan_to_deg: Annotated[float, Interval(gt=0.0, le=360.0)] = 60.0,
+                     scan_step_deg: Annotated[float, Interval(ge=1e-3, le=10.0)] = 0.25,
+                     tol_mm: Tolerance = 1e-9, tol_MPa: Tolerance = 1e-6, tol_deg: Tolerance = 1e-6) -> Result:
+    """The LP of `plan_cyclogram`, checked against the exact laws at its optimum and repaired by
+    sequential LP (issue 14, part 4).
+
+    Round 1 solves the LP with the linear laws the task gives (the amplitude tangent; the stress
+    tangent at t_ref when stress_form = "linear"; with the lever alone, the rebound's tangent at
+    its exact bound). At its optimum each linearised limit is
+    evaluated exactly: the lever's rebound a(t, n) (the chain, `exact_amplitude_mm`), sigma_max =
+    sigma_ref t_ref / t. While one exceeds its limit by more than tol_mm / tol_MPa, every limit is
+    re-linearised at the current angle and the LP re-solved with a cut (the largest met so far) as
+    the arc's lower bound: a DPP re-solve. The stress is convex and falls in t: its tangent lies
+    under it and the cuts are Newton steps on its root (quadratic convergence). The chain's a(t)
+    is wavy, so a tangent is trusted only where it falls and its root lies between t and the
+    exact bound; otherwise the cut is the exact bound itself: the smallest t beyond which a stays
+    <= limit up to scan_to_deg (the stated range [phi, scan_to_deg]; `exact_amplitude_bound`: a
+    walk down in steps of scan_step_deg and brentq). An LP bound t >= b must hold for every t the
+    LP may pick above b, hence a bound on the range and not a root. When the laws hold at t, the
+    rebound is also checked on the range: a t below the exact bound (a Newton step that stopped at
+    a crossing of a wiggle) is cut there too.
+
+    Returns the last round's event times (p_*, t_*, span_deg ...), rounds, exact_amplitude_*_mm
+    (at the final t), amplitude_holds_from_*_deg and amplitude_holds_to_*_deg (a <= limit on that
+    range), exact_sigma_*_MPa and linearisation_error_*: exact minus linear at round 1's optimum;
+    diagnostics["rounds"]: per round and limit t, exact, linear, error, excess, the cut and how it
+    was found ("newton" or "exact"). SOLVED when the exact laws hold to the tolerances; LIMIT after
+    max_rounds without it; INFEASIBLE when the rebound exceeds its limit even at scan_to_deg (no
+    values; diagnostics best_t_deg and best_amplitude_mm, the least rebound on the range); an
+    LP that fails in a round returns its status, with the rounds so far.
+    """
+    start = time.perf_counter()
+    laws = _exact_limits(task, stress_form, scan_to_deg, scan_step_deg)
+    unit = {"amplitude": "mm", "contact_stress": "MPa"}
+    tol = {"amplitude": tol_mm, "contact_stress": tol_MPa}
+    op_of = {(str(op["from"]), str(op["to"])): i for i, op in enumerate(task.operations)}
+    cuts: dict[int, float] = {}
+    history, current = [], task
+    amplitude = [law for law in laws if law.kind == "amplitude"]
+    if amplitude and not task.has_linear_amplitude:     # the lever alone: round 1 takes its tangent
+        current = dataclasses.replace(task, amplitude_slope_mm_per_deg=amplitude[0].slope,
+                                      amplitude_intercept_mm=amplitude[0].intercept)
+    for round_ in range(1, max_rounds + 1):
+        result = plan_cyclogram(current, backend=backend, stress_form=stress_form, tol_deg=tol_deg)
+        if result.status is not Status.SOLVED:
+            return dataclasses.replace(result, message=f"round {round_}: {result.message}",
+                                       diagnostics=result.diagnostics | {"rounds": history})
+        rows = []
+        for law in laws:
+            x, y = task.arcs[law.k]
+            t = result.values[f"t_{x}_{y}_deg"]
+            exact, linear = float(np.ravel(law.exact(t))[0]), law.slope * t + law.intercept
+            rows.append({"limit": f"{law.kind}[{x}->{y}]", "t_deg": t, f"exact_{unit[law.kind]}": exact,
+                         f"linear_{unit[law.kind]}": linear, "error": exact - linear, "excess": exact - law.limit})
+        history.append({"round": round_, "span_deg": result.values["span_deg"], "limits": rows})
+        over = [r["limit"] for r, law in zip(rows, laws) if r["excess"] > tol[law.kind]]
+        # a rebound that holds at t but not on the whole range above it: cut at the range bound
+        short = [law for r, law in zip(rows, laws) if law.kind == "amplitude" and r["limit"] not in over
+                 and (law.range_bound().from_deg is None or r["t_deg"] < law.range_bound().from_deg - tol_deg)]
+        if not over and not short:
+            return _repaired(task, result, laws, history, start, Status.SOLVED,
+                             f"exact laws hold after {round_} round(s) (tol {tol_mm:g} mm, {tol_MPa:g} MPa); "
+                             + "; ".join(law.range_bound().statement() for law in amplitude))
+        if round_ == max_rounds:
+            break
+        for row, law in zip(rows, laws):
+            law.relinearise(row["t_deg"])
+            if row["limit"] in over:
+                bound, how = law.cut(row["t_deg"])
+            elif law in short:
+                bound, how = law.range_bound().from_deg, "exact"
+            else:
+                bound, how = law.bound_deg(), "newton"
+            if bound is None or bound == math.inf:      # the rebound exceeds its limit on all the range
+                best = law.range_bound()        # the least rebound the range offers: at its top
+                return Result(Status.INFEASIBLE, {}, Timing(result.timing.build_s, time.perf_counter() - start),
+                              message=f"round {round_}: {row['limit']}: {best.statement()}", violated=(row["limit"],),
+                              diagnostics={"rounds": history, "best_t_deg": best.to_deg,
+                                           "best_amplitude_mm": best.amplitude_mm})
+            cuts[law.k] = max(cuts.get(law.k, -np.inf), bound)
+            row["cut_deg"], row["cut"] = cuts[law.k], how
+        ops = [dict(op) for op in task.operations]
+        for k, bound in cuts.items():
+            op = ops[op_of[task.arcs[k]]]
+            op["min_deg"] = max(float(op["min_deg"]), bound)
+        current = dataclasses.replace(current, operations=ops)
+    worst = max((r for r in history[-1]["limits"]), key=lambda r: r["excess"])
+    return _repaired(task, result, laws, history, start, Status.LIMIT,
+                     f"not converged in {max_rounds} round(s): exact {worst['limit']} exceeds its limit by "
+                     f"{worst['excess']:.3g} (raise max_rounds or loosen the tolerances)", violated=tuple(over))
+
+
+def _repaired(task, result, laws, history, start, status, message, violated=()):
+    """The last LP round's values with the linear-law readings replaced by the exact ones."""
+    values = {k: v for k, v in result.values.items() if not k.startswith(("amplitude_", "sigma_", "sens_"))}
+    values["rounds"] = float(len(history))
+    for law, first, last in zip(laws, history[0]["limits"], history[-1]["limits"]):
+        x, y = task.arcs[law.k]
+        name, unit = ("amplitude", "mm") if law.kind == "amplitude" else ("sigma", "MPa")
+        values[f"exact_{name}_{x}_{y}_{unit}"] = last[f"exact_{unit}"]
+        if law.kind == "amplitude" and law._range_bound is not None and law._range_bound.from_deg is not None:
+            values[f"amplitude_holds_from_{x}_{y}_deg"] = law._range_bound.from_deg
+            values[f"amplitude_holds_to_{x}_{y}_deg"] = law._range_bound.to_deg
+        values[f"linearisation_error_{name}_{x}_{y}_{unit}"] = first["error"]
+    diagnostics = {k: v for k, v in result.diagnostics.items() if k not in ("binding", "sens_min_deg",
+                                                                            "sensitivity_convention")}
+    diagnostics["rounds"] = history
+    return Result(status, values, Timing(result.timing.build_s, time.perf_counter() - start - result.timing.build_s),
+                  message=message, violated=violated, diagnostics=diagnostics)
+
+
+_AMPLITUDE_BOUNDS = BuildCache("loom.amplitude_bound", maxsize=64)
+
+
+def cached_amplitude_bound(task: Cyclogram, speed_rpm: float, lo_deg: float, to_deg: float,
+                           step_deg: float) -> AmplitudeBound:
+    """`exact_amplitude_bound` on [lo_deg, to_deg], from one walk per lever, limit, speed and top
+    (kept: a walk of the chain is about a hundred rises, a second). The walk goes down to
+    WALK_FLOOR_DEG; an arc whose [phi] lies above its crossing is shown to hold from [phi] on
+    (the walk saw a <= limit on all of [phi, to_deg]), so arcs with different [phi] share it."""
+    if speed_rpm is None:
+        raise ModelError("speed_rpm: the exact rebound law needs the main shaft's speed", key="speed_rpm")
+    key = (_frozen(task.lever), task.amplitude_limit_mm, float(speed_rpm), float(to_deg),
+           float(step_deg))
+    walk, _ = _AMPLITUDE_BOUNDS.get(key, lambda: exact_amplitude_bound(task, speed_rpm, min(WALK_FLOOR_DEG, to_deg),
+                                                                       to_deg, step_deg))
+    if walk.from_deg is not None and walk.from_deg <= lo_deg:
+        return dataclasses.replace(walk, from_deg=lo_deg, lo_deg=lo_deg, why="range",
+                                   amplitude_mm=float(np.ravel(exact_amplitude_mm(task, lo_deg, speed_rpm))[0]))
+    return dataclasses.replace(walk, lo_deg=lo_deg)
+
+
+WALK_FLOOR_DEG = 1.0             # the walk's lowest t: below it no cam rise of a loom
+
+
+def _frozen(value):
+    """A table (dicts, lists, numbers, names) as a hashable key."""
+    if isinstance(value, dict):
+        return tuple(sorted((k, _frozen(v)) for k, v in value.items()))
+    if isinstance(value, (list, tuple)):
+        return tuple(_frozen(v) for v in value)
+    return value

@@ -1,0 +1,364 @@
+"""The whole machine at its highest speed (issue 14, part 5): an LP in (p, n) when every law is a
+function of n / t (a probe checks), bisection on n with LP feasibility otherwise."""
+import functools
+import math
+import time
+from typing import Annotated, Literal
+
+import cvxpy as cp
+import networkx as nx
+import numpy as np
+
+from mechopt.models.errors import ModelError
+from mechopt.models.loom import MAX_RPM, Cyclogram
+from mechopt.solvers.loom.event_time import HeldLP, incidence
+from mechopt.solvers.loom.plan import _BUILDS, _constraint_arcs, _dag_times, _longest, _Net, positive_cycle
+from mechopt.solvers.loom.repair import cached_amplitude_bound, exact_amplitude_mm
+from mechopt.solvers.result import Result, Status, Timing, from_cvxpy
+from mechopt.solvers.settings import Interval
+
+
+def _angle_floors_deg(task: Cyclogram) -> np.ndarray:
+    """Each arc's [phi] as given, without the time floor of `min_ms` (that one grows with n) [deg]."""
+    return np.fromiter((phi for _, _, phi in task.graph.edges(data="min_deg")), dtype=float, count=len(task.arcs))
+
+
+MIN_RPM = 1e-6                   # bisection: below it the machine is at rest
+N_OVER_T_RTOL = 1e-9             # the probe: a(c t, c n) = a(t, n) to this (the chain meets it to 1e-16)
+N_OVER_T_FACTORS = (0.5, 2.0)
+def n_over_t_probe(task: Cyclogram, scan_to_deg: float) -> tuple[bool, float]:
+    """Whether every speed-dependent law is a function of n / t alone, and the largest relative
+    change seen. The time floor (0.006 n T) and the stress (sigma_ref t_ref n / (t n_ref)) are by
+    their form; the rebound is probed: a(c t, c n) against a(t, n) for c = 0.5, 2 at t =
+    scan_to_deg and 3/4 of it, n the task's speed. (The chain passes: its rise in its own time
+    depends on lambda = omega t / Omega only, and the impact on v0 only; see models/loom.py.)"""
+    if not task.amplitude_arcs():
+        return True, 0.0
+    n, worst = _reference_rpm(task), 0.0
+    for t in (scan_to_deg, 0.75 * scan_to_deg):
+        base = float(np.ravel(exact_amplitude_mm(task, t, n, lost=np.nan))[0])
+        for c in N_OVER_T_FACTORS:
+            other = float(np.ravel(exact_amplitude_mm(task, c * t, c * n, lost=np.nan))[0])
+            if np.isnan(base) and np.isnan(other):
+                continue
+            worst = max(worst, abs(other - base) / max(abs(base), 1e-300) if np.isfinite(other - base) else math.inf)
+    return worst <= N_OVER_T_RTOL, worst
+
+
+def _reference_rpm(task):
+    if task.speed_rpm is None:
+        raise ModelError("speed_rpm: the rebound's exact bound is found at a reference speed; give speed_rpm",
+                         key="speed_rpm")
+    return task.speed_rpm
+
+
+def speed_coeffs_deg_per_rpm(task: Cyclogram, scan_to_deg: float = 60.0, scan_step_deg: float = 0.25
+                             ) -> tuple[np.ndarray, list[str], dict]:
+    """Per arc, the angle every rpm of speed asks for [deg/rpm], which law sets it ("min_time",
+    "contact_stress", "amplitude" or "" for none), and per amplitude arc its exact bound at the
+    task's speed. Each law is f(n / t) <= limit, so it is t >= n / r*: a bound proportional to n.
+    For the wavy rebound r* = n_ref / T, T the exact bound at n_ref on [phi, scan_to_deg]
+    (`exact_amplitude_bound`): a <= limit for every n / t in [n_ref / scan_to_deg, r*]."""
+    g = task.time_coeffs_deg_per_rpm()
+    why = ["min_time" if c > 0 else "" for c in g]
+    for k in task.stress_arcs():
+        c = task.stress_coeff_deg_per_rpm(k)
+        if c > g[k]:
+            g[k], why[k] = c, "contact_stress"
+    bounds, phi = {}, _angle_floors_deg(task)
+    for k in task.amplitude_arcs():
+        n_ref = _reference_rpm(task)
+        bounds[k] = cached_amplitude_bound(task, n_ref, float(phi[k]), scan_to_deg, scan_step_deg)
+        c = math.inf if bounds[k].from_deg is None else bounds[k].from_deg / n_ref
+        if c > g[k]:
+            g[k], why[k] = c, "amplitude"
+    return g, why, bounds
+
+
+def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "lp", "bisection"] = "auto",
+                      backend: Literal["HIGHS", "CLARABEL"] = "HIGHS",
+                      rtol: Annotated[float, Interval(ge=1e-9, le=1e-2)] = 1e-7,
+                      scan_to_deg: Annotated[float, Interval(gt=0.0, le=360.0)] = 60.0,
+                      scan_step_deg: Annotated[float, Interval(ge=1e-3, le=10.0)] = 0.25) -> Result:
+    """The largest main-shaft speed n at which every group fits the machine's cycle (issue 14,
+    part 5), with the event times there.
+
+    Every limit is a lower bound on a phase angle. [phi] does not depend on n; a time `min_ms`
+    (the microshuttle's flight) asks for 0.006 n T deg; the contact stress, sigma_ref (t_ref / t)
+    (n / n_ref) <= [sigma_H] (n_ref = stress_speed_rpm), and the lever's exact rebound
+    a(t, n) = h(n / t) <= a_lim depend on n and t only through r = n / t. The first two grow with
+    r; the chain's h is wavy, so its r* is where h first crosses the limit going up from the
+    stated range's start (`speed_coeffs_deg_per_rpm`): a <= limit for every r in [n_ref /
+    scan_to_deg, r*], n_ref = speed_rpm. Each law is then r <= r*, i.e.
+
+        t(x, y) >= g(x, y) n,      g = 1 / r*  [deg/rpm]  (0.006 T; sigma_ref t_ref / ([sigma_H] n_ref); 1 / r*_a)
+
+    homogeneous and linear in (p, n): maximise n s.t. D p >= [phi], D p >= g n, windows, syncs,
+    p(first) = 0, p(last) - p(first) <= cycle is an LP (method "lp"). (In times rather than
+    angles, tau = t / (6 n), the same bounds read tau >= [phi] / 6 (1/n) and tau >= g / 6 and the
+    cycle 60 (1/n): an LP in (tau, 1/n), minimising 1/n.) A law that is not a function of n / t
+    alone (a dwell over which a vibration must decay, a time with an angle) breaks this; then
+    method "bisection" is the general route: bisection on n, each step the exact bounds at that n
+    (the rebound's by `exact_amplitude_bound` at that n on [phi, scan_to_deg], not through r*)
+    and the event-time LP's feasibility, its status checked. It is also the independent check of
+    the LP. Method "auto" takes the LP when `n_over_t_probe` finds the rebound a function of n / t
+    (diagnostics: method, n_over_t_probe_rel), else bisection. rtol (relative) on n: the answer
+    is certified by the longest-path certificate at n (1 - tol) (fits) and n (1 + tol) (does not);
+    below 1e-9 the LP's own feasibility tolerance (1e-7 deg on a 360 deg cycle) decides.
+
+    Returns max_speed_rpm, cycle_time_ms, span_deg, p_*, t_*, amplitude_*_mm and sigma_*_MPa
+    (exact, at max speed), limiting_op_deg (machines with one); diagnostics: limiting_group,
+    limiting_constraint, limiting (the speed-bound constraints on the critical chain, each with
+    its group and deg/rpm), critical_chain, sens_cycle_rpm_per_deg. INFEASIBLE when the cycle
+    cannot hold the groups at any speed (the conflicting chain named, as in plan_cyclogram),
+    UNBOUNDED when no limit grows with n on a chain the cycle closes, LIMIT when bisection finds
+    every speed up to its search bound feasible or the rebound exceeds its limit on the whole
+    stated range. With a rebound: amplitude_holds_from_*_deg and amplitude_holds_to_*_deg, the
+    range of t at the answer on which a <= limit is shown.
+    """
+    if task.cycle_deg is None:
+        raise ModelError("cycle_deg: the machine's speed is limited by its cycle; give cycle_deg", key="cycle_deg")
+    start = time.perf_counter()
+    net = _Net.structure(task)        # the speed LP has its own bounds
+    phi = _angle_floors_deg(task)
+    g, why, amp_bounds = speed_coeffs_deg_per_rpm(task, scan_to_deg, scan_step_deg)
+    scales, probe = n_over_t_probe(task, scan_to_deg)
+    chosen = ("lp" if scales else "bisection") if method == "auto" else method
+    def timing():
+        return Timing(0.0, time.perf_counter() - start)
+    diagnostics = {"method": chosen, "method_asked": method, "n_over_t_probe_rel": probe, "backend": backend,
+                   "amplitude_bounds_at_reference": {f"{task.arcs[k][0]}->{task.arcs[k][1]}": b.statement()
+                                                     for k, b in amp_bounds.items()}}
+    unreached = [b for b in amp_bounds.values() if b.from_deg is None]
+    if unreached:
+        return Result(Status.LIMIT, {}, timing(), message=f"the rebound's bound is not on the stated range: "
+                      f"{unreached[0].statement()} (raise scan_to_deg)", diagnostics=diagnostics)
+    if chosen == "lp":
+        n_max, status, message, build_s, extra = _speed_lp(task, net, phi, g, backend)
+        bounds_at = functools.partial(_lp_bounds_at, phi, g, why)
+    else:
+        bounds_at = functools.partial(_exact_bounds_at, task, phi, scan_to_deg, scan_step_deg)
+        n_max, status, message, build_s, extra = _speed_bisection(task, net, bounds_at, rtol)
+    def timing():
+        return Timing(build_s, time.perf_counter() - start - build_s)
+    diagnostics |= {"speed_coeffs_deg_per_rpm":
+                    {f"{x}->{y}": float(g[k]) for k, (x, y) in enumerate(task.arcs) if g[k] > 0}} | extra
+    if status is Status.SOLVED and n_max * g.max(initial=0.0) <= 1e-6:   # below a micro-degree: at rest
+        status = Status.INFEASIBLE
+    if status is Status.INFEASIBLE:
+        chain = _conflict_at(task, net, phi) or _conflict_at(task, net, np.maximum(phi, g * rtol))
+        groups = list(dict.fromkeys(task.graph.nodes[v]["group"] or "-" for v, _, _ in chain))
+        diagnostics["conflict_groups"] = groups
+        message = ("no speed fits: conflicting chain " + "; ".join(label for _, label, _ in chain)
+                   + f" (needs {math.fsum(w for _, _, w in chain):.6g} deg more than its limits allow as n -> 0;"
+                   + f" groups {', '.join(groups)})")
+        return Result(Status.INFEASIBLE, {}, timing(), message=message,
+                      violated=tuple(label for _, label, _ in chain), diagnostics=diagnostics)
+    if status is Status.UNBOUNDED:
+        message += ": no limit grows with the speed on a chain the cycle closes (no stress, rebound or min_ms there)"
+    if status is not Status.SOLVED:
+        return Result(status, {}, timing(), message=message, diagnostics=diagnostics)
+    lb, why_at = bounds_at(n_max)
+    certified = _certify_speed(task, net, bounds_at, n_max, rtol)
+    values, more = _speed_report(task, net, lb, why_at, n_max, rtol)
+    for k, b in amp_bounds.items():      # the range of t on which the rebound was shown to hold, at n_max
+        x, y = task.arcs[k]
+        at = b if chosen == "lp" else _exact_amplitude_bounds(task, phi, scan_to_deg, scan_step_deg, n_max)[k]
+        scale = n_max / b.speed_rpm if chosen == "lp" else 1.0
+        values[f"amplitude_holds_from_{x}_{y}_deg"] = at.from_deg * scale
+        values[f"amplitude_holds_to_{x}_{y}_deg"] = at.to_deg * scale
+    diagnostics |= more
+    if certified:
+        return Result(Status.INACCURATE, values, timing(), message=certified, diagnostics=diagnostics)
+    reason = ("every law a function of n / t" if scales else "the rebound is not a function of n / t") \
+        + f" (probe {probe:.2g})"
+    message = (f"max_speed_rpm = {n_max:.6g} ({chosen}{': ' + reason if method == 'auto' else ''}); limiting "
+               f"group {more['limiting_group']}, constraint {more['limiting_constraint']}")
+    return Result(Status.SOLVED, values, timing(), message=message, diagnostics=diagnostics)
+
+
+def _speed_lp(task, net, phi, g, backend):
+    """maximise n over (p, n): the LP of the docstring, built once per structure (DPP)."""
+    rows = np.flatnonzero(g > 0)
+    key = ("speed", backend, len(net.names), net.tails.tobytes(), net.heads.tobytes(), net.first, net.last,
+           rows.tobytes(), tuple(net.window_idx), tuple(net.sync_idx))
+
+    def build():
+        D = incidence(len(net.names), net.tails, net.heads)
+        p, n = cp.Variable(len(net.names), name="p_deg"), cp.Variable(nonneg=True, name="n_rpm")
+        prm = {"min_deg": cp.Parameter(len(net.tails), name="min_deg"),
+               "g": cp.Parameter(len(rows), nonneg=True, name="g_deg_per_rpm"),
+               "cycle_deg": cp.Parameter(nonneg=True, name="cycle_deg")}
+        cons = [D @ p >= prm["min_deg"], p[net.first] == 0, p[net.last] - p[net.first] <= prm["cycle_deg"]]
+        if len(rows):
+            cons.append(D[rows] @ p >= cp.multiply(prm["g"], n))
+        if net.window_idx:
+            w = np.asarray(net.window_idx)
+            prm["window_deg"] = cp.Parameter(len(w), name="window_deg")
+            cons.append(incidence(len(net.names), w[:, 0], w[:, 1]) @ p <= prm["window_deg"])
+        if net.sync_idx:
+            s = np.asarray(net.sync_idx)
+            cons.append(incidence(len(net.names), s[:, 0], s[:, 1]) @ p == 0)
+        problem = cp.Problem(cp.Maximize(n), cons)
+        set_values(prm)
+        problem.get_problem_data(backend)          # compile now, so build and solve time separate
+        return problem, n, prm
+
+    def set_values(prm):
+        prm["min_deg"].value, prm["g"].value, prm["cycle_deg"].value = phi, g[rows], task.cycle_deg
+        if "window_deg" in prm:
+            prm["window_deg"].value = np.array([w for _, _, w in task.window_arcs()])
+    start = time.perf_counter()
+    (problem, n, prm), _ = _BUILDS.get(key, build)
+    set_values(prm)
+    build_s = time.perf_counter() - start
+    try:
+        problem.solve(solver=backend, warm_start=False)
+    except cp.error.SolverError as exc:
+        return None, Status.FAILED, f"{backend} failed: {exc}", build_s, {}
+    status = from_cvxpy(problem.status)
+    extra = {"solver_status": problem.status}
+    if status is Status.SOLVED:
+        return float(n.value), status, "", build_s, extra
+    return None, status, f"{backend}: {problem.status}", build_s, extra
+
+
+def _lp_bounds_at(phi, g, why, n_rpm):
+    """The LP's bounds at speed n: max([phi], g n) [deg], and which law sets each ("" for [phi])."""
+    lb = np.maximum(phi, g * n_rpm)
+    return lb, [w if g[k] * n_rpm >= phi[k] else "" for k, w in enumerate(why)]
+
+
+def _exact_amplitude_bounds(task, phi, scan_to_deg, scan_step_deg, n_rpm):
+    """Per amplitude arc, the rebound's exact bound at speed n on [phi, scan_to_deg]."""
+    return {k: cached_amplitude_bound(task, n_rpm, float(phi[k]), scan_to_deg, scan_step_deg)
+            for k in task.amplitude_arcs()}
+
+
+def _exact_bounds_at(task, phi, scan_to_deg, scan_step_deg, n_rpm):
+    """Each arc's smallest angle at speed n from the exact laws directly [deg], and which law sets
+    it: the time floor, the stress bound sigma_ref t_ref n / ([sigma_H] n_ref), the rebound's
+    exact bound on [phi, scan_to_deg] (inf where none holds there). At n = 0: [phi]."""
+    lb = np.maximum(phi, task.time_coeffs_deg_per_rpm() * n_rpm)
+    why = ["min_time" if b > p else "" for b, p in zip(lb, phi)]
+    for k in task.stress_arcs():
+        bound = task.stress_coeff_deg_per_rpm(k) * n_rpm
+        if bound > lb[k]:
+            lb[k], why[k] = bound, "contact_stress"
+    if n_rpm > 0:
+        for k, b in _exact_amplitude_bounds(task, phi, scan_to_deg, scan_step_deg, n_rpm).items():
+            bound = math.inf if b.from_deg is None else b.from_deg
+            if bound > lb[k]:
+                lb[k], why[k] = bound, "amplitude"
+    return lb, why
+
+
+def _speed_bisection(task, net, bounds_at, rtol):
+    """Bisection on n: feasible when the event-time LP with the exact bounds at n fits the cycle
+    (one HiGHS model held through the steps, `HeldLP`; `backend` is the LP method's)."""
+    start = time.perf_counter()
+    lp = HeldLP(len(net.names), net.tails, net.heads, first=net.first, last=net.last,
+                window_arcs=net.window_idx, sync_arcs=net.sync_idx, with_cycle=True)
+    windows = [w for _, _, w in task.window_arcs()]
+    build_s = time.perf_counter() - start
+    steps = []
+
+    def feasible(n_rpm):
+        lb, _ = bounds_at(n_rpm)
+        if not np.all(np.isfinite(lb)):          # a rebound over its limit on the whole stated range
+            steps.append((n_rpm, "no bound on the range"))
+            return False
+        status, _ = lp.solve(lb, windows, task.cycle_deg)
+        steps.append((n_rpm, status.value))
+        if status not in (Status.SOLVED, Status.INFEASIBLE):
+            raise _Undecided(f"HiGHS: {status.value} at n = {n_rpm:.9g} rpm")
+        return status is Status.SOLVED
+    try:
+        if not feasible(0.0):
+            return None, Status.INFEASIBLE, "", build_s, {"bisection_steps": len(steps)}
+        lo, hi = 0.0, 1.0
+        while feasible(hi):
+            lo, hi = hi, 2.0 * hi
+            if hi > MAX_RPM:
+                return None, Status.LIMIT, (f"every speed up to the search bound {MAX_RPM:g} rpm fits: no limit "
+                                            f"grows with the speed"), build_s, {"bisection_steps": len(steps)}
+        while hi - lo > 0.25 * rtol * hi and hi > MIN_RPM:   # a quarter: the certificate's margin is rtol
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if feasible(mid) else (lo, mid)
+    except _Undecided as exc:
+        return None, Status.FAILED, str(exc), build_s, {"bisection_steps": len(steps)}
+    return (lo if hi > MIN_RPM else 0.0), Status.SOLVED, "", build_s, {"bisection_steps": len(steps),
+                                                                     "bisection_bracket_rpm": [lo, hi]}
+
+
+class _Undecided(Exception):
+    """A feasibility LP that was neither optimal nor infeasible: bisection cannot go on."""
+
+
+def _arcs_at(task, net, lb):
+    """The difference constraints with the arcs' bounds `lb` and the cycle, for `positive_cycle`."""
+    first, last = net.names[net.first], net.names[net.last]
+    arcs = [(u, v, w, f"t({u}->{v}) >= {w:.6g} deg") for u, v, w in _constraint_arcs(net, lb)]
+    return arcs + [(last, first, -task.cycle_deg, f"cycle p({last}) - p({first}) <= {task.cycle_deg:.6g} deg")]
+
+
+def _conflict_at(task, net, lb):
+    return [(u, label, w) for u, _, w, label in positive_cycle(_arcs_at(task, net, lb))]
+
+
+def _certify_speed(task, net, bounds_at, n_max, tol):
+    """'' when the bounds at n_max (1 - tol) leave no positive cycle and those at n_max (1 + tol)
+    do (so n_max is the largest speed to tol); else why not."""
+    below, above = n_max * (1 - tol), n_max * (1 + tol)
+    lb_below, lb_above = bounds_at(below)[0], bounds_at(above)[0]
+    if not np.all(np.isfinite(lb_below)) or _conflict_at(task, net, lb_below):
+        return f"certificate failed: n = {below:.9g} rpm (just under the answer) does not fit the cycle"
+    if np.all(np.isfinite(lb_above)) and not _conflict_at(task, net, lb_above):
+        return f"certificate failed: n = {above:.9g} rpm (just over the answer) still fits the cycle"
+    return ""
+
+
+def _speed_report(task, net, lb, why, n_max, tol):
+    """Event times at max speed (earliest start), exact readings, and which constraints limit it."""
+    first = net.names[net.first]
+    if task.windows or task.syncs:
+        early = _longest(_constraint_arcs(net, lb), first)
+        p = np.array([early.get(v, 0.0) for v in net.names])
+    else:
+        p, _ = _dag_times(len(net.names), net.tails, net.heads, lb, net.first, net.last, task.cycle_deg)
+    t = p[net.heads] - p[net.tails]
+    values = {"max_speed_rpm": n_max, "cycle_time_ms": 60_000.0 / n_max, "span_deg": float(p[net.last] - p[net.first])}
+    if task.limiting_op is not None:
+        x, y = (net.index[str(v)] for v in task.limiting_op)
+        values["limiting_op_deg"] = float(p[y] - p[x])
+    values |= {f"p_{v}_deg": float(p[i]) for i, v in enumerate(net.names)}
+    values |= {f"t_{x}_{y}_deg": float(t[k]) for k, (x, y) in enumerate(net.arcs)}
+    for k in task.amplitude_arcs():
+        x, y = net.arcs[k]
+        values[f"amplitude_{x}_{y}_mm"] = float(np.ravel(exact_amplitude_mm(task, t[k], n_max))[0])
+    for k in task.stress_arcs():
+        x, y = net.arcs[k]
+        values[f"sigma_{x}_{y}_MPa"] = float(task.stress_at_MPa(k, t[k], n_max))
+    span = task.cycle_deg
+    e, l_ = (_dag_times(len(net.names), net.tails, net.heads, lb, net.first, net.last, span)
+             if not (task.windows or task.syncs) else (p, p))
+    group = dict(task.graph.nodes(data="group"))
+    floats = {f"{x}->{y}": float(l_[net.index[y]] - e[net.index[x]] - lb[k]) for k, (x, y) in enumerate(net.arcs)}
+    critical = [a for a, f in floats.items() if f <= tol * max(1.0, span)]
+    crit = nx.DiGraph([tuple(a.split("->")) for a in critical])
+    end = net.names[net.last]
+    chain = nx.shortest_path(crit, first, end) if first in crit and end in crit and nx.has_path(crit, first, end) else []
+    limiting = []
+    for k, (x, y) in enumerate(net.arcs):
+        if why[k] and f"{x}->{y}" in critical:      # set by a law that grows with n (deg/rpm: its secant)
+            limiting.append({"constraint": f"{why[k]}[{x}->{y}]", "group": group[x] or group[y] or "-",
+                             "deg_per_rpm": float(lb[k] / n_max), "deg": float(lb[k])})
+    by_group: dict = {}
+    for row in limiting:
+        by_group[row["group"]] = by_group.get(row["group"], 0.0) + row["deg_per_rpm"]
+    slope = sum(by_group.values())
+    more = {"limiting": limiting, "float_deg": floats, "critical_ops": critical, "critical_chain": chain,
+            "limiting_group": max(by_group, key=by_group.get) if by_group else "-",
+            "limiting_constraint": max(limiting, key=lambda r: r["deg_per_rpm"])["constraint"] if limiting else "-",
+            "sens_cycle_rpm_per_deg": 1.0 / slope if slope > 0 else math.inf}
+    return values, more
