@@ -9,6 +9,8 @@ longest path by hand. The convex case (Newton steps only, quadratic convergence)
 fitted lever (tests/stop_impact_fitted.py), whose a is proportional to n / t."""
 import dataclasses
 import itertools
+import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -196,9 +198,9 @@ def test_an_unknown_or_missing_lever_parameter_is_named(task):
 
 
 @pytest.mark.parametrize("scene_id", ["loom/group1-repaired", "loom/machine-speed"])
-def test_lever_table_is_stop_impact_amplitude_law_s_chain(scene_id):
-    """The one copied table: every lever parameter, the effects and the law equal
-    stop-impact/amplitude-law's, and so does its rebound."""
+def test_lever_table_is_read_from_stop_impact_amplitude_law(scene_id):
+    """The table read from stop-impact/amplitude-law when the scene loads: every lever parameter,
+    the effects and the law equal that scene's (its question's two left out), and so does its rebound."""
     source = registry.find("stop-impact/amplitude-law")
     lever = registry.find(scene_id).build()[0].lever
     params = source.params()
@@ -224,3 +226,38 @@ def test_at_another_speed_the_rebound_is_h_of_n_over_t(task, dense_root):
     # the returner's stress bound 33.75 deg at 420 rpm falls to 24.1 deg: its [phi] = 30 deg sets the angle
     assert r.values["t_9_10_deg"] == pytest.approx(30.0, abs=1e-9)
     assert r.values["exact_sigma_9_10_MPa"] == pytest.approx(900 * 30 / 30 * 300 / 420, rel=1e-9)
+
+
+def _scenes_folder(tmp_path, lever):
+    """A copy of loom/group1-repaired whose lever table is `lever`, beside a copy of its source."""
+    root = Path(registry.find("loom/group1-repaired").path).parents[1]
+    (tmp_path / "loom").mkdir()
+    shutil.copytree(root / "stop-impact", tmp_path / "stop-impact")
+    text = (root / "loom" / "group1-repaired.toml").read_text(encoding="utf-8")
+    start = text.index("[structure.lever]")
+    end = text.index("\n[", start + 1)
+    path = tmp_path / "loom" / "mine.toml"
+    path.write_text(text[:start] + "[structure.lever]\n" + lever + text[end:], encoding="utf-8")
+    return path
+
+
+def test_the_lever_is_read_from_its_scene_so_an_edit_there_reaches_the_loom(tmp_path):
+    path = _scenes_folder(tmp_path, 'scene = "../stop-impact/amplitude-law.toml"\n'
+                                    'drop = ["speed_nominal_rpm", "amplitude_limit_mm"]\n')
+    source = tmp_path / "stop-impact" / "amplitude-law.toml"
+    source.write_text(source.read_text(encoding="utf-8").replace("mass_kg = { value = 0.81792",
+                                                                  "mass_kg = { value = 0.9"), encoding="utf-8")
+    lever = registry.find(str(path)).build()[0].lever
+    assert lever["mass_kg"] == {"value": 0.9, "mark": "calibrated", "on": "f_free_Hz",
+                                "why": lever["mass_kg"]["why"]} and "speed_nominal_rpm" not in lever
+
+
+@pytest.mark.parametrize("lever, match", [
+    ('scene = "../stop-impact/nowhere.toml"\n', r"nowhere\.toml: no such scene file"),
+    ('scene = "../stop-impact/amplitude-law.toml"\ndrop = ["colour"]\n', r"structure\.lever\.drop: colour not in"),
+    ('scene = "../stop-impact/amplitude-law.toml"\nkeep = 1\n', r"structure\.lever: a model from another scene is"),
+    ('scene = "mine.toml"\n', r"structure\.lever: mine\.toml leads back to a scene being read"),
+])
+def test_a_bad_reference_to_another_scene_is_named(tmp_path, lever, match):
+    with pytest.raises(SceneError, match=match):
+        registry.find(str(_scenes_folder(tmp_path, lever)))

@@ -214,8 +214,8 @@ class Scene:
         params, settings = self.split_overrides(overrides or {})
         paths = {k: v for k, v in params.items() if _path_head(k) in self.spec.structure}
         params = {k: v for k, v in params.items() if k not in paths}
-        structure = _read_tables(self.path, _set_paths(self.path, self.spec.structure, paths))
-        return (_build_task(self.path, self.task_class, self.spec.effects, self.params() | params, structure),
+        return (_build_task(self.path, self.task_class, self.spec.effects, self.params() | params,
+                            _set_paths(self.path, self.spec.structure, paths)),
                 _check_settings(self.path, self.solver, self.settings() | settings))
 
 
@@ -247,6 +247,7 @@ def loads(text: str, path: Path) -> Scene:
         spec = SceneFile.model_validate(raw)
     except ValidationError as exc:
         raise SceneError(f"{path}: " + "; ".join(_explain(e) for e in exc.errors())) from None
+    spec = spec.model_copy(update={"structure": _read_tables(path, spec.structure)})
     task_class = _resolve(path, "task", spec.task, "mechopt.models")
     solver = _resolve(path, "solver", spec.solver, "mechopt.solvers")
     fields = task_fields(task_class)
@@ -339,12 +340,22 @@ def _set_paths(path, structure, assignments):
     return out
 
 
+_READING: set[Path] = set()          # scene files whose tables are being read: a loop of references is refused
+
+
 def _read_tables(path, structure):
-    """Structure entries given as `{ csv = "file.csv", columns = ["x_mm", "y_mm"] }` become the
-    file's rows of those columns (a path relative to the scene file's folder): a designer's point
-    table stays in the CSV their CAD system wrote. Errors name the CSV, its row and column."""
+    """Structure entries that name a file, read when the scene loads (paths relative to the scene
+    file's folder):
+    * `{ csv = "file.csv", columns = ["x_mm", "y_mm"] }`: the file's rows of those columns, so a
+      designer's point table stays in the CSV their CAD system wrote (errors name line and column);
+    * `{ scene = "../other/scene.toml", drop = [...] }`: that scene's model as a table: its params
+      (with their marks), structure entries and effects, less the names dropped. One mechanism's
+      data then lives in one place when another's model needs it (the loom takes the lift lever)."""
     out = dict(structure)
     for key, value in structure.items():
+        if isinstance(value, dict) and "scene" in value:
+            out[key] = _scene_table(path, key, value)
+            continue
         if not (isinstance(value, dict) and "csv" in value):
             continue
         if set(value) - {"csv", "columns"} or not isinstance(value["csv"], str) or not (
@@ -354,6 +365,28 @@ def _read_tables(path, structure):
                              f'columns = ["x_mm", "y_mm"] }}; got {value!r}', key=key)
         out[key] = _csv_rows(path.parent / value["csv"], value["columns"], key)
     return out
+
+
+def _scene_table(path, key, value):
+    drop = value.get("drop", [])
+    if set(value) - {"scene", "drop"} or not isinstance(value["scene"], str) or not (
+            isinstance(drop, list) and all(isinstance(d, str) for d in drop)):
+        raise SceneError(f'{path}: structure.{key}: a model from another scene is {{ scene = "../other/scene.toml", '
+                         f'drop = ["name", ...] }}; got {value!r}', key=key)
+    source_path = (path.parent / value["scene"]).resolve()
+    if source_path in _READING:
+        raise SceneError(f"{path}: structure.{key}: {value['scene']} leads back to a scene being read (a loop)", key=key)
+    _READING.add(source_path)
+    try:
+        source = load(source_path)
+    finally:
+        _READING.discard(source_path)
+    unknown = sorted(set(drop) - set(source.spec.params) - set(source.spec.structure))
+    if unknown:
+        raise SceneError(f"{path}: structure.{key}.drop: {', '.join(unknown)} not in {value['scene']}", key=key)
+    params = {name: p.model_dump(exclude_defaults=True) for name, p in source.spec.params.items()}
+    table = {"effects": list(source.spec.effects)} | source.spec.structure | params
+    return {name: entry for name, entry in table.items() if name not in drop}
 
 
 def _csv_rows(csv_path, columns, key):
