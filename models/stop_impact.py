@@ -175,6 +175,12 @@ class LeverStop:
         if bad:
             raise ModelError(f"speeds_rpm={list(self.speeds_rpm)}: every speed must be > 0 and <= {top:g} (got {bad})",
                              key="speeds_rpm")
+        for name, keys in (("f_free_Hz", "E_GPa, J_x_mm4, a_mm, b_mm, mass_kg"),
+                           ("f_stop_Hz", "E_GPa, J_x_mm4, a_stop_mm, b_stop_mm, mass_kg")):
+            if getattr(self, name) > MAX_FREQUENCY_HZ:      # each input in range, together a tuning fork
+                raise ModelError(f"{name} = {getattr(self, name):.4g} Hz from {keys}: above {MAX_FREQUENCY_HZ:g} Hz, "
+                                 "where no rise or rebound is resolved in reasonable time (the paper's lever: 297 and "
+                                 "768 Hz); check the arms and the section", key=keys.split(", ")[3])
 
     # ---------------------------------------------------------------- stiffness and frequencies
 
@@ -295,6 +301,9 @@ STATED_RANGE = {
     "amplitude_limit_mm": (1e-9, 1e5), "inertia_A_kgm2": (1e-12, 1e6), "damping_ratio": (0.0, 1e3),
     "preload_mm": (0.0, 1e5), "closure_force_N": (0.0, 1e7),
 }
+
+
+MAX_FREQUENCY_HZ = 1e5      # a lever's natural frequency: past it the solvers' steps run into the millions
 
 
 def _require(task, key, ok, what):

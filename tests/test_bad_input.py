@@ -46,6 +46,8 @@ def test_a_bad_value_in_a_scene_file_is_refused_at_load(tmp_path, case_id, old, 
     ("cam-cutter/other-profile", {"constants.B_mm.value": "wide"}, r"constants\.B_mm='wide': expected a finite number"),
     ("cam-cutter/other-profile", {"placement": "centred"}, r"placement='centred': allowed start_at_origin, as_given"),
     ("cam-cutter/other-profile", {"t1_rad": -1.0}, r"params\.t1_rad: t1_rad=-1\.0 must be > t0_rad=0"),
+    # each input in range, together a lever of 56 MHz: refused at once (it ran past a minute before)
+    ("stop-impact/rebound-177rpm", {"b_mm": 1e-3}, r"params\.b_mm: f_free_Hz = 5\.635e\+07 Hz .* above 100000 Hz"),
 ])
 def test_a_bad_override_is_refused_before_work_and_changes_nothing(case_id, overrides, match):
     scene = registry.find(case_id)
