@@ -159,11 +159,13 @@ def _nlp(task: PressDesign, nodes: tuple, tol: float, samples: int, scales: tupl
     g = ca.vertcat(*[ca.vec(r[1]) for r in rows])
     lbg = np.concatenate([np.full(r[1].numel(), float(r[2])) for r in rows])
     ubg = np.concatenate([np.full(r[1].numel(), float(r[3])) for r in rows])
+    # from a nearby start the barrier stays small (monotone): the adaptive rule can raise it from
+    # 1e-6 to 1e3 on the first infeasible steps and wander back over ~50 quasi-Newton iterations
     solver = ca.nlpsol("design", "ipopt", {"x": x, "f": objective, "g": g},
                        {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
                         "ipopt.hessian_approximation": "limited-memory",
                         "ipopt.tol": 1e-5 if coarse else 1e-8, "ipopt.constr_viol_tol": 1e-7 if coarse else 1e-10,
-                        "ipopt.mu_strategy": "adaptive", "ipopt.max_iter": min(max_iter, COARSE_ITER) if coarse else max_iter,
+                        "ipopt.mu_strategy": "monotone" if near else "adaptive", "ipopt.max_iter": min(max_iter, COARSE_ITER) if coarse else max_iter,
                         "ipopt.max_wall_time": MAX_WALL_S, "ipopt.mu_init": 1e-6 if near else 0.1,
                         "error_on_fail": False})
     figures = ca.Function("figures", [x], [d, ca.vertcat(*Y), period, rms, energy, g, omega])
