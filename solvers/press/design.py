@@ -225,13 +225,13 @@ def _design(task, tol, samples, max_iter, check_sensitivity, warm):
     if too_fast:
         return _on_rigid_belt(task, too_fast, tol=tol, samples=samples, max_iter=max_iter, t_start=t_start)
     scales = _scales(task, start)
-    if warm is None:
-        orbit = steady_state(task.drive(start), tol=tol)
+    if warm is None:        # the starting orbit only seeds the first pass and places its nodes: coarse
+        orbit = steady_state(task.drive(start), tol=max(tol, COARSE_TOL))
         if orbit.status is not Status.SOLVED:
             return Result(orbit.status, dict(orbit.values), timing(),
                           f"no periodic motion at the starting design {start}: {orbit.message}", orbit.violated)
         y0 = np.asarray(orbit.diagnostics["initial_state"])         # the states other than phi at phi = 0
-        nodes = _nodes(task, _extremes(task, tuple(stage_angles(task)), tol, _vector(task, start), y0))
+        nodes = _nodes(task, _extremes(task, tuple(stage_angles(task)), max(tol, COARSE_TOL), _vector(task, start), y0))
     else:
         nodes, start, y0 = warm[:3]
     origin = (dict(start), y0)
@@ -254,7 +254,8 @@ def _design(task, tol, samples, max_iter, check_sensitivity, warm):
         sol = solver(x0=guess, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, **(multipliers if refine else {}))
         multipliers = {"lam_x0": sol["lam_x"], "lam_g0": sol["lam_g"]}
         word = solver.stats()["return_status"]
-        passes.append({"tol": step_tol, "nodes": len(nodes), "ipopt": word, "iterations": solver.stats()["iter_count"]})
+        passes.append({"tol": step_tol, "nodes": len(nodes), "ipopt": word, "iterations": solver.stats()["iter_count"],
+                       "warm_start": refine})
         if coarse and from_ipopt(word) is not Status.SOLVED:
             # the limits may conflict: the least violation says (phase 1); if it meets them all, its
             # design is where the fine pass starts
