@@ -56,6 +56,12 @@ RIGID_RATIO = 1000           # belt mode / revolution frequency past which the r
 MAX_WALL_S = 60.0            # IPOPT's wall-time limit per solve: LIMIT past it
 COARSE_TOL = 1e-7             # CVODES tolerance of the first pass, which only finds where the extremes go
 COARSE_ITER = 60              # and its IPOPT iterations
+COARSE_MISSED = 1e-4          # a coarse pass whose spread misses the dense one by less is followed by a fine one
+COARSE_PASSES = 3             # passes at COARSE_TOL at most before the ones at the asked tolerance
+# IPOPT from a coarse pass's optimum: its primal and multipliers, pushed only slightly off the bounds
+WARM_START = {"ipopt.warm_start_init_point": "yes", "ipopt.warm_start_bound_push": 1e-6,
+              "ipopt.warm_start_bound_frac": 1e-6, "ipopt.warm_start_slack_bound_push": 1e-6,
+              "ipopt.warm_start_slack_bound_frac": 1e-6, "ipopt.warm_start_mult_bound_push": 1e-6}
 MAX_PASSES = 8               # NLP solves, each with the extremes of the one before as nodes
 CANDIDATES = 3               # local speed peaks (and troughs) refined to find the largest (smallest)
 DENSE = 400                  # samples per interval when locating the speed extremes (error ~1e-5 rad)
@@ -81,12 +87,13 @@ class _Block:
 
 @memoised(maxsize=8)
 def _nlp(task: PressDesign, nodes: tuple, tol: float, samples: int, scales: tuple, elastic: bool, max_iter: int,
-         near: bool = False, coarse: bool = False):
+         near: bool = False, coarse: bool = False, warm: bool = False):
     """(nlpsol, blocks, (lbg, ubg), Function w -> figures, number of slacks). With `elastic`, the
     limits (not the motion's equations) get one slack each and the objective is their sum: the
     least violation, for an INFEASIBLE answer's best achievable. `near`: the start is close to the
     optimum (a small initial barrier parameter keeps IPOPT there). `coarse`: a first pass that only
-    places the nodes (loose IPOPT tolerances, `COARSE_ITER` iterations)."""
+    places the nodes (loose IPOPT tolerances, `COARSE_ITER` iterations). `warm`: the start is a coarse
+    pass's optimum with its multipliers (IPOPT's warm start)."""
     ints = intervals(task, nodes, tol, samples)
     look = probe(task, samples)
     nd, K = len(task.variables), len(ints)
@@ -159,13 +166,15 @@ def _nlp(task: PressDesign, nodes: tuple, tol: float, samples: int, scales: tupl
     g = ca.vertcat(*[ca.vec(r[1]) for r in rows])
     lbg = np.concatenate([np.full(r[1].numel(), float(r[2])) for r in rows])
     ubg = np.concatenate([np.full(r[1].numel(), float(r[3])) for r in rows])
+    # from a nearby start the barrier stays small (monotone): the adaptive rule can raise it from
+    # 1e-6 to 1e3 on the first infeasible steps and wander back over ~50 quasi-Newton iterations
     solver = ca.nlpsol("design", "ipopt", {"x": x, "f": objective, "g": g},
                        {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
                         "ipopt.hessian_approximation": "limited-memory",
                         "ipopt.tol": 1e-5 if coarse else 1e-8, "ipopt.constr_viol_tol": 1e-7 if coarse else 1e-10,
-                        "ipopt.mu_strategy": "adaptive", "ipopt.max_iter": min(max_iter, COARSE_ITER) if coarse else max_iter,
+                        "ipopt.mu_strategy": "monotone" if near else "adaptive", "ipopt.max_iter": min(max_iter, COARSE_ITER) if coarse else max_iter,
                         "ipopt.max_wall_time": MAX_WALL_S, "ipopt.mu_init": 1e-6 if near else 0.1,
-                        "error_on_fail": False})
+                        "error_on_fail": False} | (WARM_START if warm else {}))
     figures = ca.Function("figures", [x], [d, ca.vertcat(*Y), period, rms, energy, g, omega])
     return solver, tuple(blocks), (lbg, ubg), figures, slacks
 
@@ -216,32 +225,37 @@ def _design(task, tol, samples, max_iter, check_sensitivity, warm):
     if too_fast:
         return _on_rigid_belt(task, too_fast, tol=tol, samples=samples, max_iter=max_iter, t_start=t_start)
     scales = _scales(task, start)
-    if warm is None:
-        orbit = steady_state(task.drive(start), tol=tol)
+    if warm is None:        # the starting orbit only seeds the first pass and places its nodes: coarse
+        orbit = steady_state(task.drive(start), tol=max(tol, COARSE_TOL))
         if orbit.status is not Status.SOLVED:
             return Result(orbit.status, dict(orbit.values), timing(),
                           f"no periodic motion at the starting design {start}: {orbit.message}", orbit.violated)
         y0 = np.asarray(orbit.diagnostics["initial_state"])         # the states other than phi at phi = 0
-        nodes = _nodes(task, _extremes(task, tuple(stage_angles(task)), tol, _vector(task, start), y0))
+        nodes = _nodes(task, _extremes(task, tuple(stage_angles(task)), max(tol, COARSE_TOL), _vector(task, start), y0))
     else:
         nodes, start, y0 = warm[:3]
     origin = (dict(start), y0)
     build = 0.0
-    # the speed extremes move with the design: make them nodes and re-solve from there (a first pass
-    # from afar at a coarse CVODES tolerance only places them; the last pass is at `tol`)
+    # the speed extremes move with the design: make them nodes and re-solve from there (passes at a
+    # coarse CVODES tolerance place them; the last pass, at `tol`, starts from the coarse optimum)
     coarse, near = warm is None and tol < COARSE_TOL, warm is not None
-    passes = []
+    passes, multipliers = [], {}
     for _ in range(MAX_PASSES):
         step_tol = COARSE_TOL if coarse else tol
+        # after a coarse pass's optimum on as many nodes: IPOPT starts from its multipliers too
+        refine = (bool(passes) and passes[-1]["tol"] > step_tol and passes[-1]["nodes"] == len(nodes)
+                  and from_ipopt(passes[-1]["ipopt"]) is Status.SOLVED)
         b0 = time.perf_counter()
         solver, blocks, (lbg, ubg), figures, _ = _nlp(task, nodes, step_tol, samples, scales, False, max_iter,
-                                                      near, coarse)
+                                                      near, coarse, refine)
         build += time.perf_counter() - b0
-        guess = _guess(task, nodes, step_tol, samples, start, y0, scales)
         lbx, ubx = _box(task, nodes, scales, 0)
-        sol = solver(x0=guess, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
+        guess = _guess(task, nodes, step_tol, samples, start, y0, scales)
+        sol = solver(x0=guess, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, **(multipliers if refine else {}))
+        multipliers = {"lam_x0": sol["lam_x"], "lam_g0": sol["lam_g"]}
         word = solver.stats()["return_status"]
-        passes.append({"tol": step_tol, "nodes": len(nodes), "ipopt": word, "iterations": solver.stats()["iter_count"]})
+        passes.append({"tol": step_tol, "nodes": len(nodes), "ipopt": word, "iterations": solver.stats()["iter_count"],
+                       "warm_start": refine})
         if coarse and from_ipopt(word) is not Status.SOLVED:
             # the limits may conflict: the least violation says (phase 1); if it meets them all, its
             # design is where the fine pass starts
@@ -259,7 +273,10 @@ def _design(task, tol, samples, max_iter, check_sensitivity, warm):
         missed = abs((top - bottom) - (omega.max() - omega.min())) / max(omega.max() - omega.min(), 1e-12)
         if from_ipopt(word) is not Status.SOLVED or (not coarse and missed < MISSED_SPREAD):
             break
-        nodes, coarse, near = _nodes(task, extremes, () if coarse else nodes), False, True
+        # the first pass's nodes were the starting design's extremes: dropped; later ones are kept
+        nodes = _nodes(task, extremes, () if coarse and len(passes) == 1 else nodes)
+        # coarse passes while their spread misses the dense one (a few at most), then the ones at `tol`
+        coarse, near = coarse and missed > COARSE_MISSED and len(passes) < COARSE_PASSES, True
     status = from_ipopt(word)
     if status is not Status.SOLVED:
         return _not_solved(task, status, word, nodes, tol, samples, scales, origin, timing(build), max_iter)

@@ -67,11 +67,15 @@ def intervals(task: PressDesign, nodes: tuple[float, ...], tol: float, samples: 
     ode = ca.vertcat(*[xdot[i] for i in range(n) if i != iphi]) / w
     quad = ca.vertcat(1, shaft, shaft**2) / w
     out = []
+    # Adams, not BDF: the belt mode is at most ~30 times the revolution (design.STEPS_PER_REVOLUTION; faster
+    # ones go to the rigid-belt model), so at 1e-10 accuracy, not stability, sets the step, and
+    # Adams' orders up to 12 take fewer of them (the Jacobian with its sensitivities costs ~40 % of BDF's)
     for k, (a, b) in enumerate(pairwise(nodes)):
         grid = np.linspace(a, b, samples + 1)[1:]
         integ = ca.integrator(f"shoot{k}", "cvodes", {"x": y, "t": phi, "p": ca.vertcat(u, p), "ode": ode,
                                                      "quad": quad}, a, grid,
-                              {"abstol": tol, "reltol": tol, "max_num_steps": 100000, "quad_err_con": True})
+                              {"abstol": tol, "reltol": tol, "max_num_steps": 100000, "quad_err_con": True,
+                               "linear_multistep_method": "adams"})
         out.append((integ, grid, cutting_on(task, a, b)))
     return out
 
