@@ -85,7 +85,7 @@ def finish_angle(a, h=0.0):
 
 def decimal_reading(f, root, tol):
     """The paper's iterative reading of a root of f: the lattice step shrinks tenfold until both
-    ends of the bracket give |f| <= tol; the lower end is the reading (2.7329 for eq. (9))."""
+    ends of the bracket give |f| <= tol; the lower end is the reading (the paper's t_FINISH: cases/cam-cutter/paper-grid)."""
     for k in range(1, 16):
         lo = np.floor(root * 10**k) / 10**k
         if max(abs(f(lo)), abs(f(lo + 10.0**-k))) <= tol:

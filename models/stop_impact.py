@@ -29,8 +29,8 @@ Readings taken where the paper is silent or inconsistent (each pinned by a test)
   travel), kept for comparison: for one motion law on a rigid lever v0 scales as n / t.
 * J_A of S_C: m l^2 unless `inertia_A_kgm2` is given, the reduced mass at C seen from the pivot
   A, so that mass, inertia and frequency belong to one lever; the pulse's impulse is then
-  (1 + k) m v0, the plate reversing the lever's momentum. (A separately fitted J_A = 1.9e-4 kg m^2,
-  172 times below m l^2, made F_ud = 4.137 N and the pulse carry 0.9 % of the momentum.)
+  (1 + k) m v0, the plate reversing the lever's momentum (what a separately fitted J_A does to the
+  impulse: cases/stop-impact/impact-force.toml).
 * Preload (effect `preload`): the cam drives the lever `preload_mm` past the plate; the moving
   lever (Fig. 5) holds that as a constant force P = c_free * preload pressing C onto the plate,
   a constant -P added to Q_F in eq. (2).
@@ -179,8 +179,8 @@ class LeverStop:
                            ("f_stop_Hz", "E_GPa, J_x_mm4, a_stop_mm, b_stop_mm, mass_kg")):
             if getattr(self, name) > MAX_FREQUENCY_HZ:      # each input in range, together a tuning fork
                 raise ModelError(f"{name} = {getattr(self, name):.4g} Hz from {keys}: above {MAX_FREQUENCY_HZ:g} Hz, "
-                                 "where no rise or rebound is resolved in reasonable time (the paper's lever: 297 and "
-                                 "768 Hz); check the arms and the section", key=keys.split(", ")[3])
+                                 "where no rise or rebound is resolved in reasonable time; check the arms and the "
+                                 "section", key=keys.split(", ")[3])
 
     # ---------------------------------------------------------------- stiffness and frequencies
 
@@ -209,12 +209,12 @@ class LeverStop:
 
     @property
     def f_free_Hz(self) -> float:
-        """Natural frequency of the moving lever, sqrt(c/m)/(2 pi) [Hz] (published 297 Hz)."""
+        """Natural frequency of the moving lever, sqrt(c/m)/(2 pi) [Hz] (the scenes calibrate the mass on the paper's figure)."""
         return self.omega_free_rad_s / (2 * math.pi)
 
     @property
     def f_stop_Hz(self) -> float:
-        """Natural frequency on the plate [Hz] (published 768 Hz)."""
+        """Natural frequency on the plate [Hz] (the scenes calibrate b_stop_mm on the paper's figure)."""
         return self.omega_stop_rad_s / (2 * math.pi)
 
     @property
