@@ -18,9 +18,10 @@ from typing import Any, Literal, get_args, get_origin
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from mechopt.models.cache import memoised
-from mechopt.models.errors import MechoptError, SceneError
+from mechopt.models.errors import MechoptError, ModelError, SceneError
 from mechopt.solvers.result import Status
 from mechopt.solvers.settings import declared_range, describe_range, setting_problem
+from mechopt.tables import number, read_rows
 from mechopt.units import unit_of
 
 Number = int | float
@@ -391,29 +392,23 @@ def _scene_table(path, key, value):
 
 def _csv_rows(csv_path, columns, key):
     try:
-        lines = [line for line in csv_path.read_text(encoding="utf-8").splitlines() if line.strip()]
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SceneError(f"{csv_path}: cannot read the table for structure.{key}: "
-                         f"{getattr(exc, 'strerror', None) or exc}", key=key) from None
-    if not lines:
-        raise SceneError(f"{csv_path}: empty table (structure.{key})", key=key)
-    sep = ";" if ";" in lines[0] else ","
-    header = [h.strip() for h in lines[0].split(sep)]
+        header, rows, delimiter = read_rows(csv_path, what="a point table", example=",".join(columns))
+    except ModelError as exc:
+        raise SceneError(f"{exc} (the table for structure.{key})", key=key) from None
     missing = [c for c in columns if c not in header]
     if missing:
         raise SceneError(f"{csv_path}: header {header} lacks {', '.join(missing)} (structure.{key}.columns)", key=key)
-    rows = []
-    for number, line in enumerate(lines[1:], start=2):
-        cells = [c.strip() for c in line.split(sep)]
+    out = []
+    for line, cells in rows:
         try:
-            row = [float(cells[header.index(c)]) for c in columns]
+            row = [number(cells[header.index(c)], delimiter) for c in columns]
         except (ValueError, IndexError):
-            raise SceneError(f"{csv_path}: line {number} ({line.strip()!r}): expected numbers in "
+            raise SceneError(f"{csv_path}: line {line} ({delimiter.join(cells)!r}): expected numbers in "
                              f"{', '.join(columns)}", key=key) from None
         if not all(math.isfinite(v) for v in row):
-            raise SceneError(f"{csv_path}: line {number}: expected finite numbers", key=key)
-        rows.append(row)
-    return rows
+            raise SceneError(f"{csv_path}: line {line}: expected finite numbers", key=key)
+        out.append(row)
+    return out
 
 
 def _resolve(path, field, dotted, package):
