@@ -420,7 +420,3 @@ class ToolFamily:
         """(a, h) of every cam of the family [mm], a ascending, then h in the given order."""
         a = np.linspace(self.a_min_mm, self.a_max_mm, self.a_count)
         return tuple((float(x), h) for x in a for h in self.h_values_mm)
-
-    def member_fit(self, a, h, **bounds) -> LinkageFit:
-        """The single cam (a, h) as a `LinkageFit` in this band (bounds as keywords)."""
-        return LinkageFit(a_mm=a, err_width_mm=self.err_width_mm, h_mm=h, **bounds)

@@ -118,7 +118,7 @@ def constant_values(constants, key="constants"):
 
 
 class _Curve:
-    """What every cam-side curve offers: c(t), c'(t), c''(t) on [t0, t1] [mm, mm/rad, mm/rad2]."""
+    """What every cam-side curve offers: c(t) and c'(t) on [t0, t1] [mm, mm/rad]."""
     t0: float
     t1: float
 
@@ -178,7 +178,7 @@ class ExpressionCurve(_Curve):
         x, y = self.point(t, m=ca)
         x, y = ca.SX(x), ca.SX(y)
         dx, dy = ca.jacobian(x, t), ca.jacobian(y, t)
-        return ca.Function("curve_d", [t], [dx, dy, ca.jacobian(dx, t), ca.jacobian(dy, t)])
+        return ca.Function("curve_d", [t], [dx, dy])
 
     def _evaluate(self, t):
         t = np.atleast_1d(np.asarray(t, dtype=float))
@@ -187,11 +187,7 @@ class ExpressionCurve(_Curve):
 
     def derivative(self, t):
         """c'(t) by CasADi's AD [mm/rad]."""
-        return tuple(self._evaluate(t)[:2])
-
-    def second_derivative(self, t):
-        """c''(t) by CasADi's AD [mm/rad2]."""
-        return tuple(self._evaluate(t)[2:])
+        return tuple(self._evaluate(t))
 
 
 @dataclass(frozen=True)
@@ -241,16 +237,12 @@ class TableCurve(_Curve):
         object.__setattr__(self, "t0", 0.0)
         object.__setattr__(self, "t1", float(t[-1]))
 
-    def point(self, t, m=np):
+    def point(self, t):
         xy = self._spline(np.asarray(t, dtype=float))
         return xy[..., 0], xy[..., 1]
 
     def derivative(self, t):
         xy = self._spline(np.asarray(t, dtype=float), 1)
-        return xy[..., 0], xy[..., 1]
-
-    def second_derivative(self, t):
-        xy = self._spline(np.asarray(t, dtype=float), 2)
         return xy[..., 0], xy[..., 1]
 
 
@@ -296,14 +288,6 @@ class PlacedPath:
     curve: object
     h_mm: float
     shift_mm: tuple
-
-    @property
-    def t0(self):
-        return self.curve.t0
-
-    @property
-    def t1(self):
-        return self.curve.t1
 
     def point(self, t):
         """The placed torch path at t [mm] (vectorised)."""

@@ -248,7 +248,11 @@ def loads(text: str, path: Path) -> Scene:
         spec = SceneFile.model_validate(raw)
     except ValidationError as exc:
         raise SceneError(f"{path}: " + "; ".join(_explain(e) for e in exc.errors())) from None
-    spec = spec.model_copy(update={"structure": _read_tables(path, spec.structure)})
+    _READING.add(path.resolve())
+    try:
+        spec = spec.model_copy(update={"structure": _read_tables(path, spec.structure)})
+    finally:
+        _READING.discard(path.resolve())
     task_class = _resolve(path, "task", spec.task, "mechopt.models")
     solver = _resolve(path, "solver", spec.solver, "mechopt.solvers")
     fields = task_fields(task_class)
@@ -377,11 +381,7 @@ def _scene_table(path, key, value):
     source_path = (path.parent / value["scene"]).resolve()
     if source_path in _READING:
         raise SceneError(f"{path}: structure.{key}: {value['scene']} leads back to a scene being read (a loop)", key=key)
-    _READING.add(source_path)
-    try:
-        source = load(source_path)
-    finally:
-        _READING.discard(source_path)
+    source = load(source_path)
     unknown = sorted(set(drop) - set(source.spec.params) - set(source.spec.structure))
     if unknown:
         raise SceneError(f"{path}: structure.{key}.drop: {', '.join(unknown)} not in {value['scene']}", key=key)
