@@ -99,7 +99,7 @@ class HeldLP:
 
     def __init__(self, n, tails, heads, *, first, last, window_arcs=(), sync_arcs=(), with_cycle=False):
         rows = [incidence(n, tails, heads)]
-        self.arcs, self.windows = len(tails), len(window_arcs)
+        self.arcs, self.windows, self.with_cycle = len(tails), len(window_arcs), with_cycle
         for pairs in (window_arcs, sync_arcs):
             if len(pairs):
                 pairs = np.asarray(pairs)
@@ -130,12 +130,10 @@ class HeldLP:
         if self.windows:
             self.upper[self.arcs:self.arcs + self.windows] = window_deg
         if cycle_deg is not None:
+            if not self.with_cycle:         # the last row is an arc, a window or a sync here
+                raise SolverError("HeldLP.solve(cycle_deg=...): this LP was built without the cycle row")
             self.upper[-1] = cycle_deg
         self.highs.changeRowsBounds(len(self.index), self.index, self.lower, self.upper)
         self.highs.run()
         status = from_cvxpy(HIGHS_SOLVER.STATUS_MAP.get(self.highs.getModelStatus().name, "unknown"))
         return status, (np.array(self.highs.getSolution().col_value) if status is Status.SOLVED else None)
-
-
-# structural signature -> EventTimeLP, compiled once and re-solved with new Parameters; the newest
-# few only: a 10^5-event build holds ~100 MB

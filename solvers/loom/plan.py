@@ -457,14 +457,20 @@ def _sensitivities(task, net, lp, t, tol):
 
 
 def _floats(task, net, p, values, tol):
-    """Total float of every operation, LS(y) - ES(x) - lb, for the found span (a machine: with the
-    limiting operation held at its optimum); critical = float <= tol."""
-    names, lb = net.names, net.lb.copy()
+    """Total float of every operation for the found span (a machine: with the limiting operation
+    held at its optimum, a hair under: no 0+ cycle); see `schedule_floats`."""
+    lb = net.lb.copy()
     if net.limiting:
         k = next(k for k, (x, y) in enumerate(net.arcs) if (net.index[x], net.index[y]) == net.limiting)
-        lb[k] = values["limiting_op_deg"] - tol / 10      # held at its optimum (a hair under: no 0+ cycle)
+        lb[k] = values["limiting_op_deg"] - tol / 10
+    return schedule_floats(task, net, lb, values["span_deg"], tol)
+
+
+def schedule_floats(task, net, lb, span, tol):
+    """Total float LS(y) - ES(x) - lb of every operation with bounds `lb` in a span `span` [deg]:
+    {float_deg, critical_ops (float <= tol), critical_chain (one critical path, first to last)}."""
+    names = net.names
     first, last = names[net.first], names[net.last]
-    span = values["span_deg"]
     try:
         if task.windows or task.syncs:
             arcs = _constraint_arcs(net, lb)

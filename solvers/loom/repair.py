@@ -288,7 +288,7 @@ def cached_amplitude_bound(task: Cyclogram, speed_rpm: float, lo_deg: float, to_
     (the walk saw a <= limit on all of [phi, to_deg]), so arcs with different [phi] share it."""
     if speed_rpm is None:
         raise ModelError("speed_rpm: the exact rebound law needs the main shaft's speed", key="speed_rpm")
-    key = (_frozen(task.lever), task.amplitude_limit_mm, float(speed_rpm), float(to_deg),
+    key = (task.lever_model, task.amplitude_limit_mm, float(speed_rpm), float(to_deg),
            float(step_deg))
     walk, _ = _AMPLITUDE_BOUNDS.get(key, lambda: exact_amplitude_bound(task, speed_rpm, min(WALK_FLOOR_DEG, to_deg),
                                                                        to_deg, step_deg))
@@ -299,12 +299,3 @@ def cached_amplitude_bound(task: Cyclogram, speed_rpm: float, lo_deg: float, to_
 
 
 WALK_FLOOR_DEG = 1.0             # the walk's lowest t: below it no cam rise of a loom
-
-
-def _frozen(value):
-    """A table (dicts, lists, numbers, names) as a hashable key."""
-    if isinstance(value, dict):
-        return tuple(sorted((k, _frozen(v)) for k, v in value.items()))
-    if isinstance(value, (list, tuple)):
-        return tuple(_frozen(v) for v in value)
-    return value

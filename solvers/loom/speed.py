@@ -6,13 +6,20 @@ import time
 from typing import Annotated, Literal
 
 import cvxpy as cp
-import networkx as nx
 import numpy as np
 
 from mechopt.models.errors import ModelError
 from mechopt.models.loom import MAX_RPM, Cyclogram
 from mechopt.solvers.loom.event_time import HeldLP, incidence
-from mechopt.solvers.loom.plan import _BUILDS, _constraint_arcs, _dag_times, _longest, _Net, positive_cycle
+from mechopt.solvers.loom.plan import (
+    _BUILDS,
+    _constraint_arcs,
+    _dag_times,
+    _longest,
+    _Net,
+    positive_cycle,
+    schedule_floats,
+)
 from mechopt.solvers.loom.repair import cached_amplitude_bound, exact_amplitude_mm
 from mechopt.solvers.result import Result, Status, Timing, from_cvxpy
 from mechopt.solvers.settings import Interval
@@ -161,9 +168,10 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "lp", "bisecti
     lb, why_at = bounds_at(n_max)
     certified = _certify_speed(task, net, bounds_at, n_max, rtol)
     values, more = _speed_report(task, net, lb, why_at, n_max, rtol)
+    held = amp_bounds if chosen == "lp" else _exact_amplitude_bounds(task, phi, scan_to_deg, scan_step_deg, n_max)
     for k, b in amp_bounds.items():      # the range of t on which the rebound was shown to hold, at n_max
         x, y = task.arcs[k]
-        at = b if chosen == "lp" else _exact_amplitude_bounds(task, phi, scan_to_deg, scan_step_deg, n_max)[k]
+        at = held[k]
         scale = n_max / b.speed_rpm if chosen == "lp" else 1.0
         values[f"amplitude_holds_from_{x}_{y}_deg"] = at.from_deg * scale
         values[f"amplitude_holds_to_{x}_{y}_deg"] = at.to_deg * scale
@@ -339,15 +347,9 @@ def _speed_report(task, net, lb, why, n_max, tol):
     for k in task.stress_arcs():
         x, y = net.arcs[k]
         values[f"sigma_{x}_{y}_MPa"] = float(task.stress_at_MPa(k, t[k], n_max))
-    span = task.cycle_deg
-    e, l_ = (_dag_times(len(net.names), net.tails, net.heads, lb, net.first, net.last, span)
-             if not (task.windows or task.syncs) else (p, p))
     group = dict(task.graph.nodes(data="group"))
-    floats = {f"{x}->{y}": float(l_[net.index[y]] - e[net.index[x]] - lb[k]) for k, (x, y) in enumerate(net.arcs)}
-    critical = [a for a, f in floats.items() if f <= tol * max(1.0, span)]
-    crit = nx.DiGraph([tuple(a.split("->")) for a in critical])
-    end = net.names[net.last]
-    chain = nx.shortest_path(crit, first, end) if first in crit and end in crit and nx.has_path(crit, first, end) else []
+    schedule = schedule_floats(task, net, lb, task.cycle_deg, tol * max(1.0, task.cycle_deg))
+    floats, critical, chain = (schedule.get(k, []) for k in ("float_deg", "critical_ops", "critical_chain"))
     limiting = []
     for k, (x, y) in enumerate(net.arcs):
         if why[k] and f"{x}->{y}" in critical:      # set by a law that grows with n (deg/rpm: its secant)
