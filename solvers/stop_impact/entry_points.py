@@ -53,8 +53,9 @@ def impact_forces(task: LeverStop) -> Result:
         v0 = approach_velocity_m_s(task, n)
         F = float(task.impact_force_N(v0))
         values |= {f"impact_force_N_{_tag(n)}": F, f"impulse_Ns_{_tag(n)}": F * task.contact_time_s,
-                   f"approach_velocity_m_s_{_tag(n)}": v0,
-                   f"impulse_over_momentum_{_tag(n)}": F * task.contact_time_s / (task.mass_kg * v0)}
+                   f"approach_velocity_m_s_{_tag(n)}": v0}
+        if v0 > 0:                      # C that only settles onto its plate carries no momentum to compare
+            values[f"impulse_over_momentum_{_tag(n)}"] = F * task.contact_time_s / (task.mass_kg * v0)
     return Result(Status.SOLVED, values, Timing(0.0, time.perf_counter() - start),
                   message="tau = half the natural period on the plate")
 

@@ -52,7 +52,7 @@ def rebound_amplitude_mm(task: LeverStop, speed_rpm, t_deg, *, grid_points: int 
     """The exact first-rebound amplitude a(t, n) of eq. (2) [mm], vectorised over speed [rpm]
     and phase angle [deg] (broadcast). Where the roller leaves its cam (effect `cam_drive`) there
     is no rebound: `RollerLeftCam` is raised, or, with `lost` a number (a figure's NaN), that
-    number stands there.
+    number stands there (only there: a rise the integrator failed on is raised whatever `lost`).
 
     v0 and F scale as r = n / t and the preload does not, so q(s) = r g(s) + p(s) with g, p the
     responses per unit r and to the preload alone. Without preload a = r max g exactly. With it,
@@ -91,8 +91,8 @@ def _amplitude_or(lost, task, speed_rpm, t_deg):
     """One (n, t) of the chain [mm]; `lost` where the roller leaves its cam, unless it is None."""
     try:
         return closed_form_amplitude_m(impact_at(task, speed_rpm, t_deg))[0] * 1e3
-    except RollerLeftCam:
-        if lost is None:
+    except RollerLeftCam as exc:
+        if lost is None or exc.status is not Status.INFEASIBLE:    # an integrator's failure is no gap
             raise
         return lost
 
