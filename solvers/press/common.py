@@ -136,6 +136,18 @@ def belt_too_fast(task: PressDrive, step_s: float, steps: float, most: float, me
             + f"; {RIGID_LIMIT} (belt_stiffness_Nm_rad = {task.belt_stiffness_Nm_rad:g})")
 
 
+def belt_too_fast_per_revolution(task: PressDrive, most: float, method: str) -> str | None:
+    """`belt_too_fast` for a method that follows the belt mode at a tenth of its period over one
+    revolution and can afford `most` such steps (steady_state's Newton, the design NLP); None
+    without an elastic belt or when it can."""
+    hz, _ = belt_mode(task)
+    if hz == 0:
+        return None
+    step = 0.1 / hz
+    return belt_too_fast(task, step, TWO_PI / task.nominal_speed_rad_s / step, most, method,
+                         why=" (a tenth of its period)", over=" per revolution")
+
+
 def top_speed_rad_s(task: PressDrive) -> float:
     """The fastest the crank turns for long: the motor's synchronous speed reduced by i, or the
     nominal speed of an ideal drive (and never below it) [rad/s]."""

@@ -36,8 +36,9 @@ from mechopt.solvers.press.common import (
     Samples,
     Trace,
     belt_mode,
-    belt_too_fast,
+    belt_too_fast_per_revolution,
     dynamics_of,
+    stall_check,
     summarise,
     top_speed_rad_s,
 )
@@ -221,7 +222,7 @@ def _design(task, tol, samples, max_iter, check_sensitivity, warm):
     if stall is not None:
         return Result(Status.INFEASIBLE, stall[0], timing(), stall[1], ("stall",))
     start = task.start()
-    too_fast = _belt_too_fast(task.drive(start))
+    too_fast = belt_too_fast_per_revolution(task.drive(start), STEPS_PER_REVOLUTION, "the design NLP")
     if too_fast:
         return _on_rigid_belt(task, too_fast, tol=tol, samples=samples, max_iter=max_iter, t_start=t_start)
     scales = _scales(task, start)
@@ -495,31 +496,19 @@ def _box(task, nodes, scales, slacks):
 
 
 def _stall(task):
-    """(values, message) when even the biggest motor the bounds allow cannot deliver the cycle's work
-    (mean load torque above i M_k: no forward periodic motion exists), with the least motor that could."""
+    """`common.stall_check` at the biggest motor the bounds allow, with the least motor that could."""
     most = {k: task.bounds(k)[1] for k in ("gear_ratio", "motor_scale") if k in task.variables}
     drive = task.drive(most)
-    need, can = required_mean_torque_Nm(task), breakdown_torque_at_crank_Nm(drive)
-    if need <= can:
+    stalled = stall_check(drive)
+    if stalled is None:
         return None
-    least = need / drive.gear_ratio
-    values = {"required_mean_torque_Nm": need, "breakdown_torque_at_crank_Nm": can,
-              "min_motor_breakdown_torque_Nm": least, "min_motor_scale": least / task.motor_breakdown_torque_Nm}
-    return values, (f"stall: the motor cannot deliver the cycle's work at any design within the bounds: mean load "
-                    f"torque {need:.4g} N m at the crank against the breakdown torque {can:.4g} N m (i {drive.gear_ratio:.4g}"
-                    f" x {drive.motor_breakdown_torque_Nm:.4g} N m); the least motor that could has breakdown torque "
-                    f"above {least:.4g} N m at its shaft (motor_scale > {values['min_motor_scale']:.4g}), necessary "
-                    f"and approached as the flywheel grows (at exactly that the motor would sit at its breakdown slip)")
-
-
-def _belt_too_fast(drive):
-    """The message of `steady_state`'s refusal when the belt mode is too fast to follow, else None."""
-    hz, _ = belt_mode(drive)
-    if hz == 0:
-        return None
-    step = 0.1 / hz
-    return belt_too_fast(drive, step, TWO_PI / drive.nominal_speed_rad_s / step, STEPS_PER_REVOLUTION, "the design NLP",
-                         why=" (a tenth of its period)", over=" per revolution")
+    values, message = stalled
+    least = values["required_mean_torque_Nm"] / drive.gear_ratio
+    values |= {"min_motor_breakdown_torque_Nm": least, "min_motor_scale": least / task.motor_breakdown_torque_Nm}
+    return values, (f"stall at every design within the bounds: {message}; the least motor that could has breakdown "
+                    f"torque above {least:.4g} N m at its shaft (motor_scale > {values['min_motor_scale']:.4g}), "
+                    f"necessary and approached as the flywheel grows (at exactly that the motor would sit at its "
+                    f"breakdown slip)")
 
 
 def _on_rigid_belt(task, why, *, tol, samples, max_iter, t_start):

@@ -21,7 +21,7 @@ from mechopt.solvers.press.common import (
     Samples,
     Trace,
     belt_mode,
-    belt_too_fast,
+    belt_too_fast_per_revolution,
     casadi_failure,
     check_task,
     checked,
@@ -86,14 +86,12 @@ def steady_state(task: PressDrive, *, tol: Tolerance = 1e-10, samples: Samples =
     if not tol > 0:
         raise ModelError(f"tol={tol} must be > 0", key="tol")
     t_start = time.perf_counter()
-    hz, _ = belt_mode(task)
-    if hz > 0:              # Newton's CVODES sensitivities must follow the belt mode: minutes past ~2 kHz
-        step = 0.1 / hz
-        too_fast = belt_too_fast(task, step, TWO_PI / task.nominal_speed_rad_s / step, STEPS_PER_REVOLUTION,
-                                 "steady_state", why=" (a tenth of its period)", over=" per revolution")
-        if too_fast:
-            return Result(Status.LIMIT, {"belt_mode_Hz": hz, "step_needed_s": step},
-                          Timing(0.0, time.perf_counter() - t_start), too_fast + "; `events` integrates it")
+    # Newton's CVODES sensitivities must follow the belt mode: minutes past ~2 kHz
+    too_fast = belt_too_fast_per_revolution(task, STEPS_PER_REVOLUTION, "steady_state")
+    if too_fast:
+        hz, _ = belt_mode(task)
+        return Result(Status.LIMIT, {"belt_mode_Hz": hz, "step_needed_s": 0.1 / hz},
+                      Timing(0.0, time.perf_counter() - t_start), too_fast + "; `events` integrates it")
     stall = stall_check(task)
     if stall is not None:           # no forward periodic motion can exist: say so before any work
         return Result(Status.INFEASIBLE, stall[0], Timing(0.0, time.perf_counter() - t_start), stall[1], ("stall",))
