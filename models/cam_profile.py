@@ -29,7 +29,7 @@ import casadi as ca
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from mechopt.models.cam_cutter import LinkageFit
+from mechopt.models.cam_cutter import LinkageFit, real_point
 from mechopt.models.errors import ModelError
 
 FUNCTIONS = ("sin", "cos", "tan", "exp", "log", "sqrt", "abs")
@@ -314,13 +314,7 @@ def place(curve, h_mm, placement="start_at_origin"):
     return PlacedPath(curve, float(h_mm), shift)
 
 
-def _limacon_polyline(H, L, vertices):
-    """Points of eq. (10) on a polyline [mm], H and L broadcast against the vertices' axis."""
-    s = np.linspace(0.0, 2 * np.pi, vertices, endpoint=False)
-    return L * (np.cos(s) - 1) + 0.5 * H * (np.cos(2 * s) - 1), L * np.sin(s) + 0.5 * H * np.sin(2 * s)
-
-
-def coarse_start(point, t0, t1, span, *, side=24, nodes=48, vertices=512):
+def coarse_start(point, t0, t1, span, *, side=24, nodes=48, vertices=128):
     """The best (H, L) [mm] of a side x side lattice over 0.05 .. 1.2 span (span: the path's reach
     along -x) by brute force: largest node-to-polyline distance, minimised. A start for the NLP
     where no closed form matches the limaçon to the curve (it is one for the cardioid)."""
@@ -328,7 +322,7 @@ def coarse_start(point, t0, t1, span, *, side=24, nodes=48, vertices=512):
     grid = np.linspace(0.05, 1.2, side) * span
     best = (np.inf, grid[0], grid[0])
     for H in grid:
-        rx, ry = _limacon_polyline(H, grid[:, None], vertices)               # (side, vertices)
+        rx, ry = real_point(np.linspace(0.0, 2 * np.pi, vertices, endpoint=False), H, grid[:, None])  # (side, vertices)
         dist = np.hypot(rx[:, None, :] - x[None, :, None], ry[:, None, :] - y[None, :, None]).min(axis=2)
         worst = dist.max(axis=1)
         k = int(np.argmin(worst))
