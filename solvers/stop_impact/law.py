@@ -10,6 +10,7 @@ Two sources of the approach velocity v0, by the task's effects:
 """
 import numpy as np
 
+from mechopt.models.cache import memoised
 from mechopt.models.errors import ModelError, SolverError
 from mechopt.models.stop_impact import Impact, LeverStop
 from mechopt.solvers.result import Status
@@ -36,6 +37,11 @@ def approach_velocity_m_s(task: LeverStop, speed_rpm: float, t_deg: float | None
     it; a C that only settles onto its plate has v0 = 0), else the task's fitted proportionality."""
     if "cam_drive" not in task.effects:
         return float(task.approach_velocity_m_s(speed_rpm, t_deg))
+    return _rise_velocity(task, float(speed_rpm), None if t_deg is None else float(t_deg))
+
+
+@memoised(maxsize=4096)     # the chain asks for the same rise again (a law's tangent, a walk, its check)
+def _rise_velocity(task: LeverStop, speed_rpm: float, t_deg: float | None) -> float:
     rise = follow_cam(task, speed_rpm, t_deg, reltol=CHAIN_RELTOL)
     if rise.status is not Status.SOLVED:        # (no contact at all: C settles onto the plate, v0 = 0)
         raise RollerLeftCam(f"speed {speed_rpm:g} rpm, t = {rise.t_deg:g} deg: no approach velocity: {rise.message}",
