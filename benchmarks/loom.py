@@ -38,8 +38,8 @@ from mechopt import registry
 from mechopt.models.cache import clear as clear_caches
 from mechopt.models.loom import Cyclogram
 from mechopt.plots import save_figure
-from mechopt.solvers.loom import plan as cyclogram_lp
 from mechopt.solvers.loom import HeldLP, build_event_time_lp, incidence, max_machine_speed, plan_cyclogram
+from mechopt.solvers.loom import plan as cyclogram_lp
 
 __all__ = ["TARGETS", "cli", "layered", "machine", "machine_speed", "scale", "what_if"]
 
