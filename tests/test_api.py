@@ -255,3 +255,25 @@ def test_a_calibration_typo_in_a_users_scene_is_named_and_the_others_load(own):
     catalogue = registry.catalogue()
     assert any("typo.toml: params.sigma_H_limit_MPa.on = 'spam_deg'" in p for p in catalogue.problems)
     assert "my/loom-six" in {s.id for s in catalogue.scenes} and "my/typo" not in {s.id for s in catalogue.scenes}
+
+
+def test_a_press_of_ones_own_takes_the_registry_press_as_its_base(tmp_path):
+    """`base = { scene = ... }`: the press and its data from one file, only the question's changes
+    here; `mechopt new`-style copies of a scene with a base still find it from elsewhere."""
+    heavy = copy_scene("press/start-up", tmp_path, "my/heavy-start",
+                       [("\n[solver_settings]\n", '\n[params]\nflywheel_inertia_kgm2 = { value = 7.5, mark = "assumed", '
+                                                'why = "a heavier flywheel" }\n\n[solver_settings]\n')])
+    assert 'scene = "/' in heavy.read_text(encoding="utf-8")            # the base's path made absolute
+    task, _ = mechopt.load(heavy).build()
+    source, _ = mechopt.load("press/start-up").build()
+    assert task.flywheel_inertia_kgm2 == 7.5 and source.flywheel_inertia_kgm2 == 5.0
+    assert task.tool_mass_kg == source.tool_mass_kg            # the rest from the base
+    rows = {r["key"]: r for r in mechopt.describe(heavy)}
+    assert rows["tool_mass_kg"]["mark"] == "assumed" and rows["gear_ratio"]["mark"] == "calibrated"
+
+
+def test_a_base_that_drops_what_it_does_not_have_is_named(tmp_path):
+    path = copy_scene("press/kd2322-rigid-belt", tmp_path, "my/rigid",
+                      [('drop = ["belt_stiffness_Nm_rad", "belt_damping_Nms_rad"]', 'drop = ["belt_colour"]')])
+    with pytest.raises(mechopt.SceneError, match=r"base\.drop: belt_colour not in .*kd2322\.toml"):
+        mechopt.load(path)

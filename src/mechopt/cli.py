@@ -9,6 +9,7 @@ import argparse
 import inspect
 import json
 import os
+import re
 import shlex
 import sys
 import warnings
@@ -160,9 +161,13 @@ def _new(args) -> int:
     return OK
 
 
+_OTHER_SCENE = re.compile(r'scene = "([^"]+)"')      # a reference to another scene, relative to its file
+
+
 def scene_template(scene, new_id: str) -> str:
     """A scene's file as a user's starting point: a new id, its source's expectations dropped
-    (they hold for the source's numbers only), and a header saying what to edit."""
+    (they hold for the source's numbers only), references to other scenes made absolute (the copy
+    lives elsewhere), and a header saying what to edit."""
     lines, out, skipping = scene.path.read_text(encoding="utf-8").splitlines(), [], False
     for line in lines:
         stripped = line.strip()
@@ -170,7 +175,9 @@ def scene_template(scene, new_id: str) -> str:
             skipping = stripped.startswith("[expect")
         if skipping:
             continue
-        out.append(f'id = "{new_id}"' if stripped.startswith("id =") else line)
+        if stripped.startswith("id ="):
+            line = f'id = "{new_id}"'
+        out.append(_OTHER_SCENE.sub(lambda m: f'scene = "{(scene.path.parent / m[1]).resolve().as_posix()}"', line))
     header = [f"# A scene of your own, started from {scene.id} ({scene.path.name}).",
               "# Edit [params] (the unit is in every name; mark what you assumed), [structure] and",
               "# [solver_settings]; `mechopt describe THIS_FILE` lists every key with its allowed range.",

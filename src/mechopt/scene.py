@@ -244,6 +244,8 @@ def loads(text: str, path: Path) -> Scene:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(f"{path}: not valid TOML: {exc}") from None
+    if "base" in raw:
+        raw = _on_base(path, raw)
     try:
         spec = SceneFile.model_validate(raw)
     except ValidationError as exc:
@@ -373,21 +375,42 @@ def _read_tables(path, structure):
 
 
 def _scene_table(path, key, value):
-    drop = value.get("drop", [])
-    if set(value) - {"scene", "drop"} or not isinstance(value["scene"], str) or not (
-            isinstance(drop, list) and all(isinstance(d, str) for d in drop)):
-        raise SceneError(f'{path}: structure.{key}: a model from another scene is {{ scene = "../other/scene.toml", '
-                         f'drop = ["name", ...] }}; got {value!r}', key=key)
-    source_path = (path.parent / value["scene"]).resolve()
-    if source_path in _READING:
-        raise SceneError(f"{path}: structure.{key}: {value['scene']} leads back to a scene being read (a loop)", key=key)
-    source = load(source_path)
-    unknown = sorted(set(drop) - set(source.spec.params) - set(source.spec.structure))
-    if unknown:
-        raise SceneError(f"{path}: structure.{key}.drop: {', '.join(unknown)} not in {value['scene']}", key=key)
+    source, drop = _other_scene(path, f"structure.{key}", value)
     params = {name: p.model_dump(exclude_defaults=True) for name, p in source.spec.params.items()}
     table = {"effects": list(source.spec.effects)} | source.spec.structure | params
     return {name: entry for name, entry in table.items() if name not in drop}
+
+
+def _on_base(path, raw):
+    """A scene file with `base = { scene = "kd2322.toml", drop = [...] }`: that scene's params,
+    effects and structure under its own (its own win; its id, title, question and expectations
+    are its own), so a press's data lives in one file and each question states only what differs."""
+    source, drop = _other_scene(path, "base", raw.pop("base"))
+    params = {name: p.model_dump(exclude_defaults=True) for name, p in source.spec.params.items() if name not in drop}
+    structure = {name: v for name, v in source.spec.structure.items() if name not in drop}
+    return raw | {"params": params | raw.get("params", {}), "structure": structure | raw.get("structure", {}),
+                  "effects": raw.get("effects", list(source.spec.effects))}
+
+
+def _other_scene(path, where, value):
+    """(the scene `value` names, relative to `path`'s folder; the names it drops), checked."""
+    drop = value.get("drop", []) if isinstance(value, dict) else None
+    if not isinstance(value, dict) or set(value) - {"scene", "drop"} or not isinstance(value.get("scene"), str) or not (
+            isinstance(drop, list) and all(isinstance(d, str) for d in drop)):
+        raise SceneError(f'{path}: {where}: a model from another scene is {{ scene = "../other/scene.toml", '
+                         f'drop = ["name", ...] }}; got {value!r}', key=where)
+    source_path = (path.parent / value["scene"]).resolve()
+    if source_path in _READING:
+        raise SceneError(f"{path}: {where}: {value['scene']} leads back to a scene being read (a loop)", key=where)
+    _READING.add(path.resolve())
+    try:
+        source = load(source_path)
+    finally:
+        _READING.discard(path.resolve())
+    unknown = sorted(set(drop) - set(source.spec.params) - set(source.spec.structure))
+    if unknown:
+        raise SceneError(f"{path}: {where}.drop: {', '.join(unknown)} not in {value['scene']}", key=where)
+    return source, drop
 
 
 def _csv_rows(csv_path, columns, key):
