@@ -221,21 +221,26 @@ def _validate(args) -> int:
         result = registry.run(scene)
         runs.append(result)
         for c in result.checks:
-            rows.append((scene.id, c.name, c.kind, c.expected, _fmt(c.got), _verdict(c),
-                         f"{result.result.timing.build_s + result.result.timing.solve_s:.3f}"))
-    _print_table(("case", "quantity", "kind", "expected", "got", "check", "time [s]"), rows)
-    counts = registry.tally(c for r in runs for c in r.checks)
-    print(f"\n{sum(counts.values()) - counts['failed']} passed, {counts['failed']} failed")
-    print(f"of the passed: {counts['reproduced']} reproduce a published value, {counts['calibrated']} are "
-          f"calibrations (fitted, or following from a fit by construction), {counts['consistent']} are "
-          "derived (independent computations, bounds, statuses)")
+            rows.append((registry.VERDICTS.index(c.verdict), scene.id, c.name, c.kind, c.expected, _fmt(c.got),
+                         _verdict(c), f"{result.result.timing.build_s + result.result.timing.solve_s:.3f}"))
+    rows.sort(key=lambda row: row[0] if row[0] < len(registry.MISSES) else len(registry.MISSES))  # misses first
+    _print_table(("case", "quantity", "kind", "expected", "got", "verdict", "time [s]"), [r[1:] for r in rows])
+    checks = [c for r in runs for c in r.checks]
+    failed = [c for c in checks if not c.ok]
+    print(f"\n{len(checks) - len(failed)} passed, {len(failed)} failed")
+    print(registry.summary_line(checks))
+    for c in checks:
+        if c.verdict in registry.MISSES and c.reason:
+            print(f"  {c.verdict.replace('_', ' ')}: {c.name}: {c.reason}")
+        elif c.verdict == "reproduced" and c.readings_after_figure:
+            print(f"  reproduced with readings chosen after the figure: {c.name}: {'; '.join(c.readings_after_figure)}")
     unchecked = [r.scene.id for r in runs if not r.checks]
     if unchecked:
         print(f"scenes with no expectations (solved, nothing to check): {', '.join(unchecked)}")
     _warn(problems)
     if args.json:
         _write_json(args.json, [r.as_dict() for r in runs])
-    return CHECK_FAILED if counts["failed"] or problems else OK
+    return CHECK_FAILED if failed or problems else OK
 
 
 def _bench(args) -> int:
@@ -370,7 +375,7 @@ def _print_run(run):
 
 
 def _verdict(check):
-    return ("ok (calibrated)" if check.calibrated else "ok") if check.ok else "FAIL"
+    return check.label if check.ok else f"FAIL ({check.label})"
 
 
 def _print_table(header, rows):

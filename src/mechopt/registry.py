@@ -14,8 +14,20 @@ from mechopt.solvers.result import Result, Status
 from mechopt.units import unit_of
 
 
+# Every check's verdict, the misses first: the order in which validate lists and counts them.
+VERDICTS = ("failed", "unexpectedly_reproduced", "not_reproduced", "not_reproducible",
+            "reproduced", "calibrated", "derived")
+MISSES = VERDICTS[:4]
+
+
 @dataclass(frozen=True)
 class Check:
+    """One expectation against the result. `verdict` says what it shows:
+    reproduced (a figure of the source, met by a model not fitted to it), calibrated (agreement by
+    construction), derived (an independent computation, a bound or a status), not_reproduced (a declared
+    miss: computed, outside the tolerance), not_reproducible (the source lacks what is needed), failed,
+    or unexpectedly_reproduced (a declared miss that now passes: the declaration is to be corrected).
+    `ok` is whether validation passes it: a declared miss does, as pytest's xfail."""
     name: str
     expected: str            # as the scene states it: "1.5 ± 0.01", "<= 0.2", "INFEASIBLE"
     got: Any                 # float, status word, or None when the solver did not produce it
@@ -24,27 +36,55 @@ class Check:
     kind: str                # published | experimental | derived
     where: str
     calibrated: bool = False  # fitted to this value, or it follows from a fit: agreement by construction
+    verdict: str = "derived"
+    reason: str = ""          # why a declared miss is missed
+    gap: float | None = None  # (got - expected) / |expected|, where both are numbers
+    readings_after_figure: tuple[str, ...] = ()   # readings chosen with the published figure in view
 
     def as_dict(self):
         return {"name": self.name, "expected": self.expected, "got": self.got, "tol": self.tol,
-                "ok": self.ok, "kind": self.kind, "where": self.where, "calibrated": self.calibrated}
+                "ok": self.ok, "verdict": self.verdict, "kind": self.kind, "where": self.where,
+                "calibrated": self.calibrated, "reason": self.reason, "gap": self.gap,
+                "readings_after_figure": list(self.readings_after_figure)}
 
     @property
-    def verdict(self) -> str:
-        """What a passed check shows: "reproduced" (a value from the source, not fitted to it),
-        "calibrated" (agreement by construction), "consistent" (a derived value: an independent
-        computation, a bound or a status); or "failed"."""
-        if not self.ok:
-            return "failed"
-        if self.calibrated:
-            return "calibrated"
-        return "reproduced" if self.kind in ("published", "experimental") else "consistent"
+    def label(self) -> str:
+        """The verdict as a table shows it."""
+        if self.verdict == "not_reproduced" and self.gap is not None:
+            return f"not reproduced ({self.gap:+.1%})"
+        if self.verdict == "reproduced" and self.readings_after_figure:
+            return "reproduced (readings chosen after the figure)"
+        return self.verdict.replace("_", " ")
+
+
+def verdict_of(exp, met: bool, calibrated: bool) -> str:
+    """The verdict of an expectation `exp` whose comparison gave `met`."""
+    if exp.verdict == "not_reproducible":
+        return "not_reproducible"
+    if exp.verdict == "not_reproduced":
+        return "unexpectedly_reproduced" if met else "not_reproduced"
+    if not met:
+        return "failed"
+    if calibrated:
+        return "calibrated"
+    return "reproduced" if exp.kind in ("published", "experimental") else "derived"
 
 
 def tally(checks) -> dict[str, int]:
-    """How many checks are reproduced, calibrated, consistent and failed (see `Check.verdict`)."""
+    """How many checks carry each verdict (see `Check`), in the order of `VERDICTS`."""
     verdicts = [c.verdict for c in checks]
-    return {v: verdicts.count(v) for v in ("reproduced", "calibrated", "consistent", "failed")}
+    return {v: verdicts.count(v) for v in VERDICTS}
+
+
+def summary_line(checks) -> str:
+    """One line: the counts per verdict, the misses first."""
+    checks = list(checks)
+    counts = tally(checks)
+    after = sum(c.verdict == "reproduced" and bool(c.readings_after_figure) for c in checks)
+    parts = [f"{counts[v]} {v.replace('_', ' ')}" + (f" ({after} with readings chosen after the figure)"
+                                                    if v == "reproduced" and after else "")
+             for v in VERDICTS if counts[v] or v in ("failed", "not_reproduced", "reproduced")]
+    return f"{len(checks)} checks: " + ", ".join(parts)
 
 
 @dataclass(frozen=True)
@@ -280,11 +320,20 @@ def check(scene: Scene, result: Result) -> list[Check]:
                                                  and result.status.value == expected_status.value)
     out = []
     for name, exp in scene.spec.expect.items():
-        got = result.status.value if name == "status" else result.values.get(name)
-        tol = None if isinstance(exp.value, str) or exp.value is None else max(exp.abs or 0.0, (exp.rel or 0.0) * abs(exp.value))
-        ok = exp.check(got) and (name == "status" or trusted)
-        out.append(Check(name, exp.describe(), None if got is None else (got if isinstance(got, str) else float(got)),
-                         tol, ok, exp.kind, exp.where, name in scene.calibrated_on() or bool(exp.follows)))
+        got = None if exp.verdict == "not_reproducible" else (
+            result.status.value if name == "status" else result.values.get(name))
+        got = None if got is None else (got if isinstance(got, str) else float(got))
+        numeric = isinstance(exp.value, (int, float)) and not isinstance(exp.value, bool)
+        tol = max(exp.abs or 0.0, (exp.rel or 0.0) * abs(exp.value)) if numeric and exp.verdict != "not_reproducible" else None
+        met = exp.check(got) and (name == "status" or trusted)
+        calibrated = name in scene.calibrated_on() or bool(exp.follows)
+        verdict = verdict_of(exp, met, calibrated)
+        # a declared miss must still be computed: a missing value is a failure, not the declared miss
+        if verdict == "not_reproduced" and (got is None or not (name == "status" or trusted)):
+            verdict = "failed"
+        gap = (got - exp.value) / abs(exp.value) if numeric and isinstance(got, float) and exp.value else None
+        out.append(Check(name, exp.describe(), got, tol, verdict not in ("failed", "unexpectedly_reproduced"),
+                         exp.kind, exp.where, calibrated, verdict, exp.reason, gap, tuple(exp.readings_after_figure)))
     return out
 
 

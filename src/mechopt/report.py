@@ -27,7 +27,7 @@ __all__ = ["write_report"]
 _STYLE = """body{font-family:system-ui,sans-serif;max-width:1180px;margin:1.5em auto;padding:0 1em;color:#222;
 line-height:1.4}table{border-collapse:collapse;font-size:14px;width:100%}td,th{border:1px solid #ccc;
 padding:3px 6px;text-align:left;vertical-align:top}.long{overflow-wrap:anywhere}th{background:#f0f0f0}
-.ok{color:#176117}.fail{color:#b00020;font-weight:bold}.cal{color:#8a5a00}.scroll{overflow-x:auto}
+.ok{color:#176117}.fail{color:#b00020;font-weight:bold}.cal{color:#8a5a00}.miss{color:#8a3a00;font-weight:bold}.scroll{overflow-x:auto}
 figure{margin:10px 0;font-size:13px;color:#555}img{width:100%;height:auto;border:1px solid #ddd;cursor:zoom-in}
 img.zoom{position:fixed;inset:0;margin:auto;width:auto;max-width:98vw;max-height:98vh;z-index:9;cursor:zoom-out;
 background:#fff;box-shadow:0 0 0 100vmax rgba(0,0,0,.6)}details{margin:0.4em 0}nav li{margin:2px 0}
@@ -76,11 +76,8 @@ def write_report(out_dir, *, scenes: Sequence | None = None, bench_dir=None, swe
 
 
 def _summary(runs):
-    counts = registry.tally(c for r in runs for c in r.checks)
-    return (f"<p>{len(runs)} scenes, {sum(counts.values())} checks: {counts['reproduced']} published values "
-            f"reproduced, {counts['calibrated']} calibrated (a parameter was fitted to them: agreement by "
-            f"construction), {counts['consistent']} derived (independent computations, bounds and statuses, "
-            f"not values from the source), {counts['failed']} failed.</p>")
+    checks = [c for r in runs for c in r.checks]
+    return f"<p>{len(runs)} scenes; {_e(registry.summary_line(checks))}.</p>"
 
 
 def _validation(runs):
@@ -89,12 +86,14 @@ def _validation(runs):
         marks = run.scene.marks()
         assumed = sum(m == "assumed" for m in marks.values())
         for c in run.checks:
-            verdict = ("<span class='cal'>ok (calibrated)</span>" if c.calibrated else "<span class='ok'>ok</span>") \
-                if c.ok else "<span class='fail'>FAIL</span>"
-            rows.append([_e(run.scene.id), _e(c.name), _e(c.kind), _e(c.expected), _e(_fmt(c.got)), verdict,
-                         f"<span class='long'>{_e(c.where)}</span>", str(assumed)])
-    return "<div class='scroll'>" + _table(["case", "quantity", "kind", "expected (source)", "computed", "check",
-                                            "where", "assumed params"], rows) + "</div>"
+            css = "fail" if not c.ok else {"calibrated": "cal", "reproduced": "ok", "derived": "ok"}.get(c.verdict, "miss")
+            verdict = f"<span class='{css}'>{_e(c.label if c.ok else 'FAIL (' + c.label + ')')}</span>"
+            rows.append((registry.VERDICTS.index(c.verdict),
+                         [_e(run.scene.id), _e(c.name), _e(c.kind), _e(c.expected), _e(_fmt(c.got)), verdict,
+                          f"<span class='long'>{_e(c.reason or c.where)}</span>", str(assumed)]))
+    rows.sort(key=lambda row: min(row[0], len(registry.MISSES)))        # the misses first
+    return "<div class='scroll'>" + _table(["case", "quantity", "kind", "expected (source)", "computed", "verdict",
+                                            "where / why missed", "assumed params"], [r[1] for r in rows]) + "</div>"
 
 
 def _provenance(runs, command):

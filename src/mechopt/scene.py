@@ -64,9 +64,24 @@ class Expectation(BaseModel):
     kind: Literal["published", "experimental", "derived"]
     where: str
     follows: str = ""      # why agreement is by construction (it follows from a calibration): not a reproduction
+    # A declared miss, as pytest's xfail: "not_reproduced" (computed, outside the tolerance: shown with its gap,
+    # and flagged when it starts to pass) or "not_reproducible" (the source lacks what a computation needs).
+    verdict: Literal["not_reproduced", "not_reproducible"] | None = None
+    reason: str = ""       # why the figure is missed: required with a declared verdict, and only there
+    # readings taken with the published figure in view: a reproduction that needs them says so
+    readings_after_figure: list[str] = []
 
     @model_validator(mode="after")
     def _one_form(self):
+        if bool(self.verdict) != bool(self.reason.strip()):
+            raise ValueError("'reason' goes with a declared verdict (not_reproduced, not_reproducible), and only there")
+        if self.verdict and self.kind == "derived":
+            raise ValueError(f"verdict = {self.verdict!r} is for a figure of the source (kind published or "
+                             "experimental), not a derived check")
+        if self.verdict == "not_reproducible":
+            if not isinstance(self.value, (int, float)) or isinstance(self.value, bool):
+                raise ValueError("a not_reproducible figure states the source's number as 'value'")
+            return self
         if isinstance(self.value, str):
             if self.value not in STATUS_WORDS:
                 raise ValueError(f"status {self.value!r} is not a status word; allowed: {', '.join(STATUS_WORDS)}")
@@ -83,6 +98,8 @@ class Expectation(BaseModel):
         return self
 
     def check(self, got) -> bool:
+        if self.verdict == "not_reproducible":
+            return False
         if isinstance(self.value, str):
             return got == self.value
         if got is None:
@@ -100,6 +117,8 @@ class Expectation(BaseModel):
     def describe(self) -> str:
         if isinstance(self.value, str):
             return self.value
+        if self.verdict == "not_reproducible":
+            return f"{self.value:g}"
         parts = []
         if self.value is not None:
             parts.append(f"{self.value:g} ± " + (f"{self.abs:g}" if self.abs else f"{self.rel:g} rel"))
