@@ -9,7 +9,7 @@ from mechopt.models.errors import ModelError
 from mechopt.models.press import PressDrive
 from mechopt.solvers import press as pd
 from mechopt.solvers.press import event_driven
-from mechopt.solvers.press.common import initial_state, paper_U
+from mechopt.solvers.press.problem import initial_state, paper_U
 from mechopt.solvers.result import Status, from_ivp, from_rootfinder
 
 PAPER, _ = registry.find("press/kd2322").build()

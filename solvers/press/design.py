@@ -31,7 +31,7 @@ from mechopt.models.press import (
     required_mean_torque_Nm,
     single_stroke_margin_J,
 )
-from mechopt.solvers.press.common import (
+from mechopt.solvers.press.problem import (
     TWO_PI,
     Samples,
     Trace,
@@ -496,7 +496,7 @@ def _box(task, nodes, scales, slacks):
 
 
 def _stall(task):
-    """`common.stall_check` at the biggest motor the bounds allow, with the least motor that could."""
+    """`problem.stall_check` at the biggest motor the bounds allow, with the least motor that could."""
     most = {k: task.bounds(k)[1] for k in ("gear_ratio", "motor_scale") if k in task.variables}
     drive = task.drive(most)
     stalled = stall_check(drive)

@@ -11,7 +11,7 @@ import numpy as np
 from mechopt.models.cache import memoised
 from mechopt.models.errors import MechoptError, ModelError
 from mechopt.models.press import PressDrive
-from mechopt.solvers.press.common import (
+from mechopt.solvers.press.problem import (
     ANGLE_TOL_RAD,
     TWO_PI,
     Duration,

@@ -16,7 +16,7 @@ from mechopt.models.press import (
     cut_work_J,
     required_mean_torque_Nm,
 )
-from mechopt.solvers.press.common import (
+from mechopt.solvers.press.problem import (
     TWO_PI,
     Samples,
     Trace,

@@ -15,7 +15,7 @@ import numpy as np
 
 from mechopt.models.cache import memoised
 from mechopt.models.press import WORK_NAMES, PressDesign, dynamics, sizing
-from mechopt.solvers.press.common import TWO_PI
+from mechopt.solvers.press.problem import TWO_PI
 
 QUADRATURES = ("time_s", "motor_torque_integral_Nms", "motor_torque_sq_integral_N2m2s")
 

@@ -1,4 +1,5 @@
-"""What the press solvers share: the assembled equations per task, the initial state, the trace
+"""The press problem, public to every press method (fixed_step, event_driven, periodic, scipy_peer are
+siblings over it; design, loads and sensitivity stand above):  the assembled equations per task, the initial state, the trace
 of a run and its summary, and the switching logic (U, the next angle event, the mode)."""
 import re
 from dataclasses import dataclass, field
