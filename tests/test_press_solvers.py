@@ -8,7 +8,7 @@ from mechopt import registry
 from mechopt.models.errors import ModelError
 from mechopt.models.press import PressDrive
 from mechopt.solvers import press as pd
-from mechopt.solvers.press import event_driven
+from mechopt.solvers.press import problem
 from mechopt.solvers.press.problem import initial_state, paper_U
 from mechopt.solvers.result import Status, from_ivp, from_rootfinder
 
@@ -250,7 +250,7 @@ def test_benchmark_interpolates_time_to_accuracy_in_log_log():
 def test_cvodes_running_out_of_steps_is_a_limit_not_a_crash(monkeypatch):
     def exhausted(*args, **kwargs):
         raise RuntimeError("Error in Function::call for 'piece' [IntegratorInternal]: CV_TOO_MUCH_WORK")
-    monkeypatch.setattr(event_driven, "_run", exhausted)
+    monkeypatch.setattr(problem, "run_piece", exhausted)
     r = pd.events(PAPER, duration_s=0.1)
     assert r.status is Status.LIMIT and "CV_TOO_MUCH_WORK" in r.message
     assert r.values["duration_s"] == 0.0          # what was integrated before the failure: nothing
@@ -311,7 +311,7 @@ def test_a_flywheel_that_cannot_carry_the_cut_is_a_stall_not_a_casadi_stack():
 def test_a_cvodes_failure_keeps_its_stack_out_of_the_message(monkeypatch):
     raw = ("Error in Function::call for 'piece' [IntegratorInternal] at .../casadi/core/function.cpp:1736:\n"
            ".../casadi/interfaces/sundials/cvodes_interface.cpp:403: CVode returned \"CV_CONV_FAILURE\".")
-    monkeypatch.setattr(event_driven, "_run", lambda *a, **k: (_ for _ in ()).throw(RuntimeError(raw)))
+    monkeypatch.setattr(problem, "run_piece", lambda *a, **k: (_ for _ in ()).throw(RuntimeError(raw)))
     r = pd.events(PAPER, duration_s=0.1)
     assert r.status is Status.FAILED and r.diagnostics["casadi_error"] == raw
     assert r.message == "CVODES gave up (CV_CONV_FAILURE: the corrector did not converge) at t = 0 s of 0.1 s"

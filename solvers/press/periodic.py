@@ -7,7 +7,6 @@ import time
 import casadi as ca
 import numpy as np
 
-from mechopt.models.cache import memoised
 from mechopt.models.errors import MechoptError, ModelError
 from mechopt.models.press import (
     WORK_NAMES,
@@ -18,48 +17,27 @@ from mechopt.models.press import (
 )
 from mechopt.solvers.press.problem import (
     TWO_PI,
+    Limit,
     Samples,
+    Stall,
     Trace,
     belt_mode,
     belt_too_fast_per_revolution,
     casadi_failure,
     check_task,
     checked,
-    dynamics_of,
     initial_state,
+    march,
+    piece_by_time,
+    revolution_pieces,
+    revolution_trace,
     stall_check,
     summarise,
 )
-from mechopt.solvers.press.event_driven import _Limit, _march, _piece, _Stall
 from mechopt.solvers.result import Result, Status, Timing, from_rootfinder
 from mechopt.solvers.settings import Annotated, Interval, Tolerance
 
 STEPS_PER_REVOLUTION = 2500     # belt-mode steps per revolution steady_state takes on (1 kHz belt: ~3 s)
-
-
-@memoised(maxsize=16)
-def _revolution(task: PressDrive, tol: float, samples: int):
-    """The revolution as CVODES pieces in the crank angle (d/dphi = (d/dt) / omega): the states
-    other than phi, then time, then the work integrals. Returns (pieces, their angle spans, U)."""
-    dyn = dynamics_of(task)
-    n = dyn.n_states
-    iphi = task.state_names.index("phi_rad")
-    y = ca.SX.sym("y", n - 1 + 1 + len(WORK_NAMES))      # other states, time, works
-    phi = ca.SX.sym("phi")
-    u = ca.SX.sym("u")
-    states = ca.vertcat(y[:iphi], phi, y[iphi:n - 1])
-    xdot = dyn.rhs(ca.vertcat(states, y[n:]), ca.vertcat(u, 1, 0))
-    w = states[task.state_names.index("omega_rad_s")]
-    dy = ca.vertcat(xdot[:iphi], xdot[iphi + 1:n], 1, xdot[n:]) / w
-    window = task.cut_window_rad()
-    cuts = [0.0, window[0], window[1], TWO_PI] if window is not None and window[0] < window[1] else [0.0, TWO_PI]
-    pieces = []
-    for k, (a, b) in enumerate(zip(cuts[:-1], cuts[1:])):
-        grid = np.linspace(a, b, samples + 1)[1:]
-        pieces.append((ca.integrator(f"rev{k}", "cvodes", {"x": y, "t": phi, "p": u, "ode": dy}, a, grid,
-                                     {"abstol": tol, "reltol": tol, "max_num_steps": 100000}),
-                       grid, float(len(cuts) == 4 and k == 1)))
-    return pieces, n
 
 
 def steady_state(task: PressDrive, *, tol: Tolerance = 1e-10, samples: Samples = 60,
@@ -95,7 +73,7 @@ def steady_state(task: PressDrive, *, tol: Tolerance = 1e-10, samples: Samples =
     stall = stall_check(task)
     if stall is not None:           # no forward periodic motion can exist: say so before any work
         return Result(Status.INFEASIBLE, stall[0], Timing(0.0, time.perf_counter() - t_start), stall[1], ("stall",))
-    pieces, n = _revolution(task, tol, samples)
+    pieces, n = revolution_pieces(task, tol, samples)
     m = n - 1
     y0 = ca.MX.sym("y0", m)
     y = ca.vertcat(y0, ca.MX.zeros(1 + len(WORK_NAMES)))
@@ -113,7 +91,7 @@ def steady_state(task: PressDrive, *, tol: Tolerance = 1e-10, samples: Samples =
     try:                # the re-integration of the found orbit can fail as well as the Newton solve
         solution = np.asarray(rf(guess)).ravel()
         status = from_rootfinder(rf.stats()["return_status"])
-        trace = _revolution_trace(task, pieces, n, solution)
+        trace = revolution_trace(task, pieces, n, solution)
         miss = float(np.max(np.abs(np.asarray(residual(solution)).ravel())))
     except RuntimeError as exc:
         if isinstance(exc, MechoptError):
@@ -163,30 +141,9 @@ def _stalls_from(task, guess, tol):
     x[[i for i in range(len(task.state_names)) if i != iphi]] = guess
     speed = max(float(x[task.state_names.index("omega_rad_s")]), 1e-3)
     try:
-        _march(task, _piece(task, tol, 8), Trace(), x, 3 * TWO_PI / speed, 0.02, 10_000)
-    except _Stall as stall:
+        march(task, piece_by_time(task, tol, 8), Trace(), x, 3 * TWO_PI / speed, 0.02, 10_000)
+    except Stall as stall:
         return str(stall)
-    except (_Limit, RuntimeError):
+    except (Limit, RuntimeError):
         return None
     return None
-
-
-def _revolution_trace(task, pieces, n, y0):
-    """Samples over the revolution from the initial states y0 (other than phi) [as a Trace]."""
-    iphi = task.state_names.index("phi_rad")
-    trace = Trace()
-    y = np.r_[y0, np.zeros(1 + len(WORK_NAMES))]
-
-    def full(ycol, phi):
-        return np.r_[ycol[:iphi], phi, ycol[iphi:n - 1], ycol[n:]], ycol[n - 1]
-
-    x, t = full(y, 0.0)
-    trace.add(t, x, np.array([0.0, 1.0, 0.0]))
-    for integ, grid, u in pieces:
-        ys = np.asarray(integ(x0=y, p=u)["xf"]).T
-        rows = [full(row, a) for row, a in zip(ys, grid)]
-        trace.add(np.array([r[1] for r in rows]), np.array([r[0] for r in rows]), np.array([u, 1.0, 0.0]))
-        kind = "cut_start" if u == 0 and grid[-1] < TWO_PI else ("cut_end" if u == 1 else "revolution")
-        trace.events.append((kind, float(rows[-1][1]), float(grid[-1])))
-        y = ys[-1]
-    return trace

@@ -1,10 +1,13 @@
-"""The press problem, public to every press method (fixed_step, event_driven, periodic, scipy_peer are
-siblings over it; design, loads and sensitivity stand above):  the assembled equations per task, the initial state, the trace
-of a run and its summary, and the switching logic (U, the next angle event, the mode)."""
+"""The press problem, public to every press method: fixed_step, event_driven, periodic and scipy_peer
+are siblings over it (as scipy's rk, radau and bdf over its base); design, loads and sensitivity
+stand above. Here: the assembled equations per task, the initial state, the trace of a run and its
+summary, the switching logic (U, the next angle event, the mode), and the pieces every method
+integrates (CVODES by time between located events, by crank angle over a revolution)."""
 import re
 from dataclasses import dataclass, field
 from typing import Annotated, Literal
 
+import casadi as ca
 import numpy as np
 from annotated_types import Interval
 
@@ -298,3 +301,198 @@ def mode_at(task, dyn, x, moving_sign):
 def drive_torque(dyn, x, mode):
     """The torque turning the crank before friction, at a state in a mode [N m]."""
     return float(dyn.outputs(x, mode)[Dynamics.OUTPUT_NAMES.index("drive_torque_Nm")])
+
+
+# --- the pieces every method integrates: CVODES by time (events) and by crank angle (periodic) ---
+
+@memoised(maxsize=32)
+def piece_by_time(task: PressDrive, tol: float, samples: int) -> ca.Function:
+    """CVODES over a piece of duration p[0] in mode p[1:] (time scaled to [0, 1]): the states at
+    `samples` equally spaced times, the last being the end of the piece."""
+    rhs = dynamics_of(task).rhs
+    x = ca.SX.sym("x", rhs.size1_in(0))
+    p = ca.SX.sym("p", 4)
+    grid = np.linspace(0, 1, samples + 1)[1:]
+    return ca.integrator("piece", "cvodes", {"x": x, "p": p, "ode": p[0] * rhs(x, p[1:])}, 0.0, grid,
+                         {"abstol": tol, "reltol": tol, "max_num_steps": 100000})
+
+
+class Stall(Exception):
+    pass
+
+
+class Limit(Exception):
+    pass
+
+
+def march(task, piece, trace, x, duration_s, max_step_s, max_events):
+    dyn = dynamics_of(task)
+    iphi, iw = task.state_names.index("phi_rad"), task.state_names.index("omega_rad_s")
+    friction = task.friction_torque_Nm if task.friction else 0.0
+    t = 0.0
+    mode = start_mode(task, dyn, x, friction)
+    trace.add(t, x, mode)
+    while t < duration_s * (1 - 1e-14):
+        if len(trace.events) > max_events:
+            raise Limit(f"more than max_events={max_events} events by t = {t:.6g} s")
+        stuck = mode[2] > 0
+        T = min(max_step_s, duration_s - t)
+        target = kind = None
+        if not stuck and mode[1] > 0:
+            target, kind = angle_events(task, x[iphi])
+            if x[iw] > 0:
+                T = min(T, (target - x[iphi]) / x[iw])
+        xs = run_piece(piece, x, T, mode)
+        end = xs[-1]
+        # friction events: omega crossing zero while moving, breakaway while stuck
+        if stuck:
+            g = lambda s: abs(drive_torque(dyn, s, mode)) - friction
+            gs = [g(s) for s in xs]
+            hit = next((i for i, v in enumerate(gs) if v > 0), None)
+            if hit is not None:
+                T_ev, xe = locate(piece, x, mode, T * hit / len(xs), T * (hit + 1) / len(xs), g)
+                xs = run_piece(piece, x, T_ev, mode)
+                t = commit(trace, t, T_ev, xs, mode)
+                x = xs[-1]
+                sign = np.sign(drive_torque(dyn, x, mode))
+                mode = mode_at(task, dyn, x, sign)
+                trace.events.append(("slip", t, float(x[iphi])))
+                continue
+        elif mode[1] != 0:
+            ws = xs[:, iw] * mode[1]
+            hit = next((i for i, v in enumerate(ws) if v <= 0), None)
+            if hit is not None:
+                lo = T * hit / len(xs)
+                T_ev, xe = locate(piece, x, mode, lo, T * (hit + 1) / len(xs), lambda s: s[iw] * mode[1])
+                xs = run_piece(piece, x, T_ev, mode)
+                t = commit(trace, t, T_ev, xs, mode)
+                x = xs[-1].copy()
+                x[iw] = 0.0            # exactly at rest: the event's definition
+                trace.events.append(("stop", t, float(x[iphi])))
+                if mode[0] > 0:
+                    raise Stall(f"the press stalls in the cut at crank angle {np.degrees(x[iphi] % TWO_PI):.3f} deg, "
+                                 f"t = {t:.6g} s: the flywheel and motor cannot supply the cutting work")
+                mode = start_mode(task, dyn, x, friction)
+                if mode[2] > 0:
+                    trace.events.append(("stick", t, float(x[iphi])))
+                continue
+        if target is not None and end[iphi] >= target - ANGLE_TOL_RAD:
+            if abs(end[iphi] - target) > ANGLE_TOL_RAD:
+                T, xs = newton_angle(piece, x, mode, T, target, iphi, iw)
+            t = commit(trace, t, T, xs, mode)
+            x = xs[-1]
+            trace.events.append((kind, t, float(target)))
+            x = x.copy()
+            x[iphi] = target               # remove the last 1e-12 rad so the next window is clean
+            mode = mode_at(task, dyn, x, 1.0)
+            continue
+        t = commit(trace, t, T, xs, mode)
+        x = end
+
+
+def start_mode(task, dyn, x, friction):
+    """Mode for a state at rest or moving: stuck if static friction holds it."""
+    w = x[task.state_names.index("omega_rad_s")]
+    if w != 0:
+        return mode_at(task, dyn, x, np.sign(w))
+    rest = np.array([0.0, 0.0, 1.0])
+    drive = drive_torque(dyn, x, rest)
+    if abs(drive) <= friction:
+        return rest
+    return mode_at(task, dyn, x, np.sign(drive))
+
+
+def run_piece(piece, x, T, mode):
+    out = piece(x0=x, p=np.r_[T, mode])["xf"]
+    return np.asarray(out).T
+
+
+def commit(trace, t, T, xs, mode):
+    n = len(xs)
+    trace.add(t + T * np.arange(1, n + 1) / n, xs, mode)
+    return t + T
+
+
+def newton_angle(piece, x, mode, T, target, iphi, iw):
+    """Duration T at which phi reaches `target` (Newton: d phi / dT = omega)."""
+    for _ in range(50):
+        xs = run_piece(piece, x, T, mode)
+        miss = xs[-1, iphi] - target
+        if abs(miss) <= ANGLE_TOL_RAD:
+            return T, xs
+        T -= miss / xs[-1, iw]
+    raise Limit(f"event at crank angle {target:.12g} rad not located to {ANGLE_TOL_RAD} rad in 50 Newton steps")
+
+
+def locate(piece, x, mode, lo, hi, g):
+    """Duration in [lo, hi] where g(state) changes sign (Illinois false position)."""
+    g_lo = g(run_piece(piece, x, lo, mode)[-1]) if lo > 0 else g(x)
+    g_hi = g(run_piece(piece, x, hi, mode)[-1])
+    side = 0
+    for _ in range(200):
+        mid = hi - g_hi * (hi - lo) / (g_hi - g_lo) if g_hi != g_lo else 0.5 * (lo + hi)
+        state = run_piece(piece, x, mid, mode)[-1]
+        g_mid = g(state)
+        if abs(hi - lo) < 1e-14 or g_mid == 0:
+            return mid, state
+        if (g_mid > 0) == (g_hi > 0):
+            hi, g_hi = mid, g_mid
+            if side == 1:
+                g_lo /= 2
+            side = 1
+        else:
+            lo, g_lo = mid, g_mid
+            if side == -1:
+                g_hi /= 2
+            side = -1
+        if abs(g_mid) < 1e-12:
+            return mid, state
+    raise Limit(f"an event was not located to 1e-12 in 200 false-position steps (bracket {hi - lo:.3g} s, "
+                 f"g = {g_mid:.3g})")
+
+
+
+@memoised(maxsize=16)
+def revolution_pieces(task: PressDrive, tol: float, samples: int):
+    """The revolution as CVODES pieces in the crank angle (d/dphi = (d/dt) / omega): the states
+    other than phi, then time, then the work integrals. Returns (pieces, their angle spans, U)."""
+    dyn = dynamics_of(task)
+    n = dyn.n_states
+    iphi = task.state_names.index("phi_rad")
+    y = ca.SX.sym("y", n - 1 + 1 + len(WORK_NAMES))      # other states, time, works
+    phi = ca.SX.sym("phi")
+    u = ca.SX.sym("u")
+    states = ca.vertcat(y[:iphi], phi, y[iphi:n - 1])
+    xdot = dyn.rhs(ca.vertcat(states, y[n:]), ca.vertcat(u, 1, 0))
+    w = states[task.state_names.index("omega_rad_s")]
+    dy = ca.vertcat(xdot[:iphi], xdot[iphi + 1:n], 1, xdot[n:]) / w
+    window = task.cut_window_rad()
+    cuts = [0.0, window[0], window[1], TWO_PI] if window is not None and window[0] < window[1] else [0.0, TWO_PI]
+    pieces = []
+    for k, (a, b) in enumerate(zip(cuts[:-1], cuts[1:])):
+        grid = np.linspace(a, b, samples + 1)[1:]
+        pieces.append((ca.integrator(f"rev{k}", "cvodes", {"x": y, "t": phi, "p": u, "ode": dy}, a, grid,
+                                     {"abstol": tol, "reltol": tol, "max_num_steps": 100000}),
+                       grid, float(len(cuts) == 4 and k == 1)))
+    return pieces, n
+
+
+def revolution_trace(task, pieces, n, y0):
+    """Samples over the revolution from the initial states y0 (other than phi) [as a Trace]."""
+    iphi = task.state_names.index("phi_rad")
+    trace = Trace()
+    y = np.r_[y0, np.zeros(1 + len(WORK_NAMES))]
+
+    def full(ycol, phi):
+        return np.r_[ycol[:iphi], phi, ycol[iphi:n - 1], ycol[n:]], ycol[n - 1]
+
+    x, t = full(y, 0.0)
+    trace.add(t, x, np.array([0.0, 1.0, 0.0]))
+    for integ, grid, u in pieces:
+        ys = np.asarray(integ(x0=y, p=u)["xf"]).T
+        rows = [full(row, a) for row, a in zip(ys, grid)]
+        trace.add(np.array([r[1] for r in rows]), np.array([r[0] for r in rows]), np.array([u, 1.0, 0.0]))
+        kind = "cut_start" if u == 0 and grid[-1] < TWO_PI else ("cut_end" if u == 1 else "revolution")
+        trace.events.append((kind, float(rows[-1][1]), float(grid[-1])))
+        y = ys[-1]
+    return trace

@@ -17,8 +17,8 @@ import numpy as np
 
 from mechopt.models.errors import ModelError
 from mechopt.models.press import PressDrive, cutting_force_N, kloss_torque_Nm, rod_middle_m, travel_m
-from mechopt.solvers.press.problem import TWO_PI, check_task
 from mechopt.solvers.press.periodic import steady_state
+from mechopt.solvers.press.problem import TWO_PI, check_task
 from mechopt.solvers.result import Result, Status, Timing, from_rootfinder
 from mechopt.solvers.settings import Annotated, Interval, Tolerance
 
