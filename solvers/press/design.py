@@ -30,6 +30,7 @@ from mechopt.models.press import (
     breakdown_torque_at_crank_Nm,
     required_mean_torque_Nm,
     single_stroke_margin_J,
+    structure,
 )
 from mechopt.solvers.press.periodic import steady_state
 from mechopt.solvers.press.problem import (
@@ -42,8 +43,7 @@ from mechopt.solvers.press.problem import (
     locate,
     march,
     piece_by_time,
-    revolution_pieces,
-    revolution_trace,
+    revolution,
     stall_check,
     summarise,
     top_speed_rad_s,
@@ -286,7 +286,7 @@ def _design(task, tol, samples, max_iter, check_sensitivity, warm):
     if status is not Status.SOLVED:
         return _not_solved(task, status, word, nodes, tol, samples, scales, origin, timing(build), max_iter)
     drive = task.drive(start)
-    values, diagnostics, arrays = summarise(drive, revolution_trace(drive, *revolution_pieces(drive, tol, 60), y0),
+    values, diagnostics, arrays = summarise(drive, revolution(structure(drive), tol, 60).trace(y0, dynamics_of(drive).p)[0],
                                             cut_angles=task.cut_window_rad())
     # the extremes are nodes, so the NLP's samples hold them: no parabola through coarse samples here
     values["speed_fluctuation"] = float((omega.max() - omega.min()) * period[0] / TWO_PI)

@@ -3,6 +3,7 @@ are siblings over it (as scipy's rk, radau and bdf over its base); design, loads
 stand above. Here: the assembled equations per task, the initial state, the trace of a run and its
 summary, the switching logic (U, the next angle event, the mode), and the pieces every method
 integrates (CVODES by time between located events, by crank angle over a revolution)."""
+import dataclasses
 import re
 from dataclasses import dataclass, field
 from typing import Annotated, Literal
@@ -15,6 +16,7 @@ from mechopt.models.cache import memoised
 from mechopt.models.errors import ModelError
 from mechopt.models.press import (
     FORCE_KEYS,
+    PARAMETERS,
     WORK_NAMES,
     Dynamics,
     PressDrive,
@@ -22,7 +24,9 @@ from mechopt.models.press import (
     breakdown_torque_at_crank_Nm,
     cut_work_J,
     dynamics,
+    equations,
     required_mean_torque_Nm,
+    structure,
 )
 from mechopt.solvers.result import Status, from_casadi_integrator
 
@@ -35,6 +39,7 @@ Samples = Annotated[int, Interval(ge=1, le=10_000)]           # outputs per inte
 
 @memoised(maxsize=32)
 def dynamics_of(task: PressDrive) -> Dynamics:
+    """The task's equations (its structure's, built once) with its numbers bound."""
     return dynamics(task)
 
 
@@ -305,16 +310,32 @@ def drive_torque(dyn, x, mode):
 
 # --- the pieces every method integrates: CVODES by time (events) and by crank angle (periodic) ---
 
+class Piece:
+    """A structure's CVODES piece (`time_piece`) with a task's p bound: called as the integrator is."""
+
+    def __init__(self, integrator: ca.Function, p: np.ndarray):
+        self.integrator, self.p = integrator, p
+
+    def __call__(self, *, x0, p):
+        return self.integrator(x0=x0, p=np.r_[p, self.p])
+
+
 @memoised(maxsize=32)
-def piece_by_time(task: PressDrive, tol: float, samples: int) -> ca.Function:
-    """CVODES over a piece of duration p[0] in mode p[1:] (time scaled to [0, 1]): the states at
-    `samples` equally spaced times, the last being the end of the piece."""
-    rhs = dynamics_of(task).rhs
-    x = ca.SX.sym("x", rhs.size1_in(0))
-    p = ca.SX.sym("p", 4)
+def time_piece(key: tuple, tol: float, samples: int) -> ca.Function:
+    """CVODES over a piece of duration p[0] in mode p[1:4] with the press's p (`PARAMETERS`) after
+    them (time scaled to [0, 1]): the states at `samples` equally spaced times, the last being the
+    end of the piece. Built once per structure (`models.press.structure`)."""
+    eq = equations(key)
+    x = ca.SX.sym("x", eq.rhs.size1_in(0))
+    p = ca.SX.sym("p", 4 + len(PARAMETERS))
     grid = np.linspace(0, 1, samples + 1)[1:]
-    return ca.integrator("piece", "cvodes", {"x": x, "p": p, "ode": p[0] * rhs(x, p[1:])}, 0.0, grid,
+    return ca.integrator("piece", "cvodes", {"x": x, "p": p, "ode": p[0] * eq.rhs(x, p[1:4], p[4:])}, 0.0, grid,
                          {"abstol": tol, "reltol": tol, "max_num_steps": 100000})
+
+
+def piece_by_time(task: PressDrive, tol: float, samples: int) -> Piece:
+    """`time_piece` of the task's structure with its p bound."""
+    return Piece(time_piece(structure(task), tol, samples), dynamics_of(task).p)
 
 
 class Stall(Exception):
@@ -452,47 +473,79 @@ def locate(piece, x, mode, lo, hi, g):
 
 
 
+CUT_START, CUT_END = PARAMETERS.index("cut_start_rad"), PARAMETERS.index("cut_end_rad")
+
+
+@dataclass(frozen=True)
+class Revolution:
+    """One revolution of a structure in the crank angle (d/dphi = (d/dt) / omega), as CVODES pieces
+    over [0, cut start], [cut start, cut end], [cut end, 2 pi] (one piece without a cut); the state y:
+    the states other than phi, then time, then the work integrals. Every number is an input (p,
+    `PARAMETERS`: the cut's angles are two of them), so a what-if re-solves on the same build.
+
+    * ``piece(x0=y, p=[a, b, U, p])``: CVODES from angle a to b (scaled to s in [0, 1]) with U fixed,
+      the states at `samples` equally spaced angles, the last at b.
+    * ``residual(y0, p) -> (y(2 pi) - y0 over the states, its Jacobian)``: the periodicity residual
+      and the monodromy minus the identity (CVODES forward sensitivities), for Newton shooting.
+    """
+    state_names: tuple[str, ...]
+    cutting: bool
+    piece: ca.Function
+    residual: ca.Function
+    grid: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return len(self.state_names)
+
+    def spans(self, p, numbers=False) -> list[tuple]:
+        """(a, b, U) of each piece for p (numbers or symbols; with numbers, an empty cut is no piece)."""
+        if not self.cutting or (numbers and not p[CUT_START] < p[CUT_END]):
+            return [(0.0, TWO_PI, 0.0)]
+        return [(0.0, p[CUT_START], 0.0), (p[CUT_START], p[CUT_END], 1.0), (p[CUT_END], TWO_PI, 0.0)]
+
+    def trace(self, y0, p) -> tuple["Trace", np.ndarray]:
+        """Samples over the revolution from the states y0 (other than phi) [as a Trace], and y at 2 pi."""
+        n, iphi = self.n, self.state_names.index("phi_rad")
+        trace = Trace()
+        y = np.r_[y0, np.zeros(1 + len(WORK_NAMES))]
+
+        def full(rows, angles):
+            return np.column_stack([rows[:, :iphi], angles, rows[:, iphi:n - 1], rows[:, n:]]), rows[:, n - 1]
+
+        trace.add(0.0, full(y[None, :], np.zeros(1))[0], np.array([0.0, 1.0, 0.0]))
+        for a, b, u in self.spans(p, numbers=True):
+            ys = np.asarray(self.piece(x0=y, p=np.r_[a, b, u, p])["xf"]).T
+            x, t = full(ys, a + (b - a) * self.grid)
+            trace.add(t, x, np.array([u, 1.0, 0.0]))
+            kind = "cut_start" if u == 0 and b < TWO_PI else ("cut_end" if u == 1 else "revolution")
+            trace.events.append((kind, float(t[-1]), float(b)))
+            y = ys[-1]
+        return trace, y[:n - 1]
+
+
 @memoised(maxsize=16)
-def revolution_pieces(task: PressDrive, tol: float, samples: int):
-    """The revolution as CVODES pieces in the crank angle (d/dphi = (d/dt) / omega): the states
-    other than phi, then time, then the work integrals. Returns (pieces, their angle spans, U)."""
-    dyn = dynamics_of(task)
-    n = dyn.n_states
-    iphi = task.state_names.index("phi_rad")
+def revolution(key: tuple, tol: float, samples: int) -> Revolution:
+    """The `Revolution` of a structure (`models.press.structure`), built once per (structure, tol, samples)."""
+    eq = equations(key)
+    names = eq.state_names
+    n, iphi, iw = len(names), names.index("phi_rad"), names.index("omega_rad_s")
     y = ca.SX.sym("y", n - 1 + 1 + len(WORK_NAMES))      # other states, time, works
-    phi = ca.SX.sym("phi")
-    u = ca.SX.sym("u")
+    s = ca.SX.sym("s")
+    q = ca.SX.sym("q", 3 + len(PARAMETERS))              # a, b, U, p
+    a, b, u, p = q[0], q[1], q[2], q[3:]
+    phi = a + s * (b - a)
     states = ca.vertcat(y[:iphi], phi, y[iphi:n - 1])
-    xdot = dyn.rhs(ca.vertcat(states, y[n:]), ca.vertcat(u, 1, 0))
-    w = states[task.state_names.index("omega_rad_s")]
-    dy = ca.vertcat(xdot[:iphi], xdot[iphi + 1:n], 1, xdot[n:]) / w
-    window = task.cut_window_rad()
-    cuts = [0.0, window[0], window[1], TWO_PI] if window is not None and window[0] < window[1] else [0.0, TWO_PI]
-    pieces = []
-    for k, (a, b) in enumerate(zip(cuts[:-1], cuts[1:])):
-        grid = np.linspace(a, b, samples + 1)[1:]
-        pieces.append((ca.integrator(f"rev{k}", "cvodes", {"x": y, "t": phi, "p": u, "ode": dy}, a, grid,
-                                     {"abstol": tol, "reltol": tol, "max_num_steps": 100000}),
-                       grid, float(len(cuts) == 4 and k == 1)))
-    return pieces, n
-
-
-def revolution_trace(task, pieces, n, y0):
-    """Samples over the revolution from the initial states y0 (other than phi) [as a Trace]."""
-    iphi = task.state_names.index("phi_rad")
-    trace = Trace()
-    y = np.r_[y0, np.zeros(1 + len(WORK_NAMES))]
-
-    def full(ycol, phi):
-        return np.r_[ycol[:iphi], phi, ycol[iphi:n - 1], ycol[n:]], ycol[n - 1]
-
-    x, t = full(y, 0.0)
-    trace.add(t, x, np.array([0.0, 1.0, 0.0]))
-    for integ, grid, u in pieces:
-        ys = np.asarray(integ(x0=y, p=u)["xf"]).T
-        rows = [full(row, a) for row, a in zip(ys, grid)]
-        trace.add(np.array([r[1] for r in rows]), np.array([r[0] for r in rows]), np.array([u, 1.0, 0.0]))
-        kind = "cut_start" if u == 0 and grid[-1] < TWO_PI else ("cut_end" if u == 1 else "revolution")
-        trace.events.append((kind, float(rows[-1][1]), float(grid[-1])))
-        y = ys[-1]
-    return trace
+    xdot = eq.rhs(ca.vertcat(states, y[n:]), ca.vertcat(u, 1, 0), p)
+    dy = ca.vertcat(xdot[:iphi], xdot[iphi + 1:n], 1, xdot[n:]) / states[iw]
+    grid = np.linspace(0, 1, samples + 1)[1:]
+    piece = ca.integrator("revolution", "cvodes", {"x": y, "t": s, "p": q, "ode": (b - a) * dy}, 0.0, grid,
+                          {"abstol": tol, "reltol": tol, "max_num_steps": 100000})
+    rev = Revolution(names, "cutting_force" in key[0], piece, None, grid)
+    y0, P = ca.MX.sym("y0", n - 1), ca.MX.sym("p", len(PARAMETERS))
+    yy = ca.vertcat(y0, ca.MX.zeros(1 + len(WORK_NAMES)))
+    for a, b, u in rev.spans(ca.vertsplit(P)):
+        yy = piece(x0=yy, p=ca.vertcat(a, b, u, P))["xf"][:, -1]
+    miss = yy[:n - 1] - y0
+    residual = ca.Function("periodic", [y0, P], [miss, ca.jacobian(miss, y0)])
+    return dataclasses.replace(rev, residual=residual)
