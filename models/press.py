@@ -31,9 +31,14 @@ Readings the paper leaves open (each pinned by a test):
 
 The design question (issue 16, Sec. 3) is its own task, `PressDesign`: the same press with some of
 its drive (`DESIGN_VARIABLES`: flywheel inertia, gear ratio, belt stiffness, a motor scale) left to
-an optimiser within bounds, an objective (`OBJECTIVES`) and limits. `dynamics(task, free)` keeps
-those variables symbolic, so the design NLP differentiates through the very equations the
-simulators integrate. Single stroke is read as `single_stroke_margin_J` says (motor at rest, the
+an optimiser within bounds, an objective (`OBJECTIVES`) and limits.
+
+The equations are written once (`equations`): built per structure (effects, kinematics) with every
+number a caller may vary in one input p (`PARAMETERS`, filled by `parameters`). Simulation,
+periodic orbit, sensitivity and design are the same Functions with another p: numbers for a run
+(`dynamics` binds a task's), symbols for the design's variables (`design_parameters`) or the
+sensitivity's parameters, so the NLP differentiates through the very equations the simulators
+integrate and a what-if re-solves without a rebuild. Single stroke is read as `single_stroke_margin_J` says (motor at rest, the
 crank shaft alone carries one cut).
 
 Effects a scene may call for (the model is assembled from these only):
