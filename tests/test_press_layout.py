@@ -39,3 +39,26 @@ def test_the_methods_are_siblings_over_the_problem_module():
         modules = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) and n.module}
         assert "mechopt.solvers.press.problem" in modules, name
         assert not {f"mechopt.solvers.press.{s}" for s in siblings - {name}} & modules, name
+
+
+def test_a_scene_reaches_the_method_through_its_settings(tmp_path):
+    """`press.simulate` with `method` in the solver settings: one door, the Literal checked like
+    any setting (a name outside it is refused, naming the allowed ones)."""
+    from typing import get_args
+
+    import pytest
+
+    import mechopt
+    from mechopt.solvers.press import METHODS, Method
+    assert set(get_args(Method)) == set(METHODS)
+    scene = tmp_path / "door.toml"
+    base = ROOT / "cases" / "press" / "kd2322.toml"
+    scene.write_text(f'id = "door"\ntitle = "the press by its door"\nsource = "test"\ntask = "press.PressDrive"\n'
+                     f'solver = "press.simulate"\nbase = {{ scene = "{base}" }}\n\n'
+                     f'[solver_settings]\nmethod = "steady_state"\n')
+    run = mechopt.solve(str(scene))
+    direct = mechopt.solvers.press.steady_state(run.task)
+    assert run.status is mechopt.Status.SOLVED and run.result.message.startswith("periodic orbit")
+    assert run.values["omega_mean_rad_s"] == pytest.approx(direct.values["omega_mean_rad_s"], rel=1e-9)
+    with pytest.raises(mechopt.SceneError, match="method"):
+        mechopt.solve(str(scene), method="radau")
