@@ -164,7 +164,8 @@ class PressDrive:
     Geometry: `crank_radius_mm` r (stroke H = 2r), `rod_ratio` lambda = r/l. Masses [kg]: crank
     (reduced to the pin), tool with slider, rod; `flywheel_inertia_kgm2` J (flywheel and
     counterweight). Drive: `motor_inertia_kgm2` J_0 + J_shk on the motor shaft, `gear_ratio`
-    i (motor speed / crank speed), `nominal_speed_rad_s` omega of the crank. Effects' own
+    i (motor speed / crank speed), `nominal_speed_rad_s` omega of the crank (with the effect
+    motor_characteristic only the start speed and guess: the motor's characteristic sets the speed). Effects' own
     parameters: see `EFFECTS`. `effects` lists the effects the scene calls for; `kinematics`
     picks X(phi) (see `travel_m`).
     """

@@ -10,6 +10,7 @@ import numpy as np
 from mechopt.models.errors import MechoptError, ModelError
 from mechopt.models.press import PressDrive
 from mechopt.solvers.press.problem import (
+    RIGID_LIMIT,
     TWO_PI,
     Duration,
     Limit,
@@ -17,11 +18,13 @@ from mechopt.solvers.press.problem import (
     Stall,
     Start,
     Trace,
+    belt_mode,
     casadi_failure,
     check_task,
     checked,
     initial_state,
     march,
+    nominal_speed_note,
     piece_by_time,
     refuse_work,
     stall_check,
@@ -33,6 +36,8 @@ from mechopt.solvers.settings import Annotated, Interval, Positive, Tolerance
 
 MAX_PIECES = 50_000          # ~25 s of CVODES calls
 MAX_SAMPLES = 1_000_000      # states and outputs kept: ~250 MB
+MAX_BELT_STEPS = 500_000     # CVODES steps following the belt's oscillation (~1e-4 s each: ~50 s)
+STEPS_PER_BELT_PERIOD = 10
 
 
 def events(task: PressDrive, *, tol: Tolerance = 1e-10, duration_s: Duration = 1.0, start: Start = "nominal",
@@ -72,6 +77,7 @@ def events(task: PressDrive, *, tol: Tolerance = 1e-10, duration_s: Duration = 1
                 f"duration_s <= {MAX_PIECES / per_s:.4g} s with max_step_s={max_step_s:g}")
     refuse_work("samples", samples, duration_s * per_s * samples, MAX_SAMPLES, "samples in memory",
                 f"samples <= {max(int(MAX_SAMPLES / (duration_s * per_s)), 1)} over duration_s={duration_s:g}")
+    _refuse_a_belt_too_fast(task, duration_s)
     t_start = time.perf_counter()
     piece = piece_by_time(task, tol, samples)
     build = time.perf_counter() - t_start
@@ -79,7 +85,7 @@ def events(task: PressDrive, *, tol: Tolerance = 1e-10, duration_s: Duration = 1
     status, message, violated, failure = Status.SOLVED, "", (), {}
     try:
         march(task, piece, trace, initial_state(task, start), duration_s, max_step_s, max_events)
-        message = f"CVODES tol {tol:g}, {len(trace.events)} events located"
+        message = f"CVODES tol {tol:g}, {len(trace.events)} events located" + nominal_speed_note(task)
     except Stall as stall:
         status, violated, message = Status.INFEASIBLE, ("stall",), str(stall)
     except Limit as limit:
@@ -111,3 +117,18 @@ def events(task: PressDrive, *, tol: Tolerance = 1e-10, duration_s: Duration = 1
     status, message, violated = checked(status, message, violated, diagnostics)
     timing = Timing(build, time.perf_counter() - t_start - build)
     return Result(status, values, timing, message, violated, diagnostics, arrays)
+
+
+def _refuse_a_belt_too_fast(task, duration_s):
+    """CVODES must follow an oscillating belt mode (`STEPS_PER_BELT_PERIOD` steps a period) however
+    stiff its method: past `MAX_BELT_STEPS` over the run, refuse before any work, naming the stiffest
+    belt (it grows with the square of the frequency) and the duration that fit."""
+    _, eigenvalue = belt_mode(task)
+    hz = abs(eigenvalue.imag) / TWO_PI         # an overdamped mode is only stiff: BDF steps over it
+    steps = STEPS_PER_BELT_PERIOD * hz * duration_s
+    if steps > MAX_BELT_STEPS:
+        most_stiff = task.belt_stiffness_Nm_rad * (MAX_BELT_STEPS / steps) ** 2
+        refuse_work("belt_stiffness_Nm_rad", task.belt_stiffness_Nm_rad, steps, MAX_BELT_STEPS,
+                    f"CVODES steps following the belt mode at {hz:.4g} Hz for {duration_s:g} s (~1e-4 s each)",
+                    f"belt_stiffness_Nm_rad <= {most_stiff:.3g} at duration_s={duration_s:g}, or duration_s <= "
+                    f"{duration_s * MAX_BELT_STEPS / steps:.3g} s; {RIGID_LIMIT}")

@@ -29,6 +29,7 @@ from mechopt.solvers.press.problem import (
     dynamics_of,
     initial_state,
     march,
+    nominal_speed_note,
     piece_by_time,
     revolution,
     stall_check,
@@ -133,7 +134,7 @@ def steady_state(task: PressDrive, *, tol: Tolerance = 1e-10, samples: Samples =
         message = (f"not a periodic orbit to trust: {how} iterations left the "
                    f"periodicity residual {miss:.3g} > 1000 tol = {1e3 * tol:.3g}")
     elif status is Status.SOLVED:
-        message = f"periodic orbit by {how} iterations, residual {miss:.3g}"
+        message = f"periodic orbit by {how} iterations, residual {miss:.3g}" + nominal_speed_note(task)
     else:               # never a message that reads like an answer
         message = (f"no periodic orbit found: Newton shooting stopped after {iterations} of max_iter={max_iter} "
                    f"iterations with periodicity residual {miss:.3g}")

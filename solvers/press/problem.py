@@ -31,7 +31,14 @@ from mechopt.models.press import (
 from mechopt.solvers.result import Status, from_casadi_integrator
 
 TWO_PI = 2 * np.pi
-ANGLE_TOL_RAD = 1e-12          # events are located to this in crank angle (omega ~ 25: 4e-14 s)
+ANGLE_TOL_RAD = 1e-12          # events are located to this in crank angle (omega ~ 25: 4e-14 s) near phi = 0
+ANGLE_ULPS = 64                # and to this many units in the last place of the angle far from it
+
+
+def angle_tol(phi) -> float:
+    """How close an event is located to the angle phi [rad]: `ANGLE_TOL_RAD`, or relative to phi once
+    a double's spacing there makes that absolute figure unreachable (1445 rad after a minute: 2.3e-13)."""
+    return max(ANGLE_TOL_RAD, ANGLE_ULPS * float(np.spacing(abs(phi))))
 Start = Literal["nominal", "rest"]
 Duration = Annotated[float, Interval(gt=0, le=3600)]          # simulated time [s]
 Samples = Annotated[int, Interval(ge=1, le=10_000)]           # outputs per integrated piece
@@ -155,6 +162,19 @@ def belt_too_fast_per_revolution(task: PressDrive, most: float, method: str) -> 
     step = 0.1 / hz
     return belt_too_fast(task, step, TWO_PI / task.nominal_speed_rad_s / step, most, method,
                          why=" (a tenth of its period)", over=" per revolution")
+
+
+def nominal_speed_note(task: PressDrive) -> str:
+    """'' or, with a motor whose working range at the crank (breakdown to idle speed, reduced by i)
+    misses `nominal_speed_rad_s`, the words saying it is a start speed and guess only."""
+    if not task.motor:
+        return ""
+    idle = task.motor_sync_speed_rad_s / task.gear_ratio
+    if idle * (1 - task.motor_breakdown_slip) <= task.nominal_speed_rad_s <= idle:
+        return ""
+    return (f"; nominal_speed_rad_s={task.nominal_speed_rad_s:g} is a start speed and guess only: the motor sets "
+            f"the speed (its working range at the crank: {idle * (1 - task.motor_breakdown_slip):.4g} to "
+            f"{idle:.4g} rad/s, motor_sync_speed_rad_s / gear_ratio at breakdown slip and idle)")
 
 
 def top_speed_rad_s(task: PressDrive) -> float:
@@ -287,7 +307,7 @@ def angle_events(task, phi):
     for turn in (0, 1):
         for angle, kind in sorted(marks):
             a = base + turn * TWO_PI + angle
-            if a > phi + ANGLE_TOL_RAD:
+            if a > phi + angle_tol(a):
                 return a, kind
     raise AssertionError("unreachable")
 
@@ -397,8 +417,8 @@ def march(task, piece, trace, x, duration_s, max_step_s, max_events):
                 if mode[2] > 0:
                     trace.events.append(("stick", t, float(x[iphi])))
                 continue
-        if target is not None and end[iphi] >= target - ANGLE_TOL_RAD:
-            if abs(end[iphi] - target) > ANGLE_TOL_RAD:
+        if target is not None and end[iphi] >= target - angle_tol(target):
+            if abs(end[iphi] - target) > angle_tol(target):
                 T, xs = newton_angle(piece, x, mode, T, target, iphi, iw)
             t = commit(trace, t, T, xs, mode)
             x = xs[-1]
@@ -439,10 +459,11 @@ def newton_angle(piece, x, mode, T, target, iphi, iw):
     for _ in range(50):
         xs = run_piece(piece, x, T, mode)
         miss = xs[-1, iphi] - target
-        if abs(miss) <= ANGLE_TOL_RAD:
+        if abs(miss) <= angle_tol(target):
             return T, xs
         T -= miss / xs[-1, iw]
-    raise Limit(f"event at crank angle {target:.12g} rad not located to {ANGLE_TOL_RAD} rad in 50 Newton steps")
+    raise Limit(f"event at crank angle {target:.12g} rad not located to {angle_tol(target):.3g} rad in 50 Newton "
+                "steps")
 
 
 def locate(piece, x, mode, lo, hi, g):
