@@ -449,3 +449,22 @@ def test_the_nominal_speed_under_a_motor_is_said_to_be_a_start_guess_only():
     assert said.values["omega_mean_rad_s"] == pytest.approx(same.values["omega_mean_rad_s"], rel=1e-9)
     assert "nominal_speed_rad_s=1000 is a start speed and guess only" in said.message
     assert "nominal_speed_rad_s" not in same.message          # 25 rad/s lies in the motor's working range
+
+
+def test_a_what_if_re_solves_on_the_structures_build_from_the_last_orbit():
+    """Issue 24: other numbers, same structure: no new build (equations, revolution), the orbit
+    warm-started from the last one by chord steps, and the same orbit as a cold solve."""
+    from mechopt.models.cache import clear
+    from mechopt.models.press import equations
+    pd.steady_state(PAPER)
+    builds = len(equations.cache), len(problem.revolution.cache)
+    what = dataclasses.replace(PAPER, belt_stiffness_Nm_rad=6e4, flywheel_inertia_kgm2=5.5)
+    warm = pd.steady_state(what)
+    assert warm.status is Status.SOLVED and warm.diagnostics["warm_start"]
+    assert (len(equations.cache), len(problem.revolution.cache)) == builds
+    assert warm.values["periodicity_residual"] <= 100 * 1e-10 and "chord steps" in warm.message
+    clear()
+    cold = pd.steady_state(what)
+    assert cold.status is Status.SOLVED and not cold.diagnostics["warm_start"]
+    for key in ("omega_mean_rad_s", "speed_fluctuation", "peak_belt_torque_Nm", "motor_work_J"):
+        assert warm.values[key] == pytest.approx(cold.values[key], rel=1e-8), key

@@ -3,7 +3,6 @@ are siblings over it (as scipy's rk, radau and bdf over its base); design, loads
 stand above. Here: the assembled equations per task, the initial state, the trace of a run and its
 summary, the switching logic (U, the next angle event, the mode), and the pieces every method
 integrates (CVODES by time between located events, by crank angle over a revolution)."""
-import dataclasses
 import re
 from dataclasses import dataclass, field
 from typing import Annotated, Literal
@@ -506,13 +505,13 @@ class Revolution:
 
     * ``piece(x0=y, p=[a, b, U, p])``: CVODES from angle a to b (scaled to s in [0, 1]) with U fixed,
       the states at `samples` equally spaced angles, the last at b.
-    * ``residual(y0, p) -> (y(2 pi) - y0 over the states, its Jacobian)``: the periodicity residual
-      and the monodromy minus the identity (CVODES forward sensitivities), for Newton shooting.
+    * ``variational(x0=[y, Y], p=[a, b, U, p])``: the same piece with the variational equations
+      beside it (Y = dy/dy0, column-major), for the monodromy (`residual`).
     """
     state_names: tuple[str, ...]
     cutting: bool
     piece: ca.Function
-    residual: ca.Function
+    variational: ca.Function
     grid: np.ndarray
 
     @property
@@ -524,6 +523,17 @@ class Revolution:
         if not self.cutting or (numbers and not p[CUT_START] < p[CUT_END]):
             return [(0.0, TWO_PI, 0.0)]
         return [(0.0, p[CUT_START], 0.0), (p[CUT_START], p[CUT_END], 1.0), (p[CUT_END], TWO_PI, 0.0)]
+
+    def residual(self, y0, p) -> tuple[np.ndarray, np.ndarray]:
+        """(y(2 pi) - y0 over the states other than phi, the monodromy minus the identity): the
+        periodicity residual and its Jacobian, for Newton shooting."""
+        m = self.n - 1
+        y = np.r_[y0, np.zeros(1 + len(WORK_NAMES))]
+        Y = np.eye(len(y), m)
+        for a, b, u in self.spans(p, numbers=True):
+            z = np.asarray(self.variational(x0=np.r_[y, Y.ravel(order="F")], p=np.r_[a, b, u, p])["xf"]).ravel()
+            y, Y = z[:len(y)], z[len(y):].reshape((len(y), m), order="F")
+        return y[:m] - y0, Y[:m] - np.eye(m)
 
     def trace(self, y0, p) -> tuple["Trace", np.ndarray]:
         """Samples over the revolution from the states y0 (other than phi) [as a Trace], and y at 2 pi."""
@@ -562,11 +572,10 @@ def revolution(key: tuple, tol: float, samples: int) -> Revolution:
     grid = np.linspace(0, 1, samples + 1)[1:]
     piece = ca.integrator("revolution", "cvodes", {"x": y, "t": s, "p": q, "ode": (b - a) * dy}, 0.0, grid,
                           {"abstol": tol, "reltol": tol, "max_num_steps": 100000})
-    rev = Revolution(names, "cutting_force" in key[0], piece, None, grid)
-    y0, P = ca.MX.sym("y0", n - 1), ca.MX.sym("p", len(PARAMETERS))
-    yy = ca.vertcat(y0, ca.MX.zeros(1 + len(WORK_NAMES)))
-    for a, b, u in rev.spans(ca.vertsplit(P)):
-        yy = piece(x0=yy, p=ca.vertcat(a, b, u, P))["xf"][:, -1]
-    miss = yy[:n - 1] - y0
-    residual = ca.Function("periodic", [y0, P], [miss, ca.jacobian(miss, y0)])
-    return dataclasses.replace(rev, residual=residual)
+    Y = ca.SX.sym("Y", y.numel(), n - 1)        # dy/dy0: the variational equations ride along
+    ode = (b - a) * dy
+    variational = ca.integrator("variational", "cvodes",
+                                {"x": ca.vertcat(y, ca.vec(Y)), "t": s, "p": q,
+                                 "ode": ca.vertcat(ode, ca.vec(ca.jacobian(ode, y) @ Y))}, 0.0, 1.0,
+                                {"abstol": tol, "reltol": tol, "max_num_steps": 100000})
+    return Revolution(names, "cutting_force" in key[0], piece, variational, grid)
