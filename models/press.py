@@ -776,3 +776,50 @@ def single_stroke_margin_J(task: PressDrive, flywheel_inertia_kgm2, omega_start_
     friction = task.friction_torque_Nm if task.friction else 0.0
     lost = cut_work_J(task) + friction * (b - a) + float(potential_J(task, b) - potential_J(task, a))
     return 0.5 * (J_a + extra) * omega_start_rad_s**2 - lost - 0.5 * (J_b + extra) * ((1 - speed_drop) * omega_start_rad_s)**2
+
+
+CATALOGUE_COLUMNS = ("name", "rated_power_kW", "breakdown_torque_Nm", "inertia_kgm2")
+
+
+@dataclass(frozen=True)
+class PressCatalogue(PressDesign):
+    """A `PressDesign` whose motor and belt ratio are chosen from a catalogue: `motors`, rows of
+    (`CATALOGUE_COLUMNS`: name, rated power [kW], breakdown torque M_k [N m], rotor and pulley inertia
+    J_0 + J_shk [kg m2]), and `ratios`, the standard belt ratios i on offer. Every (row, ratio) is a
+    drive whose `variables` (the flywheel: the continuous NLP inside) are designed as `PressDesign`
+    says; it is feasible when that design is SOLVED and the mean crank speed is within
+    `max_speed_deviation` of `nominal_speed_rad_s` (the strokes per minute). The cheapest row is the
+    one of least rated power (then least breakdown torque) with a feasible ratio."""
+    motors: tuple = ()
+    ratios: tuple = ()
+    max_speed_deviation: float = 0.05
+
+    def __post_init__(self):
+        object.__setattr__(self, "motors", tuple(tuple(row) for row in self.motors))
+        object.__setattr__(self, "ratios", tuple(float(r) for r in self.ratios))
+        super().__post_init__()
+        if not self.motor:
+            raise ModelError("a motor catalogue needs effect 'motor_characteristic'", key="effects")
+        chosen = [v for v in self.variables if v in ("gear_ratio", "motor_scale")]
+        if chosen:
+            raise ModelError(f"variables={list(self.variables)}: {chosen} come from the catalogue here; "
+                             "leave them out", key="variables")
+        if not self.motors or not self.ratios:
+            raise ModelError("motors and ratios must each list one or more rows", key="motors" if not self.motors
+                             else "ratios")
+        for k, row in enumerate(self.motors):
+            ok = (len(row) == 4 and isinstance(row[0], str)
+                  and all(isinstance(v, int | float) and 0 < v < 1e6 for v in row[1:]))
+            if not ok:
+                raise ModelError(f"motors[{k}]={list(row)}: expected [name, rated power kW, breakdown torque N m, "
+                                 f"inertia kg m2], the numbers in (0, 1e6)", key="motors")
+        for k, ratio in enumerate(self.ratios):
+            if not 0 < ratio <= self.RANGES["gear_ratio"][0]:
+                raise ModelError(f"ratios[{k}]={ratio} is outside (0, {self.RANGES['gear_ratio'][0]:g}]", key="ratios")
+        _require(self, "max_speed_deviation", 0 < self.max_speed_deviation <= 0.5, "is outside (0, 0.5]")
+
+    def candidate(self, row: tuple, ratio: float) -> PressDesign:
+        """The design question for one catalogue row and ratio (a plain `PressDesign`)."""
+        own = {f.name: getattr(self, f.name) for f in fields(PressDesign)}
+        return PressDesign(**(own | {"motor_breakdown_torque_Nm": float(row[2]), "motor_inertia_kgm2": float(row[3]),
+                                     "gear_ratio": float(ratio)}))

@@ -17,10 +17,12 @@ the run's samples in `Result.arrays` (`t_s`, the states, `cutting`, the outputs)
 `loads` (loads.py) adds the peaks of the loads a designer sizes parts with (Figs. 9-10).
 `force_fit.fit_force` fits the force law (1) to load-travel data.
 `sensitivity` (sensitivity.py): d(output)/d(assumed parameter) through the periodic orbit by AD.
-`design` (design.py) chooses the drive by optimisation over the periodic steady motion.
+`design` (design.py) chooses the drive by optimisation over the periodic steady motion;
+`catalogue` (catalogue.py) picks a motor row and a belt ratio from a catalogue with `design` inside.
 """
 from typing import Literal
 
+from mechopt.solvers.press.catalogue import catalogue
 from mechopt.solvers.press.design import design
 from mechopt.solvers.press.event_driven import events
 from mechopt.solvers.press.fixed_step import rk4
@@ -29,7 +31,8 @@ from mechopt.solvers.press.periodic import steady_state
 from mechopt.solvers.press.scipy_peer import ivp
 from mechopt.solvers.press.sensitivity import sensitivity
 
-__all__ = ["METHODS", "Method", "design", "events", "ivp", "loads", "rk4", "sensitivity", "simulate", "steady_state"]
+__all__ = ["METHODS", "Method", "catalogue", "design", "events", "ivp", "loads", "rk4", "sensitivity", "simulate",
+           "steady_state"]
 
 METHODS = {"rk4": rk4, "events": events, "steady_state": steady_state, "ivp": ivp}
 Method = Literal["rk4", "events", "steady_state", "ivp"]
