@@ -174,3 +174,15 @@ def test_the_motor_designs_multipliers_are_the_slopes_of_re_solves():
     assert result.values["sensitivity_fd_rel_error"] <= 1e-3
     assert result.values["sensitivity_fd"] == pytest.approx(
         result.values["d_motor_rms_torque_N_m_d_max_speed_fluctuation"], rel=1e-3)
+
+
+def test_a_designers_own_press_is_designed_at_the_default_settings():
+    """Issue 24: a designer's own press (crank radius 40 mm, a 5 mm blank, a 4 kW four-pole motor:
+    breakdown 2.3 x 26.5 N m, rotor and pulley 0.0153 kg m2, as the motor-catalogue row) is SOLVED at
+    the default settings, and its least flywheel holds the limit exactly (steady_state, no NLP)."""
+    task = dataclasses.replace(load("press/flywheel-design").build()[0], crank_radius_mm=40.0,
+                               blank_thickness_mm=5.0, motor_breakdown_torque_Nm=61.0, motor_inertia_kgm2=0.0153)
+    result = design(task)
+    assert result.status is Status.SOLVED, result.message
+    J = result.values["flywheel_inertia_kgm2"]
+    assert _fluctuation(task.drive({"flywheel_inertia_kgm2": J})) == pytest.approx(task.max_speed_fluctuation, rel=1e-6)
