@@ -38,8 +38,10 @@ number a caller may vary in one input p (`PARAMETERS`, filled by `parameters`). 
 periodic orbit, sensitivity and design are the same Functions with another p: numbers for a run
 (`dynamics` binds a task's), symbols for the design's variables (`design_parameters`) or the
 sensitivity's parameters, so the NLP differentiates through the very equations the simulators
-integrate and a what-if re-solves without a rebuild. Single stroke is read as `single_stroke_margin_J` says (motor at rest, the
-crank shaft alone carries one cut).
+integrate and a what-if re-solves without a rebuild.
+
+Single stroke is read as `single_stroke_margin_J` says (motor at rest, the crank shaft alone
+carries one cut).
 
 Effects a scene may call for (the model is assembled from these only):
 
@@ -165,8 +167,8 @@ class PressDrive:
     (reduced to the pin), tool with slider, rod; `flywheel_inertia_kgm2` J (flywheel and
     counterweight). Drive: `motor_inertia_kgm2` J_0 + J_shk on the motor shaft, `gear_ratio`
     i (motor speed / crank speed), `nominal_speed_rad_s` omega of the crank (with the effect
-    motor_characteristic only the start speed and guess: the motor's characteristic sets the speed). Effects' own
-    parameters: see `EFFECTS`. `effects` lists the effects the scene calls for; `kinematics`
+    motor_characteristic only the start speed and guess: the motor's characteristic sets the
+    speed). Effects' own parameters: see `EFFECTS`. `effects` lists the effects the scene calls for; `kinematics`
     picks X(phi) (see `travel_m`).
     """
     crank_radius_mm: float

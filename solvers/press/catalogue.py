@@ -109,7 +109,8 @@ def _chosen(task, k, ratio, result, drive, tried, reasons, t_start):
                                     "motor_torque_margin": float(row[2]) / peak,
                                     "designs_solved": float(sum(1 for r in tried if r[2] in (0, 3)))}
     cheaper = ("; cheaper rows: " + "; ".join(reasons)) if reasons else "; it is the cheapest row"
-    message = (f"{row[0]} ({row[1]:g} kW) with i = {ratio:g}: {_objective_key(task)} {values[_objective_key(task)]:.5g}, "
+    key = _objective_key(task)
+    message = (f"{row[0]} ({row[1]:g} kW) with i = {ratio:g}: {key} {values[key]:.5g}, "
                f"mean speed {values['omega_mean_rad_s']:.4g} rad/s, torque margin {values['motor_torque_margin']:.3g} "
                f"(M_k / peak shaft torque){cheaper}")
     return Result(Status.SOLVED, values, Timing(0.0, time.perf_counter() - t_start), message, (),

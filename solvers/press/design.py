@@ -286,7 +286,8 @@ def _design(task, tol, samples, max_iter, check_sensitivity, warm):
     if status is not Status.SOLVED:
         return _not_solved(task, status, word, nodes, tol, samples, scales, origin, timing(build), max_iter)
     drive = task.drive(start)
-    values, diagnostics, arrays = summarise(drive, revolution(structure(drive), tol, 60).trace(y0, dynamics_of(drive).p)[0],
+    revolved, _ = revolution(structure(drive), tol, 60).trace(y0, dynamics_of(drive).p)
+    values, diagnostics, arrays = summarise(drive, revolved,
                                             cut_angles=task.cut_window_rad())
     # the extremes are nodes, so the NLP's samples hold them: no parabola through coarse samples here
     values["speed_fluctuation"] = float((omega.max() - omega.min()) * period[0] / TWO_PI)

@@ -99,7 +99,8 @@ def steady_state(task: PressDrive, *, tol: Tolerance = 1e-10, samples: Samples =
         else:
             solution, iterations, converged, jacobian = _newton(rev, guess, p, tol, max_iter)
             trace, _ = rev.trace(solution, p)
-            last |= {"y": solution, "jacobian": jacobian}
+            if converged:
+                last |= {"y": solution, "jacobian": jacobian}
         miss = float(np.max(np.abs(_periodicity(rev, trace, solution))))
     except (RuntimeError, np.linalg.LinAlgError) as exc:
         if isinstance(exc, MechoptError):
@@ -169,7 +170,12 @@ def _chord(rev, last, p, tol):
     the residual is within 100 tol, or None (then a full Newton solve follows)."""
     y = last["y"]
     for k in range(CHORD_STEPS + 1):
-        trace, _ = rev.trace(y, p)
+        try:
+            trace, _ = rev.trace(y, p)
+        except RuntimeError as exc:        # CVODES gave up from this start: the cold solve decides
+            if isinstance(exc, MechoptError):
+                raise
+            return None
         miss = _periodicity(rev, trace, y)
         if not np.all(np.isfinite(miss)):
             return None
