@@ -265,13 +265,12 @@ def design_table(rows):
     return "\n".join(lines)
 
 
-def cli(repeats, out_dir, progress=None, quick=False) -> str:
+def cli(repeats, out_dir, progress=None) -> str:
     """What `mechopt bench press` prints: the work-precision table, the targets, the plot, the
     design problem against its derivative-free peer (NLP: median of max(repeats, 3); peer: one run),
-    and issue 24's what-if, sweep and walk figures. `quick`: only the last (about a minute)."""
+    and issue 24's what-if, sweep, walk and catalogue figures (alone, about two minutes:
+    `whatif_table(whatif_rows(), sweep_rows(), walk(), catalogue_rows())`)."""
     whatif = whatif_table(whatif_rows(max(repeats, 7)), sweep_rows(), walk(), catalogue_rows())
-    if quick:
-        return whatif
     rows = run(repeats=repeats, progress=progress)
     paths = plot(rows, out_dir)
     design = design_table(design_rows(repeats=max(repeats, 3), progress=progress))
