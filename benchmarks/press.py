@@ -23,18 +23,21 @@ to its own tolerance; the peer's objective is compared with the NLP's. Targets: 
 faster, and the whole design (a cold build included) under 2 s.
 """
 import statistics
+import sys
 import time
 
 import numpy as np
 from scipy.optimize import minimize
 
+import mechopt
 from mechopt import registry
 from mechopt.models import cache
 from mechopt.plots import save_figure
 from mechopt.solvers import press as pd
 
-__all__ = ["DESIGN_SCENES", "DURATION_S", "PAPER_TASK", "at_accuracy", "cli", "cycle_timing", "design_rows",
-           "design_table", "observed_order", "peer_design", "plot", "run", "table"]
+__all__ = ["DESIGN_SCENES", "DURATION_S", "PAPER_TASK", "at_accuracy", "catalogue_rows", "cli", "cycle_timing",
+           "design_rows", "design_table", "observed_order", "peer_design", "plot", "run", "sweep_rows", "table", "walk",
+           "whatif_rows", "whatif_table"]
 
 PAPER_TASK, _ = registry.find("press/kd2322").build()
 DURATION_S = 0.25           # about one revolution at 25 rad/s, with one cut
@@ -263,9 +266,143 @@ def design_table(rows):
 
 
 def cli(repeats, out_dir, progress=None) -> str:
-    """What `mechopt bench press` prints: the work-precision table, the targets, the plot, and the
-    design problem against its derivative-free peer (NLP: median of max(repeats, 3); peer: one run)."""
+    """What `mechopt bench press` prints: the work-precision table, the targets, the plot, the
+    design problem against its derivative-free peer (NLP: median of max(repeats, 3); peer: one run),
+    and issue 24's what-if, sweep, walk and catalogue figures (alone, about two minutes:
+    `whatif_table(whatif_rows(), sweep_rows(), walk(), catalogue_rows())`)."""
+    whatif = whatif_table(whatif_rows(max(repeats, 7)), sweep_rows(), walk(), catalogue_rows())
     rows = run(repeats=repeats, progress=progress)
     paths = plot(rows, out_dir)
     design = design_table(design_rows(repeats=max(repeats, 3), progress=progress))
-    return "\n".join([table(rows, at_accuracy(rows), cycle_timing()), design, *(f"plot: {p}" for p in paths)])
+    return "\n".join([table(rows, at_accuracy(rows), cycle_timing()), design, whatif,
+                      *(f"plot: {p}" for p in paths)])
+
+
+# --- issue 24: what-ifs that re-solve on the structure's build ------------------------------------
+
+WHATIF = {"belt_stiffness_Nm_rad": 6e4}
+SWEEP_SCENE = "press/kd2322"
+WHATIF_TARGETS = {"build_share": 0.10, "orbit_s": 0.050, "speedup": 5.0, "sweep_speedup": 5.0}
+
+
+def _solve(overrides=None):
+    start = time.perf_counter()
+    result = mechopt.solve(SWEEP_SCENE, overrides or {}).result
+    return time.perf_counter() - start, result
+
+
+def whatif_rows(repeats=7):
+    """Fresh solves (every cache cleared first) against what-ifs (`WHATIF` after a solve of the scene
+    as it is, same process): medians of wall time, build_s and the periodic orbit's solve_s."""
+    fresh, whatif = [], []
+    for _ in range(repeats):
+        cache.clear()
+        wall, result = _solve()
+        fresh.append((wall, result.timing.build_s, result.timing.solve_s, result.status.value))
+        _solve()                                  # back on the scene's own orbit
+        wall, result = _solve(WHATIF)
+        whatif.append((wall, result.timing.build_s, result.timing.solve_s, result.status.value,
+                       result.diagnostics["newton_iterations"], result.values["periodicity_residual"]))
+    med = lambda rows, i: statistics.median(r[i] for r in rows)
+    return {"fresh_wall_s": med(fresh, 0), "fresh_build_s": med(fresh, 1), "whatif_wall_s": med(whatif, 0),
+            "whatif_build_s": med(whatif, 1), "whatif_orbit_s": med(whatif, 2),
+            "whatif_chord_steps": med(whatif, 4), "whatif_residual": max(r[5] for r in whatif),
+            "statuses": sorted({r[3] for r in fresh + whatif})}
+
+
+def sweep_rows(variants=1000, baseline_variants=40):
+    """Throughput of a sweep of `variants` of one structure (flywheel inertia x belt stiffness, the
+    order a grid takes) against the same variants solved the way every variant was before issue 24:
+    every build made afresh and the orbit found from the cold guess (caches cleared per variant; a
+    `baseline_variants` prefix of the grid). Variants per second, and the statuses seen."""
+    side = int(round(np.sqrt(variants)))
+    grid = [{"flywheel_inertia_kgm2": float(J), "belt_stiffness_Nm_rad": float(C)}
+            for J in np.linspace(4.0, 6.0, side) for C in np.linspace(4e4, 6e4, variants // side)]
+    statuses = {}
+    start = time.perf_counter()
+    for overrides in grid[:baseline_variants]:
+        cache.clear()
+        _, result = _solve(overrides)
+        statuses[result.status.value] = statuses.get(result.status.value, 0) + 1
+    before = baseline_variants / (time.perf_counter() - start)
+    _solve()
+    start = time.perf_counter()
+    warm = 0
+    for overrides in grid:
+        _, result = _solve(overrides)
+        warm += bool(result.diagnostics.get("warm_start"))
+        statuses[result.status.value] = statuses.get(result.status.value, 0) + 1
+    after = len(grid) / (time.perf_counter() - start)
+    return {"variants": len(grid), "rebuild_per_s": before, "structure_per_s": after, "warm_started": warm,
+            "statuses": statuses}
+
+
+def walk(scene="press/kd2322"):
+    """The walk of a task through `steady_state` (a cold solve): the press's files (models/, solvers/)
+    the call enters in order, `stops` the changes of file and `returns` the changes back to a file
+    already visited (sys.setprofile; the spine and CasADi not counted)."""
+    task = registry.find(scene).build()[0]
+    cache.clear()
+    sequence = []
+
+    def enter(frame, event, arg):
+        name = frame.f_code.co_filename
+        if event == "call" and ("/models/" in name or "/solvers/" in name) and "site-packages" not in name:
+            short = "/".join(name.split("/")[-2:])
+            if not sequence or sequence[-1] != short:
+                sequence.append(short)
+    sys.setprofile(enter)
+    try:
+        pd.steady_state(task)
+    finally:
+        sys.setprofile(None)
+    seen, returns = set(), 0
+    for short in sequence:
+        returns += short in seen
+        seen.add(short)
+    return {"stops": len(sequence), "returns": returns, "files": sorted(seen)}
+
+
+CATALOGUE_SCENE, CATALOGUE_TARGET_S = "press/motor-catalogue", 10.0
+
+
+def catalogue_rows(repeats=3):
+    """The catalogue design (10 motor rows x 6 ratios, the NLP inside): one cold run (caches
+    cleared) and the median of `repeats` warm ones; the row chosen and the NLPs it took."""
+    cache.clear()
+    start = time.perf_counter()
+    result = mechopt.solve(CATALOGUE_SCENE).result
+    cold = time.perf_counter() - start
+    walls = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        result = mechopt.solve(CATALOGUE_SCENE).result
+        walls.append(time.perf_counter() - start)
+    return {"cold_s": cold, "warm_s": statistics.median(walls), "status": result.status.value,
+            "row": result.values.get("motor_row"), "designs": result.values.get("designs_solved"),
+            "message": result.message}
+
+
+def whatif_table(w, s, path, c=None):
+    met = {True: "met", False: "MISSED"}
+    share, speedup = w["whatif_build_s"] / w["fresh_build_s"], w["fresh_wall_s"] / w["whatif_wall_s"]
+    ratio = s["structure_per_s"] / s["rebuild_per_s"]
+    t = WHATIF_TARGETS
+    return "\n".join([
+        f"\nwhat-if {WHATIF} after a solve of {SWEEP_SCENE} (medians, same process):",
+        f"  fresh: {w['fresh_wall_s'] * 1e3:.4g} ms (build {w['fresh_build_s'] * 1e3:.3g} ms); what-if: "
+        f"{w['whatif_wall_s'] * 1e3:.4g} ms (build {w['whatif_build_s'] * 1e3:.3g} ms, periodic orbit "
+        f"{w['whatif_orbit_s'] * 1e3:.3g} ms, {w['whatif_chord_steps']:g} chord steps, residual <= "
+        f"{w['whatif_residual']:.2g}); statuses {', '.join(w['statuses'])}",
+        f"  targets: build share {share:.3g} (< {t['build_share']:g}: {met[share < t['build_share']]}), orbit "
+        f"{w['whatif_orbit_s'] * 1e3:.3g} ms (< {t['orbit_s'] * 1e3:g} ms: {met[w['whatif_orbit_s'] < t['orbit_s']]}),"
+        f" fresh / what-if {speedup:.3g} (>= {t['speedup']:g}: {met[speedup >= t['speedup']]})",
+        f"sweep of {s['variants']} variants of one structure: {s['structure_per_s']:.4g} variants/s "
+        f"({s['warm_started']} warm-started) against {s['rebuild_per_s']:.4g}/s rebuilding each; ratio "
+        f"{ratio:.3g} (>= {t['sweep_speedup']:g}: {met[ratio >= t['sweep_speedup']]}); statuses {s['statuses']}",
+        f"walk of a task through steady_state: {path['stops']} stops, {path['returns']} returns over "
+        f"{len(path['files'])} files ({', '.join(path['files'])})",
+        *([] if c is None else [
+            f"catalogue design ({CATALOGUE_SCENE}, 10 rows x 6 ratios): cold {c['cold_s']:.3g} s, warm "
+            f"{c['warm_s']:.3g} s (< {CATALOGUE_TARGET_S:g} s: {met[c['cold_s'] < CATALOGUE_TARGET_S]}), "
+            f"{c['designs']:g} NLPs, {c['status']}: {c['message']}"])])

@@ -31,10 +31,17 @@ Readings the paper leaves open (each pinned by a test):
 
 The design question (issue 16, Sec. 3) is its own task, `PressDesign`: the same press with some of
 its drive (`DESIGN_VARIABLES`: flywheel inertia, gear ratio, belt stiffness, a motor scale) left to
-an optimiser within bounds, an objective (`OBJECTIVES`) and limits. `dynamics(task, free)` keeps
-those variables symbolic, so the design NLP differentiates through the very equations the
-simulators integrate. Single stroke is read as `single_stroke_margin_J` says (motor at rest, the
-crank shaft alone carries one cut).
+an optimiser within bounds, an objective (`OBJECTIVES`) and limits.
+
+The equations are written once (`equations`): built per structure (effects, kinematics) with every
+number a caller may vary in one input p (`PARAMETERS`, filled by `parameters`). Simulation,
+periodic orbit, sensitivity and design are the same Functions with another p: numbers for a run
+(`dynamics` binds a task's), symbols for the design's variables (`design_parameters`) or the
+sensitivity's parameters, so the NLP differentiates through the very equations the simulators
+integrate and a what-if re-solves without a rebuild.
+
+Single stroke is read as `single_stroke_margin_J` says (motor at rest, the crank shaft alone
+carries one cut).
 
 Effects a scene may call for (the model is assembled from these only):
 
@@ -59,6 +66,7 @@ import casadi as ca
 import numpy as np
 from scipy.optimize import brentq
 
+from mechopt.models.cache import memoised
 from mechopt.models.effects import Effect, check_effects
 from mechopt.models.errors import ModelError
 
@@ -158,8 +166,9 @@ class PressDrive:
     Geometry: `crank_radius_mm` r (stroke H = 2r), `rod_ratio` lambda = r/l. Masses [kg]: crank
     (reduced to the pin), tool with slider, rod; `flywheel_inertia_kgm2` J (flywheel and
     counterweight). Drive: `motor_inertia_kgm2` J_0 + J_shk on the motor shaft, `gear_ratio`
-    i (motor speed / crank speed), `nominal_speed_rad_s` omega of the crank. Effects' own
-    parameters: see `EFFECTS`. `effects` lists the effects the scene calls for; `kinematics`
+    i (motor speed / crank speed), `nominal_speed_rad_s` omega of the crank (with the effect
+    motor_characteristic only the start speed and guess: the motor's characteristic sets the
+    speed). Effects' own parameters: see `EFFECTS`. `effects` lists the effects the scene calls for; `kinematics`
     picks X(phi) (see `travel_m`).
     """
     crank_radius_mm: float
@@ -287,11 +296,7 @@ class PressDrive:
     @property
     def state_names(self) -> tuple[str, ...]:
         """The physical states, in order (only those the listed effects call for)."""
-        if self.belt and self.motor:
-            return ("twist_rad", "omega_p_rad_s", "phi_rad", "omega_rad_s")
-        if self.belt:
-            return ("twist_rad", "phi_rad", "omega_rad_s")
-        return ("phi_rad", "omega_rad_s")
+        return state_names(self.effects)
 
     def travel(self, phi, m=np):
         """Tool travel X [m] (see `travel_m`)."""
@@ -309,6 +314,14 @@ class PressDrive:
     def reduced_motor_inertia_kgm2(self) -> float:
         """J_p = (J_0 + J_shk) i^2, table row 4 [kg m2]."""
         return self.motor_inertia_kgm2 * self.gear_ratio**2
+
+
+def state_names(effects) -> tuple[str, ...]:
+    """The physical states of a press with these effects, in order."""
+    if "belt_elasticity" in effects:
+        return ("twist_rad", "omega_p_rad_s", "phi_rad", "omega_rad_s") if "motor_characteristic" in effects \
+            else ("twist_rad", "phi_rad", "omega_rad_s")
+    return ("phi_rad", "omega_rad_s")
 
 
 def _angle_at_travel(task, x_m):
@@ -376,45 +389,139 @@ def crank_inertia(task: PressDrive):
     """J_k(phi) and dJ_k/dphi as CasADi Functions [kg m2], table row 1, from the kinetic energy:
     J_k = J + r^2 m_k + m_tool X'^2 + m_rod (x_mid'^2 + y_mid'^2); derivative by AD."""
     phi = ca.SX.sym("phi")
-    r, lam, kin = task.r_m, task.rod_ratio, task.kinematics
-    X = travel_m(phi, r, lam, kin, ca)
-    xm, ym = rod_middle_m(phi, r, lam, kin, ca)
-    J = (task.flywheel_inertia_kgm2 + r**2 * task.crank_mass_kg + task.tool_mass_kg * ca.jacobian(X, phi) ** 2
-         + task.rod_mass_kg * (ca.jacobian(xm, phi) ** 2 + ca.jacobian(ym, phi) ** 2))
+    J = _crank_inertia(phi, task.kinematics, task.r_m, task.rod_ratio, task.flywheel_inertia_kgm2,
+                       task.crank_mass_kg, task.tool_mass_kg, task.rod_mass_kg)
     return ca.Function("J_k", [phi], [J]), ca.Function("dJ_k", [phi], [ca.jacobian(J, phi)])
+
+
+def _crank_inertia(phi, kinematics, r, lam, flywheel, crank_mass, tool_mass, rod_mass):
+    """J_k(phi) as a CasADi expression of numbers or symbols (see `crank_inertia`)."""
+    X = travel_m(phi, r, lam, kinematics, ca)
+    xm, ym = rod_middle_m(phi, r, lam, kinematics, ca)
+    return (flywheel + r**2 * crank_mass + tool_mass * ca.jacobian(X, phi) ** 2
+            + rod_mass * (ca.jacobian(xm, phi) ** 2 + ca.jacobian(ym, phi) ** 2))
+
+
+def mean_inertia_ratios(task: PressDrive) -> tuple[float, float]:
+    """The means over a revolution of X'^2 / r^2 and of (x_mid'^2 + y_mid'^2) / r^2 [-]: the tool's
+    and the rod's shares of the mean J_k per kg, over r^2 (they depend on lambda and the kinematics
+    only, so the mean J_k is linear in the masses, the flywheel and r^2)."""
+    return _mean_shares(task.kinematics, task.rod_ratio)
+
+
+@memoised(maxsize=256)
+def _mean_shares(kinematics: str, lam: float) -> tuple[float, float]:
+    phi = ca.SX.sym("phi")
+    shares = [_crank_inertia(phi, kinematics, 1.0, lam, 0.0, 0.0, *masses)
+              for masses in ((1.0, 0.0), (0.0, 1.0))]
+    grid = np.linspace(0, 2 * np.pi, 720, endpoint=False).reshape(1, -1)     # exact for the paper's J_k
+    return tuple(float(np.mean(np.asarray(ca.Function("share", [phi], [s])(grid)))) for s in shares)
 
 
 def mean_crank_inertia_kgm2(task: PressDrive) -> float:
     """The mean of J_k over a revolution [kg m2] (J_k without the effect variable_inertia)."""
-    J, _ = crank_inertia(task)
-    phi = np.linspace(0, 2 * np.pi, 720, endpoint=False)     # exact for the paper's trigonometric J_k
-    return float(np.mean(np.asarray(J(phi.reshape(1, -1))).ravel()))
+    tool, rod = mean_inertia_ratios(task)
+    return task.flywheel_inertia_kgm2 + task.r_m**2 * (task.crank_mass_kg + tool * task.tool_mass_kg
+                                                       + rod * task.rod_mass_kg)
+
+
+# --- the equations once: a structure's CasADi Functions with every number in the input p ---------
+
+GIVEN = ("crank_radius_mm", "rod_ratio", "nominal_speed_rad_s", "flywheel_inertia_kgm2", "crank_mass_kg",
+         "tool_mass_kg", "rod_mass_kg", "motor_inertia_kgm2", "gear_ratio", "belt_stiffness_Nm_rad",
+         "belt_damping_Nms_rad", "gravity_m_s2", "friction_torque_Nm", *FORCE_KEYS, "blank_thickness_mm",
+         "shortfall_mm", "motor_sync_speed_rad_s", "motor_breakdown_torque_Nm", "motor_breakdown_slip")
+PARAMETERS = (*GIVEN, "rod_weight_sign", "cut_start_rad", "cut_end_rad", "mean_tool_share", "mean_rod_share")
+"""The order of p: the task's numbers (`GIVEN`; None reads 0), the rod-weight reading (+1: the rod's
+weight helps on the way down, the model's; -1: the table's sign), and what follows from the geometry
+(the cut window's angles, `cut_window_rad`; the mean-inertia shares, `mean_inertia_ratios`)."""
+
+
+def structure(task: PressDrive) -> tuple[tuple[str, ...], str]:
+    """What a build depends on besides numbers: the effects (as a sorted tuple) and the kinematics."""
+    return tuple(sorted(task.effects)), task.kinematics
+
+
+def parameters(task: PressDrive, *, rod_weight_sign=1.0, **given) -> list:
+    """p for `task` in `PARAMETERS` order; `given` replaces any of `GIVEN` (numbers or CasADi symbols:
+    a design's variables, a sensitivity's parameters)."""
+    unknown = sorted(set(given) - set(GIVEN))
+    if unknown:
+        raise ModelError(f"parameters {unknown}: allowed {', '.join(GIVEN)}", key=unknown[0])
+    own = [given[k] if k in given else (getattr(task, k) or 0.0) for k in GIVEN]
+    window = task.cut_window_rad() or (0.0, 0.0)
+    return [*own, rod_weight_sign, *window, *mean_inertia_ratios(task)]
 
 
 @dataclass(frozen=True)
-class Dynamics:
-    """Equations (2) assembled from the listed effects, as CasADi Functions of the state x
-    (`task.state_names` followed by the work integrals `WORK_NAMES`).
+class Equations:
+    """Equations (2) of one structure (`structure`), as CasADi Functions of the state x
+    (`state_names` followed by the work integrals `WORK_NAMES`), a mode and p (`PARAMETERS`).
 
-    * ``rhs(x, mode) -> dx/dt`` with mode = [U, friction sign, stuck]: U the switching function's
+    * ``rhs(x, mode, p) -> dx/dt`` with mode = [U, friction sign, stuck]: U the switching function's
       value, the friction sign, and stuck = 1 when the crank is held by static friction.
-    * ``switched(x) -> dx/dt`` with U and sign(omega) evaluated from the state (the paper's U).
-    * ``outputs(x, mode) -> [belt torque, motor torque, F, Q, X_mm, penetration_mm, E_kin, E_pot,
+    * ``switched(x, p) -> dx/dt`` with U and sign(omega) evaluated from the state (the paper's U).
+    * ``outputs(x, mode, p) -> [belt torque, motor torque, F, Q, X_mm, penetration_mm, E_kin, E_pot,
       crank torque without friction, crank acceleration, then the loads of `linkage_forces`]``
       (`OUTPUT_NAMES`).
     """
-    task: PressDrive
     rhs: ca.Function
     switched: ca.Function
     outputs: ca.Function
-    n_states: int
+    state_names: tuple[str, ...]
 
     OUTPUT_NAMES: ClassVar[tuple[str, ...]] = ("belt_torque_Nm", "motor_torque_Nm", "force_N", "Q_N", "travel_mm",
                                                "penetration_mm", "kinetic_J", "potential_J", "drive_torque_Nm",
                                                "alpha_rad_s2", "rod_force_N", "rod_force_pin_N", "crank_torque_Nm",
                                                "main_bearing_load_N", "guide_force_N")
-    free: tuple[str, ...] = ()
-    """Design variables (`DESIGN_VARIABLES`) left symbolic: the Functions then take them as a third input p."""
+
+    @property
+    def n_states(self) -> int:
+        return len(self.state_names)
+
+
+class Bound:
+    """A Function of (..., p) with p fixed: called with the other inputs; `map(n)` broadcasts p."""
+
+    def __init__(self, function: ca.Function, p):
+        self.function, self.p = function, p
+
+    def __call__(self, *args):
+        return self.function(*args, self.p)
+
+    def map(self, n: int):
+        mapped = self.function.map(n)
+        return lambda *args: mapped(*args, self.p)
+
+    def size1_in(self, i: int) -> int:
+        return self.function.size1_in(i)
+
+
+@dataclass(frozen=True)
+class Dynamics:
+    """A task's equations: its structure's `Equations` with its p (`parameters`) bound, so `rhs(x,
+    mode)`, `switched(x)` and `outputs(x, mode)` take the state and mode alone."""
+    task: PressDrive
+    equations: Equations
+    p: np.ndarray
+
+    OUTPUT_NAMES: ClassVar[tuple[str, ...]] = Equations.OUTPUT_NAMES
+
+    @property
+    def n_states(self) -> int:
+        return self.equations.n_states
+
+    @property
+    def rhs(self) -> Bound:
+        return Bound(self.equations.rhs, self.p)
+
+    @property
+    def switched(self) -> Bound:
+        return Bound(self.equations.switched, self.p)
+
+    @property
+    def outputs(self) -> Bound:
+        return Bound(self.equations.outputs, self.p)
 
 
 # --- sizing: what a design may change --------------------------------------------------------------
@@ -441,60 +548,79 @@ def sizing(task: PressDrive, design: dict) -> dict:
             "motor_inertia_kgm2": scale * task.motor_inertia_kgm2}
 
 
-def dynamics(task: PressDrive, free: tuple[str, ...] = ()) -> Dynamics:
-    """Build eqs. (2) for `task` from its listed effects only (see the module's effect table).
-    With `free` design variables (`DESIGN_VARIABLES`), those are symbols: every Function takes
-    them as a third input p, in the order of `free` (the design NLP's exact derivatives)."""
-    unknown = [k for k in free if k not in DESIGN_VARIABLES]
+def design_parameters(task: PressDrive, design: dict) -> list:
+    """p (`parameters`) with `design` (`DESIGN_VARIABLES` -> numbers or symbols) applied by `sizing`."""
+    unknown = [k for k in design if k not in DESIGN_VARIABLES]
     if unknown:
-        raise ModelError(f"free={list(free)}: unknown {unknown}; allowed: {', '.join(DESIGN_VARIABLES)}", key="free")
-    n = len(task.state_names)
+        raise ModelError(f"design {unknown}: allowed {', '.join(DESIGN_VARIABLES)}", key=unknown[0])
+    return parameters(task, **{k: v for k, v in sizing(task, design).items() if v is not None})
+
+
+def dynamics(task: PressDrive) -> Dynamics:
+    """Eqs. (2) for `task`: its structure's `equations` (built once per structure) with its p bound."""
+    return Dynamics(task, equations(structure(task)), np.asarray(parameters(task), dtype=float))
+
+
+@memoised(maxsize=32)
+def equations(key: tuple[tuple[str, ...], str]) -> Equations:
+    """Build eqs. (2) for a structure (`structure`: effects, kinematics) from its listed effects only
+    (see the module's effect table), every number a symbol of p (`PARAMETERS`)."""
+    effects, kin = key
+    names = state_names(effects)
+    n = len(names)
     x = ca.SX.sym("x", n + len(WORK_NAMES))
     mode = ca.SX.sym("mode", 3)
-    p = ca.SX.sym("p", len(free))
-    size = sizing(task, dict(zip(free, ca.vertsplit(p))))
-    gear, stiffness, breakdown = (size[k] for k in ("gear_ratio", "belt_stiffness_Nm_rad", "motor_breakdown_torque_Nm"))
-    reduced_motor_inertia = size["motor_inertia_kgm2"] * gear**2       # table row 4
-    extra_flywheel = size["flywheel_inertia_kgm2"] - task.flywheel_inertia_kgm2     # J_k is linear in J
+    p = ca.SX.sym("p", len(PARAMETERS))
+    q = dict(zip(PARAMETERS, ca.vertsplit(p)))
+    belt, motor = "belt_elasticity" in effects, "motor_characteristic" in effects
+    cutting, friction_on = "cutting_force" in effects, "friction" in effects
+    gear, stiffness, damping = q["gear_ratio"], q["belt_stiffness_Nm_rad"], q["belt_damping_Nms_rad"]
+    reduced_motor_inertia = q["motor_inertia_kgm2"] * gear**2       # table row 4
     U, sgn, stuck = mode[0], mode[1], mode[2]
-    s = dict(zip(task.state_names, ca.vertsplit(x[:n])))
+    s = dict(zip(names, ca.vertsplit(x[:n])))
     phi, w = s["phi_rad"], s["omega_rad_s"]
-    r, lam, kin = task.r_m, task.rod_ratio, task.kinematics
+    r, lam = q["crank_radius_mm"] / 1000, q["rod_ratio"]
+    masses = (q["flywheel_inertia_kgm2"], q["crank_mass_kg"], q["tool_mass_kg"], q["rod_mass_kg"])
 
-    J_fun, dJ_fun = crank_inertia(task)
-    if "variable_inertia" in task.effects:
-        J, dJ = J_fun(phi) + extra_flywheel, dJ_fun(phi)
-    else:
-        J, dJ = mean_crank_inertia_kgm2(task) + extra_flywheel, 0.0
+    if "variable_inertia" in effects:
+        J = _crank_inertia(phi, kin, r, lam, *masses)
+        dJ = ca.jacobian(J, phi)
+    else:               # the mean over a revolution: linear in the masses (`mean_inertia_ratios`)
+        J = masses[0] + r**2 * (masses[1] + q["mean_tool_share"] * masses[2] + q["mean_rod_share"] * masses[3])
+        dJ = 0.0
 
     X = travel_m(phi, r, lam, kin, ca)
     dX = ca.jacobian(X, phi)
     ddX = ca.jacobian(dX, phi)
-    potential = potential_J(task, phi, ca)
-    gravity_moment = -ca.jacobian(potential, phi) if "gravity" in task.effects else 0.0
+    g = q["gravity_m_s2"]
+    xm, ym = rod_middle_m(phi, r, lam, kin, ca)
+    potential = (-g * (q["tool_mass_kg"] * X + q["rod_weight_sign"] * q["rod_mass_kg"] * ym)
+                 if "gravity" in effects else 0.0 * phi)
+    gravity_moment = -ca.jacobian(potential, phi) if "gravity" in effects else 0.0
 
     penetration_mm = 0.0 * phi
     force = 0.0 * phi
     U_paper = 0.0 * phi
-    if task.cutting:
-        penetration_mm = X * 1000 - (task.stroke_mm - task.blank_thickness_mm - task.shortfall_mm)
-        force = U * cutting_force_N(penetration_mm, *(getattr(task, k) for k in FORCE_KEYS))
+    if cutting:
+        Z = q["blank_thickness_mm"]
+        penetration_mm = X * 1000 - (2 * q["crank_radius_mm"] - Z - q["shortfall_mm"])
+        # the one place eq. (1) is evaluated: beyond the fitted range when the penetration leaves [0, Z]
+        force = U * cutting_force_N(penetration_mm, *(q[k] for k in FORCE_KEYS))
         # the paper's U: on while the tool is inside the blank and moving down
-        U_paper = ca.logic_and(ca.logic_and(penetration_mm >= 0, penetration_mm <= task.blank_thickness_mm),
-                               w * dX > 0)
-    friction = task.friction_torque_Nm if task.friction else 0.0
+        U_paper = ca.logic_and(ca.logic_and(penetration_mm >= 0, penetration_mm <= Z), w * dX > 0)
+    friction = q["friction_torque_Nm"] if friction_on else 0.0
 
     # motor side
-    if task.motor:
-        w_p = s["omega_p_rad_s"] if task.belt else w
-        slip = 1 - gear * w_p / task.motor_sync_speed_rad_s
-        motor_torque = gear * kloss_torque_Nm(slip, breakdown, task.motor_breakdown_slip)
+    if motor:
+        w_p = s["omega_p_rad_s"] if belt else w
+        slip = 1 - gear * w_p / q["motor_sync_speed_rad_s"]
+        motor_torque = gear * kloss_torque_Nm(slip, q["motor_breakdown_torque_Nm"], q["motor_breakdown_slip"])
     else:
-        w_p, motor_torque = task.nominal_speed_rad_s, 0.0 * phi
-    if task.belt:
+        w_p, motor_torque = q["nominal_speed_rad_s"], 0.0 * phi
+    if belt:
         twist = s["twist_rad"]
-        belt_torque = stiffness * twist + task.belt_damping_Nms_rad * (w_p - w)
-        damping_power = task.belt_damping_Nms_rad * (w_p - w) ** 2
+        belt_torque = stiffness * twist + damping * (w_p - w)
+        damping_power = damping * (w_p - w) ** 2
         drive = belt_torque
         J_total = J
         belt_energy = 0.5 * stiffness * twist**2
@@ -510,30 +636,27 @@ def dynamics(task: PressDrive, free: tuple[str, ...] = ()) -> Dynamics:
     dphi = (1 - stuck) * w
 
     derivs = {"phi_rad": dphi, "omega_rad_s": acc}
-    if task.belt:
+    if belt:
         derivs["twist_rad"] = w_p - dphi
-        if task.motor:
+        if motor:
             derivs["omega_p_rad_s"] = (motor_torque - belt_torque) / reduced_motor_inertia
-    motor_power = motor_torque * w_p if task.motor else belt_torque * w_p
+    motor_power = motor_torque * w_p if motor else belt_torque * w_p
     works = [motor_power, force * dX * dphi, sgn * friction * dphi, damping_power]
-    xdot = ca.vertcat(*[derivs[k] for k in task.state_names], *works)
+    xdot = ca.vertcat(*[derivs[k] for k in names], *works)
 
-    kinetic = 0.5 * J * w**2 + (0.5 * reduced_motor_inertia * w_p**2 if task.motor else 0.0)
-    Q = force + task.tool_mass_kg * (ddX * dphi**2 + dX * acc - (task.gravity_m_s2 or 0.0))
-    xm, ym = rod_middle_m(phi, r, lam, kin, ca)
-    g = task.gravity_m_s2 or 0.0             # as in Q
-    rod_x, rod_y = (task.rod_mass_kg * (ca.jacobian(ca.jacobian(p, phi), phi) * dphi**2 + ca.jacobian(p, phi) * acc)
-                    for p in (xm, ym))
-    loads = linkage_forces(phi, rod_angle_rad(phi, lam, kin, ca), Q, rod_x, rod_y - task.rod_mass_kg * g, r, ca)
+    kinetic = 0.5 * J * w**2 + (0.5 * reduced_motor_inertia * w_p**2 if motor else 0.0)
+    Q = force + q["tool_mass_kg"] * (ddX * dphi**2 + dX * acc - g)
+    rod_x, rod_y = (q["rod_mass_kg"] * (ca.jacobian(ca.jacobian(c, phi), phi) * dphi**2 + ca.jacobian(c, phi) * acc)
+                    for c in (xm, ym))
+    loads = linkage_forces(phi, rod_angle_rad(phi, lam, kin, ca), Q, rod_x, rod_y - q["rod_mass_kg"] * g, r, ca)
     outputs = ca.vertcat(belt_torque, motor_torque, force, Q, X * 1000, penetration_mm, kinetic,
                          potential + belt_energy, drive_torque, acc, *loads)
 
     switched_mode = ca.vertcat(U_paper, ca.sign(w), 0)
-    given = [p] if free else []
-    rhs = ca.Function("rhs", [x, mode, *given], [xdot])
-    switched = ca.Function("switched", [x, *given], [rhs(x, switched_mode, *given)])
-    out = ca.Function("outputs", [x, mode, *given], [outputs])
-    return Dynamics(task, rhs, switched, out, n, tuple(free))
+    rhs = ca.Function("rhs", [x, mode, p], [xdot])
+    switched = ca.Function("switched", [x, p], [rhs(x, switched_mode, p)])
+    out = ca.Function("outputs", [x, mode, p], [outputs])
+    return Equations(rhs, switched, out, names)
 
 
 # --- the design question: which drive, by optimisation (issue 16, Sec. 3) ------------------------
@@ -655,3 +778,50 @@ def single_stroke_margin_J(task: PressDrive, flywheel_inertia_kgm2, omega_start_
     friction = task.friction_torque_Nm if task.friction else 0.0
     lost = cut_work_J(task) + friction * (b - a) + float(potential_J(task, b) - potential_J(task, a))
     return 0.5 * (J_a + extra) * omega_start_rad_s**2 - lost - 0.5 * (J_b + extra) * ((1 - speed_drop) * omega_start_rad_s)**2
+
+
+CATALOGUE_COLUMNS = ("name", "rated_power_kW", "breakdown_torque_Nm", "inertia_kgm2")
+
+
+@dataclass(frozen=True)
+class PressCatalogue(PressDesign):
+    """A `PressDesign` whose motor and belt ratio are chosen from a catalogue: `motors`, rows of
+    (`CATALOGUE_COLUMNS`: name, rated power [kW], breakdown torque M_k [N m], rotor and pulley inertia
+    J_0 + J_shk [kg m2]), and `ratios`, the standard belt ratios i on offer. Every (row, ratio) is a
+    drive whose `variables` (the flywheel: the continuous NLP inside) are designed as `PressDesign`
+    says; it is feasible when that design is SOLVED and the mean crank speed is within
+    `max_speed_deviation` of `nominal_speed_rad_s` (the strokes per minute). The cheapest row is the
+    one of least rated power (then least breakdown torque) with a feasible ratio."""
+    motors: tuple = ()
+    ratios: tuple = ()
+    max_speed_deviation: float = 0.05
+
+    def __post_init__(self):
+        object.__setattr__(self, "motors", tuple(tuple(row) for row in self.motors))
+        object.__setattr__(self, "ratios", tuple(float(r) for r in self.ratios))
+        super().__post_init__()
+        if not self.motor:
+            raise ModelError("a motor catalogue needs effect 'motor_characteristic'", key="effects")
+        chosen = [v for v in self.variables if v in ("gear_ratio", "motor_scale")]
+        if chosen:
+            raise ModelError(f"variables={list(self.variables)}: {chosen} come from the catalogue here; "
+                             "leave them out", key="variables")
+        if not self.motors or not self.ratios:
+            raise ModelError("motors and ratios must each list one or more rows", key="motors" if not self.motors
+                             else "ratios")
+        for k, row in enumerate(self.motors):
+            ok = (len(row) == 4 and isinstance(row[0], str)
+                  and all(isinstance(v, int | float) and 0 < v < 1e6 for v in row[1:]))
+            if not ok:
+                raise ModelError(f"motors[{k}]={list(row)}: expected [name, rated power kW, breakdown torque N m, "
+                                 f"inertia kg m2], the numbers in (0, 1e6)", key="motors")
+        for k, ratio in enumerate(self.ratios):
+            if not 0 < ratio <= self.RANGES["gear_ratio"][0]:
+                raise ModelError(f"ratios[{k}]={ratio} is outside (0, {self.RANGES['gear_ratio'][0]:g}]", key="ratios")
+        _require(self, "max_speed_deviation", 0 < self.max_speed_deviation <= 0.5, "is outside (0, 0.5]")
+
+    def candidate(self, row: tuple, ratio: float) -> PressDesign:
+        """The design question for one catalogue row and ratio (a plain `PressDesign`)."""
+        own = {f.name: getattr(self, f.name) for f in fields(PressDesign)}
+        return PressDesign(**(own | {"motor_breakdown_torque_Nm": float(row[2]), "motor_inertia_kgm2": float(row[3]),
+                                     "gear_ratio": float(ratio)}))

@@ -4,12 +4,13 @@ cases (stall, a rigid-belt limit, an empty constraint set, no cut)."""
 import dataclasses
 import time
 
+import casadi as ca
 import numpy as np
 import pytest
 
 from mechopt import load
 from mechopt.models.errors import ModelError
-from mechopt.models.press import dynamics
+from mechopt.models.press import design_parameters, dynamics, equations, structure
 from mechopt.solvers.press import design, steady_state
 from mechopt.solvers.result import Status
 
@@ -33,17 +34,23 @@ def _fluctuation(drive):
 
 
 def test_free_design_variables_give_the_numeric_equations(flywheel_task):
-    """dynamics(task, free) with p = a design equals dynamics of the press built with those numbers."""
+    """The equations with p from a symbolic design, evaluated at a design, equal those of the press
+    built with those numbers (the design NLP and the simulators call the same Functions)."""
     task = dataclasses.replace(flywheel_task, variables=("flywheel_inertia_kgm2", "gear_ratio",
                                                           "belt_stiffness_Nm_rad", "motor_scale"))
     values = {"flywheel_inertia_kgm2": 0.9, "gear_ratio": 7.1, "belt_stiffness_Nm_rad": 3.3e4, "motor_scale": 1.7}
-    free, fixed = dynamics(task, task.variables), dynamics(task.drive(values))
+    symbols = ca.SX.sym("d", len(task.variables))
+    p_of = ca.Function("p", [symbols], [ca.vertcat(*design_parameters(task, dict(zip(task.variables,
+                                                                                      ca.vertsplit(symbols)))))])
+    p = np.asarray(p_of([values[k] for k in task.variables])).ravel()
+    fixed = dynamics(task.drive(values))
+    assert np.allclose(p, fixed.p, rtol=1e-15, atol=0)
+    free = equations(structure(task))
     rng = np.random.default_rng(3)
     for _ in range(5):
         x = np.r_[rng.normal(0, 1e-3), 25 + rng.normal(0, 1), rng.uniform(0, 2 * np.pi), 25 + rng.normal(0, 1),
                   np.zeros(4)]
         mode = [float(rng.integers(0, 2)), 1.0, 0.0]
-        p = [values[k] for k in task.variables]
         assert np.allclose(np.asarray(free.rhs(x, mode, p)), np.asarray(fixed.rhs(x, mode)), rtol=1e-12, atol=1e-12)
         assert np.allclose(np.asarray(free.outputs(x, mode, p)), np.asarray(fixed.outputs(x, mode)), rtol=1e-12)
 
@@ -167,3 +174,15 @@ def test_the_motor_designs_multipliers_are_the_slopes_of_re_solves():
     assert result.values["sensitivity_fd_rel_error"] <= 1e-3
     assert result.values["sensitivity_fd"] == pytest.approx(
         result.values["d_motor_rms_torque_N_m_d_max_speed_fluctuation"], rel=1e-3)
+
+
+def test_a_designers_own_press_is_designed_at_the_default_settings():
+    """Issue 24: a designer's own press (crank radius 40 mm, a 5 mm blank, a 4 kW four-pole motor:
+    breakdown 2.3 x 26.5 N m, rotor and pulley 0.0153 kg m2, as the motor-catalogue row) is SOLVED at
+    the default settings, and its least flywheel holds the limit exactly (steady_state, no NLP)."""
+    task = dataclasses.replace(load("press/flywheel-design").build()[0], crank_radius_mm=40.0,
+                               blank_thickness_mm=5.0, motor_breakdown_torque_Nm=61.0, motor_inertia_kgm2=0.0153)
+    result = design(task)
+    assert result.status is Status.SOLVED, result.message
+    J = result.values["flywheel_inertia_kgm2"]
+    assert _fluctuation(task.drive({"flywheel_inertia_kgm2": J})) == pytest.approx(task.max_speed_fluctuation, rel=1e-6)

@@ -1,15 +1,16 @@
 """Press dynamics solvers: cross-checks against an independent reference, energy, events, hard cases."""
 import dataclasses
+import time
 
 import numpy as np
 import pytest
 
 from mechopt import registry
 from mechopt.models.errors import ModelError
-from mechopt.models.press import PressDrive
+from mechopt.models.press import PressDrive, mean_crank_inertia_kgm2
 from mechopt.solvers import press as pd
-from mechopt.solvers.press import event_driven
-from mechopt.solvers.press.common import initial_state, paper_U
+from mechopt.solvers.press import problem
+from mechopt.solvers.press.problem import initial_state, paper_U
 from mechopt.solvers.result import Status, from_ivp, from_rootfinder
 
 PAPER, _ = registry.find("press/kd2322").build()
@@ -250,7 +251,7 @@ def test_benchmark_interpolates_time_to_accuracy_in_log_log():
 def test_cvodes_running_out_of_steps_is_a_limit_not_a_crash(monkeypatch):
     def exhausted(*args, **kwargs):
         raise RuntimeError("Error in Function::call for 'piece' [IntegratorInternal]: CV_TOO_MUCH_WORK")
-    monkeypatch.setattr(event_driven, "_run", exhausted)
+    monkeypatch.setattr(problem, "run_piece", exhausted)
     r = pd.events(PAPER, duration_s=0.1)
     assert r.status is Status.LIMIT and "CV_TOO_MUCH_WORK" in r.message
     assert r.values["duration_s"] == 0.0          # what was integrated before the failure: nothing
@@ -311,7 +312,7 @@ def test_a_flywheel_that_cannot_carry_the_cut_is_a_stall_not_a_casadi_stack():
 def test_a_cvodes_failure_keeps_its_stack_out_of_the_message(monkeypatch):
     raw = ("Error in Function::call for 'piece' [IntegratorInternal] at .../casadi/core/function.cpp:1736:\n"
            ".../casadi/interfaces/sundials/cvodes_interface.cpp:403: CVode returned \"CV_CONV_FAILURE\".")
-    monkeypatch.setattr(event_driven, "_run", lambda *a, **k: (_ for _ in ()).throw(RuntimeError(raw)))
+    monkeypatch.setattr(problem, "run_piece", lambda *a, **k: (_ for _ in ()).throw(RuntimeError(raw)))
     r = pd.events(PAPER, duration_s=0.1)
     assert r.status is Status.FAILED and r.diagnostics["casadi_error"] == raw
     assert r.message == "CVODES gave up (CV_CONV_FAILURE: the corrector did not converge) at t = 0 s of 0.1 s"
@@ -407,3 +408,63 @@ def test_rk4_and_ivp_name_the_same_stall_in_the_cut():
         angles.append(float(r.message.split("crank angle ")[1].split(" deg")[0]))
     start, end = np.degrees(thick.cut_window_rad())
     assert start < angles[1] < end and angles[0] == pytest.approx(angles[1], abs=0.01)
+
+
+def test_events_refuses_a_belt_it_would_follow_for_minutes_before_any_work():
+    """Issue 21: belt_stiffness 1e12 under `events` took 94 s; the estimate (10 steps a period of the
+    264 kHz belt mode over 3 s: 7.9e6) refuses it at once, naming the key and the stiffest belt that fits."""
+    task = dataclasses.replace(registry.find("press/start-up").build()[0], belt_stiffness_Nm_rad=1e12)
+    start = time.perf_counter()
+    with pytest.raises(ModelError, match=r"belt_stiffness_Nm_rad <= 3.99e\+09 at duration_s=3") as refused:
+        pd.events(task, duration_s=3.0, start="rest")
+    assert refused.value.key == "belt_stiffness_Nm_rad" and time.perf_counter() - start < 1.0
+    hz = np.sqrt(1e12 * (1 / mean_crank_inertia_kgm2(task) + 1 / (task.motor_inertia_kgm2 * task.gear_ratio**2)))
+    assert f"{hz / (2 * np.pi):.4g} Hz" in str(refused.value)       # undamped; damping 15 moves it < 1e-6
+
+
+@pytest.mark.parametrize("turns", [224, 257, 5000])
+def test_events_far_from_phi_zero_are_located_relative_to_the_angle(monkeypatch, turns):
+    """Issue 21: a minute of start-up reaches 1445 rad, where doubles are 2.3e-13 apart and an absolute
+    1e-12 rad was at times out of Newton's reach (LIMIT). From these turns (each a LIMIT under the old
+    absolute rule, the first check below) the events are located relative to the angle."""
+    iphi = PAPER.state_names.index("phi_rad")
+    x = initial_state(PAPER, "nominal")
+    x[iphi] = turns * 2 * np.pi + 0.5
+    piece = problem.piece_by_time(PAPER, 1e-10, 8)
+    with monkeypatch.context() as absolute:
+        absolute.setattr(problem, "ANGLE_ULPS", 0)
+        with pytest.raises(problem.Limit, match="not located"):
+            problem.march(PAPER, piece, problem.Trace(), x.copy(), 0.3, 0.02, 1000)
+    trace = problem.Trace()
+    problem.march(PAPER, piece, trace, x, 0.3, 0.02, 1000)
+    kinds = [e[0] for e in trace.events]
+    assert kinds.count("revolution") == 1 and kinds.count("cut_start") == kinds.count("cut_end") == 1
+    assert trace.t[-1][-1] == pytest.approx(0.3, rel=1e-12)
+    assert problem.angle_tol(1445.0) == pytest.approx(64 * np.spacing(1445.0)) and problem.angle_tol(1.0) == 1e-12
+
+
+def test_the_nominal_speed_under_a_motor_is_said_to_be_a_start_guess_only():
+    fast = dataclasses.replace(PAPER, nominal_speed_rad_s=1000.0)
+    same, said = pd.steady_state(PAPER), pd.steady_state(fast)
+    assert said.values["omega_mean_rad_s"] == pytest.approx(same.values["omega_mean_rad_s"], rel=1e-9)
+    assert "nominal_speed_rad_s=1000 is a start speed and guess only" in said.message
+    assert "nominal_speed_rad_s" not in same.message          # 25 rad/s lies in the motor's working range
+
+
+def test_a_what_if_re_solves_on_the_structures_build_from_the_last_orbit():
+    """Issue 24: other numbers, same structure: no new build (equations, revolution), the orbit
+    warm-started from the last one by chord steps, and the same orbit as a cold solve."""
+    from mechopt.models.cache import clear
+    from mechopt.models.press import equations
+    pd.steady_state(PAPER)
+    builds = len(equations.cache), len(problem.revolution.cache)
+    what = dataclasses.replace(PAPER, belt_stiffness_Nm_rad=6e4, flywheel_inertia_kgm2=5.5)
+    warm = pd.steady_state(what)
+    assert warm.status is Status.SOLVED and warm.diagnostics["warm_start"]
+    assert (len(equations.cache), len(problem.revolution.cache)) == builds
+    assert warm.values["periodicity_residual"] <= 100 * 1e-10 and "chord steps" in warm.message
+    clear()
+    cold = pd.steady_state(what)
+    assert cold.status is Status.SOLVED and not cold.diagnostics["warm_start"]
+    for key in ("omega_mean_rad_s", "speed_fluctuation", "peak_belt_torque_Nm", "motor_work_J"):
+        assert warm.values[key] == pytest.approx(cold.values[key], rel=1e-8), key

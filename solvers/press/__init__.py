@@ -5,7 +5,10 @@
 * `events` (event_driven.py):  CVODES on each smooth piece, restarted at located events.
 * `steady_state` (periodic.py): the periodic steady motion over one revolution, solved directly.
 * `ivp` (scipy_peer.py):       scipy's solve_ivp, the peer a user would reach for.
-* `simulate(task, method=...)`: one door to all four, as `scipy.integrate.solve_ivp` has.
+* `simulate(task, method=...)`: one door to all four (`METHODS`), as `scipy.integrate.solve_ivp` has.
+
+The four are siblings over `problem.py` (the press problem: its equations per structure, the
+pieces they integrate, the switching logic, the summary of a run); none imports another.
 
 Every result reports the energy balance over the run (motor work = cutting + friction + belt
 damping work + change of kinetic and potential energy; `energy_residual`, relative), the events
@@ -14,8 +17,12 @@ the run's samples in `Result.arrays` (`t_s`, the states, `cutting`, the outputs)
 `loads` (loads.py) adds the peaks of the loads a designer sizes parts with (Figs. 9-10).
 `force_fit.fit_force` fits the force law (1) to load-travel data.
 `sensitivity` (sensitivity.py): d(output)/d(assumed parameter) through the periodic orbit by AD.
-`design` (design.py) chooses the drive by optimisation over the periodic steady motion.
+`design` (design.py) chooses the drive by optimisation over the periodic steady motion;
+`catalogue` (catalogue.py) picks a motor row and a belt ratio from a catalogue with `design` inside.
 """
+from typing import Literal
+
+from mechopt.solvers.press.catalogue import catalogue
 from mechopt.solvers.press.design import design
 from mechopt.solvers.press.event_driven import events
 from mechopt.solvers.press.fixed_step import rk4
@@ -24,14 +31,18 @@ from mechopt.solvers.press.periodic import steady_state
 from mechopt.solvers.press.scipy_peer import ivp
 from mechopt.solvers.press.sensitivity import sensitivity
 
-__all__ = ["METHODS", "design", "events", "ivp", "loads", "rk4", "sensitivity", "simulate", "steady_state"]
+__all__ = ["METHODS", "Method", "catalogue", "design", "events", "ivp", "loads", "rk4", "sensitivity", "simulate",
+           "steady_state"]
 
 METHODS = {"rk4": rk4, "events": events, "steady_state": steady_state, "ivp": ivp}
+Method = Literal["rk4", "events", "steady_state", "ivp"]
 
 
-def simulate(task, *, method="events", **options):
+def simulate(task, *, method: Method = "events", **options):
     """Motion of the press by one of `METHODS` ("rk4", "events", "steady_state", "ivp"), with
     that method's keyword options; returns its Result (values, status, `arrays` of the samples).
+    A scene reaches it as `solver = "press.simulate"` with `method` in its solver settings (the
+    method's own settings through its own solver name, e.g. `press.events`).
 
     >>> from mechopt import load
     >>> task, _ = load("press/kd2322").build()

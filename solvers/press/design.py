@@ -30,20 +30,24 @@ from mechopt.models.press import (
     breakdown_torque_at_crank_Nm,
     required_mean_torque_Nm,
     single_stroke_margin_J,
+    structure,
 )
-from mechopt.solvers.press.common import (
+from mechopt.solvers.press.periodic import steady_state
+from mechopt.solvers.press.problem import (
     TWO_PI,
     Samples,
     Trace,
     belt_mode,
     belt_too_fast_per_revolution,
     dynamics_of,
+    locate,
+    march,
+    piece_by_time,
+    revolution,
     stall_check,
     summarise,
     top_speed_rad_s,
 )
-from mechopt.solvers.press.event_driven import _locate, _march, _piece
-from mechopt.solvers.press.periodic import _revolution, _revolution_trace, steady_state
 from mechopt.solvers.press.shooting import QUADRATURES, cutting_on, intervals, probe, reach, stage_angles
 from mechopt.solvers.result import Result, Status, Timing, from_ipopt
 from mechopt.solvers.settings import Annotated, Interval, Tolerance
@@ -282,7 +286,8 @@ def _design(task, tol, samples, max_iter, check_sensitivity, warm):
     if status is not Status.SOLVED:
         return _not_solved(task, status, word, nodes, tol, samples, scales, origin, timing(build), max_iter)
     drive = task.drive(start)
-    values, diagnostics, arrays = summarise(drive, _revolution_trace(drive, *_revolution(drive, tol, 60), y0),
+    revolved, _ = revolution(structure(drive), tol, 60).trace(y0, dynamics_of(drive).p)
+    values, diagnostics, arrays = summarise(drive, revolved,
                                             cut_angles=task.cut_window_rad())
     # the extremes are nodes, so the NLP's samples hold them: no parabola through coarse samples here
     values["speed_fluctuation"] = float((omega.max() - omega.min()) * period[0] / TWO_PI)
@@ -496,7 +501,7 @@ def _box(task, nodes, scales, slacks):
 
 
 def _stall(task):
-    """`common.stall_check` at the biggest motor the bounds allow, with the least motor that could."""
+    """`problem.stall_check` at the biggest motor the bounds allow, with the least motor that could."""
     most = {k: task.bounds(k)[1] for k in ("gear_ratio", "motor_scale") if k in task.variables}
     drive = task.drive(most)
     stalled = stall_check(drive)
@@ -587,7 +592,7 @@ def _sizing_values(task, design):
 
 def _located_extreme(drive, piece, trace, sign):
     """The largest (sign 1) or smallest (-1) crank speed of an event-located run: at the extreme sample,
-    located where the acceleration changes sign between its neighbours (`event_driven._locate` on the
+    located where the acceleration changes sign between its neighbours (`event_driven.locate` on the
     piece's duration); the sample itself at a piece's end (a kink at an event)."""
     dyn = dynamics_of(drive)
     iw, alpha = drive.state_names.index("omega_rad_s"), Dynamics.OUTPUT_NAMES.index("alpha_rad_s2")
@@ -603,7 +608,7 @@ def _located_extreme(drive, piece, trace, sign):
     lo, hi = trace.t[c][j - 1] - start, trace.t[c][j + 1] - start
     if g(trace.x[c][j - 1]) * g(trace.x[c][j + 1]) >= 0:
         return value
-    _, state = _locate(piece, trace.x[c - 1][-1], mode, lo, hi, g)
+    _, state = locate(piece, trace.x[c - 1][-1], mode, lo, hi, g)
     return float(state[iw])
 
 
@@ -612,9 +617,9 @@ def _verify(drive, x0, values, tol):
     simulation of one period from the optimum's state at phi = 0."""
     period = values["period_s"]
     trace = Trace()
-    piece = _piece(drive, max(tol * 1e-2, 1e-13), 200)
+    piece = piece_by_time(drive, max(tol * 1e-2, 1e-13), 200)
     try:
-        _march(drive, piece, trace, np.r_[x0, np.zeros(4)], period * (1 + 1e-6), period / 32, 1000)
+        march(drive, piece, trace, np.r_[x0, np.zeros(4)], period * (1 + 1e-6), period / 32, 1000)
         got, _, arrays = summarise(drive, trace)
         top, bottom = (_located_extreme(drive, piece, trace, sign) for sign in (1, -1))
     except (RuntimeError, ArithmeticError) as exc:      # a failed check is a finding, reported, not a crash

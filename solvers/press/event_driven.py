@@ -2,30 +2,30 @@
 U switching on, the jump, every full revolution, and friction sign changes (crank stopping,
 sticking, breaking away). CasADi 3.8's own events fire on one crossing direction only and never
 with a single output time, so events are located here by Newton on the piece's duration instead
-(see `_locate`)."""
+(see `locate`)."""
 import time
 
-import casadi as ca
 import numpy as np
 
-from mechopt.models.cache import memoised
 from mechopt.models.errors import MechoptError, ModelError
 from mechopt.models.press import PressDrive
-from mechopt.solvers.press.common import (
-    ANGLE_TOL_RAD,
+from mechopt.solvers.press.problem import (
+    RIGID_LIMIT,
     TWO_PI,
     Duration,
+    Limit,
     Samples,
+    Stall,
     Start,
     Trace,
-    angle_events,
+    belt_mode,
     casadi_failure,
     check_task,
     checked,
-    drive_torque,
-    dynamics_of,
     initial_state,
-    mode_at,
+    march,
+    nominal_speed_note,
+    piece_by_time,
     refuse_work,
     stall_check,
     summarise,
@@ -34,25 +34,10 @@ from mechopt.solvers.press.common import (
 from mechopt.solvers.result import Result, Status, Timing
 from mechopt.solvers.settings import Annotated, Interval, Positive, Tolerance
 
-
-@memoised(maxsize=32)
-def _piece(task: PressDrive, tol: float, samples: int) -> ca.Function:
-    """CVODES over a piece of duration p[0] in mode p[1:] (time scaled to [0, 1]): the states at
-    `samples` equally spaced times, the last being the end of the piece."""
-    rhs = dynamics_of(task).rhs
-    x = ca.SX.sym("x", rhs.size1_in(0))
-    p = ca.SX.sym("p", 4)
-    grid = np.linspace(0, 1, samples + 1)[1:]
-    return ca.integrator("piece", "cvodes", {"x": x, "p": p, "ode": p[0] * rhs(x, p[1:])}, 0.0, grid,
-                         {"abstol": tol, "reltol": tol, "max_num_steps": 100000})
-
-
 MAX_PIECES = 50_000          # ~25 s of CVODES calls
 MAX_SAMPLES = 1_000_000      # states and outputs kept: ~250 MB
-
-
-class _Stall(Exception):
-    pass
+MAX_BELT_STEPS = 500_000     # CVODES steps following the belt's oscillation (~1e-4 s each: ~50 s)
+STEPS_PER_BELT_PERIOD = 10
 
 
 def events(task: PressDrive, *, tol: Tolerance = 1e-10, duration_s: Duration = 1.0, start: Start = "nominal",
@@ -92,17 +77,18 @@ def events(task: PressDrive, *, tol: Tolerance = 1e-10, duration_s: Duration = 1
                 f"duration_s <= {MAX_PIECES / per_s:.4g} s with max_step_s={max_step_s:g}")
     refuse_work("samples", samples, duration_s * per_s * samples, MAX_SAMPLES, "samples in memory",
                 f"samples <= {max(int(MAX_SAMPLES / (duration_s * per_s)), 1)} over duration_s={duration_s:g}")
+    _refuse_a_belt_too_fast(task, duration_s)
     t_start = time.perf_counter()
-    piece = _piece(task, tol, samples)
+    piece = piece_by_time(task, tol, samples)
     build = time.perf_counter() - t_start
     trace = Trace()
     status, message, violated, failure = Status.SOLVED, "", (), {}
     try:
-        _march(task, piece, trace, initial_state(task, start), duration_s, max_step_s, max_events)
-        message = f"CVODES tol {tol:g}, {len(trace.events)} events located"
-    except _Stall as stall:
+        march(task, piece, trace, initial_state(task, start), duration_s, max_step_s, max_events)
+        message = f"CVODES tol {tol:g}, {len(trace.events)} events located" + nominal_speed_note(task)
+    except Stall as stall:
         status, violated, message = Status.INFEASIBLE, ("stall",), str(stall)
-    except _Limit as limit:
+    except Limit as limit:
         status, message = Status.LIMIT, str(limit)
     except RuntimeError as exc:        # CVODES gave up (e.g. too much work): a status, not a crash
         if isinstance(exc, MechoptError):
@@ -133,131 +119,16 @@ def events(task: PressDrive, *, tol: Tolerance = 1e-10, duration_s: Duration = 1
     return Result(status, values, timing, message, violated, diagnostics, arrays)
 
 
-class _Limit(Exception):
-    pass
-
-
-def _march(task, piece, trace, x, duration_s, max_step_s, max_events):
-    dyn = dynamics_of(task)
-    iphi, iw = task.state_names.index("phi_rad"), task.state_names.index("omega_rad_s")
-    friction = task.friction_torque_Nm if task.friction else 0.0
-    t = 0.0
-    mode = _start_mode(task, dyn, x, friction)
-    trace.add(t, x, mode)
-    while t < duration_s * (1 - 1e-14):
-        if len(trace.events) > max_events:
-            raise _Limit(f"more than max_events={max_events} events by t = {t:.6g} s")
-        stuck = mode[2] > 0
-        T = min(max_step_s, duration_s - t)
-        target = kind = None
-        if not stuck and mode[1] > 0:
-            target, kind = angle_events(task, x[iphi])
-            if x[iw] > 0:
-                T = min(T, (target - x[iphi]) / x[iw])
-        xs = _run(piece, x, T, mode)
-        end = xs[-1]
-        # friction events: omega crossing zero while moving, breakaway while stuck
-        if stuck:
-            g = lambda s: abs(drive_torque(dyn, s, mode)) - friction
-            gs = [g(s) for s in xs]
-            hit = next((i for i, v in enumerate(gs) if v > 0), None)
-            if hit is not None:
-                T_ev, xe = _locate(piece, x, mode, T * hit / len(xs), T * (hit + 1) / len(xs), g)
-                xs = _run(piece, x, T_ev, mode)
-                t = _commit(trace, t, T_ev, xs, mode)
-                x = xs[-1]
-                sign = np.sign(drive_torque(dyn, x, mode))
-                mode = mode_at(task, dyn, x, sign)
-                trace.events.append(("slip", t, float(x[iphi])))
-                continue
-        elif mode[1] != 0:
-            ws = xs[:, iw] * mode[1]
-            hit = next((i for i, v in enumerate(ws) if v <= 0), None)
-            if hit is not None:
-                lo = T * hit / len(xs)
-                T_ev, xe = _locate(piece, x, mode, lo, T * (hit + 1) / len(xs), lambda s: s[iw] * mode[1])
-                xs = _run(piece, x, T_ev, mode)
-                t = _commit(trace, t, T_ev, xs, mode)
-                x = xs[-1].copy()
-                x[iw] = 0.0            # exactly at rest: the event's definition
-                trace.events.append(("stop", t, float(x[iphi])))
-                if mode[0] > 0:
-                    raise _Stall(f"the press stalls in the cut at crank angle {np.degrees(x[iphi] % TWO_PI):.3f} deg, "
-                                 f"t = {t:.6g} s: the flywheel and motor cannot supply the cutting work")
-                mode = _start_mode(task, dyn, x, friction)
-                if mode[2] > 0:
-                    trace.events.append(("stick", t, float(x[iphi])))
-                continue
-        if target is not None and end[iphi] >= target - ANGLE_TOL_RAD:
-            if abs(end[iphi] - target) > ANGLE_TOL_RAD:
-                T, xs = _newton_angle(piece, x, mode, T, target, iphi, iw)
-            t = _commit(trace, t, T, xs, mode)
-            x = xs[-1]
-            trace.events.append((kind, t, float(target)))
-            x = x.copy()
-            x[iphi] = target               # remove the last 1e-12 rad so the next window is clean
-            mode = mode_at(task, dyn, x, 1.0)
-            continue
-        t = _commit(trace, t, T, xs, mode)
-        x = end
-
-
-def _start_mode(task, dyn, x, friction):
-    """Mode for a state at rest or moving: stuck if static friction holds it."""
-    w = x[task.state_names.index("omega_rad_s")]
-    if w != 0:
-        return mode_at(task, dyn, x, np.sign(w))
-    rest = np.array([0.0, 0.0, 1.0])
-    drive = drive_torque(dyn, x, rest)
-    if abs(drive) <= friction:
-        return rest
-    return mode_at(task, dyn, x, np.sign(drive))
-
-
-def _run(piece, x, T, mode):
-    out = piece(x0=x, p=np.r_[T, mode])["xf"]
-    return np.asarray(out).T
-
-
-def _commit(trace, t, T, xs, mode):
-    n = len(xs)
-    trace.add(t + T * np.arange(1, n + 1) / n, xs, mode)
-    return t + T
-
-
-def _newton_angle(piece, x, mode, T, target, iphi, iw):
-    """Duration T at which phi reaches `target` (Newton: d phi / dT = omega)."""
-    for _ in range(50):
-        xs = _run(piece, x, T, mode)
-        miss = xs[-1, iphi] - target
-        if abs(miss) <= ANGLE_TOL_RAD:
-            return T, xs
-        T -= miss / xs[-1, iw]
-    raise _Limit(f"event at crank angle {target:.12g} rad not located to {ANGLE_TOL_RAD} rad in 50 Newton steps")
-
-
-def _locate(piece, x, mode, lo, hi, g):
-    """Duration in [lo, hi] where g(state) changes sign (Illinois false position)."""
-    g_lo = g(_run(piece, x, lo, mode)[-1]) if lo > 0 else g(x)
-    g_hi = g(_run(piece, x, hi, mode)[-1])
-    side = 0
-    for _ in range(200):
-        mid = hi - g_hi * (hi - lo) / (g_hi - g_lo) if g_hi != g_lo else 0.5 * (lo + hi)
-        state = _run(piece, x, mid, mode)[-1]
-        g_mid = g(state)
-        if abs(hi - lo) < 1e-14 or g_mid == 0:
-            return mid, state
-        if (g_mid > 0) == (g_hi > 0):
-            hi, g_hi = mid, g_mid
-            if side == 1:
-                g_lo /= 2
-            side = 1
-        else:
-            lo, g_lo = mid, g_mid
-            if side == -1:
-                g_hi /= 2
-            side = -1
-        if abs(g_mid) < 1e-12:
-            return mid, state
-    raise _Limit(f"an event was not located to 1e-12 in 200 false-position steps (bracket {hi - lo:.3g} s, "
-                 f"g = {g_mid:.3g})")
+def _refuse_a_belt_too_fast(task, duration_s):
+    """CVODES must follow an oscillating belt mode (`STEPS_PER_BELT_PERIOD` steps a period) however
+    stiff its method: past `MAX_BELT_STEPS` over the run, refuse before any work, naming the stiffest
+    belt (it grows with the square of the frequency) and the duration that fit."""
+    _, eigenvalue = belt_mode(task)
+    hz = abs(eigenvalue.imag) / TWO_PI         # an overdamped mode is only stiff: BDF steps over it
+    steps = STEPS_PER_BELT_PERIOD * hz * duration_s
+    if steps > MAX_BELT_STEPS:
+        most_stiff = task.belt_stiffness_Nm_rad * (MAX_BELT_STEPS / steps) ** 2
+        refuse_work("belt_stiffness_Nm_rad", task.belt_stiffness_Nm_rad, steps, MAX_BELT_STEPS,
+                    f"CVODES steps following the belt mode at {hz:.4g} Hz for {duration_s:g} s (~1e-4 s each)",
+                    f"belt_stiffness_Nm_rad <= {most_stiff:.3g} at duration_s={duration_s:g}, or duration_s <= "
+                    f"{duration_s * MAX_BELT_STEPS / steps:.3g} s; {RIGID_LIMIT}")

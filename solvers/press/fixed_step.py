@@ -9,7 +9,7 @@ import numpy as np
 from mechopt.models.cache import memoised
 from mechopt.models.errors import ModelError
 from mechopt.models.press import PressDrive
-from mechopt.solvers.press.common import (
+from mechopt.solvers.press.problem import (
     Duration,
     Start,
     Trace,

@@ -15,8 +15,8 @@ their peaks during the cut relative to ours.
 import numpy as np
 
 from mechopt.models.press import PressDrive
-from mechopt.solvers.press.common import Samples
 from mechopt.solvers.press.periodic import steady_state
+from mechopt.solvers.press.problem import Samples
 from mechopt.solvers.result import Result
 from mechopt.solvers.settings import Annotated, Interval, Tolerance
 

@@ -1,24 +1,25 @@
 """The periodic steady motion of the press over one revolution, solved directly: in the crank
 angle as independent variable the cut starts and ends at fixed angles, so one revolution is three
-CVODES pieces composed symbolically, and CasADi's Newton rootfinder finds the initial state that
-the revolution reproduces."""
+CVODES pieces composed symbolically, and Newton's method finds the initial state that the
+revolution reproduces; a what-if re-solves on the structure's build from the last orbit."""
 import time
 
-import casadi as ca
 import numpy as np
 
-from mechopt.models.cache import memoised
+from mechopt.models.cache import BuildCache
 from mechopt.models.errors import MechoptError, ModelError
 from mechopt.models.press import (
-    WORK_NAMES,
     PressDrive,
     breakdown_torque_at_crank_Nm,
     cut_work_J,
     required_mean_torque_Nm,
+    structure,
 )
-from mechopt.solvers.press.common import (
+from mechopt.solvers.press.problem import (
     TWO_PI,
+    Limit,
     Samples,
+    Stall,
     Trace,
     belt_mode,
     belt_too_fast_per_revolution,
@@ -27,39 +28,19 @@ from mechopt.solvers.press.common import (
     checked,
     dynamics_of,
     initial_state,
+    march,
+    nominal_speed_note,
+    piece_by_time,
+    revolution,
     stall_check,
     summarise,
 )
-from mechopt.solvers.press.event_driven import _Limit, _march, _piece, _Stall
-from mechopt.solvers.result import Result, Status, Timing, from_rootfinder
+from mechopt.solvers.result import Result, Status, Timing
 from mechopt.solvers.settings import Annotated, Interval, Tolerance
 
 STEPS_PER_REVOLUTION = 2500     # belt-mode steps per revolution steady_state takes on (1 kHz belt: ~3 s)
-
-
-@memoised(maxsize=16)
-def _revolution(task: PressDrive, tol: float, samples: int):
-    """The revolution as CVODES pieces in the crank angle (d/dphi = (d/dt) / omega): the states
-    other than phi, then time, then the work integrals. Returns (pieces, their angle spans, U)."""
-    dyn = dynamics_of(task)
-    n = dyn.n_states
-    iphi = task.state_names.index("phi_rad")
-    y = ca.SX.sym("y", n - 1 + 1 + len(WORK_NAMES))      # other states, time, works
-    phi = ca.SX.sym("phi")
-    u = ca.SX.sym("u")
-    states = ca.vertcat(y[:iphi], phi, y[iphi:n - 1])
-    xdot = dyn.rhs(ca.vertcat(states, y[n:]), ca.vertcat(u, 1, 0))
-    w = states[task.state_names.index("omega_rad_s")]
-    dy = ca.vertcat(xdot[:iphi], xdot[iphi + 1:n], 1, xdot[n:]) / w
-    window = task.cut_window_rad()
-    cuts = [0.0, window[0], window[1], TWO_PI] if window is not None and window[0] < window[1] else [0.0, TWO_PI]
-    pieces = []
-    for k, (a, b) in enumerate(zip(cuts[:-1], cuts[1:])):
-        grid = np.linspace(a, b, samples + 1)[1:]
-        pieces.append((ca.integrator(f"rev{k}", "cvodes", {"x": y, "t": phi, "p": u, "ode": dy}, a, grid,
-                                     {"abstol": tol, "reltol": tol, "max_num_steps": 100000}),
-                       grid, float(len(cuts) == 4 and k == 1)))
-    return pieces, n
+CHORD_STEPS = 4                 # warm start: chord steps with the last monodromy before a full Newton solve
+LAST_ORBIT = BuildCache("press.periodic.last_orbit", 16)      # per (structure, tol, samples): y0, Jacobian
 
 
 def steady_state(task: PressDrive, *, tol: Tolerance = 1e-10, samples: Samples = 60,
@@ -70,7 +51,11 @@ def steady_state(task: PressDrive, *, tol: Tolerance = 1e-10, samples: Samples =
     Unknowns: the states at phi = 0 other than phi (belt twist, pulley and crank speeds); the
     revolution maps them, through three CVODES pieces in the crank angle (idle, cut, idle: the
     cut's ends are fixed angles there, so no event location is needed), to the states at
-    phi = 2 pi. CasADi's Newton rootfinder, with CVODES sensitivities, makes the two equal.
+    phi = 2 pi. Newton's method, with CVODES sensitivities for the monodromy, makes the two equal
+    (to 100 tol in every state). The build is the structure's (`problem.revolution`): a what-if
+    with other numbers re-solves on it, warm-started from the last orbit of the same structure
+    by chord steps with its monodromy (at most `CHORD_STEPS`, then a full Newton solve from the
+    usual guess); `diagnostics["warm_start"]` says which.
     Assumes the crank keeps turning forward (omega > 0); a solution that violates it is FAILED.
     A belt far stiffer than the drive makes the CVODES sensitivities very expensive (1e4 times
     the KD2322 value: 25 s; 1e6: minutes, and Newton stalls at ~1e-7): past `STEPS_PER_REVOLUTION`
@@ -95,27 +80,29 @@ def steady_state(task: PressDrive, *, tol: Tolerance = 1e-10, samples: Samples =
     stall = stall_check(task)
     if stall is not None:           # no forward periodic motion can exist: say so before any work
         return Result(Status.INFEASIBLE, stall[0], Timing(0.0, time.perf_counter() - t_start), stall[1], ("stall",))
-    pieces, n = _revolution(task, tol, samples)
-    m = n - 1
-    y0 = ca.MX.sym("y0", m)
-    y = ca.vertcat(y0, ca.MX.zeros(1 + len(WORK_NAMES)))
-    for integ, _, u in pieces:
-        y = integ(x0=y, p=u)["xf"][:, -1]
-    residual = ca.Function("periodic", [y0], [y[:m] - y0])
-    rf = ca.rootfinder("rf", "newton", residual, {"max_iter": max_iter, "error_on_fail": False,
-                                                  "abstol": 100 * tol})
-    build = time.perf_counter() - t_start
-    guess = np.delete(initial_state(task, "nominal")[:n], task.state_names.index("phi_rad"))
+    t_build = time.perf_counter()
+    key = (structure(task), tol, samples)
+    rev = revolution(*key)
+    p = dynamics_of(task).p
+    build = time.perf_counter() - t_build
+    guess = np.delete(initial_state(task, "nominal")[:rev.n], task.state_names.index("phi_rad"))
     if task.motor:      # start near the motor's idle speed rather than the nominal one
         guess[[i for i, k in enumerate(np.delete(np.array(task.state_names), task.state_names.index("phi_rad")))
                if k.startswith("omega")]] = task.motor_sync_speed_rad_s / task.gear_ratio * 0.99
     guess_speed = float(guess[task.state_names.index("omega_rad_s") - 1])
+    last, _ = LAST_ORBIT.get(key, dict)
     try:                # the re-integration of the found orbit can fail as well as the Newton solve
-        solution = np.asarray(rf(guess)).ravel()
-        status = from_rootfinder(rf.stats()["return_status"])
-        trace = _revolution_trace(task, pieces, n, solution)
-        miss = float(np.max(np.abs(np.asarray(residual(solution)).ravel())))
-    except RuntimeError as exc:
+        warm = _chord(rev, last, p, tol) if last else None
+        if warm is not None:
+            solution, trace, iterations = warm
+            converged = True
+        else:
+            solution, iterations, converged, jacobian = _newton(rev, guess, p, tol, max_iter)
+            trace, _ = rev.trace(solution, p)
+            if converged:
+                last |= {"y": solution, "jacobian": jacobian}
+        miss = float(np.max(np.abs(_periodicity(rev, trace, solution))))
+    except (RuntimeError, np.linalg.LinAlgError) as exc:
         if isinstance(exc, MechoptError):
             raise
         status, message, diagnostics = casadi_failure(exc, "integrating a revolution inside the periodic Newton "
@@ -133,26 +120,70 @@ def steady_state(task: PressDrive, *, tol: Tolerance = 1e-10, samples: Samples =
                        f" N m at the crank), but the flywheel cannot carry the cut ({values['cut_work_J']:.4g} J)")
         return Result(status, values, Timing(build, time.perf_counter() - t_start - build), message, violated,
                       diagnostics)
+    status = Status.SOLVED if converged else Status.LIMIT
     values, diagnostics, arrays = summarise(task, trace, cut_angles=task.cut_window_rad())
     values["periodicity_residual"] = miss
-    diagnostics |= {"newton_iterations": rf.stats()["iter_count"], "initial_state": solution.tolist()}
-    iterations = rf.stats()["iter_count"]
+    diagnostics |= {"newton_iterations": iterations, "initial_state": solution.tolist(),
+                    "warm_start": warm is not None}
+    how = f"chord steps with the last orbit's monodromy, {iterations}" if warm else f"Newton shooting, {iterations}"
     if status is Status.SOLVED and diagnostics["min_omega_rad_s"] <= 0:
         status = Status.FAILED
-        message = (f"no forward periodic motion: Newton shooting converged ({iterations} iterations) to an orbit on "
+        message = (f"no forward periodic motion: {how} iterations converged to an orbit on "
                    f"which the crank stops or turns back (min omega {diagnostics['min_omega_rad_s']:.3g} rad/s)")
     elif status is Status.SOLVED and miss > 1e3 * tol:
         status = Status.INACCURATE
-        message = (f"not a periodic orbit to trust: Newton shooting stopped after {iterations} iterations with "
+        message = (f"not a periodic orbit to trust: {how} iterations left the "
                    f"periodicity residual {miss:.3g} > 1000 tol = {1e3 * tol:.3g}")
     elif status is Status.SOLVED:
-        message = f"periodic orbit by Newton shooting, {iterations} iterations, residual {miss:.3g}"
+        message = f"periodic orbit by {how} iterations, residual {miss:.3g}" + nominal_speed_note(task)
     else:               # never a message that reads like an answer
         message = (f"no periodic orbit found: Newton shooting stopped after {iterations} of max_iter={max_iter} "
-                   f"iterations ({rf.stats()['return_status']}) with periodicity residual {miss:.3g}")
+                   f"iterations with periodicity residual {miss:.3g}")
     status, message, violated = checked(status, message, (), diagnostics)
     return Result(status, values, Timing(build, time.perf_counter() - t_start - build), message, violated,
                   diagnostics, arrays)
+
+
+def _periodicity(rev, trace, y0):
+    """y(2 pi) - y(0) over the states other than phi, from a revolution's trace."""
+    iphi = rev.state_names.index("phi_rad")
+    return np.delete(trace.x[-1][-1, :rev.n], iphi) - y0
+
+
+def _newton(rev, y, p, tol, max_iter):
+    """Newton on the periodicity residual from y: (y, iterations, converged, Jacobian at the last y).
+    Converged when every state's residual is within 100 tol (as CasADi's rootfinder's abstol)."""
+    y = np.asarray(y, dtype=float)
+    for k in range(max_iter + 1):
+        miss, jacobian = (np.asarray(v) for v in rev.residual(y, p))
+        miss = miss.ravel()
+        if not np.all(np.isfinite(miss)):
+            raise np.linalg.LinAlgError(f"the periodicity residual is not finite after {k} Newton steps")
+        if np.max(np.abs(miss)) <= 100 * tol or k == max_iter:
+            return y, k, bool(np.max(np.abs(miss)) <= 100 * tol), jacobian
+        y = y - np.linalg.solve(jacobian, miss)
+    raise AssertionError("unreachable")
+
+
+def _chord(rev, last, p, tol):
+    """From the last orbit of this structure, chord steps with its Jacobian: (y, trace, steps) once
+    the residual is within 100 tol, or None (then a full Newton solve follows)."""
+    y = last["y"]
+    for k in range(CHORD_STEPS + 1):
+        try:
+            trace, _ = rev.trace(y, p)
+        except RuntimeError as exc:        # CVODES gave up from this start: the cold solve decides
+            if isinstance(exc, MechoptError):
+                raise
+            return None
+        miss = _periodicity(rev, trace, y)
+        if not np.all(np.isfinite(miss)):
+            return None
+        if np.max(np.abs(miss)) <= 100 * tol:
+            last["y"] = y
+            return y, trace, k
+        y = y - np.linalg.solve(last["jacobian"], miss)
+    return None
 
 
 def _stalls_from(task, guess, tol):
@@ -163,30 +194,9 @@ def _stalls_from(task, guess, tol):
     x[[i for i in range(len(task.state_names)) if i != iphi]] = guess
     speed = max(float(x[task.state_names.index("omega_rad_s")]), 1e-3)
     try:
-        _march(task, _piece(task, tol, 8), Trace(), x, 3 * TWO_PI / speed, 0.02, 10_000)
-    except _Stall as stall:
+        march(task, piece_by_time(task, tol, 8), Trace(), x, 3 * TWO_PI / speed, 0.02, 10_000)
+    except Stall as stall:
         return str(stall)
-    except (_Limit, RuntimeError):
+    except (Limit, RuntimeError):
         return None
     return None
-
-
-def _revolution_trace(task, pieces, n, y0):
-    """Samples over the revolution from the initial states y0 (other than phi) [as a Trace]."""
-    iphi = task.state_names.index("phi_rad")
-    trace = Trace()
-    y = np.r_[y0, np.zeros(1 + len(WORK_NAMES))]
-
-    def full(ycol, phi):
-        return np.r_[ycol[:iphi], phi, ycol[iphi:n - 1], ycol[n:]], ycol[n - 1]
-
-    x, t = full(y, 0.0)
-    trace.add(t, x, np.array([0.0, 1.0, 0.0]))
-    for integ, grid, u in pieces:
-        ys = np.asarray(integ(x0=y, p=u)["xf"]).T
-        rows = [full(row, a) for row, a in zip(ys, grid)]
-        trace.add(np.array([r[1] for r in rows]), np.array([r[0] for r in rows]), np.array([u, 1.0, 0.0]))
-        kind = "cut_start" if u == 0 and grid[-1] < TWO_PI else ("cut_end" if u == 1 else "revolution")
-        trace.events.append((kind, float(rows[-1][1]), float(grid[-1])))
-        y = ys[-1]
-    return trace

@@ -8,7 +8,7 @@ import numpy as np
 from scipy.integrate import DOP853, RK45, solve_ivp
 
 from mechopt.models.press import PressDrive
-from mechopt.solvers.press.common import (
+from mechopt.solvers.press.problem import (
     TWO_PI,
     Duration,
     Trace,

@@ -9,16 +9,14 @@ the integration tolerance: the speed fluctuation (omega_max - omega_min) / omega
 of the slowest speed, the peak belt torque, the mean crank speed and the works of a revolution.
 """
 import time
-from dataclasses import fields
-from types import SimpleNamespace
 
 import casadi as ca
 import numpy as np
 
 from mechopt.models.errors import ModelError
-from mechopt.models.press import PressDrive, cutting_force_N, kloss_torque_Nm, rod_middle_m, travel_m
-from mechopt.solvers.press.common import TWO_PI, check_task
+from mechopt.models.press import WORK_NAMES, Equations, PressDrive, equations, parameters, structure
 from mechopt.solvers.press.periodic import steady_state
+from mechopt.solvers.press.problem import TWO_PI, check_task
 from mechopt.solvers.result import Result, Status, Timing, from_rootfinder
 from mechopt.solvers.settings import Annotated, Interval, Tolerance
 
@@ -41,74 +39,34 @@ def assumed_parameters(task: PressDrive) -> tuple[str, ...]:
     return tuple(names)
 
 
-def _parametric_rhs(task: PressDrive, names):
-    """Eqs. (2) for forward motion (friction sign +1, not stuck) with `names` (and `ROD_SIGN`) as the
-    input p: f(x, U, p) -> (dx/dt, belt torque), x = the task's states then motor and cut work.
-    It restates `models.press.dynamics` with the task's numbers as symbols (CasADi refuses free
-    symbols in a Function); a test holds the two equal."""
+def _orbit_rhs(task: PressDrive, names):
+    """The model's eqs. (2) for forward motion (friction sign +1, not stuck) with `names` and the
+    rod-weight reading as the input p: f(x, U, p) -> (dx/dt, belt torque), x = the task's states then
+    the work integrals (`WORK_NAMES`). The structure's own Functions (`models.press.equations`), the
+    other numbers the task's."""
     p = ca.SX.sym("p", len(names) + 1)
-    t = SimpleNamespace(**{f.name: getattr(task, f.name) for f in fields(task)})
-    for name, sym in zip(names, ca.vertsplit(p)):
-        setattr(t, name, sym)
-    rod_sign = p[-1]
-    x = ca.SX.sym("x", len(task.state_names) + 2)
+    given = dict(zip(names, ca.vertsplit(p)))
+    P = ca.vertcat(*parameters(task, rod_weight_sign=p[-1], **given))
+    eq = equations(structure(task))
+    x = ca.SX.sym("x", eq.rhs.size1_in(0))
     U = ca.SX.sym("U")
-    s = dict(zip(task.state_names, ca.vertsplit(x)))
-    phi, w = s["phi_rad"], s["omega_rad_s"]
-    r, lam, kin = task.r_m, task.rod_ratio, task.kinematics
-
-    X = travel_m(phi, r, lam, kin, ca)
-    dX = ca.jacobian(X, phi)
-    xm, ym = rod_middle_m(phi, r, lam, kin, ca)
-    J = (t.flywheel_inertia_kgm2 + r**2 * t.crank_mass_kg + t.tool_mass_kg * dX**2
-         + t.rod_mass_kg * (ca.jacobian(xm, phi) ** 2 + ca.jacobian(ym, phi) ** 2))
-    if "variable_inertia" in task.effects:
-        dJ = ca.jacobian(J, phi)
-    else:                   # the mean over a revolution, as the model takes it
-        grid = np.linspace(0, 2 * np.pi, 720, endpoint=False)
-        J = ca.sum1(ca.vertcat(*[ca.substitute(J, phi, a) for a in grid])) / len(grid)
-        dJ = 0.0
-    moment = 0.0
-    if "gravity" in task.effects:
-        potential = -t.gravity_m_s2 * (t.tool_mass_kg * X + rod_sign * t.rod_mass_kg * ym)
-        moment = -ca.jacobian(potential, phi)
-    force = 0.0
-    if task.cutting:
-        penetration_mm = X * 1000 - (task.stroke_mm - task.blank_thickness_mm - task.shortfall_mm)
-        force = U * cutting_force_N(penetration_mm, task.force_c1_N_mm, task.force_c2_N_mm2, task.force_c3_N_mm3,
-                                    task.force_c4_N_mm4)
-    friction = t.friction_torque_Nm if task.friction else 0.0
-    j_motor = t.motor_inertia_kgm2 * t.gear_ratio**2
-    if task.motor:
-        w_p = s["omega_p_rad_s"] if task.belt else w
-        slip = 1 - t.gear_ratio * w_p / t.motor_sync_speed_rad_s
-        motor = t.gear_ratio * kloss_torque_Nm(slip, t.motor_breakdown_torque_Nm, t.motor_breakdown_slip)
-    else:
-        w_p, motor = task.nominal_speed_rad_s, 0.0
-    if task.belt:
-        belt = t.belt_stiffness_Nm_rad * s["twist_rad"] + t.belt_damping_Nms_rad * (w_p - w)
-        J_total = J
-    else:
-        belt, J_total = motor, J + j_motor
-    acc = (belt + moment - force * dX - friction - 0.5 * dJ * w**2) / J_total
-    derivs = {"phi_rad": w, "omega_rad_s": acc, "twist_rad": w_p - w,
-              "omega_p_rad_s": (motor - belt) / j_motor if task.motor and task.belt else 0.0}
-    power = (motor if task.motor else belt) * w_p
-    xdot = ca.vertcat(*[derivs[k] for k in task.state_names], power, force * dX * w)
-    return ca.Function("rhs_p", [x, U, p], [xdot, belt]), p.numel()
+    mode = ca.vertcat(U, 1, 0)
+    belt = eq.outputs(x, mode, P)[Equations.OUTPUT_NAMES.index("belt_torque_Nm")]
+    return ca.Function("rhs_p", [x, U, p], [eq.rhs(x, mode, P), belt]), p.numel()
 
 
 class _Orbit:
     """The periodic orbit and its extremes as a rootfinder in (orbit unknowns z; parameters p)."""
 
     def __init__(self, task, names, tol, guess_arrays):
-        rhs, n_p = _parametric_rhs(task, names)
+        rhs, n_p = _orbit_rhs(task, names)
+        works = len(WORK_NAMES)
         n = len(task.state_names)
         self.iphi, self.iw = task.state_names.index("phi_rad"), task.state_names.index("omega_rad_s")
         keep = [i for i in range(n) if i != self.iphi]
         self.m = len(keep)
         # one CVODES piece in s in [0, 1] over crank angles a..b: d/ds = (b - a) d/dphi = (b - a) (d/dt) / omega
-        y = ca.SX.sym("y", self.m + 3)                 # other states, time, motor work, cut work
+        y = ca.SX.sym("y", self.m + 1 + works)         # other states, time, works (motor, cut, ...)
         s, q = ca.SX.sym("s"), ca.SX.sym("q", 3 + n_p)  # q = (a, b, U, p)
         a, b, U, p = q[0], q[1], q[2], q[3:]
         phi = a + s * (b - a)
@@ -118,7 +76,7 @@ class _Orbit:
         self.piece = ca.integrator("piece", "cvodes", {"x": y, "t": s, "p": q, "ode": (b - a) * dy}, 0.0, 1.0,
                                    {"abstol": tol, "reltol": tol, "max_num_steps": 100000})
         # d(g)/d(phi) along the motion for g = crank speed and belt torque (x_full with its derivative)
-        xf, pf, Uf = ca.SX.sym("xf", n + 2), ca.SX.sym("pf", n_p), ca.SX.sym("Uf")
+        xf, pf, Uf = ca.SX.sym("xf", n + works), ca.SX.sym("pf", n_p), ca.SX.sym("Uf")
         xdot, belt = rhs(xf, Uf, pf)
         self.g = ca.Function("g", [xf, Uf, pf], [ca.vertcat(xf[self.iw], belt),
                                                  ca.jtimes(ca.vertcat(xf[self.iw], belt), xf, xdot)])
@@ -147,7 +105,7 @@ class _Orbit:
     def residual_and_outputs(self, z, p):
         """(residual, outputs) as MX of the unknowns z = (orbit states at phi = 0, extreme angles) and p."""
         y0 = z[:self.m]
-        y = ca.vertcat(y0, ca.MX.zeros(3))
+        y = ca.vertcat(y0, ca.MX.zeros(1 + len(WORK_NAMES)))
         starts = []
         for j, (a, b) in enumerate(zip(self.bounds[:-1], self.bounds[1:])):
             starts.append(y)

@@ -14,15 +14,10 @@ import casadi as ca
 import numpy as np
 
 from mechopt.models.cache import memoised
-from mechopt.models.press import WORK_NAMES, PressDesign, dynamics, sizing
-from mechopt.solvers.press.common import TWO_PI
+from mechopt.models.press import WORK_NAMES, Dynamics, PressDesign, design_parameters, equations, sizing, structure
+from mechopt.solvers.press.problem import TWO_PI
 
 QUADRATURES = ("time_s", "motor_torque_integral_Nms", "motor_torque_sq_integral_N2m2s")
-
-
-@memoised(maxsize=8)
-def free_dynamics(task: PressDesign):
-    return dynamics(task, tuple(task.variables))
 
 
 def stage_angles(task: PressDesign) -> list[float]:
@@ -41,12 +36,14 @@ def cutting_on(task: PressDesign, a: float, b: float) -> float:
 
 def _symbols(task: PressDesign):
     """The shooting state y (the states other than phi), phi, U, design p; the model's state x (zero
-    work integrals) and mode; the free dynamics and the gear ratio (a symbol when free)."""
-    dyn = free_dynamics(task)
+    work integrals) and mode; the press's equations with the design variables as symbols in their
+    p (the very Functions the simulators call), and the gear ratio (a symbol when free)."""
     iphi = task.state_names.index("phi_rad")
-    y = ca.SX.sym("y", dyn.n_states - 1)
     phi, u = ca.SX.sym("phi"), ca.SX.sym("u")
     p = ca.SX.sym("p", len(task.variables))
+    dyn = Dynamics(task, equations(structure(task)),
+                   ca.vertcat(*design_parameters(task, dict(zip(task.variables, ca.vertsplit(p))))))
+    y = ca.SX.sym("y", dyn.n_states - 1)
     others = ca.vertsplit(y)                    # (slicing y[:0] gives a 1-by-0 that vertcat miscounts)
     x = ca.vertcat(*others[:iphi], phi, *others[iphi:], ca.DM.zeros(len(WORK_NAMES)))
     gear = sizing(task, dict(zip(task.variables, ca.vertsplit(p))))["gear_ratio"]
@@ -61,8 +58,8 @@ def intervals(task: PressDesign, nodes: tuple[float, ...], tol: float, samples: 
     y, phi, u, p, x, mode, dyn, gear = _symbols(task)
     n = dyn.n_states
     iphi = task.state_names.index("phi_rad")
-    xdot = dyn.rhs(x, mode, p)
-    shaft = dyn.outputs(x, mode, p)[1] / gear if task.motor else 0 * phi       # motor torque at its shaft
+    xdot = dyn.rhs(x, mode)
+    shaft = dyn.outputs(x, mode)[1] / gear if task.motor else 0 * phi       # motor torque at its shaft
     w = x[task.state_names.index("omega_rad_s")]
     ode = ca.vertcat(*[xdot[i] for i in range(n) if i != iphi]) / w
     quad = ca.vertcat(1, shaft, shaft**2) / w
@@ -85,7 +82,7 @@ def probe(task: PressDesign, samples: int) -> ca.Function:
     """(states other than phi (columns), their angles, U, design p) -> rows omega [rad/s], belt torque
     at the crank shaft [N m], motor shaft torque [N m], at each sample."""
     y, phi, u, p, x, mode, dyn, gear = _symbols(task)
-    out = dyn.outputs(x, mode, p)
+    out = dyn.outputs(x, mode)
     w = x[task.state_names.index("omega_rad_s")]
     one = ca.Function("probe", [y, phi, u, p], [ca.vertcat(w, out[0], out[1] / gear if task.motor else 0 * phi)])
     return one.map(samples)
@@ -100,7 +97,7 @@ def reach(task: PressDesign, tol: float) -> ca.Function:
     n = dyn.n_states
     iphi = task.state_names.index("phi_rad")
     a, span, s = ca.SX.sym("a"), ca.SX.sym("span"), ca.SX.sym("s")
-    xdot = dyn.rhs(x, mode, p)
+    xdot = dyn.rhs(x, mode)
     ode = ca.vertcat(*[xdot[i] for i in range(n) if i != iphi]) / x[task.state_names.index("omega_rad_s")]
     ode = ca.substitute(ode, phi, a + s * span) * span
     integ = ca.integrator("reach", "cvodes", {"x": y, "t": s, "p": ca.vertcat(u, p, a, span), "ode": ode}, 0.0, 1.0,
@@ -108,5 +105,5 @@ def reach(task: PressDesign, tol: float) -> ca.Function:
     y0, p_all = ca.MX.sym("y0", y.numel()), ca.MX.sym("p", 1 + p.numel() + 2)
     end = integ(x0=y0, p=p_all)["xf"]
     alpha = dyn.OUTPUT_NAMES.index("alpha_rad_s2")
-    accel = ca.Function("accel", [y, phi, u, p], [dyn.outputs(x, mode, p)[alpha]])
+    accel = ca.Function("accel", [y, phi, u, p], [dyn.outputs(x, mode)[alpha]])
     return ca.Function("reach", [y0, p_all], [end, accel(end, p_all[-2] + p_all[-1], p_all[0], p_all[1:-2])])

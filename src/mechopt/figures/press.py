@@ -2,7 +2,7 @@
 import numpy as np
 
 from mechopt.figures.registry import new_figure, register
-from mechopt.models.press import PressDesign, PressDrive
+from mechopt.models.press import PressCatalogue, PressDesign, PressDrive
 
 
 @register(PressDrive)
@@ -111,7 +111,7 @@ def elasticities(run):
     return {"elasticities": fig}
 
 
-@register(PressDesign)
+@register(PressDesign, PressCatalogue)
 def designed(run):
     """The designed drive's steady revolution (the cycle figure) and its limits: crank speed against
     crank angle with the fluctuation band the design keeps, belt and motor torque with their limits."""

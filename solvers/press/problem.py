@@ -1,9 +1,13 @@
-"""What the press solvers share: the assembled equations per task, the initial state, the trace
-of a run and its summary, and the switching logic (U, the next angle event, the mode)."""
+"""The press problem, public to every press method: fixed_step, event_driven, periodic and scipy_peer
+are siblings over it (as scipy's rk, radau and bdf over its base); design, loads and sensitivity
+stand above. Here: the assembled equations per task, the initial state, the trace of a run and its
+summary, the switching logic (U, the next angle event, the mode), and the pieces every method
+integrates (CVODES by time between located events, by crank angle over a revolution)."""
 import re
 from dataclasses import dataclass, field
 from typing import Annotated, Literal
 
+import casadi as ca
 import numpy as np
 from annotated_types import Interval
 
@@ -11,6 +15,7 @@ from mechopt.models.cache import memoised
 from mechopt.models.errors import ModelError
 from mechopt.models.press import (
     FORCE_KEYS,
+    PARAMETERS,
     WORK_NAMES,
     Dynamics,
     PressDrive,
@@ -18,12 +23,21 @@ from mechopt.models.press import (
     breakdown_torque_at_crank_Nm,
     cut_work_J,
     dynamics,
+    equations,
     required_mean_torque_Nm,
+    structure,
 )
 from mechopt.solvers.result import Status, from_casadi_integrator
 
 TWO_PI = 2 * np.pi
-ANGLE_TOL_RAD = 1e-12          # events are located to this in crank angle (omega ~ 25: 4e-14 s)
+ANGLE_TOL_RAD = 1e-12          # events are located to this in crank angle (omega ~ 25: 4e-14 s) near phi = 0
+ANGLE_ULPS = 64                # and to this many units in the last place of the angle far from it
+
+
+def angle_tol(phi) -> float:
+    """How close an event is located to the angle phi [rad]: `ANGLE_TOL_RAD`, or relative to phi once
+    a double's spacing there makes that absolute figure unreachable (1445 rad after a minute: 2.3e-13)."""
+    return max(ANGLE_TOL_RAD, ANGLE_ULPS * float(np.spacing(abs(phi))))
 Start = Literal["nominal", "rest"]
 Duration = Annotated[float, Interval(gt=0, le=3600)]          # simulated time [s]
 Samples = Annotated[int, Interval(ge=1, le=10_000)]           # outputs per integrated piece
@@ -31,6 +45,7 @@ Samples = Annotated[int, Interval(ge=1, le=10_000)]           # outputs per inte
 
 @memoised(maxsize=32)
 def dynamics_of(task: PressDrive) -> Dynamics:
+    """The task's equations (its structure's, built once) with its numbers bound."""
     return dynamics(task)
 
 
@@ -146,6 +161,19 @@ def belt_too_fast_per_revolution(task: PressDrive, most: float, method: str) -> 
     step = 0.1 / hz
     return belt_too_fast(task, step, TWO_PI / task.nominal_speed_rad_s / step, most, method,
                          why=" (a tenth of its period)", over=" per revolution")
+
+
+def nominal_speed_note(task: PressDrive) -> str:
+    """'' or, with a motor whose working range at the crank (breakdown to idle speed, reduced by i)
+    misses `nominal_speed_rad_s`, the words saying it is a start speed and guess only."""
+    if not task.motor:
+        return ""
+    idle = task.motor_sync_speed_rad_s / task.gear_ratio
+    if idle * (1 - task.motor_breakdown_slip) <= task.nominal_speed_rad_s <= idle:
+        return ""
+    return (f"; nominal_speed_rad_s={task.nominal_speed_rad_s:g} is a start speed and guess only: the motor sets "
+            f"the speed (its working range at the crank: {idle * (1 - task.motor_breakdown_slip):.4g} to "
+            f"{idle:.4g} rad/s, motor_sync_speed_rad_s / gear_ratio at breakdown slip and idle)")
 
 
 def top_speed_rad_s(task: PressDrive) -> float:
@@ -278,7 +306,7 @@ def angle_events(task, phi):
     for turn in (0, 1):
         for angle, kind in sorted(marks):
             a = base + turn * TWO_PI + angle
-            if a > phi + ANGLE_TOL_RAD:
+            if a > phi + angle_tol(a):
                 return a, kind
     raise AssertionError("unreachable")
 
@@ -297,3 +325,257 @@ def mode_at(task, dyn, x, moving_sign):
 def drive_torque(dyn, x, mode):
     """The torque turning the crank before friction, at a state in a mode [N m]."""
     return float(dyn.outputs(x, mode)[Dynamics.OUTPUT_NAMES.index("drive_torque_Nm")])
+
+
+# --- the pieces every method integrates: CVODES by time (events) and by crank angle (periodic) ---
+
+class Piece:
+    """A structure's CVODES piece (`time_piece`) with a task's p bound: called as the integrator is."""
+
+    def __init__(self, integrator: ca.Function, p: np.ndarray):
+        self.integrator, self.p = integrator, p
+
+    def __call__(self, *, x0, p):
+        return self.integrator(x0=x0, p=np.r_[p, self.p])
+
+
+@memoised(maxsize=32)
+def time_piece(key: tuple, tol: float, samples: int) -> ca.Function:
+    """CVODES over a piece of duration p[0] in mode p[1:4] with the press's p (`PARAMETERS`) after
+    them (time scaled to [0, 1]): the states at `samples` equally spaced times, the last being the
+    end of the piece. Built once per structure (`models.press.structure`)."""
+    eq = equations(key)
+    x = ca.SX.sym("x", eq.rhs.size1_in(0))
+    p = ca.SX.sym("p", 4 + len(PARAMETERS))
+    grid = np.linspace(0, 1, samples + 1)[1:]
+    return ca.integrator("piece", "cvodes", {"x": x, "p": p, "ode": p[0] * eq.rhs(x, p[1:4], p[4:])}, 0.0, grid,
+                         {"abstol": tol, "reltol": tol, "max_num_steps": 100000})
+
+
+def piece_by_time(task: PressDrive, tol: float, samples: int) -> Piece:
+    """`time_piece` of the task's structure with its p bound."""
+    return Piece(time_piece(structure(task), tol, samples), dynamics_of(task).p)
+
+
+class Stall(Exception):
+    pass
+
+
+class Limit(Exception):
+    pass
+
+
+def march(task, piece, trace, x, duration_s, max_step_s, max_events):
+    dyn = dynamics_of(task)
+    iphi, iw = task.state_names.index("phi_rad"), task.state_names.index("omega_rad_s")
+    friction = task.friction_torque_Nm if task.friction else 0.0
+    t = 0.0
+    mode = start_mode(task, dyn, x, friction)
+    trace.add(t, x, mode)
+    while t < duration_s * (1 - 1e-14):
+        if len(trace.events) > max_events:
+            raise Limit(f"more than max_events={max_events} events by t = {t:.6g} s")
+        stuck = mode[2] > 0
+        T = min(max_step_s, duration_s - t)
+        target = kind = None
+        if not stuck and mode[1] > 0:
+            target, kind = angle_events(task, x[iphi])
+            if x[iw] > 0:
+                T = min(T, (target - x[iphi]) / x[iw])
+        xs = run_piece(piece, x, T, mode)
+        end = xs[-1]
+        # friction events: omega crossing zero while moving, breakaway while stuck
+        if stuck:
+            g = lambda s: abs(drive_torque(dyn, s, mode)) - friction
+            gs = [g(s) for s in xs]
+            hit = next((i for i, v in enumerate(gs) if v > 0), None)
+            if hit is not None:
+                T_ev, xe = locate(piece, x, mode, T * hit / len(xs), T * (hit + 1) / len(xs), g)
+                xs = run_piece(piece, x, T_ev, mode)
+                t = commit(trace, t, T_ev, xs, mode)
+                x = xs[-1]
+                sign = np.sign(drive_torque(dyn, x, mode))
+                mode = mode_at(task, dyn, x, sign)
+                trace.events.append(("slip", t, float(x[iphi])))
+                continue
+        elif mode[1] != 0:
+            ws = xs[:, iw] * mode[1]
+            hit = next((i for i, v in enumerate(ws) if v <= 0), None)
+            if hit is not None:
+                lo = T * hit / len(xs)
+                T_ev, xe = locate(piece, x, mode, lo, T * (hit + 1) / len(xs), lambda s: s[iw] * mode[1])
+                xs = run_piece(piece, x, T_ev, mode)
+                t = commit(trace, t, T_ev, xs, mode)
+                x = xs[-1].copy()
+                x[iw] = 0.0            # exactly at rest: the event's definition
+                trace.events.append(("stop", t, float(x[iphi])))
+                if mode[0] > 0:
+                    raise Stall(f"the press stalls in the cut at crank angle {np.degrees(x[iphi] % TWO_PI):.3f} deg, "
+                                 f"t = {t:.6g} s: the flywheel and motor cannot supply the cutting work")
+                mode = start_mode(task, dyn, x, friction)
+                if mode[2] > 0:
+                    trace.events.append(("stick", t, float(x[iphi])))
+                continue
+        if target is not None and end[iphi] >= target - angle_tol(target):
+            if abs(end[iphi] - target) > angle_tol(target):
+                T, xs = newton_angle(piece, x, mode, T, target, iphi, iw)
+            t = commit(trace, t, T, xs, mode)
+            x = xs[-1]
+            trace.events.append((kind, t, float(target)))
+            x = x.copy()
+            x[iphi] = target               # remove the last 1e-12 rad so the next window is clean
+            mode = mode_at(task, dyn, x, 1.0)
+            continue
+        t = commit(trace, t, T, xs, mode)
+        x = end
+
+
+def start_mode(task, dyn, x, friction):
+    """Mode for a state at rest or moving: stuck if static friction holds it."""
+    w = x[task.state_names.index("omega_rad_s")]
+    if w != 0:
+        return mode_at(task, dyn, x, np.sign(w))
+    rest = np.array([0.0, 0.0, 1.0])
+    drive = drive_torque(dyn, x, rest)
+    if abs(drive) <= friction:
+        return rest
+    return mode_at(task, dyn, x, np.sign(drive))
+
+
+def run_piece(piece, x, T, mode):
+    out = piece(x0=x, p=np.r_[T, mode])["xf"]
+    return np.asarray(out).T
+
+
+def commit(trace, t, T, xs, mode):
+    n = len(xs)
+    trace.add(t + T * np.arange(1, n + 1) / n, xs, mode)
+    return t + T
+
+
+def newton_angle(piece, x, mode, T, target, iphi, iw):
+    """Duration T at which phi reaches `target` (Newton: d phi / dT = omega)."""
+    for _ in range(50):
+        xs = run_piece(piece, x, T, mode)
+        miss = xs[-1, iphi] - target
+        if abs(miss) <= angle_tol(target):
+            return T, xs
+        T -= miss / xs[-1, iw]
+    raise Limit(f"event at crank angle {target:.12g} rad not located to {angle_tol(target):.3g} rad in 50 Newton "
+                "steps")
+
+
+def locate(piece, x, mode, lo, hi, g):
+    """Duration in [lo, hi] where g(state) changes sign (Illinois false position)."""
+    g_lo = g(run_piece(piece, x, lo, mode)[-1]) if lo > 0 else g(x)
+    g_hi = g(run_piece(piece, x, hi, mode)[-1])
+    side = 0
+    for _ in range(200):
+        mid = hi - g_hi * (hi - lo) / (g_hi - g_lo) if g_hi != g_lo else 0.5 * (lo + hi)
+        state = run_piece(piece, x, mid, mode)[-1]
+        g_mid = g(state)
+        if abs(hi - lo) < 1e-14 or g_mid == 0:
+            return mid, state
+        if (g_mid > 0) == (g_hi > 0):
+            hi, g_hi = mid, g_mid
+            if side == 1:
+                g_lo /= 2
+            side = 1
+        else:
+            lo, g_lo = mid, g_mid
+            if side == -1:
+                g_hi /= 2
+            side = -1
+        if abs(g_mid) < 1e-12:
+            return mid, state
+    raise Limit(f"an event was not located to 1e-12 in 200 false-position steps (bracket {hi - lo:.3g} s, "
+                 f"g = {g_mid:.3g})")
+
+
+
+CUT_START, CUT_END = PARAMETERS.index("cut_start_rad"), PARAMETERS.index("cut_end_rad")
+
+
+@dataclass(frozen=True)
+class Revolution:
+    """One revolution of a structure in the crank angle (d/dphi = (d/dt) / omega), as CVODES pieces
+    over [0, cut start], [cut start, cut end], [cut end, 2 pi] (one piece without a cut); the state y:
+    the states other than phi, then time, then the work integrals. Every number is an input (p,
+    `PARAMETERS`: the cut's angles are two of them), so a what-if re-solves on the same build.
+
+    * ``piece(x0=y, p=[a, b, U, p])``: CVODES from angle a to b (scaled to s in [0, 1]) with U fixed,
+      the states at `samples` equally spaced angles, the last at b.
+    * ``variational(x0=[y, Y], p=[a, b, U, p])``: the same piece with the variational equations
+      beside it (Y = dy/dy0, column-major), for the monodromy (`residual`).
+    """
+    state_names: tuple[str, ...]
+    cutting: bool
+    piece: ca.Function
+    variational: ca.Function
+    grid: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return len(self.state_names)
+
+    def spans(self, p, numbers=False) -> list[tuple]:
+        """(a, b, U) of each piece for p (numbers or symbols; with numbers, an empty cut is no piece)."""
+        if not self.cutting or (numbers and not p[CUT_START] < p[CUT_END]):
+            return [(0.0, TWO_PI, 0.0)]
+        return [(0.0, p[CUT_START], 0.0), (p[CUT_START], p[CUT_END], 1.0), (p[CUT_END], TWO_PI, 0.0)]
+
+    def residual(self, y0, p) -> tuple[np.ndarray, np.ndarray]:
+        """(y(2 pi) - y0 over the states other than phi, the monodromy minus the identity): the
+        periodicity residual and its Jacobian, for Newton shooting."""
+        m = self.n - 1
+        y = np.r_[y0, np.zeros(1 + len(WORK_NAMES))]
+        Y = np.eye(len(y), m)
+        for a, b, u in self.spans(p, numbers=True):
+            z = np.asarray(self.variational(x0=np.r_[y, Y.ravel(order="F")], p=np.r_[a, b, u, p])["xf"]).ravel()
+            y, Y = z[:len(y)], z[len(y):].reshape((len(y), m), order="F")
+        return y[:m] - y0, Y[:m] - np.eye(m)
+
+    def trace(self, y0, p) -> tuple["Trace", np.ndarray]:
+        """Samples over the revolution from the states y0 (other than phi) [as a Trace], and y at 2 pi."""
+        n, iphi = self.n, self.state_names.index("phi_rad")
+        trace = Trace()
+        y = np.r_[y0, np.zeros(1 + len(WORK_NAMES))]
+
+        def full(rows, angles):
+            return np.column_stack([rows[:, :iphi], angles, rows[:, iphi:n - 1], rows[:, n:]]), rows[:, n - 1]
+
+        trace.add(0.0, full(y[None, :], np.zeros(1))[0], np.array([0.0, 1.0, 0.0]))
+        for a, b, u in self.spans(p, numbers=True):
+            ys = np.asarray(self.piece(x0=y, p=np.r_[a, b, u, p])["xf"]).T
+            x, t = full(ys, a + (b - a) * self.grid)
+            trace.add(t, x, np.array([u, 1.0, 0.0]))
+            kind = "cut_start" if u == 0 and b < TWO_PI else ("cut_end" if u == 1 else "revolution")
+            trace.events.append((kind, float(t[-1]), float(b)))
+            y = ys[-1]
+        return trace, y[:n - 1]
+
+
+@memoised(maxsize=16)
+def revolution(key: tuple, tol: float, samples: int) -> Revolution:
+    """The `Revolution` of a structure (`models.press.structure`), built once per (structure, tol, samples)."""
+    eq = equations(key)
+    names = eq.state_names
+    n, iphi, iw = len(names), names.index("phi_rad"), names.index("omega_rad_s")
+    y = ca.SX.sym("y", n - 1 + 1 + len(WORK_NAMES))      # other states, time, works
+    s = ca.SX.sym("s")
+    q = ca.SX.sym("q", 3 + len(PARAMETERS))              # a, b, U, p
+    a, b, u, p = q[0], q[1], q[2], q[3:]
+    phi = a + s * (b - a)
+    states = ca.vertcat(y[:iphi], phi, y[iphi:n - 1])
+    xdot = eq.rhs(ca.vertcat(states, y[n:]), ca.vertcat(u, 1, 0), p)
+    dy = ca.vertcat(xdot[:iphi], xdot[iphi + 1:n], 1, xdot[n:]) / states[iw]
+    grid = np.linspace(0, 1, samples + 1)[1:]
+    piece = ca.integrator("revolution", "cvodes", {"x": y, "t": s, "p": q, "ode": (b - a) * dy}, 0.0, grid,
+                          {"abstol": tol, "reltol": tol, "max_num_steps": 100000})
+    Y = ca.SX.sym("Y", y.numel(), n - 1)        # dy/dy0: the variational equations ride along
+    ode = (b - a) * dy
+    variational = ca.integrator("variational", "cvodes",
+                                {"x": ca.vertcat(y, ca.vec(Y)), "t": s, "p": q,
+                                 "ode": ca.vertcat(ode, ca.vec(ca.jacobian(ode, y) @ Y))}, 0.0, 1.0,
+                                {"abstol": tol, "reltol": tol, "max_num_steps": 100000})
+    return Revolution(names, "cutting_force" in key[0], piece, variational, grid)
