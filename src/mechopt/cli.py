@@ -6,6 +6,7 @@ message names the file, key and allowed range; nothing was computed or written),
 (INFEASIBLE, LIMIT, INACCURATE, FAILED), 130 interrupted.
 """
 import argparse
+import errno
 import inspect
 import json
 import os
@@ -46,6 +47,16 @@ def main(argv=None) -> int:
     except BrokenPipeError:             # `mechopt cases | head`: the reader left, not an error of ours
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return OK
+    except OSError as exc:
+        if exc.errno not in WRITE_FAILURES:
+            raise
+        print(f"error: cannot write {exc.filename or 'an output'}: {exc.strerror} (the run itself finished; "
+              "free some space or choose another place and run it again)", file=sys.stderr)
+        return CHECK_FAILED
+
+
+# a disk that filled up or turned read-only after the outputs were checked (before the work)
+WRITE_FAILURES = {errno.ENOSPC, errno.EROFS, errno.EDQUOT, errno.EACCES, errno.EPERM, errno.EFBIG}
 
 
 def _parser():

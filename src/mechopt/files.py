@@ -1,8 +1,15 @@
 """Writing files so that nothing is ever half-written: a temporary file `<name>.<pid>.tmp` beside
 the target, flushed to disk, renamed over it, and the folder synced (a reader sees the old file or
 the new one, even after a power cut; a sweep removes temporaries a killed writer left)."""
+import errno
 import os
+import stat
 from pathlib import Path
+
+try:                                 # Unix; Windows locks with msvcrt (the package imports on both)
+    import fcntl
+except ImportError:
+    fcntl = None
 
 
 def write_bytes_atomic(path, data: bytes) -> Path:
@@ -30,3 +37,80 @@ def write_bytes_atomic(path, data: bytes) -> Path:
 def write_text_atomic(path, text: str) -> Path:
     """`text` (UTF-8) into `path` whole or not at all; returns the path."""
     return write_bytes_atomic(path, text.encode("utf-8"))
+
+
+def read_regular(path, *, max_bytes: int, what: str) -> bytes:
+    """The bytes of `path`, refused unless it is a regular file of at most `max_bytes` bytes read
+    (not as `st_size` says: /dev/zero reports 0 and never ends; a FIFO would block forever).
+    Raises OSError (a missing or unreadable file) or ValueError naming `what` and the limit."""
+    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0)
+    fd = os.open(path, flags)          # non-blocking: opening a FIFO with no writer returns at once
+    try:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            raise ValueError(f"{path}: not a regular file (a device, FIFO, socket or folder); {what} is a file")
+        chunks, total = [], 0
+        while chunk := os.read(fd, min(1 << 20, max_bytes + 1 - total)):
+            chunks.append(chunk)
+            total += len(chunk)
+            if total > max_bytes:
+                raise ValueError(f"{path}: more than {max_bytes / 1e6:g} MB; {what} is at most {max_bytes / 1e6:g} MB")
+        return b"".join(chunks)
+    finally:
+        os.close(fd)
+
+
+def quote(text, limit: int = 40) -> str:
+    """A short, escaped prefix of text from a file that is not what it should be: an error names
+    the file and line but echoes no more of its content (it may be a key file or /etc/passwd)."""
+    text = str(text)
+    return repr(text[:limit]) + (f" (and {len(text) - limit} more characters)" if len(text) > limit else "")
+
+
+def listing(items, limit: int = 5) -> str:
+    """At most `limit` items, then "and N more": an error message stays one short line."""
+    items = [str(i) for i in items]
+    return ", ".join(items[:limit]) + (f" and {len(items) - limit} more" if len(items) > limit else "")
+
+
+def take_lock(path) -> int | None:
+    """An open descriptor holding an exclusive lock on the file `path` (created if absent), or None
+    when another process holds it. A symbolic link, folder, FIFO or device at `path` is refused
+    (ValueError), never followed: a lock is written to, and a link would make it truncate its target."""
+    path = Path(path)
+    if path.is_symlink():
+        raise ValueError(f"{path}: a symbolic link where a lock file belongs; remove it (it is not followed)")
+    flags = os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0)
+    try:
+        fd = os.open(path, flags, 0o644)
+    except OSError as exc:
+        if exc.errno in (errno.ELOOP, errno.EISDIR):
+            raise ValueError(f"{path}: not a regular file where a lock file belongs; remove it") from None
+        raise
+    try:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            raise ValueError(f"{path}: not a regular file (a FIFO, device or socket) where a lock file belongs; "
+                             "remove it")
+        if fcntl is not None:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        else:
+            import msvcrt
+            msvcrt.locking(fd, msvcrt.LK_NBLCK, 1)
+    except OSError as exc:
+        os.close(fd)
+        if exc.errno in (errno.EAGAIN, errno.EACCES, errno.EDEADLK):
+            return None
+        raise
+    except BaseException:
+        os.close(fd)
+        raise
+    return fd
+
+
+def holds(fd: int, path) -> bool:
+    """Whether the locked descriptor `fd` is still the file at `path` (not deleted or replaced)."""
+    try:
+        now = os.stat(path, follow_symlinks=False)
+    except FileNotFoundError:
+        return False
+    mine = os.fstat(fd)
+    return (now.st_dev, now.st_ino) == (mine.st_dev, mine.st_ino)

@@ -28,14 +28,12 @@ a setting the scene or model refuses, ERROR for an unexpected exception), ``mess
 ``solve_s``, then every ``values`` entry of the result (null where a variant did not produce it).
 """
 import difflib
-import errno
-import fcntl
 import hashlib
 import itertools
 import json
 import math
 import os
-import shutil
+import re
 import sys
 import warnings
 from collections.abc import Callable
@@ -49,7 +47,7 @@ import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
 from mechopt import registry
-from mechopt.files import write_bytes_atomic
+from mechopt.files import holds, quote, take_lock, write_bytes_atomic
 from mechopt.models.cache import BuildCache
 from mechopt.models.errors import MechoptError, SceneError, SolverError
 from mechopt.scene import Scene, loads, solver_options, task_fields
@@ -173,6 +171,8 @@ def plan(scene: Scene, grid=(), random=(), *, samples: int = 0, seed: int = 0,
     point (last axis fastest) of the ``i // n_grid``-th random sample. The count is checked
     against `max_variants` before anything is expanded.
     """
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**63:
+        raise SceneError(f"--seed {seed!r}: expected a whole number from 0 to 2**63 - 1", key="seed")
     spec = SweepSpec(scene.id, tuple(grid), tuple(random), int(samples), int(seed))
     if not spec.grid and not spec.random:
         raise SceneError("a sweep needs at least one --grid KEY=START:STOP:NUM or --random KEY=LOW:HIGH")
@@ -378,7 +378,44 @@ def _read_meta(path) -> dict:
     if raw is None:
         raise SceneError(f"{path}: a Parquet file but not a mechopt sweep (no {META_KEY.decode()} metadata); "
                          f"choose another --out")
-    return json.loads(raw)
+    problem = None
+    if len(raw) > MAX_META_BYTES:
+        problem = f"{len(raw):,} bytes, more than a sweep's spec ever needs ({MAX_META_BYTES:,})"
+    else:
+        try:
+            meta = json.loads(raw)
+            problem = _meta_problem(meta)
+        except (ValueError, RecursionError):
+            problem = f"not JSON (starts {quote(raw[:40].decode('utf-8', 'replace'))})"
+    if problem:
+        raise SceneError(f"{path}: its {META_KEY.decode()} metadata is not a sweep's: {problem}; "
+                         f"this file was not written by mechopt sweep (choose another --out)", key="out")
+    return meta
+
+
+MAX_META_BYTES = 100_000
+_AXIS_FIELDS = {"key": str, "low": (int, float), "high": (int, float), "num": int}
+
+
+def _meta_problem(meta) -> str | None:
+    """What is wrong with a sweep table's metadata (read from a file anyone may have written), or None."""
+    if not isinstance(meta, dict) or set(meta) != {"case", "spec", "scene_sha256"}:
+        return "expected an object with case, spec and scene_sha256"
+    if not isinstance(meta["case"], str) or not re.fullmatch(r"[0-9a-f]{64}", str(meta["scene_sha256"])):
+        return "case must be text and scene_sha256 64 hex digits"
+    spec = meta["spec"]
+    if not isinstance(spec, dict) or set(spec) != {"case", "grid", "random", "samples", "seed"}:
+        return "spec must hold case, grid, random, samples and seed"
+    if not all(isinstance(spec[k], int) and not isinstance(spec[k], bool) and spec[k] >= 0 for k in ("samples", "seed")):
+        return "spec.samples and spec.seed must be whole numbers >= 0"
+    for name in ("grid", "random"):
+        axes = spec[name]
+        if not isinstance(axes, list) or not all(
+                isinstance(a, dict) and set(a) == set(_AXIS_FIELDS)
+                and all(isinstance(a[k], t) and not isinstance(a[k], bool) for k, t in _AXIS_FIELDS.items())
+                for a in axes):
+            return f"spec.{name} must be a list of axes {{key, low, high, num}}"
+    return None
 
 
 class _Store:
@@ -396,25 +433,10 @@ class _Store:
             raise SceneError(f"{self.path}: a folder; --out names the table's file, e.g. {self.path / 'sweep.parquet'}",
                              key="out")
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        while True:
-            fd = os.open(self.lock_path, os.O_RDWR | os.O_CREAT, 0o644)
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except OSError as exc:
-                os.close(fd)
-                if exc.errno not in (errno.EAGAIN, errno.EACCES):
-                    raise
-                raise SceneError(f"{self.path} is being written by another sweep (pid {self._holder()}); "
-                                 f"wait for it or choose another --out", key="out") from None
-            try:
-                same = os.fstat(fd).st_ino == os.stat(self.lock_path).st_ino
-            except FileNotFoundError:
-                same = False
-            if same:                 # else its holder removed it as we opened it: take the new one
-                break
-            os.close(fd)
-        os.ftruncate(fd, 0)
-        os.write(fd, f"{os.getpid()}\n".encode())
+        if self.parts.is_symlink() or (self.parts.exists() and not self.parts.is_dir()):
+            raise SceneError(f"{self.parts}: not this sweep's folder of parts (a symbolic link or a file); it is "
+                             f"not followed: remove it, or choose another --out", key="out")
+        fd = self._take()
         self._lock = fd
         try:
             for stale in self.path.parent.glob(f"{self.path.name}.*.tmp"):   # a merge killed mid-write
@@ -426,9 +448,42 @@ class _Store:
             self.unlock()
             raise
 
+    def _take(self):
+        """A descriptor holding `<out>.lock` (its pid written in it), or SceneError: held by another
+        sweep, or not a regular file (a symbolic link is never followed)."""
+        while True:
+            try:
+                fd = take_lock(self.lock_path)
+            except ValueError as exc:
+                raise SceneError(f"{exc}; nothing was written", key="out") from None
+            if fd is None:
+                raise SceneError(f"{self.path} is being written by another sweep (pid {self._holder()}); "
+                                 f"wait for it or choose another --out", key="out")
+            if holds(fd, self.lock_path):   # else its holder removed it as we opened it: take the new one
+                break
+            os.close(fd)
+        os.ftruncate(fd, 0)
+        os.write(fd, f"{os.getpid()}\n".encode())
+        return fd
+
+    def check_lock(self):
+        """Re-check that `<out>.lock` is still the file this sweep holds (someone may delete it, and a
+        second sweep then takes a new one): a deleted lock is taken again; one another sweep now holds
+        stops this sweep, its finished parts kept, rather than have two writers."""
+        if self._lock is None or holds(self._lock, self.lock_path):
+            return
+        old, self._lock = self._lock, None
+        os.close(old)
+        try:
+            self._lock = self._take()
+        except SceneError as exc:
+            raise SceneError(f"{self.lock_path} was removed while this sweep ran, and {exc}; this sweep stops "
+                             f"(its finished parts are kept in {self.parts})", key="out") from None
+
     def unlock(self):
         if self._lock is not None:
-            os.unlink(self.lock_path)        # while still held: the next sweep makes a fresh one
+            if holds(self._lock, self.lock_path):
+                os.unlink(self.lock_path)    # while still held: the next sweep makes a fresh one
             os.close(self._lock)
             self._lock = None
 
@@ -449,6 +504,9 @@ class _Store:
         """A part whose bytes are not those written (or cannot be read) is named, removed and its
         variants computed again; so is a part whose checksum never got written (killed in between)."""
         for part in self._parts():
+            if part.is_symlink() or not part.is_file():
+                raise SceneError(f"{part}: not a file this sweep wrote (a folder or a link); it is left as it is: "
+                                 f"remove it by hand and re-run", key="out")
             check = part.with_name(part.name + ".sha256")
             try:
                 want, _, count = check.read_text().partition(" ")
@@ -465,7 +523,7 @@ class _Store:
                 what = f"its {count} variants are" if count is not None else "its variants are"
                 warnings.warn(f"{part}: {why}; {what} recomputed", SweepWarning, stacklevel=4)
                 try:
-                    shutil.rmtree(part) if part.is_dir() else part.unlink(missing_ok=True)
+                    part.unlink(missing_ok=True)     # a regular file of this sweep's naming (_parts)
                     check.unlink(missing_ok=True)
                 except OSError as exc:
                     raise SceneError(f"{part}: cannot remove this damaged part ({exc.strerror}); remove it "
@@ -476,6 +534,7 @@ class _Store:
         return {int(v) for t in tables for v in t.column("variant").to_pylist()}
 
     def write_part(self, rows):
+        self.check_lock()
         self.parts.mkdir(parents=True, exist_ok=True)
         first = min(r["variant"] for r in rows)
         path = self.parts / f"part-{first:09d}.parquet"
@@ -489,8 +548,9 @@ class _Store:
     def consolidate(self) -> pa.Table:
         """Merge `out` and the parts into `out` (atomic); part rows already in `out` (a merge killed
         before the parts were removed) are dropped, so the merge can be run again at any point."""
-        tables, seen = [], pa.array([], pa.int64())
-        for file in self._files():
+        self.check_lock()
+        tables, seen, merged = [], pa.array([], pa.int64()), self._files()
+        for file in merged:
             table = pq.read_table(file)
             table = table.filter(pc.invert(pc.is_in(table.column("variant"), value_set=seen)))
             table = _unique_variants(table)
@@ -503,14 +563,32 @@ class _Store:
         sink = pa.BufferOutputStream()
         pq.write_table(table, sink)
         write_bytes_atomic(self.path, sink.getvalue().to_pybytes())
-        shutil.rmtree(self.parts, ignore_errors=True)     # all of it is in the file now
+        self._remove_parts([p for p in merged if p != self.path])      # all of them are in the file now
         return table
 
+    def _remove_parts(self, parts):
+        """The parts merged, their checksums and then the folder if nothing else is in it."""
+        for part in parts:
+            part.unlink(missing_ok=True)
+            part.with_name(part.name + ".sha256").unlink(missing_ok=True)
+        try:
+            self.parts.rmdir()
+        except OSError:
+            pass                 # not empty (a file not this sweep's) or never made: left as it is
+
     def _parts(self):
-        return sorted(self.parts.glob("*.parquet")) if self.parts.is_dir() else []
+        """This sweep's parts: the entries named part-<9 digits>.parquet (nothing else in the folder
+        is read or removed; a symbolic link to the folder is refused by `lock`, so is a part that is
+        not a regular file)."""
+        if not self.parts.is_dir() or self.parts.is_symlink():
+            return []
+        return sorted(p for p in self.parts.glob("part-*.parquet") if _PART_NAME.fullmatch(p.name))
 
     def _files(self):
         return ([self.path] if self.path.exists() else []) + self._parts()
+
+
+_PART_NAME = re.compile(r"part-\d{9}\.parquet")
 
 
 def _unique_variants(table):
