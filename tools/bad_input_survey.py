@@ -33,7 +33,7 @@ from pathlib import Path
 
 PY = sys.executable
 ROOT = Path(__file__).resolve().parents[1]
-SECRET = "root:x:0:0:SECRET-LINE"          # content of a 'private' file a reference may name
+SECRET = "root:x:0:0:SECRET-LINE"          # a 'private' file's line: a short prefix may show, not all of it
 MAX_MESSAGE = 600
 
 SCENE = """id = "mine/probe"
@@ -421,7 +421,7 @@ PROBES = [
     Probe("4 ctrl-c", "ctrl_c_loom_repaired", ctrl_c_loom_repaired, codes=(130,), sigint_after=4.0),
     Probe("4 ctrl-c", "ctrl_c_validate", ctrl_c_validate, codes=(130,), sigint_after=6.0),
     Probe("4 ctrl-c", "ctrl_c_stop_sweep", ctrl_c_stop_sweep, codes=(130,), sigint_after=8.0),
-    Probe("5 legal", "missing_structure_table", missing_structure_table, must_not_say="expected a number"),
+    Probe("5 legal", "missing_structure_table", missing_structure_table, codes=(0,)),
     Probe("5 legal", "grid_selector", grid_selector, codes=(0,), timeout=120),
     Probe("5 legal", "bom_scene", bom_scene, codes=(0,)),
     Probe("5 legal", "derive_missing", derive_missing, must_say="derive.t0_rad"),
@@ -459,7 +459,7 @@ def classify(probe: Probe) -> dict:
             outcome = "traceback"
         elif problem or proc.returncode not in probe.codes:
             outcome = "wrong"
-        elif (len(err) > MAX_MESSAGE or "SECRET" in err + out or (proc.returncode == 2 and not said)
+        elif (len(err) > MAX_MESSAGE or SECRET in err + out or (proc.returncode == 2 and not said)
               or probe.must_say not in err or (probe.must_not_say and probe.must_not_say in err)):
             outcome = "unclear"
         else:

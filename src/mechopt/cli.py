@@ -38,7 +38,7 @@ def main(argv=None) -> int:
             registry.add_cases(folder)
         return COMMANDS[args.command](args)
     except MechoptError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        print(f"error: {short(exc)}", file=sys.stderr)
         return BAD_INPUT
     except KeyboardInterrupt:
         print("interrupted (a sweep keeps its finished chunks: re-run the same command to resume)",
@@ -57,6 +57,16 @@ def main(argv=None) -> int:
 
 # a disk that filled up or turned read-only after the outputs were checked (before the work)
 WRITE_FAILURES = {errno.ENOSPC, errno.EROFS, errno.EDQUOT, errno.EACCES, errno.EPERM, errno.EFBIG}
+
+
+MAX_MESSAGE = 1000          # characters of an error line; the rest is counted, not printed
+
+
+def short(message) -> str:
+    """An error message of at most MAX_MESSAGE characters (a model listing every bad row of a table
+    of millions would print megabytes)."""
+    text = str(message)
+    return text if len(text) <= MAX_MESSAGE else f"{text[:MAX_MESSAGE]}... (and {len(text) - MAX_MESSAGE:,} more characters)"
 
 
 def _parser():
@@ -296,7 +306,7 @@ def _sweep(args) -> int:
             return INTERRUPTED
         finally:
             for warning in said:
-                print(f"warning: {warning.message}", file=sys.stderr)
+                print(f"warning: {short(warning.message)}", file=sys.stderr)
     counts = Counter(table.column("status").to_pylist())
     print(f"{scene.id}: {table.num_rows} variants ({', '.join(f'{n} {s}' for s, n in sorted(counts.items()))})")
     print(f"table: {out}")
@@ -359,7 +369,7 @@ def _writable_folder(flag, folder):
 
 def _warn(problems):
     for line in problems:
-        print(f"warning: skipped {line}", file=sys.stderr)
+        print(f"warning: skipped {short(line)}", file=sys.stderr)
 
 
 def _print_run(run):

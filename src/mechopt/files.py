@@ -41,13 +41,20 @@ def write_text_atomic(path, text: str) -> Path:
 
 def read_regular(path, *, max_bytes: int, what: str) -> bytes:
     """The bytes of `path`, refused unless it is a regular file of at most `max_bytes` bytes read
+    (`what` names it in the message: "a scene file")
     (not as `st_size` says: /dev/zero reports 0 and never ends; a FIFO would block forever).
     Raises OSError (a missing or unreadable file) or ValueError naming `what` and the limit."""
     flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0)
     fd = os.open(path, flags)          # non-blocking: opening a FIFO with no writer returns at once
     try:
-        if not stat.S_ISREG(os.fstat(fd).st_mode):
-            raise ValueError(f"{path}: not a regular file (a device, FIFO, socket or folder); {what} is a file")
+        mode = os.fstat(fd).st_mode
+        if not stat.S_ISREG(mode):
+            kind = ("folder" if stat.S_ISDIR(mode) else "FIFO" if stat.S_ISFIFO(mode)
+                    else "socket" if stat.S_ISSOCK(mode) else "device")
+            raise ValueError(f"{path}: a {kind}, not {what} (references must name regular files)")
+        size = os.fstat(fd).st_size
+        if size > max_bytes:         # said before reading; the count below holds if the file grows meanwhile
+            raise ValueError(f"{path}: {size / 1e6:.3g} MB; {what} is at most {max_bytes / 1e6:g} MB")
         chunks, total = [], 0
         while chunk := os.read(fd, min(1 << 20, max_bytes + 1 - total)):
             chunks.append(chunk)
@@ -59,11 +66,14 @@ def read_regular(path, *, max_bytes: int, what: str) -> bytes:
         os.close(fd)
 
 
-def quote(text, limit: int = 40) -> str:
-    """A short, escaped prefix of text from a file that is not what it should be: an error names
-    the file and line but echoes no more of its content (it may be a key file or /etc/passwd)."""
-    text = str(text)
-    return repr(text[:limit]) + (f" (and {len(text) - limit} more characters)" if len(text) > limit else "")
+def quote(value, limit: int = 40) -> str:
+    """A short, escaped prefix of a value read from a file: an error names the file and line but
+    echoes no more of its content (a reference may name a key file or /etc/passwd)."""
+    try:
+        text = repr(value)
+    except RecursionError:
+        return "(a value nested too deeply to show)"
+    return text if len(text) <= limit else f"{text[:limit]}... ({len(text)} characters)"
 
 
 def listing(items, limit: int = 5) -> str:

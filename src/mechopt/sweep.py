@@ -50,7 +50,7 @@ from mechopt import registry
 from mechopt.files import holds, quote, take_lock, write_bytes_atomic
 from mechopt.models.cache import BuildCache
 from mechopt.models.errors import MechoptError, SceneError, SolverError
-from mechopt.scene import Scene, loads, solver_options, task_fields
+from mechopt.scene import Scene, loads, path_head, solver_options, split_assignment, task_fields
 
 __all__ = ["Axis", "SweepSpec", "SceneText", "SweepInterrupted", "SweepWarning", "parse_grid", "parse_random",
            "grid_values", "count_variants", "plan", "sweep", "run_chunk", "read_table", "check_unique", "scene_hash", "describe_axes"]
@@ -352,6 +352,14 @@ def read_table(path) -> tuple[pa.Table, dict]:
         table = pq.read_table(path)
     except (OSError, pa.ArrowInvalid) as exc:
         raise SceneError(f"{path}: not a readable Parquet file ({exc})") from None
+    wanted = {**{k: "a number" for k in _keys(meta)}, "variant": "int64", "status": "string", "message": "string"}
+    wrong = [name for name, kind in wanted.items() if name not in table.column_names
+             or (kind != "a number" and str(table.schema.field(name).type) != kind)
+             or (kind == "a number" and not pa.types.is_integer(table.schema.field(name).type)
+                 and not pa.types.is_floating(table.schema.field(name).type))]
+    if wrong:
+        raise SceneError(f"{path}: not a sweep's table: column {quote(wrong[0])} is missing or not "
+                         f"{wanted[wrong[0]]}", key="sweep")
     check_unique(table, path)
     return table, meta
 
@@ -672,10 +680,15 @@ def _kind(scene, key):
         return float
     if key in settings:
         return (lambda v: int(round(v))) if isinstance(settings[key], int) else float
+    if path_head(key) in scene.spec.structure and key != path_head(key):
+        scene.build({key: 1.0})         # a number in a structure table: a path that leads nowhere is refused
+        return float
     near = difflib.get_close_matches(key, [*params, *settings], n=3)
     raise SceneError(f"{scene.id}: {key!r} cannot be swept" + (f" (did you mean {', '.join(near)}?)" if near else "")
                      + f"; numeric parameters: {', '.join(params)}; numeric solver settings: "
-                     + (", ".join(settings) or "none"), key=key)
+                     + (", ".join(settings) or "none")
+                     + ("; numbers in structure tables by path, e.g. 'operations[from=3,to=7].min_deg'"
+                        if scene.spec.structure else ""), key=key)
 
 
 def _sweepable(scene):
@@ -708,7 +721,7 @@ def _describe(meta):
 
 
 def _split(text, flag, form, count):
-    key, sep, rest = text.partition("=")
+    key, sep, rest = split_assignment(text)
     numbers = rest.split(":")
     if not sep or not key.strip() or len(numbers) != count:
         raise SceneError(f"{flag} {text!r}: expected {form}", key=key.strip() or None)
@@ -721,8 +734,8 @@ def _number(text, flag, word, name):
     except ValueError:
         value = math.nan
     if not math.isfinite(value):
-        raise SceneError(f"{flag} {text!r}: {name} = {word!r} is not a finite number", key=text.partition("=")[0])
+        raise SceneError(f"{flag} {text!r}: {name} = {word!r} is not a finite number", key=split_assignment(text)[0])
     if abs(value) > AXIS_LIMIT:
         raise SceneError(f"{flag} {text!r}: {name} = {word} is beyond ±{AXIS_LIMIT:g}; no parameter or setting "
-                         f"of a mechanism is that large", key=text.partition("=")[0])
+                         f"of a mechanism is that large", key=split_assignment(text)[0])
     return value
