@@ -12,15 +12,18 @@ import json
 import os
 import re
 import shlex
+import signal
 import sys
+import threading
 import warnings
 from pathlib import Path
 
 from mechopt import __version__, registry
 from mechopt.benchmarks import STUDIES, study
 from mechopt.files import write_text_atomic
-from mechopt.models.errors import MechoptError, SceneError
+from mechopt.models.errors import MechoptError, SceneError, SolverError
 from mechopt.scene import parse_overrides
+from mechopt.solvers import interrupt
 from mechopt.solvers.result import Status
 
 OK, CHECK_FAILED, BAD_INPUT, NOT_SOLVED, INTERRUPTED = 0, 1, 2, 3, 130
@@ -30,20 +33,27 @@ TEMPLATES = {"cam-cutter": "cam-cutter/minimax", "press": "press/kd2322", "loom"
 
 
 def main(argv=None) -> int:
+    as_command = argv is None            # the process is this command (not a test or a caller's script)
     argv = sys.argv[1:] if argv is None else list(argv)
     args = _parser().parse_args(argv)
     args.argv = argv
     try:
-        for folder in args.cases:
-            registry.add_cases(folder)
-        return COMMANDS[args.command](args)
+        with interrupt.honoured():
+            for folder in args.cases:
+                registry.add_cases(folder)
+            code = COMMANDS[args.command](args)
+            interrupt.check()
+            return code
     except MechoptError as exc:
+        if interrupt.pending():         # a back end turned Ctrl-C into an error of its own
+            return _interrupted()
+        if isinstance(exc, SolverError):        # the input was valid; the back end failed on it
+            print(f"error: not solved: {short(exc)}", file=sys.stderr)
+            return NOT_SOLVED
         print(f"error: {short(exc)}", file=sys.stderr)
         return BAD_INPUT
     except KeyboardInterrupt:
-        print("interrupted (a sweep keeps its finished chunks: re-run the same command to resume)",
-              file=sys.stderr)
-        return INTERRUPTED
+        return _interrupted()
     except BrokenPipeError:             # `mechopt cases | head`: the reader left, not an error of ours
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return OK
@@ -53,6 +63,30 @@ def main(argv=None) -> int:
         print(f"error: cannot write {exc.filename or 'an output'}: {exc.strerror} (the run itself finished; "
               "free some space or choose another place and run it again)", file=sys.stderr)
         return CHECK_FAILED
+    finally:
+        if as_command:
+            _exit_on_interrupt()
+
+
+def _interrupted():
+    print("interrupted (a sweep keeps its finished chunks: re-run the same command to resume)", file=sys.stderr)
+    return INTERRUPTED
+
+
+def _exit_on_interrupt():
+    """From here on (the interpreter shutting down: Dask's and the pool's threads joined), Ctrl-C
+    ends the process with 130 at once, not with a traceback and death by SIGINT (-2)."""
+    if threading.current_thread() is not threading.main_thread():
+        return
+
+    def stop(signum, frame):
+        for stream in (sys.stdout, sys.stderr):
+            try:
+                stream.flush()
+            except (OSError, ValueError):
+                pass
+        os._exit(INTERRUPTED)
+    signal.signal(signal.SIGINT, stop)
 
 
 # a disk that filled up or turned read-only after the outputs were checked (before the work)

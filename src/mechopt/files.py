@@ -4,6 +4,8 @@ the new one, even after a power cut; a sweep removes temporaries a killed writer
 import errno
 import os
 import stat
+from contextlib import contextmanager
+from contextvars import ContextVar
 from pathlib import Path
 
 try:                                 # Unix; Windows locks with msvcrt (the package imports on both)
@@ -39,11 +41,48 @@ def write_text_atomic(path, text: str) -> Path:
     return write_bytes_atomic(path, text.encode("utf-8"))
 
 
+_SHIPPED: ContextVar[dict] = ContextVar("mechopt_shipped", default={})     # resolved path -> bytes
+_RECORDERS: ContextVar[tuple] = ContextVar("mechopt_recorders", default=())
+
+
+@contextmanager
+def recorded():
+    """A dict that collects every file `read_regular` reads inside the block (resolved path ->
+    bytes): what a scene references, to be sent with it to a worker on another machine."""
+    got = {}
+    token = _RECORDERS.set(_RECORDERS.get() + (got,))
+    try:
+        yield got
+    finally:
+        _RECORDERS.reset(token)
+
+
+@contextmanager
+def shipped(files: dict):
+    """Inside the block, `read_regular` takes these files (resolved path -> bytes, from
+    `recorded` on the client) instead of the disk: a worker elsewhere has no copy of them."""
+    token = _SHIPPED.set({**_SHIPPED.get(), **files})
+    try:
+        yield
+    finally:
+        _SHIPPED.reset(token)
+
+
 def read_regular(path, *, max_bytes: int, what: str) -> bytes:
     """The bytes of `path`, refused unless it is a regular file of at most `max_bytes` bytes read
     (`what` names it in the message: "a scene file")
     (not as `st_size` says: /dev/zero reports 0 and never ends; a FIFO would block forever).
     Raises OSError (a missing or unreadable file) or ValueError naming `what` and the limit."""
+    key = str(Path(path).resolve())
+    data = _SHIPPED.get().get(key)
+    if data is None:
+        data = _read_regular(path, max_bytes, what)
+    for got in _RECORDERS.get():
+        got[key] = data
+    return data
+
+
+def _read_regular(path, max_bytes, what):
     flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0)
     fd = os.open(path, flags)          # non-blocking: opening a FIFO with no writer returns at once
     try:

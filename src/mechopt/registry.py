@@ -10,6 +10,7 @@ from typing import Any
 from mechopt.models.cache import memoised
 from mechopt.models.errors import MechoptError, SceneError
 from mechopt.scene import Scene, load, scene_files
+from mechopt.solvers import interrupt
 from mechopt.solvers.result import Result, Status
 from mechopt.units import unit_of
 
@@ -242,7 +243,7 @@ def run(scene: Scene | str, overrides: dict | None = None) -> Run:
     scene = find(scene)
     overrides = dict(overrides or {})
     task, settings = scene.build(_derived_params(scene) | overrides)
-    result = scene.solver(task, **settings)
+    result = _solve(scene.solver, task, settings)
     params_changed = bool(scene.split_overrides(overrides)[0])
     checks = [] if params_changed else check(scene, result)
     return Run(scene, result, checks, overrides, task, settings)
@@ -272,7 +273,17 @@ def _source_result(source_id: str, chain: tuple[str, ...]) -> Result:
     scene solves its source once per process, not once per variant."""
     source = find(source_id)
     task, settings = source.build(_derived_params(source, chain))
-    return source.solver(task, **settings)
+    return _solve(source.solver, task, settings)
+
+
+def _solve(solver, task, settings) -> Result:
+    """The solver's result; a Ctrl-C during it, which CasADi turns into a failed solve, raised
+    as KeyboardInterrupt instead, so that no interrupted result is ever stored or reported."""
+    with interrupt.honoured():
+        try:
+            return solver(task, **settings)
+        finally:
+            interrupt.check()
 
 
 def check(scene: Scene, result: Result) -> list[Check]:

@@ -21,7 +21,8 @@ named, dropped and recomputed; the merge writes a temporary file, fsyncs it and 
 ``<out>``, and drops part rows already in ``<out>``, so a kill at any moment leaves no variant
 twice. A table with a variant stored twice is refused when read or drawn. A request is counted
 before anything is allocated and refused past ``max_variants``. The scene travels with each chunk
-as its TOML text and hash, so a scene from any file runs on any worker.
+as its TOML text and hash, with every file it references (CSV tables, base scenes), so a scene from
+any file runs on any worker.
 
 Row columns: the swept keys, ``variant`` (its number), ``status`` (a Result status, or INVALID for
 a setting the scene or model refuses, ERROR for an unexpected exception), ``message``, ``build_s``,
@@ -47,7 +48,7 @@ import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
 from mechopt import registry
-from mechopt.files import holds, quote, take_lock, write_bytes_atomic
+from mechopt.files import holds, quote, recorded, shipped, take_lock, write_bytes_atomic
 from mechopt.models.cache import BuildCache
 from mechopt.models.errors import MechoptError, SceneError, SolverError
 from mechopt.scene import Scene, loads, path_head, solver_options, split_assignment, task_fields
@@ -77,19 +78,33 @@ class SweepWarning(UserWarning):
 
 @dataclass(frozen=True)
 class SceneText:
-    """A scene as a worker receives it: its file's text, where it came from, the sha256 of its bytes."""
+    """A scene as a worker receives it: its file's text, where it came from, the sha256 of its
+    bytes, and every file it references (CSV tables, base and lever scenes) by resolved path, so
+    that a worker on another machine needs no copy of them."""
     text: str
     path: str
     sha256: str
+    files: tuple = ()           # ((resolved path, bytes), ...)
 
     @classmethod
     def of(cls, scene: Scene) -> "SceneText":
         try:
             data = Path(scene.path).read_bytes()
+            with recorded() as referenced:
+                loads(data.decode("utf-8"), Path(scene.path))
         except OSError as exc:
             raise SceneError(f"{scene.path}: cannot read the scene file to send it to the workers: "
                              f"{exc.strerror}") from None
-        return cls(data.decode("utf-8"), str(scene.path), hashlib.sha256(data).hexdigest())
+        return cls(data.decode("utf-8"), str(scene.path), hashlib.sha256(data).hexdigest(),
+                   tuple(sorted(referenced.items())))
+
+    @property
+    def digest(self) -> str:
+        """sha256 of the text and every file sent with it: a worker's cache key."""
+        h = hashlib.sha256(self.sha256.encode())
+        for path, data in self.files:
+            h.update(path.encode() + b"\0" + hashlib.sha256(data).digest())
+        return h.hexdigest()
 
 
 @dataclass(frozen=True)
@@ -218,15 +233,16 @@ _SCENES = BuildCache("mechopt.sweep.scenes", 8)      # a worker parses each scen
 def run_chunk(source: SceneText, chunk: list[tuple[int, dict]]) -> list[dict]:
     """Solve the variants `(number, overrides)` of one scene on a worker; one row each.
 
-    The scene comes as its file's text (`SceneText`), so a scene from any file runs on any
-    worker; a text whose sha256 is not the one sent (damaged on the way) is refused. The loaded
-    scene is kept per process by hash.
+    The scene comes as its file's text (`SceneText`) with the files it references, so a scene
+    from any file runs on any worker; a text whose sha256 is not the one sent (damaged on the way)
+    is refused. The loaded scene is kept per process by hash.
     """
     got = hashlib.sha256(source.text.encode("utf-8")).hexdigest()
     if got != source.sha256:
         raise SceneError(f"{source.path}: the scene file this worker received differs from the sweep's "
                          f"(sha256 {got[:12]} != {source.sha256[:12]}); it was changed on the way")
-    scene, _ = _SCENES.get(source.sha256, lambda: loads(source.text, Path(source.path)))
+    with shipped(dict(source.files)):
+        scene, _ = _SCENES.get(source.digest, lambda: loads(source.text, Path(source.path)))
     return _solve_rows(scene, chunk)
 
 
@@ -634,13 +650,51 @@ def _on_pool(workers, source, chunks):
 
 
 def _connect(address, timeout_s):
+    """A Dask client for `address`, or SceneError within about `timeout_s`: distributed's own
+    timeout covers the TCP connection but not its handshake, so a server that accepts and stays
+    silent (not a Dask scheduler) would hang it; such a server is found by a probe first, and
+    the client is made on a thread given a wall-clock limit."""
+    import threading
+
     from distributed import Client
+    hint = f"start one with `dask scheduler` and workers with `dask worker {address}`"
+    problem = _silent_server(address, timeout_s)
+    if problem:
+        raise SceneError(f"--scheduler {address}: {problem}; {hint}", key="scheduler")
+    made = {}
+
+    def connect():
+        try:
+            made["client"] = Client(address, timeout=f"{timeout_s}s")
+        except Exception as exc:         # noqa: BLE001 -- reported below, on the caller's thread
+            made["error"] = exc
+    worker = threading.Thread(target=connect, daemon=True)
+    worker.start()
+    worker.join(timeout_s + 5.0)
+    if "client" in made:
+        return made["client"]
+    exc = made.get("error")
+    why = f"{type(exc).__name__}: {exc}" if exc else f"no answer within {timeout_s + 5:g} s"
+    raise SceneError(f"--scheduler {address}: cannot reach a Dask scheduler within {timeout_s:g} s ({why}); {hint}",
+                     key="scheduler")
+
+
+def _silent_server(address, timeout_s) -> str | None:
+    """Why a tcp:// address is not a Dask scheduler (a Dask server speaks first: its handshake),
+    or None when it answers, cannot be probed (another protocol) or refuses (said by the client)."""
+    import socket
+    scheme, _, where = address.rpartition("://")
+    host, _, port = where.rpartition(":")
+    if scheme not in ("", "tcp") or not port.isdigit():
+        return None
     try:
-        return Client(address, timeout=f"{timeout_s}s")
-    except (OSError, TimeoutError, ValueError) as exc:
-        raise SceneError(f"--scheduler {address}: cannot reach a Dask scheduler within {timeout_s:g} s "
-                         f"({type(exc).__name__}: {exc}); start one with `dask scheduler` and workers "
-                         f"with `dask worker {address}`", key="scheduler") from None
+        with socket.create_connection((host.strip("[]") or "127.0.0.1", int(port)), timeout=timeout_s) as conn:
+            conn.settimeout(timeout_s)
+            return None if conn.recv(1) else "the server closed the connection at once: not a Dask scheduler"
+    except TimeoutError:
+        return f"a server answers there but said nothing within {timeout_s:g} s: not a Dask scheduler"
+    except OSError:
+        return None
 
 
 def _bar(total, done, enabled):
