@@ -15,8 +15,9 @@ sweep loses at most the chunks in flight and a re-run with the same ``--out`` sk
 The file carries its case, its sweep spec and its scene file's hash in the Parquet metadata, and
 a file of another sweep is refused rather than mixed.
 
-Integrity: one writer per ``--out`` (an OS lock on ``<out>.lock``; a second sweep is refused at
-once); each part has a sha256 beside it (``part-N.parquet.sha256``), and a part that fails it is
+Integrity: one writer per ``--out`` (an OS lock on ``<out>.lock``, opened without following a
+link and re-checked at every chunk; a second sweep is refused at once); only files named as this
+sweep's own are read or removed; each part has a sha256 beside it (``part-N.parquet.sha256``), and a part that fails it is
 named, dropped and recomputed; the merge writes a temporary file, fsyncs it and renames it over
 ``<out>``, and drops part rows already in ``<out>``, so a kill at any moment leaves no variant
 twice. A table with a variant stored twice is refused when read or drawn. A request is counted

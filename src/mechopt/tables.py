@@ -22,7 +22,7 @@ def read_rows(path, *, what, example, max_bytes=MAX_BYTES, max_rows=MAX_ROWS):
     except OSError as exc:
         raise ModelError(f"{path}: cannot read: {exc.strerror}", key="path") from None
     except ValueError as exc:
-        raise ModelError(f"{exc} (millions of readings)", key="path") from None
+        raise ModelError(str(exc), key="path") from None
     lines = raw.count(b"\n") + 1
     if lines > max_rows + 1:
         raise ModelError(f"{path}: {lines:,} lines; {what} has at most {max_rows:,} rows", key="path")
