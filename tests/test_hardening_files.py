@@ -90,9 +90,11 @@ def test_a_sweep_whose_lock_another_writer_took_stops_with_its_parts_kept(tmp_pa
 
 
 def test_the_package_imports_where_fcntl_does_not_exist():
-    code = ("import sys; sys.modules['fcntl'] = None\n"
-            "import mechopt, mechopt.sweep, mechopt.report, mechopt.cli, mechopt.files\n"
-            "assert mechopt.files.fcntl is None\nprint('ok')")
+    code = ("import importlib, pkgutil, sys; sys.modules['fcntl'] = None\n"
+            "import mechopt\n"
+            "for m in pkgutil.walk_packages(mechopt.__path__, 'mechopt.'):\n"
+            "    if not m.name.endswith('__main__'): importlib.import_module(m.name)\n"
+            "assert mechopt.files.fcntl is None and 'mechopt.sweep' in sys.modules\nprint('ok')")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0 and done.stdout.strip() == "ok", done.stderr[-2000:]
 

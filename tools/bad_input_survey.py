@@ -188,7 +188,8 @@ def base_dev_zero(folder):
 
 
 def csv_dev_zero(folder):
-    return mechopt("run", write(folder, "s.toml", SCENE.format(points='{ csv = "/dev/zero", columns = ["x_mm", "y_mm"] }')))
+    points = '{ csv = "/dev/zero", columns = ["x_mm", "y_mm"] }'
+    return mechopt("run", write(folder, "s.toml", SCENE.format(points=points)))
 
 
 def force_dev_zero(folder):
@@ -204,7 +205,8 @@ def scene_fifo(folder):
 def csv_fifo(folder):
     fifo = Path(folder) / "p.csv"
     os.mkfifo(fifo)
-    return mechopt("run", write(folder, "s.toml", SCENE.format(points=f'{{ csv = "{fifo}", columns = ["x_mm", "y_mm"] }}')))
+    points = f'{{ csv = "{fifo}", columns = ["x_mm", "y_mm"] }}'
+    return mechopt("run", write(folder, "s.toml", SCENE.format(points=points)))
 
 
 def csv_many_rows(folder):
@@ -225,12 +227,13 @@ def hostile_meta(folder, text='{"case": "<script>alert(1)</script>", "spec": "<b
     return path
 
 
+def no_script(folder):
+    page = Path(folder) / "rep" / "index.html"
+    return "<script>alert" in page.read_text() and "script in the page" if page.exists() else None
+
+
 def report_hostile_meta(folder):
     path = hostile_meta(folder)
-
-    def no_script(folder):
-        page = Path(folder) / "rep" / "index.html"
-        return "<script>alert" in page.read_text() and "script in the page" if page.exists() else None
     return mechopt("report", "--case", "loom/group1", "--sweep", path, "--out", Path(folder) / "rep"), no_script
 
 
@@ -245,10 +248,6 @@ def report_hostile_message(folder):
     table = pa.table({"<script>alert(3)</script>": [0.0, 1.0], "variant": [0, 1], "status": ["SOLVED", "FAILED"],
                       "message": ["<script>alert(4)</script>"] * 2, "x": [1.0, 2.0]})
     pq.write_table(table.replace_schema_metadata({b"mechopt.sweep": json.dumps(meta).encode()}), path)
-
-    def no_script(folder):
-        page = Path(folder) / "rep" / "index.html"
-        return "<script>alert" in page.read_text() and "script in the page" if page.exists() else None
     return mechopt("report", "--case", "loom/group1", "--sweep", path, "--out", Path(folder) / "rep"), no_script
 
 
@@ -293,7 +292,7 @@ def task_not_class(folder):
 
 
 def solver_not_function(folder):
-    text = SCENE.format(points="[[0, 0], [1, 1]]").replace('solver = "cam_cutter.minimax"', 'solver = "cam_cutter.METHODS"')
+    text = SCENE.format(points="[[0, 0], [1, 1]]").replace('"cam_cutter.minimax"', '"cam_cutter.METHODS"')
     return mechopt("run", write(folder, "s.toml", text))
 
 

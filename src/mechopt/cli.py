@@ -90,7 +90,7 @@ def _exit_on_interrupt():
 
 
 # a disk that filled up or turned read-only after the outputs were checked (before the work)
-WRITE_FAILURES = {errno.ENOSPC, errno.EROFS, errno.EDQUOT, errno.EACCES, errno.EPERM, errno.EFBIG}
+WRITE_FAILURES = {errno.ENOSPC, errno.EROFS, errno.EDQUOT, errno.EFBIG}
 
 
 MAX_MESSAGE = 1000          # characters of an error line; the rest is counted, not printed
@@ -100,7 +100,9 @@ def short(message) -> str:
     """An error message of at most MAX_MESSAGE characters (a model listing every bad row of a table
     of millions would print megabytes)."""
     text = str(message)
-    return text if len(text) <= MAX_MESSAGE else f"{text[:MAX_MESSAGE]}... (and {len(text) - MAX_MESSAGE:,} more characters)"
+    if len(text) <= MAX_MESSAGE:
+        return text
+    return f"{text[:MAX_MESSAGE]}... (and {len(text) - MAX_MESSAGE:,} more characters)"
 
 
 def _parser():

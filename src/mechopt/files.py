@@ -115,12 +115,6 @@ def quote(value, limit: int = 40) -> str:
     return text if len(text) <= limit else f"{text[:limit]}... ({len(text)} characters)"
 
 
-def listing(items, limit: int = 5) -> str:
-    """At most `limit` items, then "and N more": an error message stays one short line."""
-    items = [str(i) for i in items]
-    return ", ".join(items[:limit]) + (f" and {len(items) - limit} more" if len(items) > limit else "")
-
-
 def take_lock(path) -> int | None:
     """An open descriptor holding an exclusive lock on the file `path` (created if absent), or None
     when another process holds it. A symbolic link, folder, FIFO or device at `path` is refused

@@ -18,7 +18,7 @@ from typing import Any, Literal, get_args, get_origin
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-from mechopt.files import listing, quote, read_regular
+from mechopt.files import quote, read_regular
 from mechopt.models.cache import memoised
 from mechopt.models.errors import MechoptError, ModelError, SceneError
 from mechopt.solvers.result import Status
@@ -224,8 +224,9 @@ class Scene:
             raise SceneError(f"{self.path}: --set {long[0]}: {long[1]} entries; a list given here holds at most "
                              f"{MAX_LIST_ITEMS}", key=long[0])
         paths = {k: v for k, v in params.items() if path_head(k) in self.spec.structure}
+        fields = task_fields(self.task_class)
         added = {k: v for k, v in params.items() if k not in paths and k not in self.spec.params
-                 and isinstance(v, (list, dict, str))}
+                 and isinstance(v, (list, dict, str)) and _is_structure(fields.get(k))}
         params = {k: v for k, v in params.items() if k not in paths and k not in added}
         return (_build_task(self.path, self.task_class, self.spec.effects, self.params() | params,
                             _set_paths(self.path, self.spec.structure, paths) | added),
@@ -336,6 +337,12 @@ def split_assignment(text):
         if ch == "=" and depth == 0:
             return text[:i], "=", text[i + 1:]
     return text, "", ""
+
+
+def _is_structure(field) -> bool:
+    """Whether a task field takes a table or list (its default is one, or none), not a number."""
+    return field is not None and (field.default_factory is not dataclasses.MISSING
+                                  or field.default is None or isinstance(field.default, (list, tuple, dict, str)))
 
 
 def _long_list(table):

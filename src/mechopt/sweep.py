@@ -17,11 +17,11 @@ a file of another sweep is refused rather than mixed.
 
 Integrity: one writer per ``--out`` (an OS lock on ``<out>.lock``, opened without following a
 link and re-checked at every chunk; a second sweep is refused at once); only files named as this
-sweep's own are read or removed; each part has a sha256 beside it (``part-N.parquet.sha256``), and a part that fails it is
-named, dropped and recomputed; the merge writes a temporary file, fsyncs it and renames it over
-``<out>``, and drops part rows already in ``<out>``, so a kill at any moment leaves no variant
-twice. A table with a variant stored twice is refused when read or drawn. A request is counted
-before anything is allocated and refused past ``max_variants``. The scene travels with each chunk
+sweep's own are read or removed; each part has a sha256 beside it (``part-N.parquet.sha256``), and
+a part that fails it is named, dropped and recomputed; the merge writes a temporary file, fsyncs it
+and renames it over ``<out>``, and drops part rows already in ``<out>``, so a kill at any moment
+leaves no variant twice. A table with a variant stored twice is refused when read or drawn. A
+request is counted before anything is allocated and refused past ``max_variants``. The scene travels with each chunk
 as its TOML text and hash, with every file it references (CSV tables, base scenes), so a scene from
 any file runs on any worker.
 
@@ -431,7 +431,8 @@ def _meta_problem(meta) -> str | None:
     spec = meta["spec"]
     if not isinstance(spec, dict) or set(spec) != {"case", "grid", "random", "samples", "seed"}:
         return "spec must hold case, grid, random, samples and seed"
-    if not all(isinstance(spec[k], int) and not isinstance(spec[k], bool) and spec[k] >= 0 for k in ("samples", "seed")):
+    if not all(isinstance(spec[k], int) and not isinstance(spec[k], bool) and spec[k] >= 0
+               for k in ("samples", "seed")):
         return "spec.samples and spec.seed must be whole numbers >= 0"
     for name in ("grid", "random"):
         axes = spec[name]
@@ -507,10 +508,15 @@ class _Store:
 
     def unlock(self):
         if self._lock is not None:
-            if holds(self._lock, self.lock_path):
-                os.unlink(self.lock_path)    # while still held: the next sweep makes a fresh one
-            os.close(self._lock)
-            self._lock = None
+            fd, self._lock = self._lock, None
+            try:
+                if holds(fd, self.lock_path):
+                    os.unlink(self.lock_path)    # while still held: the next sweep makes a fresh one
+            except PermissionError:              # Windows removes no open file: closed first, then removed
+                os.close(fd)
+                self.lock_path.unlink(missing_ok=True)
+                return
+            os.close(fd)
 
     def _holder(self):
         try:

@@ -5,7 +5,7 @@ every error names the file (and the line)."""
 import csv
 from pathlib import Path
 
-from mechopt.files import quote, read_regular
+from mechopt.files import read_regular
 from mechopt.models.errors import ModelError
 
 MAX_BYTES = 100_000_000      # read whole into memory: refuse what is plainly not a table of readings
