@@ -36,7 +36,7 @@ from pathlib import Path
 
 PY = sys.executable
 ROOT = Path(__file__).resolve().parents[1]
-SECRET = "root:x:0:0:SECRET-LINE"          # a 'private' file's line: a short prefix may show, not all of it
+SECRET = "root:x:0:0:root:/root:/bin/bash:SECRET-TAIL-0123456789"    # a short prefix may show, not all
 MAX_MESSAGE = 600
 
 SCENE = """id = "mine/probe"

@@ -36,7 +36,7 @@ def read_force_csv(path):
         except ModelError:
             raise
         except (ValueError, IndexError):
-            raise ModelError(f"{path}: line {line}: {quote(row, 20)} is not a number in every column",
+            raise ModelError(f"{path}: line {line}: {quote(row)} is not a number in every column",
                              key="path") from None
     return np.array(x), np.array(f)
 
@@ -58,8 +58,8 @@ def _column(path, header, name, units):
         if stem.lower() == name:
             known = {u.lower(): factor for u, factor in units.items()}
             if unit.lower() not in known:
-                raise ModelError(f"{path}: column {quote(h, 20)}: unit {quote(unit)} unknown; allowed "
+                raise ModelError(f"{path}: column {quote(h)}: unit {quote(unit)} unknown; allowed "
                                  + ", ".join(f"{name}_{u}" for u in units), key=name)
             return i, known[unit.lower()]
-    raise ModelError(f"{path}: no '{name}_<unit>' column in header {quote(header, 20)}; expected {EXPECTED_HEADER}, "
+    raise ModelError(f"{path}: no '{name}_<unit>' column in header {quote(header)}; expected {EXPECTED_HEADER}, "
                      f"e.g. travel_mm,load_N", key=name)

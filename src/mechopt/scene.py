@@ -485,14 +485,14 @@ def _csv_rows(csv_path, columns, key):
         raise SceneError(f"{exc} (the table for structure.{key})", key=key) from None
     missing = [c for c in columns if c not in header]
     if missing:
-        raise SceneError(f"{csv_path}: header {quote(header, 20)} lacks {', '.join(missing)} (structure.{key}.columns)",
+        raise SceneError(f"{csv_path}: header {quote(header)} lacks {', '.join(missing)} (structure.{key}.columns)",
                          key=key)
     out = []
     for line, cells in rows:
         try:
             row = [number(cells[header.index(c)], delimiter) for c in columns]
         except (ValueError, IndexError):
-            raise SceneError(f"{csv_path}: line {line} ({quote(delimiter.join(cells), 20)}): expected numbers in "
+            raise SceneError(f"{csv_path}: line {line} ({quote(delimiter.join(cells))}): expected numbers in "
                              f"{', '.join(columns)}", key=key) from None
         if not all(math.isfinite(v) and abs(v) <= MAX_TABLE_VALUE for v in row):
             raise SceneError(f"{csv_path}: line {line}: expected finite numbers within ±{MAX_TABLE_VALUE:g} "
