@@ -123,7 +123,7 @@ def test_kill_between_merge_and_removing_the_parts_leaves_no_variant_twice(tmp_p
     def killed(*args, **kwargs):
         raise _Kill
     with monkeypatch.context() as m:
-        m.setattr(sw.shutil, "rmtree", killed)
+        m.setattr(sw._Store, "_remove_parts", killed)
         with pytest.raises(_Kill):
             sw.sweep(scene, _grid(GRID), out=out, chunk=3, progress=False)
     assert pq.read_table(out).num_rows == 10 and len(list((tmp_path / "s.parquet.parts").glob("*.parquet"))) == 4
@@ -177,14 +177,29 @@ def test_a_damaged_part_is_named_and_recomputed(tmp_path, monkeypatch, clean, da
 
 def test_an_unreadable_part_is_named_and_recomputed(tmp_path, monkeypatch, clean):
     out, parts = _two_parts(tmp_path, monkeypatch)
-    parts[0].unlink()
-    parts[0].mkdir()                                               # read_bytes fails with an OSError
     calls = _counting(monkeypatch)
-    with pytest.warns(sw.SweepWarning, match=r"part-000000000.parquet: unreadable \(Is a directory\); "
+    read = sw.Path.read_bytes
+
+    def refused(self):              # as an unreadable file (chmod 0 does not stop root)
+        if self == parts[0]:
+            raise PermissionError(13, "Permission denied")
+        return read(self)
+    monkeypatch.setattr(sw.Path, "read_bytes", refused)
+    with pytest.warns(sw.SweepWarning, match=r"part-000000000.parquet: unreadable \(Permission denied\); "
                                              r"its 3 variants are recomputed"):
         table = sw.sweep(registry.find(LOOM), _grid(GRID), out=out, chunk=3, progress=False)
     assert len(calls) == 7
     assert _values(table).equals(_values(clean))
+
+
+def test_a_folder_named_as_a_part_is_named_and_left_alone(tmp_path, monkeypatch):
+    out, parts = _two_parts(tmp_path, monkeypatch)
+    parts[0].unlink()
+    parts[0].mkdir()
+    (parts[0] / "keep.txt").write_text("precious")
+    with pytest.raises(SceneError, match=r"part-000000000.parquet: not a file this sweep wrote \(a folder or a link\)"):
+        sw.sweep(registry.find(LOOM), _grid(GRID), out=out, chunk=3, progress=False)
+    assert (parts[0] / "keep.txt").read_text() == "precious"
 
 
 def test_a_damaged_part_that_cannot_be_removed_is_named(tmp_path, monkeypatch):

@@ -6,20 +6,24 @@ message names the file, key and allowed range; nothing was computed or written),
 (INFEASIBLE, LIMIT, INACCURATE, FAILED), 130 interrupted.
 """
 import argparse
+import errno
 import inspect
 import json
 import os
 import re
 import shlex
+import signal
 import sys
+import threading
 import warnings
 from pathlib import Path
 
 from mechopt import __version__, registry
 from mechopt.benchmarks import STUDIES, study
 from mechopt.files import write_text_atomic
-from mechopt.models.errors import MechoptError, SceneError
+from mechopt.models.errors import MechoptError, SceneError, SolverError
 from mechopt.scene import parse_overrides
+from mechopt.solvers import interrupt
 from mechopt.solvers.result import Status
 
 OK, CHECK_FAILED, BAD_INPUT, NOT_SOLVED, INTERRUPTED = 0, 1, 2, 3, 130
@@ -29,23 +33,76 @@ TEMPLATES = {"cam-cutter": "cam-cutter/minimax", "press": "press/kd2322", "loom"
 
 
 def main(argv=None) -> int:
+    as_command = argv is None            # the process is this command (not a test or a caller's script)
     argv = sys.argv[1:] if argv is None else list(argv)
     args = _parser().parse_args(argv)
     args.argv = argv
     try:
-        for folder in args.cases:
-            registry.add_cases(folder)
-        return COMMANDS[args.command](args)
+        with interrupt.honoured():
+            for folder in args.cases:
+                registry.add_cases(folder)
+            code = COMMANDS[args.command](args)
+            interrupt.check()
+            return code
     except MechoptError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        if interrupt.pending():         # a back end turned Ctrl-C into an error of its own
+            return _interrupted()
+        if isinstance(exc, SolverError):        # the input was valid; the back end failed on it
+            print(f"error: not solved: {short(exc)}", file=sys.stderr)
+            return NOT_SOLVED
+        print(f"error: {short(exc)}", file=sys.stderr)
         return BAD_INPUT
     except KeyboardInterrupt:
-        print("interrupted (a sweep keeps its finished chunks: re-run the same command to resume)",
-              file=sys.stderr)
-        return INTERRUPTED
+        return _interrupted()
     except BrokenPipeError:             # `mechopt cases | head`: the reader left, not an error of ours
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return OK
+    except OSError as exc:
+        if exc.errno not in WRITE_FAILURES:
+            raise
+        print(f"error: cannot write {exc.filename or 'an output'}: {exc.strerror} (the run itself finished; "
+              "free some space or choose another place and run it again)", file=sys.stderr)
+        return CHECK_FAILED
+    finally:
+        if as_command:
+            _exit_on_interrupt()
+
+
+def _interrupted():
+    print("interrupted (a sweep keeps its finished chunks: re-run the same command to resume)", file=sys.stderr)
+    return INTERRUPTED
+
+
+def _exit_on_interrupt():
+    """From here on (the interpreter shutting down: Dask's and the pool's threads joined), Ctrl-C
+    ends the process with 130 at once, not with a traceback and death by SIGINT (-2)."""
+    if threading.current_thread() is not threading.main_thread():
+        return
+
+    def stop(signum, frame):
+        for stream in (sys.stdout, sys.stderr):
+            try:
+                stream.flush()
+            except (OSError, ValueError):
+                pass
+        os._exit(INTERRUPTED)
+    signal.signal(signal.SIGINT, stop)
+
+
+# a disk that filled up or turned read-only after the outputs were checked (before the work)
+WRITE_FAILURES = {errno.ENOSPC, errno.EROFS, errno.EDQUOT, errno.EFBIG}
+
+
+MAX_MESSAGE = 1000          # characters of an error line; the rest is counted, not printed
+
+
+def short(message) -> str:
+    """An error message of at most MAX_MESSAGE characters (a model listing every bad row of a table
+    of millions would print megabytes)."""
+    text = str(message)
+    if len(text) <= MAX_MESSAGE:
+        return text
+    return f"{text[:MAX_MESSAGE]}... (and {len(text) - MAX_MESSAGE:,} more characters)"
 
 
 def _parser():
@@ -290,7 +347,7 @@ def _sweep(args) -> int:
             return INTERRUPTED
         finally:
             for warning in said:
-                print(f"warning: {warning.message}", file=sys.stderr)
+                print(f"warning: {short(warning.message)}", file=sys.stderr)
     counts = Counter(table.column("status").to_pylist())
     print(f"{scene.id}: {table.num_rows} variants ({', '.join(f'{n} {s}' for s, n in sorted(counts.items()))})")
     print(f"table: {out}")
@@ -353,7 +410,7 @@ def _writable_folder(flag, folder):
 
 def _warn(problems):
     for line in problems:
-        print(f"warning: skipped {line}", file=sys.stderr)
+        print(f"warning: skipped {short(line)}", file=sys.stderr)
 
 
 def _print_run(run):

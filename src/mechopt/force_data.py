@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from mechopt.models.errors import ModelError
+from mechopt.files import quote
 from mechopt.tables import MAX_BYTES, number, read_rows
 
 TRAVEL_UNITS_MM = {"mm": 1.0, "m": 1000.0, "um": 1e-3}
@@ -35,7 +36,8 @@ def read_force_csv(path):
         except ModelError:
             raise
         except (ValueError, IndexError):
-            raise ModelError(f"{path}: line {line}: {row!r} is not a number in every column", key="path") from None
+            raise ModelError(f"{path}: line {line}: {quote(row)} is not a number in every column",
+                             key="path") from None
     return np.array(x), np.array(f)
 
 
@@ -44,7 +46,7 @@ def _reading(path, line, row, column, limit, unit, delimiter):
     (index, factor), cell = column, row[column[0]].strip()
     value = number(cell, delimiter) * factor
     if not (math.isfinite(value) and abs(value) <= limit):
-        raise ModelError(f"{path}: line {line}: {cell!r} in column {index + 1} is {value:g} {unit}, outside "
+        raise ModelError(f"{path}: line {line}: {quote(cell)} in column {index + 1} is {value:g} {unit}, outside "
                          f"[-{limit:g}, {limit:g}] {unit}", key="path")
     return value
 
@@ -56,8 +58,8 @@ def _column(path, header, name, units):
         if stem.lower() == name:
             known = {u.lower(): factor for u, factor in units.items()}
             if unit.lower() not in known:
-                raise ModelError(f"{path}: column {h!r}: unit {unit!r} unknown; allowed "
+                raise ModelError(f"{path}: column {quote(h)}: unit {quote(unit)} unknown; allowed "
                                  + ", ".join(f"{name}_{u}" for u in units), key=name)
             return i, known[unit.lower()]
-    raise ModelError(f"{path}: no '{name}_<unit>' column in header {header}; expected {EXPECTED_HEADER}, "
+    raise ModelError(f"{path}: no '{name}_<unit>' column in header {quote(header)}; expected {EXPECTED_HEADER}, "
                      f"e.g. travel_mm,load_N", key=name)

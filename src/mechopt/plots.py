@@ -18,10 +18,18 @@ def plot_run(run, out_dir) -> list[Path]:
 
 
 def save_figure(fig, path, *, dpi=110) -> Path:
-    """Lay out, write and release a matplotlib figure (sweeps draw many)."""
-    fig.tight_layout()
-    fig.savefig(path, dpi=dpi)
-    if fig.canvas.manager is not None:      # a pyplot figure: pyplot keeps it until closed
-        import matplotlib.pyplot as plt
-        plt.close(fig)
+    """Lay out, write (whole or not at all: drawn in memory, then renamed into place, so Ctrl-C
+    or a full disk leaves no truncated PNG) and release a matplotlib figure (sweeps draw many)."""
+    import io
+
+    from mechopt.files import write_bytes_atomic
+    try:
+        fig.tight_layout()
+        image = io.BytesIO()
+        fig.savefig(image, dpi=dpi, format=Path(path).suffix.lstrip(".") or "png")
+        write_bytes_atomic(path, image.getvalue())
+    finally:
+        if fig.canvas.manager is not None:      # a pyplot figure: pyplot keeps it until closed
+            import matplotlib.pyplot as plt
+            plt.close(fig)
     return Path(path)

@@ -9,7 +9,8 @@ from typing import Any
 
 from mechopt.models.cache import memoised
 from mechopt.models.errors import MechoptError, SceneError
-from mechopt.scene import Scene, load
+from mechopt.scene import Scene, load, scene_files
+from mechopt.solvers import interrupt
 from mechopt.solvers.result import Result, Status
 from mechopt.units import unit_of
 
@@ -182,7 +183,7 @@ def _catalogue(folders: tuple[Path, ...]) -> Catalogue:
     _refuse_twice(scenes, cases_dir())
     problems = []
     for folder in folders:
-        for path in sorted(folder.rglob("*.toml")):
+        for path in scene_files(folder):
             try:
                 scene = load(path)
             except MechoptError as exc:      # one bad file of the user's does not stop the others
@@ -263,7 +264,7 @@ def select(refs=()) -> tuple[list[Scene], list[str]]:
     for ref in refs:
         path = Path(str(ref)).expanduser()
         if not isinstance(ref, Scene) and is_path(ref) and path.is_dir():
-            found = sorted(path.rglob("*.toml"))
+            found = scene_files(path)
             if not found:
                 raise SceneError(f"{path}: no scene files (*.toml) in this folder")
             for file in found:
@@ -282,7 +283,7 @@ def run(scene: Scene | str, overrides: dict | None = None) -> Run:
     scene = find(scene)
     overrides = dict(overrides or {})
     task, settings = scene.build(_derived_params(scene) | overrides)
-    result = scene.solver(task, **settings)
+    result = _solve(scene.solver, task, settings)
     params_changed = bool(scene.split_overrides(overrides)[0])
     checks = [] if params_changed else check(scene, result)
     return Run(scene, result, checks, overrides, task, settings)
@@ -294,7 +295,10 @@ def _derived_params(scene: Scene, chain: tuple[str, ...] = ()) -> dict:
     for key, (source_id, name) in scene.derived().items():
         if source_id in chain + (scene.id,):
             raise SceneError(f"{scene.path}: derive.{key}: {' -> '.join(chain + (scene.id, source_id))} is a loop")
-        result = _source_result(source_id, chain + (scene.id,))
+        try:
+            result = _source_result(source_id, chain + (scene.id,))
+        except SceneError as exc:        # a source that is not there: say which file and key asked for it
+            raise SceneError(f"{scene.path}: derive.{key} = '{source_id}:{name}': {exc}", key=key) from None
         if result.status is not Status.SOLVED or name not in result.values:
             raise SceneError(f"{scene.path}: derive.{key}: scene {source_id} gave status {result.status.value}"
                              + ("" if name in result.values else f" and no value {name!r}; it has "
@@ -309,7 +313,17 @@ def _source_result(source_id: str, chain: tuple[str, ...]) -> Result:
     scene solves its source once per process, not once per variant."""
     source = find(source_id)
     task, settings = source.build(_derived_params(source, chain))
-    return source.solver(task, **settings)
+    return _solve(source.solver, task, settings)
+
+
+def _solve(solver, task, settings) -> Result:
+    """The solver's result; a Ctrl-C during it, which CasADi turns into a failed solve, raised
+    as KeyboardInterrupt instead, so that no interrupted result is ever stored or reported."""
+    with interrupt.honoured():
+        try:
+            return solver(task, **settings)
+        finally:
+            interrupt.check()
 
 
 def check(scene: Scene, result: Result) -> list[Check]:

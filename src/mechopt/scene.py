@@ -9,6 +9,7 @@ import dataclasses
 import importlib
 import inspect
 import math
+import os
 import re
 import tomllib
 from pathlib import Path
@@ -17,6 +18,7 @@ from typing import Any, Literal, get_args, get_origin
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
+from mechopt.files import quote, read_regular
 from mechopt.models.cache import memoised
 from mechopt.models.errors import MechoptError, ModelError, SceneError
 from mechopt.solvers.result import Status
@@ -26,6 +28,8 @@ from mechopt.units import unit_of
 
 Number = int | float
 STATUS_WORDS = tuple(s.value for s in Status)
+MAX_SCENE_BYTES = 1_000_000      # a scene is a page of TOML; its tables of points come from CSV files
+MAX_LIST_ITEMS = 100             # a list typed into a scene or a --set (speeds, operations); longer: a CSV
 
 
 class Param(BaseModel):
@@ -183,7 +187,7 @@ class Scene:
         options = solver_options(self.solver)
         params, settings = {}, {}
         for key, value in overrides.items():
-            if key in fields or _path_head(key) in self.spec.structure:
+            if key in fields or path_head(key) in self.spec.structure:
                 params[key] = value
             elif key in options:
                 settings[key] = value
@@ -230,12 +234,21 @@ class Scene:
         return rows
 
     def build(self, overrides: dict[str, Any] | None = None):
-        """The task instance and solver settings, overrides applied and validated like the file."""
+        """The task instance and solver settings, overrides applied and validated like the file.
+        A whole structure entry the scene does not have (`--set 'windows=[...]'`) is structure
+        too: a table or list is never read as a parameter."""
         params, settings = self.split_overrides(overrides or {})
-        paths = {k: v for k, v in params.items() if _path_head(k) in self.spec.structure}
-        params = {k: v for k, v in params.items() if k not in paths}
+        long = _long_list(params)
+        if long:
+            raise SceneError(f"{self.path}: --set {long[0]}: {long[1]} entries; a list given here holds at most "
+                             f"{MAX_LIST_ITEMS}", key=long[0])
+        paths = {k: v for k, v in params.items() if path_head(k) in self.spec.structure}
+        fields = task_fields(self.task_class)
+        added = {k: v for k, v in params.items() if k not in paths and k not in self.spec.params
+                 and isinstance(v, (list, dict, str)) and _is_structure(fields.get(k))}
+        params = {k: v for k, v in params.items() if k not in paths and k not in added}
         return (_build_task(self.path, self.task_class, self.spec.effects, self.params() | params,
-                            _set_paths(self.path, self.spec.structure, paths)),
+                            _set_paths(self.path, self.spec.structure, paths) | added),
                 _check_settings(self.path, self.solver, self.settings() | settings))
 
 
@@ -243,7 +256,7 @@ def load(path: Path) -> Scene:
     """Read and validate one scene file; raise SceneError naming the file, the key and what is allowed."""
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = read_regular(path, max_bytes=MAX_SCENE_BYTES, what="a scene file").decode("utf-8")
     except FileNotFoundError:
         raise SceneError(f"{path}: no such scene file") from None
     except IsADirectoryError:
@@ -252,6 +265,8 @@ def load(path: Path) -> Scene:
         raise SceneError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start})") from None
     except OSError as exc:
         raise SceneError(f"{path}: cannot read: {exc.strerror}") from None
+    except ValueError as exc:            # not a regular file, or larger than a scene ever is
+        raise SceneError(str(exc)) from None
     return loads(text, path)
 
 
@@ -260,9 +275,17 @@ def loads(text: str, path: Path) -> Scene:
     from: a sweep's worker loads the client's file from its text)."""
     path = Path(path)
     try:
-        raw = tomllib.loads(text)
+        raw = tomllib.loads(text.removeprefix("\ufeff"))     # a byte-order mark, as some editors write
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(f"{path}: not valid TOML: {exc}") from None
+    except RecursionError:
+        raise SceneError(f"{path}: not a scene: arrays or tables nested too deeply") from None
+    except ValueError as exc:            # an integer of thousands of digits
+        raise SceneError(f"{path}: not a scene: {str(exc).split(';')[0]}") from None
+    long = _long_list(raw.get("structure"))
+    if long:
+        raise SceneError(f"{path}: structure.{long[0]}: {long[1]} entries; a list in a scene holds at most "
+                         f"{MAX_LIST_ITEMS} (a longer table: {{ csv = \"file.csv\", columns = [...] }})", key=long[0])
     if "base" in raw:
         raw = _on_base(path, raw)
     try:
@@ -288,24 +311,65 @@ def loads(text: str, path: Path) -> Scene:
     return scene
 
 
+MAX_WALK_ENTRIES = 20_000       # files and folders looked at under one folder of scenes
+
+
+def scene_files(folder) -> list[Path]:
+    """The *.toml files under `folder` (recursively, symbolic links to folders not followed), in
+    path order; a folder holding more than MAX_WALK_ENTRIES entries (`--cases /`: the whole disk)
+    is refused after looking at that many, not walked to the end."""
+    found, seen = [], 0
+    for root, dirs, names in os.walk(folder):
+        seen += len(dirs) + len(names)
+        if seen > MAX_WALK_ENTRIES:
+            raise SceneError(f"{folder}: more than {MAX_WALK_ENTRIES:,} files and folders below it; a folder of "
+                             "scenes is smaller: name the folder that holds your *.toml files", key="cases")
+        dirs.sort()
+        found += [Path(root) / n for n in names if n.endswith(".toml")]
+    return sorted(found)
+
+
 def parse_overrides(pairs: list[str]) -> dict[str, Any]:
     """`KEY=VALUE` strings as typed values: TOML literals (3, 0.5, true, "x"), else plain text."""
     out = {}
     for pair in pairs:
-        depth, cut = 0, -1
-        for i, ch in enumerate(pair):      # the first '=' outside a selector's brackets
-            depth += (ch == "[") - (ch == "]")
-            if ch == "=" and depth == 0:
-                cut = i
-                break
-        key, sep, text = (pair[:cut], "=", pair[cut + 1:]) if cut >= 0 else (pair, "", "")
+        key, sep, text = split_assignment(pair)
         if not sep or not key.strip():
             raise SceneError(f"--set {pair!r}: expected KEY=VALUE, e.g. --set a_mm=40")
         try:
             out[key.strip()] = tomllib.loads(f"v = {text.strip()}")["v"]
         except tomllib.TOMLDecodeError:
             out[key.strip()] = text.strip()
+        except (ValueError, RecursionError):        # thousands of digits, or lists nested thousands deep
+            raise SceneError(f"--set {key.strip()}: the value ({len(text):,} characters) is no number or table "
+                             "a mechanism takes", key=key.strip()) from None
     return out
+
+
+def split_assignment(text):
+    """(key, "=", value) split at the first '=' outside a selector's brackets
+    (`operations[from=3,to=7].min_deg=10` -> key `operations[from=3,to=7].min_deg`); (text, "", "")
+    when there is none."""
+    depth = 0
+    for i, ch in enumerate(text):
+        depth += (ch == "[") - (ch == "]")
+        if ch == "=" and depth == 0:
+            return text[:i], "=", text[i + 1:]
+    return text, "", ""
+
+
+def _is_structure(field) -> bool:
+    """Whether a task field takes a table or list (its default is one, or none), not a number."""
+    return field is not None and (field.default_factory is not dataclasses.MISSING
+                                  or field.default is None or isinstance(field.default, (list, tuple, dict, str)))
+
+
+def _long_list(table):
+    """(key, length) of the first list in `table` longer than MAX_LIST_ITEMS, or None."""
+    for key, value in (table or {}).items() if isinstance(table, dict) else ():
+        if isinstance(value, list) and len(value) > MAX_LIST_ITEMS:
+            return key, len(value)
+    return None
 
 
 def _path_parts(key):
@@ -321,7 +385,8 @@ def _path_parts(key):
     return parts + [current]
 
 
-def _path_head(key):
+def path_head(key):
+    """The structure entry a `--set` path starts at: `operations[from=3,to=7].min_deg` -> operations."""
     return _path_parts(key)[0].split("[", 1)[0]
 
 
@@ -439,18 +504,23 @@ def _csv_rows(csv_path, columns, key):
         raise SceneError(f"{exc} (the table for structure.{key})", key=key) from None
     missing = [c for c in columns if c not in header]
     if missing:
-        raise SceneError(f"{csv_path}: header {header} lacks {', '.join(missing)} (structure.{key}.columns)", key=key)
+        raise SceneError(f"{csv_path}: header {quote(header)} lacks {', '.join(missing)} (structure.{key}.columns)",
+                         key=key)
     out = []
     for line, cells in rows:
         try:
             row = [number(cells[header.index(c)], delimiter) for c in columns]
         except (ValueError, IndexError):
-            raise SceneError(f"{csv_path}: line {line} ({delimiter.join(cells)!r}): expected numbers in "
+            raise SceneError(f"{csv_path}: line {line} ({quote(delimiter.join(cells))}): expected numbers in "
                              f"{', '.join(columns)}", key=key) from None
-        if not all(math.isfinite(v) for v in row):
-            raise SceneError(f"{csv_path}: line {line}: expected finite numbers", key=key)
+        if not all(math.isfinite(v) and abs(v) <= MAX_TABLE_VALUE for v in row):
+            raise SceneError(f"{csv_path}: line {line}: expected finite numbers within ±{MAX_TABLE_VALUE:g} "
+                             f"(a point table's unit is in its column names: mm, deg)", key=key)
         out.append(row)
     return out
+
+
+MAX_TABLE_VALUE = 1e9                # a kilometre in mm: no mechanism's point table reaches it
 
 
 def _resolve(path, field, dotted, package):
@@ -466,7 +536,13 @@ def _resolve(path, field, dotted, package):
                                             and dataclasses.is_dataclass(v) and v.__module__ == module.__name__])
         raise SceneError(f"{path}: unknown {field} {dotted!r}; known: "
                          + ", ".join(f"{module_name}.{n}" for n in known), key=field)
-    return getattr(module, name)
+    found = getattr(module, name)
+    right = (inspect.isclass(found) and dataclasses.is_dataclass(found) if field == "task"
+             else callable(found) and not inspect.isclass(found))
+    if not right:
+        raise SceneError(f"{path}: {field} = {dotted!r} names a {type(found).__name__}, not a "
+                         + ("model's task class" if field == "task" else "solver function"), key=field)
+    return found
 
 
 def _show(value) -> str:
@@ -495,8 +571,8 @@ def _build_task(path, task_class, effects, params, structure=None):
                              f"not call for; add it to effects or drop the parameter", key=key)
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise SceneError(f"{path}: params.{key} = {value!r}: expected a number", key=key)
-        if not math.isfinite(value):
-            raise SceneError(f"{path}: params.{key} = {value!r}: expected a finite number", key=key)
+        if not abs(value) <= 1e308:         # inf, nan, or an integer of hundreds of digits (no float holds it)
+            raise SceneError(f"{path}: params.{key} = {quote(value)}: expected a finite number", key=key)
         low, high = declared_range(fields[key].type)
         if (low and not low[1](value, low[0])) or (high and not high[1](value, high[0])):
             raise SceneError(f"{path}: params.{key} = {value!r}: allowed {describe_range(low, high)}", key=key)
@@ -515,7 +591,7 @@ def _build_task(path, task_class, effects, params, structure=None):
     try:
         return task_class(**{k: float(v) for k, v in params.items()}, **structure)
     except MechoptError as exc:
-        table = "structure" if exc.key and _path_head(exc.key) in structure else "params"
+        table = "structure" if exc.key and path_head(exc.key) in structure else "params"
         raise SceneError(f"{path}: {table}.{exc.key}: {exc}" if exc.key else f"{path}: {exc}", key=exc.key) from None
 
 
@@ -546,7 +622,7 @@ def _explain(error) -> str:
         return f"{loc}: unknown key" + (f"; allowed: {', '.join(allowed)}" if allowed else "")
     if error["type"] == "missing":
         return f"{loc}: missing"
-    return f"{loc}: {error['msg']} (got {error.get('input')!r})"
+    return f"{loc}: {error['msg']} (got {quote(error.get('input'))})"
 
 
 def _allowed_at(loc):

@@ -15,27 +15,27 @@ sweep loses at most the chunks in flight and a re-run with the same ``--out`` sk
 The file carries its case, its sweep spec and its scene file's hash in the Parquet metadata, and
 a file of another sweep is refused rather than mixed.
 
-Integrity: one writer per ``--out`` (an OS lock on ``<out>.lock``; a second sweep is refused at
-once); each part has a sha256 beside it (``part-N.parquet.sha256``), and a part that fails it is
-named, dropped and recomputed; the merge writes a temporary file, fsyncs it and renames it over
-``<out>``, and drops part rows already in ``<out>``, so a kill at any moment leaves no variant
-twice. A table with a variant stored twice is refused when read or drawn. A request is counted
-before anything is allocated and refused past ``max_variants``. The scene travels with each chunk
-as its TOML text and hash, so a scene from any file runs on any worker.
+Integrity: one writer per ``--out`` (an OS lock on ``<out>.lock``, opened without following a
+link and re-checked at every chunk; a second sweep is refused at once); only files named as this
+sweep's own are read or removed; each part has a sha256 beside it (``part-N.parquet.sha256``), and
+a part that fails it is named, dropped and recomputed; the merge writes a temporary file, fsyncs it
+and renames it over ``<out>``, and drops part rows already in ``<out>``, so a kill at any moment
+leaves no variant twice. A table with a variant stored twice is refused when read or drawn. A
+request is counted before anything is allocated and refused past ``max_variants``. The scene travels with each chunk
+as its TOML text and hash, with every file it references (CSV tables, base scenes), so a scene from
+any file runs on any worker.
 
 Row columns: the swept keys, ``variant`` (its number), ``status`` (a Result status, or INVALID for
 a setting the scene or model refuses, ERROR for an unexpected exception), ``message``, ``build_s``,
 ``solve_s``, then every ``values`` entry of the result (null where a variant did not produce it).
 """
 import difflib
-import errno
-import fcntl
 import hashlib
 import itertools
 import json
 import math
 import os
-import shutil
+import re
 import sys
 import warnings
 from collections.abc import Callable
@@ -49,10 +49,10 @@ import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
 from mechopt import registry
-from mechopt.files import write_bytes_atomic
+from mechopt.files import holds, quote, recorded, shipped, take_lock, write_bytes_atomic
 from mechopt.models.cache import BuildCache
 from mechopt.models.errors import MechoptError, SceneError, SolverError
-from mechopt.scene import Scene, loads, solver_options, task_fields
+from mechopt.scene import Scene, loads, path_head, solver_options, split_assignment, task_fields
 
 __all__ = ["Axis", "SweepSpec", "SceneText", "SweepInterrupted", "SweepWarning", "parse_grid", "parse_random",
            "grid_values", "count_variants", "plan", "sweep", "run_chunk", "read_table", "check_unique", "scene_hash", "describe_axes"]
@@ -79,19 +79,33 @@ class SweepWarning(UserWarning):
 
 @dataclass(frozen=True)
 class SceneText:
-    """A scene as a worker receives it: its file's text, where it came from, the sha256 of its bytes."""
+    """A scene as a worker receives it: its file's text, where it came from, the sha256 of its
+    bytes, and every file it references (CSV tables, base and lever scenes) by resolved path, so
+    that a worker on another machine needs no copy of them."""
     text: str
     path: str
     sha256: str
+    files: tuple = ()           # ((resolved path, bytes), ...)
 
     @classmethod
     def of(cls, scene: Scene) -> "SceneText":
         try:
             data = Path(scene.path).read_bytes()
+            with recorded() as referenced:
+                loads(data.decode("utf-8"), Path(scene.path))
         except OSError as exc:
             raise SceneError(f"{scene.path}: cannot read the scene file to send it to the workers: "
                              f"{exc.strerror}") from None
-        return cls(data.decode("utf-8"), str(scene.path), hashlib.sha256(data).hexdigest())
+        return cls(data.decode("utf-8"), str(scene.path), hashlib.sha256(data).hexdigest(),
+                   tuple(sorted(referenced.items())))
+
+    @property
+    def digest(self) -> str:
+        """sha256 of the text and every file sent with it: a worker's cache key."""
+        h = hashlib.sha256(self.sha256.encode())
+        for path, data in self.files:
+            h.update(path.encode() + b"\0" + hashlib.sha256(data).digest())
+        return h.hexdigest()
 
 
 @dataclass(frozen=True)
@@ -173,6 +187,8 @@ def plan(scene: Scene, grid=(), random=(), *, samples: int = 0, seed: int = 0,
     point (last axis fastest) of the ``i // n_grid``-th random sample. The count is checked
     against `max_variants` before anything is expanded.
     """
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**63:
+        raise SceneError(f"--seed {seed!r}: expected a whole number from 0 to 2**63 - 1", key="seed")
     spec = SweepSpec(scene.id, tuple(grid), tuple(random), int(samples), int(seed))
     if not spec.grid and not spec.random:
         raise SceneError("a sweep needs at least one --grid KEY=START:STOP:NUM or --random KEY=LOW:HIGH")
@@ -218,15 +234,16 @@ _SCENES = BuildCache("mechopt.sweep.scenes", 8)      # a worker parses each scen
 def run_chunk(source: SceneText, chunk: list[tuple[int, dict]]) -> list[dict]:
     """Solve the variants `(number, overrides)` of one scene on a worker; one row each.
 
-    The scene comes as its file's text (`SceneText`), so a scene from any file runs on any
-    worker; a text whose sha256 is not the one sent (damaged on the way) is refused. The loaded
-    scene is kept per process by hash.
+    The scene comes as its file's text (`SceneText`) with the files it references, so a scene
+    from any file runs on any worker; a text whose sha256 is not the one sent (damaged on the way)
+    is refused. The loaded scene is kept per process by hash.
     """
     got = hashlib.sha256(source.text.encode("utf-8")).hexdigest()
     if got != source.sha256:
         raise SceneError(f"{source.path}: the scene file this worker received differs from the sweep's "
                          f"(sha256 {got[:12]} != {source.sha256[:12]}); it was changed on the way")
-    scene, _ = _SCENES.get(source.sha256, lambda: loads(source.text, Path(source.path)))
+    with shipped(dict(source.files)):
+        scene, _ = _SCENES.get(source.digest, lambda: loads(source.text, Path(source.path)))
     return _solve_rows(scene, chunk)
 
 
@@ -352,6 +369,14 @@ def read_table(path) -> tuple[pa.Table, dict]:
         table = pq.read_table(path)
     except (OSError, pa.ArrowInvalid) as exc:
         raise SceneError(f"{path}: not a readable Parquet file ({exc})") from None
+    wanted = {**{k: "a number" for k in _keys(meta)}, "variant": "int64", "status": "string", "message": "string"}
+    wrong = [name for name, kind in wanted.items() if name not in table.column_names
+             or (kind != "a number" and str(table.schema.field(name).type) != kind)
+             or (kind == "a number" and not pa.types.is_integer(table.schema.field(name).type)
+                 and not pa.types.is_floating(table.schema.field(name).type))]
+    if wrong:
+        raise SceneError(f"{path}: not a sweep's table: column {quote(wrong[0])} is missing or not "
+                         f"{wanted[wrong[0]]}", key="sweep")
     check_unique(table, path)
     return table, meta
 
@@ -378,7 +403,45 @@ def _read_meta(path) -> dict:
     if raw is None:
         raise SceneError(f"{path}: a Parquet file but not a mechopt sweep (no {META_KEY.decode()} metadata); "
                          f"choose another --out")
-    return json.loads(raw)
+    problem = None
+    if len(raw) > MAX_META_BYTES:
+        problem = f"{len(raw):,} bytes, more than a sweep's spec ever needs ({MAX_META_BYTES:,})"
+    else:
+        try:
+            meta = json.loads(raw)
+            problem = _meta_problem(meta)
+        except (ValueError, RecursionError):
+            problem = f"not JSON (starts {quote(raw[:40].decode('utf-8', 'replace'))})"
+    if problem:
+        raise SceneError(f"{path}: its {META_KEY.decode()} metadata is not a sweep's: {problem}; "
+                         f"this file was not written by mechopt sweep (choose another --out)", key="out")
+    return meta
+
+
+MAX_META_BYTES = 100_000
+_AXIS_FIELDS = {"key": str, "low": (int, float), "high": (int, float), "num": int}
+
+
+def _meta_problem(meta) -> str | None:
+    """What is wrong with a sweep table's metadata (read from a file anyone may have written), or None."""
+    if not isinstance(meta, dict) or set(meta) != {"case", "spec", "scene_sha256"}:
+        return "expected an object with case, spec and scene_sha256"
+    if not isinstance(meta["case"], str) or not re.fullmatch(r"[0-9a-f]{64}", str(meta["scene_sha256"])):
+        return "case must be text and scene_sha256 64 hex digits"
+    spec = meta["spec"]
+    if not isinstance(spec, dict) or set(spec) != {"case", "grid", "random", "samples", "seed"}:
+        return "spec must hold case, grid, random, samples and seed"
+    if not all(isinstance(spec[k], int) and not isinstance(spec[k], bool) and spec[k] >= 0
+               for k in ("samples", "seed")):
+        return "spec.samples and spec.seed must be whole numbers >= 0"
+    for name in ("grid", "random"):
+        axes = spec[name]
+        if not isinstance(axes, list) or not all(
+                isinstance(a, dict) and set(a) == set(_AXIS_FIELDS)
+                and all(isinstance(a[k], t) and not isinstance(a[k], bool) for k, t in _AXIS_FIELDS.items())
+                for a in axes):
+            return f"spec.{name} must be a list of axes {{key, low, high, num}}"
+    return None
 
 
 class _Store:
@@ -396,25 +459,10 @@ class _Store:
             raise SceneError(f"{self.path}: a folder; --out names the table's file, e.g. {self.path / 'sweep.parquet'}",
                              key="out")
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        while True:
-            fd = os.open(self.lock_path, os.O_RDWR | os.O_CREAT, 0o644)
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except OSError as exc:
-                os.close(fd)
-                if exc.errno not in (errno.EAGAIN, errno.EACCES):
-                    raise
-                raise SceneError(f"{self.path} is being written by another sweep (pid {self._holder()}); "
-                                 f"wait for it or choose another --out", key="out") from None
-            try:
-                same = os.fstat(fd).st_ino == os.stat(self.lock_path).st_ino
-            except FileNotFoundError:
-                same = False
-            if same:                 # else its holder removed it as we opened it: take the new one
-                break
-            os.close(fd)
-        os.ftruncate(fd, 0)
-        os.write(fd, f"{os.getpid()}\n".encode())
+        if self.parts.is_symlink() or (self.parts.exists() and not self.parts.is_dir()):
+            raise SceneError(f"{self.parts}: not this sweep's folder of parts (a symbolic link or a file); it is "
+                             f"not followed: remove it, or choose another --out", key="out")
+        fd = self._take()
         self._lock = fd
         try:
             for stale in self.path.parent.glob(f"{self.path.name}.*.tmp"):   # a merge killed mid-write
@@ -426,11 +474,49 @@ class _Store:
             self.unlock()
             raise
 
+    def _take(self):
+        """A descriptor holding `<out>.lock` (its pid written in it), or SceneError: held by another
+        sweep, or not a regular file (a symbolic link is never followed)."""
+        while True:
+            try:
+                fd = take_lock(self.lock_path)
+            except ValueError as exc:
+                raise SceneError(f"{exc}; nothing was written", key="out") from None
+            if fd is None:
+                raise SceneError(f"{self.path} is being written by another sweep (pid {self._holder()}); "
+                                 f"wait for it or choose another --out", key="out")
+            if holds(fd, self.lock_path):   # else its holder removed it as we opened it: take the new one
+                break
+            os.close(fd)
+        os.ftruncate(fd, 0)
+        os.write(fd, f"{os.getpid()}\n".encode())
+        return fd
+
+    def check_lock(self):
+        """Re-check that `<out>.lock` is still the file this sweep holds (someone may delete it, and a
+        second sweep then takes a new one): a deleted lock is taken again; one another sweep now holds
+        stops this sweep, its finished parts kept, rather than have two writers."""
+        if self._lock is None or holds(self._lock, self.lock_path):
+            return
+        old, self._lock = self._lock, None
+        os.close(old)
+        try:
+            self._lock = self._take()
+        except SceneError as exc:
+            raise SceneError(f"{self.lock_path} was removed while this sweep ran, and {exc}; this sweep stops "
+                             f"(its finished parts are kept in {self.parts})", key="out") from None
+
     def unlock(self):
         if self._lock is not None:
-            os.unlink(self.lock_path)        # while still held: the next sweep makes a fresh one
-            os.close(self._lock)
-            self._lock = None
+            fd, self._lock = self._lock, None
+            try:
+                if holds(fd, self.lock_path):
+                    os.unlink(self.lock_path)    # while still held: the next sweep makes a fresh one
+            except PermissionError:              # Windows removes no open file: closed first, then removed
+                os.close(fd)
+                self.lock_path.unlink(missing_ok=True)
+                return
+            os.close(fd)
 
     def _holder(self):
         try:
@@ -449,6 +535,9 @@ class _Store:
         """A part whose bytes are not those written (or cannot be read) is named, removed and its
         variants computed again; so is a part whose checksum never got written (killed in between)."""
         for part in self._parts():
+            if part.is_symlink() or not part.is_file():
+                raise SceneError(f"{part}: not a file this sweep wrote (a folder or a link); it is left as it is: "
+                                 f"remove it by hand and re-run", key="out")
             check = part.with_name(part.name + ".sha256")
             try:
                 want, _, count = check.read_text().partition(" ")
@@ -465,7 +554,7 @@ class _Store:
                 what = f"its {count} variants are" if count is not None else "its variants are"
                 warnings.warn(f"{part}: {why}; {what} recomputed", SweepWarning, stacklevel=4)
                 try:
-                    shutil.rmtree(part) if part.is_dir() else part.unlink(missing_ok=True)
+                    part.unlink(missing_ok=True)     # a regular file of this sweep's naming (_parts)
                     check.unlink(missing_ok=True)
                 except OSError as exc:
                     raise SceneError(f"{part}: cannot remove this damaged part ({exc.strerror}); remove it "
@@ -476,6 +565,7 @@ class _Store:
         return {int(v) for t in tables for v in t.column("variant").to_pylist()}
 
     def write_part(self, rows):
+        self.check_lock()
         self.parts.mkdir(parents=True, exist_ok=True)
         first = min(r["variant"] for r in rows)
         path = self.parts / f"part-{first:09d}.parquet"
@@ -489,8 +579,9 @@ class _Store:
     def consolidate(self) -> pa.Table:
         """Merge `out` and the parts into `out` (atomic); part rows already in `out` (a merge killed
         before the parts were removed) are dropped, so the merge can be run again at any point."""
-        tables, seen = [], pa.array([], pa.int64())
-        for file in self._files():
+        self.check_lock()
+        tables, seen, merged = [], pa.array([], pa.int64()), self._files()
+        for file in merged:
             table = pq.read_table(file)
             table = table.filter(pc.invert(pc.is_in(table.column("variant"), value_set=seen)))
             table = _unique_variants(table)
@@ -503,14 +594,32 @@ class _Store:
         sink = pa.BufferOutputStream()
         pq.write_table(table, sink)
         write_bytes_atomic(self.path, sink.getvalue().to_pybytes())
-        shutil.rmtree(self.parts, ignore_errors=True)     # all of it is in the file now
+        self._remove_parts([p for p in merged if p != self.path])      # all of them are in the file now
         return table
 
+    def _remove_parts(self, parts):
+        """The parts merged, their checksums and then the folder if nothing else is in it."""
+        for part in parts:
+            part.unlink(missing_ok=True)
+            part.with_name(part.name + ".sha256").unlink(missing_ok=True)
+        try:
+            self.parts.rmdir()
+        except OSError:
+            pass                 # not empty (a file not this sweep's) or never made: left as it is
+
     def _parts(self):
-        return sorted(self.parts.glob("*.parquet")) if self.parts.is_dir() else []
+        """This sweep's parts: the entries named part-<9 digits>.parquet (nothing else in the folder
+        is read or removed; a symbolic link to the folder is refused by `lock`, so is a part that is
+        not a regular file)."""
+        if not self.parts.is_dir() or self.parts.is_symlink():
+            return []
+        return sorted(p for p in self.parts.glob("part-*.parquet") if _PART_NAME.fullmatch(p.name))
 
     def _files(self):
         return ([self.path] if self.path.exists() else []) + self._parts()
+
+
+_PART_NAME = re.compile(r"part-\d{9}\.parquet")
 
 
 def _unique_variants(table):
@@ -548,13 +657,51 @@ def _on_pool(workers, source, chunks):
 
 
 def _connect(address, timeout_s):
+    """A Dask client for `address`, or SceneError within about `timeout_s`: distributed's own
+    timeout covers the TCP connection but not its handshake, so a server that accepts and stays
+    silent (not a Dask scheduler) would hang it; such a server is found by a probe first, and
+    the client is made on a thread given a wall-clock limit."""
+    import threading
+
     from distributed import Client
+    hint = f"start one with `dask scheduler` and workers with `dask worker {address}`"
+    problem = _silent_server(address, timeout_s)
+    if problem:
+        raise SceneError(f"--scheduler {address}: {problem}; {hint}", key="scheduler")
+    made = {}
+
+    def connect():
+        try:
+            made["client"] = Client(address, timeout=f"{timeout_s}s")
+        except Exception as exc:         # noqa: BLE001 -- reported below, on the caller's thread
+            made["error"] = exc
+    worker = threading.Thread(target=connect, daemon=True)
+    worker.start()
+    worker.join(timeout_s + 5.0)
+    if "client" in made:
+        return made["client"]
+    exc = made.get("error")
+    why = f"{type(exc).__name__}: {exc}" if exc else f"no answer within {timeout_s + 5:g} s"
+    raise SceneError(f"--scheduler {address}: cannot reach a Dask scheduler within {timeout_s:g} s ({why}); {hint}",
+                     key="scheduler")
+
+
+def _silent_server(address, timeout_s) -> str | None:
+    """Why a tcp:// address is not a Dask scheduler (a Dask server speaks first: its handshake),
+    or None when it answers, cannot be probed (another protocol) or refuses (said by the client)."""
+    import socket
+    scheme, _, where = address.rpartition("://")
+    host, _, port = where.rpartition(":")
+    if scheme not in ("", "tcp") or not port.isdigit():
+        return None
     try:
-        return Client(address, timeout=f"{timeout_s}s")
-    except (OSError, TimeoutError, ValueError) as exc:
-        raise SceneError(f"--scheduler {address}: cannot reach a Dask scheduler within {timeout_s:g} s "
-                         f"({type(exc).__name__}: {exc}); start one with `dask scheduler` and workers "
-                         f"with `dask worker {address}`", key="scheduler") from None
+        with socket.create_connection((host.strip("[]") or "127.0.0.1", int(port)), timeout=timeout_s) as conn:
+            conn.settimeout(timeout_s)
+            return None if conn.recv(1) else "the server closed the connection at once: not a Dask scheduler"
+    except TimeoutError:
+        return f"a server answers there but said nothing within {timeout_s:g} s: not a Dask scheduler"
+    except OSError:
+        return None
 
 
 def _bar(total, done, enabled):
@@ -594,10 +741,15 @@ def _kind(scene, key):
         return float
     if key in settings:
         return (lambda v: int(round(v))) if isinstance(settings[key], int) else float
+    if path_head(key) in scene.spec.structure and key != path_head(key):
+        scene.build({key: 1.0})         # a number in a structure table: a path that leads nowhere is refused
+        return float
     near = difflib.get_close_matches(key, [*params, *settings], n=3)
     raise SceneError(f"{scene.id}: {key!r} cannot be swept" + (f" (did you mean {', '.join(near)}?)" if near else "")
                      + f"; numeric parameters: {', '.join(params)}; numeric solver settings: "
-                     + (", ".join(settings) or "none"), key=key)
+                     + (", ".join(settings) or "none")
+                     + ("; numbers in structure tables by path, e.g. 'operations[from=3,to=7].min_deg'"
+                        if scene.spec.structure else ""), key=key)
 
 
 def _sweepable(scene):
@@ -630,7 +782,7 @@ def _describe(meta):
 
 
 def _split(text, flag, form, count):
-    key, sep, rest = text.partition("=")
+    key, sep, rest = split_assignment(text)
     numbers = rest.split(":")
     if not sep or not key.strip() or len(numbers) != count:
         raise SceneError(f"{flag} {text!r}: expected {form}", key=key.strip() or None)
@@ -643,8 +795,8 @@ def _number(text, flag, word, name):
     except ValueError:
         value = math.nan
     if not math.isfinite(value):
-        raise SceneError(f"{flag} {text!r}: {name} = {word!r} is not a finite number", key=text.partition("=")[0])
+        raise SceneError(f"{flag} {text!r}: {name} = {word!r} is not a finite number", key=split_assignment(text)[0])
     if abs(value) > AXIS_LIMIT:
         raise SceneError(f"{flag} {text!r}: {name} = {word} is beyond ±{AXIS_LIMIT:g}; no parameter or setting "
-                         f"of a mechanism is that large", key=text.partition("=")[0])
+                         f"of a mechanism is that large", key=split_assignment(text)[0])
     return value

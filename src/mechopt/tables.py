@@ -5,23 +5,27 @@ every error names the file (and the line)."""
 import csv
 from pathlib import Path
 
+from mechopt.files import read_regular
 from mechopt.models.errors import ModelError
 
 MAX_BYTES = 100_000_000      # read whole into memory: refuse what is plainly not a table of readings
+MAX_ROWS = 1_000_000         # counted before parsing: a table of more readings takes minutes to refuse
 
 
-def read_rows(path, *, what, example, max_bytes=MAX_BYTES):
-    """(header, [(line number, cells)], delimiter) of the CSV file `path`; `what` names the record
-    in a size error ("a load-travel record"), `example` the header it should have."""
+def read_rows(path, *, what, example, max_bytes=MAX_BYTES, max_rows=MAX_ROWS):
+    """(header, [(line number, cells)], delimiter) of the CSV file `path`, a regular file of at most
+    `max_bytes` bytes and `max_rows` lines; `what` names the record in a size error ("a load-travel
+    record"), `example` the header it should have."""
     path = Path(path)
     try:
-        size = path.stat().st_size
-        if size > max_bytes:
-            raise ModelError(f"{path}: {size / 1e6:.3g} MB; {what} is at most {max_bytes / 1e6:g} MB "
-                             f"(millions of readings)", key="path")
-        raw = path.read_bytes()
+        raw = read_regular(path, max_bytes=max_bytes, what=what)
     except OSError as exc:
         raise ModelError(f"{path}: cannot read: {exc.strerror}", key="path") from None
+    except ValueError as exc:
+        raise ModelError(str(exc), key="path") from None
+    lines = raw.count(b"\n") + 1
+    if lines > max_rows + 1:
+        raise ModelError(f"{path}: {lines:,} lines; {what} has at most {max_rows:,} rows", key="path")
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:

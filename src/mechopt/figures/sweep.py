@@ -15,6 +15,7 @@ A not-solved variant is drawn at its value when the solver gave one and on the a
 (line plot), so a designer sees where the answer stops being an answer.
 """
 import json
+import re
 import textwrap
 from math import ceil
 from pathlib import Path
@@ -140,8 +141,14 @@ def plot_sweep(table, out_dir, *, scene=None, outputs=None) -> list[Path]:
             fig, name = _panels(table, keys, output, case), f"sweep_{output}_vs_{keys[0]}_{keys[1]}.png"
         else:
             fig, name = _panels(table, keys, output, case), f"sweep_{output}_vs_{keys[0]}_{keys[1]}_by_{keys[2]}.png"
-        paths.append(save_figure(fig, out_dir / name))
+        paths.append(save_figure(fig, out_dir / _file_name(name)))
     return paths
+
+
+def _file_name(name):
+    """A figure's file name from swept keys and outputs, which a table from anywhere may name with
+    '/', '..' or markup: only letters, digits and . = , - [ ] kept, the rest '_'."""
+    return re.sub(r"[^\w.=,\[\]-]", "_", name).lstrip(".")[:200]
 
 
 def _empty(case, output):

@@ -1,0 +1,296 @@
+"""Issue 21, sections 2, 3 and 5 (the spine's part): a hostile or careless file cannot leak,
+execute or exhaust, no request hangs, and legal input is read as meant. Each a clear exit-2 line
+naming the file and key, or the right answer."""
+import json
+import os
+import socket
+import threading
+import time
+from pathlib import Path
+
+import pyarrow as pa
+import pyarrow.parquet as pq
+import pytest
+
+from mechopt import cli, registry
+from mechopt import sweep as sw
+from mechopt.files import quote, read_regular
+from mechopt.models.errors import ModelError, SceneError
+from mechopt.scene import load, loads, parse_overrides
+from mechopt.tables import read_rows
+
+SECRET = "root:x:0:0:root:/root:/bin/bash:SECRET-TAIL-0123456789"
+SCENE = """id = "mine/probe"
+title = "a probe"
+source = "a test"
+task = "cam_profile.ProfileFit"
+solver = "cam_cutter.minimax"
+[params]
+err_width_mm = {{ value = 0.4, mark = "assumed", why = "a test" }}
+[solver_settings]
+count = 200
+[structure]
+points_mm = {points}
+"""
+CSV = '{{ csv = "{}", columns = ["x_mm", "y_mm"] }}'
+
+
+def _scene(tmp_path, points, name="s.toml", text=SCENE):
+    path = tmp_path / name
+    path.write_text(text.format(points=points), encoding="utf-8")
+    return path
+
+
+def _secret(tmp_path):
+    path = tmp_path / "passwd"
+    path.write_text((SECRET + "\n") * 3)
+    return path
+
+
+# --- references: no content echoed, regular files only, reads bounded ---------------------------
+
+def test_a_table_reference_to_a_private_file_echoes_no_more_than_a_short_prefix(tmp_path):
+    path = _scene(tmp_path, CSV.format(_secret(tmp_path)))
+    with pytest.raises(SceneError, match=r"passwd: header \['root:x:0:0:root:/root:/bin/bash:SECRET\.\.\. \(\d+ characters\) "
+                                         r"lacks") as exc:
+        load(path)
+    assert "SECRET-TAIL" not in str(exc.value)
+
+
+def test_a_base_that_is_a_private_file_is_named_not_quoted(tmp_path):
+    path = _scene(tmp_path, "[[0, 0], [1, 1]]", text=f'base = {{{{ scene = "{_secret(tmp_path)}" }}}}\n' + SCENE)
+    with pytest.raises(SceneError, match=r"passwd: not valid TOML") as exc:
+        load(path)
+    assert "SECRET" not in str(exc.value)
+
+
+@pytest.mark.parametrize("reference", ["scene", "base", "csv"])
+def test_a_device_as_a_reference_is_refused_at_once(tmp_path, reference):
+    path = {"scene": lambda: "/dev/zero",
+            "base": lambda: _scene(tmp_path, "[]", text='base = {{ scene = "/dev/zero" }}\n' + SCENE),
+            "csv": lambda: _scene(tmp_path, CSV.format("/dev/zero"))}[reference]()
+    with pytest.raises(SceneError, match=r"/dev/zero: a device, not a (scene file|point table) \(references must name "
+                                         r"regular files\)"):
+        load(path)
+
+
+def test_a_fifo_as_a_scene_or_table_is_refused_without_blocking(tmp_path):
+    fifo = tmp_path / "p.csv"
+    os.mkfifo(fifo)
+    start = time.monotonic()
+    with pytest.raises(SceneError, match=r"p.csv: a FIFO, not a scene file"):
+        load(fifo)
+    with pytest.raises(SceneError, match=r"p.csv: a FIFO, not a point table"):
+        load(_scene(tmp_path, CSV.format(fifo)))
+    assert time.monotonic() - start < 5
+
+
+def test_a_file_growing_past_its_limit_is_refused_by_the_bytes_read(tmp_path, monkeypatch):
+    path = tmp_path / "grows.csv"
+    path.write_bytes(b"x" * 100)
+    real_fstat = os.fstat
+    monkeypatch.setattr(os, "fstat", lambda fd: os.stat_result((*real_fstat(fd)[:6], 0, *real_fstat(fd)[7:])))
+    with pytest.raises(ValueError, match=r"grows.csv: more than 5e-05 MB; a table is at most 5e-05 MB"):
+        read_regular(path, max_bytes=50, what="a table")       # st_size says 0, as /proc files do
+
+
+def test_a_csv_of_too_many_rows_is_refused_before_it_is_parsed(tmp_path):
+    path = tmp_path / "big.csv"
+    path.write_text("travel_mm,load_N\n" + "1,2\n" * 2001)
+    with pytest.raises(ModelError, match=r"big.csv: 2,003 lines; a load-travel record has at most 2,000 rows"):
+        read_rows(path, what="a load-travel record", example="travel_mm,load_N", max_rows=2000)
+
+
+def test_csv_values_of_1e300_are_refused_with_their_line(tmp_path):
+    (tmp_path / "p.csv").write_text("x_mm,y_mm\n0,0\n1e300,1\n2,0\n3,1\n")
+    with pytest.raises(SceneError, match=r"p.csv: line 3: expected finite numbers within ±1e\+09"):
+        load(_scene(tmp_path, CSV.format("p.csv")))
+
+
+def test_every_cli_error_is_capped_in_length(tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(registry, "find", lambda ref: (_ for _ in ()).throw(SceneError("row 1, " * 10_000)))
+    assert cli.main(["run", "x"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err) < cli.MAX_MESSAGE + 80 and err.endswith("more characters)")
+
+
+def test_quote_shows_a_short_escaped_prefix():
+    text = "a\x1b[31m" + "b" * 100
+    assert quote(text, 10) == f"'a\\x1b[31m... ({len(repr(text))} characters)"
+
+
+# --- TOML, literals, names -----------------------------------------------------------------------
+
+@pytest.mark.parametrize("points, match", [
+    ("[" * 5000 + "]" * 5000, r"s.toml: not a scene: arrays or tables nested too deeply"),
+    ("[[0, 1" + "0" * 5000 + "], [1, 1]]", r"s.toml: not a scene: Exceeds the limit \(4300 digits\)"),
+], ids=["nesting", "digits"])
+def test_hostile_toml_is_one_clear_line(tmp_path, points, match):
+    with pytest.raises(SceneError, match=match):
+        load(_scene(tmp_path, points))
+
+
+@pytest.mark.parametrize("value, match", [
+    ("1" + "0" * 5000, r"--set a_mm: the value \(5,001 characters\) is no number or table a mechanism takes"),
+    ("[" * 3000 + "]" * 3000, r"--set a_mm: the value \(6,000 characters\) is no number"),
+], ids=["digits", "nesting"])
+def test_hostile_set_values_are_one_clear_line(value, match):
+    with pytest.raises(SceneError, match=match):
+        parse_overrides([f"a_mm={value}"])
+
+
+def test_an_integer_no_float_holds_is_refused_naming_the_key():
+    with pytest.raises(SceneError, match=r"params.amplitude_limit_mm = 1000.*\(401 characters\): expected a finite"):
+        registry.find("loom/group1").build({"amplitude_limit_mm": 10**400})
+
+
+@pytest.mark.parametrize("line, match", [
+    ('task = "cam_profile.np"', r"task = 'cam_profile.np' names a module, not a model's task class"),
+    ('solver = "cam_cutter.METHODS"', r"solver = 'cam_cutter.METHODS' names a dict, not a solver function"),
+])
+def test_a_task_or_solver_name_that_is_no_class_or_function_is_refused(tmp_path, line, match):
+    key = line.split(" =")[0]
+    text = "\n".join(line if row.startswith(key + " =") else row for row in SCENE.splitlines())
+    with pytest.raises(SceneError, match=match):
+        load(_scene(tmp_path, "[[0, 0], [1, 1]]", text=text))
+
+
+def test_a_negative_seed_is_refused():
+    with pytest.raises(SceneError, match=r"--seed -1: expected a whole number from 0 to 2\*\*63 - 1"):
+        sw.plan(registry.find("loom/group1"), random=[sw.parse_random("amplitude_limit_mm=0.1:0.2")], samples=2,
+                seed=-1)
+
+
+def test_cases_at_the_root_of_the_disk_is_refused_after_a_bounded_walk(monkeypatch, tmp_path):
+    from mechopt import scene as scene_mod
+    for k in range(30):
+        (tmp_path / f"d{k}").mkdir()
+    monkeypatch.setattr(scene_mod, "MAX_WALK_ENTRIES", 20)
+    with pytest.raises(SceneError, match=r"more than 20 files and folders below it; a folder of scenes is smaller"):
+        scene_mod.scene_files(tmp_path)
+
+
+# --- hostile sweep tables ------------------------------------------------------------------------
+
+def _table(path, meta_text, key="amplitude_limit_mm", message="ok"):
+    table = pa.table({key: [0.1, 0.2], "variant": [0, 1], "status": ["SOLVED", "FAILED"],
+                      "message": [message] * 2, "x_mm": [1.0, 2.0]})
+    pq.write_table(table.replace_schema_metadata({b"mechopt.sweep": meta_text.encode()}), path)
+    return path
+
+
+def _meta(case="loom/group1", key="amplitude_limit_mm"):
+    return {"case": case, "scene_sha256": "0" * 64,
+            "spec": {"case": case, "grid": [{"key": key, "low": 0.1, "high": 0.2, "num": 2}], "random": [],
+                     "samples": 0, "seed": 0}}
+
+
+@pytest.mark.parametrize("meta, match", [
+    ("not json{", r"not JSON \(starts 'not json\{'\)"),
+    ('{"case": 1, "spec": [1], "scene_sha256": null}', r"case must be text and scene_sha256 64 hex digits"),
+    ("[" * 60_000 + "]" * 60_000, r"120,000 bytes, more than a sweep's spec ever needs"),
+    ("[" * 20_000 + "]" * 20_000, r"not JSON"),
+    (json.dumps(_meta() | {"spec": {"case": "x", "grid": [{"key": 1}], "random": [], "samples": 0, "seed": 0}}),
+     r"spec.grid must be a list of axes"),
+], ids=["not-json", "wrong-types", "oversize", "deep", "bad-axis"])
+def test_hostile_sweep_metadata_is_refused_naming_the_file(tmp_path, meta, match):
+    path = _table(tmp_path / "h.parquet", meta)
+    with pytest.raises(SceneError, match=r"h.parquet: its mechopt.sweep metadata is not a sweep's: " + match):
+        sw.read_table(path)
+    with pytest.raises(SceneError, match=r"h.parquet: its mechopt.sweep metadata is not a sweep's"):
+        sw.sweep(registry.find("loom/group1"), [sw.parse_grid("amplitude_limit_mm=0.1:0.2:2")], out=path,
+                 progress=False)
+
+
+def test_a_sweep_table_lacking_its_columns_is_refused(tmp_path):
+    path = _table(tmp_path / "h.parquet", json.dumps(_meta(key="other_key")))
+    with pytest.raises(SceneError, match=r"h.parquet: not a sweep's table: column 'other_key' is missing"):
+        sw.read_table(path)
+
+
+def test_the_report_escapes_every_value_of_a_hostile_sweep_table(tmp_path):
+    from mechopt.report import write_report
+    script = "<script>alert(1)</script>"
+    path = _table(tmp_path / "h.parquet", json.dumps(_meta(case=script, key=script)), key=script, message=script)
+    page = write_report(tmp_path / "rep", scenes=[], sweeps=[path]).read_text()
+    assert "<script>alert" not in page and "&lt;script&gt;alert(1)&lt;/script&gt;" in page
+
+
+# --- section 3: no hang --------------------------------------------------------------------------
+
+def test_a_list_of_500_speeds_is_refused_before_any_work():
+    with pytest.raises(SceneError, match=r"rebound-177rpm.toml: --set speeds_rpm: 500 entries; a list given here holds "
+                                         r"at most 100"):
+        registry.run("stop-impact/rebound-177rpm", {"speeds_rpm": [177] * 500})
+
+
+def test_a_scheduler_address_where_a_silent_server_answers_is_refused_within_the_timeout():
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(4)
+    held = []
+    threading.Thread(target=lambda: held.append(server.accept()), daemon=True).start()
+    start = time.monotonic()
+    try:
+        with pytest.raises(SceneError, match=r"a server answers there but said nothing within 0.5 s: not a Dask"):
+            sw._connect(f"tcp://127.0.0.1:{server.getsockname()[1]}", 0.5)
+    finally:
+        server.close()
+        for conn, _ in held:
+            conn.close()
+    assert time.monotonic() - start < 3
+
+
+# --- section 5: legal input read as meant ---------------------------------------------------------
+
+def test_a_scene_with_a_byte_order_mark_loads(tmp_path):
+    path = _scene(tmp_path, "[[0, 0], [1, 1]]")
+    path.write_bytes(b"\xef\xbb\xbf" + path.read_bytes())
+    with pytest.raises(SceneError, match=r"points_mm: expected two columns"):   # read as TOML: the model speaks
+        load(path)
+
+
+def test_a_whole_structure_entry_the_scene_lacks_is_structure_not_a_parameter():
+    scene = registry.find("loom/group1")
+    assert "windows" not in scene.spec.structure
+    window = [{"from": "3", "to": "7", "max_deg": 1.0}]
+    task, _ = scene.build({"windows": window})
+    assert task.windows == window
+
+
+def test_a_grid_over_a_structure_path_with_a_selector_is_parsed_and_swept():
+    axis = sw.parse_grid("operations[from=3,to=7].min_deg=10:40:4")
+    assert axis == sw.Axis("operations[from=3,to=7].min_deg", 10.0, 40.0, 4)
+    spec, variants = sw.plan(registry.find("loom/group1"), [axis])
+    assert [v["operations[from=3,to=7].min_deg"] for v in variants] == [10.0, 20.0, 30.0, 40.0]
+    with pytest.raises(SceneError, match=r"\[from=3,to=9\] matches 0 entries of 'operations', not one"):
+        sw.plan(registry.find("loom/group1"), [sw.parse_grid("operations[from=3,to=9].min_deg=10:40:4")])
+
+
+def test_derive_naming_a_missing_scene_names_the_file_and_the_key(tmp_path):
+    text = SCENE.format(points="[[0, 0], [1, 1]]") + '[derive]\nt0_rad = "no/such-scene:x"\n'
+    path = tmp_path / "s.toml"
+    path.write_text(text)
+    with pytest.raises(SceneError, match=r"s.toml: derive.t0_rad = 'no/such-scene:x': unknown case 'no/such-scene'"):
+        registry.run(path)
+
+
+def test_a_solver_error_is_not_solved_not_bad_input(monkeypatch, capsys):
+    from mechopt.models.errors import SolverError
+    monkeypatch.setattr(registry, "run", lambda *a, **k: (_ for _ in ()).throw(SolverError("CVODES gave up")))
+    assert cli.main(["run", "loom/group1"]) == cli.NOT_SOLVED
+    assert capsys.readouterr().err.strip() == "error: not solved: CVODES gave up"
+
+
+def test_a_sweep_sends_the_csv_table_its_scene_references_to_the_workers(tmp_path):
+    table = tmp_path / "tables" / "cam.csv"
+    table.parent.mkdir()
+    table.write_text((Path(__file__).parents[1] / "examples" / "cam-profile-table.csv").read_text())
+    path = _scene(tmp_path, CSV.format("tables/cam.csv"))
+    source = sw.SceneText.of(load(path))
+    assert [p for p, _ in source.files] == [str(table.resolve())]
+    table.unlink()                       # a worker on another machine has no copy of it
+    rows = sw.run_chunk(source, [(0, {"err_width_mm": 0.5})])
+    assert rows[0]["status"] == "SOLVED", rows[0]["message"]
+    with pytest.raises(SceneError, match=r"cam.csv: cannot read: No such file"):
+        loads(source.text, path)         # without what was sent, the table is not there
