@@ -186,6 +186,7 @@ class PressDrive:
     motor_breakdown_slip: float | None = None
     effects: tuple[str, ...] = field(default=())
     kinematics: str = "paper"
+    force_fit_max_mm: float | None = None    # the travel eq. (1) was fitted on, up to: past it a warning (models/validity.py)
 
     EFFECTS: ClassVar[dict[str, Effect]] = {
         "belt_elasticity": Effect(adds="elastic belt between pulley and crank shaft: twist and pulley speed states",
@@ -228,7 +229,7 @@ class PressDrive:
             _require(self, key, getattr(self, key) > 0, "must be > 0")
         for key in ("flywheel_inertia_kgm2", "crank_mass_kg", "tool_mass_kg", "rod_mass_kg", "motor_inertia_kgm2",
                     "belt_stiffness_Nm_rad", "belt_damping_Nms_rad", "gravity_m_s2", "friction_torque_Nm",
-                    "blank_thickness_mm", "shortfall_mm"):
+                    "blank_thickness_mm", "shortfall_mm", "force_fit_max_mm"):
             value = getattr(self, key)
             _require(self, key, value is None or value >= 0, "must be >= 0")
         for key, (most, why) in self.RANGES.items():      # also refuses inf and NaN

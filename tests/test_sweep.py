@@ -32,10 +32,11 @@ def _assert_rows_match_direct_runs(scene, table):
     for row in table.to_pylist():
         direct = registry.run(scene, {k: row[k] for k in keys}).result
         assert row["status"] == direct.status.value
+        assert row["warnings"] == "; ".join(direct.warnings)
         for name, value in direct.values.items():
             assert row[name] == pytest.approx(float(value), rel=1e-9, abs=1e-12), (row, name)
         extra = {c for c in table.column_names if row[c] is not None} - set(direct.values) - set(keys) \
-            - {"variant", "status", "message"} - TIMES
+            - {"variant", "status", "message", "warnings"} - TIMES
         assert not extra
 
 

@@ -365,6 +365,8 @@ def _print_run(run):
     print(f"status: {r.status.value}  ({r.message})" if r.message else f"status: {r.status.value}")
     if r.violated:
         print(f"violated: {', '.join(r.violated)}")
+    for sentence in r.warnings:
+        print(f"warning: {sentence}")
     _print_table(("value", "got"), [(k, _fmt(v)) for k, v in r.values.items()])
     if run.checks:
         _print_table(("check", "expected", "got", "kind", "where", ""),

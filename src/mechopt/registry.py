@@ -9,6 +9,7 @@ from typing import Any
 
 from mechopt.models.cache import memoised
 from mechopt.models.errors import MechoptError, SceneError
+from mechopt.models.validity import out_of_range
 from mechopt.scene import Scene, load
 from mechopt.solvers.result import Result, Status
 from mechopt.units import unit_of
@@ -131,7 +132,7 @@ class Run:
                 "values": {k: float(v) for k, v in r.values.items()},
                 "checks": [c.as_dict() for c in self.checks],
                 "timing": {"build_s": r.timing.build_s, "solve_s": r.timing.solve_s},
-                "violated": list(r.violated), "overrides": self.overrides,
+                "violated": list(r.violated), "warnings": list(r.warnings), "overrides": self.overrides,
                 "diagnostics": _plain(r.diagnostics)}
 
 
@@ -283,6 +284,7 @@ def run(scene: Scene | str, overrides: dict | None = None) -> Run:
     overrides = dict(overrides or {})
     task, settings = scene.build(_derived_params(scene) | overrides)
     result = scene.solver(task, **settings)
+    result = result.with_warnings(out_of_range(task, result.values))
     params_changed = bool(scene.split_overrides(overrides)[0])
     checks = [] if params_changed else check(scene, result)
     return Run(scene, result, checks, overrides, task, settings)

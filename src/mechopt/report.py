@@ -127,6 +127,7 @@ def _scene_section(run, scratch):
             f"<p><i>{_e(scene.spec.source)}</i><br>status {_e(r.status.value)}"
             f"{' (' + _e(r.message) + ')' if r.message else ''}; build {r.timing.build_s:.4f} s, "
             f"solve {r.timing.solve_s:.4f} s</p>"
+            + "".join(f"<p class='warning'>warning: {_e(w)}</p>" for w in r.warnings)
             + (f"<details><summary>{len(marked)} assumed / calibrated parameters</summary>"
                + _table(["parameter", "value", "unit", "mark", "why"],
                         [[_e(k), _e(_fmt(v)), _e(unit_of(k)), _e(m), _e(w)] for k, v, m, w in marked])
