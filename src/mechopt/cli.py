@@ -17,6 +17,7 @@ from pathlib import Path
 
 from mechopt import __version__, registry
 from mechopt.benchmarks import STUDIES, study
+from mechopt.drivers import set_mostly_by
 from mechopt.files import write_text_atomic
 from mechopt.models.errors import MechoptError, SceneError
 from mechopt.scene import parse_overrides
@@ -190,7 +191,7 @@ def _run(args) -> int:
     overrides = parse_overrides(args.set)
     _check_outputs(json_file=args.json, plot_dir=args.plot, table_file=args.csv)
     scene = registry.find(args.case)
-    result = registry.run(scene, overrides)
+    result = registry.run(scene, overrides, drivers=True)
     _print_run(result)
     if args.json:
         _write_json(args.json, result.as_dict())
@@ -367,6 +368,8 @@ def _print_run(run):
         print(f"violated: {', '.join(r.violated)}")
     for sentence in r.warnings:
         print(f"warning: {sentence}")
+    for sentence in set_mostly_by(r.diagnostics.get("drivers", {})):
+        print(f"drivers: {sentence}")
     _print_table(("value", "got"), [(k, _fmt(v)) for k, v in r.values.items()])
     if run.checks:
         _print_table(("check", "expected", "got", "kind", "where", ""),
