@@ -43,19 +43,7 @@ def uncertain_inputs(scene) -> list[Input]:
 
 def _structure_inputs(path, node) -> list[Input]:
     if isinstance(node, list):
-        out = []
-        for entry in node:
-            if isinstance(entry, dict) and entry.get("mark") in MARKS:
-                names = {k: v for k, v in entry.items() if isinstance(v, str) and k in ("from", "to", "name")}
-                if not names:
-                    continue
-                selector = ",".join(f"{k}={v}" for k, v in names.items() if k != "name") or f"name={names['name']}"
-                same = [e for e in node if isinstance(e, dict) and all(str(e.get(k)) == v for k, v in
-                                                                       (p.split("=", 1) for p in selector.split(",")))]
-                if len(same) != 1:
-                    continue       # no path names this entry alone
-                out += [Input(f"{path}[{selector}].{k}", float(v), entry["mark"]) for k, v in entry.items() if _number(v)]
-        return out
+        return [i for entry in node for i in _list_entry_inputs(path, node, entry)]
     if not isinstance(node, dict):
         return []
     if node.get("mark") in MARKS:
@@ -63,6 +51,19 @@ def _structure_inputs(path, node) -> list[Input]:
             return [Input(f"{path}.value", float(node["value"]), node["mark"])]
         return [Input(f"{path}.{k}", float(v), node["mark"]) for k, v in node.items() if _number(v)]
     return [i for k, v in node.items() for i in _structure_inputs(f"{path}.{k}", v)]
+
+
+def _list_entry_inputs(path, node, entry) -> list[Input]:
+    """A marked table of a list, named by its from/to (else its name) as `--set` paths select it."""
+    if not (isinstance(entry, dict) and entry.get("mark") in MARKS):
+        return []
+    ends = {k: entry[k] for k in ("from", "to") if isinstance(entry.get(k), str)}
+    picks = ends or ({"name": entry["name"]} if isinstance(entry.get("name"), str) else {})
+    same = [e for e in node if isinstance(e, dict) and all(e.get(k) == v for k, v in picks.items())]
+    if not picks or len(same) != 1:
+        return []                  # no path names this entry alone
+    selector = ",".join(f"{k}={v}" for k, v in picks.items())
+    return [Input(f"{path}[{selector}].{k}", float(v), entry["mark"]) for k, v in entry.items() if _number(v)]
 
 
 def elasticities(solve, inputs, headline, values, *, budget_s: float = 60.0) -> dict:
