@@ -61,5 +61,8 @@ def test_machine_speed_is_set_mostly_by_the_flight_time(tmp_path):
     assert top["elasticity"] == pytest.approx(-0.676, abs=0.01)
 
 
-def test_validate_and_sweeps_do_not_pay_for_drivers():
+def test_validate_sweeps_and_a_plain_run_do_not_pay_for_drivers(capsys):
     assert "drivers" not in registry.run("loom/group1").result.diagnostics
+    assert main(["run", "loom/group1"]) == 0 and "drivers:" not in capsys.readouterr().out
+    assert main(["run", "loom/group1", "--drivers"]) == 0
+    assert "drivers: span_deg: set mostly by" in capsys.readouterr().out

@@ -69,7 +69,9 @@ def _parser():
     run.add_argument("case", help="a scene id or a scene file's path")
     run.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                      help="override a parameter, solver setting or structure path (what-if); repeatable")
-    run.add_argument("--json", type=Path, metavar="FILE", help="write the result as JSON")
+    run.add_argument("--json", type=Path, metavar="FILE", help="write the result as JSON (with the drivers, see --drivers)")
+    run.add_argument("--drivers", action="store_true",
+                     help="the headline values' largest elasticities to the assumed inputs (re-solves; always with --json)")
     run.add_argument("--plot", type=Path, metavar="DIR", help="write figures into DIR")
     run.add_argument("--csv", type=Path, metavar="FILE",
                      help="write the run's arrays (trajectories: t_s, states, loads ...) as CSV columns")
@@ -191,7 +193,7 @@ def _run(args) -> int:
     overrides = parse_overrides(args.set)
     _check_outputs(json_file=args.json, plot_dir=args.plot, table_file=args.csv)
     scene = registry.find(args.case)
-    result = registry.run(scene, overrides, drivers=True)
+    result = registry.run(scene, overrides, drivers=args.drivers or args.json is not None)
     _print_run(result)
     if args.json:
         _write_json(args.json, result.as_dict())
