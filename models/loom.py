@@ -167,6 +167,7 @@ class Cyclogram:
     speed_rpm: float | None = None
     stress_speed_rpm: float | None = None
     lever: dict | None = None
+    lever_law_max_rpm: float | None = None   # the highest speed the lever's law was studied at (models/validity.py)
 
     EFFECTS: ClassVar[dict[str, Effect]] = {
         "contact_stress": Effect(adds="sigma_max(t) <= [sigma_H] on operations naming a stress model",
@@ -454,7 +455,7 @@ class Cyclogram:
 
 def _check_numbers(task):
     for key, top in (("cycle_deg", MAX_DEG), ("sigma_H_limit_MPa", MAX_MPA), ("amplitude_limit_mm", math.inf),
-                     ("speed_rpm", MAX_RPM), ("stress_speed_rpm", MAX_RPM)):
+                     ("speed_rpm", MAX_RPM), ("stress_speed_rpm", MAX_RPM), ("lever_law_max_rpm", MAX_RPM)):
         value = getattr(task, key)
         if value is not None and not (math.isfinite(value) and 0 < value <= top):
             raise ModelError(f"{key}={value} must be a finite number > 0" + (f" and <= {top:g}" if top < math.inf

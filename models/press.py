@@ -22,7 +22,8 @@ Readings the paper leaves open (each pinned by a test):
 * Q, the "resulting cutting force" of Figs. 9-10, is the force the rod exerts on the tool along
   the stroke: Q = F U + m_tool (X'' - g) (the tool's own equation of motion). The paper plots Q
   "against tool travel and crank angle during the cut" without an equation; the other readings
-  (F alone, the force along the rod) differ from it by 9.6 % at the KD2322 scene's jump.
+  (F alone, the force along the rod) differ: at the jump of press/kd2322's 160 kN data F alone
+  exceeds Q by 24.0 %, the force along the rod is Q's within 0.03 % (tests/test_trust_paper_figures.py).
 * Loads for sizing parts (`linkage_forces`): rod force at both ends, crank torque, main-bearing
   load, from the rod's Newton-Euler equations along the rod direction the task's X implies.
 * Motor: the Kloss static characteristic of an induction motor, M = 2 M_k s s_k / (s^2 + s_k^2),
@@ -195,6 +196,7 @@ class PressDrive:
     motor_breakdown_slip: float | None = None
     effects: tuple[str, ...] = field(default=())
     kinematics: str = "paper"
+    force_fit_max_mm: float | None = None    # the travel eq. (1) was fitted on, up to: past it a warning (models/validity.py)
 
     EFFECTS: ClassVar[dict[str, Effect]] = {
         "belt_elasticity": Effect(adds="elastic belt between pulley and crank shaft: twist and pulley speed states",
@@ -237,7 +239,7 @@ class PressDrive:
             _require(self, key, getattr(self, key) > 0, "must be > 0")
         for key in ("flywheel_inertia_kgm2", "crank_mass_kg", "tool_mass_kg", "rod_mass_kg", "motor_inertia_kgm2",
                     "belt_stiffness_Nm_rad", "belt_damping_Nms_rad", "gravity_m_s2", "friction_torque_Nm",
-                    "blank_thickness_mm", "shortfall_mm"):
+                    "blank_thickness_mm", "shortfall_mm", "force_fit_max_mm"):
             value = getattr(self, key)
             _require(self, key, value is None or value >= 0, "must be >= 0")
         for key, (most, why) in self.RANGES.items():      # also refuses inf and NaN

@@ -1,7 +1,7 @@
 """The one result every solver returns, and the only code that knows back ends' status words."""
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from enum import Enum
 
 import numpy as np
@@ -37,6 +37,9 @@ class Result:
     arrays: Mapping[str, np.ndarray] = field(default_factory=dict)
     """What the solver computed along the way, named with units (a run's `t_s` and states, a
     response's samples): what figures and notebooks read. The arrays are read-only copies."""
+    warnings: tuple[str, ...] = ()
+    """Plain sentences, one per way this answer leaves what its model's source or derivation
+    supports (an extrapolated force law, a lever slower than its cycle): the answer stands, with them."""
 
     def __post_init__(self):
         bad = {k: v for k, v in self.values.items() if not math.isfinite(v)}
@@ -48,6 +51,13 @@ class Result:
             array.flags.writeable = False
             arrays[name] = array
         object.__setattr__(self, "arrays", arrays)
+        if isinstance(self.warnings, str) or not all(isinstance(w, str) for w in self.warnings):
+            raise SolverError(f"warnings must be a tuple of sentences, got {self.warnings!r}")
+        object.__setattr__(self, "warnings", tuple(dict.fromkeys(self.warnings)))
+
+    def with_warnings(self, more) -> "Result":
+        """This result with more warnings (each sentence once)."""
+        return replace(self, warnings=(*self.warnings, *more)) if more else self
 
 
 _IPOPT = {

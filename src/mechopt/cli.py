@@ -20,6 +20,7 @@ from pathlib import Path
 
 from mechopt import __version__, registry
 from mechopt.benchmarks import STUDIES, study
+from mechopt.drivers import set_mostly_by
 from mechopt.files import write_text_atomic
 from mechopt.models.errors import MechoptError, SceneError, SolverError
 from mechopt.scene import parse_overrides
@@ -125,7 +126,9 @@ def _parser():
     run.add_argument("case", help="a scene id or a scene file's path")
     run.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                      help="override a parameter, solver setting or structure path (what-if); repeatable")
-    run.add_argument("--json", type=Path, metavar="FILE", help="write the result as JSON")
+    run.add_argument("--json", type=Path, metavar="FILE", help="write the result as JSON (with the drivers, see --drivers)")
+    run.add_argument("--drivers", action="store_true",
+                     help="the headline values' largest elasticities to the assumed inputs (re-solves; always with --json)")
     run.add_argument("--plot", type=Path, metavar="DIR", help="write figures into DIR")
     run.add_argument("--csv", type=Path, metavar="FILE",
                      help="write the run's arrays (trajectories: t_s, states, loads ...) as CSV columns")
@@ -247,7 +250,7 @@ def _run(args) -> int:
     overrides = parse_overrides(args.set)
     _check_outputs(json_file=args.json, plot_dir=args.plot, table_file=args.csv)
     scene = registry.find(args.case)
-    result = registry.run(scene, overrides)
+    result = registry.run(scene, overrides, drivers=args.drivers or args.json is not None)
     _print_run(result)
     if args.json:
         _write_json(args.json, result.as_dict())
@@ -422,6 +425,10 @@ def _print_run(run):
     print(f"status: {r.status.value}  ({r.message})" if r.message else f"status: {r.status.value}")
     if r.violated:
         print(f"violated: {', '.join(r.violated)}")
+    for sentence in r.warnings:
+        print(f"warning: {sentence}")
+    for sentence in set_mostly_by(r.diagnostics.get("drivers", {})):
+        print(f"drivers: {sentence}")
     _print_table(("value", "got"), [(k, _fmt(v)) for k, v in r.values.items()])
     if run.checks:
         _print_table(("check", "expected", "got", "kind", "where", ""),

@@ -2,13 +2,15 @@
 MECHOPT_CASES) and files (named by path); run one, check it against what its source says."""
 import difflib
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from importlib.resources import files
 from pathlib import Path
 from typing import Any
 
+from mechopt.drivers import elasticities, uncertain_inputs
 from mechopt.models.cache import memoised
 from mechopt.models.errors import MechoptError, SceneError
+from mechopt.models.validity import out_of_range
 from mechopt.scene import Scene, load, scene_files
 from mechopt.solvers import interrupt
 from mechopt.solvers.result import Result, Status
@@ -132,7 +134,7 @@ class Run:
                 "values": {k: float(v) for k, v in r.values.items()},
                 "checks": [c.as_dict() for c in self.checks],
                 "timing": {"build_s": r.timing.build_s, "solve_s": r.timing.solve_s},
-                "violated": list(r.violated), "overrides": self.overrides,
+                "violated": list(r.violated), "warnings": list(r.warnings), "overrides": self.overrides,
                 "diagnostics": _plain(r.diagnostics)}
 
 
@@ -277,16 +279,31 @@ def select(refs=()) -> tuple[list[Scene], list[str]]:
     return scenes, problems
 
 
-def run(scene: Scene | str, overrides: dict | None = None) -> Run:
+def run(scene: Scene | str, overrides: dict | None = None, *, drivers: bool = False) -> Run:
     """Solve a scene (a Scene, a registry id or a scene file's path), with `--set` overrides
-    validated like the file, and check its expectations."""
+    validated like the file, and check its expectations. With `drivers`, a scene's headline values
+    gain their largest elasticities to its assumed and calibrated inputs (`diagnostics["drivers"]`:
+    one re-solve per input and side, so only where asked)."""
     scene = find(scene)
     overrides = dict(overrides or {})
     task, settings = scene.build(_derived_params(scene) | overrides)
     result = _solve(scene.solver, task, settings)
+    result = result.with_warnings(out_of_range(task, result.values))
+    if drivers and scene.spec.headline:
+        result = _with_drivers(scene, overrides, result)
     params_changed = bool(scene.split_overrides(overrides)[0])
     checks = [] if params_changed else check(scene, result)
     return Run(scene, result, checks, overrides, task, settings)
+
+
+def _with_drivers(scene: Scene, overrides: dict, result: Result) -> Result:
+    def solve(more):
+        task, settings = scene.build(_derived_params(scene) | overrides | more)
+        return _solve(scene.solver, task, settings)
+    inputs = [replace(i, value=float(overrides[i.key])) if isinstance(overrides.get(i.key), (int, float)) else i
+              for i in uncertain_inputs(scene)]
+    found = elasticities(solve, inputs, scene.spec.headline, result.values)
+    return replace(result, diagnostics={**result.diagnostics, "drivers": found})
 
 
 def _derived_params(scene: Scene, chain: tuple[str, ...] = ()) -> dict:

@@ -17,6 +17,7 @@ from pathlib import Path
 
 from mechopt import __version__, registry
 from mechopt.figures.sweep import plot_sweep
+from mechopt.drivers import set_mostly_by
 from mechopt.files import write_text_atomic
 from mechopt.plots import plot_run
 from mechopt.sweep import describe_axes, read_table, scene_hash
@@ -59,7 +60,7 @@ def write_report(out_dir, *, scenes: Sequence | None = None, bench_dir=None, swe
     for scene in scenes if scenes is not None else registry.all_scenes():
         if progress:
             progress(f"running {scene.id} ...")
-        runs.append(registry.run(scene))
+        runs.append(registry.run(scene, drivers=True))
     with tempfile.TemporaryDirectory() as scratch:
         parts = ["<h1>mechopt: validation report</h1>", _provenance(runs, command), _summary(runs), _contents(runs),
                  "<h2 id='validation'>Validation</h2>", _validation(runs),
@@ -127,6 +128,8 @@ def _scene_section(run, scratch):
             f"<p><i>{_e(scene.spec.source)}</i><br>status {_e(r.status.value)}"
             f"{' (' + _e(r.message) + ')' if r.message else ''}; build {r.timing.build_s:.4f} s, "
             f"solve {r.timing.solve_s:.4f} s</p>"
+            + "".join(f"<p class='warning'>warning: {_e(w)}</p>" for w in r.warnings)
+            + "".join(f"<p>{_e(w)}</p>" for w in set_mostly_by(r.diagnostics.get("drivers", {})))
             + (f"<details><summary>{len(marked)} assumed / calibrated parameters</summary>"
                + _table(["parameter", "value", "unit", "mark", "why"],
                         [[_e(k), _e(_fmt(v)), _e(unit_of(k)), _e(m), _e(w)] for k, v, m, w in marked])

@@ -149,6 +149,8 @@ class SceneFile(BaseModel):
     solver_settings: dict[str, Number | str | bool] = {}
     method: dict[str, Number | str] = {}     # the source's own method, when it matters to the numbers
     expect: dict[str, Expectation] = {}
+    headline: list[str] = []                 # values the README or report shows: their drivers (mechopt.drivers)
+    headline_fixed: dict[str, str] = {}      # inputs not varied for the drivers, each with why
 
 
 @dataclasses.dataclass(frozen=True)

@@ -58,7 +58,7 @@ __all__ = ["Axis", "SweepSpec", "SceneText", "SweepInterrupted", "SweepWarning",
            "grid_values", "count_variants", "plan", "sweep", "run_chunk", "read_table", "check_unique", "scene_hash", "describe_axes"]
 
 META_KEY = b"mechopt.sweep"
-FIXED_COLUMNS = ("variant", "status", "message", "build_s", "solve_s")
+FIXED_COLUMNS = ("variant", "status", "message", "warnings", "build_s", "solve_s")
 MAX_VARIANTS = 1_000_000
 BYTES_PER_VARIANT = 400         # plan dicts (~190 B, 2 keys) and table; the audit saw 3.3 GB for 10^7
 AXIS_LIMIT = 1e12               # no length, stress, speed or setting of a mechanism is larger
@@ -266,7 +266,7 @@ def _solve_rows(scene: Scene, chunk) -> list[dict]:
             continue
         values = {k: float(v) for k, v in result.values.items() if k not in row}
         rows.append(row | {"status": result.status.value, "message": result.message,
-                           "build_s": result.timing.build_s, "solve_s": result.timing.solve_s} | values)
+                           "warnings": "; ".join(result.warnings), "build_s": result.timing.build_s, "solve_s": result.timing.solve_s} | values)
     return rows
 
 
@@ -715,7 +715,7 @@ def _table(rows, keys, meta) -> pa.Table:
     for row in rows:
         columns += [k for k in row if k not in columns]
     types = {k: pa.float64() for k in columns} | {"variant": pa.int64(), "status": pa.string(),
-                                                 "message": pa.string()}
+                                                 "message": pa.string(), "warnings": pa.string()}
     for key in keys:            # whole-number settings stay whole
         if rows and all(isinstance(r.get(key), int) for r in rows):
             types[key] = pa.int64()

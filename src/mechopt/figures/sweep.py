@@ -29,7 +29,7 @@ from mechopt.units import label as axis_label
 
 __all__ = ["plot_sweep", "outputs_of", "grid_of", "boundary_of", "Grid"]
 
-_NOT_OUTPUTS = {"variant", "status", "message", "build_s", "solve_s"}
+_NOT_OUTPUTS = {"variant", "status", "message", "warnings", "build_s", "solve_s"}
 MAX_PANELS = 6          # small multiples beyond this stop being readable side by side
 
 
