@@ -1,11 +1,13 @@
 """The documentation site: it builds strictly, its generated page is complete, its tutorials run.
 
 A code block is run when the line before its fence is `<!-- runnable -->`; a page's runnable
-blocks run in order in one temporary folder (```bash with `bash -e`, ```python with this
-interpreter), so a later block sees the files an earlier one wrote. A ```text block right after a
+blocks run in order in one temporary folder (```bash with `bash -e`, ```python in this process),
+so a later block sees the files an earlier one wrote. A ```text block right after a
 runnable one is what it prints (its last lines): the page quotes the code, and the test holds it to that.
 """
+import contextlib
 import importlib.util
+import io
 import os
 import re
 import subprocess
@@ -39,6 +41,10 @@ def environment():
     return env
 
 
+def checkout_files():
+    return sorted(p for p in ROOT.rglob("*") if ".git" not in p.parts and "__pycache__" not in p.parts)
+
+
 def load_hooks():
     spec = importlib.util.spec_from_file_location("docs_hooks", ROOT / "tools" / "docs_hooks.py")
     module = importlib.util.module_from_spec(spec)
@@ -59,15 +65,28 @@ def test_every_tutorial_has_runnable_code_and_every_mark_a_block():
         assert len(runnable_blocks(text)) == text.count(MARK), f"{page.name}: a {MARK} not followed by a fence"
 
 
+def run_python(code: str) -> str:
+    """A python block in this process (mechopt is imported once for every page): what it printed."""
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed):
+        exec(compile(code, "<docs block>", "exec"), {"__name__": "__main__"})
+    return printed.getvalue()
+
+
 @pytest.mark.parametrize("page", PAGES_WITH_CODE)
-def test_page_code_runs(page, tmp_path):
+def test_page_code_runs(page, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
     for number, (language, code, output) in enumerate(runnable_blocks((DOCS / page).read_text("utf-8")), 1):
-        command = {"bash": ["bash", "-e", "-c", code], "python": [sys.executable, "-c", code]}[language]
-        done = subprocess.run(command, cwd=tmp_path, env=environment(), capture_output=True, text=True, timeout=600)
-        where = f"{page}, block {number} ({language}):\n{code}\n{done.stdout}\n{done.stderr}"
-        assert done.returncode == 0, where
+        where = f"{page}, block {number} ({language}):\n{code}"
+        if language == "python":
+            printed = run_python(code)
+        else:
+            done = subprocess.run(["bash", "-e", "-c", code], env=environment(), capture_output=True, text=True,
+                                  timeout=600)
+            printed = done.stdout
+            assert done.returncode == 0, f"{where}\n{done.stdout}\n{done.stderr}"
         if output is not None:
-            assert output.strip() in done.stdout, where      # a back end may print a banner first
+            assert output.strip() in printed, f"{where}\n{printed}"
 
 
 def test_scene_reference_has_every_scene_with_its_declared_keys():
@@ -88,9 +107,10 @@ def test_a_cell_escapes_pipes_and_cuts_long_values():
 
 def test_site_builds_strictly_outside_the_checkout(tmp_path):
     pytest.importorskip("mkdocstrings", reason="the docs extra (pip install '.[test]' includes it)")
-    before = sorted(p for p in ROOT.rglob("*") if ".git" not in p.parts and "__pycache__" not in p.parts)
-    done = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "-q", "-f", str(ROOT / "mkdocs.yml"),
-                           "-d", str(tmp_path / "site")], env=environment(), capture_output=True, text=True, timeout=600)
+    before = checkout_files()
+    build = [sys.executable, "-m", "mkdocs", "build", "--strict", "-q", "-f", str(ROOT / "mkdocs.yml"),
+             "-d", str(tmp_path / "site")]
+    done = subprocess.run(build, env=environment(), capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stdout + done.stderr
     assert (tmp_path / "site" / "reference" / "scenes" / "index.html").exists()
-    assert sorted(p for p in ROOT.rglob("*") if ".git" not in p.parts and "__pycache__" not in p.parts) == before
+    assert checkout_files() == before

@@ -13,8 +13,6 @@ import tempfile
 import tomllib
 from pathlib import Path
 
-from mkdocs.structure.files import File
-
 from mechopt import describe, scenes
 
 PAGE = "reference/scenes.md"
@@ -67,7 +65,8 @@ ROOT = Path(__file__).resolve().parent.parent
 
 def mirror_package(root: Path) -> Path:
     """A temporary folder holding `mechopt/` as installed: symlinks per pyproject's package-dir."""
-    package_dir = tomllib.loads((root / "pyproject.toml").read_text(encoding="utf-8"))["tool"]["setuptools"]["package-dir"]
+    setuptools = tomllib.loads((root / "pyproject.toml").read_text(encoding="utf-8"))["tool"]["setuptools"]
+    package_dir = setuptools["package-dir"]
     folder = Path(tempfile.mkdtemp(prefix="mechopt-docs-"))
     atexit.register(shutil.rmtree, folder, ignore_errors=True)
     top = folder / "mechopt"
@@ -87,6 +86,7 @@ def on_startup(command, dirty):
 
 def on_files(files, config):
     """mkdocs hook: add the generated page to the build (in memory)."""
+    from mkdocs.structure.files import File      # here: the page itself needs no mkdocs (tests read it)
     files.append(File.generated(config, PAGE, content=scene_reference()))
     return files
 
