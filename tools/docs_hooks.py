@@ -3,14 +3,14 @@
 * The generated page: every registry scene's keys, from `mechopt.describe`, added to the build in
   memory, so the checkout is never written to. `python tools/docs_hooks.py` prints the same Markdown.
 * mkdocstrings reads the source with griffe, which finds a package by its folder; mechopt's
-  subpackages live beside src/ (pyproject's package-dir maps models/ to mechopt.models, ...). The
-  layout as installed is mirrored with symlinks in a temporary folder searched first.
+  subpackages live beside src/ (the package-dir mapping puts models/ at mechopt.models, ...). The
+  layout as imported is mirrored with symlinks in a temporary folder searched first.
 """
 import atexit
+import importlib.util
 import shutil
 import sys
 import tempfile
-import tomllib
 from pathlib import Path
 
 from mechopt import describe, scenes
@@ -64,18 +64,19 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def mirror_package(root: Path) -> Path:
-    """A temporary folder holding `mechopt/` as installed: symlinks per pyproject's package-dir."""
-    setuptools = tomllib.loads((root / "pyproject.toml").read_text(encoding="utf-8"))["tool"]["setuptools"]
-    package_dir = setuptools["package-dir"]
+    """A temporary folder holding `mechopt/` as imported: its own folder's entries, and each folder
+    of the repository that Python imports as a subpackage (mechopt.models from models/, ...)."""
+    import mechopt
     folder = Path(tempfile.mkdtemp(prefix="mechopt-docs-"))
     atexit.register(shutil.rmtree, folder, ignore_errors=True)
     top = folder / "mechopt"
     top.mkdir()
-    for entry in (root / package_dir["mechopt"]).iterdir():
+    for entry in Path(mechopt.__file__).parent.iterdir():
         (top / entry.name).symlink_to(entry)
-    for name, source in package_dir.items():
-        if name != "mechopt":
-            (folder / name.replace(".", "/")).symlink_to(root / source)
+    for sub in sorted(p for p in root.iterdir() if (p / "__init__.py").is_file()):
+        spec = importlib.util.find_spec(f"mechopt.{sub.name}")
+        if spec and spec.origin and Path(spec.origin).parent.resolve() == sub.resolve():
+            (top / sub.name).symlink_to(sub)
     return folder
 
 
