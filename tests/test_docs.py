@@ -1,0 +1,116 @@
+"""The documentation site: it builds strictly, its generated page is complete, its tutorials run.
+
+A code block is run when the line before its fence is `<!-- runnable -->`; a page's runnable
+blocks run in order in one temporary folder (```bash with `bash -e`, ```python in this process),
+so a later block sees the files an earlier one wrote. A ```text block right after a
+runnable one is what it prints (its last lines): the page quotes the code, and the test holds it to that.
+"""
+import contextlib
+import importlib.util
+import io
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+DOCS = ROOT / "docs"
+MARK = "<!-- runnable -->"
+FENCE = re.compile(r"^(`{3,})(\w+)[^\n]*\n(.*?)^\1\s*$", re.S | re.M)
+PAGES_WITH_CODE = sorted(p.relative_to(DOCS).as_posix() for p in DOCS.rglob("*.md") if MARK in p.read_text("utf-8"))
+
+
+def runnable_blocks(text: str) -> list[tuple[str, str, str | None]]:
+    """(language, code, printed output or None) of every fenced block whose preceding line is the mark."""
+    fences, blocks = list(FENCE.finditer(text)), []
+    for match, after in zip(fences, fences[1:] + [None]):
+        if text[:match.start()].rstrip("\n").rsplit("\n", 1)[-1].strip() != MARK:
+            continue
+        output = after is not None and after[2] == "text" and not text[match.end():after.start()].strip()
+        blocks.append((match[2], match[3], after[3] if output else None))
+    return blocks
+
+
+def environment():
+    """This interpreter's bin folder first, so `mechopt` and `python` are the tested ones."""
+    env = dict(os.environ, PYTHONDONTWRITEBYTECODE="1", MPLBACKEND="Agg", NO_MKDOCS_2_WARNING="1")
+    env["PATH"] = str(Path(sys.executable).parent) + os.pathsep + env.get("PATH", "")
+    return env
+
+
+def checkout_files():
+    return sorted(p for p in ROOT.rglob("*") if ".git" not in p.parts and "__pycache__" not in p.parts)
+
+
+def load_hooks():
+    spec = importlib.util.spec_from_file_location("docs_hooks", ROOT / "tools" / "docs_hooks.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_runnable_blocks_are_found_only_after_the_mark():
+    text = (f"{MARK}\n```bash\necho one\n```\n\n```bash\necho two\n```\n{MARK}\n```python\nprint(3)\n```\n\n"
+            "```text\n3\n```\nthen\n```text\nnot an output\n```\n")
+    assert runnable_blocks(text) == [("bash", "echo one\n", None), ("python", "print(3)\n", "3\n")]
+
+
+def test_every_tutorial_has_runnable_code_and_every_mark_a_block():
+    for page in sorted((DOCS / "tutorials").glob("*.md")):
+        text = page.read_text("utf-8")
+        assert runnable_blocks(text), f"{page.name}: no runnable block"
+        assert len(runnable_blocks(text)) == text.count(MARK), f"{page.name}: a {MARK} not followed by a fence"
+
+
+def run_python(code: str) -> str:
+    """A python block in this process (mechopt is imported once for every page): what it printed."""
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed):
+        exec(compile(code, "<docs block>", "exec"), {"__name__": "__main__"})
+    return printed.getvalue()
+
+
+@pytest.mark.parametrize("page", PAGES_WITH_CODE)
+def test_page_code_runs(page, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    for number, (language, code, output) in enumerate(runnable_blocks((DOCS / page).read_text("utf-8")), 1):
+        where = f"{page}, block {number} ({language}):\n{code}"
+        if language == "python":
+            printed = run_python(code)
+        else:
+            done = subprocess.run(["bash", "-e", "-c", code], env=environment(), capture_output=True, text=True,
+                                  timeout=600)
+            printed = done.stdout
+            assert done.returncode == 0, f"{where}\n{done.stdout}\n{done.stderr}"
+        if output is not None:
+            assert output.strip() in printed, f"{where}\n{printed}"
+
+
+def test_scene_reference_has_every_scene_with_its_declared_keys():
+    import mechopt
+    page = load_hooks().scene_reference()
+    for scene in mechopt.scenes():
+        assert f"### `{scene.id}`" in page
+    kd2322 = page.split("### `press/kd2322`")[1].split("### ")[0]
+    row = next(line for line in kd2322.splitlines() if line.startswith("| flywheel_inertia_kgm2 |"))
+    assert "| kg m² | assumed |" in row
+
+
+def test_a_cell_escapes_pipes_and_cuts_long_values():
+    cell = load_hooks().cell
+    assert cell("HIGHS | CLARABEL") == "HIGHS \\| CLARABEL"
+    assert cell("x" * 200).endswith("…") and len(cell("x" * 200)) == 70
+
+
+def test_site_builds_strictly_outside_the_checkout(tmp_path):
+    pytest.importorskip("mkdocstrings", reason="the docs extra (pip install '.[test]' includes it)")
+    before = checkout_files()
+    build = [sys.executable, "-m", "mkdocs", "build", "--strict", "-q", "-f", str(ROOT / "mkdocs.yml"),
+             "-d", str(tmp_path / "site")]
+    done = subprocess.run(build, env=environment(), capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert (tmp_path / "site" / "reference" / "scenes" / "index.html").exists()
+    assert checkout_files() == before
