@@ -43,8 +43,7 @@ def natural_frequencies(task: LeverStop) -> Result:
 
 def impact_forces(task: LeverStop) -> Result:
     """Impact force F_ud = J_A omega_0 (1 + k) / (l tau) at each speed of `speeds_rpm`, with the
-    impulse S_C = F tau, the approach velocity and the impulse over the lever's momentum m v0
-    (1 + k when J_A = m l^2: the plate reverses the momentum); `impact_force_N_<rpm>` etc."""
+    impulse S_C = F tau and the approach velocity; `impact_force_N_<rpm>` etc."""
     task.need_effect("impact_pulse")
     _need_speeds(task)
     start = time.perf_counter()
@@ -54,8 +53,6 @@ def impact_forces(task: LeverStop) -> Result:
         F = float(task.impact_force_N(v0))
         values |= {f"impact_force_N_{_tag(n)}": F, f"impulse_Ns_{_tag(n)}": F * task.contact_time_s,
                    f"approach_velocity_m_s_{_tag(n)}": v0}
-        if v0 > 0:                      # C that only settles onto its plate carries no momentum to compare
-            values[f"impulse_over_momentum_{_tag(n)}"] = F * task.contact_time_s / (task.mass_kg * v0)
     return Result(Status.SOLVED, values, Timing(0.0, time.perf_counter() - start),
                   message="tau = half the natural period on the plate")
 
