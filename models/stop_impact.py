@@ -177,6 +177,10 @@ class LeverStop:
                      "is not used with the effect 'cam_drive' (the cam computes the approach velocity); drop it")
             for key in ("law", "stroke_mm", "t_deg"):
                 _require(self, key, bool(getattr(self, key)), "is needed by the effect 'cam_drive'")
+            if "preload" in self.effects and self.preload_mm is not None:    # else C starts on its plate
+                _require(self, "preload_mm", self.preload_mm < self.stroke_mm,
+                         f"must be below stroke_mm={self.stroke_mm:g} (the plate would stand at or below the "
+                         "rise's start: the cam could not lift C onto it)")
         _require(self, "inertia_A_kgm2", self.inertia_A_kgm2 is None or "impact_pulse" in self.effects,
                  "belongs to effect 'impact_pulse', which is not listed in effects; add it or drop the parameter")
         for key, (lo, hi) in STATED_RANGE.items():      # the range the model and its solvers are tested over
