@@ -114,6 +114,8 @@ class LeverStop:
     given); `damping_ratio` zeta (effect damping, of the link in the rise and of the plate);
     `preload_mm` (effect preload); `closure_force_N` the force holding the roller on its cam and
     `law` the cam's motion law (structure; effect cam_drive, which replaces `velocity_factor`);
+    `law_slope_mm_per_deg`, `law_intercept_mm` the amplitude law a(3,7) = slope t + intercept the
+    chain's stroke and t are fitted to (solvers/stop_impact/fit.py finds every root of that fit);
     `launch` how C leaves the plate (structure, module docstring: "pulse_plus_v0" | "restitution");
     `effects` the effects the scene calls for (structure:
     the scene's own list, repeated, until the spine hands it to the task).
@@ -135,6 +137,8 @@ class LeverStop:
     damping_ratio: float | None = None
     preload_mm: float | None = None
     closure_force_N: float | None = None
+    law_slope_mm_per_deg: float | None = None
+    law_intercept_mm: float | None = None
     law: str = ""
     launch: str = "pulse_plus_v0"
     speeds_rpm: tuple = ()
@@ -167,6 +171,9 @@ class LeverStop:
         _require(self, "damping_ratio", self.damping_ratio is None or self.damping_ratio >= 0, "must be >= 0")
         _require(self, "preload_mm", self.preload_mm is None or self.preload_mm >= 0, "must be >= 0")
         _require(self, "closure_force_N", self.closure_force_N is None or self.closure_force_N >= 0, "must be >= 0")
+        _require(self, "law_slope_mm_per_deg", self.law_slope_mm_per_deg is None or self.law_slope_mm_per_deg < 0,
+                 "must be < 0 (the rebound falls as the lift gets more phase)")
+        _require(self, "law_intercept_mm", self.law_intercept_mm is None or self.law_intercept_mm > 0, "must be > 0")
         _require(self, "law", self.law in ("", *LAWS), f"is not a motion law; allowed: {', '.join(LAWS)}")
         _require(self, "launch", self.launch in LAUNCHES, f"is not a launch reading; allowed: {', '.join(LAUNCHES)}")
         if self.launch == "restitution":     # C leaves at k v0: needs k and the approach it reverses
