@@ -58,6 +58,8 @@ def test_the_scenes_declare_their_launch_and_the_177_rpm_figure_tells_the_two_ap
     assert pulse.task.launch == "pulse_plus_v0" and newton.task.launch == "restitution"
     assert pulse.result.values["rebound_mm_177"] == pytest.approx(0.019262, rel=1e-4)
     assert newton.result.values["rebound_mm_177"] == pytest.approx(0.021715, rel=1e-4)
+    measured = {c.name: c for c in pulse.checks}["rebound_experiment_mm_177"]     # a second row of one value (of = ...)
+    assert measured.got == pulse.result.values["rebound_mm_177"] and measured.verdict == "reproduced"
 
 
 def test_the_papers_reading_makes_its_law_the_tangent_of_a_hyperbola():
