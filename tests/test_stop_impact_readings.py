@@ -1,7 +1,6 @@
 """Readings of paper 004's stop impact (issues 20 §2, 26 §1-2): how C leaves the plate (the scene
 key `launch`), the paper's own reading (a rebound proportional to n / t), and no stop-impact
 check that passes by construction."""
-import dataclasses
 import math
 
 import pytest

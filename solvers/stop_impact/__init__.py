@@ -21,4 +21,5 @@ from mechopt.solvers.stop_impact.entry_points import (
 )
 from mechopt.solvers.stop_impact.fit import fit_roots
 
-__all__ = ["cam_dynamics", "fit_roots", "impact_forces", "linearise_amplitude", "natural_frequencies", "operating_point", "rebound"]
+__all__ = ["cam_dynamics", "fit_roots", "impact_forces", "linearise_amplitude", "natural_frequencies", "operating_point",
+           "rebound"]
