@@ -4,9 +4,8 @@ tangent; what each root predicts, the spread over the roots and over the assumed
 the root that a rule looking at the law alone picks.
 
 The two conditions are a(t; H) = intercept + slope t (C's rebound on the law's line) and
-da/dt(t; H) = slope. For each t of a grid the first fixes H (secant from the neighbour's H, else
-brentq over the stroke box: a grows with H, the approach velocity scaling with the stroke); the
-second's residual is then scanned over t, and each sign change is polished by brentq. Points
+da/dt(t; H) = slope. For each t of a grid the first fixes H (secant from the nearest t's H: a
+grows with H, the approach velocity scaling with the stroke); the second's residual is then scanned over t, and each sign change is polished by brentq. Points
 where the roller leaves its cam carry no rise and are gaps of the scan (reported).
 """
 import dataclasses
@@ -16,6 +15,7 @@ import time
 import numpy as np
 from scipy.optimize import brentq
 
+from mechopt.models.errors import ModelError
 from mechopt.models.stop_impact import LeverStop
 from mechopt.solvers.result import Result, Status, Timing
 from mechopt.solvers.settings import Annotated, Interval, NonNegative, Positive, Tolerance
@@ -46,8 +46,8 @@ def fit_roots(task: LeverStop, *, t_min_deg: Annotated[float, Interval(gt=0, lt=
     task.need("law_slope_mm_per_deg", "law_intercept_mm", "speed_nominal_rpm")
     task.need_effect("cam_drive")
     if not (t_min_deg < t_max_deg and stroke_min_mm < stroke_max_mm):
-        raise ValueError(f"empty box: t [{t_min_deg:g}, {t_max_deg:g}] deg, stroke [{stroke_min_mm:g}, "
-                         f"{stroke_max_mm:g}] mm")
+        raise ModelError(f"empty box: t_min_deg={t_min_deg:g} must be below t_max_deg={t_max_deg:g} and "
+                         f"stroke_min_mm={stroke_min_mm:g} below stroke_max_mm={stroke_max_mm:g}", key="t_min_deg")
     start = time.perf_counter()
     fit = _Fit(task, stroke_min_mm, stroke_max_mm)
     grid = np.arange(t_min_deg, t_max_deg + 0.5 * t_step_deg, t_step_deg)
@@ -128,7 +128,7 @@ class _Fit:
                         raise
                     step /= 2
             else:
-                raise
+                raise ValueError(f"t = {t_deg:g} deg: the roller leaves its cam at every stroke tried")
             previous, h, fh = (h, fh), h + step, f_new
         if not (self.box[0] <= h <= self.box[1]) or abs(fh) > 1e-12 * abs(target):
             raise ValueError(f"t = {t_deg:g} deg: no stroke in the box puts the rebound on the law's line")
