@@ -31,6 +31,12 @@ Readings taken where the paper is silent or inconsistent (each pinned by a test)
   A, so that mass, inertia and frequency belong to one lever; the pulse's impulse is then
   (1 + k) m v0, the plate reversing the lever's momentum (what a separately fitted J_A does to the
   impulse: cases/stop-impact/impact-force.toml).
+* Launch after the impact (structure `launch`), two readings of how C leaves the plate:
+  "pulse_plus_v0" (the paper's eq. (2) as computed, q0' = omega_0 l away from the plate *and*
+  the reversing pulse Q_F: C leaves at about (2 + k) v0) and "restitution" (Newton: the pulse
+  is the restitution itself, C leaves at k v0; eq. (2) then runs with q0' = k v0 and no pulse).
+  Under a v0 proportional to n / t both give a rebound proportional to n / t (one constant
+  apart); they differ where the preload does not scale (177 rpm) and in the chain.
 * Preload (effect `preload`): the cam drives the lever `preload_mm` past the plate; the moving
   lever (Fig. 5) holds that as a constant force P = c_free * preload pressing C onto the plate,
   a constant -P added to Q_F in eq. (2).
@@ -108,6 +114,9 @@ class LeverStop:
     given); `damping_ratio` zeta (effect damping, of the link in the rise and of the plate);
     `preload_mm` (effect preload); `closure_force_N` the force holding the roller on its cam and
     `law` the cam's motion law (structure; effect cam_drive, which replaces `velocity_factor`);
+    `law_slope_mm_per_deg`, `law_intercept_mm` the amplitude law a(3,7) = slope t + intercept the
+    chain's stroke and t are fitted to (solvers/stop_impact/fit.py finds every root of that fit);
+    `launch` how C leaves the plate (structure, module docstring: "pulse_plus_v0" | "restitution");
     `effects` the effects the scene calls for (structure:
     the scene's own list, repeated, until the spine hands it to the task).
     """
@@ -128,7 +137,10 @@ class LeverStop:
     damping_ratio: float | None = None
     preload_mm: float | None = None
     closure_force_N: float | None = None
+    law_slope_mm_per_deg: float | None = None
+    law_intercept_mm: float | None = None
     law: str = ""
+    launch: str = "pulse_plus_v0"
     speeds_rpm: tuple = ()
     effects: tuple = ()
 
@@ -159,12 +171,23 @@ class LeverStop:
         _require(self, "damping_ratio", self.damping_ratio is None or self.damping_ratio >= 0, "must be >= 0")
         _require(self, "preload_mm", self.preload_mm is None or self.preload_mm >= 0, "must be >= 0")
         _require(self, "closure_force_N", self.closure_force_N is None or self.closure_force_N >= 0, "must be >= 0")
+        _require(self, "law_slope_mm_per_deg", self.law_slope_mm_per_deg is None or self.law_slope_mm_per_deg < 0,
+                 "must be < 0 (the rebound falls as the lift gets more phase)")
+        _require(self, "law_intercept_mm", self.law_intercept_mm is None or self.law_intercept_mm > 0, "must be > 0")
         _require(self, "law", self.law in ("", *LAWS), f"is not a motion law; allowed: {', '.join(LAWS)}")
+        _require(self, "launch", self.launch in LAUNCHES, f"is not a launch reading; allowed: {', '.join(LAUNCHES)}")
+        if self.launch == "restitution":     # C leaves at k v0: needs k and the approach it reverses
+            for effect in ("initial_velocity", "impact_pulse"):
+                _require(self, "launch", effect in self.effects, f"needs the effect '{effect}' (C leaves at k v0)")
         if "cam_drive" in self.effects:      # one source of the approach velocity: the cam, not a fitted factor
             _require(self, "velocity_factor", self.velocity_factor is None,
                      "is not used with the effect 'cam_drive' (the cam computes the approach velocity); drop it")
             for key in ("law", "stroke_mm", "t_deg"):
                 _require(self, key, bool(getattr(self, key)), "is needed by the effect 'cam_drive'")
+            if "preload" in self.effects and self.preload_mm is not None:    # else C starts on its plate
+                _require(self, "preload_mm", self.preload_mm < self.stroke_mm,
+                         f"must be below stroke_mm={self.stroke_mm:g} (the plate would stand at or below the "
+                         "rise's start: the cam could not lift C onto it)")
         _require(self, "inertia_A_kgm2", self.inertia_A_kgm2 is None or "impact_pulse" in self.effects,
                  "belongs to effect 'impact_pulse', which is not listed in effects; add it or drop the parameter")
         for key, (lo, hi) in STATED_RANGE.items():      # the range the model and its solvers are tested over
@@ -254,14 +277,17 @@ class LeverStop:
 
     def impact(self, speed_rpm, t_deg=None, *, v0_m_s=None) -> Impact:
         """The inputs of eq. (2) at one speed and phase angle, with only the listed effects; `v0_m_s`
-        the approach velocity when the cam computed it (effect cam_drive)."""
+        the approach velocity when the cam computed it (effect cam_drive). Under the launch
+        reading "restitution" C leaves at k v0 and no pulse follows (the pulse is the restitution)."""
         v0 = self.approach_velocity_m_s(speed_rpm, t_deg) if v0_m_s is None else v0_m_s
         omega = self.omega_stop_rad_s
+        pulse = "impact_pulse" in self.effects and self.launch == "pulse_plus_v0"
+        launch = v0 * (self.restitution if self.launch == "restitution" else 1.0)
         return Impact(omega_rad_s=omega,
                       damping_rad_s=self.damping_ratio * omega if "damping" in self.effects else 0.0,
                       mass_kg=self.mass_kg,
-                      v0_m_s=v0 if "initial_velocity" in self.effects else 0.0,
-                      force_N=self.impact_force_N(v0) if "impact_pulse" in self.effects else 0.0,
+                      v0_m_s=launch if "initial_velocity" in self.effects else 0.0,
+                      force_N=self.impact_force_N(v0) if pulse else 0.0,
                       tau_s=self.contact_time_s, preload_N=self.preload_N)
 
     # ---------------------------------------------------------------- checks for solvers
@@ -302,6 +328,8 @@ STATED_RANGE = {
     "preload_mm": (0.0, 1e5), "closure_force_N": (0.0, 1e7),
 }
 
+
+LAUNCHES = ("pulse_plus_v0", "restitution")     # how C leaves the plate (module docstring)
 
 MAX_FREQUENCY_HZ = 1e5      # a lever's natural frequency: past it the solvers' steps run into the millions
 

@@ -193,7 +193,8 @@ def test_one_lever_its_impulse_reverses_the_momentum(chain):
     assert imp.force_N * imp.tau_s == pytest.approx((1 + 5 / 9) * chain.mass_kg * imp.v0_m_s, rel=1e-12)
     assert 150 < imp.force_N / FORCE_280_N < 250
     forces = impact_forces(dataclasses.replace(chain, speeds_rpm=(280.0,))).values
-    assert forces["impulse_over_momentum_280"] == pytest.approx(1 + 5 / 9, rel=1e-12)
+    assert forces["impulse_Ns_280"] == pytest.approx((1 + 5 / 9) * chain.mass_kg * forces["approach_velocity_m_s_280"],
+                                                     rel=1e-12)
 
 
 def test_the_chains_rebound_is_eq_2_with_the_independently_integrated_approach_velocity(chain):

@@ -6,6 +6,8 @@
 * `entry_points`  what scenes name: `natural_frequencies`, `impact_forces`, `rebound`
                   (method="closed_form" | "quadrature" | "ode"), `linearise_amplitude`,
                   `operating_point`, `cam_dynamics`.
+* `fit`           every root of the chain's calibration (stroke, t) on the published law, and the
+                  spread of its predictions over the roots and the damping: `fit_roots`.
 * `cam_follower`  the lift cam's rise with the elastic lever (Fig. 4): contact with the plate,
                   approach velocity, dynamic errors, the roller's contact force.
 """
@@ -17,5 +19,7 @@ from mechopt.solvers.stop_impact.entry_points import (
                                                       operating_point,
                                                       rebound,
 )
+from mechopt.solvers.stop_impact.fit import fit_roots
 
-__all__ = ["cam_dynamics", "impact_forces", "linearise_amplitude", "natural_frequencies", "operating_point", "rebound"]
+__all__ = ["cam_dynamics", "fit_roots", "impact_forces", "linearise_amplitude", "natural_frequencies", "operating_point",
+           "rebound"]

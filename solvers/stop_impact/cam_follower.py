@@ -24,6 +24,13 @@ from mechopt.solvers.result import Status, from_casadi_integrator, from_ivp
 
 DWELL_PERIODS = 4.0         # how long after the rise C may still reach its plate [natural periods]
 
+
+def dwell_length(lam, t_deg):
+    """How far past the rise (in xi) C is followed: DWELL_PERIODS natural periods, but never past
+    the cycle's end (the cam comes round); and whether the cycle cut it short."""
+    periods, cycle = DWELL_PERIODS * 2 * math.pi / lam, 360.0 / t_deg - 1.0
+    return min(periods, cycle), cycle < periods
+
 _BUILDS = BuildCache("stop_impact.cam_integrators", maxsize=16)
 
 
@@ -85,7 +92,7 @@ def follow_cam(task: LeverStop, speed_rpm, t_deg=None, *, reltol: float = 1e-10,
     t_deg = task.t_deg if t_deg is None else t_deg
     lam, zeta, H, target, T = follower_data(task, speed_rpm, t_deg)
     (grid_int, end_int), build_s = _integrators(task.law, points, reltol)
-    dwell = DWELL_PERIODS * 2 * math.pi / lam
+    dwell, cut = dwell_length(lam, t_deg)
     phases = [(0.0, 1.0, 1.0), (1.0, dwell, 0.0)]
     state = np.zeros(2)
     xs, es, des = [np.zeros(1)], [np.zeros(1)], [np.zeros(1)]
@@ -127,6 +134,11 @@ def follow_cam(task: LeverStop, speed_rpm, t_deg=None, *, reltol: float = 1e-10,
     leaves = None
     status, message = Status.SOLVED, "C meets its plate" if contact is not None else \
         f"C does not reach its plate within the rise and {DWELL_PERIODS:g} periods of dwell"
+    if contact is None and cut:         # a lever slower than its cycle: the next rise comes first
+        status = Status.LIMIT
+        message = (f"the lever (f_free = {task.f_free_Hz:.4g} Hz) is slower than its cycle at {speed_rpm:g} rpm "
+                   f"({60 / speed_rpm * 1e3:.4g} ms a turn): C does not reach its plate before the cam comes round, "
+                   "outside the one-rise model; stiffen the lever (E_GPa, J_x_mm4) or lighten it (mass_kg)")
     below = np.flatnonzero(force < 0)
     if below.size:
         j = int(below[0])
@@ -214,7 +226,7 @@ def follow_cam_reference(task: LeverStop, speed_rpm, t_deg=None, *, rtol: float 
         return y[0] - target
     plate.terminal, plate.direction = True, 1
     state = [0.0, 0.0]
-    for span, rising in (((0.0, 1.0), True), ((1.0, 1.0 + DWELL_PERIODS * 2 * math.pi / lam), False)):
+    for span, rising in (((0.0, 1.0), True), ((1.0, 1.0 + dwell_length(lam, t_deg)[0]), False)):
         run = solve_ivp(rhs(rising), span, state, method="DOP853", rtol=rtol, atol=rtol * 1e-2, events=plate)
         status = from_ivp(run.status)
         if status is not Status.SOLVED:

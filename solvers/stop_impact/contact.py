@@ -37,10 +37,13 @@ def simulate_contact(task: LeverStop, speed_rpm, *, v0_m_s: float | None = None,
         return y[1]
     peak.terminal, peak.direction = True, -1
 
+    scale = abs(v0) / task.omega_stop_rad_s + delta        # what moves C: its approach, the preload
+    if scale == 0.0:
+        return 0.0, 0.0, Status.SOLVED, "nothing moves C: no approach velocity, no preload"
     horizon = 4 * math.pi / task.omega_stop_rad_s
     # start a hair inside the plate so the separation event is not the start point
     contact = solve_ivp(on_plate, (0.0, horizon), [-1e-15 * v0, -v0], method="DOP853", rtol=rtol,
-                        atol=1e-14 * v0 / task.omega_stop_rad_s, events=separation)
+                        atol=1e-14 * scale, events=separation)
     status = from_ivp(contact.status)
     if status is not Status.SOLVED:
         return 0.0, 0.0, status, f"contact phase: {contact.message}"
@@ -48,7 +51,7 @@ def simulate_contact(task: LeverStop, speed_rpm, *, v0_m_s: float | None = None,
         return 0.0, horizon, Status.SOLVED, "C stays on the plate (the preload holds it)"
     t_sep, y_sep = contact.t_events[0][0], contact.y_events[0][0]
     free = solve_ivp(off_plate, (t_sep, t_sep + 2 * math.pi / task.omega_free_rad_s), [0.0, y_sep[1]],
-                     method="DOP853", rtol=rtol, atol=1e-14 * v0 / task.omega_free_rad_s, events=peak)
+                     method="DOP853", rtol=rtol, atol=1e-14 * scale, events=peak)
     status = from_ivp(free.status)
     if status is not Status.SOLVED or not free.t_events[0].size:
         return 0.0, t_sep, Status.FAILED if status is Status.SOLVED else status, f"free phase: {free.message}"

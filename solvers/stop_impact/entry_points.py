@@ -43,8 +43,7 @@ def natural_frequencies(task: LeverStop) -> Result:
 
 def impact_forces(task: LeverStop) -> Result:
     """Impact force F_ud = J_A omega_0 (1 + k) / (l tau) at each speed of `speeds_rpm`, with the
-    impulse S_C = F tau, the approach velocity and the impulse over the lever's momentum m v0
-    (1 + k when J_A = m l^2: the plate reverses the momentum); `impact_force_N_<rpm>` etc."""
+    impulse S_C = F tau and the approach velocity; `impact_force_N_<rpm>` etc."""
     task.need_effect("impact_pulse")
     _need_speeds(task)
     start = time.perf_counter()
@@ -54,8 +53,6 @@ def impact_forces(task: LeverStop) -> Result:
         F = float(task.impact_force_N(v0))
         values |= {f"impact_force_N_{_tag(n)}": F, f"impulse_Ns_{_tag(n)}": F * task.contact_time_s,
                    f"approach_velocity_m_s_{_tag(n)}": v0}
-        if v0 > 0:                      # C that only settles onto its plate carries no momentum to compare
-            values[f"impulse_over_momentum_{_tag(n)}"] = F * task.contact_time_s / (task.mass_kg * v0)
     return Result(Status.SOLVED, values, Timing(0.0, time.perf_counter() - start),
                   message="tau = half the natural period on the plate")
 
@@ -111,19 +108,24 @@ def rebound(task: LeverStop, *, method: Literal["closed_form", "quadrature", "od
 def linearise_amplitude(task: LeverStop) -> Result:
     """The amplitude law for the LP: tangent of a(t) at `t_deg`, `speed_nominal_rpm`; the bound on
     t(3,7) that a <= `amplitude_limit_mm` gives, by the tangent and by the exact law (a falls
-    with t: the exact bound is the root of a(t) = limit)."""
+    with t: the exact bound is the root of a(t) = limit). Where the roller leaves its cam on the
+    way (effect cam_drive) the answer is INFEASIBLE (violated `cam_contact`), the tangent kept."""
     task.need("amplitude_limit_mm")
     start = time.perf_counter()
-    slope, intercept = amplitude_law(task)
     limit = task.amplitude_limit_mm
     n = task.speed_nominal_rpm
-    exact = lambda t: float(rebound_amplitude_mm(task, n, t)) - limit
-    lo, hi = _bracket(exact, task.t_deg, limit, n)
+    values = {}
+    try:
+        slope, intercept = amplitude_law(task)
+        t_linear = (limit - intercept) / slope
+        values = {"slope_mm_per_deg": slope, "intercept_mm": intercept, "t_3_7_min_deg": t_linear}
+        exact = lambda t: float(rebound_amplitude_mm(task, n, t)) - limit
+        lo, hi = _bracket(exact, task.t_deg, limit, n)
+    except RollerLeftCam as exc:
+        return _without_cam(exc, values, Timing(0.0, time.perf_counter() - start))
     t_exact = brentq(exact, lo, hi, xtol=1e-12, rtol=1e-14)
-    t_linear = (limit - intercept) / slope
-    values = {"slope_mm_per_deg": slope, "intercept_mm": intercept, "t_3_7_min_deg": t_linear,
-              "t_3_7_min_exact_deg": t_exact, "span_gain_deg": t_exact - t_linear,
-              "amplitude_nominal_mm": float(rebound_amplitude_mm(task, n, task.t_deg))}
+    values |= {"t_3_7_min_exact_deg": t_exact, "span_gain_deg": t_exact - t_linear,
+               "amplitude_nominal_mm": float(rebound_amplitude_mm(task, n, task.t_deg))}
     return Result(Status.SOLVED, values, Timing(0.0, time.perf_counter() - start),
                   message=f"tangent at t = {task.t_deg:g} deg, n = {n:g} rpm; a(t) is convex, so the tangent's "
                           f"bound is looser than the exact one by span_gain_deg")
@@ -190,7 +192,12 @@ def _bracket(excess, t_deg, limit, speed_rpm, factor=1.25, steps=40):
                 if excess(lo) >= 0:
                     return lo, hi
                 hi = lo
-    except SolverError as exc:          # e.g. the roller leaves its cam on the way: no exact bound there
+    except RollerLeftCam as exc:        # the roller leaves its cam on the way: a status, for the caller
+        if exc.status is Status.INFEASIBLE:
+            raise
+        raise ModelError(f"amplitude_limit_mm={limit}: no exact bound on t at {speed_rpm:g} rpm: {exc}",
+                         key="amplitude_limit_mm") from None
+    except SolverError as exc:          # an integrator's failure on the way: no exact bound there
         raise ModelError(f"amplitude_limit_mm={limit}: no exact bound on t at {speed_rpm:g} rpm: {exc}",
                          key="amplitude_limit_mm") from None
     raise ModelError(f"amplitude_limit_mm={limit}: a(t) at {speed_rpm:g} rpm does not cross it for t in "

@@ -352,7 +352,7 @@ def check(scene: Scene, result: Result) -> list[Check]:
     out = []
     for name, exp in scene.spec.expect.items():
         got = None if exp.verdict == "not_reproducible" else (
-            result.status.value if name == "status" else result.values.get(name))
+            result.status.value if name == "status" else result.values.get(exp.of or name))
         got = None if got is None else (got if isinstance(got, str) else float(got))
         numeric = isinstance(exp.value, (int, float)) and not isinstance(exp.value, bool)
         tol = max(exp.abs or 0.0, (exp.rel or 0.0) * abs(exp.value)) if numeric and exp.verdict != "not_reproducible" else None

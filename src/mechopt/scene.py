@@ -74,6 +74,7 @@ class Expectation(BaseModel):
     reason: str = ""       # why the figure is missed: required with a declared verdict, and only there
     # readings taken with the published figure in view: a reproduction that needs them says so
     readings_after_figure: list[str] = []
+    of: str = ""           # the result's value this row checks, when not the row's own name (a second figure of it)
 
     @model_validator(mode="after")
     def _one_form(self):
