@@ -18,7 +18,7 @@ checks: the two impulse_over_momentum (J_A = m l^2 makes S / (m v0) = 1 + k), co
 amplitude-law's t_3_7_min_deg and group1-stop-model's t_3_7_deg (36 deg from the tangent whose two
 constants are fitted to the law's slope and intercept), three amplitude_3_7_mm = 0.1 (the linear
 law at t_3_7_deg = 36, checked beside it) and machine-speed's amplitude_holds_to_3_7_deg (the
-solver's own 60 n / 420). The last four are removed; the stop-impact ones are engineer stop's.
+solver's own 60 n / 420). Eight are removed; group1-stop-model's is labelled `follows`.
 """
 import re
 
@@ -47,7 +47,7 @@ IDENTITIES = (
      "tau = 1 / (2 f_stop), the model's reading, with f_stop calibrated to the published frequency"),
 )
 
-# identities left to another change, each struck from here when fixed (engineer stop, issue 20 part 2)
+# identities left to another change, each struck from here when fixed
 PENDING: set[tuple[str, str]] = set()     # the stop-impact ones are gone (the stiffer-lever test keeps them out)
 
 # derived number checks written before rule 2, read one by one: each can fail, its `where` says how
@@ -66,8 +66,7 @@ UNNAMED = {
     ("press/sensitivity", "speed_fluctuation"), ("press/sensitivity", "omega_min_deg"),
     ("press/sensitivity", "peak_belt_torque_Nm"), ("press/sensitivity", "omega_mean_rad_s"),
     ("press/start-up", "peak_force_N"), ("press/start-up", "cut_end_deg"),
-    ("stop-impact/impact-force", "impulse_over_momentum_280"), ("stop-impact/impact-force", "impulse_over_momentum_420"),
-    ("stop-impact/amplitude-law", "t_3_7_min_deg"), ("loom/group1-repaired", "linearisation_error_amplitude_3_7_mm"),
+    ("loom/group1-repaired", "linearisation_error_amplitude_3_7_mm"),
 }
 
 
