@@ -28,7 +28,6 @@ from mechopt.models.cam_cutter import (
     ideal_point,
     limacon_implicit,
     real_point,
-    real_velocity,
 )
 from mechopt.models.cam_profile import ProfileFit
 from mechopt.models.errors import ModelError
@@ -41,7 +40,8 @@ from mechopt.solvers.cam_cutter.deviation import (
     verified_deviation,
     verified_deviation_on,
 )
-from mechopt.solvers.result import Result, Status, Timing, from_ipopt, from_sqpmethod
+from mechopt.solvers.cam_cutter.problem import NLP_OPTIONS, ROUND_VERTICES, foot_and_band, pad_nodes, solve_round
+from mechopt.solvers.result import Result, Status, Timing
 from mechopt.solvers.settings import Annotated, Ge, Interval, Tolerance, check_settings
 
 Nodes = Annotated[int, Interval(ge=2, le=1_000_000)]      # COUNT: nodes on the ideal path
@@ -57,10 +57,6 @@ NODE_RULES = {
 GRID_POINT_LIMIT = 50_000_000
 BOX_PAD_PER_A = 0.5        # the default box: matched linkage +- a/2 (`LinkageFit.bounds`)
 BOX_WIDEN_FACTOR = 4.0     # each widening of a default side the optimum lies on
-# polyline vertices seeding Newton's foot points inside the exchange rounds: 4096 match 2^16 to
-# 1e-13 mm on the paper's and other cardioids (2048 can seed the wrong branch); the reported
-# max_deviation_mm keeps the finer default of `path_distance`
-ROUND_VERTICES = 2**12
 
 
 def grid_scan(task: LinkageFit, *, count: Nodes = 1000,
@@ -172,8 +168,8 @@ def minimax(task: LinkageFit | ProfileFit, *, count: Nodes = 1000, slots: Annota
     """
     _check_count(count)
     check_settings(minimax, slots=slots, max_rounds=max_rounds, widen=widen)
-    if nlp not in _NLP_OPTIONS:
-        raise ModelError(f"nlp={nlp!r} is not an NLP back end; known: {', '.join(_NLP_OPTIONS)}", key="nlp")
+    if nlp not in NLP_OPTIONS:
+        raise ModelError(f"nlp={nlp!r} is not an NLP back end; known: {', '.join(NLP_OPTIONS)}", key="nlp")
     start = time.perf_counter()
     t_start, t_end = task.t_start_rad, task.t_end_rad
     scale = _scale(task)
@@ -240,12 +236,12 @@ def _exchange_rounds(px, py, a, box, H, L, count, slots, max_rounds, nlp):
     every = feet = None            # every node's distance and foot point at the last round's (H, L)
     for rounds in range(1, max_rounds + 1):
         k = min(_slot_count(len(kept), slots), count)
-        chosen = np.array(_pad(kept, k, count))
+        chosen = np.array(pad_nodes(kept, k, count))
         if rounds == 1:
             dist, s0 = foot_points(px[chosen], py[chosen], H, L, vertices=ROUND_VERTICES)
         else:                      # the last round measured every node at this (H, L)
             dist, s0 = every[chosen], feet[chosen]
-        sol, status, status_word, used, built_s = _solve_round(k, nlp, dict(
+        sol, status, status_word, used, built_s = solve_round(k, nlp, solver_of=_minimax_nlp, bounds=dict(
             x0=np.r_[H, L, dist.max(), s0], p=np.r_[px[chosen], py[chosen], a],
             lbx=np.r_[H_lo, L_lo, 0.0, np.full(k, -np.inf)], ubx=np.r_[H_hi, L_hi, np.inf, np.full(k, np.inf)],
             lbg=np.zeros(3 * k), ubg=np.r_[np.zeros(k), np.full(2 * k, np.inf)]))
@@ -471,20 +467,6 @@ def check(task: LinkageCheck, *, count: Nodes = 1000,
 
 
 _NLP_BUILDS = BuildCache("cam_cutter.minimax_nlp", maxsize=64)
-_NLP_OPTIONS = {
-    "ipopt": {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.tol": 1e-10,
-              "ipopt.max_iter": 300},
-    # exact-Hessian SQP with CasADi's own active-set QP: ~4 iterations, no interior-point start-up.
-    # At a minimax optimum more constraints are active than there are unknowns, and the gradient
-    # of the Lagrangian stalls near 1e-6 (against the objective's gradient of 1) while the steps
-    # shrink quadratically to zero: the dual tolerance is 1e-5, reached when the last step is
-    # ~1e-7 mm. A round that still does not converge (delta = 0 exactly, h = 0) goes to IPOPT
-    "sqp": {"print_time": False, "print_header": False, "print_iteration": False, "print_status": False,
-            "qpsol": "qrqp", "qpsol_options": {"print_iter": False, "print_header": False, "print_info": False,
-                                               "error_on_fail": False, "constr_viol_tol": 1e-12,
-                                               "dual_inf_tol": 1e-12},
-            "convexify_strategy": "regularize", "tol_pr": 1e-10, "tol_du": 1e-5, "max_iter": 50},
-}
 
 
 def _minimax_nlp(k: int, method: str):
@@ -498,34 +480,13 @@ def _build_minimax_nlp(k, method):
     p = ca.SX.sym("p", 2 * k + 1)
     g = foot_and_band(s, H, L, p[:k], p[k:2 * k], p[2 * k], delta)
     nlp = {"x": ca.vertcat(H, L, delta, s), "p": p, "f": delta, "g": g}
-    return ca.nlpsol("cam_minimax", "sqpmethod" if method == "sqp" else "ipopt", nlp, _NLP_OPTIONS[method])
+    return ca.nlpsol("cam_minimax", "sqpmethod" if method == "sqp" else "ipopt", nlp, NLP_OPTIONS[method])
 
 
-def foot_and_band(s, H, L, px, py, a, delta):
-    """The minimax constraints for nodes (px, py) and limaçon points s (CasADi symbols): the foot
-    condition (= 0), then delta + and - the signed distance (>= 0). L may differ per node."""
-    rx, ry = real_point(s, H, L, m=ca)
-    vx, vy = real_velocity(s, H, L, m=ca)
-    ex, ey = rx - px, ry - py
-    # |R'| vanishes only at the plain cardioid's cusp, where the cross product does too
-    signed = (ex * vy - ey * vx) / ca.sqrt(vx * vx + vy * vy + (1e-9 * a) ** 2)
-    return ca.vertcat(ex * vx + ey * vy, delta + signed, delta - signed)
 
 
-def _solve_round(k, method, bounds, *, solver_of=None, cold=False):
-    """One exchange round's NLP: (solution, Status, the back end's word, the back end, build s).
-    SQP first when asked (and not `cold`); a round it does not solve is solved again by IPOPT from
-    the same start. `solver_of(k, name)` gives the built NLP (default: this module's minimax)."""
-    build_s = 0.0
-    for name in (("sqp", "ipopt") if method == "sqp" and not cold else ("ipopt",)):
-        solver, built_s = (solver_of or _minimax_nlp)(k, name)
-        build_s += built_s
-        sol = solver(**bounds)
-        stats = solver.stats()
-        status = (from_sqpmethod(stats["return_status"], stats["success"]) if name == "sqp"
-                  else from_ipopt(stats["return_status"]))
-        if status is Status.SOLVED or name == "ipopt":
-            return sol, status, stats["return_status"], name, build_s
+
+
 
 
 def _slot_count(needed, minimum):
@@ -535,15 +496,7 @@ def _slot_count(needed, minimum):
     return k
 
 
-def _pad(working, k, count):
-    """The working nodes plus spread nodes not yet in it, k in all (never a duplicate)."""
-    chosen = list(dict.fromkeys(working))
-    for i in np.linspace(0, count - 1, k + len(chosen)).round().astype(int):
-        if len(chosen) >= min(k, count):
-            break
-        if i not in chosen:
-            chosen.append(int(i))
-    return chosen
+
 
 
 def _node_times(task, count, nodes):
