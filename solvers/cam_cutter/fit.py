@@ -29,8 +29,9 @@ from mechopt.models.cam_cutter import (
     limacon_implicit,
     real_point,
 )
-from mechopt.models.cam_profile import ProfileFit
+from mechopt.models.cam_profile import MIN_LINK_PER_SIZE, ProfileFit
 from mechopt.models.errors import ModelError
+from mechopt.solvers.cam_cutter.certificate import box_lower_bound, grid_starts
 from mechopt.solvers.cam_cutter.deviation import (
     foot_points,
     nodes_and_normals,
@@ -137,7 +138,10 @@ def grid_scan(task: LinkageFit, *, count: Nodes = 1000,
 
 def minimax(task: LinkageFit | ProfileFit, *, count: Nodes = 1000, slots: Annotated[int, Interval(ge=1, le=4096)] = 8,
             max_rounds: Annotated[int, Interval(ge=1, le=10_000)] = 40,
-            nlp: Literal["sqp", "ipopt"] = "sqp", widen: Annotated[int, Interval(ge=0, le=10)] = 3) -> Result:
+            nlp: Literal["sqp", "ipopt"] = "sqp", widen: Annotated[int, Interval(ge=0, le=10)] = 3,
+            starts: Annotated[int, Interval(ge=0, le=64)] = 4, certify: Literal["auto", "on", "off"] = "auto",
+            gap_per_size: Annotated[float, Interval(gt=0, le=0.1)] = 4e-5,
+            max_cells: Annotated[int, Interval(ge=64, le=10_000_000)] = 20_000) -> Result:
     """(H, L) in the box minimising the largest distance from COUNT nodes of the ideal path to
     the limaçon, as a CasADi NLP:
 
@@ -165,9 +169,23 @@ def minimax(task: LinkageFit | ProfileFit, *, count: Nodes = 1000, slots: Annota
     `nlp` picks the back end of each round: "sqp" (CasADi's sqpmethod with qrqp, exact Hessian;
     a round it does not converge is re-solved by IPOPT) or "ipopt" only. Both reach the same
     (H, L) to ~1e-9 mm; SQP is ~7x faster per round (`mechopt bench cam-cutter`).
+
+    Global over the box. A cam of any shape has no closed-form start, and its deviation has
+    several basins (H > 0 and the mirrored crank H < 0, `models.cam_profile`): its box is the
+    declared one (not widened), and the exchange rounds run from the brute-force start and from
+    up to `starts` grid cells that are lower than their neighbours (`certificate.grid_starts`);
+    the best dense deviation is kept. Then the certificate: a branch and bound on a Lipschitz
+    bound (`certificate.box_lower_bound`) gives a lower bound on the deviation over the whole
+    box; `diagnostics["global_gap_mm"]` is the answer's deviation less that bound. A gap above
+    `gap_per_size` cam sizes (1e-3 mm on the paper's cam) after `max_cells` cells is not
+    certified: a SOLVED or INFEASIBLE answer is then INACCURATE ("not certified global").
+    `certify`: "auto" certifies a cam of any shape and not the cardioid (one start from its
+    matched linkage; the certificate costs ~30 of its solves: `cam-cutter/minimax` asks "on"),
+    whose answer then says `global_certified` False, "not checked".
     """
     _check_count(count)
-    check_settings(minimax, slots=slots, max_rounds=max_rounds, widen=widen)
+    check_settings(minimax, slots=slots, max_rounds=max_rounds, widen=widen, starts=starts, certify=certify,
+                   gap_per_size=gap_per_size, max_cells=max_cells)
     if nlp not in NLP_OPTIONS:
         raise ModelError(f"nlp={nlp!r} is not an NLP back end; known: {', '.join(NLP_OPTIONS)}", key="nlp")
     start = time.perf_counter()
@@ -178,22 +196,23 @@ def minimax(task: LinkageFit | ProfileFit, *, count: Nodes = 1000, slots: Annota
     pad, widened = BOX_PAD_PER_A, 0
     H, L = task.matched
     build_s, back_ends, unsolved, rounds_in_all = 0.0, [], {}, 0
+    general = isinstance(task, ProfileFit)        # a declared box, searched from several starts
     while True:
-        box = task.bounds(pad)
-        H, L = (float(v) for v in np.clip((H, L), box[::2], box[1::2]))
-        got = _exchange_rounds(px, py, task.size_mm / scale, np.divide(box, scale), H / scale, L / scale,
-                               count, slots, max_rounds, nlp)
+        box = task.bounds() if general else task.bounds(pad)
+        seeds = [(H, L)] + (grid_starts(px[::max(1, count // 64)] * scale, py[::max(1, count // 64)] * scale,
+                                        box, count=starts) if general else [])
+        got = _best_of(px, py, task, box, seeds, count, slots, max_rounds, nlp)
         build_s += got["build_s"]
         back_ends += got["back_ends"]
-        unsolved |= {r + rounds_in_all: w for r, w in got["unsolved"].items()}
+        unsolved |= {r + rounds_in_all: w for r, w in got["unsolved"].items()}     # rounds of the kept start
         rounds_in_all += got["rounds"]
         status, status_word = got["status"], got["status_word"]
         if status is Status.FAILED:
             break
-        H, L = got["H"] * scale, got["L"] * scale
+        H, L = got["H"], got["L"]
         on_bounds = _bounds_hit(task, H, L, box)
         derived = [name for name in on_bounds if getattr(task, name) is None]
-        if not derived or widened == widen or status is not Status.SOLVED:
+        if general or not derived or widened == widen or status is not Status.SOLVED:
             break
         pad, widened = pad * BOX_WIDEN_FACTOR, widened + 1     # the default box cut it short: widen, re-solve
     rounds = rounds_in_all
@@ -201,8 +220,11 @@ def minimax(task: LinkageFit | ProfileFit, *, count: Nodes = 1000, slots: Annota
         return Result(Status.FAILED, task.path_values(),
                       Timing(build_s, time.perf_counter() - start - build_s),
                       message=f"{back_ends[-1] if back_ends else nlp} failed ({status_word}) after {rounds} round(s)")
-    deviation, where = verified_deviation_on(task.path_point, t_start, t_end, H, L)
+    deviation, where = got["deviation"], got["where"]
     where_xy = [float(v[0]) for v in task.path_point(np.array([where]))]
+    certify = certify == "on" or (certify == "auto" and general)
+    certificate = _certify(task, px * scale, py * scale, box, H, L, deviation, gap_per_size, max_cells) \
+        if certify else {"global_certified": False, "global_note": "not checked (certify = \"on\" checks it)"}
     solve_s = time.perf_counter() - start - build_s       # the verification is part of the answer
     nodes_max = got["nodes_max"] * scale
     message = (f"{status_word} after {rounds} exchange round(s) ({', '.join(back_ends)}), "
@@ -210,9 +232,20 @@ def minimax(task: LinkageFit | ProfileFit, *, count: Nodes = 1000, slots: Annota
     earlier = [f"round {r}: {word}" for r, word in unsolved.items() if r < rounds]
     if earlier:             # a later round started from it; only the last round's answer counts
         message += f"; earlier rounds not solved ({', '.join(earlier)})"
+    if general and got["starts"] > 1:
+        message += f", best of {got['starts']} starts"
     status, violated, message = _verdict(task, status, message, nodes_max, deviation, count, H, L, box, on_bounds)
     if violated:            # where the band is set: the path's point farthest from the best limaçon
         message += f"; set at t = {where:.6g} rad, (x, y) = ({where_xy[0]:.6g}, {where_xy[1]:.6g}) mm"
+    if general and abs(H) < MIN_LINK_PER_SIZE * task.size_mm and status is Status.SOLVED:
+        status = Status.LIMIT           # the circle about a fixed pivot: no crank, no mechanism
+        message += f"; H = {H:.3g} mm: no crank (H = 0 is no mechanism), give a box that excludes it"
+    if certify and not certificate["global_certified"] and status in (Status.SOLVED, Status.INFEASIBLE):
+        status = Status.INACCURATE
+        message += (f"; not certified global over the box: lower bound {certificate['global_lower_bound_mm']:.6g} mm, "
+                    f"gap {certificate['global_gap_mm']:.3g} mm after {certificate['global_cells']} cells")
+    elif certify:
+        message += f"; global over the box to {certificate['global_gap_mm']:.2g} mm"
     return Result(status, {"H_mm": H, "L_mm": L, "max_deviation_mm": deviation, **task.path_values()},
                   Timing(build_s, solve_s), message=message, violated=violated,
                   diagnostics={"nodes_max_deviation_mm": nodes_max, "nlp_nodes": got["nlp_nodes"],
@@ -222,7 +255,45 @@ def minimax(task: LinkageFit | ProfileFit, *, count: Nodes = 1000, slots: Annota
                                "active_bounds": on_bounds, "box_mm": [float(b) for b in box],
                                "box_widenings": widened,
                                "max_deviation_at_rad": where, "max_deviation_at_mm": where_xy,
-                               "t_finish_exact_rad": t_end})
+                               "t_finish_exact_rad": t_end, "starts": got["starts"]} | certificate)
+
+
+def _best_of(px, py, task, box, seeds, count, slots, max_rounds, nlp):
+    """`_exchange_rounds` in the box [mm] from each seed (H, L) [mm]: the answer with the smallest
+    dense deviation (`verified_deviation_on`), in mm, with that deviation and where it is; its
+    rounds and unsolved rounds are its own, build time and back ends those of every start."""
+    scale, best, build_s, back_ends = _scale(task), None, 0.0, []
+    for H, L in seeds:
+        H, L = (float(v) for v in np.clip((H, L), box[::2], box[1::2]))
+        got = _exchange_rounds(px, py, task.size_mm / scale, np.divide(box, scale), H / scale, L / scale,
+                               count, slots, max_rounds, nlp)
+        build_s, back_ends = build_s + got["build_s"], back_ends + got["back_ends"]
+        if got["status"] is Status.FAILED:
+            best = best or got
+            continue
+        got["H"], got["L"] = got["H"] * scale, got["L"] * scale
+        got["deviation"], got["where"] = verified_deviation_on(task.path_point, task.t_start_rad, task.t_end_rad,
+                                                               got["H"], got["L"])
+        if best is None or best["status"] is Status.FAILED or got["deviation"] < best["deviation"]:
+            best = got
+    return best | {"starts": len(seeds), "build_s": build_s, "back_ends": back_ends}
+
+
+CERTIFY_SPREAD = 48     # nodes spread over the path in the bound's node set
+CERTIFY_WORST = 16      # plus the answer's worst nodes, where the bound is tight
+
+
+def _certify(task, px, py, box, H, L, deviation, gap_per_size, max_cells):
+    """The certificate of `minimax`'s answer (H, L) [mm]: a lower bound on the deviation over the
+    box from a node set (`certificate.box_lower_bound`), the gap, and whether it is within
+    gap_per_size cam sizes. Node coordinates in mm."""
+    worst = np.argsort(foot_points(px, py, H, L, vertices=ROUND_VERTICES)[0])[::-1][:CERTIFY_WORST]
+    nodes = np.unique(np.r_[np.linspace(0, px.size - 1, CERTIFY_SPREAD).round().astype(int), worst])
+    target = gap_per_size * task.size_mm
+    lower, cells, complete = box_lower_bound(px[nodes], py[nodes], box, deviation, gap=target, max_cells=max_cells)
+    gap = max(deviation - lower, 0.0)
+    return {"global_lower_bound_mm": lower, "global_gap_mm": gap, "global_cells": cells,
+            "global_certified": bool(complete or gap <= target), "global_gap_target_mm": target}
 
 
 def _exchange_rounds(px, py, a, box, H, L, count, slots, max_rounds, nlp):
