@@ -67,7 +67,10 @@ def grid_scan(task: LinkageFit, *, count: Nodes = 1000,
 
     At node t_i the segment runs +-err_width_mm along the ideal path's normal; an end below the
     x axis is pulled back to the axis; the node passes when exactly one end lies inside the closed
-    limaçon (`limacon_implicit` < 0). Nodes t_i = i t_FINISH / COUNT with t_FINISH read to
+    limaçon (`limacon_implicit` < 0); where both ends lie on one side, points of the segment
+    (`_segment_probes`) say whether it is crossed twice (a band wider than the limaçon spans it),
+    which the paper's test alone cannot see; the paper's answer is unchanged by them. Nodes
+    t_i = i t_FINISH / COUNT with t_FINISH read to
     y_tol_mm as the paper read it (`t_finish_read_rad`); `nodes` picks which i (see NODE_RULES).
 
     Exact and fast: a point must pass every node, so the nodes are applied one at a time, in an
@@ -84,6 +87,7 @@ def grid_scan(task: LinkageFit, *, count: Nodes = 1000,
     t_finish = task.t_finish_read_rad
     t = _node_times(task, count, nodes)
     ends = _segment_ends(t, task)
+    probes = _segment_probes(t, task, ends)
     build = time.perf_counter() - start
 
     # golden-ratio spread from the far end: early nodes pass nearly every point, late ones ~3 %
@@ -95,6 +99,12 @@ def grid_scan(task: LinkageFit, *, count: Nodes = 1000,
             inner = limacon_implicit(ends[0][i], ends[1][i], H, L) < 0
             outer = limacon_implicit(ends[2][i], ends[3][i], H, L) < 0
             keep = inner != outer
+            blind = np.flatnonzero(~keep)   # both ends on one side: no crossing, or an even number
+            for x, y in probes[i]:          # a probe on the other side: the segment is crossed
+                if blind.size == 0:
+                    break
+                keep[blind] = (limacon_implicit(x, y, H[blind], L[blind]) < 0) != inner[blind]
+                blind = blind[~keep[blind]]
             H, L = H[keep], L[keep]
             if H.size == 0:
                 break
@@ -635,6 +645,28 @@ def _segment_ends(t, task):
         ends += [px + side * reach * nx, py + side * reach * ny]
     ends[1], ends[3] = np.maximum(ends[1], 0.0), np.maximum(ends[3], 0.0)
     return ends
+
+
+PROBE_LEVELS = 12      # probes at err_width / 2^k, k = 0 .. 11, either side of the node
+
+
+def _segment_probes(t, task, ends):
+    """Per node, points of its error segment between its ends, for the segments whose two ends lie
+    on one side of the limaçon: the node itself, then at err_width / 2^k along either half (k =
+    1 .. PROBE_LEVELS - 1, each kept within the trimmed segment), nearest the node first. A
+    segment wider than the limaçon spans it and is crossed twice, which the paper's
+    one-end-in test cannot see (issue 21: every point failed at err_width_mm = 100); a probe on
+    the other side shows the crossing. Returns, per node, a list of (x, y)."""
+    px, py = ideal_point(t, task.a_mm, task.h_mm)
+    out = []
+    for i in range(t.size):
+        points = [(px[i], py[i])]
+        for k in range(PROBE_LEVELS - 1, 0, -1):
+            f = 0.5 ** k
+            for ex, ey in ((ends[0][i], ends[1][i]), (ends[2][i], ends[3][i])):
+                points.append((px[i] + f * (ex - px[i]), py[i] + f * (ey - py[i])))
+        out.append(points)
+    return out
 
 
 def _finish_node_report(task, H, L, t_finish):
