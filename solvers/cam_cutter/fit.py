@@ -419,6 +419,8 @@ def robust(task: LinkageFit, *, count: Nodes = 1000, max_moves: Annotated[int, I
     this small each node's deviation is close to linear in H and L, so its extremes sit at the
     corners (a test bounds what a finer box sampling adds). The search is a descent over lattice
     points from the minimax optimum; lattice deviations are memoised, neighbours share them.
+    Global? Not certified (`diagnostics["global_certified"]` False): a descent stops at a local
+    minimum of the worst case; a test compares it with every lattice point around the optimum.
     """
     _cardioid_only(task, "robust")
     _check_count(count)
@@ -468,7 +470,8 @@ def robust(task: LinkageFit, *, count: Nodes = 1000, max_moves: Annotated[int, I
                   message=message, violated=violated,
                   diagnostics={"minimax_H_mm": best.values["H_mm"], "minimax_L_mm": best.values["L_mm"],
                                "minimax_deviation_mm": best.values["max_deviation_mm"],
-                               "lattice_points": len(memo)})
+                               "lattice_points": len(memo), "global_certified": False,
+                               "global_note": "a lattice descent: a local minimum of the worst case"})
 
 
 def evolve(task: LinkageFit, *, count: Nodes = 1000, popsize: Annotated[int, Interval(ge=5, le=1000)] = 15,
