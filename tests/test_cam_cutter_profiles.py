@@ -159,6 +159,9 @@ def test_the_cardioid_as_a_curve_gives_the_cardioid_minimax():
     got, ref = minimax(curve_task, count=1000), minimax(LinkageFit(a_mm=a, err_width_mm=0.075, h_mm=h), count=1000)
     for key in ("H_mm", "L_mm", "max_deviation_mm"):
         assert got.values[key] == pytest.approx(ref.values[key], abs=1e-7)
+    # as a general curve its box holds both cranks, |H| up to 4.66 a: the paper's cardioid's
+    # minimax linkage is global over them too (the best mirrored crank is 8.27 mm off)
+    assert got.diagnostics["box_mm"][0] < 0 and got.diagnostics["global_certified"]
 
 
 def test_a_band_the_limacons_cannot_keep_is_infeasible_with_where():
