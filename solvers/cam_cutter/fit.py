@@ -190,7 +190,7 @@ def minimax(task: LinkageFit | ProfileFit, *, count: Nodes = 1000, slots: Annota
     `gap_per_size` cam sizes (1e-3 mm on the paper's cam) after `max_cells` cells is not
     certified: a SOLVED or INFEASIBLE answer is then INACCURATE ("not certified global").
     `certify`: "auto" certifies a cam of any shape and not the cardioid (one start from its
-    matched linkage; the certificate costs ~30 of its solves: `cam-cutter/minimax` asks "on"),
+    matched linkage; the certificate costs ~70 of its solves: `cam-cutter/minimax` asks "on"),
     whose answer then says `global_certified` False, "not checked".
     """
     _check_count(count)
