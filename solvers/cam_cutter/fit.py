@@ -37,6 +37,7 @@ from mechopt.solvers.cam_cutter.deviation import (
     nodes_and_normals,
     normal_crossings,
     normal_deviation,
+    normal_quartic,
     path_distance,
     verified_deviation,
     verified_deviation_on,
@@ -67,9 +68,10 @@ def grid_scan(task: LinkageFit, *, count: Nodes = 1000,
 
     At node t_i the segment runs +-err_width_mm along the ideal path's normal; an end below the
     x axis is pulled back to the axis; the node passes when exactly one end lies inside the closed
-    limaçon (`limacon_implicit` < 0); where both ends lie on one side, points of the segment
-    (`_segment_probes`) say whether it is crossed twice (a band wider than the limaçon spans it),
-    which the paper's test alone cannot see; the paper's answer is unchanged by them. Nodes
+    limaçon (`limacon_implicit` < 0). Where that fails every lattice point, the scan is repeated
+    with segments crossed twice passing too (`_crossed_twice`: a band wider than the limaçon spans
+    it, which the paper's test cannot see: at err_width_mm = 100 it failed every point where 75
+    passed all); `diagnostics["segments_probed"]` says so. Nodes
     t_i = i t_FINISH / COUNT with t_FINISH read to
     y_tol_mm as the paper read it (`t_finish_read_rad`); `nodes` picks which i (see NODE_RULES).
 
@@ -87,32 +89,17 @@ def grid_scan(task: LinkageFit, *, count: Nodes = 1000,
     t_finish = task.t_finish_read_rad
     t = _node_times(task, count, nodes)
     ends = _segment_ends(t, task)
-    probes = _segment_probes(t, task, ends)
     build = time.perf_counter() - start
 
     # golden-ratio spread from the far end: early nodes pass nearly every point, late ones ~3 %
     order = np.argsort((np.arange(t.size)[::-1] * 0.6180339887498949) % 1.0)
-    passing = []
-    for rows in np.array_split(np.arange(H_grid.size), max(1, H_grid.size * L_grid.size // 2_000_000)):
-        H, L = (g.ravel() for g in np.meshgrid(H_grid[rows], L_grid, indexing="ij"))
-        for i in order:
-            inner = limacon_implicit(ends[0][i], ends[1][i], H, L) < 0
-            outer = limacon_implicit(ends[2][i], ends[3][i], H, L) < 0
-            keep = inner != outer
-            blind = np.flatnonzero(~keep)   # both ends on one side: no crossing, or an even number
-            for x, y in probes[i]:          # a probe on the other side: the segment is crossed
-                if blind.size == 0:
-                    break
-                keep[blind] = (limacon_implicit(x, y, H[blind], L[blind]) < 0) != inner[blind]
-                blind = blind[~keep[blind]]
-            H, L = H[keep], L[keep]
-            if H.size == 0:
-                break
-        passing.append(np.column_stack([H, L]))
-    passing = np.concatenate(passing)
+    passing = _scan(H_grid, L_grid, ends, order)
+    probed = len(passing) == 0      # every point failed: tell segments crossed twice from none
+    if probed:
+        passing = _scan(H_grid, L_grid, ends, order, crossed=_crossed_twice(t, task, ends))
 
     diagnostics = {"nodes": int(t.size), "node_rule": nodes, "t_finish_exact_rad": task.t_finish_rad,
-                   "grid_points": int(H_grid.size * L_grid.size)}
+                   "grid_points": int(H_grid.size * L_grid.size), "segments_probed": probed}
     values = {"t_finish_rad": t_finish, "n_passing": float(len(passing))}
     if len(passing) == 0:
         best = minimax(task, count=count)      # the grid has no answer: say what is achievable
@@ -137,6 +124,8 @@ def grid_scan(task: LinkageFit, *, count: Nodes = 1000,
     values |= {"H_mm": H, "L_mm": L, "max_deviation_mm": deviation}
     status, violated = Status.SOLVED, ()
     message = f"first of {len(passing)} passing grid points, H ascending then L ascending"
+    if probed:
+        message += " (the paper's one-end-in test failed every point; a segment crossed twice passes)"
     if deviation > task.err_width_mm:       # every node passes, yet the path leaves the band between them
         status, violated = Status.INACCURATE, ("err_width",)
         message += f"; between the {t.size} nodes the path is {deviation:.4g} mm off: raise count"
@@ -653,23 +642,67 @@ def _segment_ends(t, task):
 PROBE_LEVELS = 12      # probes at err_width / 2^k, k = 0 .. 11, either side of the node
 
 
+def _scan(H_grid, L_grid, ends, order, crossed=None):
+    """The lattice points (H, L) whose every node passes: one end of its segment inside the
+    limaçon, one outside (the paper's test); with `crossed(i, H, L, inside)`, a segment whose
+    ends lie on one side passes where that says it is crossed (twice). Nodes in `order`."""
+    passing = []
+    for rows in np.array_split(np.arange(H_grid.size), max(1, H_grid.size * L_grid.size // 2_000_000)):
+        H, L = (g.ravel() for g in np.meshgrid(H_grid[rows], L_grid, indexing="ij"))
+        for i in order:
+            inner = limacon_implicit(ends[0][i], ends[1][i], H, L) < 0
+            keep = inner != (limacon_implicit(ends[2][i], ends[3][i], H, L) < 0)
+            blind = np.flatnonzero(~keep)
+            if crossed is not None and blind.size:
+                keep[blind] = crossed(i, H[blind], L[blind], inner[blind])
+            H, L = H[keep], L[keep]
+            if H.size == 0:
+                break
+        passing.append(np.column_stack([H, L]))
+    return np.concatenate(passing)
+
+
+def _crossed_twice(t, task, ends):
+    """`crossed` for `_scan`: whether node i's segment, both ends on one side of the limaçons
+    (H, L), meets them: not where `_clear_of_segment` rules it out, else where a probe of
+    `_segment_probes` lies on the other side."""
+    normals = nodes_and_normals(t, task.a_mm, task.h_mm)
+    reach = np.maximum(np.hypot(ends[0] - normals[0], ends[1] - normals[1]),
+                       np.hypot(ends[2] - normals[0], ends[3] - normals[1]))
+    px, py = _segment_probes(t, task, ends)
+
+    def crossed(i, H, L, inside):
+        near = np.flatnonzero(~_clear_of_segment(i, normals, reach, H, L, inside))
+        out = np.zeros(H.shape, dtype=bool)
+        probe = limacon_implicit(px[i][:, None], py[i][:, None], H[near], L[near]) < 0
+        out[near] = np.any(probe != inside[near], axis=0)
+        return out
+    return crossed
+
+
+def _clear_of_segment(i, nodes, reach, H, L, inside):
+    """True where node i's segment surely does not meet the limaçon (H, L): along the normal,
+    F(P + d n) = d^4 + c3 d^3 + c2 d^2 + c1 d + c0 (`normal_quartic`) keeps the sign of its ends
+    (`inside`: negative) for every |d| <= reach, bounded term by term. Settles cheaply the points
+    far from the curve, so only those near it are probed."""
+    c0, c1, c2, c3 = normal_quartic(nodes[0][i], nodes[1][i], nodes[2][i], nodes[3][i], H, L)
+    r = reach[i]
+    spread = np.abs(c1) * r + np.abs(c2) * r * r + np.abs(c3) * r ** 3
+    return np.where(inside, c0 + spread + r ** 4 < 0, c0 - spread > 0)
+
+
 def _segment_probes(t, task, ends):
-    """Per node, points of its error segment between its ends, for the segments whose two ends lie
-    on one side of the limaçon: the node itself, then at err_width / 2^k along either half (k =
-    1 .. PROBE_LEVELS - 1, each kept within the trimmed segment), nearest the node first. A
-    segment wider than the limaçon spans it and is crossed twice, which the paper's
-    one-end-in test cannot see (issue 21: every point failed at err_width_mm = 100); a probe on
-    the other side shows the crossing. Returns, per node, a list of (x, y)."""
+    """Points of each node's error segment between its ends, for the segments whose two ends lie
+    on one side of the limaçon: the node itself and the points at err_width / 2^k along either
+    half (k = 1 .. PROBE_LEVELS - 1, within the trimmed segment). A segment wider than the
+    limaçon spans it and is crossed twice, which the paper's one-end-in test cannot see (issue
+    21: every point failed at err_width_mm = 100); a probe on the other side shows the crossing.
+    Returns (x, y), each of shape (nodes, probes)."""
     px, py = ideal_point(t, task.a_mm, task.h_mm)
-    out = []
-    for i in range(t.size):
-        points = [(px[i], py[i])]
-        for k in range(PROBE_LEVELS - 1, 0, -1):
-            f = 0.5 ** k
-            for ex, ey in ((ends[0][i], ends[1][i]), (ends[2][i], ends[3][i])):
-                points.append((px[i] + f * (ex - px[i]), py[i] + f * (ey - py[i])))
-        out.append(points)
-    return out
+    f = 0.5 ** np.arange(1, PROBE_LEVELS)
+    xs = [px[:, None]] + [px[:, None] + f * (end[:, None] - px[:, None]) for end in (ends[0], ends[2])]
+    ys = [py[:, None]] + [py[:, None] + f * (end[:, None] - py[:, None]) for end in (ends[1], ends[3])]
+    return np.hstack(xs), np.hstack(ys)
 
 
 def _finish_node_report(task, H, L, t_finish):
