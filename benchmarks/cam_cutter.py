@@ -21,6 +21,11 @@ number of crank angles; the largest driving torque beside the finest grid's) and
 (the readjustable tool's family NLP against the number of cams, the target 20 cams < 1 s), with
 its peer `family_peer`: scipy's differential evolution on the same family objective, stopped
 when its node objective reaches the NLP's worst deviation, both answers verified densely.
+
+Issue 20 adds `global_rows`: what the global minimax costs against the local NLP in the same
+run, on the paper's cardioid and on the ellipse of `other-profile`: local = one start, no
+certificate (``starts=0, certify="off"``); global = the multistart (a cam of any shape) and the
+Lipschitz certificate (``certify="on"``); the ratio of their medians, the bands and the gap.
 """
 import statistics
 import time
@@ -34,7 +39,7 @@ from mechopt.solvers.cam_cutter import fit as trajectory_fit
 from mechopt.solvers.cam_cutter import joint_loads
 
 __all__ = ["cli", "run", "table", "ratios", "plot", "grid_box_timing", "targets_table", "PAPER_TASK", "TARGETS",
-           "kinetostatics_rows", "family_rows", "family_peer", "family_table"]
+           "kinetostatics_rows", "family_rows", "family_peer", "family_table", "global_rows", "global_table"]
 
 PAPER_TASK, _ = registry.find("cam-cutter/paper-grid").build()   # the paper's cardioid, band and box
 COUNTS = (20, 50, 100, 200, 500, 1000, 2000, 5000)
@@ -128,6 +133,36 @@ def family_table(loads, family, peer):
               f"  NLP {peer['nlp_wall_s']:.4f} s (median of {peer['nlp_runs']}), worst {peer['nlp_worst_mm']:.6f} mm; "
               f"DE {peer['de_wall_s']:.3f} s (median of {peer['de_runs']}, {peer['de_generations']} generations, "
               f"{peer['de_status']}), worst {peer['de_worst_mm']:.6f} mm; DE / NLP = {peer['de_over_nlp']:.0f}x"]
+    return "\n".join(lines)
+
+
+GLOBAL_TASKS = {"paper cardioid": PAPER_TASK, "other-profile ellipse": registry.find("cam-cutter/other-profile").build()[0]}
+
+
+def global_rows(repeats=3, progress=None, *, count=1000):
+    """Per task of GLOBAL_TASKS: the local NLP (one start, no certificate) and the global minimax
+    (multistart where the task is a general curve, certificate), medians of `repeats` warm runs."""
+    rows = []
+    for name, task in GLOBAL_TASKS.items():
+        local_s, local = _timed(lambda: trajectory_fit.minimax(task, count=count, starts=0, certify="off"),
+                                repeats, progress, f"local NLP  {name}")
+        global_s, best = _timed(lambda: trajectory_fit.minimax(task, count=count, certify="on"),
+                                repeats, progress, f"global     {name}")
+        rows.append({"task": name, "local_wall_s": local_s, "global_wall_s": global_s,
+                     "global_over_local": global_s / local_s, "local_mm": local.values["max_deviation_mm"],
+                     "global_mm": best.values["max_deviation_mm"], "gap_mm": best.diagnostics["global_gap_mm"],
+                     "cells": best.diagnostics["global_cells"], "status": best.status.value, "runs": repeats})
+    return rows
+
+
+def global_table(rows):
+    """`global_rows` as fixed-width text."""
+    lines = ["", "global minimax against the local NLP (same run; warm builds)",
+             f"{'task':<24}{'local s':>9}{'global s':>10}{'ratio':>7}{'local mm':>11}{'global mm':>11}"
+             f"{'gap mm':>9}{'cells':>7}  status"]
+    lines += [f"{r['task']:<24}{r['local_wall_s']:>9.3f}{r['global_wall_s']:>10.3f}{r['global_over_local']:>7.0f}"
+              f"{r['local_mm']:>11.6f}{r['global_mm']:>11.6f}{r['gap_mm']:>9.1e}{r['cells']:>7}  {r['status']}"
+              for r in rows]
     return "\n".join(lines)
 
 
@@ -279,20 +314,22 @@ def plot(rows, out_dir):
 def cli(repeats, out_dir, progress=None, quick=False) -> str:
     """What `mechopt bench cam-cutter` prints: the work-precision table, the targets, the plot,
     then the kinetostatics, family and peer studies. `quick`: a few counts, one run each, the
-    DE peer on two cams (about half a minute)."""
+    DE peer on two cams, the global study once (about a minute)."""
     if quick:
         repeats = max(1, min(repeats, 3))
         rows = run(counts=(100, 1000), repeats=repeats, de_counts=(100,), progress=progress)
         loads = kinetostatics_rows(angles=(181, 721, 2881), repeats=repeats, progress=progress)
         family = family_rows(sizes=(5, 20), repeats=repeats, progress=progress)
         peer = family_peer(cams=2, repeats=repeats, progress=progress)
+        glob = global_rows(repeats=1, progress=progress)
     else:
         rows = run(repeats=repeats, progress=progress)
         loads = kinetostatics_rows(repeats=repeats, progress=progress)
         family = family_rows(repeats=repeats, progress=progress)
         peer = family_peer(cams=4, repeats=repeats, progress=progress, de_repeats=3)
+        glob = global_rows(repeats=min(repeats, 3), progress=progress)
     paths = plot(rows, out_dir)
     timing = grid_box_timing(repeats=repeats, progress=progress)
     timing["family_20_cams_s"] = next(r["wall_s_median"] for r in family if r["cams"] == 20)
-    return "\n".join([table(rows), targets_table(timing), family_table(loads, family, peer),
+    return "\n".join([table(rows), targets_table(timing), family_table(loads, family, peer), global_table(glob),
                       *(f"plot: {p}" for p in paths)])

@@ -343,9 +343,22 @@ class ProfileFit:
     named `constants` [mm]) or a table of points `points_mm` ([[x, y], ...] in path order, its
     parameter the chord length [mm] over the whole table: t0_rad, t1_rad are then unused); the
     torch path is its offset by the kerf `h_mm` (effect torch_offset, eq. (2) generalised),
-    placed by `placement` (PLACEMENTS). `H_min_mm` ... `L_max_mm` the search box; a side not given
-    is the brute-force start (`coarse_start`) +- size/2, with size = the path's reach / 4 (the
-    cardioid's a, for h = 0), which the solver widens when the optimum lies on it.
+    placed by `placement` (PLACEMENTS). `H_min_mm` ... `L_max_mm` the search box, searched whole
+    (`cam_cutter.minimax` is global over it); a side not given is the default box's: H within
+    +- the path's reach (both cranks, see below), L from a hundredth of size to the reach, with
+    size = the path's reach / 4 (the cardioid's a, for h = 0).
+
+    The mirrored crank, H < 0 (reading taken). Eq. (5) puts the crank's pivot O1 at (H/2, 0) and
+    its pin P on the circle of radius H/2 about it; eq. (7) is then the limaçon r = L + H cos t
+    about the block's pivot O. With H < 0 the pivot O1 lies on the other side of O, the crank is
+    |H|/2 long and P still runs on a circle through O, at twice the link's speed: the same
+    slotted-link mechanism, its triangle O O1 P isosceles as before. Along the link the block
+    sits at -H cos t from the pin for either sign, so the link must reach |H| behind the pin and
+    L ahead of it whatever the sign: H < 0 is realisable wherever H > 0 is. Its limaçon is the
+    H > 0 one mirrored across the y axis through O, and eq. (10)'s shift -(L + H) still puts its
+    s = 0 point (now the vertex nearer the pole) at the origin. H = 0 (no crank: a circle about a
+    fixed pivot) is no mechanism; `minimax` names an answer there. The other reading, H > 0 only
+    (eq. (5)'s R = H/2 read as a length), excludes the mirrored crank; it is a box H_min_mm > 0.
     """
     err_width_mm: float
     x_expr: str = ""
@@ -399,15 +412,17 @@ class ProfileFit:
         if self.err_width_mm > LINK_MAX_PER_SIZE * self.size_mm:
             raise ModelError(f"err_width_mm={self.err_width_mm} must be <= {LINK_MAX_PER_SIZE * self.size_mm:.6g}",
                              key="err_width_mm")
+        top = LINK_MAX_PER_SIZE * self.size_mm
         for key in ("H_min_mm", "H_max_mm", "L_min_mm", "L_max_mm"):
             v = getattr(self, key)
-            if v is not None and not (0 < v <= LINK_MAX_PER_SIZE * self.size_mm):
-                raise ModelError(f"{key}={v} must be within (0, {LINK_MAX_PER_SIZE * self.size_mm:.6g}]", key=key)
+            crank = key.startswith("H")             # H < 0: the mirrored crank (the class docstring)
+            if v is not None and not ((-top <= v if crank else 0 < v) and v <= top):
+                raise ModelError(f"{key}={v} must be within {f'[{-top:.6g}' if crank else '(0'}, {top:.6g}]", key=key)
         box = self.bounds()
         for lo, hi, k in (("H_min_mm", "H_max_mm", 0), ("L_min_mm", "L_max_mm", 2)):
             if box[k] > box[k + 1]:
                 raise ModelError(f"bounds reversed: {lo}={box[k]:.6g} > {hi}={box[k + 1]:.6g}"
-                                 " (a side not given is the start +- size/2: give both)", key=lo)
+                                 " (a side not given is the default box's: give both)", key=lo)
 
     @property
     def t_start_rad(self) -> float:
@@ -429,11 +444,11 @@ class ProfileFit:
         """(H, L) [mm]: the NLP's start and the default box's centre (`coarse_start`)."""
         return coarse_start(self.path_point, self.t_start_rad, self.t_end_rad, 4 * self.size_mm)
 
-    def bounds(self, pad_per_a: float = 0.5) -> tuple[float, float, float, float]:
-        """(H_min, H_max, L_min, L_max) [mm]: given sides, the others the start +- pad_per_a size."""
-        H0, L0 = self.matched
-        pad, floor = pad_per_a * self.size_mm, MIN_LINK_PER_SIZE * self.size_mm
-        derived = (max(H0 - pad, floor), H0 + pad, max(L0 - pad, floor), L0 + pad)
+    def bounds(self) -> tuple[float, float, float, float]:
+        """(H_min, H_max, L_min, L_max) [mm]: the given sides; a side not given is the path's reach
+        (4 sizes) either side for H (both cranks), MIN_LINK_PER_SIZE sizes .. the reach for L."""
+        reach, floor = 4 * self.size_mm, MIN_LINK_PER_SIZE * self.size_mm
+        derived = (-reach, reach, floor, reach)
         given = (self.H_min_mm, self.H_max_mm, self.L_min_mm, self.L_max_mm)
         return tuple(float(g) if g is not None else d for g, d in zip(given, derived))
 

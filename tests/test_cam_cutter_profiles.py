@@ -1,12 +1,13 @@
 """Cams of any shape (issue 13, Sec. 2): the safe curve parser, the point table, the kerf offset,
 the cusp, and the minimax on a general curve against independent computations."""
+import dataclasses
 import shutil
 from pathlib import Path
 
 import casadi as ca
 import numpy as np
 import pytest
-from scipy.optimize import differential_evolution
+from scipy.optimize import minimize
 from scipy.spatial import cKDTree
 
 from mechopt import registry
@@ -158,12 +159,16 @@ def test_the_cardioid_as_a_curve_gives_the_cardioid_minimax():
     got, ref = minimax(curve_task, count=1000), minimax(LinkageFit(a_mm=a, err_width_mm=0.075, h_mm=h), count=1000)
     for key in ("H_mm", "L_mm", "max_deviation_mm"):
         assert got.values[key] == pytest.approx(ref.values[key], abs=1e-7)
+    # as a general curve its box holds both cranks, |H| up to 4.66 a: the paper's cardioid's
+    # minimax linkage is global over them too (the best mirrored crank is 8.27 mm off)
+    assert got.diagnostics["box_mm"][0] < 0 and got.diagnostics["global_certified"]
 
 
 def test_a_band_the_limacons_cannot_keep_is_infeasible_with_where():
     run = registry.run("cam-cutter/other-profile", {"err_width_mm": 0.3})
     assert run.status is Status.INFEASIBLE and run.result.violated == ("err_width",)
-    assert "best achievable 0.3562 mm; set at t = " in run.result.message
+    assert "best achievable 0.3057 mm; set at t = " in run.result.message
+    assert run.result.diagnostics["global_certified"]          # no linkage of the box keeps 0.3 mm
     x, y = run.result.diagnostics["max_deviation_at_mm"]
     assert np.isfinite(x) and np.isfinite(y)
 
@@ -185,26 +190,61 @@ def _distance_to_limacon(px, py, H, L, vertices=2**15):
     return best
 
 
-def test_other_profile_scene_agrees_with_differential_evolution():
+def _grid_distance(px, py, H, L, vertices=256):
+    """Largest distance from the points to each limaçon (H, L[j]) of a row, directly over a
+    coarse polyline: the brute-force grid's measure (its error, ~0.01 mm, ranks basins only)."""
+    s = np.linspace(0.0, 2 * np.pi, vertices, endpoint=False)
+    L = np.asarray(L)[:, None, None]
+    rx, ry = L * (np.cos(s) - 1) + 0.5 * H * (np.cos(2 * s) - 1), L * np.sin(s) + 0.5 * H * np.sin(2 * s)
+    return np.sqrt(((rx - px[:, None]) ** 2 + (ry - py[:, None]) ** 2).min(axis=2)).max(axis=1)
+
+
+def brute_force_minimax(px, py, box, *, step=2.0, basins=4):
+    """A brute-force global search over the box: every (H, L) of a `step` mm grid, then
+    Nelder-Mead from the best grid point of each of the `basins` best basins (grid points more
+    than 3 steps apart), on the distance of `_distance_to_limacon`. Returns (value, H, L), best first."""
+    H = np.arange(box[0], box[1] + 1e-9, step)
+    L = np.arange(box[2], box[3] + 1e-9, step)
+    sub = np.linspace(0, px.size - 1, 50).round().astype(int)
+    grid = np.array([_grid_distance(px[sub], py[sub], h, L) for h in H])
+    seeds = []
+    for flat in np.argsort(grid, axis=None):
+        i, j = np.unravel_index(flat, grid.shape)
+        if all(abs(H[i] - h) > 3 * step or abs(L[j] - l) > 3 * step for h, l in seeds):
+            seeds.append((H[i], L[j]))
+        if len(seeds) == basins:
+            break
+
+    def worst(v):
+        return _distance_to_limacon(px, py, v[0], v[1], 2**12).max()
+
+    found = [minimize(worst, seed, method="Nelder-Mead", options={"xatol": 1e-6, "fatol": 1e-9}) for seed in seeds]
+    return sorted((float(f.fun), *map(float, f.x)) for f in found)
+
+
+def test_other_profile_scene_is_the_global_minimax_of_a_brute_force_search():
     scene = registry.find("cam-cutter/other-profile")
     task, _ = scene.build()
     t = np.linspace(task.t_start_rad, task.t_end_rad, 1500)
     px, py = task.path_point(t)            # the offset path itself is pinned above against eq. (9)
-
-    def worst(v, vertices=2**12):
-        return _distance_to_limacon(px, py, v[0], v[1], vertices).max()
-
-    found = differential_evolution(lambda v: worst(v, 2**11), [(1.0, 40.0), (40.0, 60.0)], seed=3, tol=1e-10,
-                                   popsize=10, maxiter=80, polish=False)
+    found = brute_force_minimax(px, py, task.bounds())
+    value, H, L = found[0]
     exp = scene.spec.expect
-    assert found.x[0] == pytest.approx(exp["H_mm"].value, abs=0.1)
-    assert found.x[1] == pytest.approx(exp["L_mm"].value, abs=0.05)
+    assert H == pytest.approx(exp["H_mm"].value, abs=0.01) and L == pytest.approx(exp["L_mm"].value, abs=0.01)
+    assert H < 0                                   # the mirrored crank
+    assert found[1][1] > 0 and found[1][0] == pytest.approx(0.356156, abs=2e-5)    # the best H > 0
+    assert found[1][0] / value - 1 > 0.14          # the mirrored crank keeps a band 14 % narrower
     # at the scene's optimum, finely: its value, and no better point around it
     best = np.array([exp["H_mm"].value, exp["L_mm"].value])
-    value = worst(best, 2**16)
-    assert value == pytest.approx(exp["max_deviation_mm"].value, abs=2e-6)
+    fine = _distance_to_limacon(px, py, *best, 2**16).max()
+    assert fine == pytest.approx(exp["max_deviation_mm"].value, abs=2e-6)
     for dH, dL in [(d * np.cos(q), d * np.sin(q)) for d in (0.003, 0.03) for q in np.linspace(0, 2 * np.pi, 8, endpoint=False)]:
-        assert worst(best + (dH, dL), 2**16) > value - 2e-6
+        assert _distance_to_limacon(px, py, *(best + (dH, dL)), 2**16).max() > fine - 2e-6
+    # the package's certificate: a lower bound below every brute-force value, within its gap
+    run = registry.run(scene.id)
+    d = run.result.diagnostics
+    assert d["global_certified"] and d["global_gap_mm"] <= d["global_gap_target_mm"]
+    assert d["global_lower_bound_mm"] <= value <= run.values["max_deviation_mm"] + 1e-5
 
 
 def test_the_placement_reading_matters_and_start_at_origin_is_taken():
@@ -212,17 +252,55 @@ def test_the_placement_reading_matters_and_start_at_origin_is_taken():
     scene = registry.find("cam-cutter/other-profile")
     task, _ = scene.build({"placement": "as_given"})
     run = minimax(task, count=400)
-    assert run.status is not Status.SOLVED and run.values["max_deviation_mm"] > 40
+    assert run.status is not Status.SOLVED and run.values["max_deviation_mm"] > 3
     assert scene.spec.structure["placement"] == "start_at_origin"
 
 
-def test_an_optimum_on_the_default_box_is_limit_not_solved():
-    # an ellipse longer than it is tall wants H < 0 (the egg turned round): the box floor stops it
+def test_the_h_positive_reading_keeps_the_band_of_the_local_optimum():
+    task, _ = registry.find("cam-cutter/other-profile").build()
+    positive = minimax(dataclasses.replace(task, H_min_mm=1.0), count=1000)     # the H > 0 reading
+    assert positive.status is Status.SOLVED and positive.diagnostics["global_certified"]
+    assert positive.values["H_mm"] == pytest.approx(15.215569, abs=0.01)
+    assert positive.values["max_deviation_mm"] == pytest.approx(0.356156, abs=2e-5)
+
+
+def test_an_answer_with_no_crank_is_named_not_solved():
+    # an ellipse longer than it is tall, links of 20 .. 80 mm: the best limaçon is the circle H = 0
     task = ProfileFit(err_width_mm=2.0, x_expr="A*cos(t)", y_expr="B*sin(t)", t1_rad=np.pi,
-                      constants={"A": 50.0, "B": 47.5}, h_mm=2.0)
-    run = minimax(task, count=400)
-    assert run.status is Status.LIMIT
-    assert "H at its lower bound H_min_mm" in run.message and "the default box" in run.message
+                      constants={"A": 50.0, "B": 47.5}, h_mm=2.0, H_min_mm=-60.0, H_max_mm=60.0,
+                      L_min_mm=20.0, L_max_mm=80.0)
+    got = minimax(task, count=400, certify="off")
+    assert got.status is Status.LIMIT and abs(got.values["H_mm"]) < 1e-3
+    assert "no crank (H = 0 is no mechanism)" in got.message
+
+
+def test_the_mirrored_crank_is_the_limacon_mirrored_and_placed_at_the_origin():
+    from mechopt.models.cam_cutter import real_point
+    s = np.linspace(0.0, 2 * np.pi, 7)
+    H, L = 13.0, 52.0
+    x, y = real_point(s, -H, L)
+    # r = L - H cos t about the pole is r = L + H cos t mirrored across the pole's y axis (t -> pi - t)
+    mx, my = real_point(np.pi - s, H, L)
+    pole_neg, pole_pos = -(L - H), -(L + H)
+    assert np.allclose(x - pole_neg, -(mx - pole_pos)) and np.allclose(y, my)
+    assert real_point(0.0, -H, L) == pytest.approx((0.0, 0.0))
+
+
+@pytest.mark.parametrize("key, value, match", [
+    ("H_min_mm", -2601.0, r"H_min_mm=-2601.0 must be within \[-2600, 2600\]"),
+    ("L_min_mm", -1.0, r"L_min_mm=-1.0 must be within \(0, 2600\]"),
+])
+def test_box_sides_out_of_range_are_refused(key, value, match):
+    with pytest.raises(ModelError, match=match) as err:
+        ProfileFit(err_width_mm=0.4, x_expr="50*cos(t)", y_expr="52*sin(t)", h_mm=2.0, **{key: value})
+    assert err.value.key == key
+
+
+def test_a_certificate_cut_short_is_inaccurate_not_solved():
+    task, _ = registry.find("cam-cutter/other-profile").build()
+    got = minimax(task, count=400, max_cells=200)
+    assert got.status is Status.INACCURATE and "not certified global over the box" in got.message
+    assert got.diagnostics["global_gap_mm"] > got.diagnostics["global_gap_target_mm"]
 
 
 def test_a_users_scene_takes_a_point_table_in_its_structure(tmp_path):

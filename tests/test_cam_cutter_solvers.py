@@ -613,15 +613,15 @@ def test_unknown_nlp_back_end_is_rejected(task):
 
 def test_a_round_that_was_not_solved_is_named_even_when_a_later_one_is(task, monkeypatch):
     import mechopt.solvers.cam_cutter.fit as tf
-    solve_round, calls = tf._solve_round, []
+    solve_round, calls = tf.solve_round, []
 
-    def first_stops_short(k, method, bounds):
-        sol, status, word, used, built = solve_round(k, method, bounds)
+    def first_stops_short(k, method, bounds, **options):
+        sol, status, word, used, built = solve_round(k, method, bounds, **options)
         calls.append(word)
         return (sol, Status.LIMIT, "Maximum_Iterations_Exceeded", used, built) if len(calls) == 1 else \
             (sol, status, word, used, built)
 
-    monkeypatch.setattr(tf, "_solve_round", first_stops_short)
+    monkeypatch.setattr(tf, "solve_round", first_stops_short)
     got = minimax(task)
     assert len(calls) > 1 and got.status is Status.SOLVED
     assert "earlier rounds not solved (round 1: sqp Maximum_Iterations_Exceeded)" in got.message
@@ -727,13 +727,36 @@ def test_from_sqpmethod_maps_status_words(word, success, status):
 
 def test_a_round_returning_a_non_finite_point_fails_whatever_its_status_word(task, monkeypatch):
     import mechopt.solvers.cam_cutter.fit as tf
-    solve_round = tf._solve_round
+    solve_round = tf.solve_round
 
-    def nan_point(k, method, bounds):
-        sol, status, word, used, built = solve_round(k, method, bounds)
+    def nan_point(k, method, bounds, **options):
+        sol, status, word, used, built = solve_round(k, method, bounds, **options)
         return {"x": np.full(np.asarray(sol["x"]).shape, np.nan)}, status, word, used, built
 
-    monkeypatch.setattr(tf, "_solve_round", nan_point)
+    monkeypatch.setattr(tf, "solve_round", nan_point)
     got = minimax(task)
     assert got.status is Status.FAILED and "non-finite point" in got.message
     assert "H_mm" not in got.values
+
+
+def test_no_cam_cutter_solver_imports_another_modules_private_name():
+    import ast
+    from pathlib import Path
+
+    import mechopt.solvers.cam_cutter as package
+    found = []
+    for path in Path(package.__file__).parent.glob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("mechopt"):
+                found += [f"{path.name}: {node.module}.{a.name}" for a in node.names if a.name.startswith("_")]
+    assert found == []
+
+
+@pytest.mark.parametrize("width", [75.0, 100.0])
+def test_a_band_wider_than_the_limacon_passes_every_linkage_it_holds(width):
+    # issue 21: at 100 mm every segment spans the limaçon, crossed twice; the one-end-in test
+    # alone failed every point (INFEASIBLE "best achievable 0.06084 mm") where 75 mm passed all
+    run = registry.run("cam-cutter/paper-grid", {"err_width_mm": width, "H_max_mm": 56.0, "L_max_mm": 46.0, "count": 50})
+    assert run.status is Status.SOLVED and run.values["n_passing"] == 101 * 101
+    assert (run.values["H_mm"], run.values["L_mm"]) == (55.0, 45.0)
+    assert run.values["max_deviation_mm"] < width

@@ -3,7 +3,9 @@
 `fit` holds the solvers a scene names (`cam_cutter.minimax`, ...); `deviation` measures how far
 a limaçon is from the ideal path; `kinetostatics.joint_loads` the reactions and driving torque
 over the cycle (Sec. V re-derived); `family.readjustable` one H for a family of cams (Sec. VII).
-`minimax` also takes a cam of any shape (`models.cam_profile.ProfileFit`). `fit_linkage(task, method=...)` is the one door to the four
+`minimax` also takes a cam of any shape (`models.cam_profile.ProfileFit`), globally over its box
+(`certificate`: the multistart's starts and the lower bound); `problem` is the minimax problem
+`fit` and `family` share. `fit_linkage(task, method=...)` is the one door to the four
 ways of finding the linkage, as `scipy.integrate.solve_ivp` has one for its methods.
 """
 from mechopt.models.errors import SceneError

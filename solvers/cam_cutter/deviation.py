@@ -20,19 +20,23 @@ from mechopt.models.cache import memoised
 from mechopt.models.cam_cutter import ideal_normal, ideal_point
 
 
-def normal_crossings(px, py, nx, ny, H, L):
-    """Signed distances d [mm] at which P + d n meets the closed limaçon: the four roots of
-    F(P + d n) = 0, complex where there is no crossing. Arrays broadcast; the result has a
-    trailing axis of 4."""
+def normal_quartic(px, py, nx, ny, H, L):
+    """(c0, c1, c2, c3): F(P + d n) = d^4 + c3 d^3 + c2 d^2 + c1 d + c0, the limaçon's implicit
+    form (`limacon_implicit`) along the unit normal n through P. Arrays broadcast."""
     u0 = px + L + H                       # node abscissa from the limaçon's pole
     r0 = u0 * u0 + py * py
     r1 = 2 * (u0 * nx + py * ny)
     g0 = r0 - H * u0
     g1 = r1 - H * nx
     # F(d) = (d^2 + g1 d + g0)^2 - L^2 (d^2 + r1 d + r0), monic because |n| = 1
-    c3, c2 = 2 * g1, g1 * g1 + 2 * g0 - L * L
-    c1, c0 = 2 * g0 * g1 - L * L * r1, g0 * g0 - L * L * r0
-    c0, c1, c2, c3 = np.broadcast_arrays(c0, c1, c2, c3)
+    return g0 * g0 - L * L * r0, 2 * g0 * g1 - L * L * r1, g1 * g1 + 2 * g0 - L * L, 2 * g1
+
+
+def normal_crossings(px, py, nx, ny, H, L):
+    """Signed distances d [mm] at which P + d n meets the closed limaçon: the four roots of
+    F(P + d n) = 0, complex where there is no crossing. Arrays broadcast; the result has a
+    trailing axis of 4."""
+    c0, c1, c2, c3 = np.broadcast_arrays(*normal_quartic(px, py, nx, ny, H, L))
     companion = np.zeros(c0.shape + (4, 4))
     companion[..., 1, 0] = companion[..., 2, 1] = companion[..., 3, 2] = 1.0
     companion[..., :, 3] = -np.stack([c0, c1, c2, c3], axis=-1)

@@ -28,20 +28,22 @@ from mechopt.models.cam_cutter import (
     ideal_point,
     limacon_implicit,
     real_point,
-    real_velocity,
 )
-from mechopt.models.cam_profile import ProfileFit
+from mechopt.models.cam_profile import MIN_LINK_PER_SIZE, ProfileFit
 from mechopt.models.errors import ModelError
+from mechopt.solvers.cam_cutter.certificate import box_lower_bound, grid_starts
 from mechopt.solvers.cam_cutter.deviation import (
     foot_points,
     nodes_and_normals,
     normal_crossings,
     normal_deviation,
+    normal_quartic,
     path_distance,
     verified_deviation,
     verified_deviation_on,
 )
-from mechopt.solvers.result import Result, Status, Timing, from_ipopt, from_sqpmethod
+from mechopt.solvers.cam_cutter.problem import NLP_OPTIONS, ROUND_VERTICES, foot_and_band, pad_nodes, solve_round
+from mechopt.solvers.result import Result, Status, Timing
 from mechopt.solvers.settings import Annotated, Ge, Interval, Tolerance, check_settings
 
 Nodes = Annotated[int, Interval(ge=2, le=1_000_000)]      # COUNT: nodes on the ideal path
@@ -57,10 +59,6 @@ NODE_RULES = {
 GRID_POINT_LIMIT = 50_000_000
 BOX_PAD_PER_A = 0.5        # the default box: matched linkage +- a/2 (`LinkageFit.bounds`)
 BOX_WIDEN_FACTOR = 4.0     # each widening of a default side the optimum lies on
-# polyline vertices seeding Newton's foot points inside the exchange rounds: 4096 match 2^16 to
-# 1e-13 mm on the paper's and other cardioids (2048 can seed the wrong branch); the reported
-# max_deviation_mm keeps the finer default of `path_distance`
-ROUND_VERTICES = 2**12
 
 
 def grid_scan(task: LinkageFit, *, count: Nodes = 1000,
@@ -70,7 +68,11 @@ def grid_scan(task: LinkageFit, *, count: Nodes = 1000,
 
     At node t_i the segment runs +-err_width_mm along the ideal path's normal; an end below the
     x axis is pulled back to the axis; the node passes when exactly one end lies inside the closed
-    limaçon (`limacon_implicit` < 0). Nodes t_i = i t_FINISH / COUNT with t_FINISH read to
+    limaçon (`limacon_implicit` < 0). Where that fails every lattice point, the scan is repeated
+    with segments crossed twice passing too (`_crossed_twice`: a band wider than the limaçon spans
+    it, which the paper's test cannot see: at err_width_mm = 100 it failed every point where 75
+    passed all); `diagnostics["segments_probed"]` says so. Nodes
+    t_i = i t_FINISH / COUNT with t_FINISH read to
     y_tol_mm as the paper read it (`t_finish_read_rad`); `nodes` picks which i (see NODE_RULES).
 
     Exact and fast: a point must pass every node, so the nodes are applied one at a time, in an
@@ -91,21 +93,13 @@ def grid_scan(task: LinkageFit, *, count: Nodes = 1000,
 
     # golden-ratio spread from the far end: early nodes pass nearly every point, late ones ~3 %
     order = np.argsort((np.arange(t.size)[::-1] * 0.6180339887498949) % 1.0)
-    passing = []
-    for rows in np.array_split(np.arange(H_grid.size), max(1, H_grid.size * L_grid.size // 2_000_000)):
-        H, L = (g.ravel() for g in np.meshgrid(H_grid[rows], L_grid, indexing="ij"))
-        for i in order:
-            inner = limacon_implicit(ends[0][i], ends[1][i], H, L) < 0
-            outer = limacon_implicit(ends[2][i], ends[3][i], H, L) < 0
-            keep = inner != outer
-            H, L = H[keep], L[keep]
-            if H.size == 0:
-                break
-        passing.append(np.column_stack([H, L]))
-    passing = np.concatenate(passing)
+    passing = _scan(H_grid, L_grid, ends, order)
+    probed = len(passing) == 0      # every point failed: tell segments crossed twice from none
+    if probed:
+        passing = _scan(H_grid, L_grid, ends, order, crossed=_crossed_twice(t, task, ends))
 
     diagnostics = {"nodes": int(t.size), "node_rule": nodes, "t_finish_exact_rad": task.t_finish_rad,
-                   "grid_points": int(H_grid.size * L_grid.size)}
+                   "grid_points": int(H_grid.size * L_grid.size), "segments_probed": probed}
     values = {"t_finish_rad": t_finish, "n_passing": float(len(passing))}
     if len(passing) == 0:
         best = minimax(task, count=count)      # the grid has no answer: say what is achievable
@@ -130,6 +124,8 @@ def grid_scan(task: LinkageFit, *, count: Nodes = 1000,
     values |= {"H_mm": H, "L_mm": L, "max_deviation_mm": deviation}
     status, violated = Status.SOLVED, ()
     message = f"first of {len(passing)} passing grid points, H ascending then L ascending"
+    if probed:
+        message += " (the paper's one-end-in test failed every point; a segment crossed twice passes)"
     if deviation > task.err_width_mm:       # every node passes, yet the path leaves the band between them
         status, violated = Status.INACCURATE, ("err_width",)
         message += f"; between the {t.size} nodes the path is {deviation:.4g} mm off: raise count"
@@ -141,7 +137,10 @@ def grid_scan(task: LinkageFit, *, count: Nodes = 1000,
 
 def minimax(task: LinkageFit | ProfileFit, *, count: Nodes = 1000, slots: Annotated[int, Interval(ge=1, le=4096)] = 8,
             max_rounds: Annotated[int, Interval(ge=1, le=10_000)] = 40,
-            nlp: Literal["sqp", "ipopt"] = "sqp", widen: Annotated[int, Interval(ge=0, le=10)] = 3) -> Result:
+            nlp: Literal["sqp", "ipopt"] = "sqp", widen: Annotated[int, Interval(ge=0, le=10)] = 3,
+            starts: Annotated[int, Interval(ge=0, le=64)] = 4, certify: Literal["auto", "on", "off"] = "auto",
+            gap_per_size: Annotated[float, Interval(gt=0, le=0.1)] = 4e-5,
+            max_cells: Annotated[int, Interval(ge=64, le=10_000_000)] = 20_000) -> Result:
     """(H, L) in the box minimising the largest distance from COUNT nodes of the ideal path to
     the limaçon, as a CasADi NLP:
 
@@ -169,11 +168,25 @@ def minimax(task: LinkageFit | ProfileFit, *, count: Nodes = 1000, slots: Annota
     `nlp` picks the back end of each round: "sqp" (CasADi's sqpmethod with qrqp, exact Hessian;
     a round it does not converge is re-solved by IPOPT) or "ipopt" only. Both reach the same
     (H, L) to ~1e-9 mm; SQP is ~7x faster per round (`mechopt bench cam-cutter`).
+
+    Global over the box. A cam of any shape has no closed-form start, and its deviation has
+    several basins (H > 0 and the mirrored crank H < 0, `models.cam_profile`): its box is the
+    declared one (not widened), and the exchange rounds run from the brute-force start and from
+    up to `starts` grid cells that are lower than their neighbours (`certificate.grid_starts`);
+    the best dense deviation is kept. Then the certificate: a branch and bound on a Lipschitz
+    bound (`certificate.box_lower_bound`) gives a lower bound on the deviation over the whole
+    box; `diagnostics["global_gap_mm"]` is the answer's deviation less that bound. A gap above
+    `gap_per_size` cam sizes (1e-3 mm on the paper's cam) after `max_cells` cells is not
+    certified: a SOLVED or INFEASIBLE answer is then INACCURATE ("not certified global").
+    `certify`: "auto" certifies a cam of any shape and not the cardioid (one start from its
+    matched linkage; the certificate costs ~70 of its solves: `cam-cutter/minimax` asks "on"),
+    whose answer then says `global_certified` False, "not checked".
     """
     _check_count(count)
-    check_settings(minimax, slots=slots, max_rounds=max_rounds, widen=widen)
-    if nlp not in _NLP_OPTIONS:
-        raise ModelError(f"nlp={nlp!r} is not an NLP back end; known: {', '.join(_NLP_OPTIONS)}", key="nlp")
+    check_settings(minimax, slots=slots, max_rounds=max_rounds, widen=widen, starts=starts, certify=certify,
+                   gap_per_size=gap_per_size, max_cells=max_cells)
+    if nlp not in NLP_OPTIONS:
+        raise ModelError(f"nlp={nlp!r} is not an NLP back end; known: {', '.join(NLP_OPTIONS)}", key="nlp")
     start = time.perf_counter()
     t_start, t_end = task.t_start_rad, task.t_end_rad
     scale = _scale(task)
@@ -182,22 +195,23 @@ def minimax(task: LinkageFit | ProfileFit, *, count: Nodes = 1000, slots: Annota
     pad, widened = BOX_PAD_PER_A, 0
     H, L = task.matched
     build_s, back_ends, unsolved, rounds_in_all = 0.0, [], {}, 0
+    general = isinstance(task, ProfileFit)        # a declared box, searched from several starts
     while True:
-        box = task.bounds(pad)
-        H, L = (float(v) for v in np.clip((H, L), box[::2], box[1::2]))
-        got = _exchange_rounds(px, py, task.size_mm / scale, np.divide(box, scale), H / scale, L / scale,
-                               count, slots, max_rounds, nlp)
+        box = task.bounds() if general else task.bounds(pad)
+        seeds = [(H, L)] + (grid_starts(px[::max(1, count // 64)] * scale, py[::max(1, count // 64)] * scale,
+                                        box, count=starts) if general else [])
+        got = _best_of(px, py, task, box, seeds, count, slots, max_rounds, nlp)
         build_s += got["build_s"]
         back_ends += got["back_ends"]
-        unsolved |= {r + rounds_in_all: w for r, w in got["unsolved"].items()}
+        unsolved |= {r + rounds_in_all: w for r, w in got["unsolved"].items()}     # rounds of the kept start
         rounds_in_all += got["rounds"]
         status, status_word = got["status"], got["status_word"]
         if status is Status.FAILED:
             break
-        H, L = got["H"] * scale, got["L"] * scale
+        H, L = got["H"], got["L"]
         on_bounds = _bounds_hit(task, H, L, box)
         derived = [name for name in on_bounds if getattr(task, name) is None]
-        if not derived or widened == widen or status is not Status.SOLVED:
+        if general or not derived or widened == widen or status is not Status.SOLVED:
             break
         pad, widened = pad * BOX_WIDEN_FACTOR, widened + 1     # the default box cut it short: widen, re-solve
     rounds = rounds_in_all
@@ -205,8 +219,11 @@ def minimax(task: LinkageFit | ProfileFit, *, count: Nodes = 1000, slots: Annota
         return Result(Status.FAILED, task.path_values(),
                       Timing(build_s, time.perf_counter() - start - build_s),
                       message=f"{back_ends[-1] if back_ends else nlp} failed ({status_word}) after {rounds} round(s)")
-    deviation, where = verified_deviation_on(task.path_point, t_start, t_end, H, L)
+    deviation, where = got["deviation"], got["where"]
     where_xy = [float(v[0]) for v in task.path_point(np.array([where]))]
+    certify = certify == "on" or (certify == "auto" and general)
+    certificate = _certify(task, px * scale, py * scale, box, H, L, deviation, gap_per_size, max_cells) \
+        if certify else {"global_certified": False, "global_note": "not checked (certify = \"on\" checks it)"}
     solve_s = time.perf_counter() - start - build_s       # the verification is part of the answer
     nodes_max = got["nodes_max"] * scale
     message = (f"{status_word} after {rounds} exchange round(s) ({', '.join(back_ends)}), "
@@ -214,9 +231,20 @@ def minimax(task: LinkageFit | ProfileFit, *, count: Nodes = 1000, slots: Annota
     earlier = [f"round {r}: {word}" for r, word in unsolved.items() if r < rounds]
     if earlier:             # a later round started from it; only the last round's answer counts
         message += f"; earlier rounds not solved ({', '.join(earlier)})"
+    if general and got["starts"] > 1:
+        message += f", best of {got['starts']} starts"
     status, violated, message = _verdict(task, status, message, nodes_max, deviation, count, H, L, box, on_bounds)
     if violated:            # where the band is set: the path's point farthest from the best limaçon
         message += f"; set at t = {where:.6g} rad, (x, y) = ({where_xy[0]:.6g}, {where_xy[1]:.6g}) mm"
+    if general and abs(H) < MIN_LINK_PER_SIZE * task.size_mm and status is Status.SOLVED:
+        status = Status.LIMIT           # the circle about a fixed pivot: no crank, no mechanism
+        message += f"; H = {H:.3g} mm: no crank (H = 0 is no mechanism), give a box that excludes it"
+    if certify and not certificate["global_certified"] and status in (Status.SOLVED, Status.INFEASIBLE):
+        status = Status.INACCURATE
+        message += (f"; not certified global over the box: lower bound {certificate['global_lower_bound_mm']:.6g} mm, "
+                    f"gap {certificate['global_gap_mm']:.3g} mm after {certificate['global_cells']} cells")
+    elif certify:
+        message += f"; global over the box to {certificate['global_gap_mm']:.2g} mm"
     return Result(status, {"H_mm": H, "L_mm": L, "max_deviation_mm": deviation, **task.path_values()},
                   Timing(build_s, solve_s), message=message, violated=violated,
                   diagnostics={"nodes_max_deviation_mm": nodes_max, "nlp_nodes": got["nlp_nodes"],
@@ -226,7 +254,45 @@ def minimax(task: LinkageFit | ProfileFit, *, count: Nodes = 1000, slots: Annota
                                "active_bounds": on_bounds, "box_mm": [float(b) for b in box],
                                "box_widenings": widened,
                                "max_deviation_at_rad": where, "max_deviation_at_mm": where_xy,
-                               "t_finish_exact_rad": t_end})
+                               "t_finish_exact_rad": t_end, "starts": got["starts"]} | certificate)
+
+
+def _best_of(px, py, task, box, seeds, count, slots, max_rounds, nlp):
+    """`_exchange_rounds` in the box [mm] from each seed (H, L) [mm]: the answer with the smallest
+    dense deviation (`verified_deviation_on`), in mm, with that deviation and where it is; its
+    rounds and unsolved rounds are its own, build time and back ends those of every start."""
+    scale, best, build_s, back_ends = _scale(task), None, 0.0, []
+    for H, L in seeds:
+        H, L = (float(v) for v in np.clip((H, L), box[::2], box[1::2]))
+        got = _exchange_rounds(px, py, task.size_mm / scale, np.divide(box, scale), H / scale, L / scale,
+                               count, slots, max_rounds, nlp)
+        build_s, back_ends = build_s + got["build_s"], back_ends + got["back_ends"]
+        if got["status"] is Status.FAILED:
+            best = best or got
+            continue
+        got["H"], got["L"] = got["H"] * scale, got["L"] * scale
+        got["deviation"], got["where"] = verified_deviation_on(task.path_point, task.t_start_rad, task.t_end_rad,
+                                                               got["H"], got["L"])
+        if best is None or best["status"] is Status.FAILED or got["deviation"] < best["deviation"]:
+            best = got
+    return best | {"starts": len(seeds), "build_s": build_s, "back_ends": back_ends}
+
+
+CERTIFY_SPREAD = 48     # nodes spread over the path in the bound's node set
+CERTIFY_WORST = 16      # plus the answer's worst nodes, where the bound is tight
+
+
+def _certify(task, px, py, box, H, L, deviation, gap_per_size, max_cells):
+    """The certificate of `minimax`'s answer (H, L) [mm]: a lower bound on the deviation over the
+    box from a node set (`certificate.box_lower_bound`), the gap, and whether it is within
+    gap_per_size cam sizes. Node coordinates in mm."""
+    worst = np.argsort(foot_points(px, py, H, L, vertices=ROUND_VERTICES)[0])[::-1][:CERTIFY_WORST]
+    nodes = np.unique(np.r_[np.linspace(0, px.size - 1, CERTIFY_SPREAD).round().astype(int), worst])
+    target = gap_per_size * task.size_mm
+    lower, cells, complete = box_lower_bound(px[nodes], py[nodes], box, deviation, gap=target, max_cells=max_cells)
+    gap = max(deviation - lower, 0.0)
+    return {"global_lower_bound_mm": lower, "global_gap_mm": gap, "global_cells": cells,
+            "global_certified": bool(complete or gap <= target), "global_gap_target_mm": target}
 
 
 def _exchange_rounds(px, py, a, box, H, L, count, slots, max_rounds, nlp):
@@ -240,12 +306,12 @@ def _exchange_rounds(px, py, a, box, H, L, count, slots, max_rounds, nlp):
     every = feet = None            # every node's distance and foot point at the last round's (H, L)
     for rounds in range(1, max_rounds + 1):
         k = min(_slot_count(len(kept), slots), count)
-        chosen = np.array(_pad(kept, k, count))
+        chosen = np.array(pad_nodes(kept, k, count))
         if rounds == 1:
             dist, s0 = foot_points(px[chosen], py[chosen], H, L, vertices=ROUND_VERTICES)
         else:                      # the last round measured every node at this (H, L)
             dist, s0 = every[chosen], feet[chosen]
-        sol, status, status_word, used, built_s = _solve_round(k, nlp, dict(
+        sol, status, status_word, used, built_s = solve_round(k, nlp, solver_of=_minimax_nlp, bounds=dict(
             x0=np.r_[H, L, dist.max(), s0], p=np.r_[px[chosen], py[chosen], a],
             lbx=np.r_[H_lo, L_lo, 0.0, np.full(k, -np.inf)], ubx=np.r_[H_hi, L_hi, np.inf, np.full(k, np.inf)],
             lbg=np.zeros(3 * k), ubg=np.r_[np.zeros(k), np.full(2 * k, np.inf)]))
@@ -342,6 +408,8 @@ def robust(task: LinkageFit, *, count: Nodes = 1000, max_moves: Annotated[int, I
     this small each node's deviation is close to linear in H and L, so its extremes sit at the
     corners (a test bounds what a finer box sampling adds). The search is a descent over lattice
     points from the minimax optimum; lattice deviations are memoised, neighbours share them.
+    Global? Not certified (`diagnostics["global_certified"]` False): a descent stops at a local
+    minimum of the worst case; a test compares it with every lattice point around the optimum.
     """
     _cardioid_only(task, "robust")
     _check_count(count)
@@ -391,7 +459,8 @@ def robust(task: LinkageFit, *, count: Nodes = 1000, max_moves: Annotated[int, I
                   message=message, violated=violated,
                   diagnostics={"minimax_H_mm": best.values["H_mm"], "minimax_L_mm": best.values["L_mm"],
                                "minimax_deviation_mm": best.values["max_deviation_mm"],
-                               "lattice_points": len(memo)})
+                               "lattice_points": len(memo), "global_certified": False,
+                               "global_note": "a lattice descent: a local minimum of the worst case"})
 
 
 def evolve(task: LinkageFit, *, count: Nodes = 1000, popsize: Annotated[int, Interval(ge=5, le=1000)] = 15,
@@ -471,20 +540,6 @@ def check(task: LinkageCheck, *, count: Nodes = 1000,
 
 
 _NLP_BUILDS = BuildCache("cam_cutter.minimax_nlp", maxsize=64)
-_NLP_OPTIONS = {
-    "ipopt": {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.tol": 1e-10,
-              "ipopt.max_iter": 300},
-    # exact-Hessian SQP with CasADi's own active-set QP: ~4 iterations, no interior-point start-up.
-    # At a minimax optimum more constraints are active than there are unknowns, and the gradient
-    # of the Lagrangian stalls near 1e-6 (against the objective's gradient of 1) while the steps
-    # shrink quadratically to zero: the dual tolerance is 1e-5, reached when the last step is
-    # ~1e-7 mm. A round that still does not converge (delta = 0 exactly, h = 0) goes to IPOPT
-    "sqp": {"print_time": False, "print_header": False, "print_iteration": False, "print_status": False,
-            "qpsol": "qrqp", "qpsol_options": {"print_iter": False, "print_header": False, "print_info": False,
-                                               "error_on_fail": False, "constr_viol_tol": 1e-12,
-                                               "dual_inf_tol": 1e-12},
-            "convexify_strategy": "regularize", "tol_pr": 1e-10, "tol_du": 1e-5, "max_iter": 50},
-}
 
 
 def _minimax_nlp(k: int, method: str):
@@ -498,34 +553,13 @@ def _build_minimax_nlp(k, method):
     p = ca.SX.sym("p", 2 * k + 1)
     g = foot_and_band(s, H, L, p[:k], p[k:2 * k], p[2 * k], delta)
     nlp = {"x": ca.vertcat(H, L, delta, s), "p": p, "f": delta, "g": g}
-    return ca.nlpsol("cam_minimax", "sqpmethod" if method == "sqp" else "ipopt", nlp, _NLP_OPTIONS[method])
+    return ca.nlpsol("cam_minimax", "sqpmethod" if method == "sqp" else "ipopt", nlp, NLP_OPTIONS[method])
 
 
-def foot_and_band(s, H, L, px, py, a, delta):
-    """The minimax constraints for nodes (px, py) and limaçon points s (CasADi symbols): the foot
-    condition (= 0), then delta + and - the signed distance (>= 0). L may differ per node."""
-    rx, ry = real_point(s, H, L, m=ca)
-    vx, vy = real_velocity(s, H, L, m=ca)
-    ex, ey = rx - px, ry - py
-    # |R'| vanishes only at the plain cardioid's cusp, where the cross product does too
-    signed = (ex * vy - ey * vx) / ca.sqrt(vx * vx + vy * vy + (1e-9 * a) ** 2)
-    return ca.vertcat(ex * vx + ey * vy, delta + signed, delta - signed)
 
 
-def _solve_round(k, method, bounds, *, solver_of=None, cold=False):
-    """One exchange round's NLP: (solution, Status, the back end's word, the back end, build s).
-    SQP first when asked (and not `cold`); a round it does not solve is solved again by IPOPT from
-    the same start. `solver_of(k, name)` gives the built NLP (default: this module's minimax)."""
-    build_s = 0.0
-    for name in (("sqp", "ipopt") if method == "sqp" and not cold else ("ipopt",)):
-        solver, built_s = (solver_of or _minimax_nlp)(k, name)
-        build_s += built_s
-        sol = solver(**bounds)
-        stats = solver.stats()
-        status = (from_sqpmethod(stats["return_status"], stats["success"]) if name == "sqp"
-                  else from_ipopt(stats["return_status"]))
-        if status is Status.SOLVED or name == "ipopt":
-            return sol, status, stats["return_status"], name, build_s
+
+
 
 
 def _slot_count(needed, minimum):
@@ -535,15 +569,7 @@ def _slot_count(needed, minimum):
     return k
 
 
-def _pad(working, k, count):
-    """The working nodes plus spread nodes not yet in it, k in all (never a duplicate)."""
-    chosen = list(dict.fromkeys(working))
-    for i in np.linspace(0, count - 1, k + len(chosen)).round().astype(int):
-        if len(chosen) >= min(k, count):
-            break
-        if i not in chosen:
-            chosen.append(int(i))
-    return chosen
+
 
 
 def _node_times(task, count, nodes):
@@ -611,6 +637,72 @@ def _segment_ends(t, task):
         ends += [px + side * reach * nx, py + side * reach * ny]
     ends[1], ends[3] = np.maximum(ends[1], 0.0), np.maximum(ends[3], 0.0)
     return ends
+
+
+PROBE_LEVELS = 12      # probes at err_width / 2^k, k = 0 .. 11, either side of the node
+
+
+def _scan(H_grid, L_grid, ends, order, crossed=None):
+    """The lattice points (H, L) whose every node passes: one end of its segment inside the
+    limaçon, one outside (the paper's test); with `crossed(i, H, L, inside)`, a segment whose
+    ends lie on one side passes where that says it is crossed (twice). Nodes in `order`."""
+    passing = []
+    for rows in np.array_split(np.arange(H_grid.size), max(1, H_grid.size * L_grid.size // 2_000_000)):
+        H, L = (g.ravel() for g in np.meshgrid(H_grid[rows], L_grid, indexing="ij"))
+        for i in order:
+            inner = limacon_implicit(ends[0][i], ends[1][i], H, L) < 0
+            keep = inner != (limacon_implicit(ends[2][i], ends[3][i], H, L) < 0)
+            blind = np.flatnonzero(~keep)
+            if crossed is not None and blind.size:
+                keep[blind] = crossed(i, H[blind], L[blind], inner[blind])
+            H, L = H[keep], L[keep]
+            if H.size == 0:
+                break
+        passing.append(np.column_stack([H, L]))
+    return np.concatenate(passing)
+
+
+def _crossed_twice(t, task, ends):
+    """`crossed` for `_scan`: whether node i's segment, both ends on one side of the limaçons
+    (H, L), meets them: not where `_clear_of_segment` rules it out, else where a probe of
+    `_segment_probes` lies on the other side."""
+    normals = nodes_and_normals(t, task.a_mm, task.h_mm)
+    reach = np.maximum(np.hypot(ends[0] - normals[0], ends[1] - normals[1]),
+                       np.hypot(ends[2] - normals[0], ends[3] - normals[1]))
+    px, py = _segment_probes(t, task, ends)
+
+    def crossed(i, H, L, inside):
+        near = np.flatnonzero(~_clear_of_segment(i, normals, reach, H, L, inside))
+        out = np.zeros(H.shape, dtype=bool)
+        probe = limacon_implicit(px[i][:, None], py[i][:, None], H[near], L[near]) < 0
+        out[near] = np.any(probe != inside[near], axis=0)
+        return out
+    return crossed
+
+
+def _clear_of_segment(i, nodes, reach, H, L, inside):
+    """True where node i's segment surely does not meet the limaçon (H, L): along the normal,
+    F(P + d n) = d^4 + c3 d^3 + c2 d^2 + c1 d + c0 (`normal_quartic`) keeps the sign of its ends
+    (`inside`: negative) for every |d| <= reach, bounded term by term. Settles cheaply the points
+    far from the curve, so only those near it are probed."""
+    c0, c1, c2, c3 = normal_quartic(nodes[0][i], nodes[1][i], nodes[2][i], nodes[3][i], H, L)
+    r = reach[i]
+    spread = np.abs(c1) * r + np.abs(c2) * r * r + np.abs(c3) * r ** 3
+    return np.where(inside, c0 + spread + r ** 4 < 0, c0 - spread > 0)
+
+
+def _segment_probes(t, task, ends):
+    """Points of each node's error segment between its ends, for the segments whose two ends lie
+    on one side of the limaçon: the node itself and the points at err_width / 2^k along either
+    half (k = 1 .. PROBE_LEVELS - 1, within the trimmed segment). A segment wider than the
+    limaçon spans it and is crossed twice, which the paper's one-end-in test cannot see (issue
+    21: every point failed at err_width_mm = 100); a probe on the other side shows the crossing.
+    Returns (x, y), each of shape (nodes, probes)."""
+    px, py = ideal_point(t, task.a_mm, task.h_mm)
+    f = 0.5 ** np.arange(1, PROBE_LEVELS)
+    xs = [px[:, None]] + [px[:, None] + f * (end[:, None] - px[:, None]) for end in (ends[0], ends[2])]
+    ys = [py[:, None]] + [py[:, None] + f * (end[:, None] - py[:, None]) for end in (ends[1], ends[3])]
+    return np.hstack(xs), np.hstack(ys)
 
 
 def _finish_node_report(task, H, L, t_finish):
