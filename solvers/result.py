@@ -1,4 +1,5 @@
 """The one result every solver returns, and the only code that knows back ends' status words."""
+import html
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -16,6 +17,14 @@ class Status(str, Enum):
     UNBOUNDED = "UNBOUNDED"
     LIMIT = "LIMIT"                # iteration, round or size limit reached
     FAILED = "FAILED"
+
+    def __bool__(self) -> bool:
+        """True for SOLVED only: `if result.status:` reads as "was it solved?" (a str Enum is
+        otherwise always true, INFEASIBLE included)."""
+        return self is Status.SOLVED
+
+
+SHOWN = 4          # values a Result's repr names before "... N more"
 
 
 @dataclass(frozen=True)
@@ -48,6 +57,25 @@ class Result:
             array.flags.writeable = False
             arrays[name] = array
         object.__setattr__(self, "arrays", arrays)
+
+    @property
+    def success(self) -> bool:
+        """Whether the solver reached an answer to trust (SOLVED), as scipy's `OptimizeResult.success`."""
+        return self.status is Status.SOLVED
+
+    def __repr__(self) -> str:
+        """One line: status, the first values, how many more (the full dict is `values`)."""
+        shown = ", ".join(f"{k}={v:.6g}" for k, v in list(self.values.items())[:SHOWN])
+        more = f", ... {len(self.values) - SHOWN} more" if len(self.values) > SHOWN else ""
+        return (f"Result({self.status.value}, values={{{shown}{more}}}"
+                + (f", {len(self.arrays)} arrays" if self.arrays else "")
+                + (f", message={self.message[:80]!r}" if self.message else "") + ")")
+
+    def _repr_html_(self) -> str:
+        """A notebook's view: the status and a table of the values."""
+        rows = "".join(f"<tr><td>{html.escape(k)}</td><td title='{v!r}'>{v:.4g}</td></tr>" for k, v in self.values.items())
+        return (f"<p><b>{self.status.value}</b> {html.escape(self.message)}</p>"
+                f"<table><tr><th>value</th><th></th></tr>{rows}</table>")
 
 
 _IPOPT = {

@@ -277,3 +277,51 @@ def test_a_base_that_drops_what_it_does_not_have_is_named(tmp_path):
                       [('drop = ["belt_stiffness_Nm_rad", "belt_damping_Nms_rad"]', 'drop = ["belt_colour"]')])
     with pytest.raises(mechopt.SceneError, match=r"base\.drop: belt_colour not in .*kd2322\.toml"):
         mechopt.load(path)
+
+
+def test_status_is_true_only_when_solved_and_success_says_so_as_scipy_does():
+    from mechopt import Status
+    assert [s for s in Status if s] == [Status.SOLVED]
+    run = mechopt.solve("press/flywheel-design")
+    assert run.success is run.result.success is True and run.status
+
+
+def test_a_what_if_with_no_checks_is_not_ok_when_it_finds_no_answer():
+    tight = mechopt.solve("loom/group1", cycle_deg=100.0)          # the chain of minimum spans needs more
+    assert tight.status is mechopt.Status.INFEASIBLE and not tight.checks
+    assert not tight.success and not tight.ok and not tight.status
+    # a scene that asks whether its network is feasible expects INFEASIBLE: that answer is the one asked for
+    conflict = mechopt.solve("loom/group1-window-conflict", amplitude_limit_mm=0.12)
+    assert conflict.status is mechopt.Status.INFEASIBLE and not conflict.checks
+    assert conflict.ok and not conflict.success
+
+
+def test_run_and_result_show_compactly_in_a_notebook():
+    run = mechopt.solve("press/flywheel-design")
+    text = repr(run)
+    assert len(text) < 400 and "press/flywheel-design" in text and "SOLVED" in text and "5/5 checks pass" in text
+    assert repr(run.result).startswith("Result(SOLVED, values={") and "more}" in repr(run.result)
+    page = run._repr_html_()
+    inertia = run.values["flywheel_inertia_kgm2"]
+    assert f"<td>flywheel_inertia_kgm2</td><td title='{inertia!r}'>5.118</td><td>kg m²</td><td>computed</td>" in page
+    assert f"<td>flywheel_inertia_kgm2</td><td title='{inertia!r}'>5.118</td>" in run.result._repr_html_()
+    assert "<td>speed_fluctuation</td>" in page and "<td>derived</td>" in page        # a checked value says so
+
+
+def test_sweep_takes_an_id_and_a_dict_grid_as_solve_does():
+    table = mechopt.sweep("loom/group1", grid={"amplitude_limit_mm": (0.05, 0.2, 3)})
+    assert table.column("amplitude_limit_mm").to_pylist() == [0.05, 0.125, 0.2]
+    assert set(table.column("status").to_pylist()) <= {"SOLVED", "INFEASIBLE"}
+    assert mechopt.sweep.parse_grid("a_mm=1:2:2").num == 2               # still the module of the machinery
+    with pytest.raises(mechopt.SceneError, match=r"grid\['amplitude_limit_mm'\] = \(0.2, 0.05, 3\): 0.2 > 0.05"):
+        mechopt.sweep("loom/group1", grid={"amplitude_limit_mm": (0.2, 0.05, 3)})
+    with pytest.raises(mechopt.SceneError, match=r"num = 2.5; expected a whole number"):
+        mechopt.sweep("loom/group1", grid={"amplitude_limit_mm": (0.05, 0.2, 2.5)})
+
+
+def test_errors_of_the_python_api_name_keywords_not_the_command_lines_flag():
+    with pytest.raises(mechopt.SceneError, match="unknown keyword a_m; parameters: ") as caught:
+        mechopt.solve("loom/group1", a_m=3)
+    assert "--set" not in str(caught.value) and caught.value.key == "a_m"
+    with pytest.raises(mechopt.SceneError, match=r"keyword operations\[from=1,to=9\]\.min_deg: .*matches 0 entries"):
+        mechopt.solve("loom/group1", {"operations[from=1,to=9].min_deg": 3.0})

@@ -206,8 +206,7 @@ def _run(args) -> int:
 
 def run_exit_code(run) -> int:
     """0 solved and checked, 1 a check failed, 3 not solved (unless the scene expects that status)."""
-    expected = run.scene.spec.expect.get("status")
-    if run.result.status is not Status.SOLVED and (expected is None or expected.value != run.result.status.value):
+    if not run.status_as_expected:
         return NOT_SOLVED
     return OK if run.ok else CHECK_FAILED
 
