@@ -325,3 +325,51 @@ def test_errors_of_the_python_api_name_keywords_not_the_command_lines_flag():
     assert "--set" not in str(caught.value) and caught.value.key == "a_m"
     with pytest.raises(mechopt.SceneError, match=r"keyword operations\[from=1,to=9\]\.min_deg: .*matches 0 entries"):
         mechopt.solve("loom/group1", {"operations[from=1,to=9].min_deg": 3.0})
+
+
+def test_the_highs_banner_stays_off_stdout():
+    """HiGHS writes its banner to the C stdout on the first model of a process; stdout is for results."""
+    done = subprocess.run([sys.executable, "-m", "mechopt", "run", "loom/group1"], capture_output=True, text=True,
+                          timeout=300)
+    assert done.returncode == 0 and done.stdout.startswith("loom/group1: ")
+    assert "Running HiGHS" not in done.stdout and "Running HiGHS" in done.stderr
+
+
+def test_plot_of_a_run_with_no_solution_says_why_nothing_was_drawn(tmp_path, capsys):
+    assert main(["run", "loom/group1", "--set", "cycle_deg=100", "--plot", str(tmp_path / "figs")]) == 3
+    err = capsys.readouterr().err
+    assert f"plot: nothing drawn into {tmp_path / 'figs'} (status INFEASIBLE: no solution to draw)" in err
+
+
+def test_progress_goes_to_stderr_a_line_a_scene_off_a_terminal_and_quiet_silences_it(capsys):
+    assert main(["validate", "loom/group1", "cam-cutter/minimax"]) == 0
+    said = capsys.readouterr()
+    assert "running loom/group1 ...\nrunning cam-cutter/minimax ...\n" in said.err and "running" not in said.out
+    assert main(["validate", "--quiet", "loom/group1"]) == 0
+    assert "running" not in capsys.readouterr().err
+
+
+def test_a_template_makes_every_value_the_users_own_and_says_a_calibration_must_be_redone(tmp_path):
+    path = tmp_path / "drive.toml"
+    assert main(["new", "press-design", str(path)]) == 0
+    mine = registry.find(str(path))
+    source = registry.find("press/flywheel-design")
+    assert mine.spec.params.keys() == source.spec.params.keys()
+    assert {p.mark for p in mine.spec.params.values()} == {"assumed"}
+    assert all(p.why.startswith("your value") for p in mine.spec.params.values())
+    assert mine.params() == source.params()                               # the same numbers, the user's now
+    gear = mine.spec.params["gear_ratio"]
+    assert source.spec.params["gear_ratio"].mark == "calibrated"
+    assert "re-derive it when its inputs change" in gear.why and "omega_mean_rad_s" in gear.why
+    assert not mine.spec.expect
+
+
+def test_a_cam_of_ones_own_as_a_point_table_runs_from_its_template(tmp_path):
+    path = tmp_path / "cam.toml"
+    assert main(["new", "cam-table", str(path)]) == 0
+    table = (tmp_path / "cam-points.csv").read_text(encoding="utf-8").splitlines()
+    assert table[0] == "x_mm,y_mm" and len(table) == 38 and table[1] == "54.0000,0.0000"   # r = 50 + 4 at theta 0
+    assert "x_expr" not in path.read_text(encoding="utf-8")
+    run = mechopt.solve(str(path))
+    assert run.success and len(run.task.points_mm) == 37
+    assert main(["new", "cam-table", str(path.with_name("other.toml"))]) == 0     # beside it: its own table

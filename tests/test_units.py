@@ -37,13 +37,15 @@ def test_labels_keep_the_words_and_the_case_number():
 def unread(name: str) -> list[str]:
     """Unit symbols or `per` left among a name's words (its first word may be a symbol: `N_N`)."""
     words = parse(name)[0].replace(" / d ", " ").split()
-    return [w for w in words[1:] if w == "per" or w in SYMBOLS or w.rstrip("1234") in SYMBOLS]
+    unit = [w in SYMBOLS or w.rstrip("1234") in SYMBOLS for w in words] + [False]
+    return [w for i, w in enumerate(words) if i and (unit[i] or (w == "per" and unit[i + 1]))]
 
 
 def test_the_check_bites_on_the_old_reading():
     assert unread("sens_sigma_H_deg_per_MPa") == []
     assert unread("elasticity_cut_work_J") == []                    # an elasticity drops its unit words
-    assert unread("force_x_mm_deg_per") == ["mm", "deg", "per"]     # a unit not at the end is named
+    assert unread("force_x_mm_deg_per_stroke") == ["mm", "deg"]     # a unit not at the end is named
+    assert unread("energy_per_stroke_J") == [] and unread("slope_per_mm_x") == ["per", "mm"]
 
 
 @pytest.mark.parametrize("scene", registry.all_scenes(), ids=lambda s: s.id)
