@@ -23,10 +23,11 @@ import ast
 import math
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import ClassVar
+from typing import Annotated, ClassVar
 
 import casadi as ca
 import numpy as np
+from annotated_types import Ge, Gt, Interval
 from scipy.interpolate import CubicSpline
 
 from mechopt.models.cam_cutter import LinkageFit, real_point
@@ -347,14 +348,14 @@ class ProfileFit:
     is the brute-force start (`coarse_start`) +- size/2, with size = the path's reach / 4 (the
     cardioid's a, for h = 0), which the solver widens when the optimum lies on it.
     """
-    err_width_mm: float
+    err_width_mm: Annotated[float, Gt(0)]
     x_expr: str = ""
     y_expr: str = ""
-    t0_rad: float = 0.0
-    t1_rad: float = math.pi
+    t0_rad: Annotated[float, Interval()] = 0.0
+    t1_rad: Annotated[float, Interval()] = math.pi
     constants: dict = field(default_factory=dict)
     points_mm: tuple = ()
-    h_mm: float = 0.0
+    h_mm: Annotated[float, Ge(0)] = 0.0
     placement: str = "start_at_origin"
     H_min_mm: float | None = None
     H_max_mm: float | None = None

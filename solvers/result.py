@@ -45,7 +45,8 @@ class Result:
     diagnostics: dict = field(default_factory=dict)
     arrays: Mapping[str, np.ndarray] = field(default_factory=dict)
     """What the solver computed along the way, named with units (a run's `t_s` and states, a
-    response's samples): what figures and notebooks read. The arrays are read-only copies."""
+    response's samples): what figures and notebooks read. The arrays are read-only copies: floats,
+    or text in a label column that names a table's rows (`parameter`)."""
 
     def __post_init__(self):
         bad = {k: v for k, v in self.values.items() if not math.isfinite(v)}
@@ -53,7 +54,9 @@ class Result:
             raise SolverError(f"solver produced non-finite values {bad} (status {self.status.value})")
         arrays = {}
         for name, array in self.arrays.items():
-            array = np.array(array, dtype=float)      # a copy: the caller's array stays writable
+            labels = np.asarray(array)
+            # a copy (the caller's array stays writable); text is a label column naming rows (a table's parameters)
+            array = labels.astype(str) if labels.dtype.kind == "U" else np.array(array, dtype=float)
             array.flags.writeable = False
             arrays[name] = array
         object.__setattr__(self, "arrays", arrays)

@@ -373,3 +373,47 @@ def test_a_cam_of_ones_own_as_a_point_table_runs_from_its_template(tmp_path):
     run = mechopt.solve(str(path))
     assert run.success and len(run.task.points_mm) == 37
     assert main(["new", "cam-table", str(path.with_name("other.toml"))]) == 0     # beside it: its own table
+
+
+RELATIVE = {"H_min_mm", "H_max_mm", "L_min_mm", "L_max_mm", "crank_centre_mm", "link_centre_mm"}   # bounds set by a_mm, H, L
+
+
+@pytest.mark.parametrize("scene", mechopt.scenes(), ids=lambda s: s.id)
+def test_describe_shows_the_declared_range_of_every_number(scene):
+    """Ranges are declared on the model's fields (Annotated): describe and the loader read them there."""
+    from mechopt.scene import task_fields
+    from mechopt.solvers.settings import declared_range
+    fields = task_fields(scene.task_class)
+    for row in scene.describe():
+        if row["kind"] != "parameter" or row["key"] in RELATIVE or "float" not in str(fields[row["key"]].type):
+            continue
+        assert not row["range"].startswith("checked by"), (scene.id, row["key"])
+        low, high = declared_range(fields[row["key"]].type)
+        value = scene.spec.params[row["key"]].value if row["key"] in scene.spec.params else None
+        if value is not None:                                      # the scene's own value is inside it
+            assert (not low or low[1](value, low[0])) and (not high or high[1](value, high[0]))
+
+
+def test_describe_prints_structure_paths_whole_and_each_values_why(capsys):
+    assert main(["describe", "loom/group1"]) == 0
+    out = capsys.readouterr().out
+    assert "operations[from=1,to=2].min_deg " in out
+    sigma = next(line for line in out.splitlines() if line.startswith("sigma_H_limit_MPa "))
+    assert "> 0 ... 1e+06" in sigma and "a usual allowable Hertz stress" in sigma
+    with pytest.raises(mechopt.SceneError, match=r"params.sigma_H_limit_MPa = -1.0: allowed > 0 ... 1e\+06"):
+        mechopt.solve("loom/group1", sigma_H_limit_MPa=-1.0)
+
+
+def test_a_table_names_its_rows_in_a_label_column(tmp_path):
+    run = mechopt.solve("press/sensitivity")
+    names = list(run.arrays["parameter"])
+    assert names == run.result.diagnostics["parameters"] and "flywheel_inertia_kgm2" in names
+    assert len(run.arrays["elasticity_speed_fluctuation"]) == len(names)
+    out = tmp_path / "sens.csv"
+    assert main(["run", "press/sensitivity", "--csv", str(out)]) == 0
+    lines = out.read_text(encoding="utf-8").splitlines()
+    header = lines[0].split(",")
+    assert header[0] == "parameter" and lines[1].split(",")[0] == names[0] and len(lines) == len(names) + 1
+    row = dict(zip(header, lines[1 + names.index("flywheel_inertia_kgm2")].split(",")))
+    assert float(row["elasticity_speed_fluctuation"]) == pytest.approx(
+        run.values["speed_fluctuation_elasticity_flywheel_inertia_kgm2"], rel=1e-9)

@@ -149,8 +149,11 @@ def _describe(args) -> int:
     print(f"{scene.id}: {scene.spec.title}\nfile: {scene.path}\n"
           f"task {scene.spec.task}, solver {scene.spec.solver}, effects {', '.join(scene.spec.effects) or 'none'}")
     rows = scene.describe()
-    _print_table(("key", "kind", "unit", "mark", "allowed", "value"),
-                 [(r["key"], r["kind"], r["unit"] or "-", r["mark"], r["range"], r["value"]) for r in rows])
+    params = scene.spec.params
+    why = {k: (p.why + (f" (fitted to {p.on})" if p.on else "") if p.mark != "given" else p.where) for k, p in params.items()}
+    _print_table(("key", "kind", "unit", "mark", "allowed", "value", "why / where"),
+                 [(r["key"], r["kind"], r["unit"] or "-", r["mark"], r["range"], r["value"], why.get(r["key"], ""))
+                  for r in rows])
     print("\nchange any of them with --set KEY=VALUE (structure: --set 'PATH=VALUE', a TOML value)")
     return OK
 
@@ -387,7 +390,8 @@ def arrays_csv(arrays, where) -> str:
         raise SceneError(f"--csv {where}: the arrays have different lengths {sorted(lengths)}; use --json")
     names = list(arrays)
     rows = zip(*(arrays[n] for n in names))
-    return ",".join(names) + "\n" + "".join(",".join(f"{x:.12g}" for x in row) + "\n" for row in rows)
+    cell = lambda x: x if isinstance(x, str) else f"{x:.12g}"       # noqa: E731  (a label column's text as it is)
+    return ",".join(names) + "\n" + "".join(",".join(map(cell, row)) + "\n" for row in rows)
 
 
 COMMANDS = {"cases": _cases, "describe": _describe, "new": _new, "run": _run, "validate": _validate,
