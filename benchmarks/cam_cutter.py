@@ -33,7 +33,8 @@ from mechopt.solvers.cam_cutter import family as family_fit
 from mechopt.solvers.cam_cutter import fit as trajectory_fit
 from mechopt.solvers.cam_cutter import joint_loads
 
-__all__ = ["cli", "run", "table", "ratios", "plot", "grid_box_timing", "targets_table", "PAPER_TASK", "BASELINE", "TARGETS",
+__all__ = ["cli", "run", "table", "ratios", "plot", "grid_box_timing", "targets_table", "PAPER_TASK", "BASELINE",
+           "TARGETS",
            "kinetostatics_rows", "family_rows", "family_peer", "family_table"]
 
 PAPER_TASK, _ = registry.find("cam-cutter/paper-grid").build()   # the paper's cardioid, band and box

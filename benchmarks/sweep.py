@@ -142,7 +142,8 @@ def table(loom, cam, cam_pool, dask, dask_side=DASK_SIDE, loops=None):
         ratio = row["dask_1"] / row["in_process"]
         lines.append(f"{chunk:>7}{row['in_process']:>14.2f}{row['dask_1']:>11.2f}"
                      f"{ratio:>7.2f}{row['dask_2']:>11.2f}"
-                     f"{row['dask_2'] / row['in_process']:>7.2f}  {'met' if ratio < TARGETS['dask_over_in_process'] else 'MISSED'}")
+                     f"{row['dask_2'] / row['in_process']:>7.2f}  "
+                     f"{'met' if ratio < TARGETS['dask_over_in_process'] else 'MISSED'}")
     return "\n".join(lines)
 
 
@@ -176,7 +177,8 @@ def cli(repeats, out_dir, progress=None, quick=False) -> str:
     cam = in_process("cam-cutter/minimax", CAM_GRID, side, repeats=cam_repeats, progress=progress)
     cam_pool = in_process("cam-cutter/minimax", CAM_GRID, side, repeats=cam_repeats, workers=2, progress=progress)
     dask = dask_overhead(side=dask_side, repeats=repeats, progress=progress)
-    loops = {"loom": solve_loop("loom/group1", LOOM_GRID, side), "cam": solve_loop("cam-cutter/minimax", CAM_GRID, side)}
+    loops = {"loom": solve_loop("loom/group1", LOOM_GRID, side),
+             "cam": solve_loop("cam-cutter/minimax", CAM_GRID, side)}
     plot(loom, cam, cam_pool, dask, out_dir)
     return table(loom, cam, cam_pool, dask, dask_side, loops)
 

@@ -76,7 +76,8 @@ class Result:
 
     def _repr_html_(self) -> str:
         """A notebook's view: the status and a table of the values."""
-        rows = "".join(f"<tr><td>{html.escape(k)}</td><td title='{v!r}'>{v:.4g}</td></tr>" for k, v in self.values.items())
+        rows = "".join(f"<tr><td>{html.escape(k)}</td><td title='{v!r}'>{v:.4g}</td></tr>"
+                       for k, v in self.values.items())
         return (f"<p><b>{self.status.value}</b> {html.escape(self.message)}</p>"
                 f"<table><tr><th>value</th><th></th></tr>{rows}</table>")
 

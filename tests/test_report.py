@@ -175,8 +175,8 @@ def test_the_page_reads_on_a_phone_in_a_real_browser(page, browser_tool, tmp_pat
     assert metrics["window_px"] == 390 and browser_tool.problems(metrics) == []
     one = write_report(tmp_path / "one", runs=[r for r in runs if r.scene.id == "loom/group1"])
     loose = tmp_path / "loose.html"
-    loose.write_text(one.read_text(encoding="utf-8").replace(".scroll{overflow-x:auto;", ".scroll{overflow-x:visible;"),
-                     encoding="utf-8")
+    text_one = one.read_text(encoding="utf-8")
+    loose.write_text(text_one.replace(".scroll{overflow-x:auto;", ".scroll{overflow-x:visible;"), encoding="utf-8")
     assert any("wide in a 390 px window" in p for p in browser_tool.problems(browser_tool.measure(loose, width=390)))
 
 
@@ -194,7 +194,8 @@ def test_each_scene_leads_with_its_status_values_and_warnings_then_its_figures(p
         assert f"<tr><td>{name}</td><td title='{value!r}'>{value:.4g}</td><td>{unit_of(name)}</td>" in section
     # the minimax bound is text on the page, not only in a figure's title
     minimax = next(r for r in runs if r.scene.id == "cam-cutter/minimax").values["H_mm"]
-    assert f"<tr><td>H_mm</td><td title='{minimax!r}'>{minimax:.4g}</td><td>mm</td>" in _section(text, "cam-cutter/minimax")
+    assert f"<tr><td>H_mm</td><td title='{minimax!r}'>{minimax:.4g}</td><td>mm</td>" in _section(text,
+                                                                                                "cam-cutter/minimax")
 
 
 def test_every_value_on_the_page_reads_its_unit_cleanly(page):

@@ -9,7 +9,6 @@ The Python API (the `mechopt` command does the same from a terminal)::
     run.arrays                                          # what the solver computed along the way
     run.figures()                                       # matplotlib Figures, by name (no files)
     mechopt.describe(scene)                             # every key you can override, unit, range
-
     run.success, run.ok                                 # SOLVED?; the answer asked for, checks passed?
     table = mechopt.sweep("loom/group1", grid={"amplitude_limit_mm": (0.05, 0.2, 31)})   # pyarrow Table
 
@@ -25,9 +24,9 @@ import types
 from contextlib import contextmanager
 from importlib.metadata import PackageNotFoundError, version
 
+from mechopt import sweep as _studies
 from mechopt.models.cache import clear as clear_caches
 from mechopt.models.errors import MechoptError, ModelError, SceneError, SolverError
-from mechopt import sweep as _studies
 from mechopt.registry import Run, add_cases
 from mechopt.registry import all_scenes as scenes
 from mechopt.registry import find as load

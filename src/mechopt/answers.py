@@ -23,7 +23,8 @@ def warnings_html(run) -> str:
 
 def values_html(run) -> str:
     rows = "".join(f"<tr><td>{escape(name)}</td><td title='{value!r}'>{value:.{SIGNIFICANT}g}</td>"
-                   f"<td>{escape(unit)}</td><td>{escape(mark)}</td></tr>" for name, value, unit, mark in run.value_rows())
+                   f"<td>{escape(unit)}</td><td>{escape(mark)}</td></tr>"
+                   for name, value, unit, mark in run.value_rows())
     if not rows:
         return "<p>no values (the solver found none to report)</p>"
     return ("<div class='scroll'><table class='values'><tr><th>value</th><th>computed</th><th>unit</th>"

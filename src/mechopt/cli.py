@@ -25,7 +25,8 @@ from mechopt.solvers.result import Status
 OK, CHECK_FAILED, BAD_INPUT, NOT_SOLVED, INTERRUPTED = 0, 1, 2, 3, 130
 
 TEMPLATES = {"cam-cutter": "cam-cutter/minimax", "cam-table": "cam-cutter/other-profile", "press": "press/kd2322",
-             "press-design": "press/flywheel-design", "loom": "loom/group1", "stop-impact": "stop-impact/rebound-177rpm"}
+             "press-design": "press/flywheel-design", "loom": "loom/group1",
+             "stop-impact": "stop-impact/rebound-177rpm"}
 # cam-table: the other-profile scene with its parsed curve replaced by a point table in a CSV beside the scene
 TABLE_CURVE = {"x_expr": None, "y_expr": None, "constants": None,
                "points_mm": '{ csv = "%s", columns = ["x_mm", "y_mm"] }'}
@@ -150,7 +151,8 @@ def _describe(args) -> int:
           f"task {scene.spec.task}, solver {scene.spec.solver}, effects {', '.join(scene.spec.effects) or 'none'}")
     rows = scene.describe()
     params = scene.spec.params
-    why = {k: (p.why + (f" (fitted to {p.on})" if p.on else "") if p.mark != "given" else p.where) for k, p in params.items()}
+    why = {k: (p.why + (f" (fitted to {p.on})" if p.on else "") if p.mark != "given" else p.where)
+           for k, p in params.items()}
     _print_table(("key", "kind", "unit", "mark", "allowed", "value", "why / where"),
                  [(r["key"], r["kind"], r["unit"] or "-", r["mark"], r["range"], r["value"], why.get(r["key"], ""))
                   for r in rows])
