@@ -27,6 +27,13 @@ def page(tmp_path_factory):
     """The full default report (every scene of the registry) with a sweep's maps and a bench plot:
     made once, read by every test here (and looked at in a browser)."""
     root = tmp_path_factory.mktemp("report")
+    with pytest.MonkeyPatch.context() as patch:          # the package's scenes only, whatever ran before
+        patch.setattr(registry, "_USER_FOLDERS", [])
+        patch.delenv(registry.ENV_CASES, raising=False)
+        return _default_report(root)
+
+
+def _default_report(root):
     bench = root / "bench_out"
     bench.mkdir()
     import matplotlib.pyplot as plt

@@ -109,7 +109,7 @@ def elasticities(run):
         ax.grid(alpha=0.3, axis="x")
         ax.tick_params(axis="y", labelsize=8)
     for ax in axes[len(outputs):]:
-        ax.set_visible(False)
+        ax.remove()                          # the grid's empty places: no panel
     axes[0].set_yticks(np.arange(len(rows)), [rows[i] for i in order], fontsize=8)
     fig.supxlabel("elasticity: % change of the output per % change of the parameter")
     fig.suptitle(f"{run.scene.id}: what the periodic motion owes to each assumed value "
