@@ -18,9 +18,10 @@ torch_offset  kerf offset h: the path is the parallel curve at distance   eqs. (
 """
 from dataclasses import dataclass
 from functools import cached_property
-from typing import ClassVar
+from typing import Annotated, ClassVar
 
 import numpy as np
+from annotated_types import Ge, Gt, Interval, Le
 from scipy.optimize import brentq
 
 from mechopt.models.cache import memoised
@@ -157,11 +158,11 @@ class LinkageFit(_OnIdealPath):
     paper's ratios to its cam (0.01 mm and 0.001 mm at a = 25 mm, `scaled_default`); the value
     filled in is stored, so `dataclasses.replace` of `a_mm` alone keeps it.
     """
-    a_mm: float
-    err_width_mm: float
-    step_mm: float | None = None
-    h_mm: float = 0.0
-    y_tol_mm: float | None = None
+    a_mm: Annotated[float, Interval(ge=A_RANGE_MM[0], le=A_RANGE_MM[1])]
+    err_width_mm: Annotated[float, Gt(0)]
+    step_mm: Annotated[float | None, Gt(0)] = None
+    h_mm: Annotated[float, Ge(0)] = 0.0
+    y_tol_mm: Annotated[float | None, Gt(0)] = None
     H_min_mm: float | None = None
     H_max_mm: float | None = None
     L_min_mm: float | None = None
@@ -215,12 +216,12 @@ class LinkageCheck(_OnIdealPath):
     The what-if counterpart of `LinkageFit`: sweep `H_mm` and `L_mm` (and `err_width_mm`) to map
     where a linkage meets the band. Parameters [mm] as in `LinkageFit`; `H_mm`, `L_mm` the links.
     """
-    a_mm: float
-    err_width_mm: float
-    H_mm: float
-    L_mm: float
-    h_mm: float = 0.0
-    y_tol_mm: float | None = None
+    a_mm: Annotated[float, Interval(ge=A_RANGE_MM[0], le=A_RANGE_MM[1])]
+    err_width_mm: Annotated[float, Gt(0)]
+    H_mm: Annotated[float, Gt(0)]
+    L_mm: Annotated[float, Gt(0)]
+    h_mm: Annotated[float, Ge(0)] = 0.0
+    y_tol_mm: Annotated[float | None, Gt(0)] = None
 
     EFFECTS: ClassVar[dict[str, Effect]] = LinkageFit.EFFECTS
 
@@ -301,19 +302,19 @@ class LinkageLoads:
     `link_centre_mm` from P towards the torch (negative: behind P); the block's at O. Gravity
     `gravity_m_s2` acts along -y (0: the linkage lies in a horizontal plane).
     """
-    H_mm: float
-    L_mm: float
-    force_N: float
-    crank_speed_rad_s: float
-    crank_mass_kg: float
+    H_mm: Annotated[float, Gt(0), Le(1e6)]
+    L_mm: Annotated[float, Gt(0), Le(1e6)]
+    force_N: Annotated[float, Ge(0), Le(1e6)]
+    crank_speed_rad_s: Annotated[float, Gt(0), Le(1e6)]
+    crank_mass_kg: Annotated[float, Ge(0), Le(1e6)]
     crank_centre_mm: float
-    crank_inertia_kgm2: float
-    link_mass_kg: float
+    crank_inertia_kgm2: Annotated[float, Ge(0), Le(1e6)]
+    link_mass_kg: Annotated[float, Ge(0), Le(1e6)]
     link_centre_mm: float
-    link_inertia_kgm2: float
-    block_mass_kg: float = 0.0
-    block_inertia_kgm2: float = 0.0
-    gravity_m_s2: float = 0.0
+    link_inertia_kgm2: Annotated[float, Ge(0), Le(1e6)]
+    block_mass_kg: Annotated[float, Ge(0), Le(1e6)] = 0.0
+    block_inertia_kgm2: Annotated[float, Ge(0), Le(1e6)] = 0.0
+    gravity_m_s2: Annotated[float, Ge(0), Le(1e6)] = 0.0
     force_direction: str = "against_velocity"
 
     def __post_init__(self):
@@ -378,10 +379,10 @@ class ToolFamily:
     `err_width_mm` is the band every member must keep. `H_min_mm`, `H_max_mm` bound H (not given:
     the members' matched H +- a/2, widened by the solver when the optimum lies on a side).
     """
-    a_min_mm: float
-    a_max_mm: float
-    err_width_mm: float
-    a_count: float = 5
+    a_min_mm: Annotated[float, Interval(ge=A_RANGE_MM[0], le=A_RANGE_MM[1])]
+    a_max_mm: Annotated[float, Interval(ge=A_RANGE_MM[0], le=A_RANGE_MM[1])]
+    err_width_mm: Annotated[float, Gt(0)]
+    a_count: Annotated[float, Ge(1), Le(200)] = 5
     h_values_mm: tuple = (2.0,)
     H_min_mm: float | None = None
     H_max_mm: float | None = None

@@ -23,10 +23,11 @@ import ast
 import math
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import ClassVar
+from typing import Annotated, ClassVar
 
 import casadi as ca
 import numpy as np
+from annotated_types import Ge, Gt, Interval
 from scipy.interpolate import CubicSpline
 
 from mechopt.models.cam_cutter import LinkageFit, real_point
@@ -360,14 +361,14 @@ class ProfileFit:
     fixed pivot) is no mechanism; `minimax` names an answer there. The other reading, H > 0 only
     (eq. (5)'s R = H/2 read as a length), excludes the mirrored crank; it is a box H_min_mm > 0.
     """
-    err_width_mm: float
+    err_width_mm: Annotated[float, Gt(0)]
     x_expr: str = ""
     y_expr: str = ""
-    t0_rad: float = 0.0
-    t1_rad: float = math.pi
+    t0_rad: Annotated[float, Interval()] = 0.0
+    t1_rad: Annotated[float, Interval()] = math.pi
     constants: dict = field(default_factory=dict)
     points_mm: tuple = ()
-    h_mm: float = 0.0
+    h_mm: Annotated[float, Ge(0)] = 0.0
     placement: str = "start_at_origin"
     H_min_mm: float | None = None
     H_max_mm: float | None = None

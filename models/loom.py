@@ -44,10 +44,11 @@ import dataclasses
 import math
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import ClassVar
+from typing import Annotated, ClassVar
 
 import networkx as nx
 import numpy as np
+from annotated_types import Gt, Interval, Le, Lt
 
 from mechopt.models.effects import Effect
 from mechopt.models.errors import MechoptError, ModelError
@@ -159,13 +160,13 @@ class Cyclogram:
     windows: list = field(default_factory=list)
     syncs: list = field(default_factory=list)
     limiting_op: list | None = None
-    cycle_deg: float | None = None
-    sigma_H_limit_MPa: float | None = None
-    amplitude_slope_mm_per_deg: float | None = None
-    amplitude_intercept_mm: float | None = None
-    amplitude_limit_mm: float | None = None
-    speed_rpm: float | None = None
-    stress_speed_rpm: float | None = None
+    cycle_deg: Annotated[float | None, Gt(0), Le(MAX_DEG)] = None
+    sigma_H_limit_MPa: Annotated[float | None, Gt(0), Le(MAX_MPA)] = None
+    amplitude_slope_mm_per_deg: Annotated[float | None, Lt(0)] = None
+    amplitude_intercept_mm: Annotated[float | None, Interval()] = None      # any finite number
+    amplitude_limit_mm: Annotated[float | None, Gt(0)] = None
+    speed_rpm: Annotated[float | None, Gt(0), Le(MAX_RPM)] = None
+    stress_speed_rpm: Annotated[float | None, Gt(0), Le(MAX_RPM)] = None
     lever: dict | None = None
     lever_law_max_rpm: float | None = None   # the highest speed the lever's law was studied at (models/validity.py)
 

@@ -61,10 +61,11 @@ motor_characteristic  Kloss torque of the motor, reduced by i; without it the   
 ====================  ========================================================  ==============
 """
 from dataclasses import dataclass, field, fields
-from typing import ClassVar
+from typing import Annotated, ClassVar
 
 import casadi as ca
 import numpy as np
+from annotated_types import Ge, Gt, Le, Lt
 from scipy.optimize import brentq
 
 from mechopt.models.cache import memoised
@@ -172,28 +173,28 @@ class PressDrive:
     speed). Effects' own parameters: see `EFFECTS`. `effects` lists the effects the scene calls for; `kinematics`
     picks X(phi) (see `travel_m`).
     """
-    crank_radius_mm: float
-    rod_ratio: float
-    nominal_speed_rad_s: float
-    flywheel_inertia_kgm2: float
-    crank_mass_kg: float
-    tool_mass_kg: float
-    rod_mass_kg: float
-    motor_inertia_kgm2: float = 0.0
-    gear_ratio: float = 1.0
-    belt_stiffness_Nm_rad: float | None = None
-    belt_damping_Nms_rad: float | None = None
-    gravity_m_s2: float | None = None
-    friction_torque_Nm: float | None = None
-    force_c1_N_mm: float | None = None
-    force_c2_N_mm2: float | None = None
-    force_c3_N_mm3: float | None = None
-    force_c4_N_mm4: float | None = None
-    blank_thickness_mm: float | None = None
-    shortfall_mm: float | None = None
-    motor_sync_speed_rad_s: float | None = None
-    motor_breakdown_torque_Nm: float | None = None
-    motor_breakdown_slip: float | None = None
+    crank_radius_mm: Annotated[float, Gt(0), Le(1000)]
+    rod_ratio: Annotated[float, Gt(0), Lt(1)]
+    nominal_speed_rad_s: Annotated[float, Gt(0), Le(1000)]
+    flywheel_inertia_kgm2: Annotated[float, Ge(0), Le(1e5)]
+    crank_mass_kg: Annotated[float, Ge(0), Le(1e5)]
+    tool_mass_kg: Annotated[float, Ge(0), Le(1e5)]
+    rod_mass_kg: Annotated[float, Ge(0), Le(1e5)]
+    motor_inertia_kgm2: Annotated[float, Ge(0), Le(1e3)] = 0.0
+    gear_ratio: Annotated[float, Gt(0), Le(1e3)] = 1.0
+    belt_stiffness_Nm_rad: Annotated[float | None, Ge(0), Le(1e12)] = None
+    belt_damping_Nms_rad: Annotated[float | None, Ge(0), Le(1e6)] = None
+    gravity_m_s2: Annotated[float | None, Ge(0), Le(100)] = None
+    friction_torque_Nm: Annotated[float | None, Ge(0), Le(1e6)] = None
+    force_c1_N_mm: Annotated[float | None, Ge(-1e9), Le(1e9)] = None
+    force_c2_N_mm2: Annotated[float | None, Ge(-1e9), Le(1e9)] = None
+    force_c3_N_mm3: Annotated[float | None, Ge(-1e9), Le(1e9)] = None
+    force_c4_N_mm4: Annotated[float | None, Ge(-1e9), Le(1e9)] = None
+    blank_thickness_mm: Annotated[float | None, Ge(0), Le(1000)] = None
+    shortfall_mm: Annotated[float | None, Ge(0), Le(1000)] = None
+    motor_sync_speed_rad_s: Annotated[float | None, Gt(0), Le(1e4)] = None
+    motor_breakdown_torque_Nm: Annotated[float | None, Gt(0), Le(1e6)] = None
+    motor_breakdown_slip: Annotated[float | None, Gt(0), Lt(1)] = None
     effects: tuple[str, ...] = field(default=())
     kinematics: str = "paper"
     force_fit_max_mm: float | None = None    # the travel eq. (1) was fitted on, up to: past it a warning (models/validity.py)
@@ -691,18 +692,18 @@ class PressDesign(PressDrive):
     """
     objective: str = "least_flywheel_inertia"
     variables: tuple[str, ...] = ("flywheel_inertia_kgm2",)
-    max_speed_fluctuation: float | None = None
-    belt_slip_torque_Nm: float | None = None
-    motor_safety_factor: float | None = None
-    single_stroke_speed_drop: float | None = None
-    flywheel_inertia_min_kgm2: float = 0.01
-    flywheel_inertia_max_kgm2: float = 100.0
-    gear_ratio_min: float = 1.0
-    gear_ratio_max: float = 50.0
-    belt_stiffness_min_Nm_rad: float = 1e3
-    belt_stiffness_max_Nm_rad: float = 1e7
-    motor_scale_min: float = 0.1
-    motor_scale_max: float = 10.0
+    max_speed_fluctuation: Annotated[float | None, Gt(0), Le(2)] = None
+    belt_slip_torque_Nm: Annotated[float | None, Gt(0), Le(1e6)] = None
+    motor_safety_factor: Annotated[float | None, Ge(1), Le(100)] = None
+    single_stroke_speed_drop: Annotated[float | None, Gt(0), Le(1)] = None
+    flywheel_inertia_min_kgm2: Annotated[float, Gt(0), Le(1e5)] = 0.01
+    flywheel_inertia_max_kgm2: Annotated[float, Gt(0), Le(1e5)] = 100.0
+    gear_ratio_min: Annotated[float, Gt(0), Le(1e3)] = 1.0
+    gear_ratio_max: Annotated[float, Gt(0), Le(1e3)] = 50.0
+    belt_stiffness_min_Nm_rad: Annotated[float, Gt(0), Le(1e12)] = 1e3
+    belt_stiffness_max_Nm_rad: Annotated[float, Gt(0), Le(1e12)] = 1e7
+    motor_scale_min: Annotated[float, Gt(0), Le(1e3)] = 0.1
+    motor_scale_max: Annotated[float, Gt(0), Le(1e3)] = 10.0
 
     # (needs, why) of each design input: the effect it acts through
     NEEDS: ClassVar[dict[str, tuple[str, str]]] = {

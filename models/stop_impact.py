@@ -57,7 +57,9 @@ Units: the names say so (mm, GPa, kg, rpm, deg); the functions return SI (m, s, 
 """
 import math
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import Annotated, ClassVar
+
+from annotated_types import Interval
 
 from mechopt.models.cam_follower import LAWS
 from mechopt.models.effects import Effect, check_effects
@@ -79,6 +81,23 @@ def reduced_stiffness_N_per_m(E_GPa, J_x_mm4, a_mm, b_mm):
     2848344
     """
     return 3.0 * E_GPa * 1e9 * J_x_mm4 * 1e-12 / ((a_mm + b_mm) * b_mm**2 * 1e-9)
+
+
+# The range each input of the lever model (and its solvers) is tested over: declared on its field
+# (describe, the scene loader and the docs read it there), and checked again when a task is made.
+STATED_RANGE = {
+    "E_GPa": (1e-3, 1e4), "J_x_mm4": (1e-6, 1e12), "a_mm": (1e-3, 1e5), "b_mm": (1e-3, 1e5),
+    "a_stop_mm": (1e-3, 1e5), "b_stop_mm": (1e-3, 1e5), "mass_kg": (1e-6, 1e6), "stroke_mm": (1e-6, 1e5),
+    "velocity_factor": (1e-6, 1e3), "t_deg": (1e-3, 360.0), "speed_nominal_rpm": (1e-3, 1e6),
+    "amplitude_limit_mm": (1e-9, 1e5), "inertia_A_kgm2": (1e-12, 1e6), "damping_ratio": (0.0, 1e3),
+    "preload_mm": (0.0, 1e5), "closure_force_N": (0.0, 1e7),
+}
+
+
+def stated(key):
+    """The stated range of an input as its field's annotation."""
+    low, high = STATED_RANGE[key]
+    return Interval(ge=low, le=high)
 
 
 @dataclass(frozen=True)
@@ -120,25 +139,25 @@ class LeverStop:
     `effects` the effects the scene calls for (structure:
     the scene's own list, repeated, until the spine hands it to the task).
     """
-    E_GPa: float
-    J_x_mm4: float
-    a_mm: float
-    b_mm: float
-    a_stop_mm: float
-    b_stop_mm: float
-    mass_kg: float
-    stroke_mm: float | None = None
-    velocity_factor: float | None = None
-    t_deg: float | None = None
-    speed_nominal_rpm: float | None = None
-    amplitude_limit_mm: float | None = None
-    inertia_A_kgm2: float | None = None
-    restitution: float | None = None
-    damping_ratio: float | None = None
-    preload_mm: float | None = None
-    closure_force_N: float | None = None
-    law_slope_mm_per_deg: float | None = None
-    law_intercept_mm: float | None = None
+    E_GPa: Annotated[float, stated("E_GPa")]
+    J_x_mm4: Annotated[float, stated("J_x_mm4")]
+    a_mm: Annotated[float, stated("a_mm")]
+    b_mm: Annotated[float, stated("b_mm")]
+    a_stop_mm: Annotated[float, stated("a_stop_mm")]
+    b_stop_mm: Annotated[float, stated("b_stop_mm")]
+    mass_kg: Annotated[float, stated("mass_kg")]
+    stroke_mm: Annotated[float | None, stated("stroke_mm")] = None
+    velocity_factor: Annotated[float | None, stated("velocity_factor")] = None
+    t_deg: Annotated[float | None, stated("t_deg")] = None
+    speed_nominal_rpm: Annotated[float | None, stated("speed_nominal_rpm")] = None
+    amplitude_limit_mm: Annotated[float | None, stated("amplitude_limit_mm")] = None
+    inertia_A_kgm2: Annotated[float | None, stated("inertia_A_kgm2")] = None
+    restitution: Annotated[float | None, Interval(ge=0, le=1)] = None
+    damping_ratio: Annotated[float | None, stated("damping_ratio")] = None
+    preload_mm: Annotated[float | None, stated("preload_mm")] = None
+    closure_force_N: Annotated[float | None, stated("closure_force_N")] = None
+    law_slope_mm_per_deg: Annotated[float | None, Interval(lt=0)] = None
+    law_intercept_mm: Annotated[float | None, Interval(gt=0)] = None
     law: str = ""
     launch: str = "pulse_plus_v0"
     speeds_rpm: tuple = ()
@@ -320,13 +339,6 @@ def _names_or_numbers(task, key, *, number):
 # Stated ranges of the inputs: a lever of a machine, generously (a micro-mechanism to a press
 # frame). Past them the beam formulas and eq. (2)'s closed form overflow, divide by zero or
 # lose every digit, so an input outside is refused before any work.
-STATED_RANGE = {
-    "E_GPa": (1e-3, 1e4), "J_x_mm4": (1e-6, 1e12), "a_mm": (1e-3, 1e5), "b_mm": (1e-3, 1e5),
-    "a_stop_mm": (1e-3, 1e5), "b_stop_mm": (1e-3, 1e5), "mass_kg": (1e-6, 1e6), "stroke_mm": (1e-6, 1e5),
-    "velocity_factor": (1e-6, 1e3), "t_deg": (1e-3, 360.0), "speed_nominal_rpm": (1e-3, 1e6),
-    "amplitude_limit_mm": (1e-9, 1e5), "inertia_A_kgm2": (1e-12, 1e6), "damping_ratio": (0.0, 1e3),
-    "preload_mm": (0.0, 1e5), "closure_force_N": (0.0, 1e7),
-}
 
 
 LAUNCHES = ("pulse_plus_v0", "restitution")     # how C leaves the plate (module docstring)

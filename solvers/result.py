@@ -1,4 +1,5 @@
 """The one result every solver returns, and the only code that knows back ends' status words."""
+import html
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
@@ -16,6 +17,14 @@ class Status(str, Enum):
     UNBOUNDED = "UNBOUNDED"
     LIMIT = "LIMIT"                # iteration, round or size limit reached
     FAILED = "FAILED"
+
+    def __bool__(self) -> bool:
+        """True for SOLVED only: `if result.status:` reads as "was it solved?" (a str Enum is
+        otherwise always true, INFEASIBLE included)."""
+        return self is Status.SOLVED
+
+
+SHOWN = 4          # values a Result's repr names before "... N more"
 
 
 @dataclass(frozen=True)
@@ -36,7 +45,8 @@ class Result:
     diagnostics: dict = field(default_factory=dict)
     arrays: Mapping[str, np.ndarray] = field(default_factory=dict)
     """What the solver computed along the way, named with units (a run's `t_s` and states, a
-    response's samples): what figures and notebooks read. The arrays are read-only copies."""
+    response's samples): what figures and notebooks read. The arrays are read-only copies: floats,
+    or text in a label column that names a table's rows (`parameter`)."""
     warnings: tuple[str, ...] = ()
     """Plain sentences, one per way this answer leaves what its model's source or derivation
     supports (an extrapolated force law, a lever slower than its cycle): the answer stands, with them."""
@@ -47,7 +57,9 @@ class Result:
             raise SolverError(f"solver produced non-finite values {bad} (status {self.status.value})")
         arrays = {}
         for name, array in self.arrays.items():
-            array = np.array(array, dtype=float)      # a copy: the caller's array stays writable
+            labels = np.asarray(array)
+            # a copy (the caller's array stays writable); text is a label column naming rows (a table's parameters)
+            array = labels.astype(str) if labels.dtype.kind == "U" else np.array(array, dtype=float)
             array.flags.writeable = False
             arrays[name] = array
         object.__setattr__(self, "arrays", arrays)
@@ -58,6 +70,26 @@ class Result:
     def with_warnings(self, more) -> "Result":
         """This result with more warnings (each sentence once)."""
         return replace(self, warnings=(*self.warnings, *more)) if more else self
+
+    @property
+    def success(self) -> bool:
+        """Whether the solver reached an answer to trust (SOLVED), as scipy's `OptimizeResult.success`."""
+        return self.status is Status.SOLVED
+
+    def __repr__(self) -> str:
+        """One line: status, the first values, how many more (the full dict is `values`)."""
+        shown = ", ".join(f"{k}={v:.6g}" for k, v in list(self.values.items())[:SHOWN])
+        more = f", ... {len(self.values) - SHOWN} more" if len(self.values) > SHOWN else ""
+        return (f"Result({self.status.value}, values={{{shown}{more}}}"
+                + (f", {len(self.arrays)} arrays" if self.arrays else "")
+                + (f", message={self.message[:80]!r}" if self.message else "") + ")")
+
+    def _repr_html_(self) -> str:
+        """A notebook's view: the status and a table of the values."""
+        rows = "".join(f"<tr><td>{html.escape(k)}</td><td title='{v!r}'>{v:.4g}</td></tr>"
+                       for k, v in self.values.items())
+        return (f"<p><b>{self.status.value}</b> {html.escape(self.message)}</p>"
+                f"<table><tr><th>value</th><th></th></tr>{rows}</table>")
 
 
 _IPOPT = {

@@ -261,15 +261,16 @@ def test_a_press_of_ones_own_takes_the_registry_press_as_its_base(tmp_path):
     """`base = { scene = ... }`: the press and its data from one file, only the question's changes
     here; `mechopt new`-style copies of a scene with a base still find it from elsewhere."""
     heavy = copy_scene("press/start-up", tmp_path, "my/heavy-start",
-                       [("\n[solver_settings]\n", '\n[params]\nflywheel_inertia_kgm2 = { value = 7.5, mark = "assumed", '
-                                                'why = "a heavier flywheel" }\n\n[solver_settings]\n')])
+                       [('flywheel_inertia_kgm2 = { value = 5.0, mark = "assumed", why = "your value" }',
+                         'flywheel_inertia_kgm2 = { value = 7.5, mark = "assumed", why = "a heavier flywheel" }')])
     assert 'scene = "/' in heavy.read_text(encoding="utf-8")            # the base's path made absolute
     task, _ = mechopt.load(heavy).build()
     source, _ = mechopt.load("press/start-up").build()
     assert task.flywheel_inertia_kgm2 == 7.5 and source.flywheel_inertia_kgm2 == 5.0
     assert task.tool_mass_kg == source.tool_mass_kg            # the rest from the base
     rows = {r["key"]: r for r in mechopt.describe(heavy)}
-    assert rows["tool_mass_kg"]["mark"] == "assumed" and rows["gear_ratio"]["mark"] == "calibrated"
+    # the copy's values are the user's: a calibration of the source's is to be re-derived, not trusted
+    assert rows["tool_mass_kg"]["mark"] == "assumed" and rows["gear_ratio"]["mark"] == "assumed"
 
 
 def test_a_base_that_drops_what_it_does_not_have_is_named(tmp_path):
@@ -277,3 +278,144 @@ def test_a_base_that_drops_what_it_does_not_have_is_named(tmp_path):
                       [('drop = ["belt_stiffness_Nm_rad", "belt_damping_Nms_rad"]', 'drop = ["belt_colour"]')])
     with pytest.raises(mechopt.SceneError, match=r"base\.drop: belt_colour not in .*kd2322\.toml"):
         mechopt.load(path)
+
+
+def test_status_is_true_only_when_solved_and_success_says_so_as_scipy_does():
+    from mechopt import Status
+    assert [s for s in Status if s] == [Status.SOLVED]
+    run = mechopt.solve("press/flywheel-design")
+    assert run.success is run.result.success is True and run.status
+
+
+def test_a_what_if_with_no_checks_is_not_ok_when_it_finds_no_answer():
+    tight = mechopt.solve("loom/group1", cycle_deg=100.0)          # the chain of minimum spans needs more
+    assert tight.status is mechopt.Status.INFEASIBLE and not tight.checks
+    assert not tight.success and not tight.ok and not tight.status
+    # a scene that asks whether its network is feasible expects INFEASIBLE: that answer is the one asked for
+    conflict = mechopt.solve("loom/group1-window-conflict", amplitude_limit_mm=0.12)
+    assert conflict.status is mechopt.Status.INFEASIBLE and not conflict.checks
+    assert conflict.ok and not conflict.success
+
+
+def test_run_and_result_show_compactly_in_a_notebook():
+    run = mechopt.solve("press/flywheel-design")
+    text = repr(run)
+    assert len(text) < 400 and "press/flywheel-design" in text and "SOLVED" in text and "5/5 checks pass" in text
+    assert repr(run.result).startswith("Result(SOLVED, values={") and "more}" in repr(run.result)
+    page = run._repr_html_()
+    inertia = run.values["flywheel_inertia_kgm2"]
+    assert f"<td>flywheel_inertia_kgm2</td><td title='{inertia!r}'>5.118</td><td>kg m²</td><td>computed</td>" in page
+    assert f"<td>flywheel_inertia_kgm2</td><td title='{inertia!r}'>5.118</td>" in run.result._repr_html_()
+    assert "<td>speed_fluctuation</td>" in page and "<td>derived</td>" in page        # a checked value says so
+
+
+def test_sweep_takes_an_id_and_a_dict_grid_as_solve_does():
+    table = mechopt.sweep("loom/group1", grid={"amplitude_limit_mm": (0.05, 0.2, 3)})
+    assert table.column("amplitude_limit_mm").to_pylist() == [0.05, 0.125, 0.2]
+    assert set(table.column("status").to_pylist()) <= {"SOLVED", "INFEASIBLE"}
+    assert mechopt.sweep.parse_grid("a_mm=1:2:2").num == 2               # still the module of the machinery
+    with pytest.raises(mechopt.SceneError, match=r"grid\['amplitude_limit_mm'\] = \(0.2, 0.05, 3\): 0.2 > 0.05"):
+        mechopt.sweep("loom/group1", grid={"amplitude_limit_mm": (0.2, 0.05, 3)})
+    with pytest.raises(mechopt.SceneError, match=r"num = 2.5; expected a whole number"):
+        mechopt.sweep("loom/group1", grid={"amplitude_limit_mm": (0.05, 0.2, 2.5)})
+
+
+def test_errors_of_the_python_api_name_keywords_not_the_command_lines_flag():
+    with pytest.raises(mechopt.SceneError, match="unknown keyword a_m; parameters: ") as caught:
+        mechopt.solve("loom/group1", a_m=3)
+    assert "--set" not in str(caught.value) and caught.value.key == "a_m"
+    with pytest.raises(mechopt.SceneError, match=r"keyword operations\[from=1,to=9\]\.min_deg: .*matches 0 entries"):
+        mechopt.solve("loom/group1", {"operations[from=1,to=9].min_deg": 3.0})
+
+
+def test_the_highs_banner_stays_off_stdout():
+    """HiGHS writes its banner to the C stdout on the first model of a process; stdout is for results."""
+    done = subprocess.run([sys.executable, "-m", "mechopt", "run", "loom/group1"], capture_output=True, text=True,
+                          timeout=300)
+    assert done.returncode == 0 and done.stdout.startswith("loom/group1: ")
+    assert "Running HiGHS" not in done.stdout and "Running HiGHS" in done.stderr
+
+
+def test_plot_of_a_run_with_no_solution_says_why_nothing_was_drawn(tmp_path, capsys):
+    assert main(["run", "loom/group1", "--set", "cycle_deg=100", "--plot", str(tmp_path / "figs")]) == 3
+    err = capsys.readouterr().err
+    assert f"plot: nothing drawn into {tmp_path / 'figs'} (status INFEASIBLE: no solution to draw)" in err
+
+
+def test_progress_goes_to_stderr_a_line_a_scene_off_a_terminal_and_quiet_silences_it(capsys):
+    assert main(["validate", "loom/group1", "cam-cutter/minimax"]) == 0
+    said = capsys.readouterr()
+    assert "running loom/group1 ...\nrunning cam-cutter/minimax ...\n" in said.err and "running" not in said.out
+    assert main(["validate", "--quiet", "loom/group1"]) == 0
+    assert "running" not in capsys.readouterr().err
+
+
+def test_a_template_makes_every_value_the_users_own_and_says_a_calibration_must_be_redone(tmp_path):
+    path = tmp_path / "drive.toml"
+    assert main(["new", "press-design", str(path)]) == 0
+    mine = registry.find(str(path))
+    source = registry.find("press/flywheel-design")
+    assert mine.spec.params.keys() == source.spec.params.keys()
+    assert {p.mark for p in mine.spec.params.values()} == {"assumed"}
+    assert all(p.why.startswith("your value") for p in mine.spec.params.values())
+    assert mine.params() == source.params()                               # the same numbers, the user's now
+    gear = mine.spec.params["gear_ratio"]
+    assert source.spec.params["gear_ratio"].mark == "calibrated"
+    assert "re-derive it when its inputs change" in gear.why and "omega_mean_rad_s" in gear.why
+    assert not mine.spec.expect
+
+
+def test_a_cam_of_ones_own_as_a_point_table_runs_from_its_template(tmp_path):
+    path = tmp_path / "cam.toml"
+    assert main(["new", "cam-table", str(path)]) == 0
+    table = (tmp_path / "cam-points.csv").read_text(encoding="utf-8").splitlines()
+    assert table[0] == "x_mm,y_mm" and len(table) == 38 and table[1] == "54.0000,0.0000"   # r = 50 + 4 at theta 0
+    assert "x_expr" not in path.read_text(encoding="utf-8")
+    run = mechopt.solve(str(path))
+    assert run.success and len(run.task.points_mm) == 37
+    assert main(["new", "cam-table", str(path.with_name("other.toml"))]) == 0     # beside it: its own table
+
+
+# bounds set by other parameters (a_mm, H, L): the model checks them
+RELATIVE = {"H_min_mm", "H_max_mm", "L_min_mm", "L_max_mm", "crank_centre_mm", "link_centre_mm"}
+
+
+@pytest.mark.parametrize("scene", mechopt.scenes(), ids=lambda s: s.id)
+def test_describe_shows_the_declared_range_of_every_number(scene):
+    """Ranges are declared on the model's fields (Annotated): describe and the loader read them there."""
+    from mechopt.scene import task_fields
+    from mechopt.solvers.settings import declared_range
+    fields = task_fields(scene.task_class)
+    for row in scene.describe():
+        if row["kind"] != "parameter" or row["key"] in RELATIVE or "float" not in str(fields[row["key"]].type):
+            continue
+        assert not row["range"].startswith("checked by"), (scene.id, row["key"])
+        low, high = declared_range(fields[row["key"]].type)
+        value = scene.spec.params[row["key"]].value if row["key"] in scene.spec.params else None
+        if value is not None:                                      # the scene's own value is inside it
+            assert (not low or low[1](value, low[0])) and (not high or high[1](value, high[0]))
+
+
+def test_describe_prints_structure_paths_whole_and_each_values_why(capsys):
+    assert main(["describe", "loom/group1"]) == 0
+    out = capsys.readouterr().out
+    assert "operations[from=1,to=2].min_deg " in out
+    sigma = next(line for line in out.splitlines() if line.startswith("sigma_H_limit_MPa "))
+    assert "> 0 ... 1e+06" in sigma and "a usual allowable Hertz stress" in sigma
+    with pytest.raises(mechopt.SceneError, match=r"params.sigma_H_limit_MPa = -1.0: allowed > 0 ... 1e\+06"):
+        mechopt.solve("loom/group1", sigma_H_limit_MPa=-1.0)
+
+
+def test_a_table_names_its_rows_in_a_label_column(tmp_path):
+    run = mechopt.solve("press/sensitivity")
+    names = list(run.arrays["parameter"])
+    assert names == run.result.diagnostics["parameters"] and "flywheel_inertia_kgm2" in names
+    assert len(run.arrays["elasticity_speed_fluctuation"]) == len(names)
+    out = tmp_path / "sens.csv"
+    assert main(["run", "press/sensitivity", "--csv", str(out)]) == 0
+    lines = out.read_text(encoding="utf-8").splitlines()
+    header = lines[0].split(",")
+    assert header[0] == "parameter" and lines[1].split(",")[0] == names[0] and len(lines) == len(names) + 1
+    row = dict(zip(header, lines[1 + names.index("flywheel_inertia_kgm2")].split(",")))
+    assert float(row["elasticity_speed_fluctuation"]) == pytest.approx(
+        run.values["speed_fluctuation_elasticity_flywheel_inertia_kgm2"], rel=1e-9)

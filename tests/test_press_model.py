@@ -199,7 +199,7 @@ def test_a_refused_scene_override_names_the_key_and_changes_nothing():
     from mechopt.models.errors import SceneError
     scene = registry.find("press/kd2322")
     before = scene.params()
-    with pytest.raises(SceneError, match=r"params\.rod_ratio: rod_ratio=1\.2 must be in \(0, 1\)"):
+    with pytest.raises(SceneError, match=r"params\.rod_ratio = 1\.2: allowed > 0 \.\.\. 1 \(excl\.\)"):
         scene.build({"rod_ratio": 1.2})
     assert scene.params() == before
 

@@ -24,7 +24,16 @@ SCENES = ("loom/group1", "stop-impact/frequencies")
 
 @pytest.fixture(scope="module")
 def page(tmp_path_factory):
+    """The full default report (every scene of the registry) with a sweep's maps and a bench plot:
+    made once, read by every test here (and looked at in a browser)."""
     root = tmp_path_factory.mktemp("report")
+    with pytest.MonkeyPatch.context() as patch:          # the package's scenes only, whatever ran before
+        patch.setattr(registry, "_USER_FOLDERS", [])
+        patch.delenv(registry.ENV_CASES, raising=False)
+        return _default_report(root)
+
+
+def _default_report(root):
     bench = root / "bench_out"
     bench.mkdir()
     import matplotlib.pyplot as plt
@@ -33,17 +42,25 @@ def page(tmp_path_factory):
     save_figure(fig, bench / "demo_work_precision.png")
     table = root / "amplitude.parquet"
     sweep(registry.find("loom/group1"), [parse_grid("amplitude_limit_mm=0.08:0.14:3")], out=table, progress=False)
-    path = write_report(root / "site", scenes=[registry.find(s) for s in SCENES], bench_dir=bench, sweeps=[table])
-    return path, path.read_text(encoding="utf-8")
+    runs = [registry.run(scene) for scene in registry.all_scenes()]
+    path = write_report(root / "site", runs=runs, bench_dir=bench, sweeps=[table])
+    return path, path.read_text(encoding="utf-8"), runs
+
+
+def _section(text, scene_id):
+    """The HTML of one scene's section."""
+    start = text.index(f"<h3 id='{scene_id.replace('/', '_')}'>")
+    end = text.find("<h3 id=", start + 1)
+    return text[start:end if end > 0 else len(text)]
 
 
 def _rows(text):
-    return [[re.sub("<[^>]+>", "", cell) for cell in re.findall(r"<td>(.*?)</td>", row)]
+    return [[re.sub("<[^>]+>", "", cell) for cell in re.findall(r"<td[^>]*>(.*?)</td>", row)]
             for row in re.findall(r"<tr>(.*?)</tr>", text) if "<td>" in row]
 
 
 def test_validation_table_holds_each_check_as_computed(page):
-    _, text = page
+    _, text, _ = page
     rows = {(r[0], r[1]): r for r in _rows(text) if len(r) == 8}
     for case in SCENES:
         run = registry.run(registry.find(case))
@@ -57,8 +74,8 @@ def test_validation_table_holds_each_check_as_computed(page):
 
 
 def test_calibrations_are_marked_and_not_counted_as_reproductions(page):
-    _, text = page
-    checks = [c for s in SCENES for c in registry.run(registry.find(s)).checks]
+    _, text, runs = page
+    checks = [c for run in runs for c in run.checks]
     fitted = sum(c.ok and c.calibrated for c in checks)
     assert fitted >= 1                                     # stop-impact/frequencies is fitted to its figures
     # a derived value (a bound, a status, our own computation) is no reproduction of the source either
@@ -76,7 +93,7 @@ def test_calibrations_are_marked_and_not_counted_as_reproductions(page):
 
 
 def test_figures_sweep_maps_and_bench_plots_are_embedded_in_the_one_page(page):
-    path, text = page
+    path, text, _ = page
     images = re.findall(r"<img src='data:image/png;base64,([^']+)' alt='([^']+)'>", text)
     assert len(images) == text.count("<img ")                     # every image is embedded
     assert all(base64.b64decode(data)[:8] == b"\x89PNG\r\n\x1a\n" for data, _ in images)
@@ -120,7 +137,7 @@ def test_maps_of_a_sweep_of_an_older_scene_file_are_flagged(tmp_path, monkeypatc
 
 
 def test_the_page_says_what_made_it_and_links_every_scene(page):
-    path, text = page
+    path, text, _ = page
     import mechopt
     assert f"mechopt {mechopt.__version__}, " in text and " UTC" in text
     for scene_id in SCENES:
@@ -130,21 +147,92 @@ def test_the_page_says_what_made_it_and_links_every_scene(page):
     assert "<div class='scroll'><table>" in text                      # the wide table scrolls, never the page
 
 
-def test_the_page_reads_on_a_laptop_in_a_real_browser(page, tmp_path):
-    """Headless Chromium at 1280 px (tools/report_in_browser.py): no horizontal overflow, every
-    image loads, no text below 11 px, no figure shrunk below 60 % (its axis text with it)."""
+@pytest.fixture(scope="module")
+def browser_tool():
     import importlib.util
     import shutil
     if not any(shutil.which(b) for b in ("chromium", "chromium-browser", "google-chrome")):
-        pytest.skip("no Chromium on this machine (apt-get install chromium)")
+        pytest.skip("no Chromium on this machine (apt-get install chromium; .ci/run installs it)")
     spec = importlib.util.spec_from_file_location("report_in_browser", ROOT / "tools" / "report_in_browser.py")
     tool = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(tool)
-    path, _ = page
-    metrics = tool.measure(path, width=1280)
-    assert metrics["images"] >= 3 and tool.problems(metrics) == []
-    # the check itself bites: the old 520 px thumbnails shrink figures below the limit
+    return tool
+
+
+def test_the_page_reads_on_a_laptop_in_a_real_browser(page, browser_tool, tmp_path):
+    """Headless Chromium at 1280 px (tools/report_in_browser.py): no horizontal overflow, every
+    image loads, no text below 11 px, no figure shrunk below 60 % (its axis text with it)."""
+    path, text, runs = page
+    metrics = browser_tool.measure(path, width=1280)
+    assert metrics["window_px"] == 1280 and metrics["images"] == text.count("<img ")
+    assert browser_tool.problems(metrics) == []
+    # the check itself bites (on one scene's page): the old 520 px thumbnails shrink figures below the limit
+    one = write_report(tmp_path / "one", runs=[r for r in runs if r.scene.id == "press/sensitivity"])
     old = tmp_path / "old.html"
-    old.write_text(path.read_text(encoding="utf-8").replace("img{width:100%;height:auto;", "img{width:520px;"),
+    old.write_text(one.read_text(encoding="utf-8").replace("img{width:100%;height:auto;", "img{width:520px;"),
                    encoding="utf-8")
-    assert any("smallest_figure_scale" in p for p in tool.problems(tool.measure(old, width=1280)))
+    assert any("smallest_figure_scale" in p for p in browser_tool.problems(browser_tool.measure(old, width=1280)))
+
+
+def test_the_page_reads_on_a_phone_in_a_real_browser(page, browser_tool, tmp_path):
+    """At 390 px the body never scrolls sideways (wide tables scroll in their own box) and no text
+    is below 11 px; the check bites on a table let out of its box."""
+    path, text, runs = page
+    metrics = browser_tool.measure(path, width=390)
+    assert metrics["window_px"] == 390 and browser_tool.problems(metrics) == []
+    one = write_report(tmp_path / "one", runs=[r for r in runs if r.scene.id == "loom/group1"])
+    loose = tmp_path / "loose.html"
+    text_one = one.read_text(encoding="utf-8")
+    loose.write_text(text_one.replace(".scroll{overflow-x:auto;", ".scroll{overflow-x:visible;"), encoding="utf-8")
+    assert any("wide in a 390 px window" in p for p in browser_tool.problems(browser_tool.measure(loose, width=390)))
+
+
+def test_each_scene_leads_with_its_status_values_and_warnings_then_its_figures(page):
+    _, text, runs = page
+    section = _section(text, "press/flywheel-design")
+    run = next(r for r in runs if r.scene.id == "press/flywheel-design")
+    inertia = run.values["flywheel_inertia_kgm2"]
+    assert f"{inertia:.4g}" == "5.118"                                  # the least flywheel, as issue 25 read it
+    row = f"<tr><td>flywheel_inertia_kgm2</td><td title='{inertia!r}'>5.118</td><td>kg m²</td><td>computed</td></tr>"
+    assert row in section
+    status, values, figure = (section.index(s) for s in ("class='status'", "class='values'", "<img "))
+    assert status < values < figure
+    for name, value in run.values.items():                               # every value is in the table, with its unit
+        assert f"<tr><td>{name}</td><td title='{value!r}'>{value:.4g}</td><td>{unit_of(name)}</td>" in section
+    # the minimax bound is text on the page, not only in a figure's title
+    minimax = next(r for r in runs if r.scene.id == "cam-cutter/minimax").values["H_mm"]
+    assert f"<tr><td>H_mm</td><td title='{minimax!r}'>{minimax:.4g}</td><td>mm</td>" in _section(text,
+                                                                                                "cam-cutter/minimax")
+
+
+def test_every_value_on_the_page_reads_its_unit_cleanly(page):
+    from test_units import unread
+    _, text, _ = page
+    names = re.findall(r"<table class='values'>.*?</table>", text)
+    rows = [cells for table in names for cells in _rows(table)]
+    assert len(rows) > 300 and not [r[0] for r in rows if unread(r[0]) or r[2] != unit_of(r[0])]
+
+
+def test_validation_opens_with_the_counts_and_the_misses_and_folds_the_full_table(page):
+    _, text, _ = page
+    section = text[text.index("<h2 id='validation'>"):text.index("<h2>Scenes</h2>")]
+    summary = re.search(r"<p><b>(\d+ checks: [^<]*)</b></p>", section)
+    assert summary and section.index(summary.group(0)) < section.index("<details>")
+    total = int(summary.group(1).split()[0])
+    assert f"<details><summary>every check ({total}), misses first</summary>" in section
+    assert len([r for r in _rows(section) if len(r) == 8]) == total
+    misses = section[:section.index("<details>")]
+    assert all(any(v.replace("_", " ") in row[4] for v in registry.MISSES) for row in _rows(misses) if len(row) == 6)
+
+
+def test_a_results_warnings_are_shown_before_its_values():
+    from types import SimpleNamespace
+
+    from mechopt.answers import answers_html
+    from mechopt.solvers.result import Status
+    result = SimpleNamespace(status=Status.SOLVED, message="", warnings=("the optimum is on the bound flywheel_max",))
+    run = SimpleNamespace(result=result, ok=True, value_rows=lambda: [("H_mm", 59.60184, "mm", "computed")])
+    shown = answers_html(run)
+    assert shown.index("warning: the optimum is on the bound flywheel_max") < shown.index("<td>H_mm</td>")
+    assert "warning" not in answers_html(SimpleNamespace(result=SimpleNamespace(status=Status.SOLVED, message=""),
+                                                         ok=True, value_rows=list))

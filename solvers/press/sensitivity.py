@@ -205,7 +205,7 @@ def sensitivity(task: PressDrive, *, tol: Tolerance = 1e-10, max_iter: Annotated
     diagnostics = {"parameters": rows, "parameter_values": values0.tolist(), "outputs": list(OUTPUTS),
                    "extremes": {e[0]: ("kink at an event" if e[3] is not None else "smooth") for e in orbit.extremes},
                    "newton_iterations": iterations}
-    arrays = {"parameter_value": values0}
+    arrays = {"parameter": rows, "parameter_value": values0}       # one row per parameter, named
     for j, name in enumerate(OUTPUTS):
         arrays[f"d_{name}"] = D[j]
         arrays[f"elasticity_{name}"] = elasticity[j]

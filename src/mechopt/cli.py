@@ -29,8 +29,12 @@ from mechopt.solvers.result import Status
 
 OK, CHECK_FAILED, BAD_INPUT, NOT_SOLVED, INTERRUPTED = 0, 1, 2, 3, 130
 
-TEMPLATES = {"cam-cutter": "cam-cutter/minimax", "press": "press/kd2322", "loom": "loom/group1",
+TEMPLATES = {"cam-cutter": "cam-cutter/minimax", "cam-table": "cam-cutter/other-profile", "press": "press/kd2322",
+             "press-design": "press/flywheel-design", "loom": "loom/group1",
              "stop-impact": "stop-impact/rebound-177rpm"}
+# cam-table: the other-profile scene with its parsed curve replaced by a point table in a CSV beside the scene
+TABLE_CURVE = {"x_expr": None, "y_expr": None, "constants": None,
+               "points_mm": '{ csv = "%s", columns = ["x_mm", "y_mm"] }'}
 
 
 def main(argv=None) -> int:
@@ -114,13 +118,16 @@ def _parser():
     common.add_argument("--cases", action="append", default=[], type=Path, metavar="DIR",
                         help="a folder of your own scenes (*.toml, searched recursively) added to the registry; "
                              "repeatable; also the MECHOPT_CASES variable")
+    common.add_argument("--quiet", action="store_true", help="no progress on stderr (bars only show on a terminal)")
     sub = parser.add_subparsers(dest="command", required=True)
     sub.add_parser("cases", parents=[common], help="list scene ids and titles")
     describe = sub.add_parser("describe", parents=[common],
                               help="every key --set reaches: unit, mark, allowed range, current value")
     describe.add_argument("case", help="a scene id or a scene file's path")
     new = sub.add_parser("new", parents=[common], help="write a commented scene to start from")
-    new.add_argument("mechanism", choices=list(TEMPLATES))
+    new.add_argument("mechanism", choices=list(TEMPLATES),
+                     help="cam-table: a cam given as a point table (a CSV written beside the scene); "
+                          "press-design: the drive found by optimisation")
     new.add_argument("file", type=Path, help="the scene file to write (not overwritten if it exists)")
     run = sub.add_parser("run", parents=[common], help="solve one scene and check it against its source")
     run.add_argument("case", help="a scene id or a scene file's path")
@@ -203,8 +210,12 @@ def _describe(args) -> int:
     print(f"{scene.id}: {scene.spec.title}\nfile: {scene.path}\n"
           f"task {scene.spec.task}, solver {scene.spec.solver}, effects {', '.join(scene.spec.effects) or 'none'}")
     rows = scene.describe()
-    _print_table(("key", "kind", "unit", "mark", "allowed", "value"),
-                 [(r["key"], r["kind"], r["unit"] or "-", r["mark"], r["range"], r["value"]) for r in rows])
+    params = scene.spec.params
+    why = {k: (p.why + (f" (fitted to {p.on})" if p.on else "") if p.mark != "given" else p.where)
+           for k, p in params.items()}
+    _print_table(("key", "kind", "unit", "mark", "allowed", "value", "why / where"),
+                 [(r["key"], r["kind"], r["unit"] or "-", r["mark"], r["range"], r["value"], why.get(r["key"], ""))
+                  for r in rows])
     print("\nchange any of them with --set KEY=VALUE (structure: --set 'PATH=VALUE', a TOML value)")
     return OK
 
@@ -214,11 +225,41 @@ def _new(args) -> int:
         raise SceneError(f"{args.file}: exists; name a new file (nothing was written)")
     template = registry.find(TEMPLATES[args.mechanism])
     text = scene_template(template, f"my/{args.file.stem}")
+    table = args.file.with_name(f"{args.file.stem}-points.csv") if args.mechanism == "cam-table" else None
+    if table is not None:
+        if table.exists():
+            raise SceneError(f"{table}: exists; name a new scene file (nothing was written)")
+        text = _with_table(text, table.name)
+        _write_text(table, limacon_table())
     from mechopt.scene import loads
     loads(text, args.file)                     # what we write must load
     _write_text(args.file, text)
-    print(f"scene: {args.file} (from {template.id}); try: mechopt run {args.file}")
+    print(f"scene: {args.file} (from {template.id})" + (f", points: {table}" if table else "")
+          + f"; try: mechopt run {args.file}")
     return OK
+
+
+def limacon_table() -> str:
+    """37 points of the limaçon r = 50 + 4 cos(theta) [mm] (H = 4, L = 50 by eq. (10)) as a CAD
+    system writes a point table: a cam to replace by one's own."""
+    import math
+    rows = [(50 + 4 * math.cos(t)) * f for k in range(37) for t in [math.radians(10 * k)]
+            for f in (math.cos(t), math.sin(t))]
+    return "x_mm,y_mm\n" + "".join(f"{rows[i]:.4f},{rows[i + 1]:.4f}\n" for i in range(0, len(rows), 2))
+
+
+def _with_table(text, csv_name):
+    """A scene's parsed curve replaced by the point table `csv_name`."""
+    out = []
+    for line in text.splitlines():
+        key = line.split("=", 1)[0].strip()
+        if key in TABLE_CURVE:
+            if TABLE_CURVE[key] is None:
+                continue
+        out.append(line)
+        if line.strip() == "[structure]":
+            out.append(f"points_mm = {TABLE_CURVE['points_mm'] % csv_name}      # your cam: x_mm, y_mm rows")
+    return "\n".join(out) + "\n"
 
 
 _OTHER_SCENE = re.compile(r'scene = "([^"]+)"')      # a reference to another scene, relative to its file
@@ -227,23 +268,43 @@ _OTHER_SCENE = re.compile(r'scene = "([^"]+)"')      # a reference to another sc
 def scene_template(scene, new_id: str) -> str:
     """A scene's file as a user's starting point: a new id, its source's expectations dropped
     (they hold for the source's numbers only), references to other scenes made absolute (the copy
-    lives elsewhere), and a header saying what to edit."""
+    lives elsewhere), every parameter (a base scene's too) restated as `assumed` with why = "your
+    value" (the source's provenance in a comment above it: a figure of the source describes the
+    source's machine, not yours), and a header saying what to edit."""
     lines, out, skipping = scene.path.read_text(encoding="utf-8").splitlines(), [], False
     for line in lines:
         stripped = line.strip()
         if stripped.startswith("["):
-            skipping = stripped.startswith("[expect")
+            skipping = stripped.startswith(("[expect", "[params"))
+            if stripped.startswith("[params"):
+                out += ["[params]", *_your_params(scene)]
         if skipping:
             continue
         if stripped.startswith("id ="):
             line = f'id = "{new_id}"'
         out.append(_OTHER_SCENE.sub(lambda m: f'scene = "{(scene.path.parent / m[1]).resolve().as_posix()}"', line))
+    if "[params]" not in out and scene.spec.params:
+        out += ["", "[params]", *_your_params(scene)]
     header = [f"# A scene of your own, started from {scene.id} ({scene.path.name}).",
-              "# Edit [params] (the unit is in every name; mark what you assumed), [structure] and",
+              "# Edit [params] (the unit is in every name; say why you chose a value), [structure] and",
               "# [solver_settings]; `mechopt describe THIS_FILE` lists every key with its allowed range.",
               "# Add [expect.NAME] tables (value with abs or rel, or max/min, kind, where) for figures you",
               "# know: `mechopt run THIS_FILE` checks them.", ""]
     return "\n".join(header + out).rstrip() + "\n"
+
+
+def _your_params(scene) -> list[str]:
+    """The scene's parameters as the user's: `assumed`, why = "your value"; a calibrated one says
+    that it must be fitted again when what it was fitted with changes."""
+    lines = []
+    for key, p in scene.spec.params.items():
+        said = {"given": f"given by the source ({p.where or scene.spec.source})", "assumed": f"assumed: {p.why}",
+                "calibrated": f"calibrated on {p.on}: {p.why}"}[p.mark]
+        why = "your value" + ("; calibrated in " + scene.id + " against " + p.on + ": re-derive it when its "
+                              "inputs change" if p.mark == "calibrated" else "")
+        lines += [f"# {scene.id}: {' '.join(said.split())}",
+                  f"{key} = {{ value = {json.dumps(p.value)}, mark = \"assumed\", why = {json.dumps(why)} }}"]
+    return lines
 
 
 def _run(args) -> int:
@@ -259,15 +320,19 @@ def _run(args) -> int:
         print(f"csv: {args.csv}")
     if args.plot:
         from mechopt.plots import plot_run
-        for path in plot_run(result, args.plot):
+        paths = plot_run(result, args.plot)
+        for path in paths:
             print(f"plot: {path}")
+        if not paths:
+            why = (f"status {result.status.value}: no solution to draw" if not result.success
+                   else "its figures found nothing to draw in this result")
+            print(f"plot: nothing drawn into {args.plot} ({why})", file=sys.stderr)
     return run_exit_code(result)
 
 
 def run_exit_code(run) -> int:
     """0 solved and checked, 1 a check failed, 3 not solved (unless the scene expects that status)."""
-    expected = run.scene.spec.expect.get("status")
-    if run.result.status is not Status.SOLVED and (expected is None or expected.value != run.result.status.value):
+    if not run.status_as_expected:
         return NOT_SOLVED
     return OK if run.ok else CHECK_FAILED
 
@@ -276,13 +341,15 @@ def _validate(args) -> int:
     _check_outputs(json_file=args.json)
     scenes, problems = registry.select(args.refs)
     rows, runs = [], []
+    step = _progress(args, len(scenes))
     for scene in scenes:
-        print(f"running {scene.id} ...", file=sys.stderr, flush=True)
+        step(scene.id)
         result = registry.run(scene)
         runs.append(result)
         for c in result.checks:
             rows.append((registry.VERDICTS.index(c.verdict), scene.id, c.name, c.kind, c.expected, _fmt(c.got),
                          _verdict(c), f"{result.result.timing.build_s + result.result.timing.solve_s:.3f}"))
+    step()
     rows.sort(key=lambda row: row[0] if row[0] < len(registry.MISSES) else len(registry.MISSES))  # misses first
     _print_table(("case", "quantity", "kind", "expected", "got", "verdict", "time [s]"), [r[1:] for r in rows])
     checks = [c for r in runs for c in r.checks]
@@ -311,7 +378,8 @@ def _bench(args) -> int:
         if "quick" not in inspect.signature(module.cli).parameters:
             raise SceneError(f"bench {args.study}: no --quick version (it takes seconds to a few minutes as it is)")
         quick = {"quick": True}
-    text = module.cli(args.repeats, args.plot, progress=lambda line: print(line, file=sys.stderr, flush=True), **quick)
+    said = None if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True))
+    text = module.cli(args.repeats, args.plot, progress=said, **quick)
     print(text)
     return CHECK_FAILED if "MISSED" in text else OK
 
@@ -366,9 +434,11 @@ def _report(args) -> int:
     _check_outputs(plot_dir=args.out)
     scenes, problems = registry.select(args.case)
     _warn(problems)
+    step = _progress(args, len(scenes))
     path = write_report(args.out, scenes=scenes, bench_dir=args.bench, sweeps=args.sweep,
-                        progress=lambda line: print(line, file=sys.stderr, flush=True),
+                        progress=lambda line: step(line.removeprefix("running ").removesuffix(" ...")),
                         command=shlex.join(["mechopt", *args.argv]))
+    step()
     print(f"report: {path}")
     return OK
 
@@ -382,7 +452,8 @@ def arrays_csv(arrays, where) -> str:
         raise SceneError(f"--csv {where}: the arrays have different lengths {sorted(lengths)}; use --json")
     names = list(arrays)
     rows = zip(*(arrays[n] for n in names))
-    return ",".join(names) + "\n" + "".join(",".join(f"{x:.12g}" for x in row) + "\n" for row in rows)
+    cell = lambda x: x if isinstance(x, str) else f"{x:.12g}"       # noqa: E731  (a label column's text as it is)
+    return ",".join(names) + "\n" + "".join(",".join(map(cell, row)) + "\n" for row in rows)
 
 
 COMMANDS = {"cases": _cases, "describe": _describe, "new": _new, "run": _run, "validate": _validate,
@@ -409,6 +480,27 @@ def _writable_folder(flag, folder):
         raise SceneError(f"{flag}: {existing} is a file, so {folder} cannot be a folder")
     if not os.access(existing, os.W_OK):
         raise SceneError(f"{flag}: {existing} is not writable")
+
+
+def _progress(args, total):
+    """`step(scene_id)` as each scene's run starts, `step()` when all are done: a tqdm bar on a
+    terminal's stderr, a line "running ID ..." per scene when stderr is a file or pipe, nothing
+    with --quiet."""
+    if args.quiet:
+        return lambda scene_id=None: None
+    if not sys.stderr.isatty():
+        return lambda scene_id=None: scene_id and print(f"running {scene_id} ...", file=sys.stderr, flush=True)
+    from tqdm import tqdm
+    bar = tqdm(total=total, unit="scene", file=sys.stderr, dynamic_ncols=True, leave=False)
+
+    def step(scene_id=None):
+        if bar.desc:                           # the previous scene is done
+            bar.update()
+        if scene_id is None:
+            bar.close()
+        else:
+            bar.set_description_str(scene_id)
+    return step
 
 
 def _warn(problems):

@@ -103,7 +103,22 @@ class Run:
 
     @property
     def ok(self) -> bool:
-        return all(c.ok for c in self.checks)
+        """The answer is the one the scene asks for and every check passes: SOLVED, or the status
+        the scene itself expects (an INFEASIBLE loom that names its conflict), even in a what-if
+        where no check is made."""
+        return self.status_as_expected and all(c.ok for c in self.checks)
+
+    @property
+    def status_as_expected(self) -> bool:
+        """SOLVED, or the status the scene's `[expect.status]` names."""
+        expected = self.scene.spec.expect.get("status")
+        return self.result.status is Status.SOLVED or (expected is not None
+                                                       and expected.value == self.result.status.value)
+
+    @property
+    def success(self) -> bool:
+        """Whether the solver reached an answer to trust (SOLVED), as scipy's `OptimizeResult.success`."""
+        return self.result.success
 
     @property
     def status(self) -> Status:
@@ -122,6 +137,24 @@ class Run:
     def with_units(self) -> dict[str, tuple[float, str]]:
         """Each value with the unit its name states: {"H_mm": (59.60, "mm"), ...}."""
         return {k: (v, unit_of(k)) for k, v in self.result.values.items()}
+
+    def value_rows(self) -> list[tuple[str, float, str, str]]:
+        """(name, value, unit, mark) per value: the mark is its check's verdict where the scene
+        expects it ("reproduced", "calibrated", "not reproduced (-30.0%)"), else "computed"."""
+        marks = {c.name: c.label if c.ok else f"FAIL ({c.label})" for c in self.checks}
+        return [(k, v, unit_of(k), marks.get(k, "computed")) for k, v in self.result.values.items()]
+
+    def __repr__(self) -> str:
+        r = self.result
+        what_if = f", what-if {self.overrides}" if self.overrides else ""
+        checks = f"{sum(c.ok for c in self.checks)}/{len(self.checks)} checks pass" if self.checks else "no checks"
+        return f"Run({self.scene.id!r}, {r.status.value}, ok={self.ok}, {checks}{what_if}, {r!r})"
+
+    def _repr_html_(self) -> str:
+        from html import escape
+
+        from mechopt.answers import answers_html
+        return f"<p><b>{escape(self.scene.id)}</b>: {escape(self.scene.spec.title)}</p>" + answers_html(self)
 
     def figures(self) -> dict:
         """This run's figures as matplotlib Figures, by name (shown as they are in a notebook)."""

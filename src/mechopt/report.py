@@ -16,8 +16,9 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 from mechopt import __version__, registry
-from mechopt.figures.sweep import plot_sweep
+from mechopt.answers import answers_html
 from mechopt.drivers import set_mostly_by
+from mechopt.figures.sweep import plot_sweep
 from mechopt.files import write_text_atomic
 from mechopt.plots import plot_run
 from mechopt.sweep import describe_axes, read_table, scene_hash
@@ -26,25 +27,29 @@ from mechopt.units import unit_of
 __all__ = ["write_report"]
 
 _STYLE = """body{font-family:system-ui,sans-serif;max-width:1180px;margin:1.5em auto;padding:0 1em;color:#222;
-line-height:1.4}table{border-collapse:collapse;font-size:14px;width:100%}td,th{border:1px solid #ccc;
-padding:3px 6px;text-align:left;vertical-align:top}.long{overflow-wrap:anywhere}th{background:#f0f0f0}
-.ok{color:#176117}.fail{color:#b00020;font-weight:bold}.cal{color:#8a5a00}.miss{color:#8a3a00;font-weight:bold}.scroll{overflow-x:auto}
+line-height:1.4}h1,h2,h3{overflow-wrap:anywhere}table{border-collapse:collapse;font-size:14px}
+td,th{border:1px solid #ccc;padding:3px 6px;text-align:left;vertical-align:top}table.wide{width:100%}
+.long{overflow-wrap:anywhere;min-width:12em}th{background:#f0f0f0}.values td:nth-child(2){text-align:right}
+.ok{color:#176117}.fail{color:#b00020;font-weight:bold}.cal{color:#8a5a00}.miss{color:#8a3a00;font-weight:bold}
+.scroll{overflow-x:auto;max-width:100%}.warnings{color:#8a3a00}
 figure{margin:10px 0;font-size:13px;color:#555}img{width:100%;height:auto;border:1px solid #ddd;cursor:zoom-in}
 img.zoom{position:fixed;inset:0;margin:auto;width:auto;max-width:98vw;max-height:98vh;z-index:9;cursor:zoom-out;
-background:#fff;box-shadow:0 0 0 100vmax rgba(0,0,0,.6)}details{margin:0.4em 0}nav li{margin:2px 0}
-code{overflow-wrap:anywhere}"""
+background:#fff;box-shadow:0 0 0 100vmax rgba(0,0,0,.6)}details{margin:0.4em 0}summary{cursor:pointer}
+nav li{margin:2px 0}code,figcaption,p{overflow-wrap:anywhere}"""
 _SCRIPT = ("<script>document.addEventListener('click',e=>{if(e.target.tagName==='IMG')"
            "e.target.classList.toggle('zoom')})</script>")
 
 
-def write_report(out_dir, *, scenes: Sequence | None = None, bench_dir=None, sweeps: Sequence = (),
-                 progress: Callable[[str], None] | None = None, command: str | None = None) -> Path:
+def write_report(out_dir, *, scenes: Sequence | None = None, runs: Sequence | None = None, bench_dir=None,
+                 sweeps: Sequence = (), progress: Callable[[str], None] | None = None,
+                 command: str | None = None) -> Path:
     """Run the scenes (all by default), draw their figures and write ``out_dir/index.html``.
 
     Parameters
     ----------
     out_dir : folder for the page (created); the page is the only file written there.
     scenes : the scenes to include (``registry.find(id)`` each); default every scene.
+    runs : scenes already solved (``registry.run``), shown as they are instead of `scenes`.
     bench_dir : folder of `mechopt bench` outputs; its PNG files are embedded when it exists.
     sweeps : Parquet tables written by `mechopt sweep --out`; their maps are embedded.
     progress : called with one line per scene run.
@@ -56,13 +61,14 @@ def write_report(out_dir, *, scenes: Sequence | None = None, bench_dir=None, swe
     """
     tables = [(Path(p), *read_table(p)) for p in sweeps]        # a file of no sweep fails before any work
     out_dir = Path(out_dir)
-    runs = []
-    for scene in scenes if scenes is not None else registry.all_scenes():
-        if progress:
-            progress(f"running {scene.id} ...")
-        runs.append(registry.run(scene, drivers=True))
+    if runs is None:
+        runs = []
+        for scene in scenes if scenes is not None else registry.all_scenes():
+            if progress:
+                progress(f"running {scene.id} ...")
+            runs.append(registry.run(scene, drivers=True))
     with tempfile.TemporaryDirectory() as scratch:
-        parts = ["<h1>mechopt: validation report</h1>", _provenance(runs, command), _summary(runs), _contents(runs),
+        parts = ["<h1>mechopt: validation report</h1>", _provenance(runs, command), _contents(runs),
                  "<h2 id='validation'>Validation</h2>", _validation(runs),
                  "<h2>Scenes</h2>", *(_scene_section(run, Path(scratch)) for run in runs)]
         if tables:
@@ -72,29 +78,38 @@ def write_report(out_dir, *, scenes: Sequence | None = None, bench_dir=None, swe
     out_dir.mkdir(parents=True, exist_ok=True)
     page = out_dir / "index.html"
     write_text_atomic(page, "<!doctype html><html><head><meta charset='utf-8'><title>mechopt report</title>"
+                      "<meta name='viewport' content='width=device-width,initial-scale=1'>"
                       f"<style>{_STYLE}</style></head><body>\n" + "\n".join(parts) + f"\n{_SCRIPT}</body></html>\n")
     return page
 
 
-def _summary(runs):
-    checks = [c for r in runs for c in r.checks]
-    return f"<p>{len(runs)} scenes; {_e(registry.summary_line(checks))}.</p>"
-
-
 def _validation(runs):
-    rows = []
+    """The counts per verdict and the misses first; every check in a table folded below."""
+    checks = [c for r in runs for c in r.checks]
+    counts = registry.tally(checks)
+    rows, misses = [], []
     for run in runs:
-        marks = run.scene.marks()
-        assumed = sum(m == "assumed" for m in marks.values())
+        assumed = sum(m == "assumed" for m in run.scene.marks().values())
         for c in run.checks:
             css = "fail" if not c.ok else {"calibrated": "cal", "reproduced": "ok", "derived": "ok"}.get(c.verdict, "miss")
             verdict = f"<span class='{css}'>{_e(c.label if c.ok else 'FAIL (' + c.label + ')')}</span>"
+            why = f"<span class='long'>{_e(c.reason or c.where)}</span>"
             rows.append((registry.VERDICTS.index(c.verdict),
-                         [_e(run.scene.id), _e(c.name), _e(c.kind), _e(c.expected), _e(_fmt(c.got)), verdict,
-                          f"<span class='long'>{_e(c.reason or c.where)}</span>", str(assumed)]))
+                         [_e(run.scene.id), _e(c.name), _e(c.kind), _e(c.expected), _e(_fmt(c.got)), verdict, why,
+                          str(assumed)]))
+            if c.verdict in registry.MISSES:
+                misses.append((registry.VERDICTS.index(c.verdict),
+                               [_e(run.scene.id), _e(c.name), _e(c.expected), _e(_fmt(c.got)), verdict, why]))
     rows.sort(key=lambda row: min(row[0], len(registry.MISSES)))        # the misses first
-    return "<div class='scroll'>" + _table(["case", "quantity", "kind", "expected (source)", "computed", "verdict",
-                                            "where / why missed", "assumed params"], [r[1] for r in rows]) + "</div>"
+    misses.sort(key=lambda row: row[0])
+    tallies = _table(["verdict", "checks"], [[_e(v.replace("_", " ")), str(n)] for v, n in counts.items() if n])
+    return (f"<p><b>{_e(registry.summary_line(checks))}</b></p>{tallies}"
+            + (f"<h3>Misses ({len(misses)})</h3>" + _table(["case", "quantity", "expected (source)", "computed",
+                                                            "verdict", "why"], [m[1] for m in misses], wide=True)
+               if misses else "<p>no misses: every check is reproduced, calibrated or derived</p>")
+            + f"<details><summary>every check ({len(checks)}), misses first</summary>"
+            + _table(["case", "quantity", "kind", "expected (source)", "computed", "verdict", "where / why missed",
+                      "assumed params"], [r[1] for r in rows], wide=True) + "</details>")
 
 
 def _provenance(runs, command):
@@ -115,24 +130,24 @@ def _contents(runs):
     items = "".join(f"<li><b>{_e(name)}</b>: " + ", ".join(
         f"<a href='#{_e(r.scene.id.replace('/', '_'))}'>{_e(r.scene.id.split('/', 1)[-1])}</a>" for r in group)
         + "</li>" for name, group in groups.items())
-    return f"<nav><h2>Contents</h2><ul><li><a href='#validation'>validation table</a></li>{items}</ul></nav>"
+    return f"<nav><h2>Contents</h2><ul><li><a href='#validation'>validation</a></li>{items}</ul></nav>"
 
 
 def _scene_section(run, scratch):
+    """Its status, values and warnings first, then how it was made, then its figures."""
     scene, r = run.scene, run.result
     slug = scene.id.replace("/", "_")
     marked = [(k, p.value, p.mark, p.why + (f" (fitted to {p.on})" if p.on else ""))
               for k, p in scene.spec.params.items() if p.mark != "given"]
     images = "".join(_image(p) for p in plot_run(run, scratch / slug))
     return (f"<h3 id='{_e(slug)}'>{_e(scene.id)}: {_e(scene.spec.title)}</h3>"
-            f"<p><i>{_e(scene.spec.source)}</i><br>status {_e(r.status.value)}"
-            f"{' (' + _e(r.message) + ')' if r.message else ''}; build {r.timing.build_s:.4f} s, "
-            f"solve {r.timing.solve_s:.4f} s</p>"
-            + "".join(f"<p class='warning'>warning: {_e(w)}</p>" for w in r.warnings)
+            + answers_html(run)
             + "".join(f"<p>{_e(w)}</p>" for w in set_mostly_by(r.diagnostics.get("drivers", {})))
+            + f"<p><i>{_e(scene.spec.source)}</i><br>build {r.timing.build_s:.4f} s, solve {r.timing.solve_s:.4f} s</p>"
             + (f"<details><summary>{len(marked)} assumed / calibrated parameters</summary>"
                + _table(["parameter", "value", "unit", "mark", "why"],
-                        [[_e(k), _e(_fmt(v)), _e(unit_of(k)), _e(m), _e(w)] for k, v, m, w in marked])
+                        [[_e(k), _e(_fmt(v)), _e(unit_of(k)), _e(m), f"<span class='long'>{_e(w)}</span>"]
+                         for k, v, m, w in marked])
                + "</details>" if marked else "<p>every parameter given by the source</p>")
             + (images or "<p>no figures for this model</p>"))
 
@@ -168,10 +183,12 @@ def _image(png):
             f"<figcaption>{_e(Path(png).name)}</figcaption></figure>")
 
 
-def _table(header, rows):
+def _table(header, rows, *, wide=False):
+    """A table in its own scrolling box: a wide one scrolls there, never the page."""
     head = "".join(f"<th>{h}</th>" for h in header)
     body = "".join("<tr>" + "".join(f"<td>{x}</td>" for x in row) + "</tr>" for row in rows)
-    return f"<table><tr>{head}</tr>{body}</table>"
+    table = "<table class='wide'>" if wide else "<table>"
+    return f"<div class='scroll'>{table}<tr>{head}</tr>{body}</table></div>"
 
 
 def _fmt(value):

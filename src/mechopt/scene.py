@@ -14,7 +14,7 @@ import re
 import tomllib
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any, Literal, get_args, get_origin
+from typing import Annotated, Any, Literal, get_args, get_origin
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
@@ -220,7 +220,9 @@ class Scene:
                 continue
             low, high = declared_range(f.type)
             rows.append({"key": key, "kind": "parameter", "unit": unit_of(key), "mark": mark,
-                         "range": describe_range(low, high) if low or high else f"checked by {self.task_class.__name__}",
+                         "range": describe_range(low, high) if low or high else (
+                             "any finite number" if get_origin(f.type) is Annotated      # declared: no bounds
+                             else f"checked by {self.task_class.__name__}"),
                          "value": _show(value)})
         for key, option in solver_options(self.solver).items():
             choices = get_args(option.annotation) if get_origin(option.annotation) is Literal else ()
@@ -231,7 +233,7 @@ class Scene:
                          "value": _show(self.spec.solver_settings.get(key, option.default))})
         for key, value in self.spec.structure.items():
             rows.append({"key": key if not (isinstance(value, list) and value and isinstance(value[0], dict))
-                         else _path_example(self.spec.structure, key).split("=")[0].strip("'"),
+                         else _path_example(self.spec.structure, key).rsplit("=", 1)[0].strip("'"),
                          "kind": "structure", "unit": unit_of(key), "mark": "given",
                          "range": "a TOML value of the same shape", "value": _show(value)})
         return rows

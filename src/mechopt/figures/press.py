@@ -98,13 +98,19 @@ def elasticities(run):
     if not rows or not outputs:
         return {}
     order = np.argsort(np.abs(a["elasticity_speed_fluctuation"]))
-    fig = new_figure(figsize=(4 * len(outputs), 6))
-    for ax, name in zip(fig.subplots(1, len(outputs), sharey=True), outputs):
+    ncols = min(3, len(outputs))            # at most three panels a row: a page shows it near full size
+    nrows = -(-len(outputs) // ncols)
+    fig = new_figure(figsize=(4 * ncols + 1.5, 0.25 * len(rows) * nrows + 1.2 * nrows + 0.8))
+    axes = fig.subplots(nrows, ncols, sharey=True, squeeze=False).ravel()
+    for ax, name in zip(axes, outputs):
         ax.barh(np.arange(len(rows)), a[f"elasticity_{name}"][order])
         ax.set_title(name, fontsize=9)
         ax.axvline(0, color="k", lw=0.5)
         ax.grid(alpha=0.3, axis="x")
-    fig.axes[0].set_yticks(np.arange(len(rows)), [rows[i] for i in order], fontsize=8)
+        ax.tick_params(axis="y", labelsize=8)
+    for ax in axes[len(outputs):]:
+        ax.remove()                          # the grid's empty places: no panel
+    axes[0].set_yticks(np.arange(len(rows)), [rows[i] for i in order], fontsize=8)
     fig.supxlabel("elasticity: % change of the output per % change of the parameter")
     fig.suptitle(f"{run.scene.id}: what the periodic motion owes to each assumed value "
                  f"({run.result.status.value})", fontsize=10)
