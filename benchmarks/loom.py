@@ -166,7 +166,7 @@ def what_if(repeats=5, progress=None, warm_max=WARM_MAX_EVENTS):
     row["resolve_cold_s"] = _median_time(resolve(False), repeats)
     row["resolve_warm_s"] = _median_time(resolve(True), repeats)
     out.append(row)
-    net = cyclogram_lp._Net(task, "exact")
+    net = cyclogram_lp.Net(task, "exact")
 
     def build_group1():
         lp = build_event_time_lp(len(net.names), net.tails, net.heads, first=net.first, last=net.last,

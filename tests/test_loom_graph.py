@@ -11,7 +11,7 @@ from mechopt import registry
 from mechopt.models.loom import Cyclogram
 from mechopt.solvers.loom import plan_cyclogram
 from mechopt.solvers.loom.graph import BackArcs, Levels, PositiveCycle
-from mechopt.solvers.loom.plan import positive_cycle
+from mechopt.solvers.loom.plan import certify, positive_cycle
 from mechopt.solvers.result import Status
 
 
@@ -106,14 +106,13 @@ def test_graph_and_lp_give_the_same_answer_on_every_loom_scene(case):
             assert r.values[key] == pytest.approx(value, abs=1e-6), key
 
 
-def test_a_check_that_disagrees_is_inaccurate(monkeypatch):
-    from mechopt.solvers.loom import plan
+def test_a_check_that_disagrees_is_inaccurate():
     task = registry.find("loom/group1").build()[0]
-    real = plan._plan_lp
-    monkeypatch.setattr(plan, "_plan_lp", lambda *a, **k: dataclasses.replace(
-        real(*a, **k), values=real(*a, **k).values | {"span_deg": 100.0}))
-    r = plan_cyclogram(task, check=True)
+    graph, lp = plan_cyclogram(task), plan_cyclogram(task, method="lp")
+    wrong = dataclasses.replace(lp, values=lp.values | {"span_deg": 100.0})
+    r = certify(graph, wrong, 1e-6)
     assert r.status is Status.INACCURATE and "span_deg 114.75 against 100.0" in r.message
+    assert certify(graph, lp, 1e-6).status is Status.SOLVED
 
 
 # ---------------------------------------------------------------- hard cases (issue 22)

@@ -159,7 +159,7 @@ def test_lp_certificate_primal_feasible_dual_nonnegative_complementary():
     task = scene_task("loom/group1")
     clear_caches()
     r = plan_cyclogram(task, method="lp")
-    [lp] = cyclogram_lp._BUILDS.values()
+    [lp] = cyclogram_lp.LP_BUILDS.values()
     duals = {}
     for name in ("min_angle", "contact_stress", "amplitude"):
         con = lp.blocks[name]
@@ -327,7 +327,7 @@ def test_gantt_figure_is_written_for_a_solved_scene_and_skipped_for_an_infeasibl
 
 def test_an_optimum_contradicting_a_positive_cycle_is_not_solved(monkeypatch):
     task = net([(1, 2, 10), (2, 3, 20)], windows=[{"from": "1", "to": "3", "max_deg": 40.0}])
-    monkeypatch.setattr(cyclogram_lp, "_constraint_arcs", lambda net, lb: [("1", "2", 10.0), ("2", "1", 0.0)])
+    monkeypatch.setattr(cyclogram_lp, "constraint_arcs", lambda net, lb: [("1", "2", 10.0), ("2", "1", 0.0)])
     r = plan_cyclogram(task, method="lp")
     assert r.status is Status.INACCURATE and "longest_path_deg" not in r.values
     assert r.message.startswith("cross-check failed: the LP reports an optimum but Bellman-Ford finds a positive "
@@ -374,7 +374,7 @@ def test_networkx_negative_cycle_extraction_is_not_relied_on():
     # the machine's cycle made infeasible: networkx's find_negative_cycle detects but cannot extract it
     # from a root joined to every event (issue #5916); our search must name it
     task = registry.find("loom/machine").build({"operations[from=12,to=13].min_deg": 300.0})[0]
-    chain = cyclogram_lp.conflict_chain(cyclogram_lp._Net(task, "exact"))
+    chain = cyclogram_lp.conflict_chain(cyclogram_lp.Net(task, "exact"))
     assert chain and _chain_excess_deg(task, [v for v, _, _ in chain]) > 0
 
 

@@ -38,7 +38,7 @@ from mechopt.solvers.settings import Tolerance
 SENSITIVITY_CONVENTION = ("sens_* = d(objective)/d(limit): change of the objective [deg] per unit increase "
                           "of the limit; negative means a looser limit shortens the span")
 
-_BUILDS = BuildCache("loom.event_time_lp", maxsize=8)
+LP_BUILDS = BuildCache("loom.event_time_lp", maxsize=8)
 
 
 def plan_cyclogram(task: Cyclogram, *, method: Literal["graph", "lp"] = "graph",
@@ -97,7 +97,7 @@ def plan_cyclogram(task: Cyclogram, *, method: Literal["graph", "lp"] = "graph",
 def _plan_lp(task, *, stress_form, tol_deg, backend, warm_start) -> Result:
     """The event-time LP in cvxpy, checked against the longest-path certificate."""
     start = time.perf_counter()
-    net = _Net(task, stress_form)
+    net = Net(task, stress_form)
     def build():
         lp = build_event_time_lp(len(net.names), net.tails, net.heads, first=net.first, last=net.last,
                                  stress_rows=net.stress_rows, stress_ref=net.stress_ref, stress_form=stress_form,
@@ -108,8 +108,8 @@ def _plan_lp(task, *, stress_form, tol_deg, backend, warm_start) -> Result:
         return lp
     # cvxpy caches one compiled chain per problem and solver
     key = (backend, *net.signature())
-    fresh = key not in _BUILDS
-    lp, _ = _BUILDS.get(key, build)
+    fresh = key not in LP_BUILDS
+    lp, _ = LP_BUILDS.get(key, build)
     set_parameters(lp, task, net)
     build_s = time.perf_counter() - start
     try:
@@ -166,7 +166,7 @@ def _may_conflict(net) -> bool:
         return True
     if task.cycle_deg is None:
         return False
-    early, _ = _dag_times(len(net.names), net.tails, net.heads, net.lb, net.first, net.last, 0.0)
+    early, _ = dag_times(len(net.names), net.tails, net.heads, net.lb, net.first, net.last, 0.0)
     return early[net.last] > task.cycle_deg
 
 
@@ -188,7 +188,7 @@ def set_parameters(lp: EventTimeLP, task: Cyclogram, net) -> None:
         prm["cycle_deg"].value = task.cycle_deg
 
 
-class _Net:
+class Net:
     """The task as index arrays (events in graph order, isolated events left out)."""
 
     def __init__(self, task: Cyclogram, stress_form: str):
@@ -205,7 +205,7 @@ class _Net:
         self.lb, self.lb_why = task.lower_bounds_deg(stress_form)
 
     @classmethod
-    def structure(cls, task: Cyclogram) -> "_Net":
+    def structure(cls, task: Cyclogram) -> "Net":
         """The index arrays alone (events, arcs, ends, windows, syncs), for LPs with their own bounds."""
         net = cls.__new__(cls)
         net._index_arrays(task)
@@ -401,10 +401,10 @@ def _cross_check(task, net, values, tol):
         g, weight = nx.DiGraph(), "weight"
         g.add_weighted_edges_from((x, y, lb[k]) for k, (x, y) in enumerate(net.arcs))
     first, last = net.names[net.first], net.names[net.last]
-    arcs = _constraint_arcs(net, lb)
+    arcs = constraint_arcs(net, lb)
     try:
         if task.windows or task.syncs:
-            longest = _longest(arcs, first)[last]
+            longest = longest_distances(arcs, first)[last]
             route = "Bellman-Ford on the difference constraints"
         else:
             longest = nx.dag_longest_path_length(g, weight=weight)
@@ -414,7 +414,7 @@ def _cross_check(task, net, values, tol):
             got, what = values["limiting_op_deg"], "limiting_op_deg"
             if task.windows or task.syncs:
                 cycle = [] if task.cycle_deg is None else [(last, first, -task.cycle_deg)]
-                back = _longest(arcs + cycle, y).get(x)
+                back = longest_distances(arcs + cycle, y).get(x)
                 expected = np.inf if back is None else -back
             else:
                 before = nx.dag_longest_path_length(g.subgraph(nx.ancestors(g, x) | {x}), weight=weight)
@@ -432,7 +432,7 @@ def _cross_check(task, net, values, tol):
     return longest, None
 
 
-def _constraint_arcs(net, lb):
+def constraint_arcs(net, lb):
     """Every difference constraint as (u, v, w): p(v) - p(u) >= w [deg]."""
     arcs = [(x, y, float(lb[k])) for k, (x, y) in enumerate(net.arcs)]
     arcs += [(b, a, -w) for a, b, w in net.task.window_arcs()]
@@ -440,7 +440,7 @@ def _constraint_arcs(net, lb):
     return arcs
 
 
-def _longest(arcs, source, reverse=False):
+def longest_distances(arcs, source, reverse=False):
     """Longest distances from `source` over difference constraints (u, v, w) by Bellman-Ford on
     negated weights [deg]; `reverse` follows the arcs backwards (distances *to* source)."""
     g = nx.DiGraph()
@@ -515,12 +515,12 @@ def schedule_floats(task, net, lb, span, tol):
     first, last = names[net.first], names[net.last]
     try:
         if task.windows or task.syncs:
-            arcs = _constraint_arcs(net, lb)
-            early = _longest(arcs, first)
-            to_last, to_first = _longest(arcs, last, reverse=True), _longest(arcs, first, reverse=True)
+            arcs = constraint_arcs(net, lb)
+            early = longest_distances(arcs, first)
+            to_last, to_first = longest_distances(arcs, last, reverse=True), longest_distances(arcs, first, reverse=True)
             late = {v: min(span - to_last.get(v, -np.inf), -to_first.get(v, -np.inf)) for v in names}
         else:
-            e, l = _dag_times(len(names), net.tails, net.heads, lb, net.first, net.last, span)
+            e, l = dag_times(len(names), net.tails, net.heads, lb, net.first, net.last, span)
             early, late = dict(zip(names, e.tolist())), dict(zip(names, l.tolist()))
     except nx.NetworkXUnbounded:
         return {"floats": "not available: round-off made a zero cycle positive"}
@@ -532,7 +532,7 @@ def schedule_floats(task, net, lb, span, tol):
     return {"float_deg": floats, "critical_ops": critical, "critical_chain": chain}
 
 
-def _dag_times(n, tails, heads, lb, first, last, span):
+def dag_times(n, tails, heads, lb, first, last, span):
     """Earliest and latest event times of a DAG (arcs tails -> heads, durations lb) [deg], by
     Kahn's topological order on index arrays: no graph objects, linear in the arcs."""
     out_start = np.r_[0, np.cumsum(np.bincount(tails, minlength=n))]
@@ -590,7 +590,7 @@ def back_arcs(net, with_cycle=True):
 def _plan_graph(task, *, stress_form, tol_deg) -> Result:
     """Event times, floats, duals and ranging by longest paths (solvers/loom/graph.py)."""
     start = time.perf_counter()
-    net = _Net(task, stress_form)
+    net = Net(task, stress_form)
     levels = Levels.of(len(net.names), net.tails, net.heads)
     back, kinds = back_arcs(net)
     build_s = time.perf_counter() - start
