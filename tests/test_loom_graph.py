@@ -8,8 +8,9 @@ import scipy.sparse as sp
 from scipy.optimize import linprog
 
 from mechopt import registry
+from mechopt.models.errors import ModelError
 from mechopt.models.loom import Cyclogram
-from mechopt.solvers.loom import plan_cyclogram
+from mechopt.solvers.loom import plan_cyclogram, repair_cyclogram
 from mechopt.solvers.loom.graph import BackArcs, Levels, PositiveCycle
 from mechopt.solvers.loom.plan import certify, positive_cycle
 from mechopt.solvers.result import Status
@@ -148,3 +149,12 @@ def test_a_time_based_operation_as_the_speed_goes_to_zero():
         task = dataclasses.replace(task, operations=[dict(task.operations[0], min_ms=50.0), task.operations[1]])
         r = plan_cyclogram(task)
         assert r.values["span_deg"] == pytest.approx(max(10.0, 0.006 * rpm * 50.0) + 20.0, rel=1e-12)
+
+
+@pytest.mark.parametrize("setting", [{"scan_step_deg": 0.001}, {"scan_to_deg": 360.0}])
+def test_a_rebound_walk_too_long_is_refused_before_it_starts(setting):
+    # issue 21: scan_step_deg = 0.001 ran for minutes and scan_to_deg = 360 for 46 s
+    task = registry.find("loom/group1-repaired").build()[0]
+    with pytest.raises(ModelError, match=r"the limit is 1000: raise scan_step_deg") as err:
+        repair_cyclogram(task, **setting)
+    assert err.value.key == "scan_step_deg"
