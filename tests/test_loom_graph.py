@@ -158,3 +158,14 @@ def test_a_rebound_walk_too_long_is_refused_before_it_starts(setting):
     with pytest.raises(ModelError, match=r"the limit is 1000: raise scan_step_deg") as err:
         repair_cyclogram(task, **setting)
     assert err.value.key == "scan_step_deg"
+
+
+def test_two_independent_conflicts_are_both_named():
+    task = net([(1, 2, 10), (2, 3, 20), (3, 4, 10), (4, 5, 30)],
+               windows=[{"from": "1", "to": "3", "max_deg": 25.0}, {"from": "3", "to": "5", "max_deg": 35.0}])
+    r = plan_cyclogram(task)
+    assert r.status is Status.INFEASIBLE and r.values == {}
+    assert "window p(3) - p(1) <= 25 deg" in r.message and "window p(5) - p(3) <= 35 deg" in r.message
+    assert "needs 5 deg more" in r.message and "independent of it" in r.message
+    assert r.diagnostics["conflict_excess_deg"] == pytest.approx(5.0)
+    assert r.diagnostics["conflicts"][0]["conflict_excess_deg"] == pytest.approx(5.0)

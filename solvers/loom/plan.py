@@ -239,11 +239,12 @@ class Net:
         return f"t({x}->{y}) >= {self.lb[k]:.6g} deg ({self.lb_why[k]})"
 
 
-def conflict_chain(net) -> list[tuple[str, str, float]]:
+def conflict_chain(net, max_conflicts: int = 1) -> list:
     """A positive cycle of the difference constraints (operations with their bounds, windows,
     syncs and the machine cycle), as [(event, label and bound [deg] of the arc leaving it)]: the
     bounds sum to more than 0 (a cycle cannot hold them, p(v) - p(u) >= w all round); empty when there is
-    none. Our own Bellman-Ford: networkx's find_negative_cycle can detect a cycle and then fail
+    none. With max_conflicts > 1: a list of up to that many such chains, each sharing no
+    constraint with those before (independent conflicts, every one named). Our own Bellman-Ford: networkx's find_negative_cycle can detect a cycle and then fail
     to extract it ("Negative cycle is detected but not found", networkx issue #5916)."""
     tight: dict = {}                       # (u, v) -> (w, label): the tightest constraint per pair
 
@@ -262,7 +263,15 @@ def conflict_chain(net) -> list[tuple[str, str, float]]:
         first, last = net.names[net.first], net.names[net.last]
         add(last, first, -net.task.cycle_deg, f"cycle p({last}) - p({first}) <= {net.task.cycle_deg:.6g} deg")
     arcs = [(u, v, w, label) for (u, v), (w, label) in tight.items()]
-    return [(u, label, w) for u, _, w, label in positive_cycle(arcs)]
+    chains = []
+    for _ in range(max_conflicts):
+        cycle = positive_cycle(arcs)
+        if not cycle:
+            break
+        chains.append([(u, label, w) for u, _, w, label in cycle])
+        used = {label for *_, label in cycle}
+        arcs = [a for a in arcs if a[3] not in used]       # the next conflict shares no constraint
+    return chains if max_conflicts > 1 else (chains[0] if chains else [])
 
 
 def positive_cycle(arcs) -> list[tuple]:
@@ -567,6 +576,7 @@ def dag_times(n, tails, heads, lb, first, last, span):
 
 # ---------------------------------------------------------------- the graph method
 
+MAX_CONFLICTS = 4          # independent conflicting chains named in one INFEASIBLE result
 RANGING_MAX_OPS = 64       # ranging of the critical operations: one pass each, for chains up to this long
 RANGING_MAX_TABLE = 10_000  # a ranging table per operation for networks up to this many operations
 
@@ -599,7 +609,16 @@ def _plan_graph(task, *, stress_form, tol_deg) -> Result:
     try:
         solved = _longest_schedule(net, levels, back, tol_deg)
     except PositiveCycle:
-        return _infeasible(conflict_chain(net), Timing(build_s, time.perf_counter() - start - build_s), diagnostics)
+        chains = conflict_chain(net, MAX_CONFLICTS)
+        timing = Timing(build_s, time.perf_counter() - start - build_s)
+        if len(chains) < 2:
+            return _infeasible(chains[0] if chains else [], timing, diagnostics)
+        first = _infeasible(chains[0], timing, diagnostics)
+        more = [_infeasible(chain, timing, {}) for chain in chains[1:]]
+        message = first.message + "".join(f"; and, independent of it, {r.message.removeprefix('infeasible: ')}"
+                                          for r in more)
+        return dataclasses.replace(first, message=message, violated=sum((r.violated for r in [first, *more]), ()),
+                                   diagnostics=first.diagnostics | {"conflicts": [r.diagnostics for r in more]})
     if solved is None:
         x, y = (net.names[i] for i in net.limiting)
         return Result(Status.UNBOUNDED, {}, Timing(build_s, time.perf_counter() - start - build_s), diagnostics=diagnostics,
