@@ -1,4 +1,5 @@
-"""Event times of a network cyclogram as a linear program in cvxpy (paper 004, problem (1)).
+"""Event times of a network cyclogram (paper 004, problem (1)): on the graph (the LP's dual, longest
+paths; the default) or as a linear program in cvxpy (method "lp").
 
     minimise p(N) - p(1)   subject to   p(y) - p(x) >= [phi(x, y)]                 every operation
                                         p(y) - p(x) >= sigma-bound(x, y; [sigma_H])  cam pairs
