@@ -40,15 +40,18 @@ from mechopt.models.loom import Cyclogram
 from mechopt.plots import save_figure
 from mechopt.solvers.loom import HeldLP, build_event_time_lp, incidence, max_machine_speed, plan_cyclogram
 from mechopt.solvers.loom import plan as cyclogram_lp
+from mechopt.solvers.loom.graph import NO_BACK_ARCS, BackArcs, Levels, a_path, tight_arcs
 
-__all__ = ["TARGETS", "cli", "layered", "machine", "machine_speed", "scale", "what_if"]
+__all__ = ["TARGETS", "cli", "graph_targets", "layered", "machine", "machine_speed", "random_dag", "scale", "what_if"]
 
 SIZES = (1_000, 10_000, 100_000)
 CLARABEL_MAX_EVENTS = 10_000      # at 10^5 one Clarabel solve took ~4 min on the 2-core machine
 WARM_MAX_EVENTS = 10_000          # at 10^5 one warm-started HiGHS re-solve took ~5 min
 TARGETS = {"cvxpy_highs_1e5_s": 1.5, "cvxpy_over_networkx_1e5": 2.0,
            "group1_fresh_over_resolve": 5.0,     # LP only: build + compile + solve against a DPP re-solve
-           "machine_speed_10x100_s": 1.0}        # max_machine_speed, fresh (LP built, compiled and solved)
+           "machine_speed_10x100_s": 1.0,        # max_machine_speed, fresh (LP built, compiled and solved)
+           # issue 22: the graph solve with floats, critical chain and duals; against cvxpy + HiGHS in the same run
+           "graph_solve_1e5_s": 0.02, "cvxpy_over_graph": 50.0, "graph_solve_1e6_s": 0.3}
 QUICK_SIZES = (1_000, 10_000)
 
 
@@ -103,7 +106,27 @@ def _linprog(n, tails, heads, w):
     return build, time.perf_counter() - start - build, float(res.x[n - 1] - res.x[0])
 
 
-METHODS = {"networkx longest path": _networkx, "cvxpy + HiGHS": _cvxpy("HIGHS"),
+def _graph(n, tails, heads, w, back=NO_BACK_ARCS, tol=1e-9):
+    """The graph method's kernel as plan_cyclogram runs it: levels (build), then earliest and
+    latest times, floats, one critical chain and the duals (arcs' uses on a longest path)."""
+    start = time.perf_counter()
+    levels = Levels(n, tails, heads)
+    build = time.perf_counter() - start
+    early = levels.longest_from(0, w, back)
+    span = early[n - 1]
+    closed = BackArcs(np.r_[back.tails, n - 1], np.r_[back.heads, 0], np.r_[back.weights, -span])
+    late = -levels.longest_to(0, w, closed)
+    floats = late[heads] - early[tails] - w
+    critical = np.flatnonzero(floats <= tol * max(1.0, span))
+    a_path(n, tails[critical], heads[critical], 0, n - 1)                        # the critical chain
+    all_t, all_h, all_w = np.r_[tails, back.tails], np.r_[heads, back.heads], np.r_[w, back.weights]
+    tight = tight_arcs(all_t, all_h, all_w, early, tol * max(1.0, span))
+    duals = np.bincount(tight[a_path(n, all_t[tight], all_h[tight], 0, n - 1)], minlength=len(all_t))
+    assert duals[:len(tails)].max() >= 1
+    return build, time.perf_counter() - start - build, float(span)
+
+
+METHODS = {"graph (numpy levels)": _graph, "networkx longest path": _networkx, "cvxpy + HiGHS": _cvxpy("HIGHS"),
            "cvxpy + Clarabel": _cvxpy("CLARABEL"), "scipy linprog (HiGHS)": _linprog}
 
 
@@ -129,6 +152,85 @@ def scale(sizes=SIZES, repeats=3, progress=None, clarabel_max=CLARABEL_MAX_EVENT
                          "total_s": statistics.median(r[0] + r[1] for r in runs),
                          "span_deg": runs[-1][2], "span_error_deg": abs(runs[-1][2] - floor)})
     return rows
+
+
+def random_dag(n, windows=1_000, seed=0):
+    """Random DAG with windows: event j > 0 fed by two random events among the 50 before it
+    (event 0 feeds the rest; the leaves feed n - 1), angles U(0, 30) deg; windows between random
+    pairs a < b, each its pair's longest distance plus U(0, 2) deg (a third exactly tight), so
+    the network stays feasible. Returns tails, heads, w, (window from, to, max_deg)."""
+    rng = np.random.default_rng(seed)
+    j = np.repeat(np.arange(1, n - 1), 2)
+    i = np.maximum(0, j - rng.integers(1, 51, j.size))
+    pairs = np.unique(np.column_stack([i, j]), axis=0)
+    leaves = np.setdiff1d(np.arange(n - 1), pairs[:, 0])
+    pairs = np.vstack([pairs, np.column_stack([leaves, np.full(leaves.size, n - 1)])])
+    tails, heads, w = pairs[:, 0], pairs[:, 1], rng.uniform(0, 30, len(pairs))
+    dist = Levels(n, tails, heads).longest_from(0, w)
+    a, b = np.sort(rng.integers(1, n - 1, (2, windows)), axis=0)
+    keep = a < b
+    a, b = a[keep], b[keep]
+    slack = rng.uniform(0, 2, a.size) * (rng.random(a.size) > 1 / 3)
+    return tails, heads, w, (a, b, np.maximum(dist[b] - dist[a], 0.0) + slack)
+
+
+def _cvxpy_windows(n, tails, heads, w, windows):
+    start = time.perf_counter()
+    a, b, wmax = windows
+    lp = build_event_time_lp(n, tails, heads, first=0, last=n - 1, window_arcs=list(zip(a.tolist(), b.tolist())))
+    lp.params["min_deg"].value, lp.params["window_deg"].value = w, wmax
+    lp.problem.get_problem_data("HIGHS")
+    build = time.perf_counter() - start
+    lp.problem.solve(solver="HIGHS", warm_start=False)
+    if lp.problem.status != "optimal":
+        raise RuntimeError(f"HIGHS: {lp.problem.status}")
+    return build, time.perf_counter() - start - build, float(lp.p.value[n - 1] - lp.p.value[0])
+
+
+def graph_targets(repeats=3, progress=None, big=1_000_000):
+    """The issue-22 rows: a random DAG of 10^5 events with windows, graph against cvxpy + HiGHS
+    (the same run), and the graph alone on a layered network of `big` events."""
+    rows = []
+    tails, heads, w, windows = random_dag(100_000)
+    back = BackArcs(windows[1], windows[0], -windows[2])
+    for method, call in (("graph (numpy levels)", lambda: _graph(100_000, tails, heads, w, back)),
+                         ("cvxpy + HiGHS", lambda: _cvxpy_windows(100_000, tails, heads, w, windows))):
+        runs = [call() for _ in range(repeats)]
+        if progress:
+            progress(f"{method} random DAG + windows: {sum(runs[-1][:2]):.3f} s")
+        rows.append({"method": method, "events": 100_000, "arcs": len(tails) + len(windows[0]), "case": "random+win",
+                     "build_s": statistics.median(r[0] for r in runs), "solve_s": statistics.median(r[1] for r in runs),
+                     "total_s": statistics.median(r[0] + r[1] for r in runs), "span_deg": runs[-1][2]})
+    tails, heads, w = layered(big)
+    runs = [_graph(big, tails, heads, w) for _ in range(repeats)]
+    rows.append({"method": "graph (numpy levels)", "events": big, "arcs": len(tails), "case": "layered",
+                 "build_s": statistics.median(r[0] for r in runs), "solve_s": statistics.median(r[1] for r in runs),
+                 "total_s": statistics.median(r[0] + r[1] for r in runs), "span_deg": runs[-1][2]})
+    return rows
+
+
+def graph_table(scale_rows, rows):
+    """The graph rows and the issue-22 verdicts: solve time (with floats, chain, duals) and its
+    ratio to cvxpy + HiGHS (build + solve) in the same run."""
+    lines = ["", f"{'graph method (issue 22)':<24}{'case':>12}{'events':>9}{'build s':>10}{'solve s':>10}"
+             f"{'span deg':>16}"]
+    lines += [f"{r['method']:<24}{r['case']:>12}{r['events']:>9}{r['build_s']:>10.4f}{r['solve_s']:>10.4f}"
+              f"{r['span_deg']:>16.6f}" for r in rows]
+    by = {(r["method"], r["events"]): r for r in scale_rows}
+    verdicts = []
+    if ("cvxpy + HiGHS", 100_000) in by:
+        g, c = by["graph (numpy levels)", 100_000], by["cvxpy + HiGHS", 100_000]
+        verdicts += [("graph_solve_1e5_layered_s", g["solve_s"], TARGETS["graph_solve_1e5_s"], "<="),
+                     ("cvxpy_over_graph_1e5_layered", c["total_s"] / g["solve_s"], TARGETS["cvxpy_over_graph"], ">=")]
+    g, c = rows[0], rows[1]
+    verdicts += [("graph_solve_1e5_windows_s", g["solve_s"], TARGETS["graph_solve_1e5_s"], "<="),
+                 ("cvxpy_over_graph_1e5_windows", c["total_s"] / g["solve_s"], TARGETS["cvxpy_over_graph"], ">="),
+                 (f"graph_solve_{rows[2]['events']:.0e}_s", rows[2]["solve_s"], TARGETS["graph_solve_1e6_s"], "<=")]
+    lines.append(f"span graph vs cvxpy (random + windows): {abs(g['span_deg'] - c['span_deg']):.1e} deg")
+    for key, got, want, op in verdicts:
+        ok = got >= want if op == ">=" else got <= want
+        lines.append(f"{key:<32}{got:>10.4g}{op + ' ' + format(want, 'g'):>10}  {'met' if ok else 'MISSED'}")
+    return "\n".join(lines)
 
 
 def _time(call):
@@ -166,7 +268,7 @@ def what_if(repeats=5, progress=None, warm_max=WARM_MAX_EVENTS):
     row["resolve_cold_s"] = _median_time(resolve(False), repeats)
     row["resolve_warm_s"] = _median_time(resolve(True), repeats)
     out.append(row)
-    net = cyclogram_lp._Net(task, "exact")
+    net = cyclogram_lp.Net(task, "exact")
 
     def build_group1():
         lp = build_event_time_lp(len(net.names), net.tails, net.heads, first=net.first, last=net.last,
@@ -355,4 +457,6 @@ def cli(repeats, out_dir, progress=None, quick=False) -> str:
                  clarabel_max=1_000 if quick else CLARABEL_MAX_EVENTS)
     whatif = what_if(repeats=max(repeats, 5), progress=progress, warm_max=1_000 if quick else WARM_MAX_EVENTS)
     speed = machine_speed(repeats=repeats, progress=progress)
-    return "\n".join([table(rows, whatif, speed), *(f"plot: {p}" for p in plot(rows, out_dir))])
+    graph = graph_targets(repeats=repeats, progress=progress, big=100_000 if quick else 1_000_000)
+    return "\n".join([table(rows, whatif, speed), graph_table(rows, graph),
+                      *(f"plot: {p}" for p in plot(rows, out_dir))])

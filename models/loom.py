@@ -466,8 +466,10 @@ def _check_numbers(task):
         raise ModelError(f"amplitude_slope_mm_per_deg={slope} must be < 0: the rebound amplitude falls as "
                          f"the approach to the stop slows (a larger phase angle)", key="amplitude_slope_mm_per_deg")
     intercept = task.amplitude_intercept_mm
-    if intercept is not None and not math.isfinite(intercept):
-        raise ModelError(f"amplitude_intercept_mm={intercept} must be finite", key="amplitude_intercept_mm")
+    if intercept is not None and not (math.isfinite(intercept) and intercept > 0):
+        raise ModelError(f"amplitude_intercept_mm={intercept} must be a finite number > 0: it is the rebound "
+                         f"amplitude at t = 0, and with the falling slope a law starting at or below 0 gives a "
+                         f"negative amplitude at every angle", key="amplitude_intercept_mm")
 
 
 def _table(value, key, kind):

@@ -229,10 +229,11 @@ def test_at_another_speed_the_rebound_is_h_of_n_over_t(task, dense_root):
 
 
 def _scenes_folder(tmp_path, lever):
-    """A copy of loom/group1-repaired whose lever table is `lever`, beside a copy of its source."""
+    """A copy of loom/group1-repaired whose lever table is `lever`, beside copies of its sources."""
     root = Path(registry.find("loom/group1-repaired").path).parents[1]
     (tmp_path / "loom").mkdir()
     shutil.copytree(root / "stop-impact", tmp_path / "stop-impact")
+    shutil.copy(root / "loom" / "group1.toml", tmp_path / "loom" / "group1.toml")       # its base
     text = (root / "loom" / "group1-repaired.toml").read_text(encoding="utf-8")
     start = text.index("[structure.lever]")
     end = text.index("\n[", start + 1)

@@ -117,8 +117,8 @@ def test_exact_and_linearised_stress_differ_by_the_tangent_gap_and_the_linear_op
 
 @pytest.mark.parametrize("case", ["loom/group1", "loom/machine"])
 def test_clarabel_agrees_with_highs(case):
-    a = plan_cyclogram(scene_task(case), backend="HIGHS")
-    b = plan_cyclogram(scene_task(case), backend="CLARABEL")
+    a = plan_cyclogram(scene_task(case), method="lp", backend="HIGHS")
+    b = plan_cyclogram(scene_task(case), method="lp", backend="CLARABEL")
     key = "limiting_op_deg" if case.endswith("machine") else "span_deg"
     assert b.status is Status.SOLVED and b.values[key] == pytest.approx(a.values[key], abs=1e-6)
 
@@ -158,8 +158,8 @@ def test_sign_convention_looser_limits_shorten_the_span():
 def test_lp_certificate_primal_feasible_dual_nonnegative_complementary():
     task = scene_task("loom/group1")
     clear_caches()
-    r = plan_cyclogram(task)
-    [lp] = cyclogram_lp._BUILDS.values()
+    r = plan_cyclogram(task, method="lp")
+    [lp] = cyclogram_lp.LP_BUILDS.values()
     duals = {}
     for name in ("min_angle", "contact_stress", "amplitude"):
         con = lp.blocks[name]
@@ -187,13 +187,13 @@ def test_lp_certificate_primal_feasible_dual_nonnegative_complementary():
 
 def test_a_limit_change_reuses_the_compiled_problem_and_gives_the_fresh_answer():
     task = scene_task("loom/group1")
-    plan_cyclogram(task)
+    plan_cyclogram(task, method="lp")
     tighter = dataclasses.replace(task, amplitude_limit_mm=0.05)
-    again = plan_cyclogram(tighter)
+    again = plan_cyclogram(tighter, method="lp")
     assert again.diagnostics["compiled_now"] is False      # re-solved, not rebuilt (speed is benched, not tested)
     assert again.values["t_3_7_deg"] == pytest.approx((0.208 - 0.05) / 0.003, abs=1e-7)
     clear_caches()
-    fresh = plan_cyclogram(tighter)
+    fresh = plan_cyclogram(tighter, method="lp")
     assert fresh.diagnostics["compiled_now"] is True
     assert fresh.values["span_deg"] == pytest.approx(again.values["span_deg"], abs=1e-9)
 
@@ -243,7 +243,7 @@ def test_limiting_operation_without_a_cycle_is_unbounded_not_a_number():
 
 def test_cross_check_failure_is_inaccurate_not_solved(monkeypatch):
     monkeypatch.setattr(cyclogram_lp.nx, "dag_longest_path_length", lambda g, **kw: -1.0)
-    r = plan_cyclogram(net([(1, 2, 10), (2, 3, 20)]))
+    r = plan_cyclogram(net([(1, 2, 10), (2, 3, 20)]), method="lp")
     assert r.status is Status.INACCURATE and r.values["span_deg"] == pytest.approx(30.0)
     assert r.message.startswith("cross-check failed: LP span_deg = 30.0 but networkx dag_longest_path_length "
                                 "gives -1.0 (tolerance 1e-06 deg per degree above 1)")
@@ -253,21 +253,21 @@ def test_a_problem_that_would_recompile_is_refused(monkeypatch):
     clear_caches()
     monkeypatch.setattr(cp.Problem, "is_dpp", lambda self, *a, **k: False)
     with pytest.raises(SolverError, match=r"event-time LP is not DPP; what-if re-solves would recompile"):
-        plan_cyclogram(net([(1, 2, 10), (2, 3, 20)]))
+        plan_cyclogram(net([(1, 2, 10), (2, 3, 20)]), method="lp")
 
 
 def test_back_end_crash_is_failed_and_inaccurate_is_not_passed_on(monkeypatch):
     task = net([(1, 2, 10), (2, 3, 20)])
-    plan_cyclogram(task)
+    plan_cyclogram(task, method="lp")
 
     def crash(self, *a, **k):
         raise cp.error.SolverError("HiGHS exploded")
     with monkeypatch.context() as m:
         m.setattr(cp.Problem, "solve", crash)
-        r = plan_cyclogram(task)
+        r = plan_cyclogram(task, method="lp")
     assert r.status is Status.FAILED and r.values == {} and "HiGHS exploded" in r.message
     monkeypatch.setattr(cyclogram_lp, "from_cvxpy", lambda status: Status.INACCURATE)
-    r = plan_cyclogram(task)
+    r = plan_cyclogram(task, method="lp")
     assert r.status is Status.INACCURATE and r.values == {}
 
 
@@ -327,8 +327,8 @@ def test_gantt_figure_is_written_for_a_solved_scene_and_skipped_for_an_infeasibl
 
 def test_an_optimum_contradicting_a_positive_cycle_is_not_solved(monkeypatch):
     task = net([(1, 2, 10), (2, 3, 20)], windows=[{"from": "1", "to": "3", "max_deg": 40.0}])
-    monkeypatch.setattr(cyclogram_lp, "_constraint_arcs", lambda net, lb: [("1", "2", 10.0), ("2", "1", 0.0)])
-    r = plan_cyclogram(task)
+    monkeypatch.setattr(cyclogram_lp, "constraint_arcs", lambda net, lb: [("1", "2", 10.0), ("2", "1", 0.0)])
+    r = plan_cyclogram(task, method="lp")
     assert r.status is Status.INACCURATE and "longest_path_deg" not in r.values
     assert r.message.startswith("cross-check failed: the LP reports an optimum but Bellman-Ford finds a positive "
                                 "cycle that the conflict search")
@@ -336,7 +336,7 @@ def test_an_optimum_contradicting_a_positive_cycle_is_not_solved(monkeypatch):
 
 def test_infeasible_without_a_positive_cycle_says_it_may_be_numerical(monkeypatch):
     monkeypatch.setattr(cyclogram_lp, "conflict_chain", lambda net: [])
-    r = plan_cyclogram(scene_task("loom/group1-window-conflict"))
+    r = plan_cyclogram(scene_task("loom/group1-window-conflict"), method="lp")
     assert r.status is Status.INFEASIBLE and r.values == {}
     assert r.message == "HIGHS: infeasible (no positive cycle among the difference constraints: a numerical failure?)"
 
@@ -374,7 +374,7 @@ def test_networkx_negative_cycle_extraction_is_not_relied_on():
     # the machine's cycle made infeasible: networkx's find_negative_cycle detects but cannot extract it
     # from a root joined to every event (issue #5916); our search must name it
     task = registry.find("loom/machine").build({"operations[from=12,to=13].min_deg": 300.0})[0]
-    chain = cyclogram_lp.conflict_chain(cyclogram_lp._Net(task, "exact"))
+    chain = cyclogram_lp.conflict_chain(cyclogram_lp.Net(task, "exact"))
     assert chain and _chain_excess_deg(task, [v for v, _, _ in chain]) > 0
 
 
@@ -388,17 +388,17 @@ def test_a_cycle_1e7_deg_too_short_is_infeasible_whatever_the_back_end_says(back
     need = nx.dag_longest_path_length(g)
     assert need == pytest.approx(279.75)
     tight = dataclasses.replace(task, cycle_deg=need - 1e-7)
-    short = plan_cyclogram(tight, backend=backend)
+    short = plan_cyclogram(tight, method="lp", backend=backend)
     assert short.status is Status.INFEASIBLE and short.values == {}
     assert short.diagnostics["conflict_excess_deg"] == pytest.approx(1e-7, rel=1e-6)
     assert _chain_excess_deg(tight, short.diagnostics["conflict_events"]) == pytest.approx(1e-7, rel=1e-6)
-    ok = plan_cyclogram(dataclasses.replace(task, cycle_deg=need + 1e-7), backend=backend)
+    ok = plan_cyclogram(dataclasses.replace(task, cycle_deg=need + 1e-7), method="lp", backend=backend)
     assert ok.status is Status.SOLVED and ok.values["limiting_op_deg"] == pytest.approx(100.0 + 1e-7, abs=1e-6)
 
 
 def test_clarabel_reporting_optimal_on_a_positive_cycle_is_overruled():
     task = dataclasses.replace(scene_task("loom/machine"), cycle_deg=279.75 - 1e-7)
-    r = plan_cyclogram(task, backend="CLARABEL")
+    r = plan_cyclogram(task, method="lp", backend="CLARABEL")
     if r.diagnostics["solver_status"] == "optimal":          # what the audit saw; the certificate overrules it
         assert "CLARABEL reported optimal, the longest-path certificate overrules it" in r.message
     assert r.status is Status.INFEASIBLE

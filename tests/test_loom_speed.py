@@ -224,9 +224,9 @@ def test_a_time_floor_is_an_angle_at_the_task_s_speed():
 
 def test_held_highs_model_agrees_with_the_cvxpy_lp_and_says_infeasible():
     from mechopt.solvers.loom import HeldLP
-    from mechopt.solvers.loom.plan import _Net
+    from mechopt.solvers.loom.plan import Net
     task = registry.find("loom/group1").build()[0]
-    net = _Net(task, "exact")
+    net = Net(task, "exact")
     held = HeldLP(len(net.names), net.tails, net.heads, first=net.first, last=net.last, with_cycle=True)
     status, p = held.solve(net.lb, cycle_deg=360.0)
     assert status is Status.SOLVED

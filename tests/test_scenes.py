@@ -194,6 +194,7 @@ def test_a_derived_parameter_is_the_other_scenes_value():
 def test_a_bad_derivation_is_refused_by_name(tmp_path, ref, match):
     text = (registry.cases_dir() / "loom" / "group1-stop-model.toml").read_text()
     path = tmp_path / "chain.toml"
+    (tmp_path / "group1.toml").write_text((registry.cases_dir() / "loom" / "group1.toml").read_text())   # its base
     path.write_text(text.replace('"stop-impact/amplitude-law:slope_mm_per_deg"', ref))
     with pytest.raises(SceneError, match=match):
         registry.run(load(path))

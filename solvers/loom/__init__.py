@@ -6,7 +6,8 @@
                                         p(y) - p(x) <= w,  p(a) = p(b)             windows, syncs
                                         p(1) = 0                                     anchor
 
-* `plan.plan_cyclogram`: this LP in cvxpy, checked against the longest-path certificate;
+* `plan.plan_cyclogram`: this LP solved on the graph (its dual, longest paths: `graph`, the
+  default) or in cvxpy (method "lp"), each checked against the other on demand (check=True);
 * `repair.repair_cyclogram`: its optimum checked on the exact rebound and contact stress, re-cut
   and re-solved until they hold (issue 14, part 4);
 * `speed.max_machine_speed`: the whole machine's largest speed, an LP in (p, n) or bisection on n

@@ -1,4 +1,5 @@
-"""Event times of a network cyclogram as a linear program in cvxpy (paper 004, problem (1)).
+"""Event times of a network cyclogram (paper 004, problem (1)): on the graph (the LP's dual, longest
+paths; the default) or as a linear program in cvxpy (method "lp").
 
     minimise p(N) - p(1)   subject to   p(y) - p(x) >= [phi(x, y)]                 every operation
                                         p(y) - p(x) >= sigma-bound(x, y; [sigma_H])  cam pairs
@@ -16,6 +17,8 @@ change of the objective (span_deg, or limiting_op_deg on a machine) per unit *in
 limit. Raising [sigma_H] or the amplitude limit loosens a bound: the span falls (<= 0); raising a
 critical [phi] lengthens it (+1 deg/deg).
 """
+import dataclasses
+import functools
 import math
 import time
 from collections import deque
@@ -29,28 +32,34 @@ from mechopt.models.cache import BuildCache
 from mechopt.models.errors import ModelError
 from mechopt.models.loom import Cyclogram, amplitude_mm, stress_bound_deg, stress_MPa
 from mechopt.solvers.loom.event_time import EventTimeLP, build_event_time_lp
+from mechopt.solvers.loom.graph import BackArcs, Levels, PositiveCycle, a_path, tight_arcs
 from mechopt.solvers.result import Result, Status, Timing, from_cvxpy
 from mechopt.solvers.settings import Tolerance
 
 SENSITIVITY_CONVENTION = ("sens_* = d(objective)/d(limit): change of the objective [deg] per unit increase "
                           "of the limit; negative means a looser limit shortens the span")
 
-_BUILDS = BuildCache("loom.event_time_lp", maxsize=8)
+LP_BUILDS = BuildCache("loom.event_time_lp", maxsize=8)
 
 
-def plan_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] = "HIGHS",
+def plan_cyclogram(task: Cyclogram, *, method: Literal["graph", "lp"] = "graph",
+                   backend: Literal["HIGHS", "CLARABEL"] = "HIGHS",
                    stress_form: Literal["exact", "linear"] = "exact", warm_start: bool = False,
-                   tol_deg: Tolerance = 1e-6) -> Result:
+                   tol_deg: Tolerance = 1e-6, check: bool = False) -> Result:
     """Event times minimising the span p(N) - p(1) of a cyclogram (paper 004, problem (1)), or
     maximising the machine's limiting operation inside its cycle.
 
     Parameters
     ----------
     task : the network and its limits (models/loom.py).
-    backend : LP solver behind cvxpy.
+    method : "graph" (longest paths on the difference constraints, solvers/loom/graph.py: the
+        LP's dual solved exactly) or "lp" (the cvxpy model of the design card).
+    backend : LP solver behind cvxpy (method "lp", and the check).
     stress_form : "exact" sigma_max(t) <= [sigma_H] as t >= K/[sigma_H]; "linear" its tangent at t_ref.
     warm_start : pass cvxpy's warm start to the back end (with HiGHS it can slow re-solves).
     tol_deg : tolerance [deg] for float = 0 (critical), binding constraints and the cross-check.
+    check : also solve by the other method and compare: span (or limiting_op_deg) to tol_deg and,
+        where the critical chain is unique, every sens_*; a mismatch makes the result INACCURATE.
 
     Returns
     -------
@@ -60,6 +69,9 @@ def plan_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] = "
     diagnostics: float_deg, critical_ops, critical_chain, binding (with duals), sens_min_deg.
     An infeasible problem names its conflicting chain (a positive cycle of the difference
     constraints) in `message` and `violated`, its events and excess [deg] in `diagnostics`.
+
+    Method "graph" also gives ranging_deg: per operation [how far its bound may fall, rise]
+    [deg] before its dual changes (None: without end).
 
     The back end's answer is checked against the exact certificate, whatever it says: a positive
     cycle (above 1e-12 of the largest angle: round-off) makes the result INFEASIBLE, an optimum
@@ -72,8 +84,21 @@ def plan_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] = "
     >>> r.status.value, r.diagnostics["critical_chain"][:3]                             # doctest: +SKIP
     ('SOLVED', ['1', '3', '7'])
     """
+    if method not in ("graph", "lp"):
+        raise ModelError(f"method={method!r}: allowed graph, lp", key="method")
+    solve = _plan_graph if method == "graph" else functools.partial(_plan_lp, backend=backend, warm_start=warm_start)
+    result = solve(task, stress_form=stress_form, tol_deg=tol_deg)
+    if not check:
+        return result
+    other = (_plan_lp(task, stress_form=stress_form, tol_deg=tol_deg, backend=backend, warm_start=warm_start)
+             if method == "graph" else _plan_graph(task, stress_form=stress_form, tol_deg=tol_deg))
+    return certify(result, other, tol_deg)
+
+
+def _plan_lp(task, *, stress_form, tol_deg, backend, warm_start) -> Result:
+    """The event-time LP in cvxpy, checked against the longest-path certificate."""
     start = time.perf_counter()
-    net = _Net(task, stress_form)
+    net = Net(task, stress_form)
     def build():
         lp = build_event_time_lp(len(net.names), net.tails, net.heads, first=net.first, last=net.last,
                                  stress_rows=net.stress_rows, stress_ref=net.stress_ref, stress_form=stress_form,
@@ -84,8 +109,8 @@ def plan_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] = "
         return lp
     # cvxpy caches one compiled chain per problem and solver
     key = (backend, *net.signature())
-    fresh = key not in _BUILDS
-    lp, _ = _BUILDS.get(key, build)
+    fresh = key not in LP_BUILDS
+    lp, _ = LP_BUILDS.get(key, build)
     set_parameters(lp, task, net)
     build_s = time.perf_counter() - start
     try:
@@ -94,21 +119,16 @@ def plan_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] = "
         return Result(Status.FAILED, {}, Timing(build_s, time.perf_counter() - start - build_s),
                       message=f"{backend} failed: {exc}")
     status = from_cvxpy(lp.problem.status)
-    diagnostics = {"backend": backend, "stress_form": stress_form, "compiled_now": fresh,
+    diagnostics = {"method": "lp", "backend": backend, "stress_form": stress_form, "compiled_now": fresh,
                    "events": len(net.names), "operations": len(net.tails), "isolated_events": task.isolated_events,
                    "solver_status": lp.problem.status, "solve_time_backend_s": lp.problem.solver_stats.solve_time}
     timing = lambda: Timing(build_s, time.perf_counter() - start - build_s)      # noqa: E731
     # the certificate: an optimum is only trusted when the difference constraints hold no positive cycle
     chain = conflict_chain(net) if status is Status.INFEASIBLE or _may_conflict(net) else []
     if chain:
-        excess = math.fsum(w for _, _, w in chain)
-        diagnostics |= {"conflict_events": [v for v, _, _ in chain], "conflict_excess_deg": excess}
-        message = "infeasible: conflicting chain " + "; ".join(label for _, label, _ in chain)
-        message += f" (needs {excess:.6g} deg more than its limits allow)"
-        if status is not Status.INFEASIBLE:
-            message += f"; {backend} reported {lp.problem.status}, the longest-path certificate overrules it"
-        return Result(Status.INFEASIBLE, {}, timing(), message=message,
-                      violated=tuple(label for _, label, _ in chain), diagnostics=diagnostics)
+        note = "" if status is Status.INFEASIBLE else \
+            f"; {backend} reported {lp.problem.status}, the longest-path certificate overrules it"
+        return _infeasible(chain, timing(), diagnostics, note)
     if status is not Status.SOLVED:
         message = f"{backend}: {lp.problem.status}"
         if status is Status.INFEASIBLE:
@@ -129,6 +149,16 @@ def plan_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] = "
                   diagnostics=diagnostics)
 
 
+def _infeasible(chain, timing, diagnostics, note="") -> Result:
+    """INFEASIBLE, naming the conflicting chain (a positive cycle of the constraints)."""
+    excess = math.fsum(w for _, _, w in chain)
+    diagnostics = diagnostics | {"conflict_events": [v for v, _, _ in chain], "conflict_excess_deg": excess}
+    message = "infeasible: conflicting chain " + "; ".join(label for _, label, _ in chain)
+    message += f" (needs {excess:.6g} deg more than its limits allow){note}"
+    return Result(Status.INFEASIBLE, {}, timing, message=message, violated=tuple(label for _, label, _ in chain),
+                  diagnostics=diagnostics)
+
+
 def _may_conflict(net) -> bool:
     """Whether the constraints can hold a positive cycle: windows and syncs can; a DAG of
     operations only with its cycle, when its longest path (linear time) is longer than it."""
@@ -137,7 +167,7 @@ def _may_conflict(net) -> bool:
         return True
     if task.cycle_deg is None:
         return False
-    early, _ = _dag_times(len(net.names), net.tails, net.heads, net.lb, net.first, net.last, 0.0)
+    early, _ = dag_times(len(net.names), net.tails, net.heads, net.lb, net.first, net.last, 0.0)
     return early[net.last] > task.cycle_deg
 
 
@@ -159,7 +189,7 @@ def set_parameters(lp: EventTimeLP, task: Cyclogram, net) -> None:
         prm["cycle_deg"].value = task.cycle_deg
 
 
-class _Net:
+class Net:
     """The task as index arrays (events in graph order, isolated events left out)."""
 
     def __init__(self, task: Cyclogram, stress_form: str):
@@ -176,7 +206,7 @@ class _Net:
         self.lb, self.lb_why = task.lower_bounds_deg(stress_form)
 
     @classmethod
-    def structure(cls, task: Cyclogram) -> "_Net":
+    def structure(cls, task: Cyclogram) -> "Net":
         """The index arrays alone (events, arcs, ends, windows, syncs), for LPs with their own bounds."""
         net = cls.__new__(cls)
         net._index_arrays(task)
@@ -210,11 +240,12 @@ class _Net:
         return f"t({x}->{y}) >= {self.lb[k]:.6g} deg ({self.lb_why[k]})"
 
 
-def conflict_chain(net) -> list[tuple[str, str, float]]:
+def conflict_chain(net, max_conflicts: int = 1) -> list:
     """A positive cycle of the difference constraints (operations with their bounds, windows,
     syncs and the machine cycle), as [(event, label and bound [deg] of the arc leaving it)]: the
     bounds sum to more than 0 (a cycle cannot hold them, p(v) - p(u) >= w all round); empty when there is
-    none. Our own Bellman-Ford: networkx's find_negative_cycle can detect a cycle and then fail
+    none. With max_conflicts > 1: a list of up to that many such chains, each sharing no
+    constraint with those before (independent conflicts, every one named). Our own Bellman-Ford: networkx's find_negative_cycle can detect a cycle and then fail
     to extract it ("Negative cycle is detected but not found", networkx issue #5916)."""
     tight: dict = {}                       # (u, v) -> (w, label): the tightest constraint per pair
 
@@ -233,7 +264,15 @@ def conflict_chain(net) -> list[tuple[str, str, float]]:
         first, last = net.names[net.first], net.names[net.last]
         add(last, first, -net.task.cycle_deg, f"cycle p({last}) - p({first}) <= {net.task.cycle_deg:.6g} deg")
     arcs = [(u, v, w, label) for (u, v), (w, label) in tight.items()]
-    return [(u, label, w) for u, _, w, label in positive_cycle(arcs)]
+    chains = []
+    for _ in range(max_conflicts):
+        cycle = positive_cycle(arcs)
+        if not cycle:
+            break
+        chains.append([(u, label, w) for u, _, w, label in cycle])
+        used = {label for *_, label in cycle}
+        arcs = [a for a in arcs if a[3] not in used]       # the next conflict shares no constraint
+    return chains if max_conflicts > 1 else (chains[0] if chains else [])
 
 
 def positive_cycle(arcs) -> list[tuple]:
@@ -302,6 +341,31 @@ def _report(task, net, lp, tol):
     """Values and diagnostics of a solved LP: times, angles, floats, duals, the cross-check."""
     p = lp.p.value
     p = p - p[net.first]                      # the anchor holds to solver precision; make it exact
+    values, overstressed = schedule_values(task, net, p)
+    t = p[net.heads] - p[net.tails]
+
+    longest, disagreement = _cross_check(task, net, values, tol)
+    if longest is not None:
+        values["longest_path_deg"] = longest
+    sens, binding, sens_min = _sensitivities(task, net, lp, t, tol)
+    values |= sens
+    floats = _floats(task, net, p, values, tol)
+    diagnostics = {"binding": binding, "sens_min_deg": sens_min} | limit_diagnostics(task, net)
+    diagnostics |= floats
+    return values, diagnostics, tuple(overstressed), disagreement
+
+
+def limit_diagnostics(task, net) -> dict:
+    """Which limit sets each operation's bound, and the linearised stress bound's gap."""
+    return {"sensitivity_convention": SENSITIVITY_CONVENTION,
+            "bound_source": {f"{x}->{y}": net.lb_why[k] for k, (x, y) in enumerate(net.arcs)},
+            "stress_gap_deg": {f"{x}->{y}": _stress_gap(task, k) for k, (x, y) in
+                               ((k, net.arcs[k]) for k in net.stress_rows)}}
+
+
+def schedule_values(task, net, p):
+    """Values of event times p [deg]: span, limiting operation, times, angles, amplitudes,
+    stresses, group spans; and the operations whose stress exceeds [sigma_H]."""
     t = p[net.heads] - p[net.tails]
     span = float(p[net.last] - p[net.first])
     values = {"span_deg": span}
@@ -322,19 +386,7 @@ def _report(task, net, lp, tol):
             values[f"span_{group}_deg"] = float(max(times) - min(times))
     overstressed = [f"contact_stress[{x}->{y}]" for k, (x, y) in ((k, net.arcs[k]) for k in net.stress_rows)
                     if values[f"sigma_{x}_{y}_MPa"] > task.sigma_H_limit_MPa * (1 + 1e-9)]
-
-    longest, disagreement = _cross_check(task, net, values, tol)
-    if longest is not None:
-        values["longest_path_deg"] = longest
-    sens, binding, sens_min = _sensitivities(task, net, lp, t, tol)
-    values |= sens
-    floats = _floats(task, net, p, values, tol)
-    diagnostics = {"binding": binding, "sens_min_deg": sens_min, "sensitivity_convention": SENSITIVITY_CONVENTION,
-                   "bound_source": {f"{x}->{y}": net.lb_why[k] for k, (x, y) in enumerate(net.arcs)},
-                   "stress_gap_deg": {f"{x}->{y}": _stress_gap(task, k) for k, (x, y) in
-                                      ((k, net.arcs[k]) for k in net.stress_rows)}}
-    diagnostics |= floats
-    return values, diagnostics, tuple(overstressed), disagreement
+    return values, tuple(overstressed)
 
 
 def _stress_gap(task, k):
@@ -359,10 +411,10 @@ def _cross_check(task, net, values, tol):
         g, weight = nx.DiGraph(), "weight"
         g.add_weighted_edges_from((x, y, lb[k]) for k, (x, y) in enumerate(net.arcs))
     first, last = net.names[net.first], net.names[net.last]
-    arcs = _constraint_arcs(net, lb)
+    arcs = constraint_arcs(net, lb)
     try:
         if task.windows or task.syncs:
-            longest = _longest(arcs, first)[last]
+            longest = longest_distances(arcs, first)[last]
             route = "Bellman-Ford on the difference constraints"
         else:
             longest = nx.dag_longest_path_length(g, weight=weight)
@@ -372,7 +424,7 @@ def _cross_check(task, net, values, tol):
             got, what = values["limiting_op_deg"], "limiting_op_deg"
             if task.windows or task.syncs:
                 cycle = [] if task.cycle_deg is None else [(last, first, -task.cycle_deg)]
-                back = _longest(arcs + cycle, y).get(x)
+                back = longest_distances(arcs + cycle, y).get(x)
                 expected = np.inf if back is None else -back
             else:
                 before = nx.dag_longest_path_length(g.subgraph(nx.ancestors(g, x) | {x}), weight=weight)
@@ -390,7 +442,7 @@ def _cross_check(task, net, values, tol):
     return longest, None
 
 
-def _constraint_arcs(net, lb):
+def constraint_arcs(net, lb):
     """Every difference constraint as (u, v, w): p(v) - p(u) >= w [deg]."""
     arcs = [(x, y, float(lb[k])) for k, (x, y) in enumerate(net.arcs)]
     arcs += [(b, a, -w) for a, b, w in net.task.window_arcs()]
@@ -398,7 +450,7 @@ def _constraint_arcs(net, lb):
     return arcs
 
 
-def _longest(arcs, source, reverse=False):
+def longest_distances(arcs, source, reverse=False):
     """Longest distances from `source` over difference constraints (u, v, w) by Bellman-Ford on
     negated weights [deg]; `reverse` follows the arcs backwards (distances *to* source)."""
     g = nx.DiGraph()
@@ -473,12 +525,12 @@ def schedule_floats(task, net, lb, span, tol):
     first, last = names[net.first], names[net.last]
     try:
         if task.windows or task.syncs:
-            arcs = _constraint_arcs(net, lb)
-            early = _longest(arcs, first)
-            to_last, to_first = _longest(arcs, last, reverse=True), _longest(arcs, first, reverse=True)
+            arcs = constraint_arcs(net, lb)
+            early = longest_distances(arcs, first)
+            to_last, to_first = longest_distances(arcs, last, reverse=True), longest_distances(arcs, first, reverse=True)
             late = {v: min(span - to_last.get(v, -np.inf), -to_first.get(v, -np.inf)) for v in names}
         else:
-            e, l = _dag_times(len(names), net.tails, net.heads, lb, net.first, net.last, span)
+            e, l = dag_times(len(names), net.tails, net.heads, lb, net.first, net.last, span)
             early, late = dict(zip(names, e.tolist())), dict(zip(names, l.tolist()))
     except nx.NetworkXUnbounded:
         return {"floats": "not available: round-off made a zero cycle positive"}
@@ -490,7 +542,7 @@ def schedule_floats(task, net, lb, span, tol):
     return {"float_deg": floats, "critical_ops": critical, "critical_chain": chain}
 
 
-def _dag_times(n, tails, heads, lb, first, last, span):
+def dag_times(n, tails, heads, lb, first, last, span):
     """Earliest and latest event times of a DAG (arcs tails -> heads, durations lb) [deg], by
     Kahn's topological order on index arrays: no graph objects, linear in the arcs."""
     out_start = np.r_[0, np.cumsum(np.bincount(tails, minlength=n))]
@@ -521,3 +573,231 @@ def _dag_times(n, tails, heads, lb, first, last, span):
     return np.array(early), np.array(late)
 
 
+
+
+# ---------------------------------------------------------------- the graph method
+
+MAX_CONFLICTS = 4          # independent conflicting chains named in one INFEASIBLE result
+RANGING_MAX_OPS = 64       # ranging of the critical operations: one pass each, for chains up to this long
+RANGING_MAX_TABLE = 10_000  # a ranging table per operation for networks up to this many operations
+
+
+def back_arcs(net, with_cycle=True):
+    """Windows, syncs and (with_cycle) the machine cycle as BackArcs over event indices, with
+    their kinds ("window", "sync", "cycle"), in that order (windows in task order)."""
+    task, arcs, kinds = net.task, [], []
+    for (a, b), (_, _, w) in zip(net.window_idx, task.window_arcs()):
+        arcs.append((b, a, -w))
+        kinds.append("window")
+    for a, b in net.sync_idx:
+        arcs += [(a, b, 0.0), (b, a, 0.0)]
+        kinds += ["sync", "sync"]
+    if with_cycle and task.cycle_deg is not None:
+        arcs.append((net.last, net.first, -task.cycle_deg))
+        kinds.append("cycle")
+    return BackArcs.of(arcs), kinds
+
+
+def _plan_graph(task, *, stress_form, tol_deg) -> Result:
+    """Event times, floats, duals and ranging by longest paths (solvers/loom/graph.py)."""
+    start = time.perf_counter()
+    net = Net(task, stress_form)
+    levels = Levels.of(len(net.names), net.tails, net.heads)
+    back, kinds = back_arcs(net)
+    build_s = time.perf_counter() - start
+    diagnostics = {"method": "graph", "stress_form": stress_form, "events": len(net.names),
+                   "operations": len(net.tails), "isolated_events": task.isolated_events}
+    try:
+        solved = _longest_schedule(net, levels, back, tol_deg)
+    except PositiveCycle:
+        chains = conflict_chain(net, MAX_CONFLICTS)
+        timing = Timing(build_s, time.perf_counter() - start - build_s)
+        if len(chains) < 2:
+            return _infeasible(chains[0] if chains else [], timing, diagnostics)
+        first = _infeasible(chains[0], timing, diagnostics)
+        more = [_infeasible(chain, timing, {}) for chain in chains[1:]]
+        message = first.message + "".join(f"; and, independent of it, {r.message.removeprefix('infeasible: ')}"
+                                          for r in more)
+        return dataclasses.replace(first, message=message, violated=sum((r.violated for r in [first, *more]), ()),
+                                   diagnostics=first.diagnostics | {"conflicts": [r.diagnostics for r in more]})
+    if solved is None:
+        x, y = (net.names[i] for i in net.limiting)
+        return Result(Status.UNBOUNDED, {}, Timing(build_s, time.perf_counter() - start - build_s), diagnostics=diagnostics,
+                      message=f"unbounded: no chain of limits leads from {y} back to {x} (give cycle_deg), so "
+                              f"t({x}->{y}) can grow without end")
+    p, objective, uses, back_uses, lb_at = solved
+    values, overstressed = schedule_values(task, net, p)
+    sign = -1.0 if net.limiting else 1.0
+    sens, binding, sens_min = _graph_sensitivities(task, net, p, sign * uses, sign * back_uses, kinds, tol_deg)
+    values |= sens
+    values["longest_path_deg"] = objective if not net.limiting else \
+        float(levels.longest_from(net.first, net.lb, back_arcs(net, with_cycle=False)[0])[net.last])
+    floats = graph_floats(net, levels, back, lb_at, values["span_deg"], tol_deg)
+    diagnostics |= {"binding": binding, "sens_min_deg": sens_min} | limit_diagnostics(task, net) | floats
+    if not net.limiting and len(net.tails) <= RANGING_MAX_TABLE:
+        diagnostics["ranging_deg"] = _ranging(net, levels, back, uses, floats, objective)
+    name = "limiting_op_deg" if net.limiting else "span_deg"
+    message = f"{name} = {values[name]:.6g} (graph, {stress_form} stress); {SENSITIVITY_CONVENTION}"
+    if overstressed:
+        message += f"; the linearised stress limit lets sigma_max exceed [sigma_H] on {', '.join(overstressed)}"
+    return Result(Status.SOLVED, values, Timing(build_s, time.perf_counter() - start - build_s), message=message,
+                  violated=overstressed, diagnostics=diagnostics)
+
+
+def _longest_schedule(net, levels, back, tol):
+    """The optimum by longest paths: (earliest event times p, objective, per operation and per
+    back arc the times it lies on the objective's path, the bounds p meets); None: unbounded.
+
+    Span: the longest path first -> last. Machine: max t(x*, y*) = -(longest path y* -> x*)
+    through the cycle's arc (the shortest-path dual of the LP); p then holds t(x*, y*) at it."""
+    lb = net.lb
+    source, target = (net.limiting[1], net.limiting[0]) if net.limiting else (net.first, net.last)
+    dist = levels.longest_from(source, lb, back)
+    if not np.isfinite(dist[target]):
+        return None          # a machine's limiting operation with nothing to hold it: unbounded
+    objective = float(-dist[target] if net.limiting else dist[target])
+    lb_at = lb
+    if net.limiting:
+        lb_at = lb.copy()
+        lb_at[_limiting_arc(net)] = objective
+        p = levels.longest_from(net.first, lb_at, back)
+    else:
+        p = dist
+    m = len(net.tails)
+    tails, heads = np.r_[net.tails, back.tails], np.r_[net.heads, back.heads]
+    w = np.r_[lb, back.weights]
+    eps = tol * 1e-3 * max(1.0, abs(objective))
+    tight = tight_arcs(tails, heads, w, dist, eps)
+    path = np.asarray(a_path(len(net.names), tails[tight], heads[tight], source, target), dtype=np.int64)
+    counts = np.bincount(tight[path], minlength=m + len(back))
+    return p, objective, counts[:m].astype(float), counts[m:].astype(float), lb_at
+
+
+def _limiting_arc(net):
+    return next(k for k in range(len(net.tails)) if (net.tails[k], net.heads[k]) == net.limiting)
+
+
+def graph_floats(net, levels, back, lb, span, tol):
+    """Total float LS(y) - ES(x) - lb of every operation for bounds lb in a span [deg], as
+    `schedule_floats`: earliest times from first, latest from the longest paths to first with
+    p(last) - p(first) <= span as one more back arc."""
+    early = levels.longest_from(net.first, lb, back)
+    closed = BackArcs(np.r_[back.tails, net.last], np.r_[back.heads, net.first], np.r_[back.weights, -span])
+    try:
+        late = -levels.longest_to(net.first, lb, closed)
+    except PositiveCycle:
+        return {"floats": "not available: round-off made a zero cycle positive"}
+    floats = late[net.heads] - early[net.tails] - lb
+    critical = np.flatnonzero(floats <= tol)
+    path = a_path(len(net.names), net.tails[critical], net.heads[critical], net.first, net.last)
+    chain = [] if path is None else [net.names[net.first]] + [net.names[net.heads[critical[k]]] for k in path]
+    keys = [f"{x}->{y}" for x, y in net.arcs]
+    return {"float_deg": dict(zip(keys, floats.tolist())), "critical_ops": [keys[k] for k in critical],
+            "critical_chain": chain}
+
+
+def _graph_sensitivities(task, net, p, d_lb, d_back, kinds, tol):
+    """d(objective)/d(limit) from the path's arcs (d_lb: per operation d objective / d bound;
+    d_back: per back arc d objective / d weight), and the binding constraints, as the LP's."""
+    t = p[net.heads] - p[net.tails]
+    phi, why = task.min_angles_deg(), net.lb_why
+    sens, binding, sens_min = {}, [], {}
+    phi_set = np.array([w in ("min_angle", "min_time") for w in why], dtype=bool)
+    d_phi = np.where(phi_set, d_lb, 0.0) + 0.0
+    for k in np.flatnonzero((t - phi <= tol) | (d_phi != 0)).tolist():
+        x, y = net.arcs[k]
+        if t[k] - phi[k] <= tol:
+            binding.append({"constraint": f"min_angle[{x}->{y}]", "dual_deg_per_deg": float(d_phi[k])})
+        if d_phi[k]:
+            sens_min[f"{x}->{y}"] = float(d_phi[k])
+    if net.stress_rows:
+        sigma, total = task.sigma_H_limit_MPa, 0.0
+        for k in net.stress_rows:
+            sigma_ref, t_ref = task.stress_reference(k)
+            slope = -sigma_ref * t_ref / sigma**2 if net.stress_form == "exact" else -t_ref / sigma_ref
+            dual = float(d_lb[k] * slope) if why[k] == "contact_stress" else 0.0
+            total += dual
+            if t[k] - stress_bound_deg(sigma_ref, t_ref, sigma, net.stress_form) <= tol:
+                x, y = net.arcs[k]
+                binding.append({"constraint": f"contact_stress[{x}->{y}]", "dual_deg_per_MPa": dual + 0.0})
+        sens["sens_sigma_H_deg_per_MPa"] = float(total) + 0.0
+    if net.amp_rows:
+        total = 0.0
+        for k in net.amp_rows:
+            dual = float(d_lb[k] / task.amplitude_slope_mm_per_deg) if why[k] == "amplitude" else 0.0
+            total += dual
+            a = amplitude_mm(task.amplitude_slope_mm_per_deg, task.amplitude_intercept_mm, t[k])
+            if task.amplitude_limit_mm - a <= tol * abs(task.amplitude_slope_mm_per_deg):
+                x, y = net.arcs[k]
+                binding.append({"constraint": f"amplitude[{x}->{y}]", "dual_deg_per_mm": dual + 0.0})
+        sens["sens_amplitude_limit_deg_per_mm"] = float(total) + 0.0
+    windows = [j for j, kind in enumerate(kinds) if kind == "window"]
+    for j, (a, b, w) in zip(windows, task.window_arcs()):
+        dual = float(-d_back[j]) + 0.0           # the back arc's weight is -w
+        sens[f"sens_window_{a}_{b}_deg_per_deg"] = dual
+        if w - (p[net.index[b]] - p[net.index[a]]) <= tol:
+            binding.append({"constraint": f"window[{a}->{b}]", "dual_deg_per_deg": dual})
+    if "cycle" in kinds:
+        dual = float(-d_back[kinds.index("cycle")]) + 0.0
+        sens["sens_cycle_deg_per_deg"] = dual
+        if abs(dual) > tol:
+            binding.append({"constraint": "cycle", "dual_deg_per_deg": dual})
+    return sens, binding, sens_min
+
+
+def _ranging(net, levels, back, uses, floats, span):
+    """Per operation [how far its bound may fall, how far rise] [deg] with its dual (d span /
+    d bound) unchanged; None: without end. Off the path: rise by its float, fall without end.
+    On it: fall until the longest path without it is as long (one pass each, for paths up to
+    RANGING_MAX_OPS); rise without end in a DAG, else until the constraints close a positive
+    cycle (one pass from its head each)."""
+    if "float_deg" not in floats:
+        return {}
+    keys = list(floats["float_deg"])
+    out = {key: [None, max(0.0, fl)] for key, fl in floats["float_deg"].items()}
+    on_path = np.flatnonzero(uses)
+    if len(on_path) > RANGING_MAX_OPS:          # the path's own ranging left out: too many passes
+        return {key: r for (key, r), used in zip(out.items(), uses.tolist()) if not used}
+    for k in on_path:
+        lb = net.lb.copy()
+        lb[k] = -np.inf
+        try:
+            without = levels.longest_from(net.first, lb, back)[net.last]
+        except PositiveCycle:
+            without = np.inf
+        down = float(span - without) if np.isfinite(without) else None
+        up = None
+        if len(back):
+            back_dist = levels.longest_from(net.heads[k], net.lb, back)[net.tails[k]]
+            up = float(-back_dist - net.lb[k]) if np.isfinite(back_dist) else None
+        out[keys[k]] = [down, up]
+    return out
+
+
+def certify(result: Result, other: Result, tol_deg: float) -> Result:
+    """`result` checked against the other method's `other`: the same status, objective to
+    tol_deg (per degree above 1) and, where the critical chain is unique, the same sens_*.
+    A mismatch makes it INACCURATE, named in the message."""
+    name = "limiting_op_deg" if "limiting_op_deg" in result.values else "span_deg"
+    diagnostics = result.diagnostics | {"check": other.diagnostics.get("method", "?"), "check_status":
+                                        other.status.value}
+    problems = []
+    if other.status is not result.status:
+        problems.append(f"{other.diagnostics.get('method')} says {other.status.value}")
+    elif result.status is Status.SOLVED:
+        mine, theirs = result.values[name], other.values[name]
+        if not abs(mine - theirs) <= tol_deg * max(1.0, abs(theirs)):
+            problems.append(f"{name} {mine!r} against {theirs!r}")
+        chain = result.diagnostics.get("critical_chain", [])
+        if len(result.diagnostics.get("critical_ops", ())) == max(len(chain) - 1, 0) > 0:
+            for key in (k for k in result.values if k.startswith("sens_")):
+                if key in other.values and not abs(result.values[key] - other.values[key]) <= 1e-6 * max(
+                        1.0, abs(other.values[key])):
+                    problems.append(f"{key} {result.values[key]!r} against {other.values[key]!r}")
+        diagnostics["check_abs_deg"] = abs(mine - theirs)
+    if not problems:
+        return dataclasses.replace(result, diagnostics=diagnostics,
+                                   message=result.message + f"; checked by {diagnostics['check']}")
+    status = Status.INACCURATE if result.status is Status.SOLVED else result.status
+    return dataclasses.replace(result, status=status, diagnostics=diagnostics,
+                               message=result.message + "; check failed: " + ", ".join(problems))

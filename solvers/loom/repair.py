@@ -288,6 +288,7 @@ def cached_amplitude_bound(task: Cyclogram, speed_rpm: float, lo_deg: float, to_
     (the walk saw a <= limit on all of [phi, to_deg]), so arcs with different [phi] share it."""
     if speed_rpm is None:
         raise ModelError("speed_rpm: the exact rebound law needs the main shaft's speed", key="speed_rpm")
+    check_walk(to_deg, step_deg)
     key = (task.lever_model, task.amplitude_limit_mm, float(speed_rpm), float(to_deg),
            float(step_deg))
     walk, _ = _AMPLITUDE_BOUNDS.get(key, lambda: exact_amplitude_bound(task, speed_rpm, min(WALK_FLOOR_DEG, to_deg),
@@ -299,3 +300,17 @@ def cached_amplitude_bound(task: Cyclogram, speed_rpm: float, lo_deg: float, to_
 
 
 WALK_FLOOR_DEG = 1.0             # the walk's lowest t: below it no cam rise of a loom
+# the walk's work, estimated before it starts: each point is one rise of the chain (~30 ms on the
+# 2-core machine: the scenes' 236 points take ~7 s, 1436 points at scan_to_deg = 360 took 46 s)
+MAX_WALK_POINTS = 1000
+
+
+def check_walk(to_deg: float, step_deg: float) -> None:
+    """Refuse a walk of more than MAX_WALK_POINTS rebounds, naming the keys and the limit."""
+    points = math.ceil((to_deg - min(WALK_FLOOR_DEG, to_deg)) / step_deg)
+    if points > MAX_WALK_POINTS:
+        raise ModelError(f"scan_to_deg={to_deg:g}, scan_step_deg={step_deg:g}: the walk for the rebound's exact "
+                         f"bound would take {points} rebounds (about {points * 0.03:.0f} s), the limit is "
+                         f"{MAX_WALK_POINTS}: raise scan_step_deg to >= "
+                         f"{(to_deg - WALK_FLOOR_DEG) / MAX_WALK_POINTS:.3g} deg or lower scan_to_deg to <= "
+                         f"{WALK_FLOOR_DEG + MAX_WALK_POINTS * step_deg:.3g} deg", key="scan_step_deg")

@@ -12,11 +12,11 @@ from mechopt.models.errors import ModelError
 from mechopt.models.loom import MAX_RPM, Cyclogram
 from mechopt.solvers.loom.event_time import HeldLP, incidence
 from mechopt.solvers.loom.plan import (
-    _BUILDS,
-    _constraint_arcs,
-    _dag_times,
-    _longest,
-    _Net,
+    LP_BUILDS,
+    Net,
+    constraint_arcs,
+    dag_times,
+    longest_distances,
     positive_cycle,
     schedule_floats,
 )
@@ -126,7 +126,7 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "lp", "bisecti
     if task.cycle_deg is None:
         raise ModelError("cycle_deg: the machine's speed is limited by its cycle; give cycle_deg", key="cycle_deg")
     start = time.perf_counter()
-    net = _Net.structure(task)        # the speed LP has its own bounds
+    net = Net.structure(task)        # the speed LP has its own bounds
     phi = _angle_floors_deg(task)
     g, why, amp_bounds = speed_coeffs_deg_per_rpm(task, scan_to_deg, scan_step_deg)
     scales, probe = n_over_t_probe(task, scan_to_deg)
@@ -217,7 +217,7 @@ def _speed_lp(task, net, phi, g, backend):
         if "window_deg" in prm:
             prm["window_deg"].value = np.array([w for _, _, w in task.window_arcs()])
     start = time.perf_counter()
-    (problem, n, prm), _ = _BUILDS.get(key, build)
+    (problem, n, prm), _ = LP_BUILDS.get(key, build)
     set_values(prm)
     build_s = time.perf_counter() - start
     try:
@@ -306,7 +306,7 @@ class _Undecided(Exception):
 def _arcs_at(task, net, lb):
     """The difference constraints with the arcs' bounds `lb` and the cycle, for `positive_cycle`."""
     first, last = net.names[net.first], net.names[net.last]
-    arcs = [(u, v, w, f"t({u}->{v}) >= {w:.6g} deg") for u, v, w in _constraint_arcs(net, lb)]
+    arcs = [(u, v, w, f"t({u}->{v}) >= {w:.6g} deg") for u, v, w in constraint_arcs(net, lb)]
     return arcs + [(last, first, -task.cycle_deg, f"cycle p({last}) - p({first}) <= {task.cycle_deg:.6g} deg")]
 
 
@@ -330,10 +330,10 @@ def _speed_report(task, net, lb, why, n_max, tol):
     """Event times at max speed (earliest start), exact readings, and which constraints limit it."""
     first = net.names[net.first]
     if task.windows or task.syncs:
-        early = _longest(_constraint_arcs(net, lb), first)
+        early = longest_distances(constraint_arcs(net, lb), first)
         p = np.array([early.get(v, 0.0) for v in net.names])
     else:
-        p, _ = _dag_times(len(net.names), net.tails, net.heads, lb, net.first, net.last, task.cycle_deg)
+        p, _ = dag_times(len(net.names), net.tails, net.heads, lb, net.first, net.last, task.cycle_deg)
     t = p[net.heads] - p[net.tails]
     values = {"max_speed_rpm": n_max, "cycle_time_ms": 60_000.0 / n_max, "span_deg": float(p[net.last] - p[net.first])}
     if task.limiting_op is not None:

@@ -1,0 +1,171 @@
+"""The graph method of plan_cyclogram (issue 22) certified by the LP: 10^4 random networks with
+windows and syncs solved at once (block-diagonal), hard cases, and the two methods side by side."""
+import dataclasses
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+from scipy.optimize import linprog
+
+from mechopt import registry
+from mechopt.models.errors import ModelError
+from mechopt.models.loom import Cyclogram
+from mechopt.solvers.loom import plan_cyclogram, repair_cyclogram
+from mechopt.solvers.loom.graph import BackArcs, Levels, PositiveCycle
+from mechopt.solvers.loom.plan import certify, positive_cycle
+from mechopt.solvers.result import Status
+
+
+def random_blocks(count, size, seed):
+    """`count` random networks of `size` events each, feasible by construction: each event gets a
+    time p0 (integers, so some tie), an arc x -> y has a bound at most p0(y) - p0(x), a window at
+    least it, a sync joins two events of equal p0. Event 0 of a block is first (arcs to all),
+    the last is last. Returns (n, arcs, windows, syncs, firsts, lasts) as index arrays."""
+    rng = np.random.default_rng(seed)
+    p0 = np.sort(rng.integers(0, 3 * size, (count, size)), axis=1).astype(float)
+    p0[:, -1] += 1.0
+    base = np.arange(count)[:, None] * size
+    i, j = np.triu_indices(size, 1)
+    pick = rng.random((count, i.size)) < 3.0 / size
+    pick[:, (i == 0) | (j == size - 1)] = True                       # one first, one last
+    blk, arc = np.nonzero(pick)
+    tails, heads = base[blk, 0] + i[arc], base[blk, 0] + j[arc]
+    gap = (p0.ravel()[heads] - p0.ravel()[tails])
+    lb = gap * rng.random(gap.size)
+    wb = rng.integers(0, count * size, count)                         # one window per block
+    a, b = np.sort(rng.integers(1, size - 1, (2, count)), axis=0)
+    wa, wb = base[:, 0] + a, base[:, 0] + b
+    wmax = p0.ravel()[wb] - p0.ravel()[wa] + rng.random(count) * 2.0 * (rng.random(count) < 0.7)
+    ties = [(base[k, 0] + x, base[k, 0] + x + 1) for k in range(count) for x in range(1, size - 2)
+            if p0[k, x] == p0[k, x + 1] and rng.random() < 0.5]
+    return count * size, (tails, heads, lb), (wa, wb, wmax), np.array(ties).reshape(-1, 2), base[:, 0], \
+        base[:, 0] + size - 1
+
+
+def test_ten_thousand_random_networks_with_windows_and_syncs_agree_with_the_lp():
+    count, size = 10_000, 8
+    n, (tails, heads, lb), (wa, wb, wmax), syncs, firsts, lasts = random_blocks(count, size, seed=22)
+    # the graph: a root joined to every block's first event by a 0 arc, so one pass solves them all
+    root = n
+    levels = Levels(n + 1, np.r_[tails, np.full(count, root)], np.r_[heads, firsts])
+    back = BackArcs(np.r_[wb, syncs[:, 0], syncs[:, 1]], np.r_[wa, syncs[:, 1], syncs[:, 0]],
+                    np.r_[-wmax, np.zeros(2 * len(syncs))])
+    dist = levels.longest_from(root, np.r_[lb, np.zeros(count)], back)
+    graph_span = dist[lasts] - dist[firsts]
+    # the LP: minimise the sum of the spans, every block anchored; separable, so each block is optimal
+    D = lambda t, h: sp.csr_matrix((np.r_[np.ones(len(t)), -np.ones(len(t))],
+                                    (np.r_[np.arange(len(t)), np.arange(len(t))], np.r_[h, t])), shape=(len(t), n))
+    c = np.zeros(n)
+    c[lasts], c[firsts] = 1.0, -1.0
+    a_ub = sp.vstack([-D(tails, heads), D(wa, wb)])
+    a_eq = sp.vstack([D(syncs[:, 0], syncs[:, 1]), sp.csr_matrix((np.ones(count), (np.arange(count), firsts)),
+                                                                   shape=(count, n))])
+    res = linprog(c, A_ub=a_ub, b_ub=np.r_[-lb, wmax], A_eq=a_eq, b_eq=np.zeros(a_eq.shape[0]),
+                  bounds=(None, None), method="highs")
+    assert res.status == 0, res.message
+    lp_span = res.x[lasts] - res.x[firsts]
+    assert len(syncs) > 1000 and np.count_nonzero(np.isclose(dist[wb] - dist[wa], wmax)) > 100     # syncs, tight windows
+    np.testing.assert_allclose(graph_span, lp_span, rtol=1e-9, atol=1e-9)
+
+
+def test_positive_cycles_found_by_the_graph_are_those_of_bellman_ford():
+    rng = np.random.default_rng(7)
+    found = 0
+    for _ in range(300):
+        size = 6
+        n, (tails, heads, lb), (wa, wb, wmax), syncs, _, _ = random_blocks(1, size, seed=int(rng.integers(1 << 30)))
+        wmax = wmax - rng.random() * 6.0             # often too tight now
+        levels = Levels(n, tails, heads)
+        back = BackArcs(wb, wa, -wmax)
+        arcs = [(int(t), int(h), float(w), "") for t, h, w in zip(tails, heads, lb)] + \
+               [(int(wb[0]), int(wa[0]), float(-wmax[0]), "")]
+        try:
+            levels.longest_from(0, lb, back)
+            conflict = False
+        except PositiveCycle:
+            conflict = found = found + 1
+        assert bool(conflict) == bool(positive_cycle(arcs))
+    assert found > 30
+
+
+def net(edges, **kw):
+    names = dict.fromkeys(str(v) for e in edges for v in e[:2])
+    return Cyclogram(events={v: {} for v in names},
+                     operations=[{"from": str(x), "to": str(y), "min_deg": float(w)} for x, y, w in edges], **kw)
+
+
+@pytest.mark.parametrize("case", ["loom/group1", "loom/machine", "loom/group1-linear-stress",
+                                  "loom/group1-window-conflict"])
+def test_graph_and_lp_give_the_same_answer_on_every_loom_scene(case):
+    task = registry.find(case).build()[0]
+    r = plan_cyclogram(task, check=True)
+    assert "check failed" not in r.message and r.diagnostics["check"] == "lp"
+    lp = plan_cyclogram(task, method="lp")
+    assert r.status is lp.status
+    for key, value in lp.values.items():
+        if key.startswith(("sens_", "limiting")) or key == "span_deg":     # times off the chain are not unique
+            assert r.values[key] == pytest.approx(value, abs=1e-6), key
+
+
+def test_a_check_that_disagrees_is_inaccurate():
+    task = registry.find("loom/group1").build()[0]
+    graph, lp = plan_cyclogram(task), plan_cyclogram(task, method="lp")
+    wrong = dataclasses.replace(lp, values=lp.values | {"span_deg": 100.0})
+    r = certify(graph, wrong, 1e-6)
+    assert r.status is Status.INACCURATE and "span_deg 114.75 against 100.0" in r.message
+    assert certify(graph, lp, 1e-6).status is Status.SOLVED
+
+
+# ---------------------------------------------------------------- hard cases (issue 22)
+
+def test_zero_length_operations_and_a_sync_ring():
+    task = net([(1, 2, 0), (2, 3, 0), (1, 3, 0), (3, 4, 5)], syncs=[{"events": ["1", "2", "3"]}])
+    r = plan_cyclogram(task)
+    assert r.status is Status.SOLVED and r.values["span_deg"] == 5.0 and r.values["p_3_deg"] == 0.0
+
+
+def test_a_window_exactly_tight_is_attained_with_zero_float():
+    task = net([(1, 2, 10), (2, 3, 20), (1, 3, 5)], windows=[{"from": "1", "to": "3", "max_deg": 30.0}])
+    r = plan_cyclogram(task)
+    assert r.status is Status.SOLVED and r.values["span_deg"] == 30.0
+    assert r.diagnostics["float_deg"]["1->2"] == 0.0 and r.diagnostics["float_deg"]["2->3"] == 0.0
+    assert r.values["sens_window_1_3_deg_per_deg"] == 0.0         # tight but not binding the span
+
+
+def test_ranging_ends_where_the_critical_chain_changes():
+    # 1-2-4 (30) is critical, 1-3-4 (25) the next: (1,2) may fall 5 deg before the chain changes
+    task = net([(1, 2, 10), (2, 4, 20), (1, 3, 15), (3, 4, 10)])
+    r = plan_cyclogram(task)
+    assert r.diagnostics["ranging_deg"]["1->2"] == [5.0, None]
+    assert r.diagnostics["ranging_deg"]["1->3"] == [None, 5.0]
+    shorter = plan_cyclogram(dataclasses.replace(task, operations=[dict(task.operations[0], min_deg=5.0)]
+                                                 + task.operations[1:]))
+    assert shorter.values["span_deg"] == 25.0 and "1->3" in shorter.diagnostics["critical_ops"]
+
+
+def test_a_time_based_operation_as_the_speed_goes_to_zero():
+    for rpm in (1e-6, 1.0, 600.0):
+        task = net([(1, 2, 10), (2, 3, 20)], speed_rpm=rpm)
+        task = dataclasses.replace(task, operations=[dict(task.operations[0], min_ms=50.0), task.operations[1]])
+        r = plan_cyclogram(task)
+        assert r.values["span_deg"] == pytest.approx(max(10.0, 0.006 * rpm * 50.0) + 20.0, rel=1e-12)
+
+
+@pytest.mark.parametrize("setting", [{"scan_step_deg": 0.001}, {"scan_to_deg": 360.0}])
+def test_a_rebound_walk_too_long_is_refused_before_it_starts(setting):
+    # issue 21: scan_step_deg = 0.001 ran for minutes and scan_to_deg = 360 for 46 s
+    task = registry.find("loom/group1-repaired").build()[0]
+    with pytest.raises(ModelError, match=r"the limit is 1000: raise scan_step_deg") as err:
+        repair_cyclogram(task, **setting)
+    assert err.value.key == "scan_step_deg"
+
+
+def test_two_independent_conflicts_are_both_named():
+    task = net([(1, 2, 10), (2, 3, 20), (3, 4, 10), (4, 5, 30)],
+               windows=[{"from": "1", "to": "3", "max_deg": 25.0}, {"from": "3", "to": "5", "max_deg": 35.0}])
+    r = plan_cyclogram(task)
+    assert r.status is Status.INFEASIBLE and r.values == {}
+    assert "window p(3) - p(1) <= 25 deg" in r.message and "window p(5) - p(3) <= 35 deg" in r.message
+    assert "needs 5 deg more" in r.message and "independent of it" in r.message
+    assert r.diagnostics["conflict_excess_deg"] == pytest.approx(5.0)
+    assert r.diagnostics["conflicts"][0]["conflict_excess_deg"] == pytest.approx(5.0)
