@@ -48,7 +48,7 @@ from typing import Annotated, ClassVar
 
 import networkx as nx
 import numpy as np
-from annotated_types import Gt, Interval, Le, Lt
+from annotated_types import Gt, Le, Lt
 
 from mechopt.models.effects import Effect
 from mechopt.models.errors import MechoptError, ModelError
@@ -163,12 +163,13 @@ class Cyclogram:
     cycle_deg: Annotated[float | None, Gt(0), Le(MAX_DEG)] = None
     sigma_H_limit_MPa: Annotated[float | None, Gt(0), Le(MAX_MPA)] = None
     amplitude_slope_mm_per_deg: Annotated[float | None, Lt(0)] = None
-    amplitude_intercept_mm: Annotated[float | None, Interval()] = None      # any finite number
+    amplitude_intercept_mm: Annotated[float | None, Gt(0)] = None   # the amplitude at t = 0: > 0 (the law falls)
     amplitude_limit_mm: Annotated[float | None, Gt(0)] = None
     speed_rpm: Annotated[float | None, Gt(0), Le(MAX_RPM)] = None
     stress_speed_rpm: Annotated[float | None, Gt(0), Le(MAX_RPM)] = None
     lever: dict | None = None
-    lever_law_max_rpm: float | None = None   # the highest speed the lever's law was studied at (models/validity.py)
+    # the highest speed the lever's law was studied at (models/validity.py)
+    lever_law_max_rpm: Annotated[float | None, Gt(0), Le(MAX_RPM)] = None
 
     EFFECTS: ClassVar[dict[str, Effect]] = {
         "contact_stress": Effect(adds="sigma_max(t) <= [sigma_H] on operations naming a stress model",

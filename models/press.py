@@ -197,7 +197,8 @@ class PressDrive:
     motor_breakdown_slip: Annotated[float | None, Gt(0), Lt(1)] = None
     effects: tuple[str, ...] = field(default=())
     kinematics: str = "paper"
-    force_fit_max_mm: float | None = None    # the travel eq. (1) was fitted on, up to: past it a warning (models/validity.py)
+    # the travel eq. (1) was fitted on, up to: past it a warning (models/validity.py)
+    force_fit_max_mm: Annotated[float | None, Ge(0), Le(1000)] = None
 
     EFFECTS: ClassVar[dict[str, Effect]] = {
         "belt_elasticity": Effect(adds="elastic belt between pulley and crank shaft: twist and pulley speed states",
@@ -797,7 +798,7 @@ class PressCatalogue(PressDesign):
     one of least rated power (then least breakdown torque) with a feasible ratio."""
     motors: tuple = ()
     ratios: tuple = ()
-    max_speed_deviation: float = 0.05
+    max_speed_deviation: Annotated[float, Gt(0), Le(0.5)] = 0.05
 
     def __post_init__(self):
         object.__setattr__(self, "motors", tuple(tuple(row) for row in self.motors))

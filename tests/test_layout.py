@@ -95,3 +95,15 @@ def test_every_registered_benchmark_imports_and_has_its_entry_point(name):
 def test_every_benchmark_file_is_registered():
     files = {p.stem for p in (ROOT / "benchmarks").glob("*.py")} - {"__init__"}
     assert files == {m.rpartition(".")[2] for m in STUDIES.values()}
+
+
+def test_no_module_imports_another_modules_private_name():
+    """What two modules share is public: a private name (`_x`) stays in its module."""
+    bad = []
+    for folder in ("src", "models", "solvers", "benchmarks", "cases"):
+        for path in (ROOT / folder).rglob("*.py"):
+            for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+                if isinstance(node, ast.ImportFrom) and ((node.module or "").startswith("mechopt") or node.level):
+                    bad += [f"{path.relative_to(ROOT)}: {node.module}.{a.name}" for a in node.names
+                            if a.name.startswith("_") and not a.name.startswith("__")]
+    assert bad == []
