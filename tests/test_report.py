@@ -229,10 +229,11 @@ def test_a_results_warnings_are_shown_before_its_values():
     from types import SimpleNamespace
 
     from mechopt.answers import answers_html
-    from mechopt.solvers.result import Status
-    result = SimpleNamespace(status=Status.SOLVED, message="", warnings=("the optimum is on the bound flywheel_max",))
+    from mechopt.solvers.result import Result, Status, Timing
+    result = Result(Status.SOLVED, {"H_mm": 59.60184}, Timing(0.0, 0.0),
+                    warnings=("the optimum is on the bound flywheel_max",))
     run = SimpleNamespace(result=result, ok=True, value_rows=lambda: [("H_mm", 59.60184, "mm", "computed")])
     shown = answers_html(run)
     assert shown.index("warning: the optimum is on the bound flywheel_max") < shown.index("<td>H_mm</td>")
-    assert "warning" not in answers_html(SimpleNamespace(result=SimpleNamespace(status=Status.SOLVED, message=""),
-                                                         ok=True, value_rows=list))
+    quiet = SimpleNamespace(result=Result(Status.SOLVED, {}, Timing(0.0, 0.0)), ok=True, value_rows=list)
+    assert "warning" not in answers_html(quiet)

@@ -41,9 +41,9 @@ def test_the_taken_calibration_is_the_root_the_rule_picks(narrow):
     assert result.values["root_t_deg_1"] == pytest.approx(amplitude_law["t_deg"], rel=1e-6)
     assert result.values["root_stroke_mm_1"] == pytest.approx(amplitude_law["stroke_mm"], rel=1e-5)
     # the spread over one root is no spread: the damping's is
-    assert result.values["rebound_mm_370_roots_min"] == result.values["rebound_mm_370_roots_max"]
-    assert result.values["rebound_mm_370_damping_min"] < result.values["rebound_mm_370"] \
-        < result.values["rebound_mm_370_damping_max"]
+    assert result.values["rebound_roots_min_mm_370"] == result.values["rebound_roots_max_mm_370"]
+    assert result.values["rebound_damping_min_mm_370"] < result.values["rebound_mm_370"] \
+        < result.values["rebound_damping_max_mm_370"]
 
 
 def test_a_box_without_a_root_is_infeasible_not_an_answer_on_its_edge(narrow):

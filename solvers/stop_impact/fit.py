@@ -33,8 +33,8 @@ def fit_roots(task: LeverStop, *, t_min_deg: Annotated[float, Interval(gt=0, lt=
     """Every (stroke_mm, t_deg) in the box [stroke_min_mm, stroke_max_mm] x [t_min_deg, t_max_deg]
     at which the chain's tangent at `speed_nominal_rpm` is the law (`law_slope_mm_per_deg`,
     `law_intercept_mm`), and the rebounds (`rebound_mm_<rpm>`) and impact forces at `speeds_rpm`
-    under each: at the chosen root, their least and largest over the roots (`_roots_min`,
-    `_roots_max`) and, at the chosen root, over the damping ratios `damping_low` ...
+    under each: at the chosen root, their least and largest over the roots (`rebound_roots_min_mm_370`,
+    `..._roots_max_...`) and, at the chosen root, over the damping ratios `damping_low` ...
     `damping_high` (`_damping_min`, `_damping_max`).
 
     The rule that picks the root looks at the law only, never at a rebound: the root whose t is
@@ -77,9 +77,9 @@ def fit_roots(task: LeverStop, *, t_min_deg: Annotated[float, Interval(gt=0, lt=
     for name in table[0]:
         over_roots = [row[name] for row in table]
         over_damping = [table[chosen][name]] + [row[name] for row in swings]
-        values |= {name: table[chosen][name], f"{name}_roots_min": np.nanmin(over_roots),
-                   f"{name}_roots_max": np.nanmax(over_roots), f"{name}_damping_min": np.nanmin(over_damping),
-                   f"{name}_damping_max": np.nanmax(over_damping)}
+        values |= {name: table[chosen][name], _spread(name, "roots_min"): np.nanmin(over_roots),
+                   _spread(name, "roots_max"): np.nanmax(over_roots), _spread(name, "damping_min"): np.nanmin(over_damping),
+                   _spread(name, "damping_max"): np.nanmax(over_damping)}
     edge = [t for t, _ in roots if any(abs(t - g) <= t_step_deg for g in gaps)]
     status = Status.SOLVED if worst <= ROOT_AGREEMENT_REL else Status.INACCURATE
     message = (f"{len(roots)} roots in t [{t_min_deg:g}, {t_max_deg:g}] deg x stroke [{stroke_min_mm:g}, "
@@ -171,3 +171,9 @@ class _Fit:
 
 def _span(points):
     return f"[{min(points):g}, {max(points):g}] deg ({len(points)} grid points)" if points else "none"
+
+
+def _spread(name: str, which: str) -> str:
+    """`rebound_mm_370` -> `rebound_roots_min_mm_370`: the unit and the speed stay at the end of the name."""
+    quantity, unit, speed = name.rsplit("_", 2)
+    return f"{quantity}_{which}_{unit}_{speed}"
