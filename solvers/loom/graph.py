@@ -102,6 +102,15 @@ class Levels:
         dist[target] = 0.0
         return self._rounds(dist, w, back, self.backward, back.heads, back.tails)
 
+    def has_positive_cycle(self, w: np.ndarray, back: BackArcs = NO_BACK_ARCS) -> bool:
+        """Whether the constraints hold a positive cycle anywhere (every event starts at 0: a
+        virtual root, so cycles not reachable from the first event count too)."""
+        try:
+            self._rounds(np.zeros(self.n), w, back, self.forward, back.tails, back.heads)
+        except PositiveCycle:
+            return True
+        return False
+
     def _rounds(self, dist, w, back, dag_pass, frm, to):
         scale = np.abs(np.r_[w, back.weights])
         eps = ROUND_OFF * max(1.0, float(scale[np.isfinite(scale)].max(initial=0.0)))     # an arc may be -inf: cut
