@@ -379,9 +379,11 @@ def _speed_report(task, net, lb, why, n_max, tol, sg=None):
         values["limiting_op_deg"] = float(p[y] - p[x])
     values |= {f"p_{v}_deg": float(p[i]) for i, v in enumerate(net.names)}
     values |= {f"t_{x}_{y}_deg": float(t[k]) for k, (x, y) in enumerate(net.arcs)}
-    for k in task.amplitude_arcs():
+    amp_rows = task.amplitude_arcs()
+    amps = np.ravel(exact_amplitude_mm(task, t[amp_rows], n_max)) if amp_rows else []    # one vectorised call
+    for k, a in zip(amp_rows, amps):
         x, y = net.arcs[k]
-        values[f"amplitude_{x}_{y}_mm"] = float(np.ravel(exact_amplitude_mm(task, t[k], n_max))[0])
+        values[f"amplitude_{x}_{y}_mm"] = float(a)
     for k in task.stress_arcs():
         x, y = net.arcs[k]
         values[f"sigma_{x}_{y}_MPa"] = float(task.stress_at_MPa(k, t[k], n_max))
