@@ -8,6 +8,7 @@ from typing import Annotated, Literal
 import cvxpy as cp
 import numpy as np
 
+from mechopt.models.cache import BuildCache
 from mechopt.models.errors import ModelError
 from mechopt.models.loom import MAX_RPM, Cyclogram
 from mechopt.solvers.loom.event_time import HeldLP, incidence
@@ -44,6 +45,14 @@ def n_over_t_probe(task: Cyclogram, scan_to_deg: float) -> tuple[bool, float]:
     depends on lambda = omega t / Omega only, and the impact on v0 only; see models/loom.py.)"""
     if not task.amplitude_arcs():
         return True, 0.0
+    key = (task.lever_model, float(_reference_rpm(task)), float(scan_to_deg))    # a property of the law alone
+    return _PROBES.get(key, lambda: _probe(task, scan_to_deg))[0]
+
+
+_PROBES = BuildCache("loom.n_over_t_probe", maxsize=16)
+
+
+def _probe(task, scan_to_deg):
     n, worst = _reference_rpm(task), 0.0
     for t in (scan_to_deg, 0.75 * scan_to_deg):
         base = float(np.ravel(exact_amplitude_mm(task, t, n, lost=np.nan))[0])
