@@ -10,7 +10,7 @@ import pytest
 from mechopt import registry
 from mechopt.benchmarks.loom import machine
 from mechopt.models.loom import Cyclogram
-from mechopt.solvers.loom import max_machine_speed
+from mechopt.solvers.loom import max_machine_speed, plan_cyclogram
 from mechopt.solvers.result import Status
 
 CHAIN_FIXED_DEG = 20 + 10 + 15 + 5 + 20 + 15 + 25     # [phi] along loom/machine-speed's critical chain
@@ -150,3 +150,31 @@ def test_a_check_that_disagrees_is_inaccurate(task, monkeypatch):
     monkeypatch.setattr(speed, "_speed_lp", off)
     r = max_machine_speed(task, check=True)
     assert r.status is Status.INACCURATE and "check failed: the LP in (p, n) gives" in r.message
+
+
+def test_one_limit_changed_on_group1_the_graph_re_solves_and_certifies_the_held_lp():
+    """Issue 22, item 5: [sigma_H] moved; the held HiGHS model re-solved and certified by a fresh
+    graph pass, both against a fresh LP of the changed scene; a held answer off by 1e-6 deg is
+    INACCURATE, and a network that cannot be held agrees only with an infeasible LP."""
+    from mechopt.solvers.loom import HeldLP
+    from mechopt.solvers.loom.graph import HeldSpan
+    from mechopt.solvers.loom.plan import Net, back_arcs
+    task = registry.find("loom/group1").build()[0]
+    net = Net(task, "exact")
+    held = HeldLP(len(net.names), net.tails, net.heads, first=net.first, last=net.last,
+                  window_arcs=net.window_idx, sync_arcs=net.sync_idx)
+    graph = HeldSpan(len(net.names), net.tails, net.heads, net.first, net.last, back_arcs(net, with_cycle=False)[0])
+    windows = [w for _, _, w in task.window_arcs()]
+    spans = []
+    for sigma in (600.0, 700.0, 800.0, 1000.0):
+        changed = dataclasses.replace(task, sigma_H_limit_MPa=sigma)
+        lb = Net(changed, "exact").lb
+        status, p = held.solve(lb, windows)
+        assert status is Status.SOLVED
+        verdict, span = graph.certify(lb, p[net.last] - p[net.first])
+        assert verdict is Status.SOLVED
+        assert span == pytest.approx(plan_cyclogram(changed, method="lp").values["span_deg"], rel=1e-9)
+        spans.append(span)
+    assert spans[0] > spans[-1]                        # a lower [sigma_H] asks for longer cam angles
+    assert graph.certify(lb, span + 1e-6)[0] is Status.INACCURATE
+    assert graph.certify(lb, None)[0] is Status.INACCURATE
