@@ -41,11 +41,11 @@ from mechopt.models.loom import Cyclogram
 from mechopt.plots import save_figure
 from mechopt.solvers.loom import HeldLP, build_event_time_lp, incidence, max_machine_speed, plan_cyclogram
 from mechopt.solvers.loom import plan as cyclogram_lp
-from mechopt.solvers.loom.graph import NO_BACK_ARCS, BackArcs, Levels, a_path, tight_arcs
+from mechopt.solvers.loom.graph import NO_BACK_ARCS, BackArcs, HeldSpan, Levels, a_path, tight_arcs
 from mechopt.solvers.loom.speed import SpeedGraph, speed_coeffs_deg_per_rpm
 
 __all__ = ["TARGETS", "cli", "graph_targets", "layered", "machine", "machine_speed", "random_dag", "scale",
-           "speed_verdicts", "what_if"]
+           "sigma_what_if", "speed_verdicts", "what_if"]
 
 SIZES = (1_000, 10_000, 100_000)
 CLARABEL_MAX_EVENTS = 10_000      # at 10^5 one Clarabel solve took ~4 min on the 2-core machine
@@ -54,6 +54,7 @@ TARGETS = {"cvxpy_highs_1e5_s": 1.5, "cvxpy_over_networkx_1e5": 2.0,
            "group1_fresh_over_resolve": 5.0,     # LP only: build + compile + solve against a DPP re-solve
            "machine_speed_10x100_s": 1.0,        # max_machine_speed, fresh (LP built, compiled and solved)
            # issue 22 item 4: the graph's speed, walk held (chain) or no walk (fitted), its speed the LP's
+           "what_if_graph_s": 2e-4,               # issue 22 item 5: one limit moved on loom/group1, graph pass
            "machine_speed_graph_s": 0.05, "lp_over_graph_speed": 1.0, "graph_lp_speed_rel": 1e-9,
            # issue 22: the graph solve with floats, critical chain and duals; against cvxpy + HiGHS in the same run
            "graph_solve_1e5_s": 0.02, "cvxpy_over_graph": 50.0, "graph_solve_1e6_s": 0.3}
@@ -301,8 +302,9 @@ def what_if(repeats=5, progress=None, warm_max=WARM_MAX_EVENTS):
             raise RuntimeError(f"held HiGHS model: {status.value}")
     out.append({"case": "loom/group1 (held HiGHS model)", "fresh_s": out[-1]["fresh_s"],
                 "resolve_cold_s": _median_time(resolve_held, repeats), "resolve_warm_s": float("nan")})
+    out.append(sigma_what_if(task, out[1]["fresh_s"], repeats))
     if progress:
-        progress(f"what-if loom/group1: {out[-2:]}")
+        progress(f"what-if loom/group1: {out[-3:]}")
     for n in (1_000, 10_000):
         tails, heads, w = layered(n)
         scales = iter(np.linspace(0.9, 1.1, 1000))
@@ -326,6 +328,42 @@ def what_if(repeats=5, progress=None, warm_max=WARM_MAX_EVENTS):
         if progress:
             progress(f"what-if n={n}: {row}")
     return out
+
+
+def sigma_what_if(task, fresh_lp_s, repeats):
+    """Issue 22, item 5 on loom/group1: [sigma_H] moved, the stress rows' bounds recomputed as a
+    vector and the span re-solved by a fresh graph pass (`HeldSpan`), and the held HiGHS model
+    re-solved and certified by that pass; against the fresh LP build + solve (`fresh_lp_s`)."""
+    net = cyclogram_lp.Net(task, "exact")
+    rows = np.asarray(net.stress_rows, dtype=np.int64)
+    floor, k_ref = task.min_angles_deg()[rows], net.stress_ref[0] * net.stress_ref[1]
+    back = cyclogram_lp.back_arcs(net, with_cycle=False)[0]
+    graph = HeldSpan(len(net.names), net.tails, net.heads, net.first, net.last, back)
+    held = HeldLP(len(net.names), net.tails, net.heads, first=net.first, last=net.last,
+                  window_arcs=net.window_idx, sync_arcs=net.sync_idx)
+    windows = [w for _, _, w in task.window_arcs()]
+    sigmas = iter(np.linspace(600.0, 1000.0, 100_000))
+    lb = net.lb.copy()
+
+    def bounds(sigma):                    # only the stress rows move (t >= sigma_ref t_ref / [sigma_H])
+        lb[rows] = np.maximum(floor, k_ref / sigma)
+        return lb
+    check = cyclogram_lp.Net(dataclasses.replace(task, sigma_H_limit_MPa=700.0), "exact").lb
+    if not np.allclose(bounds(700.0), check, rtol=1e-15, atol=0.0):
+        raise RuntimeError("the what-if's bounds are not the model's")
+
+    def graph_pass():
+        return graph.span(bounds(next(sigmas)))
+
+    def certified_resolve():
+        new = bounds(next(sigmas))
+        status, p = held.solve(new, windows)
+        verdict, _ = graph.certify(new, None if p is None else float(p[net.last] - p[net.first]))
+        if verdict.value != "SOLVED":
+            raise RuntimeError(f"held HiGHS re-solve: {status.value}, certificate {verdict.value}")
+    runs = max(repeats, 200)              # microseconds: many runs for a stable median
+    return {"case": "loom/group1 [sigma_H] (graph pass | held + cert.)", "fresh_s": fresh_lp_s,
+            "resolve_cold_s": _median_time(graph_pass, runs), "resolve_warm_s": _median_time(certified_resolve, runs)}
 
 
 FITTED_LEVER = {"E_GPa": 210.0, "J_x_mm4": 13020.8, "a_mm": 80.0, "b_mm": 120.0, "a_stop_mm": 80.0,
@@ -444,12 +482,13 @@ def table(rows, whatif, speed=None):
         verdicts += [("cvxpy_highs_1e5_s", cv), ("cvxpy_over_networkx_1e5", cv / nxr)]
     # the lever: a held HiGHS model re-solved on changed bounds (row 3), against the cvxpy fresh build
     verdicts.append(("group1_fresh_over_resolve", whatif[2]["fresh_s"] / whatif[2]["resolve_cold_s"]))
+    verdicts.append(("what_if_graph_s", whatif[3]["resolve_cold_s"]))      # fresh LP / it: the row's last column
     lines += ["", f"{'target':<28}{'measured':>10}{'target':>10}  verdict"]
     for key, got in verdicts:
         want = TARGETS[key]
         ok = got >= want if key.endswith("resolve") else got <= want
         lines.append(f"{key:<28}{got:>10.3f}{('>= ' if key.endswith('resolve') else '<= ') + format(want, 'g'):>10}  "
-                     f"{'met' if ok else 'MISSED'}" + ("" if key.startswith("group1") else f" (n={big})"))
+                     f"{'met' if ok else 'MISSED'}" + ("" if key.startswith(("group1", "what_if")) else f" (n={big})"))
     if speed:
         for key, got, want, ok in speed_verdicts(speed):
             lines.append(f"{key:<28}{got:>10.3g}{('>= ' if key.startswith('lp_over') else '<= ') + format(want, 'g'):>10}  "
