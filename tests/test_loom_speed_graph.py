@@ -41,6 +41,8 @@ def test_the_scenes_speed_on_the_graph_is_the_lp_s(case, rpm):
 
 def test_check_runs_the_lp_and_says_so(graph):
     assert graph.status is Status.SOLVED and "checked by the LP in (p, n)" in graph.message
+    lp = max_machine_speed(registry.find("loom/machine-speed").build()[0], method="lp", check=True)
+    assert lp.status is Status.SOLVED and "checked by the graph" in lp.message
     assert graph.diagnostics["check"]["status"] == "SOLVED" and graph.diagnostics["check"]["rel"] <= 1e-9
 
 

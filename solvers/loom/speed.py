@@ -125,9 +125,10 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp",
     (the rebound's by `exact_amplitude_bound` at that n on [phi, scan_to_deg], not through r*)
     and the event-time LP's feasibility, its status checked. It is also the independent check of
     the LP. Method "auto" takes the graph when `n_over_t_probe` finds the rebound a function of n / t
-    (diagnostics: method, n_over_t_probe_rel), else bisection. check = true solves the LP in
-    (p, n) as well: a speed that differs by more than 1e-9 relative makes the answer INACCURATE. rtol (relative) on n: the answer
-    is certified by the longest-path certificate at n (1 - tol) (fits) and n (1 + tol) (does not);
+    (diagnostics: method, n_over_t_probe_rel), else bisection. check = true solves the other of
+    graph and LP as well (diagnostics check): a speed that differs by more than 1e-9 relative makes
+    the answer INACCURATE (bisection's own check is the certificate below). rtol (relative) on n:
+    the answer is certified by the longest-path certificate at n (1 - tol) (fits) and n (1 + tol) (does not);
     below 1e-9 the LP's own feasibility tolerance (1e-7 deg on a 360 deg cycle) decides.
 
     Returns max_speed_rpm, cycle_time_ms, span_deg, p_*, t_*, amplitude_*_mm and sigma_*_MPa
@@ -193,8 +194,8 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp",
     values, more = _speed_report(task, net, lb, why_at, n_max, rtol, sg)
     if sg:
         more["ranging_at_max_speed"] = sg.ranging(cycle, n_max, why)
-    if check and not certified:
-        certified = _check_by_lp(task, net, phi, g, backend, n_max, more)
+    if check and not certified and chosen in ("graph", "lp"):
+        certified = _check_by_other(chosen, task, net, phi, g, why, backend, n_max, more)
     held = amp_bounds if chosen in ("lp", "graph") else _exact_amplitude_bounds(task, phi, scan_to_deg, scan_step_deg, n_max)
     for k, b in amp_bounds.items():      # the range of t on which the rebound was shown to hold, at n_max
         x, y = task.arcs[k]
@@ -209,8 +210,8 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp",
         + f" (probe {probe:.2g})"
     message = (f"max_speed_rpm = {n_max:.6g} ({chosen}{': ' + reason if method == 'auto' else ''}); limiting "
                f"group {more['limiting_group']}, constraint {more['limiting_constraint']}")
-    if check:
-        message += f"; checked by the LP in (p, n) ({more['check']['rel']:.1g} relative)"
+    if "check" in more:
+        message += f"; checked by the {more['check']['method']} ({more['check']['rel']:.1g} relative)"
     return Result(Status.SOLVED, values, timing(), message=message, diagnostics=diagnostics)
 
 
@@ -263,15 +264,18 @@ def _speed_lp(task, net, phi, g, backend):
 CHECK_RTOL = 1e-9                # the graph's speed against the LP's (check = true)
 
 
-def _check_by_lp(task, net, phi, g, backend, n_max, more):
-    """'' when the LP in (p, n) gives the graph's speed to CHECK_RTOL, else why not (its figures in `more`)."""
-    n_lp, status, message, _, _ = _speed_lp(task, net, phi, g, backend)
-    more["check"] = {"method": "lp", "status": status.value, "max_speed_rpm": n_lp}
+def _check_by_other(chosen, task, net, phi, g, why, backend, n_max, more):
+    """'' when the other method (the LP in (p, n) for the graph, the graph for the LP) gives the
+    same speed to CHECK_RTOL, else why not (its figures in `more`)."""
+    other = "LP in (p, n)" if chosen == "graph" else "graph"
+    solve = _speed_lp(task, net, phi, g, backend) if chosen == "graph" else _speed_graph(task, net, phi, g, why)
+    n_other, status, message = solve[:3]
+    more["check"] = {"method": other, "status": status.value, "max_speed_rpm": n_other}
     if status is not Status.SOLVED:
-        return f"check failed: the LP in (p, n) says {status.value} ({message})"
-    more["check"]["rel"] = abs(n_lp - n_max) / n_max
+        return f"check failed: the {other} says {status.value} ({message})"
+    more["check"]["rel"] = abs(n_other - n_max) / n_max
     if more["check"]["rel"] > CHECK_RTOL:
-        return f"check failed: the LP in (p, n) gives {n_lp!r} rpm against the graph's {n_max!r}"
+        return f"check failed: the {other} gives {n_other!r} rpm against the {chosen}'s {n_max!r}"
     return ""
 
 
