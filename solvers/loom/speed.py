@@ -508,6 +508,9 @@ class SpeedGraph:
         if cycle is None:
             return None, [], 0
         while steps < NEWTON_MAX_STEPS:
+            if not cycle:
+                raise _Undecided(f"graph: a positive cycle at n = {n:.12g} rpm that Bellman-Ford cannot name "
+                                 f"(round-off at the answer)")
             root = self.root(cycle, n, g)
             steps += 1
             if not root < n:
