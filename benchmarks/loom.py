@@ -14,11 +14,12 @@ with the networkx floor (agreement to 1e-6 deg is required).
 
 The machine-speed study (`machine_speed`) times `max_machine_speed` on a machine of 10 groups of
 100 events (random layered networks run side by side inside one cycle, contact-stress laws on a
-tenth of their arcs, the lever's rebound on one arc each, a timed flight). With the scenes' chain
-lever (loom/machine-speed's): the (p, n) LP fresh (caches cleared: the chain's walk for its exact
-bound included) and re-solved (walk and compiled LP kept). With the earlier fitted lever (a
-proportional to n / t, closed form; tests/stop_impact_fitted.py): the LP against bisection on n,
-which must agree to 1e-6 (bisection on the chain walks the chain at every step: about 37 s). The what-if study re-solves after a
+tenth of their arcs, the lever's rebound on one arc each, a timed flight), the graph method
+(issue 22: Newton on the positive cycles) against the LP in (p, n) in the same run. With the
+scenes' chain lever (loom/machine-speed's): fresh (caches cleared: the chain's walk for its exact
+bound included, the same for both methods) and re-solved (walk, levels and compiled LP kept).
+With the earlier fitted lever (a proportional to n / t, closed form; tests/stop_impact_fitted.py):
+fresh, and bisection on n, which must agree with the LP to 1e-6 (bisection on the chain walks the chain at every step: about 37 s). The what-if study re-solves after a
 parameter change through the compiled problem (DPP) against a fresh build, with cvxpy's warm
 start off and on (with HiGHS it can make re-solves slower), and through `HeldLP`: the LP held
 in HiGHS with its basis, bounds changed in place (the lever for the group re-solve target: the
@@ -40,9 +41,11 @@ from mechopt.models.loom import Cyclogram
 from mechopt.plots import save_figure
 from mechopt.solvers.loom import HeldLP, build_event_time_lp, incidence, max_machine_speed, plan_cyclogram
 from mechopt.solvers.loom import plan as cyclogram_lp
-from mechopt.solvers.loom.graph import NO_BACK_ARCS, BackArcs, Levels, a_path, tight_arcs
+from mechopt.solvers.loom.graph import NO_BACK_ARCS, BackArcs, HeldSpan, Levels, a_path, tight_arcs
+from mechopt.solvers.loom.speed import SpeedGraph, speed_coeffs_deg_per_rpm
 
-__all__ = ["TARGETS", "cli", "graph_targets", "layered", "machine", "machine_speed", "random_dag", "scale", "what_if"]
+__all__ = ["TARGETS", "cli", "graph_targets", "layered", "machine", "machine_speed", "random_dag", "scale",
+           "sigma_what_if", "speed_verdicts", "what_if"]
 
 SIZES = (1_000, 10_000, 100_000)
 CLARABEL_MAX_EVENTS = 10_000      # at 10^5 one Clarabel solve took ~4 min on the 2-core machine
@@ -50,6 +53,9 @@ WARM_MAX_EVENTS = 10_000          # at 10^5 one warm-started HiGHS re-solve took
 TARGETS = {"cvxpy_highs_1e5_s": 1.5, "cvxpy_over_networkx_1e5": 2.0,
            "group1_fresh_over_resolve": 5.0,     # LP only: build + compile + solve against a DPP re-solve
            "machine_speed_10x100_s": 1.0,        # max_machine_speed, fresh (LP built, compiled and solved)
+           # issue 22 item 4: the graph's speed, walk held (chain) or no walk (fitted), its speed the LP's
+           "what_if_graph_s": 2e-4,               # issue 22 item 5: one limit moved on loom/group1, graph pass
+           "machine_speed_graph_s": 0.05, "lp_over_graph_speed": 1.0, "graph_lp_speed_rel": 1e-9,
            # issue 22: the graph solve with floats, critical chain and duals; against cvxpy + HiGHS in the same run
            "graph_solve_1e5_s": 0.02, "cvxpy_over_graph": 50.0, "graph_solve_1e6_s": 0.3}
 QUICK_SIZES = (1_000, 10_000)
@@ -296,8 +302,9 @@ def what_if(repeats=5, progress=None, warm_max=WARM_MAX_EVENTS):
             raise RuntimeError(f"held HiGHS model: {status.value}")
     out.append({"case": "loom/group1 (held HiGHS model)", "fresh_s": out[-1]["fresh_s"],
                 "resolve_cold_s": _median_time(resolve_held, repeats), "resolve_warm_s": float("nan")})
+    out.append(sigma_what_if(task, out[1]["fresh_s"], repeats))
     if progress:
-        progress(f"what-if loom/group1: {out[-2:]}")
+        progress(f"what-if loom/group1: {out[-3:]}")
     for n in (1_000, 10_000):
         tails, heads, w = layered(n)
         scales = iter(np.linspace(0.9, 1.1, 1000))
@@ -321,6 +328,42 @@ def what_if(repeats=5, progress=None, warm_max=WARM_MAX_EVENTS):
         if progress:
             progress(f"what-if n={n}: {row}")
     return out
+
+
+def sigma_what_if(task, fresh_lp_s, repeats):
+    """Issue 22, item 5 on loom/group1: [sigma_H] moved, the stress rows' bounds recomputed as a
+    vector and the span re-solved by a fresh graph pass (`HeldSpan`), and the held HiGHS model
+    re-solved and certified by that pass; against the fresh LP build + solve (`fresh_lp_s`)."""
+    net = cyclogram_lp.Net(task, "exact")
+    rows = np.asarray(net.stress_rows, dtype=np.int64)
+    floor, k_ref = task.min_angles_deg()[rows], net.stress_ref[0] * net.stress_ref[1]
+    back = cyclogram_lp.back_arcs(net, with_cycle=False)[0]
+    graph = HeldSpan(len(net.names), net.tails, net.heads, net.first, net.last, back)
+    held = HeldLP(len(net.names), net.tails, net.heads, first=net.first, last=net.last,
+                  window_arcs=net.window_idx, sync_arcs=net.sync_idx)
+    windows = [w for _, _, w in task.window_arcs()]
+    sigmas = iter(np.linspace(600.0, 1000.0, 100_000))
+    lb = net.lb.copy()
+
+    def bounds(sigma):                    # only the stress rows move (t >= sigma_ref t_ref / [sigma_H])
+        lb[rows] = np.maximum(floor, k_ref / sigma)
+        return lb
+    check = cyclogram_lp.Net(dataclasses.replace(task, sigma_H_limit_MPa=700.0), "exact").lb
+    if not np.allclose(bounds(700.0), check, rtol=1e-15, atol=0.0):
+        raise RuntimeError("the what-if's bounds are not the model's")
+
+    def graph_pass():
+        return graph.span(bounds(next(sigmas)))
+
+    def certified_resolve():
+        new = bounds(next(sigmas))
+        status, p = held.solve(new, windows)
+        verdict, _ = graph.certify(new, None if p is None else float(p[net.last] - p[net.first]))
+        if verdict.value != "SOLVED":
+            raise RuntimeError(f"held HiGHS re-solve: {status.value}, certificate {verdict.value}")
+    runs = max(repeats, 200)              # microseconds: many runs for a stable median
+    return {"case": "loom/group1 [sigma_H] (graph pass | held + cert.)", "fresh_s": fresh_lp_s,
+            "resolve_cold_s": _median_time(graph_pass, runs), "resolve_warm_s": _median_time(certified_resolve, runs)}
 
 
 FITTED_LEVER = {"E_GPa": 210.0, "J_x_mm4": 13020.8, "a_mm": 80.0, "b_mm": 120.0, "a_stop_mm": 80.0,
@@ -358,32 +401,65 @@ def machine(groups=10, per_group=100, seed=0, lever=None):
                      amplitude_limit_mm=0.1, speed_rpm=420.0, lever=lever)
 
 
+SPEED_CASES = (("graph, chain, fresh", "chain", "graph", True), ("LP (p, n), chain, fresh", "chain", "lp", True),
+               ("graph, chain, re-solve", "chain", "graph", False), ("LP (p, n), chain, re-solve", "chain", "lp", False),
+               ("graph, fitted, fresh", "fitted", "graph", True), ("LP (p, n), fitted, fresh", "fitted", "lp", True),
+               ("bisection on n, fitted", "fitted", "bisection", True))
+
+
 def machine_speed(repeats=3, progress=None):
-    """Median seconds of `max_machine_speed` on `machine()`: with the chain lever the LP fresh
-    (caches cleared) and re-solved (structure and walk kept); with the fitted lever the LP and
-    bisection, whose speeds must agree to 1e-6."""
-    chain, fitted = machine(), machine(lever=FITTED_LEVER)
+    """Median seconds of `max_machine_speed` on `machine()`, the graph against the LP in (p, n)
+    in the same run: with the chain lever fresh (caches cleared: the chain's walk for its exact
+    bound, the same for both, dominates) and re-solved (walk, levels and compiled LP kept); with
+    the fitted lever (closed form, no walk) fresh, and bisection on n once. Speeds: graph against
+    LP to 1e-9, LP against bisection to 1e-6."""
+    tasks = {"chain": machine(), "fitted": machine(lever=FITTED_LEVER)}
     rows = []
-    for label, task, method, fresh in (("LP (p, n), chain, fresh", chain, "lp", True),
-                                       ("LP (p, n), chain, re-solve", chain, "lp", False),
-                                       ("LP (p, n), fitted, fresh", fitted, "lp", True),
-                                       ("bisection on n, fitted", fitted, "bisection", True)):
-        def call(task=task, method=method, fresh=fresh):
+    for label, lever, method, fresh in SPEED_CASES:
+        task = tasks[lever]
+
+        def call(task=task, method=method, fresh=fresh, lever=lever):
             if fresh:
                 clear_caches()
-            return max_machine_speed(task, method=method, scan_step_deg=0.25 if task is chain else 2.0)
-        if method == "lp":
+            return max_machine_speed(task, method=method, scan_step_deg=0.25 if lever == "chain" else 2.0)
+        if method != "bisection":
             call()                        # imports and the structure's first compilation
         start = time.perf_counter()
         result = call()
         first_s = time.perf_counter() - start
-        seconds = statistics.median([first_s] + [_time(call) for _ in range(repeats - 1)]) if method == "lp" else first_s
+        seconds = (statistics.median([first_s] + [_time(call) for _ in range(repeats - 1)])
+                   if method != "bisection" else first_s)
         rows.append({"case": label, "seconds": seconds, "speed_rpm": result.values["max_speed_rpm"],
-                     "status": result.status.value})
+                     "status": result.status.value, "steps": result.diagnostics.get("newton_steps")})
         if progress:
             progress(f"machine speed {label}: {rows[-1]}")
-    return {"events": len(chain.graph), "arcs": len(chain.arcs), "rows": rows,
-            "limiting": max_machine_speed(chain).diagnostics["limiting_constraint"]}
+    chain = max_machine_speed(tasks["chain"])
+    task = tasks["chain"]                 # the parametric solve alone: Newton's passes, no report
+    g, _, _ = speed_coeffs_deg_per_rpm(task)
+    phi = np.fromiter((d for *_, d in task.graph.edges(data="min_deg")), dtype=float, count=len(task.arcs))
+    solver = SpeedGraph(task, cyclogram_lp.Net.structure(task), phi, g)
+    seconds = statistics.median(_time(solver.highest_speed) for _ in range(max(repeats, 5)))
+    n_core = solver.highest_speed()[0]
+    rows.append({"case": "graph solve alone, chain", "seconds": seconds, "speed_rpm": n_core, "status": "SOLVED",
+                 "steps": solver.highest_speed()[2]})
+    return {"events": len(tasks["chain"].graph), "arcs": len(tasks["chain"].arcs), "rows": rows,
+            "limiting": chain.diagnostics["limiting_constraint"],
+            "limiting_cycle_ops": len(chain.diagnostics["limiting_cycle"]) - 1}
+
+
+def speed_verdicts(speed):
+    """(target, measured, want, met) rows of the machine-speed study; ratios in the same run."""
+    by = {r["case"]: r for r in speed["rows"]}
+    graph_s = max(by["graph, chain, re-solve"]["seconds"], by["graph, fitted, fresh"]["seconds"])
+    agree = max(abs(by[f"graph, {c}"]["speed_rpm"] / by[f"LP (p, n), {c}"]["speed_rpm"] - 1)
+                for c in ("chain, fresh", "chain, re-solve", "fitted, fresh"))
+    ratio = min(by["LP (p, n), chain, re-solve"]["seconds"] / by["graph, chain, re-solve"]["seconds"],
+                by["LP (p, n), fitted, fresh"]["seconds"] / by["graph, fitted, fresh"]["seconds"])
+    lp_fresh = by["LP (p, n), chain, fresh"]["seconds"]
+    return [("machine_speed_10x100_s", lp_fresh, TARGETS["machine_speed_10x100_s"], lp_fresh <= TARGETS["machine_speed_10x100_s"]),
+            ("machine_speed_graph_s", graph_s, TARGETS["machine_speed_graph_s"], graph_s <= TARGETS["machine_speed_graph_s"]),
+            ("lp_over_graph_speed", ratio, TARGETS["lp_over_graph_speed"], ratio >= TARGETS["lp_over_graph_speed"]),
+            ("graph_lp_speed_rel", agree, TARGETS["graph_lp_speed_rel"], agree <= TARGETS["graph_lp_speed_rel"])]
 
 
 def table(rows, whatif, speed=None):
@@ -406,25 +482,28 @@ def table(rows, whatif, speed=None):
         verdicts += [("cvxpy_highs_1e5_s", cv), ("cvxpy_over_networkx_1e5", cv / nxr)]
     # the lever: a held HiGHS model re-solved on changed bounds (row 3), against the cvxpy fresh build
     verdicts.append(("group1_fresh_over_resolve", whatif[2]["fresh_s"] / whatif[2]["resolve_cold_s"]))
+    verdicts.append(("what_if_graph_s", whatif[3]["resolve_cold_s"]))      # fresh LP / it: the row's last column
     lines += ["", f"{'target':<28}{'measured':>10}{'target':>10}  verdict"]
     for key, got in verdicts:
         want = TARGETS[key]
         ok = got >= want if key.endswith("resolve") else got <= want
         lines.append(f"{key:<28}{got:>10.3f}{('>= ' if key.endswith('resolve') else '<= ') + format(want, 'g'):>10}  "
-                     f"{'met' if ok else 'MISSED'}" + ("" if key.startswith("group1") else f" (n={big})"))
+                     f"{'met' if ok else 'MISSED'}" + ("" if key.startswith(("group1", "what_if")) else f" (n={big})"))
     if speed:
-        fresh = speed["rows"][0]["seconds"]
-        lines.append(f"{'machine_speed_10x100_s':<28}{fresh:>10.3f}{'<= ' + format(TARGETS['machine_speed_10x100_s'], 'g'):>10}  "
-                     f"{'met' if fresh <= TARGETS['machine_speed_10x100_s'] else 'MISSED'}")
+        for key, got, want, ok in speed_verdicts(speed):
+            lines.append(f"{key:<28}{got:>10.3g}{('>= ' if key.startswith('lp_over') else '<= ') + format(want, 'g'):>10}  "
+                         f"{'met' if ok else 'MISSED'}")
     worst = max(r["span_error_deg"] for r in rows)
     lines.append(f"largest span disagreement with networkx: {worst:.2e} deg ({'ok' if worst <= 1e-6 else 'OVER 1e-6'})")
     if speed:
-        lines += ["", f"machine speed, {speed['events']} events, {speed['arcs']} arcs (limiting: {speed['limiting']})",
-                  f"{'method':<28}{'median s':>10}{'speed rpm':>16}  status"]
-        lines += [f"{r['case']:<28}{r['seconds']:>10.4f}{r['speed_rpm']:>16.9g}  {r['status']}" for r in speed["rows"]]
+        lines += ["", f"machine speed, {speed['events']} events, {speed['arcs']} arcs (limiting: {speed['limiting']}; "
+                  f"limiting cycle of {speed['limiting_cycle_ops']} operations)",
+                  f"{'method':<28}{'median s':>10}{'speed rpm':>20}  status"]
+        lines += [f"{r['case']:<28}{r['seconds']:>10.4f}{r['speed_rpm']:>20.13g}  {r['status']}"
+                  + (f" ({r['steps']} Newton steps)" if r["steps"] else "") for r in speed["rows"]]
         fitted = [r["speed_rpm"] for r in speed["rows"] if "fitted" in r["case"]]
         spread = max(fitted) / min(fitted) - 1
-        lines.append(f"LP against bisection (fitted lever): {spread:.1e} relative "
+        lines.append(f"graph, LP and bisection (fitted lever): {spread:.1e} relative "
                      f"({'ok' if spread <= 1e-6 else 'OVER 1e-6'})")
     return "\n".join(lines)
 

@@ -1,5 +1,5 @@
-"""The whole machine at its highest speed (issue 14, part 5): the LP in (p, n) against bisection on
-n with LP feasibility, against the closed form along the critical chain, and the hard cases.
+"""The whole machine at its highest speed (issue 14, part 5): the graph (the default; its own tests in
+test_loom_speed_graph.py) and the LP in (p, n) against bisection on n with LP feasibility, against the closed form along the critical chain, and the hard cases.
 
 The scene's lever is the chain (cam -> approach velocity -> impact -> eq. (2)): a(t, n) = h(n / t),
 wavy. Independent references: the chain's crossing T of 0.1 mm at 420 rpm by brentq in [38.6,
@@ -86,8 +86,8 @@ def exact_bounds(task, n_rpm, T_deg):
     return lb
 
 
-def test_auto_takes_the_lp_because_the_chain_is_a_function_of_n_over_t(task, lp):
-    assert lp.status is Status.SOLVED and lp.diagnostics["method"] == "lp"
+def test_auto_takes_the_graph_because_the_chain_is_a_function_of_n_over_t(task, lp):
+    assert lp.status is Status.SOLVED and lp.diagnostics["method"] == "graph"
     assert lp.diagnostics["n_over_t_probe_rel"] <= 1e-9 and "every law a function of n / t" in lp.message
     lever = lever_stop(task.lever)                       # an independent point: (45 deg, 500 rpm) against half
     assert float(rebound_amplitude_mm(lever, 250.0, 22.5)) == pytest.approx(
@@ -145,7 +145,8 @@ def test_the_roller_leaving_its_cam_bounds_the_angle_and_says_so(task):
 
 def test_on_the_fitted_n_over_t_lever_lp_and_bisection_agree_with_the_closed_form(task):
     fitted = dataclasses.replace(task, lever=FITTED_LEVER)
-    lp, bis = max_machine_speed(fitted), max_machine_speed(fitted, method="bisection", rtol=1e-8, scan_step_deg=2.0)
+    lp, bis = max_machine_speed(fitted, method="lp"), max_machine_speed(fitted, method="bisection", rtol=1e-8,
+                                                                        scan_step_deg=2.0)
     assert lp.diagnostics["method"] == "lp" and bis.status is Status.SOLVED
     root = brentq(lambda t: float(rebound_amplitude_mm(lever_stop(FITTED_LEVER), 420.0, t)) - 0.1, 1.0, 300.0,
                   xtol=1e-13)
@@ -179,7 +180,7 @@ def test_a_law_not_of_n_over_t_is_solved_by_bisection_and_the_lp_would_be_wrong(
 
 def test_a_machine_whose_groups_cannot_fit_any_speed_is_infeasible_naming_the_chain(task):
     small = dataclasses.replace(task, cycle_deg=100.0)
-    for method in ("lp", "bisection"):
+    for method in ("graph", "lp", "bisection"):
         r = max_machine_speed(small, method=method)
         assert r.status is Status.INFEASIBLE and r.values == {}
         assert r.message.startswith("no speed fits: conflicting chain")
@@ -190,7 +191,7 @@ def test_a_machine_whose_groups_cannot_fit_any_speed_is_infeasible_naming_the_ch
 def test_a_cycle_only_a_machine_at_rest_fits_is_infeasible():
     ops = [{"from": "a", "to": "b", "min_deg": 10.0}, {"from": "b", "to": "c", "min_deg": 0.0, "min_ms": 10.0}]
     task = Cyclogram(events={"a": {}, "b": {}, "c": {}}, operations=ops, speed_rpm=100.0, cycle_deg=10.0)
-    for method in ("lp", "bisection"):
+    for method in ("graph", "lp", "bisection"):
         r = max_machine_speed(task, method=method)
         assert r.status is Status.INFEASIBLE and r.message.startswith("no speed fits: conflicting chain t(a->b)")
 
@@ -199,6 +200,7 @@ def test_no_limit_growing_with_speed_is_unbounded_or_a_search_limit(task):
     ops = [{k: v for k, v in op.items() if k not in ("stress", "amplitude", "min_ms")} for op in task.operations]
     free = dataclasses.replace(task, operations=ops)
     assert max_machine_speed(free, method="lp").status is Status.UNBOUNDED
+    assert max_machine_speed(free, method="graph").status is Status.UNBOUNDED
     r = max_machine_speed(free, method="bisection")
     assert r.status is Status.LIMIT and "search bound" in r.message and r.values == {}
 

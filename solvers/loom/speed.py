@@ -8,14 +8,18 @@ from typing import Annotated, Literal
 import cvxpy as cp
 import numpy as np
 
+from mechopt.models.cache import BuildCache
 from mechopt.models.errors import ModelError
 from mechopt.models.loom import MAX_RPM, Cyclogram
 from mechopt.solvers.loom.event_time import HeldLP, incidence
+from mechopt.solvers.loom.graph import Levels, a_path, tight_arcs
 from mechopt.solvers.loom.plan import (
     LP_BUILDS,
     Net,
+    back_arcs,
     constraint_arcs,
     dag_times,
+    graph_floats,
     longest_distances,
     positive_cycle,
     schedule_floats,
@@ -41,6 +45,14 @@ def n_over_t_probe(task: Cyclogram, scan_to_deg: float) -> tuple[bool, float]:
     depends on lambda = omega t / Omega only, and the impact on v0 only; see models/loom.py.)"""
     if not task.amplitude_arcs():
         return True, 0.0
+    key = (task.lever_model, float(_reference_rpm(task)), float(scan_to_deg))    # a property of the law alone
+    return _PROBES.get(key, lambda: _probe(task, scan_to_deg))[0]
+
+
+_PROBES = BuildCache("loom.n_over_t_probe", maxsize=16)
+
+
+def _probe(task, scan_to_deg):
     n, worst = _reference_rpm(task), 0.0
     for t in (scan_to_deg, 0.75 * scan_to_deg):
         base = float(np.ravel(exact_amplitude_mm(task, t, n, lost=np.nan))[0])
@@ -82,11 +94,12 @@ def speed_coeffs_deg_per_rpm(task: Cyclogram, scan_to_deg: float = 60.0, scan_st
     return g, why, bounds
 
 
-def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "lp", "bisection"] = "auto",
+def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp", "bisection"] = "auto",
                       backend: Literal["HIGHS", "CLARABEL"] = "HIGHS",
                       rtol: Annotated[float, Interval(ge=1e-9, le=1e-2)] = 1e-7,
                       scan_to_deg: Annotated[float, Interval(gt=0.0, le=360.0)] = 60.0,
-                      scan_step_deg: Annotated[float, Interval(ge=1e-3, le=10.0)] = 0.25) -> Result:
+                      scan_step_deg: Annotated[float, Interval(ge=1e-3, le=10.0)] = 0.25,
+                      check: bool = False) -> Result:
     """The largest main-shaft speed n at which every group fits the machine's cycle (issue 14,
     part 5), with the event times there.
 
@@ -101,16 +114,21 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "lp", "bisecti
         t(x, y) >= g(x, y) n,      g = 1 / r*  [deg/rpm]  (0.006 T; sigma_ref t_ref / ([sigma_H] n_ref); 1 / r*_a)
 
     homogeneous and linear in (p, n): maximise n s.t. D p >= [phi], D p >= g n, windows, syncs,
-    p(first) = 0, p(last) - p(first) <= cycle is an LP (method "lp"). (In times rather than
+    p(first) = 0, p(last) - p(first) <= cycle is an LP (method "lp"), and on the graph a
+    parametric longest-path problem (method "graph", `SpeedGraph`: Newton on the positive cycles,
+    each step one numpy pass; the limiting cycle of operations named, diagnostics limiting_cycle,
+    and per speed limit on it the speed without it, ranging_at_max_speed). (In times rather than
     angles, tau = t / (6 n), the same bounds read tau >= [phi] / 6 (1/n) and tau >= g / 6 and the
     cycle 60 (1/n): an LP in (tau, 1/n), minimising 1/n.) A law that is not a function of n / t
     alone (a dwell over which a vibration must decay, a time with an angle) breaks this; then
     method "bisection" is the general route: bisection on n, each step the exact bounds at that n
     (the rebound's by `exact_amplitude_bound` at that n on [phi, scan_to_deg], not through r*)
     and the event-time LP's feasibility, its status checked. It is also the independent check of
-    the LP. Method "auto" takes the LP when `n_over_t_probe` finds the rebound a function of n / t
-    (diagnostics: method, n_over_t_probe_rel), else bisection. rtol (relative) on n: the answer
-    is certified by the longest-path certificate at n (1 - tol) (fits) and n (1 + tol) (does not);
+    the LP. Method "auto" takes the graph when `n_over_t_probe` finds the rebound a function of n / t
+    (diagnostics: method, n_over_t_probe_rel), else bisection. check = true solves the other of
+    graph and LP as well (diagnostics check): a speed that differs by more than 1e-9 relative makes
+    the answer INACCURATE (bisection's own check is the certificate below). rtol (relative) on n:
+    the answer is certified by the longest-path certificate at n (1 - tol) (fits) and n (1 + tol) (does not);
     below 1e-9 the LP's own feasibility tolerance (1e-7 deg on a 360 deg cycle) decides.
 
     Returns max_speed_rpm, cycle_time_ms, span_deg, p_*, t_*, amplitude_*_mm and sigma_*_MPa
@@ -130,7 +148,7 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "lp", "bisecti
     phi = _angle_floors_deg(task)
     g, why, amp_bounds = speed_coeffs_deg_per_rpm(task, scan_to_deg, scan_step_deg)
     scales, probe = n_over_t_probe(task, scan_to_deg)
-    chosen = ("lp" if scales else "bisection") if method == "auto" else method
+    chosen = ("graph" if scales else "bisection") if method == "auto" else method
     def timing():
         return Timing(0.0, time.perf_counter() - start)
     diagnostics = {"method": chosen, "method_asked": method, "n_over_t_probe_rel": probe, "backend": backend,
@@ -140,12 +158,18 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "lp", "bisecti
     if unreached:
         return Result(Status.LIMIT, {}, timing(), message=f"the rebound's bound is not on the stated range: "
                       f"{unreached[0].statement()} (raise scan_to_deg)", diagnostics=diagnostics)
-    if chosen == "lp":
+    if chosen == "graph":
+        n_max, status, message, build_s, extra = _speed_graph(task, net, phi, g, why)
+        bounds_at = functools.partial(_lp_bounds_at, phi, g, why)
+    elif chosen == "lp":
         n_max, status, message, build_s, extra = _speed_lp(task, net, phi, g, backend)
         bounds_at = functools.partial(_lp_bounds_at, phi, g, why)
     else:
         bounds_at = functools.partial(_exact_bounds_at, task, phi, scan_to_deg, scan_step_deg)
         n_max, status, message, build_s, extra = _speed_bisection(task, net, bounds_at, rtol)
+    sg = extra.pop("graph", None)
+    cycle = extra.pop("limiting_cycle_arcs", None)
+
     def timing():
         return Timing(build_s, time.perf_counter() - start - build_s)
     diagnostics |= {"speed_coeffs_deg_per_rpm":
@@ -166,13 +190,17 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "lp", "bisecti
     if status is not Status.SOLVED:
         return Result(status, {}, timing(), message=message, diagnostics=diagnostics)
     lb, why_at = bounds_at(n_max)
-    certified = _certify_speed(task, net, bounds_at, n_max, rtol)
-    values, more = _speed_report(task, net, lb, why_at, n_max, rtol)
-    held = amp_bounds if chosen == "lp" else _exact_amplitude_bounds(task, phi, scan_to_deg, scan_step_deg, n_max)
+    certified = _certify_on_graph(sg, n_max, rtol) if sg else _certify_speed(task, net, bounds_at, n_max, rtol)
+    values, more = _speed_report(task, net, lb, why_at, n_max, rtol, sg)
+    if sg:
+        more["ranging_at_max_speed"] = sg.ranging(cycle, n_max, why)
+    if check and not certified and chosen in ("graph", "lp"):
+        certified = _check_by_other(chosen, task, net, phi, g, why, backend, n_max, more)
+    held = amp_bounds if chosen in ("lp", "graph") else _exact_amplitude_bounds(task, phi, scan_to_deg, scan_step_deg, n_max)
     for k, b in amp_bounds.items():      # the range of t on which the rebound was shown to hold, at n_max
         x, y = task.arcs[k]
         at = held[k]
-        scale = n_max / b.speed_rpm if chosen == "lp" else 1.0
+        scale = n_max / b.speed_rpm if chosen in ("lp", "graph") else 1.0
         values[f"amplitude_holds_from_{x}_{y}_deg"] = at.from_deg * scale
         values[f"amplitude_holds_to_{x}_{y}_deg"] = at.to_deg * scale
     diagnostics |= more
@@ -182,6 +210,8 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "lp", "bisecti
         + f" (probe {probe:.2g})"
     message = (f"max_speed_rpm = {n_max:.6g} ({chosen}{': ' + reason if method == 'auto' else ''}); limiting "
                f"group {more['limiting_group']}, constraint {more['limiting_constraint']}")
+    if "check" in more:
+        message += f"; checked by the {more['check']['method']} ({more['check']['rel']:.1g} relative)"
     return Result(Status.SOLVED, values, timing(), message=message, diagnostics=diagnostics)
 
 
@@ -229,6 +259,24 @@ def _speed_lp(task, net, phi, g, backend):
     if status is Status.SOLVED:
         return float(n.value), status, "", build_s, extra
     return None, status, f"{backend}: {problem.status}", build_s, extra
+
+
+CHECK_RTOL = 1e-9                # the graph's speed against the LP's (check = true)
+
+
+def _check_by_other(chosen, task, net, phi, g, why, backend, n_max, more):
+    """'' when the other method (the LP in (p, n) for the graph, the graph for the LP) gives the
+    same speed to CHECK_RTOL, else why not (its figures in `more`)."""
+    other = "LP in (p, n)" if chosen == "graph" else "graph"
+    solve = _speed_lp(task, net, phi, g, backend) if chosen == "graph" else _speed_graph(task, net, phi, g, why)
+    n_other, status, message = solve[:3]
+    more["check"] = {"method": other, "status": status.value, "max_speed_rpm": n_other}
+    if status is not Status.SOLVED:
+        return f"check failed: the {other} says {status.value} ({message})"
+    more["check"]["rel"] = abs(n_other - n_max) / n_max
+    if more["check"]["rel"] > CHECK_RTOL:
+        return f"check failed: the {other} gives {n_other!r} rpm against the {chosen}'s {n_max!r}"
+    return ""
 
 
 def _lp_bounds_at(phi, g, why, n_rpm):
@@ -326,10 +374,13 @@ def _certify_speed(task, net, bounds_at, n_max, tol):
     return ""
 
 
-def _speed_report(task, net, lb, why, n_max, tol):
-    """Event times at max speed (earliest start), exact readings, and which constraints limit it."""
+def _speed_report(task, net, lb, why, n_max, tol, sg=None):
+    """Event times at max speed (earliest start), exact readings, and which constraints limit it
+    (with `sg`, a SpeedGraph: times and floats by its numpy passes)."""
     first = net.names[net.first]
-    if task.windows or task.syncs:
+    if sg is not None:
+        p = sg.levels.longest_from(net.first, lb, sg.back)
+    elif task.windows or task.syncs:
         early = longest_distances(constraint_arcs(net, lb), first)
         p = np.array([early.get(v, 0.0) for v in net.names])
     else:
@@ -341,14 +392,19 @@ def _speed_report(task, net, lb, why, n_max, tol):
         values["limiting_op_deg"] = float(p[y] - p[x])
     values |= {f"p_{v}_deg": float(p[i]) for i, v in enumerate(net.names)}
     values |= {f"t_{x}_{y}_deg": float(t[k]) for k, (x, y) in enumerate(net.arcs)}
-    for k in task.amplitude_arcs():
+    amp_rows = task.amplitude_arcs()
+    amps = np.ravel(exact_amplitude_mm(task, t[amp_rows], n_max)) if amp_rows else []    # one vectorised call
+    for k, a in zip(amp_rows, amps):
         x, y = net.arcs[k]
-        values[f"amplitude_{x}_{y}_mm"] = float(np.ravel(exact_amplitude_mm(task, t[k], n_max))[0])
+        values[f"amplitude_{x}_{y}_mm"] = float(a)
     for k in task.stress_arcs():
         x, y = net.arcs[k]
         values[f"sigma_{x}_{y}_MPa"] = float(task.stress_at_MPa(k, t[k], n_max))
     group = dict(task.graph.nodes(data="group"))
-    schedule = schedule_floats(task, net, lb, task.cycle_deg, tol * max(1.0, task.cycle_deg))
+    if sg is not None:
+        schedule = graph_floats(net, sg.levels, sg.back, lb, task.cycle_deg, tol * max(1.0, task.cycle_deg))
+    else:
+        schedule = schedule_floats(task, net, lb, task.cycle_deg, tol * max(1.0, task.cycle_deg))
     floats, critical, chain = (schedule.get(k, []) for k in ("float_deg", "critical_ops", "critical_chain"))
     limiting = []
     for k, (x, y) in enumerate(net.arcs):
@@ -364,3 +420,173 @@ def _speed_report(task, net, lb, why, n_max, tol):
             "limiting_constraint": max(limiting, key=lambda r: r["deg_per_rpm"])["constraint"] if limiting else "-",
             "sens_cycle_rpm_per_deg": 1.0 / slope if slope > 0 else math.inf}
     return values, more
+
+
+# ---------------------------------------------------------------- the graph method (issue 22, item 4)
+
+GRAPH_TOL = 1e-10            # relative to the cycle [deg/deg]: a chain closing the cycle within it fits
+UNBOUNDED_RPM = 1e12         # the parametric search starts here; a machine that still fits has no speed limit
+NEWTON_MAX_STEPS = 200
+RANGING_MAX_LIMITS = 8       # limits on the limiting cycle re-solved without them (one solve each)
+
+
+class SpeedGraph:
+    """The speed problem on the graph: arc k needs t >= max(phi_k, g_k n) (a + b n, piecewise),
+    windows and syncs are back arcs, the cycle closes first -> last. Speed n fits when no cycle of
+    these constraints has a positive sum.
+
+    Why Newton on cycles (Dinkelbach's iteration for the parametric problem) and not Howard's
+    policy iteration or bisection: each cycle's sum W_C(n) is convex, piecewise linear and
+    non-decreasing in n, and the highest speed is the least root over the cycles. From a speed
+    that does not fit, the positive cycle the longest-path pass finds has a root below it; at
+    that root the cycle closes exactly. The next pass either finds the speed fits (the root is
+    the answer, exact: no tolerance in n, unlike bisection's ~40 passes) or a cycle with a lower
+    root. Each step is one numpy longest-path pass (graph.Levels) on the structure's levels;
+    in practice 2-4 steps. Howard's algorithm needs a strongly connected policy graph and a
+    ratio form (the max(phi, g n) arcs are not a ratio); it was not worth writing for 2-4 passes."""
+
+    def __init__(self, task, net, phi, g):
+        self.task, self.net, self.phi, self.g, self.cycle = task, net, phi, g, float(task.cycle_deg)
+        self.levels = Levels.of(len(net.names), net.tails, net.heads)
+        self.back, self.kinds = back_arcs(net, with_cycle=False)
+        self.tol = GRAPH_TOL * max(1.0, self.cycle)
+        self.passes = 0
+
+    def bounds(self, n_rpm: float, g=None) -> np.ndarray:
+        return np.maximum(self.phi, (self.g if g is None else g) * n_rpm)
+
+    def positive_cycle_at(self, n_rpm: float, g=None):
+        """None when speed n fits; else a positive cycle as [(kind, index)] in order around it,
+        kind "op" (operation k), "back" (window or sync arc j) or "cycle"."""
+        lb, net, back = self.bounds(n_rpm, g), self.net, self.back
+        self.passes += 1
+        if len(back) and self.levels.has_positive_cycle(lb, back):
+            return self._windows_cycle(lb)
+        dist = self.levels.longest_from(net.first, lb, back)
+        if not np.isfinite(dist[net.last]) or dist[net.last] - self.cycle <= self.tol:
+            return None
+        m = len(lb)
+        tails, heads = np.r_[net.tails, back.tails], np.r_[net.heads, back.heads]
+        tight = tight_arcs(tails, heads, np.r_[lb, back.weights], dist, 1e-2 * self.tol)
+        path = a_path(len(net.names), tails[tight], heads[tight], net.first, net.last)
+        arcs = tight[np.asarray(path, dtype=np.int64)]
+        return [("op", int(k)) if k < m else ("back", int(k - m)) for k in arcs] + [("cycle", 0)]
+
+    def _windows_cycle(self, lb):
+        """A positive cycle without the machine cycle (windows, syncs): plan.positive_cycle's own
+        Bellman-Ford, which returns the cycle (the numpy pass only proves one exists)."""
+        names, net, back = self.net.names, self.net, self.back
+        arcs = [(x, y, float(lb[k]), ("op", k)) for k, (x, y) in enumerate(net.arcs)]
+        arcs += [(names[u], names[v], float(w), ("back", j))
+                 for j, (u, v, w) in enumerate(zip(back.tails.tolist(), back.heads.tolist(), back.weights.tolist()))]
+        return [label for *_, label in positive_cycle(arcs)]
+
+    def root(self, cycle, n_rpm: float, g=None) -> float:
+        """The speed at which `cycle` (positive at n) closes exactly: sum max(phi, g n) + the back
+        arcs' weights = 0, found piece by piece going down from n (convex: each piece's line
+        meets 0 at or above the root; the piece that holds its own root is exact)."""
+        g = self.g if g is None else g
+        ops = np.array([k for kind, k in cycle if kind == "op"], dtype=np.int64)
+        c = math.fsum(self.back.weights[k] for kind, k in cycle if kind == "back") \
+            - (self.cycle if ("cycle", 0) in cycle else 0.0)
+        phi, g = self.phi[ops], g[ops]
+        for _ in range(len(ops) + 2):
+            active = g * n_rpm > phi
+            slope = math.fsum(g[active])
+            if slope <= 0:
+                return 0.0                  # positive at rest: the n = 0 test says so first
+            new = -(c + math.fsum(phi[~active])) / slope
+            if new >= n_rpm or np.array_equal(g * new > phi, active):
+                return min(new, n_rpm)
+            n_rpm = new
+        return n_rpm
+
+    def highest_speed(self, g=None):
+        """(n*, the limiting cycle, Newton steps); n* None: no limit grows with n (UNBOUNDED)."""
+        n, steps = UNBOUNDED_RPM, 0
+        cycle = self.positive_cycle_at(n, g)
+        if cycle is None:
+            return None, [], 0
+        while steps < NEWTON_MAX_STEPS:
+            if not cycle:
+                raise _Undecided(f"graph: a positive cycle at n = {n:.12g} rpm that Bellman-Ford cannot name "
+                                 f"(round-off at the answer)")
+            root = self.root(cycle, n, g)
+            steps += 1
+            if not root < n:
+                raise _Undecided(f"graph: the cycle found at n = {n:.12g} rpm does not close below it "
+                                 f"(round-off at the answer)")
+            following = self.positive_cycle_at(root, g)
+            n = root
+            if following is None:
+                return n, cycle, steps
+            cycle = following
+        raise _Undecided(f"graph: no answer after {NEWTON_MAX_STEPS} steps")
+
+    def describe(self, cycle, n_rpm: float, why) -> list[str]:
+        """The cycle in the designer's words: each operation with the law that sets it at n."""
+        net, names, group = self.net, self.net.names, dict(self.task.graph.nodes(data="group"))
+        out = []
+        for kind, k in cycle:
+            if kind == "op":
+                x, y = net.arcs[k]
+                speed_set = self.g[k] * n_rpm > self.phi[k]
+                law = why[k] if speed_set else "min_angle"
+                out.append(f"{law}[{x}->{y}] t >= {max(self.phi[k], self.g[k] * n_rpm):.6g} deg "
+                           f"({group[x] or group[y] or '-'}"
+                           + (f", {self.g[k]:.6g} deg/rpm)" if speed_set else ")"))
+            elif kind == "back":
+                u, v, w = names[self.back.tails[k]], names[self.back.heads[k]], self.back.weights[k]
+                out.append(f"sync p({u}) = p({v})" if self.kinds[k] == "sync"
+                           else f"window p({u}) - p({v}) <= {-w:.6g} deg")
+            else:
+                out.append(f"cycle p({names[net.last]}) - p({names[net.first]}) <= {self.cycle:.6g} deg")
+        return out
+
+    def ranging(self, cycle, n_rpm: float, why) -> list[dict]:
+        """Which limit to relax for the next rpm: per speed-set operation on the limiting cycle,
+        d n / d g (rpm per deg/rpm of its slope), and the speed with that limit gone (the next
+        cycle's root, one Newton solve) and the limit that then binds: the range over which
+        relaxing it pays."""
+        ops = [k for kind, k in cycle if kind == "op" and self.g[k] * n_rpm > self.phi[k]]
+        slope = math.fsum(self.g[k] for k in ops)
+        rows = []
+        for k in ops[:RANGING_MAX_LIMITS]:
+            x, y = self.net.arcs[k]
+            g = self.g.copy()
+            g[k] = 0.0
+            n_next, nxt, _ = self.highest_speed(g)
+            limits = [f"{why[j]}[{self.net.arcs[j][0]}->{self.net.arcs[j][1]}]" for kind, j in nxt
+                      if kind == "op" and g[j] * n_next > self.phi[j]] if n_next is not None else []
+            rows.append({"constraint": f"{why[k]}[{x}->{y}]", "deg_per_rpm": float(self.g[k]),
+                         "rpm_per_deg_per_rpm": -n_rpm / slope if slope > 0 else -math.inf,
+                         "rpm_without_it": n_next if n_next is not None else math.inf,
+                         "then_limited_by": limits or ["cycle" if n_next is not None else "nothing: unbounded"]})
+        return rows
+
+
+def _speed_graph(task, net, phi, g, why):
+    """maximise n on the graph (SpeedGraph): INFEASIBLE when n = 0 does not fit."""
+    start = time.perf_counter()
+    sg = SpeedGraph(task, net, phi, g)
+    build_s = time.perf_counter() - start
+    if sg.positive_cycle_at(0.0) is not None:
+        return None, Status.INFEASIBLE, "", build_s, {"graph": sg}
+    try:
+        n_max, cycle, steps = sg.highest_speed()
+    except _Undecided as exc:
+        return None, Status.FAILED, str(exc), build_s, {"graph": sg}
+    if n_max is None:
+        return None, Status.UNBOUNDED, f"graph: n = {UNBOUNDED_RPM:g} rpm still fits", build_s, {"graph": sg}
+    extra = {"graph": sg, "newton_steps": steps, "limiting_cycle": sg.describe(cycle, n_max, why),
+             "limiting_cycle_arcs": cycle}
+    return n_max, Status.SOLVED, "", build_s, extra
+
+
+def _certify_on_graph(sg, n_max, tol):
+    """'' when the graph says n_max (1 - tol) fits and n_max (1 + tol) does not; else why not."""
+    if sg.positive_cycle_at(n_max * (1 - tol)) is not None:
+        return f"certificate failed: n = {n_max * (1 - tol):.9g} rpm (just under the answer) does not fit the cycle"
+    if sg.positive_cycle_at(n_max * (1 + tol)) is None:
+        return f"certificate failed: n = {n_max * (1 + tol):.9g} rpm (just over the answer) still fits the cycle"
+    return ""
