@@ -65,7 +65,12 @@ MAX_MS = 1e6
 AMPLITUDE_LAWS = ("linear",)
 _NOTE_KEYS = {"mark", "why", "where", "what"}         # provenance and description, not physics
 _EVENT_KEYS = {"mechanism", "group"} | _NOTE_KEYS
-_OP_KEYS = {"from", "to", "min_deg", "min_ms", "stress", "amplitude", "name"} | _NOTE_KEYS
+_OP_KEYS = {"from", "to", "min_deg", "min_ms", "max_deg", "stress", "amplitude", "name", "group",
+            "mechanism"} | _NOTE_KEYS
+# an operations table read from a designer's CSV (scene: `operations = { csv = "ops.csv", columns =
+# [...] }`): its columns and their kinds; event names are text ("3", "10.1", "feed.start")
+OPERATION_COLUMNS = {"from": str, "to": str, "name": str, "group": str, "mechanism": str, "min_deg": float,
+                     "min_ms": float, "max_deg": float, "stress": str, "amplitude": str, "mark": str, "why": str}
 _STRESS_KEYS = {"sigma_ref_MPa", "t_ref_deg"} | _NOTE_KEYS
 _WINDOW_KEYS = {"from", "to", "max_deg"} | _NOTE_KEYS
 _SYNC_KEYS = {"events"} | _NOTE_KEYS
@@ -154,8 +159,8 @@ class Cyclogram:
     `lever` (structure): the lift lever's table (see `lever_stop`), the exact law a(t, n) behind
     the linear one; a task may give it instead of the linear law's slope and intercept.
     """
-    events: dict
     operations: list
+    events: dict = field(default_factory=dict)
     stress_models: dict = field(default_factory=dict)
     windows: list = field(default_factory=list)
     syncs: list = field(default_factory=list)
@@ -180,8 +185,19 @@ class Cyclogram:
                                          "amplitude_limit_mm")),
     }
 
+    # structure tables a scene may read from a CSV file as rows of named, typed columns
+    CSV_TABLES: ClassVar[dict] = {"operations": (("from", "to"), OPERATION_COLUMNS)}
+
     def __post_init__(self):
         _check_numbers(self)
+        _table(self.operations, "operations", list)
+        _table(self.events, "events", dict)
+        if not self.events:             # events named by the operations need no table of their own
+            object.__setattr__(self, "events", _events_of(self.operations))
+        if any(isinstance(op, dict) and "max_deg" in op for op in self.operations):
+            operations, windows = _split_windows(self.operations)
+            object.__setattr__(self, "operations", operations)
+            object.__setattr__(self, "windows", list(self.windows) + windows)
         if self.lever is not None:
             _ = self.lever_model    # builds and validates the lever (cached)
         self.graph          # builds and validates the network (cached)
@@ -212,7 +228,7 @@ class Cyclogram:
         _table(self.operations, "operations", list)
         for k, op in enumerate(self.operations):
             key = f"operations[{k}]"
-            _entry(op, key, _OP_KEYS, required=("from", "to", "min_deg"))
+            _entry(op, key, _OP_KEYS, required=("from", "to") if "min_ms" in op else ("from", "to", "min_deg"))
             x, y = str(op["from"]), str(op["to"])
             key = f"operations[{x}->{y}]"
             for end in (x, y):
@@ -221,7 +237,7 @@ class Cyclogram:
                 raise ModelError(f"{key}: an operation must join two different events", key=key)
             if g.has_edge(x, y):
                 raise ModelError(f"{key}: given twice; one operation per pair of events", key=key)
-            phi = _number(op["min_deg"], f"{key}.min_deg")
+            phi = _number(op.get("min_deg", 0.0), f"{key}.min_deg")   # a timed operation: its time alone
             if phi < 0:
                 raise ModelError(f"{key}.min_deg={phi}: a minimum phase angle must be >= 0", key=f"{key}.min_deg")
             if phi > MAX_DEG:
@@ -453,6 +469,37 @@ class Cyclogram:
             if bound > lb[k]:
                 lb[k], why[k] = bound, "amplitude"
         return lb, why
+
+
+def _events_of(operations) -> dict:
+    """{event: {mechanism, group}} from the operations naming them, in order of first mention: an
+    event takes the group and mechanism of the first operation ending at it (the motion that
+    brings it about), else of the first starting at it (the network's first event)."""
+    events, starts = {}, {}
+    for op in operations:
+        if not isinstance(op, dict) or "from" not in op or "to" not in op:
+            continue                    # reported by the network's checks
+        about = {k: str(op[k]) for k in ("group", "mechanism") if k in op}
+        starts.setdefault(str(op["from"]), about)
+        events.setdefault(str(op["from"]), None)
+        if events.get(str(op["to"])) is None:
+            events[str(op["to"])] = about
+    return {name: about if about is not None else starts[name] for name, about in events.items()}
+
+
+def _split_windows(operations) -> tuple[list, list]:
+    """(operations, windows): an operation's `max_deg` (its window, p(to) - p(from) <= max_deg)
+    taken out as a window of its own, so the solvers see one kind of window."""
+    ops, windows = [], []
+    for op in operations:
+        if isinstance(op, dict) and "max_deg" in op:
+            op = dict(op)
+            window = {"from": op.get("from"), "to": op.get("to"), "max_deg": op.pop("max_deg")}
+            if op.get("mark", "given") != "given":
+                window |= {"mark": op["mark"], "why": op.get("why", "")}
+            windows.append(window)
+        ops.append(op)
+    return ops, windows
 
 
 def _check_numbers(task):

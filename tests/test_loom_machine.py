@@ -1,0 +1,80 @@
+"""A user's own machine from a CSV timing table (issue 22, build item 3): operations read from a
+CSV beside the scene, events named by the operations, per-operation windows and times, and the
+reader's errors naming file, line and column."""
+import shutil
+from pathlib import Path
+
+import pytest
+
+from mechopt import registry
+from mechopt.models.errors import ModelError, SceneError
+from mechopt.models.loom import Cyclogram
+from mechopt.scene import load
+from mechopt.solvers.loom import plan_cyclogram
+from mechopt.solvers.result import Status
+
+CASES = Path(registry.cases_dir()) / "loom"
+
+
+def _scene(tmp_path, csv_text, columns='["from", "to", "min_deg"]', extra="[params]"):
+    (tmp_path / "ops.csv").write_text(csv_text, encoding="utf-8")
+    path = tmp_path / "m.toml"
+    path.write_text(f'id = "t/m"\ntitle = "t"\nsource = "test"\ntask = "loom.Cyclogram"\n'
+                    f'solver = "loom.plan_cyclogram"\n{extra}\n[structure]\n'
+                    f'operations = {{ csv = "ops.csv", columns = {columns} }}\n', encoding="utf-8")
+    return path
+
+
+def test_group1_from_its_csv_is_group1():
+    csv_run, toml_run = (registry.run(registry.find(i)) for i in ("loom/group1-csv", "loom/group1"))
+    assert csv_run.result.values["span_deg"] == pytest.approx(toml_run.result.values["span_deg"], abs=1e-12)
+    task = csv_run.task
+    assert task.events["7"] == {"group": "group1", "mechanism": "microshuttle lift"}
+    assert set(task.arcs) == set(toml_run.task.arcs)
+
+
+def test_text_event_names_semicolons_decimal_commas_and_an_operation_window(tmp_path):
+    path = _scene(tmp_path, "from;to;min_deg;max_deg;group\n"
+                            "feed.start;10.1;12,5;;feed\n10.1;10.2;30;40;feed\n10.2;seal.end;5;;seal\n")
+    task = load(path).build()[0]
+    assert task.arcs == [("feed.start", "10.1"), ("10.1", "10.2"), ("10.2", "seal.end")]
+    assert task.windows == [{"from": "10.1", "to": "10.2", "max_deg": 40.0}]
+    assert task.events["seal.end"]["group"] == "seal"
+    r = plan_cyclogram(task)
+    assert r.status is Status.SOLVED and r.values["span_deg"] == pytest.approx(47.5)
+
+
+def test_a_time_based_operation_needs_no_angle_and_scales_with_speed(tmp_path):
+    path = _scene(tmp_path, "from,to,min_deg,min_ms\na,b,10,\nb,c,,50\n",
+                  extra='[params]\nspeed_rpm = { value = 120.0, mark = "assumed", why = "test" }')
+    task = load(path).build()[0]
+    r = plan_cyclogram(task)
+    assert r.values["t_b_c_deg"] == pytest.approx(6 * 120 * 0.050)      # 6 n T deg at n rpm
+
+
+@pytest.mark.parametrize("csv_text, match", [
+    ("from,to,min_deg\na,b,ten\n", r"ops.csv: line 2, column min_deg: expected a number, got 'ten'"),
+    ("from,to,min_deg,colour\na,b,1,red\n", r"ops.csv: header .*unknown column 'colour'.*allowed columns: from"),
+    ("from,to\na,b\n", r"ops.csv: header .*lacks min_deg"),
+    ("from,to,min_deg\na,,1\n", r"ops.csv: line 2: empty to \(required\)"),
+    ("from,to,min_deg\na,b,1,2\n", r"ops.csv: line 2: 4 cells, the header names 3"),
+    ("from,to,min_deg\n" + "x" * 300 + ",b,1\n", r"line 2, column from: 'xxx.*longer than 200 characters"),
+    ("from,to,min_deg,min_deg\na,b,1,1\n", r"'min_deg' given twice"),
+    ("from,to,min_deg\na,b,-1\n", r"operations\[a->b\].min_deg=-1.0: a minimum phase angle must be >= 0"),
+    ("from,to,min_deg\na,b,1\nb,a,1\n", r"precedence cycle"),
+])
+def test_bad_timing_table_is_refused_naming_file_line_and_column(tmp_path, csv_text, match):
+    with pytest.raises((SceneError, ModelError), match=match):
+        load(_scene(tmp_path, csv_text)).build()
+
+
+def test_columns_must_be_known_and_numeric_tables_stay_strict(tmp_path):
+    with pytest.raises(SceneError, match=r"structure.operations.columns: unknown 'speed'"):
+        load(_scene(tmp_path, "from,to,min_deg\na,b,1\n", columns='["from", "to", "speed"]'))
+
+
+def test_events_table_still_checks_names_when_given():
+    with pytest.raises(ModelError, match=r"unknown event 'c'"):
+        Cyclogram(events={"a": {}, "b": {}}, operations=[{"from": "a", "to": "c", "min_deg": 1.0}])
+    task = Cyclogram(operations=[{"from": "a", "to": "b", "min_deg": 1.0, "group": "g"}])
+    assert task.events == {"a": {"group": "g"}, "b": {"group": "g"}}
