@@ -472,19 +472,24 @@ class Cyclogram:
 
 
 def _events_of(operations) -> dict:
-    """{event: {mechanism, group}} from the operations naming them, in order of first mention: an
-    event takes the group and mechanism of the first operation ending at it (the motion that
-    brings it about), else of the first starting at it (the network's first event)."""
-    events, starts = {}, {}
+    """{event: {group, mechanism}} from the operations naming them, in order of first mention: an
+    event takes the group (and mechanism) on which every operation ending at it agrees (the motion
+    that brings it about), or, with none ending at it (the first event), every one starting at it;
+    where they differ (a junction of groups, the last event) it takes none."""
+    ending, starting = {}, {}
     for op in operations:
         if not isinstance(op, dict) or "from" not in op or "to" not in op:
             continue                    # reported by the network's checks
-        about = {k: str(op[k]) for k in ("group", "mechanism") if k in op}
-        starts.setdefault(str(op["from"]), about)
-        events.setdefault(str(op["from"]), None)
-        if events.get(str(op["to"])) is None:
-            events[str(op["to"])] = about
-    return {name: about if about is not None else starts[name] for name, about in events.items()}
+        about = {k: str(op.get(k, "")) for k in ("group", "mechanism")}
+        starting.setdefault(str(op["from"]), []).append(about)
+        ending.setdefault(str(op["from"]), [])
+        ending.setdefault(str(op["to"]), []).append(about)
+    events = {}
+    for name, into in ending.items():
+        told = into or starting[name]
+        events[name] = {k: told[0][k] for k in ("group", "mechanism")
+                        if told[0][k] and all(t[k] == told[0][k] for t in told)}
+    return events
 
 
 def _split_windows(operations) -> tuple[list, list]:

@@ -30,6 +30,7 @@ def test_group1_from_its_csv_is_group1():
     assert csv_run.result.values["span_deg"] == pytest.approx(toml_run.result.values["span_deg"], abs=1e-12)
     task = csv_run.task
     assert task.events["7"] == {"group": "group1", "mechanism": "microshuttle lift"}
+    assert task.events["8"] == {"group": "group1"}      # ends three mechanisms' operations: theirs, no one's
     assert set(task.arcs) == set(toml_run.task.arcs)
 
 
@@ -78,3 +79,20 @@ def test_events_table_still_checks_names_when_given():
         Cyclogram(events={"a": {}, "b": {}}, operations=[{"from": "a", "to": "c", "min_deg": 1.0}])
     task = Cyclogram(operations=[{"from": "a", "to": "b", "min_deg": 1.0, "group": "g"}])
     assert task.events == {"a": {"group": "g"}, "b": {"group": "g"}}
+
+
+def test_new_cyclogram_template_is_a_packaging_machine_that_runs(tmp_path):
+    from mechopt.cli import main
+    path = tmp_path / "my" / "machine.toml"
+    path.parent.mkdir()
+    assert main(["new", "cyclogram", str(path)]) == 0
+    text = path.read_text(encoding="utf-8")
+    assert 'csv = "machine-ops.csv"' in text and "\n[expect" not in text
+    table = (path.parent / "machine-ops.csv").read_text(encoding="utf-8").splitlines()
+    assert table[0].startswith("from,to,") and all(",assumed," in row for row in table[1:])
+    run = registry.run(load(path))
+    assert run.result.status is Status.SOLVED
+    assert set(run.task.groups) == {"feed", "fold", "seal"}          # three groups, not the loom
+    assert run.result.values["limiting_op_deg"] == pytest.approx(170.0)
+    assert all(p.mark == "assumed" for p in run.scene.spec.params.values())
+    assert main(["new", "cyclogram", str(path)]) == 2                 # never overwritten
