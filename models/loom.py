@@ -253,7 +253,7 @@ class Cyclogram:
             if amplitude is not None:
                 self._check_amplitude_ref(amplitude, key)
             g.add_edge(x, y, min_deg=phi, min_ms=None if min_ms is None else float(min_ms), stress=stress,
-                       amplitude=amplitude, name=str(op.get("name", "")))
+                       amplitude=amplitude, name=str(op.get("name", "")), group=str(op.get("group", "")))
         if not nx.is_directed_acyclic_graph(g):
             cycle = nx.find_cycle(g)
             chain = " -> ".join([cycle[0][0]] + [v for _, v in cycle])

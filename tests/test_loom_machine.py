@@ -96,3 +96,43 @@ def test_new_cyclogram_template_is_a_packaging_machine_that_runs(tmp_path):
     assert run.result.values["limiting_op_deg"] == pytest.approx(170.0)
     assert all(p.mark == "assumed" for p in run.scene.spec.params.values())
     assert main(["new", "cyclogram", str(path)]) == 2                 # never overwritten
+
+
+def _layered_table(folder, n, width, groups=4):
+    """A timing table of a random layered network of n events (benchmarks' `layered`) with
+    `groups` groups by event index, and its scene."""
+    from mechopt.benchmarks.loom import layered
+    tails, heads, angles = layered(n, width=width)
+    rows = "".join(f"e{a},e{b},{w:.6f},g{a * groups // n}\n" for a, b, w in zip(tails.tolist(), heads.tolist(),
+                                                                              angles.tolist()))
+    (folder / "ops.csv").write_text("from,to,min_deg,group\n" + rows, encoding="utf-8")
+    path = folder / "big.toml"
+    path.write_text('id = "t/big"\ntitle = "t"\nsource = "generated"\ntask = "loom.Cyclogram"\n'
+                    'solver = "loom.plan_cyclogram"\n[params]\n[structure]\n'
+                    'operations = { csv = "ops.csv", columns = ["from", "to", "min_deg"] }\n', encoding="utf-8")
+    return path, len(tails)
+
+
+def test_timing_diagram_of_about_100_operations_groups_its_rows_and_drops_bar_labels(tmp_path):
+    from mechopt.figures.loom import gantt
+    path, arcs = _layered_table(tmp_path, 40, width=6)
+    run = registry.run(load(path))
+    assert 80 <= arcs <= 120 and run.result.status is Status.SOLVED
+    ax = gantt(run)["cyclogram"].axes[0]
+    rows = [t.get_text() for t in ax.get_yticklabels()]
+    assert len(rows) == arcs
+    ends = [r.rsplit("(", 1)[1].rstrip(")").split("-") for r in rows]
+    groups = [run.task.graph.edges[x, y]["group"] for x, y in ends]
+    assert groups == sorted(groups)                       # one block per group, in the order they start
+    assert [t.get_text() for t in ax.texts] == ["g0", "g1", "g2", "g3"]    # group names only, no bar labels
+    chain = run.result.diagnostics["critical_chain"]
+    assert ax.get_title().endswith(" - ".join(chain))      # 9 events: named in full (past 12 shortened)
+
+
+def test_graph_and_lp_agree_on_a_1000_event_table_read_from_csv(tmp_path):
+    path, _ = _layered_table(tmp_path, 1_000, width=100)
+    task = load(path).build()[0]
+    graph, lp = plan_cyclogram(task, method="graph"), plan_cyclogram(task, method="lp")
+    assert graph.status is Status.SOLVED and lp.status is Status.SOLVED
+    assert graph.values["span_deg"] == pytest.approx(lp.values["span_deg"], rel=1e-9)
+    assert graph.values["span_deg"] == pytest.approx(graph.values["longest_path_deg"], rel=1e-12)
