@@ -143,8 +143,11 @@ def lever_stop(table) -> LeverStop:
 class Cyclogram:
     """A machine's network cyclogram and the question asked of it.
 
-    Structure (from the scene's ``[structure]``): `events` {name: {mechanism, group}};
-    `operations` [{from, to, min_deg, stress?, amplitude?}] (min_deg is [phi] in deg);
+    Structure (from the scene's ``[structure]``): `operations` [{from, to, min_deg, min_ms?,
+    max_deg?, stress?, amplitude?, name?, group?, mechanism?}] (min_deg is [phi] in deg; min_ms a
+    least duration, then min_deg may be left out; max_deg the operation's window, moved to
+    `windows`), as a list or a CSV timing table (`CSV_TABLES`); `events` {name: {mechanism, group}},
+    by default the events the operations name, grouped as the operations ending at them agree;
     `stress_models` {name: {sigma_ref_MPa, t_ref_deg}}; `windows` [{from, to, max_deg}]:
     p(to) - p(from) <= max_deg; `syncs` [{events = [a, b, ...]}]: equal times;
     `limiting_op` [x, y]: maximise t(x, y) inside `cycle_deg` instead of minimising the span.

@@ -235,7 +235,7 @@ def _new(args) -> int:
             text = _with_table(text, table.name)
             _write_text(table, limacon_table())
         else:               # the timing table beside the template, renamed with the scene
-            text = text.replace(f'csv = "{template.id.split("/")[-1]}-ops.csv"', f'csv = "{table.name}"')
+            text = text.replace(f'csv = "{template.path.stem}-ops.csv"', f'csv = "{table.name}"')
             _write_text(table, (template.path.parent / f"{template.path.stem}-ops.csv").read_text(encoding="utf-8"))
     from mechopt.scene import loads
     loads(text, args.file)                     # what we write must load

@@ -464,19 +464,21 @@ def _read_tables(path, structure, records=None):
             raise SceneError(f'{path}: structure.{key}: a table from a file is {{ csv = "file.csv", '
                              f'columns = ["x_mm", "y_mm"] }}; got {value!r}', key=key)
         if key in (records or {}):
-            out[key] = _csv_records(path.parent / value["csv"], value["columns"], key, *records[key])
+            out[key] = _csv_records(path, value["csv"], value["columns"], key, *records[key])
         else:
             out[key] = _csv_rows(path.parent / value["csv"], value["columns"], key)
     return out
 
 
-def _csv_records(csv_path, columns, key, required, kinds):
+def _csv_records(path, csv_name, columns, key, required, kinds):
+    """The CSV `csv_name` beside the scene `path` as a list of tables (column: text or number by
+    `kinds`), every name of `columns` in its header and every cell of `required` in each row."""
     unknown = [c for c in columns if c not in kinds]
     if unknown:
-        raise SceneError(f"structure.{key}.columns: unknown {', '.join(map(quote, unknown))}; "
+        raise SceneError(f"{path}: structure.{key}.columns: unknown {', '.join(map(quote, unknown))}; "
                          f"allowed: {', '.join(kinds)}", key=key)
     try:
-        rows = read_records(csv_path, columns, kinds, required=required, what=f"a table of {key}",
+        rows = read_records(path.parent / csv_name, columns, kinds, required=required, what=f"a table of {key}",
                             example=",".join(columns))
     except ModelError as exc:
         raise SceneError(f"{exc} (the table for structure.{key})", key=key) from None
