@@ -65,7 +65,12 @@ MAX_MS = 1e6
 AMPLITUDE_LAWS = ("linear",)
 _NOTE_KEYS = {"mark", "why", "where", "what"}         # provenance and description, not physics
 _EVENT_KEYS = {"mechanism", "group"} | _NOTE_KEYS
-_OP_KEYS = {"from", "to", "min_deg", "min_ms", "stress", "amplitude", "name"} | _NOTE_KEYS
+_OP_KEYS = {"from", "to", "min_deg", "min_ms", "max_deg", "stress", "amplitude", "name", "group",
+            "mechanism"} | _NOTE_KEYS
+# an operations table read from a designer's CSV (scene: `operations = { csv = "ops.csv", columns =
+# [...] }`): its columns and their kinds; event names are text ("3", "10.1", "feed.start")
+OPERATION_COLUMNS = {"from": str, "to": str, "name": str, "group": str, "mechanism": str, "min_deg": float,
+                     "min_ms": float, "max_deg": float, "stress": str, "amplitude": str, "mark": str, "why": str}
 _STRESS_KEYS = {"sigma_ref_MPa", "t_ref_deg"} | _NOTE_KEYS
 _WINDOW_KEYS = {"from", "to", "max_deg"} | _NOTE_KEYS
 _SYNC_KEYS = {"events"} | _NOTE_KEYS
@@ -138,8 +143,11 @@ def lever_stop(table) -> LeverStop:
 class Cyclogram:
     """A machine's network cyclogram and the question asked of it.
 
-    Structure (from the scene's ``[structure]``): `events` {name: {mechanism, group}};
-    `operations` [{from, to, min_deg, stress?, amplitude?}] (min_deg is [phi] in deg);
+    Structure (from the scene's ``[structure]``): `operations` [{from, to, min_deg, min_ms?,
+    max_deg?, stress?, amplitude?, name?, group?, mechanism?}] (min_deg is [phi] in deg; min_ms a
+    least duration, then min_deg may be left out; max_deg the operation's window, moved to
+    `windows`), as a list or a CSV timing table (`CSV_TABLES`); `events` {name: {mechanism, group}},
+    by default the events the operations name, grouped as the operations ending at them agree;
     `stress_models` {name: {sigma_ref_MPa, t_ref_deg}}; `windows` [{from, to, max_deg}]:
     p(to) - p(from) <= max_deg; `syncs` [{events = [a, b, ...]}]: equal times;
     `limiting_op` [x, y]: maximise t(x, y) inside `cycle_deg` instead of minimising the span.
@@ -154,8 +162,8 @@ class Cyclogram:
     `lever` (structure): the lift lever's table (see `lever_stop`), the exact law a(t, n) behind
     the linear one; a task may give it instead of the linear law's slope and intercept.
     """
-    events: dict
     operations: list
+    events: dict = field(default_factory=dict)
     stress_models: dict = field(default_factory=dict)
     windows: list = field(default_factory=list)
     syncs: list = field(default_factory=list)
@@ -180,8 +188,19 @@ class Cyclogram:
                                          "amplitude_limit_mm")),
     }
 
+    # structure tables a scene may read from a CSV file as rows of named, typed columns
+    CSV_TABLES: ClassVar[dict] = {"operations": (("from", "to"), OPERATION_COLUMNS)}
+
     def __post_init__(self):
         _check_numbers(self)
+        _table(self.operations, "operations", list)
+        _table(self.events, "events", dict)
+        if not self.events:             # events named by the operations need no table of their own
+            object.__setattr__(self, "events", _events_of(self.operations))
+        if any(isinstance(op, dict) and "max_deg" in op for op in self.operations):
+            operations, windows = _split_windows(self.operations)
+            object.__setattr__(self, "operations", operations)
+            object.__setattr__(self, "windows", list(self.windows) + windows)
         if self.lever is not None:
             _ = self.lever_model    # builds and validates the lever (cached)
         self.graph          # builds and validates the network (cached)
@@ -212,7 +231,7 @@ class Cyclogram:
         _table(self.operations, "operations", list)
         for k, op in enumerate(self.operations):
             key = f"operations[{k}]"
-            _entry(op, key, _OP_KEYS, required=("from", "to", "min_deg"))
+            _entry(op, key, _OP_KEYS, required=("from", "to") if "min_ms" in op else ("from", "to", "min_deg"))
             x, y = str(op["from"]), str(op["to"])
             key = f"operations[{x}->{y}]"
             for end in (x, y):
@@ -221,7 +240,7 @@ class Cyclogram:
                 raise ModelError(f"{key}: an operation must join two different events", key=key)
             if g.has_edge(x, y):
                 raise ModelError(f"{key}: given twice; one operation per pair of events", key=key)
-            phi = _number(op["min_deg"], f"{key}.min_deg")
+            phi = _number(op.get("min_deg", 0.0), f"{key}.min_deg")   # a timed operation: its time alone
             if phi < 0:
                 raise ModelError(f"{key}.min_deg={phi}: a minimum phase angle must be >= 0", key=f"{key}.min_deg")
             if phi > MAX_DEG:
@@ -237,7 +256,7 @@ class Cyclogram:
             if amplitude is not None:
                 self._check_amplitude_ref(amplitude, key)
             g.add_edge(x, y, min_deg=phi, min_ms=None if min_ms is None else float(min_ms), stress=stress,
-                       amplitude=amplitude, name=str(op.get("name", "")))
+                       amplitude=amplitude, name=str(op.get("name", "")), group=str(op.get("group", "")))
         if not nx.is_directed_acyclic_graph(g):
             cycle = nx.find_cycle(g)
             chain = " -> ".join([cycle[0][0]] + [v for _, v in cycle])
@@ -326,26 +345,37 @@ class Cyclogram:
         """Operations as (from, to), in the order every per-arc array uses."""
         return list(self.graph.edges)
 
-    @property
+    # the views below are cached (the task is frozen): a solve asks for them several times, and a
+    # walk over the graph's nodes or edges costs ~0.1 s at 10^5 events
+
+    @cached_property
     def first_event(self) -> str:
         return next(v for v in self.graph if self.graph.in_degree(v) == 0 and self.graph.out_degree(v) > 0)
 
-    @property
+    @cached_property
     def last_event(self) -> str:
         return next(v for v in self.graph if self.graph.out_degree(v) == 0 and self.graph.in_degree(v) > 0)
 
     @property
     def isolated_events(self) -> list[str]:
-        return [v for v in self.graph if self.graph.degree(v) == 0]
+        return list(self._isolated)
+
+    @cached_property
+    def _isolated(self) -> tuple[str, ...]:
+        return tuple(v for v, d in self.graph.degree if d == 0)
 
     @property
     def groups(self) -> dict[str, list[str]]:
         """Group name -> its events (events without a group are left out)."""
+        return {group: list(events) for group, events in self._groups.items()}
+
+    @cached_property
+    def _groups(self) -> dict[str, tuple[str, ...]]:
         out: dict[str, list[str]] = {}
         for v, group in self.graph.nodes(data="group"):
             if group:
                 out.setdefault(group, []).append(v)
-        return out
+        return {group: tuple(events) for group, events in out.items()}
 
     def group_graph(self, group: str) -> nx.DiGraph:
         """The subgraph of one group's events and the operations between them."""
@@ -380,7 +410,11 @@ class Cyclogram:
 
     def time_arcs(self) -> list[int]:
         """Indices (in `arcs` order) of the operations with a minimum duration `min_ms`."""
-        return [k for k, e in enumerate(self.arcs) if self.graph.edges[e]["min_ms"] is not None]
+        return list(self._time_arcs)
+
+    @cached_property
+    def _time_arcs(self) -> tuple[int, ...]:
+        return tuple(k for k, (_, _, ms) in enumerate(self.graph.edges(data="min_ms")) if ms is not None)
 
     def time_coeffs_deg_per_rpm(self) -> np.ndarray:
         """Per arc, the angle its `min_ms` asks for per rpm of main-shaft speed [deg/rpm] (0: none)."""
@@ -453,6 +487,42 @@ class Cyclogram:
             if bound > lb[k]:
                 lb[k], why[k] = bound, "amplitude"
         return lb, why
+
+
+def _events_of(operations) -> dict:
+    """{event: {group, mechanism}} from the operations naming them, in order of first mention: an
+    event takes the group (and mechanism) on which every operation ending at it agrees (the motion
+    that brings it about), or, with none ending at it (the first event), every one starting at it;
+    where they differ (a junction of groups, the last event) it takes none."""
+    into, out = {}, {}                  # event -> [group, mechanism] agreed so far ("" when none)
+    for op in operations:
+        if not isinstance(op, dict) or "from" not in op or "to" not in op:
+            continue                    # reported by the network's checks
+        about = [str(op.get("group", "")), str(op.get("mechanism", ""))]
+        for side, name in ((out, str(op["from"])), (into, str(op["to"]))):
+            seen = side.get(name)
+            if seen is None:
+                side[name] = list(about)
+            elif seen != about:
+                seen[:] = [s if s == a else "" for s, a in zip(seen, about)]
+    names = dict.fromkeys(name for op in operations if isinstance(op, dict) and "from" in op and "to" in op
+                          for name in (str(op["from"]), str(op["to"])))
+    return {name: {k: v for k, v in zip(("group", "mechanism"), into.get(name) or out[name]) if v} for name in names}
+
+
+def _split_windows(operations) -> tuple[list, list]:
+    """(operations, windows): an operation's `max_deg` (its window, p(to) - p(from) <= max_deg)
+    taken out as a window of its own, so the solvers see one kind of window."""
+    ops, windows = [], []
+    for op in operations:
+        if isinstance(op, dict) and "max_deg" in op:
+            op = dict(op)
+            window = {"from": op.get("from"), "to": op.get("to"), "max_deg": op.pop("max_deg")}
+            if op.get("mark", "given") != "given":
+                window |= {"mark": op["mark"], "why": op.get("why", "")}
+            windows.append(window)
+        ops.append(op)
+    return ops, windows
 
 
 def _check_numbers(task):

@@ -31,7 +31,7 @@ OK, CHECK_FAILED, BAD_INPUT, NOT_SOLVED, INTERRUPTED = 0, 1, 2, 3, 130
 
 TEMPLATES = {"cam-cutter": "cam-cutter/minimax", "cam-table": "cam-cutter/other-profile", "press": "press/kd2322",
              "press-design": "press/flywheel-design", "loom": "loom/group1",
-             "stop-impact": "stop-impact/rebound-177rpm"}
+             "stop-impact": "stop-impact/rebound-177rpm", "cyclogram": "loom/packaging"}
 # cam-table: the other-profile scene with its parsed curve replaced by a point table in a CSV beside the scene
 TABLE_CURVE = {"x_expr": None, "y_expr": None, "constants": None,
                "points_mm": '{ csv = "%s", columns = ["x_mm", "y_mm"] }'}
@@ -127,7 +127,8 @@ def _parser():
     new = sub.add_parser("new", parents=[common], help="write a commented scene to start from")
     new.add_argument("mechanism", choices=list(TEMPLATES),
                      help="cam-table: a cam given as a point table (a CSV written beside the scene); "
-                          "press-design: the drive found by optimisation")
+                          "press-design: the drive found by optimisation; cyclogram: a machine's timing "
+                          "diagram from its table of operations (a CSV written beside the scene)")
     new.add_argument("file", type=Path, help="the scene file to write (not overwritten if it exists)")
     run = sub.add_parser("run", parents=[common], help="solve one scene and check it against its source")
     run.add_argument("case", help="a scene id or a scene file's path")
@@ -225,16 +226,21 @@ def _new(args) -> int:
         raise SceneError(f"{args.file}: exists; name a new file (nothing was written)")
     template = registry.find(TEMPLATES[args.mechanism])
     text = scene_template(template, f"my/{args.file.stem}")
-    table = args.file.with_name(f"{args.file.stem}-points.csv") if args.mechanism == "cam-table" else None
+    suffix = {"cam-table": "points", "cyclogram": "ops"}.get(args.mechanism)
+    table = args.file.with_name(f"{args.file.stem}-{suffix}.csv") if suffix else None
     if table is not None:
         if table.exists():
             raise SceneError(f"{table}: exists; name a new scene file (nothing was written)")
-        text = _with_table(text, table.name)
-        _write_text(table, limacon_table())
+        if args.mechanism == "cam-table":
+            text = _with_table(text, table.name)
+            _write_text(table, limacon_table())
+        else:               # the timing table beside the template, renamed with the scene
+            text = text.replace(f'csv = "{template.path.stem}-ops.csv"', f'csv = "{table.name}"')
+            _write_text(table, (template.path.parent / f"{template.path.stem}-ops.csv").read_text(encoding="utf-8"))
     from mechopt.scene import loads
     loads(text, args.file)                     # what we write must load
     _write_text(args.file, text)
-    print(f"scene: {args.file} (from {template.id})" + (f", points: {table}" if table else "")
+    print(f"scene: {args.file} (from {template.id})" + (f", {suffix}: {table}" if table else "")
           + f"; try: mechopt run {args.file}")
     return OK
 

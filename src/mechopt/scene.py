@@ -23,7 +23,7 @@ from mechopt.models.cache import memoised
 from mechopt.models.errors import MechoptError, ModelError, SceneError
 from mechopt.solvers.result import Status
 from mechopt.solvers.settings import declared_range, describe_range, setting_problem
-from mechopt.tables import number, read_rows
+from mechopt.tables import number, read_records, read_rows
 from mechopt.units import unit_of
 
 Number = int | float
@@ -297,12 +297,13 @@ def loads(text: str, path: Path) -> Scene:
         spec = SceneFile.model_validate(raw)
     except ValidationError as exc:
         raise SceneError(f"{path}: " + "; ".join(_explain(e) for e in exc.errors())) from None
+    task_class = _resolve(path, "task", spec.task, "mechopt.models")
     _READING.add(path.resolve())
     try:
-        spec = spec.model_copy(update={"structure": _read_tables(path, spec.structure)})
+        spec = spec.model_copy(update={"structure": _read_tables(path, spec.structure,
+                                                                 getattr(task_class, "CSV_TABLES", {}))})
     finally:
         _READING.discard(path.resolve())
-    task_class = _resolve(path, "task", spec.task, "mechopt.models")
     solver = _resolve(path, "solver", spec.solver, "mechopt.solvers")
     fields = task_fields(task_class)
     for key, ref in spec.derive.items():
@@ -439,11 +440,14 @@ def _set_paths(path, structure, assignments):
 _READING: set[Path] = set()          # scene files whose tables are being read: a loop of references is refused
 
 
-def _read_tables(path, structure):
+def _read_tables(path, structure, records=None):
     """Structure entries that name a file, read when the scene loads (paths relative to the scene
     file's folder):
     * `{ csv = "file.csv", columns = ["x_mm", "y_mm"] }`: the file's rows of those columns, so a
       designer's point table stays in the CSV their CAD system wrote (errors name line and column);
+      for a key of the task's `CSV_TABLES` ({key: (required cells, {column: str or float})}), the
+      rows as tables of the columns the file has (text or numbers by column; `columns` the ones
+      it must have), as a machine's timing table of operations between named events;
     * `{ scene = "../other/scene.toml", drop = [...] }`: that scene's model as a table: its params
       (with their marks), structure entries and effects, less the names dropped. One mechanism's
       data then lives in one place when another's model needs it (the loom takes the lift lever)."""
@@ -459,8 +463,26 @@ def _read_tables(path, structure):
                 and all(isinstance(c, str) for c in value["columns"])):
             raise SceneError(f'{path}: structure.{key}: a table from a file is {{ csv = "file.csv", '
                              f'columns = ["x_mm", "y_mm"] }}; got {value!r}', key=key)
-        out[key] = _csv_rows(path.parent / value["csv"], value["columns"], key)
+        if key in (records or {}):
+            out[key] = _csv_records(path, value["csv"], value["columns"], key, *records[key])
+        else:
+            out[key] = _csv_rows(path.parent / value["csv"], value["columns"], key)
     return out
+
+
+def _csv_records(path, csv_name, columns, key, required, kinds):
+    """The CSV `csv_name` beside the scene `path` as a list of tables (column: text or number by
+    `kinds`), every name of `columns` in its header and every cell of `required` in each row."""
+    unknown = [c for c in columns if c not in kinds]
+    if unknown:
+        raise SceneError(f"{path}: structure.{key}.columns: unknown {', '.join(map(quote, unknown))}; "
+                         f"allowed: {', '.join(kinds)}", key=key)
+    try:
+        rows = read_records(path.parent / csv_name, columns, kinds, required=required, what=f"a table of {key}",
+                            example=",".join(columns))
+    except ModelError as exc:
+        raise SceneError(f"{exc} (the table for structure.{key})", key=key) from None
+    return [row for _, row in rows]
 
 
 def _scene_table(path, key, value):

@@ -5,7 +5,7 @@ every error names the file (and the line)."""
 import csv
 from pathlib import Path
 
-from mechopt.files import read_regular
+from mechopt.files import quote, read_regular
 from mechopt.models.errors import ModelError
 
 MAX_BYTES = 100_000_000      # read whole into memory: refuse what is plainly not a table of readings
@@ -46,3 +46,46 @@ def number(cell, delimiter) -> float:
     """A cell as a float; a decimal comma is read when ';' separates the columns."""
     cell = cell.strip()
     return float(cell.replace(",", ".") if delimiter == ";" else cell)
+
+
+MAX_TEXT = 200               # a name cell in a timing table: an event or an operation, not a paragraph
+
+
+def read_records(path, columns, kinds, *, required=(), what, example, max_rows=MAX_ROWS):
+    """[(line number, {column: value})] of the CSV file `path`, whose header must hold every name
+    in `columns` and no name outside `kinds` ({column: str or float}, which types the cells: text
+    stripped and at most MAX_TEXT characters, numbers as `number` reads them). An empty cell is
+    left out of its row (an optional value not given), unless its column is in `required`.
+    Errors name the file, the line and the column, and quote a cell short."""
+    header, rows, delimiter = read_rows(path, what=what, example=example, max_rows=max_rows)
+    problems = [f"lacks {c}" for c in columns if c not in header]
+    problems += [f"unknown column {quote(c)}" for c in header if c not in kinds][:3]
+    problems += [f"{quote(c)} given twice" for c in sorted(set(header)) if header.count(c) > 1][:3]
+    if problems:
+        raise ModelError(f"{path}: header {quote(delimiter.join(header), 80)}: {'; '.join(problems)} "
+                         f"(allowed columns: {', '.join(kinds)})", key="path")
+    out = []
+    for line, cells in rows:
+        if len(cells) > len(header):
+            raise ModelError(f"{path}: line {line}: {len(cells)} cells, the header names {len(header)}", key="path")
+        row = {}
+        for column, cell in zip(header, cells):
+            cell = cell.strip()
+            if not cell:
+                continue
+            if kinds[column] is not str:
+                try:
+                    row[column] = number(cell, delimiter)
+                except ValueError:
+                    raise ModelError(f"{path}: line {line}, column {column}: expected a number, got {quote(cell)}",
+                                     key="path") from None
+            elif len(cell) > MAX_TEXT:
+                raise ModelError(f"{path}: line {line}, column {column}: {quote(cell)} is longer than "
+                                 f"{MAX_TEXT} characters", key="path")
+            else:
+                row[column] = cell
+        absent = [c for c in required if c not in row]
+        if absent:
+            raise ModelError(f"{path}: line {line}: empty {', '.join(absent)} (required)", key="path")
+        out.append((line, row))
+    return out

@@ -4,11 +4,19 @@ from mechopt.figures.registry import new_figure, register
 from mechopt.models.loom import Cyclogram
 
 
+ROW_IN = 0.35              # inches per operation row on a small network ...
+DENSE_ROWS = 40           # ... past which rows narrow to DENSE_ROW_IN and bars lose their own labels
+DENSE_ROW_IN = 0.17
+CHAIN_SHOWN = 12          # events of the critical chain named in the title before it is shortened
+
+
 @register(Cyclogram)
 def gantt(run):
-    """One bar per operation from p(from) to p(to) over the machine angle, a row per operation,
-    labelled by the mechanism whose event starts it (or the operation's name) and sorted by it;
-    the critical chain in red, every other operation's total float as a light tail."""
+    """One bar per operation from p(from) to p(to) over the machine angle, a row per operation:
+    rows grouped by the operation's group (its own, else its first event's), groups in the order
+    they start, and inside a group by start angle, so the chain reads as a staircase; the
+    critical chain in red, every other operation's total float as a light tail. Past DENSE_ROWS
+    operations (a machine's whole timing table) rows narrow and bars lose their own labels."""
     values = run.result.values
     if "span_deg" not in values:
         return {}             # infeasible or unbounded: there are no event times to draw
@@ -17,44 +25,72 @@ def gantt(run):
     diag = run.result.diagnostics
     critical = set(diag.get("critical_ops", []))
     floats = diag.get("float_deg", {}) if isinstance(diag.get("float_deg"), dict) else {}
-    mechanism = dict(task.graph.nodes(data="mechanism"))
-    label = {(x, y): d["name"] or mechanism[x] or "-" for x, y, d in task.graph.edges(data=True)}
-    arcs = sorted(task.arcs, key=lambda a: (label[a], values[f"p_{a[0]}_deg"]))
+    nodes = task.graph.nodes
+    label, group = {}, {}
+    for x, y, d in task.graph.edges(data=True):
+        label[x, y] = d["name"] or nodes[x]["mechanism"] or "-"
+        group[x, y] = d.get("group") or nodes[x]["group"] or nodes[y]["group"]
+    start = {a: values[f"p_{a[0]}_deg"] for a in task.arcs}
+    first = {}
+    for a in task.arcs:
+        first[group[a]] = min(first.get(group[a], start[a]), start[a])
+    arcs = sorted(task.arcs, key=lambda a: (first[group[a]], group[a], start[a], values[f"p_{a[1]}_deg"], label[a]))
 
+    dense = len(arcs) > DENSE_ROWS
     end = task.cycle_deg or values["span_deg"]
-    fig = new_figure(figsize=(11, 0.35 * len(arcs) + 1.8))
+    fig = new_figure(figsize=(11, (DENSE_ROW_IN if dense else ROW_IN) * len(arcs) + 1.8))
     ax = fig.subplots()
     for row, (x, y) in enumerate(arcs):
-        start, angle = values[f"p_{x}_deg"], values[f"t_{x}_{y}_deg"]
-        key = f"{x}->{y}"
-        hot = key in critical
-        ax.barh(row, angle, left=start, height=0.6, color="tab:red" if hot else "tab:blue",
-                edgecolor="black", linewidth=0.5)
-        slack = floats.get(key, 0.0)
+        angle = values[f"t_{x}_{y}_deg"]
+        hot = f"{x}->{y}" in critical
+        ax.barh(row, angle, left=start[x, y], height=0.7 if dense else 0.6, color="tab:red" if hot else "tab:blue",
+                edgecolor="black", linewidth=0.3 if dense else 0.5)
+        slack = floats.get(f"{x}->{y}", 0.0)
         if slack > 1e-9 and not hot:
-            ax.barh(row, slack, left=start + angle, height=0.25, color="tab:blue", alpha=0.25)
-        inside = angle > 0.06 * max(end, 1e-9)          # a narrow bar gets its label beside it
-        ax.text(start + angle / 2 if inside else start + angle + 0.005 * end, row, f"{x}-{y}",
-                ha="center" if inside else "left", va="center", fontsize=7,
-                color="white" if inside else "black")
+            ax.barh(row, slack, left=start[x, y] + angle, height=0.25, color="tab:blue", alpha=0.25)
+        if not dense:
+            text = f"{x}-{y}"
+            inside = angle > max(0.06, 0.011 * len(text)) * max(end, 1e-9)   # a narrow bar: its label beside it
+            ax.text(start[x, y] + angle / 2 if inside else start[x, y] + angle + 0.005 * end, row, text,
+                    ha="center" if inside else "left", va="center", fontsize=7,
+                    color="white" if inside else "black")
+    _group_bands(ax, [group[a] for a in arcs])
     ax.set_yticks(range(len(arcs)))
-    ax.set_yticklabels([f"{label[x, y]} ({x}-{y})" for x, y in arcs], fontsize=7)
-    ax.invert_yaxis()
+    ax.set_yticklabels([f"{label[x, y]} ({x}-{y})" for x, y in arcs], fontsize=6 if dense else 7)
+    ax.set_ylim(len(arcs) - 0.5, -0.5)
     from matplotlib.patches import Patch
     ax.legend(handles=[Patch(color="tab:red", label="critical operation (no float)"),
                        Patch(color="tab:blue", label="operation, at its event times"),
                        Patch(color="tab:blue", alpha=0.25, label="its total float")],
-              loc="lower right", fontsize=8)
+              loc="lower left", bbox_to_anchor=(0.0, 1.0), ncols=3, fontsize=8, frameon=False)
     ax.set_xlim(0, end * 1.02 if end > 0 else 1.0)
     ax.set_xlabel("main shaft angle [deg]")
     chain = diag.get("critical_chain") or []
+    if len(chain) > CHAIN_SHOWN:
+        chain = chain[:CHAIN_SHOWN // 2] + [f"... ({len(chain) - CHAIN_SHOWN} more)"] + chain[-CHAIN_SHOWN // 2:]
     headline = (f"max speed {values['max_speed_rpm']:.2f} rpm" if "max_speed_rpm" in values
                 else f"limiting op {values['limiting_op_deg']:.2f} deg" if "limiting_op_deg" in values
                 else f"span {values['span_deg']:.2f} deg")
-    ax.set_title(f"{run.scene.id}: {headline}; critical chain (red) {' - '.join(chain)}", fontsize=9)
+    ax.set_title(f"{run.scene.id}: {headline}, {len(arcs)} operations\ncritical chain (red) {' - '.join(chain)}",
+                 fontsize=9, pad=22)
     ax.grid(True, axis="x", alpha=0.3)
     rounds = diag.get("rounds")
     return {"cyclogram": fig} | ({"repair_rounds": _repair_rounds(run, rounds)} if rounds else {})
+
+
+def _group_bands(ax, groups):
+    """Every other group's rows shaded and each group named at the right edge (with two or more)."""
+    if len(set(groups)) < 2:
+        return
+    top, band = 0, 0
+    for row in range(1, len(groups) + 1):
+        if row < len(groups) and groups[row] == groups[top]:
+            continue
+        if band % 2:
+            ax.axhspan(top - 0.5, row - 0.5, color="0.92", zorder=0)
+        ax.text(1.005, (top + row - 1) / 2, groups[top] or "(no group)", transform=ax.get_yaxis_transform(),
+                rotation=90, ha="left", va="center", fontsize=8)
+        top, band = row, band + 1
 
 
 def _repair_rounds(run, rounds):
