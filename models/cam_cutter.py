@@ -387,8 +387,8 @@ class ToolFamily:
     err_width_mm: Annotated[float, Gt(0)]
     a_count: Annotated[float, Ge(1), Le(200)] = 5
     h_values_mm: tuple = (2.0,)
-    H_min_mm: float | None = None
-    H_max_mm: float | None = None
+    H_min_mm: Annotated[float | None, doc(f"> 0 ... {LINK_MAX_PER_A:g} a_max_mm")] = None
+    H_max_mm: Annotated[float | None, doc(f"> 0 ... {LINK_MAX_PER_A:g} a_max_mm")] = None
 
     EFFECTS: ClassVar[dict[str, Effect]] = {}
 
