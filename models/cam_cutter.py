@@ -21,7 +21,7 @@ from functools import cached_property
 from typing import Annotated, ClassVar
 
 import numpy as np
-from annotated_types import Ge, Gt, Interval, Le
+from annotated_types import Ge, Gt, Interval, Le, doc
 from scipy.optimize import brentq
 
 from mechopt.models.cache import memoised
@@ -106,6 +106,9 @@ def matched_linkage(a, h=0.0):
 PAPER_A_MM = 25.0              # the paper's cam (Sec. IV): the size the solvers' tolerances were tuned on
 A_RANGE_MM = (1e-6, 1e6)       # cam sizes accepted
 LINK_MAX_PER_A = 100.0         # links and box bounds accepted up to this many cam sizes
+# ranges that depend on another input, as describe shows them (checked in __post_init__)
+BOX_RANGE = f"> 0 ... {LINK_MAX_PER_A:g} a_mm"
+CENTRE_RANGE = "-10 (H_mm + L_mm) ... 10 (H_mm + L_mm)"
 MIN_LINK_PER_A = 0.01          # a derived lower bound never below this many cam sizes
 
 
@@ -163,10 +166,10 @@ class LinkageFit(_OnIdealPath):
     step_mm: Annotated[float | None, Gt(0)] = None
     h_mm: Annotated[float, Ge(0)] = 0.0
     y_tol_mm: Annotated[float | None, Gt(0)] = None
-    H_min_mm: float | None = None
-    H_max_mm: float | None = None
-    L_min_mm: float | None = None
-    L_max_mm: float | None = None
+    H_min_mm: Annotated[float | None, doc(BOX_RANGE)] = None
+    H_max_mm: Annotated[float | None, doc(BOX_RANGE)] = None
+    L_min_mm: Annotated[float | None, doc(BOX_RANGE)] = None
+    L_max_mm: Annotated[float | None, doc(BOX_RANGE)] = None
 
     EFFECTS: ClassVar[dict[str, Effect]] = {
         "torch_offset": Effect(adds="kerf offset h: the torch runs on the parallel curve at distance h",
@@ -307,10 +310,10 @@ class LinkageLoads:
     force_N: Annotated[float, Ge(0), Le(1e6)]
     crank_speed_rad_s: Annotated[float, Gt(0), Le(1e6)]
     crank_mass_kg: Annotated[float, Ge(0), Le(1e6)]
-    crank_centre_mm: float
+    crank_centre_mm: Annotated[float, doc(CENTRE_RANGE)]
     crank_inertia_kgm2: Annotated[float, Ge(0), Le(1e6)]
     link_mass_kg: Annotated[float, Ge(0), Le(1e6)]
-    link_centre_mm: float
+    link_centre_mm: Annotated[float, doc(CENTRE_RANGE)]
     link_inertia_kgm2: Annotated[float, Ge(0), Le(1e6)]
     block_mass_kg: Annotated[float, Ge(0), Le(1e6)] = 0.0
     block_inertia_kgm2: Annotated[float, Ge(0), Le(1e6)] = 0.0
@@ -384,8 +387,8 @@ class ToolFamily:
     err_width_mm: Annotated[float, Gt(0)]
     a_count: Annotated[float, Ge(1), Le(200)] = 5
     h_values_mm: tuple = (2.0,)
-    H_min_mm: float | None = None
-    H_max_mm: float | None = None
+    H_min_mm: Annotated[float | None, doc(f"> 0 ... {LINK_MAX_PER_A:g} a_max_mm")] = None
+    H_max_mm: Annotated[float | None, doc(f"> 0 ... {LINK_MAX_PER_A:g} a_max_mm")] = None
 
     EFFECTS: ClassVar[dict[str, Effect]] = {}
 

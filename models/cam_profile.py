@@ -27,7 +27,7 @@ from typing import Annotated, ClassVar
 
 import casadi as ca
 import numpy as np
-from annotated_types import Ge, Gt, Interval
+from annotated_types import Ge, Gt, Interval, doc
 from scipy.interpolate import CubicSpline
 
 from mechopt.models.cam_cutter import LinkageFit, real_point
@@ -334,6 +334,9 @@ def coarse_start(point, t0, t1, span, *, side=24, nodes=48, vertices=128):
 
 MIN_LINK_PER_SIZE = 0.01
 LINK_MAX_PER_SIZE = 100.0
+# the box's ranges as describe shows them, relative to the path's size (checked in ProfileFit.__post_init__)
+CRANK_RANGE = f"-{LINK_MAX_PER_SIZE:g} ... {LINK_MAX_PER_SIZE:g} path sizes"
+LINK_RANGE = f"> 0 ... {LINK_MAX_PER_SIZE:g} path sizes"
 
 
 @dataclass(frozen=True)
@@ -370,10 +373,10 @@ class ProfileFit:
     points_mm: tuple = ()
     h_mm: Annotated[float, Ge(0)] = 0.0
     placement: str = "start_at_origin"
-    H_min_mm: float | None = None
-    H_max_mm: float | None = None
-    L_min_mm: float | None = None
-    L_max_mm: float | None = None
+    H_min_mm: Annotated[float | None, doc(CRANK_RANGE)] = None     # H < 0: the mirrored crank
+    H_max_mm: Annotated[float | None, doc(CRANK_RANGE)] = None
+    L_min_mm: Annotated[float | None, doc(LINK_RANGE)] = None
+    L_max_mm: Annotated[float | None, doc(LINK_RANGE)] = None
 
     EFFECTS: ClassVar[dict] = LinkageFit.EFFECTS        # torch_offset: the same kerf h, eq. (2) generalised
 

@@ -57,7 +57,7 @@ Units: the names say so (mm, GPa, kg, rpm, deg); the functions return SI (m, s, 
 """
 import math
 from dataclasses import dataclass
-from typing import Annotated, ClassVar
+from typing import Annotated, ClassVar, Literal
 
 from annotated_types import Interval
 
@@ -159,7 +159,7 @@ class LeverStop:
     law_slope_mm_per_deg: Annotated[float | None, Interval(lt=0)] = None
     law_intercept_mm: Annotated[float | None, Interval(gt=0)] = None
     law: str = ""
-    launch: str = "pulse_plus_v0"
+    launch: Literal["pulse_plus_v0", "restitution"] = "pulse_plus_v0"   # LAUNCHES
     speeds_rpm: tuple = ()
     effects: tuple = ()
 

@@ -380,6 +380,13 @@ def test_a_cam_of_ones_own_as_a_point_table_runs_from_its_template(tmp_path):
 RELATIVE = {"H_min_mm", "H_max_mm", "L_min_mm", "L_max_mm", "crank_centre_mm", "link_centre_mm"}
 
 
+def test_a_range_relative_to_another_input_is_shown_as_declared():
+    rows = {r["key"]: r for r in mechopt.describe("cam-cutter/paper-grid")}
+    assert rows["H_min_mm"]["range"] == "> 0 ... 100 a_mm"
+    assert all(not r["range"].startswith("checked by") for r in mechopt.describe("cam-cutter/joint-reactions")
+               if r["kind"] == "parameter")
+
+
 @pytest.mark.parametrize("scene", mechopt.scenes(), ids=lambda s: s.id)
 def test_describe_shows_the_declared_range_of_every_number(scene):
     """Ranges are declared on the model's fields (Annotated): describe and the loader read them there."""

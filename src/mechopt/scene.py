@@ -16,6 +16,7 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Annotated, Any, Literal, get_args, get_origin
 
+from annotated_types import DocInfo
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from mechopt.files import quote, read_regular
@@ -221,8 +222,8 @@ class Scene:
             low, high = declared_range(f.type)
             rows.append({"key": key, "kind": "parameter", "unit": unit_of(key), "mark": mark,
                          "range": describe_range(low, high) if low or high else (
-                             "any finite number" if get_origin(f.type) is Annotated      # declared: no bounds
-                             else f"checked by {self.task_class.__name__}"),
+                             _relative_range(f.type) or "any finite number" if get_origin(f.type) is Annotated
+                             else _shape(f.type, value)),
                          "value": _show(value)})
         for key, option in solver_options(self.solver).items():
             choices = get_args(option.annotation) if get_origin(option.annotation) is Literal else ()
@@ -661,3 +662,15 @@ def _allowed_at(loc):
     if head == "params":
         return list(Param.model_fields)
     return []
+
+
+def _relative_range(annotation) -> str:
+    """A range that depends on another input, declared as text (`annotated_types.doc`) on the field."""
+    return next((mark.documentation for mark in get_args(annotation)[1:] if isinstance(mark, DocInfo)), "")
+
+
+def _shape(annotation, value) -> str:
+    """What a field that is not a number takes: its choices, text or a table (its model checks it)."""
+    if get_origin(annotation) is Literal:
+        return " | ".join(map(str, get_args(annotation)))
+    return "text" if isinstance(value, str) else "a list or table (structure)"
