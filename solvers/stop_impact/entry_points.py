@@ -72,8 +72,8 @@ def rebound(task: LeverStop, *, method: Literal["closed_form", "quadrature", "od
     `t_deg`: `rebound_mm_<rpm>`. With `cross_check` the other two methods run as well and must
     agree within 1e-8 relative (else INACCURATE), and the event-driven simulation reports how far
     the single-mass eq. (2) is from a contact that switches stiffness (`rebound_event_mm_<rpm>`).
-    `arrays` hold each speed's history q(t) over the window of its first rebound (`t_s`,
-    `q_mm_<rpm>`, closed form: the speeds share the plate, so the window).
+    `arrays` hold each speed's history q(t) in closed form over the window of its first rebound
+    (`t_s`, `q_mm_<rpm>`; one window: it depends on the plate alone, not on the speed).
     """
     _need_speeds(task)
     task.need("t_deg")
@@ -123,7 +123,8 @@ def linearise_amplitude(task: LeverStop) -> Result:
     """The amplitude law for the LP: tangent of a(t) at `t_deg`, `speed_nominal_rpm`; the bound on
     t(3,7) that a <= `amplitude_limit_mm` gives, by the tangent and by the exact law (a falls
     with t: the exact bound is the root of a(t) = limit). Where the roller leaves its cam on the
-    way (effect cam_drive) the answer is INFEASIBLE (violated `cam_contact`), the tangent kept."""
+    way (effect cam_drive) the answer is INFEASIBLE (violated `cam_contact`), the tangent kept.
+    `arrays`: the exact a(t) at every t the root search evaluated, beside the tangent there."""
     task.need("amplitude_limit_mm")
     start = time.perf_counter()
     limit = task.amplitude_limit_mm
