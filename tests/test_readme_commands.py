@@ -1,5 +1,5 @@
-"""The README's command examples, run in order as written, in a fresh folder: every one must
-work. Grids are shrunk to 3 points a key and random draws to 5 (the README's sizes are for a
+"""The command examples of the README and of the pages that took its manual (docs/commands.md,
+docs/results.md), run in order as written, in a fresh folder: every one must work. Grids are shrunk to 3 points a key and random draws to 5 (the README's sizes are for a
 designer's machine); the Dask example runs on a local cluster standing in for `scheduler-host`.
 The `bench` lines run with `--repeats 1` (a missed timing target, exit 1, is a measurement on a
 busy machine, not a fault), and the `dask scheduler` / `dask worker` lines start services: those
@@ -15,10 +15,12 @@ from mechopt.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 LEFT_OUT = ("dask scheduler", "dask worker")
+# the front door, then the manual it links to: the README's commands before the move, in their order
+PAGES = ("README.md", "docs/commands.md", "docs/results.md")
 
 
 def readme_commands():
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    text = "\n".join((ROOT / page).read_text(encoding="utf-8") for page in PAGES)
     lines = []
     for block in re.findall(r"```bash\n(.*?)```", text, flags=re.S):
         for line in block.replace("\\\n", " ").splitlines():
@@ -65,3 +67,13 @@ def test_every_readme_command_runs_in_order(tmp_path, monkeypatch):
         cluster.close()
     assert {"cases", "describe", "run", "validate", "sweep", "report", "new", "fit-force", "bench"} <= set(ran)
     assert (tmp_path / "out" / "bench" / "cam_cutter_work_precision.png").is_file()
+
+
+def test_the_validation_counts_are_stated_once_over():
+    """README.md holds `mechopt validate`'s summary line (tests/test_scenes.py checks it against a
+    run); a page that quotes it quotes the same line."""
+    today = re.findall(r"Today: `[^`]+`", (ROOT / "README.md").read_text(encoding="utf-8"))
+    assert len(today) == 1
+    for page in (ROOT / "docs").rglob("*.md"):
+        quoted = re.findall(r"Today: `[^`]+`", " ".join(page.read_text(encoding="utf-8").split()))
+        assert all(q == today[0] for q in quoted), page.name

@@ -175,6 +175,17 @@ def verified_deviation_on(path, t_start, t_end, H, L, *, samples=2048, peaks=6, 
     return best_value, best_t
 
 
+def deviation_arrays(task, H, L, *, samples=1000):
+    """What a linkage (H, L) does along a task's path, one row per sample t [rad]: the path's
+    point, its nearest point on the limaçon and the distance between them [mm] (`--csv`'s columns)."""
+    t = np.linspace(task.t_start_rad, task.t_end_rad, samples)
+    px, py = task.path_point(t)
+    distance, s = foot_points(px, py, H, L)
+    lx, ly = _limacon(np.cos(s), np.sin(s), float(H), float(L))
+    return {"t_rad": t, "path_x_mm": px, "path_y_mm": py, "limacon_x_mm": lx, "limacon_y_mm": ly,
+            "deviation_mm": distance}
+
+
 def nodes_and_normals(t, a, h):
     """Ideal-path nodes and their outward normals at parameters t: (px, py, nx, ny)."""
     return (*ideal_point(t, a, h), *ideal_normal(t))

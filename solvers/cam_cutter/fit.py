@@ -33,6 +33,7 @@ from mechopt.models.cam_profile import MIN_LINK_PER_SIZE, ProfileFit
 from mechopt.models.errors import ModelError
 from mechopt.solvers.cam_cutter.certificate import box_lower_bound, grid_starts
 from mechopt.solvers.cam_cutter.deviation import (
+    deviation_arrays,
     foot_points,
     nodes_and_normals,
     normal_crossings,
@@ -110,7 +111,8 @@ def grid_scan(task: LinkageFit, *, count: Nodes = 1000,
                       message=f"no grid point keeps every node within err_width_mm={task.err_width_mm}; best "
                               f"achievable (minimax NLP, {best.status.value}): "
                               f"{best.values.get('max_deviation_mm', float('nan')):.4g} mm",
-                      violated=("err_width",), diagnostics=diagnostics)
+                      violated=("err_width",), diagnostics=diagnostics,
+                      arrays=best.arrays)           # the best achievable linkage along the path
     H, L = (float(v) for v in passing[0])
     deviation, where = verified_deviation(task.a_mm, task.h_mm, H, L, task.t_finish_rad)
     diagnostics |= {
@@ -132,7 +134,7 @@ def grid_scan(task: LinkageFit, *, count: Nodes = 1000,
     # the first passing point on a side of the box: the passing set may go on past it
     status, message = _on_edge(task, status, message, H, L, (H_grid[0], H_grid[-1], L_grid[0], L_grid[-1]))
     return Result(status, values, Timing(build, solve), message=message, violated=violated,
-                  diagnostics=diagnostics)
+                  diagnostics=diagnostics, arrays=deviation_arrays(task, H, L))
 
 
 def minimax(task: LinkageFit | ProfileFit, *, count: Nodes = 1000, slots: Annotated[int, Interval(ge=1, le=4096)] = 8,
@@ -254,7 +256,8 @@ def minimax(task: LinkageFit | ProfileFit, *, count: Nodes = 1000, slots: Annota
                                "active_bounds": on_bounds, "box_mm": [float(b) for b in box],
                                "box_widenings": widened,
                                "max_deviation_at_rad": where, "max_deviation_at_mm": where_xy,
-                               "t_finish_exact_rad": t_end, "starts": got["starts"]} | certificate)
+                               "t_finish_exact_rad": t_end, "starts": got["starts"]} | certificate,
+                  arrays=deviation_arrays(task, H, L))
 
 
 def _best_of(px, py, task, box, seeds, count, slots, max_rounds, nlp):
@@ -460,7 +463,8 @@ def robust(task: LinkageFit, *, count: Nodes = 1000, max_moves: Annotated[int, I
                   diagnostics={"minimax_H_mm": best.values["H_mm"], "minimax_L_mm": best.values["L_mm"],
                                "minimax_deviation_mm": best.values["max_deviation_mm"],
                                "lattice_points": len(memo), "global_certified": False,
-                               "global_note": "a lattice descent: a local minimum of the worst case"})
+                               "global_note": "a lattice descent: a local minimum of the worst case"},
+                  arrays=deviation_arrays(task, H, L))
 
 
 def evolve(task: LinkageFit, *, count: Nodes = 1000, popsize: Annotated[int, Interval(ge=5, le=1000)] = 15,
@@ -506,7 +510,7 @@ def evolve(task: LinkageFit, *, count: Nodes = 1000, popsize: Annotated[int, Int
                   message=message, violated=violated,
                   diagnostics={"generations": int(found.nit), "evaluations": int(found.nfev),
                                "nodes_max_deviation_mm": nodes_max, "active_bounds": on_bounds,
-                               "max_deviation_at_rad": where})
+                               "max_deviation_at_rad": where}, arrays=deviation_arrays(task, H, L))
 
 
 def check(task: LinkageCheck, *, count: Nodes = 1000,
@@ -536,7 +540,8 @@ def check(task: LinkageCheck, *, count: Nodes = 1000,
                    "nodes_failing": float(failing)},
                   Timing(0.0, time.perf_counter() - start), message=message,
                   violated=() if within else ("err_width",),
-                  diagnostics={"max_deviation_at_rad": where, "nodes": int(t.size), "node_rule": nodes})
+                  diagnostics={"max_deviation_at_rad": where, "nodes": int(t.size), "node_rule": nodes},
+                  arrays=deviation_arrays(task, H, L))
 
 
 _NLP_BUILDS = BuildCache("cam_cutter.minimax_nlp", maxsize=64)

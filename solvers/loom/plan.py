@@ -139,14 +139,27 @@ def _plan_lp(task, *, stress_form, tol_deg, backend, warm_start) -> Result:
     solve_s = time.perf_counter() - start - build_s
     if disagreement:
         return Result(Status.INACCURATE, values, Timing(build_s, solve_s), message=disagreement,
-                      violated=overstressed, diagnostics=diagnostics)
+                      violated=overstressed, diagnostics=diagnostics, arrays=plan_arrays(net, values, diagnostics))
     objective = "limiting_op_deg" if net.limiting else "span_deg"
     message = (f"{objective} = {values[objective]:.6g} ({backend}, {stress_form} stress, "
                f"{'compiled' if fresh else 'DPP re-solve'}); {SENSITIVITY_CONVENTION}")
     if overstressed:      # the tangent under-estimates sigma_max: the linearised optimum breaks the true limit
         message += f"; the linearised stress limit lets sigma_max exceed [sigma_H] on {', '.join(overstressed)}"
     return Result(Status.SOLVED, values, Timing(build_s, solve_s), message=message, violated=overstressed,
-                  diagnostics=diagnostics)
+                  diagnostics=diagnostics, arrays=plan_arrays(net, values, diagnostics))
+
+
+def plan_arrays(net, values, diagnostics) -> dict:
+    """The plan as a table, one row per operation named `operation` ("3->7"): its start and end
+    event times, its duration and its total float [deg] (`--csv`; the values hold the same by name)."""
+    p = np.array([values[f"p_{v}_deg"] for v in net.names])
+    keys = [f"{x}->{y}" for x, y in net.arcs]
+    arrays = {"operation": np.array(keys, dtype=str), "start_deg": p[net.tails], "end_deg": p[net.heads],
+              "duration_deg": p[net.heads] - p[net.tails]}
+    floats = diagnostics.get("float_deg")
+    if isinstance(floats, dict):            # else "not available" (round-off): no column
+        arrays["float_deg"] = [floats[k] for k in keys]
+    return arrays
 
 
 def _infeasible(chain, timing, diagnostics, note="") -> Result:
@@ -641,7 +654,7 @@ def _plan_graph(task, *, stress_form, tol_deg) -> Result:
     if overstressed:
         message += f"; the linearised stress limit lets sigma_max exceed [sigma_H] on {', '.join(overstressed)}"
     return Result(Status.SOLVED, values, Timing(build_s, time.perf_counter() - start - build_s), message=message,
-                  violated=overstressed, diagnostics=diagnostics)
+                  violated=overstressed, diagnostics=diagnostics, arrays=plan_arrays(net, values, diagnostics))
 
 
 def _longest_schedule(net, levels, back, tol):

@@ -22,12 +22,18 @@ from mechopt.solvers.stop_impact.law import (
     impact_at,
     rebound_amplitude_mm,
 )
-from mechopt.solvers.stop_impact.response import closed_form_amplitude_m, ode_amplitude_m, quadrature_amplitude_m
+from mechopt.solvers.stop_impact.response import (
+    closed_form_amplitude_m,
+    closed_form_response,
+    ode_amplitude_m,
+    quadrature_amplitude_m,
+)
 
 __all__ = ["cam_dynamics", "impact_forces", "linearise_amplitude", "natural_frequencies", "operating_point", "rebound"]
 
 AGREEMENT_REL = 1e-8            # the three methods must agree this well on every scene
 CAM_AGREEMENT_REL = 1e-7        # CVODES (reltol 1e-10) and DOP853 (1e-12) on the approach velocity
+HISTORY_POINTS = 513            # samples of a rebound history q(t) over the first rebound's window
 
 
 def natural_frequencies(task: LeverStop) -> Result:
@@ -48,13 +54,16 @@ def impact_forces(task: LeverStop) -> Result:
     _need_speeds(task)
     start = time.perf_counter()
     values = {"contact_time_s": task.contact_time_s}
+    table = {"speed_rpm": [], "impact_force_N": [], "impulse_Ns": [], "approach_velocity_m_s": []}
     for n in task.speeds_rpm:
         v0 = approach_velocity_m_s(task, n)
         F = float(task.impact_force_N(v0))
         values |= {f"impact_force_N_{_tag(n)}": F, f"impulse_Ns_{_tag(n)}": F * task.contact_time_s,
                    f"approach_velocity_m_s_{_tag(n)}": v0}
+        for name, value in zip(table, (n, F, F * task.contact_time_s, v0)):
+            table[name].append(value)            # the same, one row per speed (`--csv`)
     return Result(Status.SOLVED, values, Timing(0.0, time.perf_counter() - start),
-                  message="tau = half the natural period on the plate")
+                  message="tau = half the natural period on the plate", arrays=table)
 
 
 def rebound(task: LeverStop, *, method: Literal["closed_form", "quadrature", "ode"] = "closed_form",
@@ -63,17 +72,22 @@ def rebound(task: LeverStop, *, method: Literal["closed_form", "quadrature", "od
     `t_deg`: `rebound_mm_<rpm>`. With `cross_check` the other two methods run as well and must
     agree within 1e-8 relative (else INACCURATE), and the event-driven simulation reports how far
     the single-mass eq. (2) is from a contact that switches stiffness (`rebound_event_mm_<rpm>`).
+    `arrays` hold each speed's history q(t) in closed form over the window of its first rebound
+    (`t_s`, `q_mm_<rpm>`; one window: it depends on the plate alone, not on the speed).
     """
     _need_speeds(task)
     task.need("t_deg")
     methods = {"closed_form": _by_closed_form, "quadrature": _by_quadrature, "ode": _by_ode}
     start = time.perf_counter()
     build_s, values, diagnostics, status, notes = 0.0, {}, {}, Status.SOLVED, []
+    histories = {}
     for n in task.speeds_rpm:
         try:
             imp = impact_at(task, n)
         except RollerLeftCam as exc:
             return _without_cam(exc, values, Timing(build_s, time.perf_counter() - start - build_s))
+        t_s = histories.setdefault("t_s", np.linspace(0.0, imp.window_s, HISTORY_POINTS))
+        histories[f"q_mm_{_tag(n)}"] = closed_form_response(imp, t_s)[0] * 1e3
         runs = {name: methods[name](imp) for name in ([method] + [k for k in methods if k != method]
                                                       if cross_check else [method])}
         build_s += sum(r[2] for r in runs.values())
@@ -102,14 +116,15 @@ def rebound(task: LeverStop, *, method: Literal["closed_form", "quadrature", "od
     agreed = "closed form, quadrature and ODE agree within 1e-8" if cross_check else "no cross-check"
     message = f"{method}; " + ("; ".join(notes) if notes else agreed)
     return Result(status, values, Timing(build_s, time.perf_counter() - start - build_s), message=message,
-                  diagnostics=diagnostics)
+                  diagnostics=diagnostics, arrays=histories)
 
 
 def linearise_amplitude(task: LeverStop) -> Result:
     """The amplitude law for the LP: tangent of a(t) at `t_deg`, `speed_nominal_rpm`; the bound on
     t(3,7) that a <= `amplitude_limit_mm` gives, by the tangent and by the exact law (a falls
     with t: the exact bound is the root of a(t) = limit). Where the roller leaves its cam on the
-    way (effect cam_drive) the answer is INFEASIBLE (violated `cam_contact`), the tangent kept."""
+    way (effect cam_drive) the answer is INFEASIBLE (violated `cam_contact`), the tangent kept.
+    `arrays`: the exact a(t) at every t the root search evaluated, beside the tangent there."""
     task.need("amplitude_limit_mm")
     start = time.perf_counter()
     limit = task.amplitude_limit_mm
@@ -119,14 +134,21 @@ def linearise_amplitude(task: LeverStop) -> Result:
         slope, intercept = amplitude_law(task)
         t_linear = (limit - intercept) / slope
         values = {"slope_mm_per_deg": slope, "intercept_mm": intercept, "t_3_7_min_deg": t_linear}
-        exact = lambda t: float(rebound_amplitude_mm(task, n, t)) - limit
+        seen = {}           # a(t) at every t the root search asked for: the law's curve, at no cost
+
+        def exact(t):
+            seen[float(t)] = float(rebound_amplitude_mm(task, n, t))
+            return seen[float(t)] - limit
         lo, hi = _bracket(exact, task.t_deg, limit, n)
     except RollerLeftCam as exc:
         return _without_cam(exc, values, Timing(0.0, time.perf_counter() - start))
     t_exact = brentq(exact, lo, hi, xtol=1e-12, rtol=1e-14)
     values |= {"t_3_7_min_exact_deg": t_exact, "span_gain_deg": t_exact - t_linear,
                "amplitude_nominal_mm": float(rebound_amplitude_mm(task, n, task.t_deg))}
-    return Result(Status.SOLVED, values, Timing(0.0, time.perf_counter() - start),
+    t_deg = np.array(sorted(seen))
+    exact_mm = np.array([seen[t] for t in t_deg])
+    arrays = {"t_deg": t_deg, "amplitude_mm": exact_mm, "tangent_mm": intercept + slope * t_deg}    # t ascending
+    return Result(Status.SOLVED, values, Timing(0.0, time.perf_counter() - start), arrays=arrays,
                   message=f"tangent at t = {task.t_deg:g} deg, n = {n:g} rpm; a(t) is convex, so the tangent's "
                           f"bound is looser than the exact one by span_gain_deg")
 
@@ -151,18 +173,20 @@ def operating_point(task: LeverStop) -> Result:
               "approach_velocity_m_s": imp.v0_m_s, "contact_time_s": task.contact_time_s}
     if "impact_pulse" in task.effects:
         values["impact_force_N"] = float(task.impact_force_N(values["approach_velocity_m_s"]))
+    t_s = np.linspace(0.0, imp.window_s, HISTORY_POINTS)
+    history = {"t_s": t_s, "q_mm": closed_form_response(imp, t_s)[0] * 1e3}     # the rebound q(t)
     timing = Timing(build_s, time.perf_counter() - start - build_s)
     if ode_status is not Status.SOLVED:
-        return Result(Status.INACCURATE, values, timing,
+        return Result(Status.INACCURATE, values, timing, arrays=history,
                       message=f"the ODE cross-check gave {ode_status.value}: the law's "
                               f"{amplitude_mm:.4g} mm is unconfirmed")
     spread = abs(ode_m * 1e3 - amplitude_mm) / max(amplitude_mm, 1e-300)
     values["methods_rel_diff"] = spread
     if spread > AGREEMENT_REL:
-        return Result(Status.INACCURATE, values, timing,
+        return Result(Status.INACCURATE, values, timing, arrays=history,
                       message=f"exact law and ODE differ by {spread:.2e} relative at {n:g} rpm, {t:g} deg")
     within = amplitude_mm <= limit
-    return Result(Status.SOLVED if within else Status.INFEASIBLE, values, timing,
+    return Result(Status.SOLVED if within else Status.INFEASIBLE, values, timing, arrays=history,
                   violated=() if within else ("amplitude",),
                   message=f"{amplitude_mm:.4g} mm at {n:g} rpm, t = {t:g} deg: "
                           f"{'within' if within else 'above'} amplitude_limit_mm={limit:g}; "

@@ -87,7 +87,9 @@ def fit_roots(task: LeverStop, *, t_min_deg: Annotated[float, Interval(gt=0, lt=
                f"meet the law to {worst:.1e}" + (f"; the roller leaves its cam at t in {_span(gaps)}" if gaps else "")
                + (f"; roots next to that gap: {', '.join(f'{t:.3f}' for t in edge)} deg" if edge else ""))
     diagnostics = {"roots": [{"t_deg": t, "stroke_mm": H} | row for (t, H), row in zip(roots, table)], "gaps_deg": gaps}
-    return Result(status, values, timing(), message=message, diagnostics=diagnostics)
+    arrays = {"t_deg": [t for t, _ in roots], "stroke_mm": [H for _, H in roots]}     # one row per root
+    arrays |= {name: [row[name] for row in table] for name in table[0]}
+    return Result(status, values, timing(), message=message, diagnostics=diagnostics, arrays=arrays)
 
 
 class _Fit:
