@@ -1,7 +1,6 @@
 """A user's own machine from a CSV timing table (issue 22, build item 3): operations read from a
 CSV beside the scene, events named by the operations, per-operation windows and times, and the
 reader's errors naming file, line and column."""
-import shutil
 from pathlib import Path
 
 import pytest

@@ -87,7 +87,7 @@ def on_startup(command, dirty):
 
 def on_files(files, config):
     """mkdocs hook: add the generated page to the build (in memory)."""
-    from mkdocs.structure.files import File      # here: the page itself needs no mkdocs (tests read it)
+    from mkdocs.structure.files import File  # here: the page itself needs no mkdocs (tests read it)
     files.append(File.generated(config, PAGE, content=scene_reference()))
     return files
 

@@ -55,6 +55,13 @@ class PositiveCycle(Exception):
     """The constraints hold a cycle whose bounds sum to more than 0: no schedule exists."""
 
 
+def _relax(dist, weights, ends, segments):
+    """One pass over the levels: each segment's targets take the best of their arcs' far ends + weights."""
+    for a, b, starts, targets in segments:
+        best = np.maximum.reduceat(dist[ends[a:b]] + weights[a:b], starts)
+        dist[targets] = np.maximum(dist[targets], best)
+
+
 class Levels:
     """A DAG's arcs grouped by topological level for vectorised longest-path passes.
 
@@ -76,19 +83,11 @@ class Levels:
 
     def forward(self, dist: np.ndarray, w: np.ndarray) -> None:
         """dist[v] = max(dist[v], dist[u] + w) over every DAG path, in place."""
-        wv = w[self.forward_order]
-        t = self._t_fwd
-        for a, b, starts, targets in self.forward_segments:
-            best = np.maximum.reduceat(dist[t[a:b]] + wv[a:b], starts)
-            dist[targets] = np.maximum(dist[targets], best)
+        _relax(dist, w[self.forward_order], self._t_fwd, self.forward_segments)
 
     def backward(self, dist: np.ndarray, w: np.ndarray) -> None:
         """dist[u] = max(dist[u], w + dist[v]) over every DAG path (distances *to* a target), in place."""
-        wv = w[self.backward_order]
-        h = self._h_bwd
-        for a, b, starts, targets in self.backward_segments:
-            best = np.maximum.reduceat(dist[h[a:b]] + wv[a:b], starts)
-            dist[targets] = np.maximum(dist[targets], best)
+        _relax(dist, w[self.backward_order], self._h_bwd, self.backward_segments)
 
     def longest_from(self, source: int, w: np.ndarray, back: BackArcs = NO_BACK_ARCS) -> np.ndarray:
         """Longest distances from `source` to every event (-inf: unreachable) [deg]; PositiveCycle

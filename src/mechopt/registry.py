@@ -16,7 +16,6 @@ from mechopt.solvers import interrupt
 from mechopt.solvers.result import Result, Status
 from mechopt.units import unit_of
 
-
 # Every check's verdict, the misses first: the order in which validate lists and counts them.
 VERDICTS = ("failed", "unexpectedly_reproduced", "not_reproduced", "not_reproducible",
             "reproduced", "calibrated", "derived")

@@ -3,7 +3,6 @@ for a repaired LP (loom.repair_cyclogram) each exact limit's excess over the rou
 from mechopt.figures.registry import new_figure, register
 from mechopt.models.loom import Cyclogram
 
-
 ROW_IN = 0.35              # inches per operation row on a small network ...
 DENSE_ROWS = 40           # ... past which rows narrow to DENSE_ROW_IN and bars lose their own labels
 DENSE_ROW_IN = 0.17
