@@ -31,7 +31,7 @@ import statistics
 import time
 
 from mechopt import registry
-from mechopt.models.cache import clear as clear_caches
+from mechopt.cache import clear as clear_caches
 from mechopt.models.cam_cutter import ToolFamily
 from mechopt.plots import save_figure
 from mechopt.solvers.cam_cutter import family as family_fit

@@ -36,7 +36,7 @@ import scipy.sparse as sp
 from scipy.optimize import linprog
 
 from mechopt import registry
-from mechopt.models.cache import clear as clear_caches
+from mechopt.cache import clear as clear_caches
 from mechopt.models.loom import Cyclogram
 from mechopt.plots import save_figure
 from mechopt.solvers.loom import HeldLP, build_event_time_lp, incidence, max_machine_speed, plan_cyclogram

@@ -31,7 +31,7 @@ from scipy.optimize import minimize
 
 import mechopt
 from mechopt import registry
-from mechopt.models import cache
+from mechopt import cache
 from mechopt.plots import save_figure
 from mechopt.solvers import press as pd
 

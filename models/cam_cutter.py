@@ -24,9 +24,9 @@ import numpy as np
 from annotated_types import Ge, Gt, Interval, Le, doc
 from scipy.optimize import brentq
 
-from mechopt.models.cache import memoised
+from mechopt.cache import memoised
+from mechopt.errors import ModelError
 from mechopt.models.effects import Effect
-from mechopt.models.errors import ModelError
 
 
 def ideal_point(t, a, h=0.0, m=np):

@@ -33,8 +33,8 @@ import math
 import casadi as ca
 import numpy as np
 
-from mechopt.models.cache import memoised
-from mechopt.models.errors import ModelError
+from mechopt.cache import memoised
+from mechopt.errors import ModelError
 
 LAWS = ("cycloidal", "modified_sine", "polynomial_345", "harmonic")
 

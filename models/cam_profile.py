@@ -30,8 +30,8 @@ import numpy as np
 from annotated_types import Ge, Gt, Interval, doc
 from scipy.interpolate import CubicSpline
 
+from mechopt.errors import ModelError
 from mechopt.models.cam_cutter import LinkageFit, real_point
-from mechopt.models.errors import ModelError
 
 FUNCTIONS = ("sin", "cos", "tan", "exp", "log", "sqrt", "abs")
 _BINARY = {ast.Add: lambda a, b: a + b, ast.Sub: lambda a, b: a - b, ast.Mult: lambda a, b: a * b,

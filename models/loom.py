@@ -50,8 +50,8 @@ import networkx as nx
 import numpy as np
 from annotated_types import Gt, Le, Lt
 
+from mechopt.errors import MechoptError, ModelError
 from mechopt.models.effects import Effect
-from mechopt.models.errors import MechoptError, ModelError
 from mechopt.models.stop_impact import LeverStop
 
 STRESS_FORMS = ("exact", "linear")

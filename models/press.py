@@ -68,9 +68,9 @@ import numpy as np
 from annotated_types import Ge, Gt, Le, Lt
 from scipy.optimize import brentq
 
-from mechopt.models.cache import memoised
+from mechopt.cache import memoised
+from mechopt.errors import ModelError
 from mechopt.models.effects import Effect, check_effects
-from mechopt.models.errors import ModelError
 
 KINEMATICS = ("paper", "exact")
 FORCE_KEYS = ("force_c1_N_mm", "force_c2_N_mm2", "force_c3_N_mm3", "force_c4_N_mm4")

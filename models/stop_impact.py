@@ -61,9 +61,9 @@ from typing import Annotated, ClassVar, Literal
 
 from annotated_types import Interval
 
+from mechopt.errors import ModelError, require
 from mechopt.models.cam_follower import LAWS
 from mechopt.models.effects import Effect, check_effects
-from mechopt.models.errors import ModelError
 
 
 def reduced_stiffness_N_per_m(E_GPa, J_x_mm4, a_mm, b_mm):
@@ -347,5 +347,4 @@ MAX_FREQUENCY_HZ = 1e5      # a lever's natural frequency: past it the solvers' 
 
 
 def _require(task, key, ok, what):
-    if not ok:
-        raise ModelError(f"{key}={getattr(task, key)} {what}", key=key)
+    require(ok, f"{key}={getattr(task, key)} {what}", key=key)

@@ -7,7 +7,7 @@ from enum import Enum
 
 import numpy as np
 
-from mechopt.models.errors import SolverError
+from mechopt.errors import SolverError
 
 
 class Status(str, Enum):

@@ -13,7 +13,7 @@ from typing import Annotated, Literal, get_args, get_origin
 
 from annotated_types import Ge, Gt, Interval, Le
 
-from mechopt.models.errors import ModelError
+from mechopt.errors import SettingError
 
 Positive = Annotated[float, Gt(0)]
 NonNegative = Annotated[float, Ge(0)]
@@ -26,12 +26,12 @@ __all__ = ["Positive", "NonNegative", "Tolerance", "Count", "Ge", "Gt", "Interva
 
 def check_settings(solver, **values) -> None:
     """Settings of a direct call against the ranges the solver's signature declares, as the scene
-    loader checks them: a one-line ModelError naming the key, never a traceback from inside."""
+    loader checks them: a one-line SettingError naming the key, never a traceback from inside."""
     options = inspect.signature(solver).parameters
     for key, value in values.items():
         problem = setting_problem(options[key], value)
         if problem:
-            raise ModelError(f"{key}={value!r}: {problem}", key=key)
+            raise SettingError(f"{key}={value!r}: {problem}", key=key)
 
 
 def setting_problem(option: inspect.Parameter, value) -> str:

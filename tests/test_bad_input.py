@@ -3,7 +3,7 @@ one line naming the file, the key and what is allowed; the scene is left as it w
 import pytest
 
 from mechopt import registry
-from mechopt.models.errors import SceneError
+from mechopt.errors import SceneError
 from mechopt.scene import load
 
 

@@ -4,8 +4,8 @@ import dataclasses
 import numpy as np
 import pytest
 
+from mechopt.errors import ModelError
 from mechopt.models.cam_cutter import LinkageLoads, linkage_energy, linkage_positions, real_point, real_velocity
-from mechopt.models.errors import ModelError
 from mechopt.solvers.cam_cutter.kinetostatics import joint_loads, load_system
 from mechopt.solvers.result import Status
 

@@ -10,6 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from mechopt.errors import ModelError
 from mechopt.models.cam_cutter import (
     LinkageFit,
     decimal_reading,
@@ -22,7 +23,6 @@ from mechopt.models.cam_cutter import (
     real_point,
     real_velocity,
 )
-from mechopt.models.errors import ModelError
 
 PROPERTY = settings(max_examples=40, deadline=None)
 T_FINISH_PUBLISHED_RAD = 2.7329      # Podchasov (2021), Sec. IV: "t_FINISH = 2.7329 rad" (a = 25 mm, h = 2 mm)

@@ -11,6 +11,7 @@ from scipy.optimize import minimize
 from scipy.spatial import cKDTree
 
 from mechopt import registry
+from mechopt.errors import ModelError, SceneError
 from mechopt.models.cam_cutter import LinkageFit, finish_angle, ideal_normal, ideal_point
 from mechopt.models.cam_profile import (
     ExpressionCurve,
@@ -20,7 +21,6 @@ from mechopt.models.cam_profile import (
     place,
     unit_normal,
 )
-from mechopt.models.errors import ModelError, SceneError
 from mechopt.solvers.cam_cutter import minimax
 from mechopt.solvers.result import Status
 

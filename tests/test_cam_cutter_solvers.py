@@ -14,8 +14,8 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from mechopt import registry
+from mechopt.errors import ModelError, SceneError, SettingError, SolverError
 from mechopt.models.cam_cutter import LinkageCheck, LinkageFit, ideal_normal, ideal_point, limacon_implicit
-from mechopt.models.errors import ModelError, SceneError, SolverError
 from mechopt.solvers.cam_cutter.deviation import normal_deviation, path_distance, verified_deviation
 from mechopt.solvers.cam_cutter.fit import check, evolve, grid_scan, minimax, robust
 from mechopt.solvers.result import Result, Status, Timing, from_ipopt, from_sqpmethod
@@ -671,9 +671,9 @@ def test_box_without_a_lattice_point_is_refused_by_every_lattice_solver(task, so
     (evolve, "seed", -1, r"allowed >= 0"),
     (robust, "max_moves", 0, r"allowed 1 \.\.\. 100,000"),
 ])
-def test_setting_outside_its_declared_range_is_one_model_error(task, solver, setting, value, allowed):
+def test_setting_outside_its_declared_range_is_one_setting_error(task, solver, setting, value, allowed):
     # the loader refuses these from a scene; a direct call gets the same range, not a traceback
-    with pytest.raises(ModelError, match=rf"^{setting}={value!r}: {allowed}$") as err:
+    with pytest.raises(SettingError, match=rf"^{setting}={value!r}: {allowed}$") as err:
         solver(task, **{setting: value})
     assert err.value.key == setting
 

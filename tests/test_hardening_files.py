@@ -11,7 +11,7 @@ import pytest
 
 from mechopt import cli, files, registry
 from mechopt import sweep as sw
-from mechopt.models.errors import SceneError
+from mechopt.errors import SceneError
 
 LOOM = "loom/group1"
 

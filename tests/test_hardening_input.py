@@ -14,8 +14,8 @@ import pytest
 
 from mechopt import cli, registry
 from mechopt import sweep as sw
+from mechopt.errors import ModelError, SceneError
 from mechopt.files import quote, read_regular
-from mechopt.models.errors import ModelError, SceneError
 from mechopt.scene import load, loads, parse_overrides
 from mechopt.tables import read_rows
 
@@ -276,7 +276,7 @@ def test_derive_naming_a_missing_scene_names_the_file_and_the_key(tmp_path):
 
 
 def test_a_solver_error_is_not_solved_not_bad_input(monkeypatch, capsys):
-    from mechopt.models.errors import SolverError
+    from mechopt.errors import SolverError
     monkeypatch.setattr(registry, "run", lambda *a, **k: (_ for _ in ()).throw(SolverError("CVODES gave up")))
     assert cli.main(["run", "loom/group1"]) == cli.NOT_SOLVED
     assert capsys.readouterr().err.strip() == "error: not solved: CVODES gave up"

@@ -14,7 +14,7 @@ import pytest
 
 from mechopt import cli, registry
 from mechopt import sweep as sw
-from mechopt.models.errors import SolverError
+from mechopt.errors import SolverError
 from mechopt.solvers import interrupt
 from mechopt.solvers.result import Result, Status
 

@@ -12,7 +12,8 @@ from mechopt.benchmarks import STUDIES, study
 from mechopt.figures import FIGURES
 
 ROOT = Path(__file__).resolve().parents[1]
-SPINE = {"mechopt." + p.stem for p in (ROOT / "src" / "mechopt").glob("*.py")} | {"mechopt.figures", "mechopt.benchmarks"}
+KIT = {"mechopt.errors", "mechopt.cache"}          # importable from every layer; imports nothing of mechopt
+SPINE = ({"mechopt." + p.stem for p in (ROOT / "src" / "mechopt").glob("*.py")} - KIT) | {"mechopt.figures", "mechopt.benchmarks"}
 IO = {"tomllib", "json", "pyarrow", "pickle", "shelve", "csv", "sqlite3", "shutil", "tempfile", "dask", "distributed"}
 
 
@@ -35,6 +36,12 @@ def offending(folder: str, forbidden) -> dict[str, list[str]]:
         if hits:
             bad[str(path.relative_to(ROOT))] = hits
     return bad
+
+
+def test_the_kit_imports_nothing_of_mechopt():
+    for name in KIT:
+        path = ROOT / "src" / "mechopt" / f"{name.split('.')[1]}.py"
+        assert not {m for m in imports_of(path) if m.startswith("mechopt")}, path
 
 
 def test_no_model_imports_a_solver_the_spine_or_io():
@@ -75,8 +82,8 @@ def test_every_scenes_task_class_has_registered_figures():
 
 
 def test_a_task_without_figures_is_an_error_not_an_empty_list():
+    from mechopt.errors import MechoptError
     from mechopt.figures.registry import figures_of
-    from mechopt.models.errors import MechoptError
     scene = registry.find("loom/group1")
 
     class Unregistered:

@@ -8,7 +8,7 @@ import scipy.sparse as sp
 from scipy.optimize import linprog
 
 from mechopt import registry
-from mechopt.models.errors import ModelError
+from mechopt.errors import ModelError
 from mechopt.models.loom import Cyclogram
 from mechopt.solvers.loom import plan_cyclogram, repair_cyclogram
 from mechopt.solvers.loom.graph import BackArcs, Levels, PositiveCycle

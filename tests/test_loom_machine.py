@@ -6,7 +6,7 @@ from pathlib import Path
 import pytest
 
 from mechopt import registry
-from mechopt.models.errors import ModelError, SceneError
+from mechopt.errors import ModelError, SceneError
 from mechopt.models.loom import Cyclogram
 from mechopt.scene import load
 from mechopt.solvers.loom import plan_cyclogram

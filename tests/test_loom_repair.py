@@ -19,7 +19,7 @@ from stop_impact_fitted import FREE, J_A_FITTED_KGM2, LEVER
 
 import mechopt.solvers.loom.repair as loom_solver
 from mechopt import clear_caches, registry
-from mechopt.models.errors import ModelError, SceneError
+from mechopt.errors import ModelError, SceneError
 from mechopt.models.loom import lever_stop
 from mechopt.solvers.loom import plan_cyclogram, repair_cyclogram
 from mechopt.solvers.result import Status

@@ -12,8 +12,8 @@ import pytest
 
 from mechopt import registry
 from mechopt.benchmarks.loom import layered
-from mechopt.models.cache import clear as clear_caches
-from mechopt.models.errors import SolverError
+from mechopt.cache import clear as clear_caches
+from mechopt.errors import SolverError
 from mechopt.models.loom import Cyclogram
 from mechopt.solvers.loom import plan as cyclogram_lp
 from mechopt.solvers.loom import plan_cyclogram

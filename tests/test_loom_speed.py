@@ -16,7 +16,7 @@ from stop_impact_fitted import FREE, J_A_FITTED_KGM2, LEVER
 
 import mechopt.solvers.loom.repair as loom_solver
 from mechopt import clear_caches, registry
-from mechopt.models.errors import ModelError
+from mechopt.errors import ModelError
 from mechopt.models.loom import Cyclogram, lever_stop
 from mechopt.solvers.loom import exact_amplitude_bound, max_machine_speed, plan_cyclogram
 from mechopt.solvers.result import Status

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from mechopt import load
-from mechopt.models.errors import ModelError
+from mechopt.errors import ModelError
 from mechopt.solvers.press import catalogue, design
 from mechopt.solvers.result import Status
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from mechopt import load
-from mechopt.models.errors import ModelError
+from mechopt.errors import ModelError
 from mechopt.models.press import design_parameters, dynamics, equations, structure
 from mechopt.solvers.press import design, steady_state
 from mechopt.solvers.result import Status

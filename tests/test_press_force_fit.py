@@ -6,8 +6,8 @@ Instron experiment (its 60 readings are not published).
 import numpy as np
 import pytest
 
+from mechopt.errors import ModelError
 from mechopt.force_data import read_force_csv
-from mechopt.models.errors import ModelError
 from mechopt.models.press import cutting_force_N
 from mechopt.solvers.press.force_fit import fit_force
 from mechopt.solvers.result import Status

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from mechopt import registry
-from mechopt.models.errors import ModelError
+from mechopt.errors import ModelError
 from mechopt.solvers.press import sensitivity
 from mechopt.solvers.press.sensitivity import OUTPUTS
 from mechopt.solvers.result import Status

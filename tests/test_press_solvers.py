@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from mechopt import registry
-from mechopt.models.errors import ModelError
+from mechopt.errors import ModelError
 from mechopt.models.press import PressDrive, mean_crank_inertia_kgm2
 from mechopt.solvers import press as pd
 from mechopt.solvers.press import problem
@@ -380,7 +380,7 @@ def test_work_past_the_stated_limits_is_refused_before_it_starts(call, match):
 def test_a_set_override_past_the_limits_is_refused_naming_the_key():
     with pytest.raises(ModelError, match=r"duration_s=3600\.0 means about"):
         registry.run(registry.find("press/start-up"), {"duration_s": 3600.0})
-    from mechopt.models.errors import SceneError
+    from mechopt.errors import SceneError
     with pytest.raises(SceneError, match=r"max_events"):
         registry.run(registry.find("press/start-up"), {"max_events": 10**7})
 
@@ -454,7 +454,7 @@ def test_the_nominal_speed_under_a_motor_is_said_to_be_a_start_guess_only():
 def test_a_what_if_re_solves_on_the_structures_build_from_the_last_orbit():
     """Issue 24: other numbers, same structure: no new build (equations, revolution), the orbit
     warm-started from the last one by chord steps, and the same orbit as a cold solve."""
-    from mechopt.models.cache import clear
+    from mechopt.cache import clear
     from mechopt.models.press import equations
     pd.steady_state(PAPER)
     builds = len(equations.cache), len(problem.revolution.cache)

@@ -8,7 +8,7 @@ import pytest
 import mechopt
 from mechopt import registry
 from mechopt.cli import main
-from mechopt.models.errors import SceneError
+from mechopt.errors import SceneError
 from mechopt.plots import plot_run
 from mechopt.scene import load, parse_overrides
 from mechopt.solvers.cam_cutter.deviation import verified_deviation

@@ -3,7 +3,7 @@ never a long run or an input error for a physical outcome."""
 import pytest
 
 from mechopt import registry
-from mechopt.models.errors import SceneError
+from mechopt.errors import SceneError
 from mechopt.solvers.result import Status
 
 

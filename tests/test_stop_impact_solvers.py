@@ -14,7 +14,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from stop_impact_fitted import fitted_task
 
-from mechopt.models.errors import ModelError
+from mechopt.errors import ModelError
 from mechopt.models.stop_impact import Impact
 from mechopt.solvers.result import Status, from_casadi_integrator, from_quadpack
 from mechopt.solvers.stop_impact import entry_points, response

@@ -8,7 +8,7 @@ import pytest
 
 from mechopt import registry
 from mechopt.cli import main
-from mechopt.models.errors import SolverError
+from mechopt.errors import SolverError
 from mechopt.models.press import cutting_force_N, travel_m
 from mechopt.models.validity import PAPER_KINEMATICS_TOLERANCE, out_of_range, paper_kinematics_error
 from mechopt.solvers.result import Result, Status, Timing

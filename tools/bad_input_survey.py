@@ -144,7 +144,7 @@ def second_writer(rows):
     fd = os.open(str(out) + ".lock", os.O_RDWR | os.O_CREAT)
     fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
     held.append(fd)
-from mechopt.models.errors import MechoptError
+from mechopt.errors import MechoptError
 try:
     sweep.sweep(registry.find("loom/group1"), [sweep.parse_grid("amplitude_limit_mm=0.1:0.12:4")], out=out,
                 chunk=1, progress=False, on_chunk=second_writer)

@@ -21,7 +21,7 @@ from typing import Literal
 import casadi as ca
 import numpy as np
 
-from mechopt.models.cache import BuildCache
+from mechopt.cache import BuildCache
 from mechopt.models.cam_cutter import (
     PAPER_A_MM,
     ToolFamily,

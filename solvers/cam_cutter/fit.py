@@ -19,7 +19,8 @@ import casadi as ca
 import numpy as np
 from scipy.optimize import differential_evolution
 
-from mechopt.models.cache import BuildCache
+from mechopt.cache import BuildCache
+from mechopt.errors import ModelError
 from mechopt.models.cam_cutter import (
     PAPER_A_MM,
     LinkageCheck,
@@ -30,7 +31,6 @@ from mechopt.models.cam_cutter import (
     real_point,
 )
 from mechopt.models.cam_profile import MIN_LINK_PER_SIZE, ProfileFit
-from mechopt.models.errors import ModelError
 from mechopt.solvers.cam_cutter.certificate import box_lower_bound, grid_starts
 from mechopt.solvers.cam_cutter.deviation import (
     deviation_arrays,

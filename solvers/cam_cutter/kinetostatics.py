@@ -12,7 +12,7 @@ import time
 import casadi as ca
 import numpy as np
 
-from mechopt.models.cache import BuildCache
+from mechopt.cache import BuildCache
 from mechopt.models.cam_cutter import LOAD_UNKNOWNS, LinkageLoads, linkage_energy, linkage_positions
 from mechopt.solvers.result import Result, Status, Timing
 from mechopt.solvers.settings import Annotated, Interval, check_settings

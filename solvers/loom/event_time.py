@@ -8,7 +8,7 @@ import numpy as np
 import scipy.sparse as sp
 from cvxpy.reductions.solvers.conic_solvers.highs_conif import HIGHS as HIGHS_SOLVER
 
-from mechopt.models.errors import SolverError
+from mechopt.errors import SolverError
 from mechopt.solvers.highs import banner_to_stderr
 from mechopt.solvers.result import Status, from_cvxpy
 

@@ -28,8 +28,8 @@ import cvxpy as cp
 import networkx as nx
 import numpy as np
 
-from mechopt.models.cache import BuildCache
-from mechopt.models.errors import ModelError
+from mechopt.cache import BuildCache
+from mechopt.errors import ModelError
 from mechopt.models.loom import Cyclogram, amplitude_mm, stress_bound_deg, stress_MPa
 from mechopt.solvers.loom.event_time import EventTimeLP, build_event_time_lp
 from mechopt.solvers.loom.graph import BackArcs, Levels, PositiveCycle, a_path, tight_arcs

@@ -11,8 +11,8 @@ from typing import Annotated, Literal
 import numpy as np
 from scipy.optimize import brentq
 
-from mechopt.models.cache import BuildCache
-from mechopt.models.errors import ModelError
+from mechopt.cache import BuildCache
+from mechopt.errors import ModelError
 from mechopt.models.loom import Cyclogram, stress_bound_deg, stress_MPa
 from mechopt.solvers.loom.plan import plan_cyclogram
 from mechopt.solvers.result import Result, Status, Timing

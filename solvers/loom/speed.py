@@ -8,8 +8,8 @@ from typing import Annotated, Literal
 import cvxpy as cp
 import numpy as np
 
-from mechopt.models.cache import BuildCache
-from mechopt.models.errors import ModelError
+from mechopt.cache import BuildCache
+from mechopt.errors import ModelError
 from mechopt.models.loom import MAX_RPM, Cyclogram
 from mechopt.solvers.loom.event_time import HeldLP, incidence
 from mechopt.solvers.loom.graph import Levels, a_path, tight_arcs

@@ -11,7 +11,7 @@ import time
 
 import numpy as np
 
-from mechopt.models.errors import ModelError
+from mechopt.errors import ModelError
 from mechopt.models.press import PressCatalogue
 from mechopt.solvers.press.design import design
 from mechopt.solvers.press.periodic import steady_state

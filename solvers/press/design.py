@@ -21,8 +21,8 @@ import casadi as ca
 import numpy as np
 from scipy.integrate import simpson
 
-from mechopt.models.cache import memoised
-from mechopt.models.errors import ModelError
+from mechopt.cache import memoised
+from mechopt.errors import ModelError
 from mechopt.models.press import (
     BOUNDS,
     Dynamics,

@@ -7,7 +7,7 @@ import time
 
 import numpy as np
 
-from mechopt.models.errors import MechoptError, ModelError
+from mechopt.errors import MechoptError, ModelError
 from mechopt.models.press import PressDrive
 from mechopt.solvers.press.problem import (
     RIGID_LIMIT,

@@ -6,8 +6,8 @@ import time
 import casadi as ca
 import numpy as np
 
-from mechopt.models.cache import memoised
-from mechopt.models.errors import ModelError
+from mechopt.cache import memoised
+from mechopt.errors import ModelError
 from mechopt.models.press import PressDrive
 from mechopt.solvers.press.problem import (
     Duration,

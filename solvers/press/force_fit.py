@@ -11,7 +11,7 @@ import time
 
 import numpy as np
 
-from mechopt.models.errors import ModelError
+from mechopt.errors import ModelError
 from mechopt.solvers.result import Result, Status, Timing
 
 __all__ = ["fit_force"]

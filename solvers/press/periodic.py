@@ -6,8 +6,8 @@ import time
 
 import numpy as np
 
-from mechopt.models.cache import BuildCache
-from mechopt.models.errors import MechoptError, ModelError
+from mechopt.cache import BuildCache
+from mechopt.errors import MechoptError, ModelError
 from mechopt.models.press import (
     PressDrive,
     breakdown_torque_at_crank_Nm,

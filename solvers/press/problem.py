@@ -11,8 +11,8 @@ import casadi as ca
 import numpy as np
 from annotated_types import Interval
 
-from mechopt.models.cache import memoised
-from mechopt.models.errors import ModelError
+from mechopt.cache import memoised
+from mechopt.errors import ModelError
 from mechopt.models.press import (
     FORCE_KEYS,
     PARAMETERS,

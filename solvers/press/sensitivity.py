@@ -13,7 +13,7 @@ import time
 import casadi as ca
 import numpy as np
 
-from mechopt.models.errors import ModelError
+from mechopt.errors import ModelError
 from mechopt.models.press import WORK_NAMES, Equations, PressDrive, equations, parameters, structure
 from mechopt.solvers.press.periodic import steady_state
 from mechopt.solvers.press.problem import TWO_PI, check_task

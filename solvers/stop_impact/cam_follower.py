@@ -16,9 +16,9 @@ import casadi as ca
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from mechopt.models.cache import BuildCache
+from mechopt.cache import BuildCache
+from mechopt.errors import MechoptError
 from mechopt.models.cam_follower import law_function, law_values, relative_acceleration, rise_duration_s
-from mechopt.models.errors import MechoptError
 from mechopt.models.stop_impact import LeverStop
 from mechopt.solvers.result import Status, from_casadi_integrator, from_ivp
 

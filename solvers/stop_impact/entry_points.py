@@ -8,8 +8,8 @@ from typing import Literal
 import numpy as np
 from scipy.optimize import brentq
 
+from mechopt.errors import ModelError, SolverError
 from mechopt.models.cam_follower import law_values
-from mechopt.models.errors import ModelError, SolverError
 from mechopt.models.stop_impact import LeverStop
 from mechopt.solvers.result import Result, Status, Timing
 from mechopt.solvers.settings import Annotated, Interval, Tolerance

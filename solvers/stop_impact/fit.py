@@ -15,7 +15,7 @@ import time
 import numpy as np
 from scipy.optimize import brentq
 
-from mechopt.models.errors import ModelError
+from mechopt.errors import ModelError
 from mechopt.models.stop_impact import LeverStop
 from mechopt.solvers.result import Result, Status, Timing
 from mechopt.solvers.settings import Annotated, Interval, NonNegative, Positive, Tolerance

@@ -10,8 +10,8 @@ Two sources of the approach velocity v0, by the task's effects:
 """
 import numpy as np
 
-from mechopt.models.cache import memoised
-from mechopt.models.errors import ModelError, SolverError
+from mechopt.cache import memoised
+from mechopt.errors import ModelError, SolverError
 from mechopt.models.stop_impact import Impact, LeverStop
 from mechopt.solvers.result import Status
 from mechopt.solvers.stop_impact.cam_follower import follow_cam

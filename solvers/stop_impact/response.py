@@ -19,8 +19,8 @@ import numpy as np
 from scipy.integrate import quad
 from scipy.optimize import minimize_scalar
 
-from mechopt.models.cache import BuildCache
-from mechopt.models.errors import MechoptError
+from mechopt.cache import BuildCache
+from mechopt.errors import MechoptError
 from mechopt.models.stop_impact import Impact
 from mechopt.solvers.result import Status, from_casadi_integrator, from_quadpack
 

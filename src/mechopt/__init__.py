@@ -25,8 +25,8 @@ from contextlib import contextmanager
 from importlib.metadata import PackageNotFoundError, version
 
 from mechopt import sweep as _studies
-from mechopt.models.cache import clear as clear_caches
-from mechopt.models.errors import MechoptError, ModelError, SceneError, SolverError
+from mechopt.cache import clear as clear_caches
+from mechopt.errors import MechoptError, ModelError, SceneError, SettingError, SolverError
 from mechopt.registry import Run, add_cases
 from mechopt.registry import all_scenes as scenes
 from mechopt.registry import find as load
@@ -38,7 +38,7 @@ except PackageNotFoundError:        # imported from a source tree that was never
     __version__ = "0+unknown"
 
 __all__ = ["load", "solve", "sweep", "describe", "scenes", "add_cases", "clear_caches", "Run", "Result", "Status",
-           "MechoptError", "ModelError", "SceneError", "SolverError", "__version__"]
+           "MechoptError", "ModelError", "SceneError", "SettingError", "SolverError", "__version__"]
 
 
 def solve(scene, overrides: dict | None = None, **more) -> Run:

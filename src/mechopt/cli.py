@@ -21,8 +21,8 @@ from pathlib import Path
 from mechopt import __version__, registry
 from mechopt.benchmarks import STUDIES, study
 from mechopt.drivers import set_mostly_by
+from mechopt.errors import MechoptError, SceneError, SolverError
 from mechopt.files import write_text_atomic
-from mechopt.models.errors import MechoptError, SceneError, SolverError
 from mechopt.scene import parse_overrides
 from mechopt.solvers import interrupt
 from mechopt.solvers.result import Status

@@ -7,9 +7,9 @@ from importlib.resources import files
 from pathlib import Path
 from typing import Any
 
+from mechopt.cache import memoised
 from mechopt.drivers import elasticities, uncertain_inputs
-from mechopt.models.cache import memoised
-from mechopt.models.errors import MechoptError, SceneError
+from mechopt.errors import MechoptError, SceneError
 from mechopt.models.validity import out_of_range
 from mechopt.scene import Scene, load, scene_files
 from mechopt.solvers import interrupt

@@ -19,9 +19,9 @@ from typing import Annotated, Any, Literal, get_args, get_origin
 from annotated_types import DocInfo
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
+from mechopt.cache import memoised
+from mechopt.errors import MechoptError, ModelError, SceneError, SettingError
 from mechopt.files import quote, read_regular
-from mechopt.models.cache import memoised
-from mechopt.models.errors import MechoptError, ModelError, SceneError
 from mechopt.solvers.result import Status
 from mechopt.solvers.settings import declared_range, describe_range, setting_problem
 from mechopt.tables import number, read_records, read_rows
@@ -635,11 +635,11 @@ def _check_settings(path, solver, settings):
     options = solver_options(solver)
     for key, value in settings.items():
         if key not in options:
-            raise SceneError(f"{path}: solver_settings.{key}: unknown setting of {solver.__name__}; "
+            raise SettingError(f"{path}: solver_settings.{key}: unknown setting of {solver.__name__}; "
                              f"allowed: {', '.join(options) or 'none'}", key=key)
         problem = setting_problem(options[key], value)
         if problem:
-            raise SceneError(f"{path}: solver_settings.{key} = {value!r}: {problem}", key=key)
+            raise SettingError(f"{path}: solver_settings.{key} = {value!r}: {problem}", key=key)
     return {k: (float(v) if type(options[k].default) is float else v) for k, v in settings.items()}
 
 

@@ -49,9 +49,9 @@ import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
 from mechopt import registry
+from mechopt.cache import BuildCache
+from mechopt.errors import MechoptError, SceneError, SolverError
 from mechopt.files import holds, quote, recorded, shipped, take_lock, write_bytes_atomic
-from mechopt.models.cache import BuildCache
-from mechopt.models.errors import MechoptError, SceneError, SolverError
 from mechopt.scene import Scene, loads, path_head, solver_options, split_assignment, task_fields
 
 __all__ = ["Axis", "SweepSpec", "SceneText", "SweepInterrupted", "SweepWarning", "parse_grid", "parse_random",

@@ -5,8 +5,8 @@ every error names the file (and the line)."""
 import csv
 from pathlib import Path
 
+from mechopt.errors import ModelError
 from mechopt.files import quote, read_regular
-from mechopt.models.errors import ModelError
 
 MAX_BYTES = 100_000_000      # read whole into memory: refuse what is plainly not a table of readings
 MAX_ROWS = 1_000_000         # counted before parsing: a table of more readings takes minutes to refuse

@@ -7,7 +7,7 @@ notebook shows them as they are.
 """
 from collections.abc import Callable
 
-from mechopt.models.errors import MechoptError
+from mechopt.errors import MechoptError
 
 FIGURES: dict[type, Callable] = {}
 

@@ -1,0 +1,37 @@
+"""The errors mechopt raises, by kind (cvxpy's `error.py` is the model). Each names the offending
+input (`key`) when there is one, and each is also the builtin it is a kind of (a bad number is a
+ValueError, a crashed back end a RuntimeError), so a caller may catch either.
+
+This module and `mechopt.cache` are the kit: importable from models, solvers and the spine alike,
+and importing nothing from mechopt themselves (tests/test_layout.py).
+"""
+
+
+class MechoptError(Exception):
+    """Base of every mechopt error; `key` is the parameter or setting at fault, if any."""
+
+    def __init__(self, message: str, *, key: str | None = None):
+        super().__init__(message)
+        self.key = key
+
+
+class ModelError(MechoptError, ValueError):
+    """The numbers describe a mechanism that cannot exist (negative length, no assembly)."""
+
+
+class SceneError(MechoptError, ValueError):
+    """A scene file or an override is malformed; the message names file, key and what is allowed."""
+
+
+class SettingError(SceneError):
+    """A solver setting is unknown or out of the range its signature declares (in a scene or a direct call)."""
+
+
+class SolverError(MechoptError, RuntimeError):
+    """A numerical back end crashed or returned something unusable (not: infeasible, which is a status)."""
+
+
+def require(ok: bool, message: str, *, key: str | None = None, kind: type[MechoptError] = ModelError) -> None:
+    """Raise `kind(message, key=key)` unless `ok`: the one way a rule on an input is written."""
+    if not ok:
+        raise kind(message, key=key)
