@@ -4,7 +4,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from mechopt.errors import ModelError
+from mechopt.errors import ModelError, SettingError
 from mechopt.models.cam_cutter import LinkageLoads, linkage_energy, linkage_positions, real_point, real_velocity
 from mechopt.solvers.cam_cutter.kinetostatics import joint_loads, load_system
 from mechopt.solvers.result import Status
@@ -145,7 +145,7 @@ def test_bad_input_is_refused_by_name():
         loads(link_mass_kg=float("nan"))
     with pytest.raises(ModelError, match=r"force_direction='up': allowed against_velocity, normal_to_link"):
         loads(force_direction="up")
-    with pytest.raises(ModelError, match=r"count=4: allowed"):
+    with pytest.raises(SettingError, match=r"count=4: allowed"):
         joint_loads(loads(), count=4)
 
 
