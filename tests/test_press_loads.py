@@ -147,7 +147,7 @@ def test_the_loads_scene_draws_loads_against_crank_angle_and_tool_travel_with_un
     from mechopt import registry
     from mechopt.figures import plot_run
     from mechopt.registry import Run
-    scene = registry.find("press/kd2322")
+    scene = dataclasses.replace(registry.find("press/kd2322"), solver=loads)     # figures follow the solver
     task = scene.build()[0]
     run = Run(scene, loads(task), [], task=task)
     figures = run.figures()
