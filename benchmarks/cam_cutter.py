@@ -32,8 +32,8 @@ import time
 
 from mechopt import registry
 from mechopt.cache import clear as clear_caches
+from mechopt.figures import save_figure
 from mechopt.models.cam_cutter import ToolFamily
-from mechopt.plots import save_figure
 from mechopt.solvers.cam_cutter import family as family_fit
 from mechopt.solvers.cam_cutter import fit as trajectory_fit
 from mechopt.solvers.cam_cutter import joint_loads

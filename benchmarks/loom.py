@@ -37,8 +37,8 @@ from scipy.optimize import linprog
 
 from mechopt import registry
 from mechopt.cache import clear as clear_caches
+from mechopt.figures import save_figure
 from mechopt.models.loom import Cyclogram
-from mechopt.plots import save_figure
 from mechopt.solvers.loom import HeldLP, build_event_time_lp, incidence, max_machine_speed, plan_cyclogram
 from mechopt.solvers.loom import plan as cyclogram_lp
 from mechopt.solvers.loom.graph import NO_BACK_ARCS, BackArcs, HeldSpan, Levels, a_path, tight_arcs

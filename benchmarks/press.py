@@ -30,9 +30,8 @@ import numpy as np
 from scipy.optimize import minimize
 
 import mechopt
-from mechopt import registry
-from mechopt import cache
-from mechopt.plots import save_figure
+from mechopt import cache, registry
+from mechopt.figures import save_figure
 from mechopt.solvers import press as pd
 
 __all__ = ["DESIGN_SCENES", "DURATION_S", "PAPER_TASK", "at_accuracy", "catalogue_rows", "cli", "cycle_timing",

@@ -21,7 +21,7 @@ import time
 import numpy as np
 
 from mechopt import registry
-from mechopt.plots import save_figure
+from mechopt.figures import save_figure
 from mechopt.solvers.stop_impact.cam_follower import follow_cam, follow_cam_reference
 from mechopt.solvers.stop_impact.entry_points import AGREEMENT_REL
 from mechopt.solvers.stop_impact.law import impact_at, rebound_amplitude_mm

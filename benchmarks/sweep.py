@@ -185,8 +185,8 @@ def cli(repeats, out_dir, progress=None, quick=False) -> str:
 
 def plot(loom, cam, cam_pool, dask, out_dir):
     """Variants per second of each route, and the Dask path's time over in-process per chunk size."""
+    from mechopt.figures import save_figure
     from mechopt.figures.registry import new_figure
-    from mechopt.plots import save_figure
     fig = new_figure(figsize=(11, 4.5))
     left, right = fig.subplots(1, 2)
     names = ["loom/group1\nin-process", "cam-cutter/minimax\nin-process", "cam-cutter/minimax\n--workers 2"]

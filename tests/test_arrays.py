@@ -96,3 +96,23 @@ def test_label_columns_write_as_text_in_csv():
     text = arrays_csv(mechopt.solve("loom/group1").arrays, "plan.csv").splitlines()
     assert text[0].startswith("operation,start_deg,end_deg,duration_deg,float_deg")
     assert text[1].startswith("1->2,0,10,10,")
+
+
+def test_the_cam_rise_of_every_speed_is_on_the_nominal_angles_as_the_figure_draws_it():
+    """cam_dynamics returns each speed's rise (what the Fig. 4 figure draws, no longer recomputed
+    there): on the nominal rise's angles, the samples are that speed's own, NaN past its end."""
+    from mechopt.solvers.stop_impact.cam_follower import follow_cam
+    run = mechopt.solve("stop-impact/cam-dynamics")
+    a, v, task = run.arrays, run.values, run.task
+    rad = np.radians(task.t_deg)
+    for n in (280, 320, 370):
+        rise = follow_cam(task, float(n))
+        shared = min(len(rise.xi), len(a["phi_deg"])) - 1          # the grid points both have (not the contact)
+        np.testing.assert_allclose(a[f"x_mm_{n}"][:shared], rise.X[:shared] * task.stroke_mm, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(a[f"d2x_dphi2_mm_per_rad2_{n}"][:shared], rise.ddX[:shared] * task.stroke_mm / rad**2,
+                                   rtol=1e-12, atol=1e-9)
+        assert v[f"contact_angle_deg_{n}"] == pytest.approx(rise.contact_xi * task.t_deg, rel=1e-12)
+    # the rigid law's analogues beside them: its velocity analogue integrates to its displacement
+    phi = np.radians(a["phi_deg"])
+    rise_of_s = np.sum(np.diff(phi) * (a["ds_dphi_mm_per_rad"][1:] + a["ds_dphi_mm_per_rad"][:-1]) / 2)
+    assert rise_of_s == pytest.approx(a["s_mm"][-1] - a["s_mm"][0], rel=1e-5)

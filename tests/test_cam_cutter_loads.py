@@ -151,7 +151,7 @@ def test_bad_input_is_refused_by_name():
 
 def test_scene_speed_is_the_papers_cutting_speed_and_its_figure_draws(tmp_path):
     from mechopt import registry
-    from mechopt.plots import plot_run
+    from mechopt.figures import plot_run
     run = registry.run(registry.find("cam-cutter/joint-reactions"))
     # the crank speed was chosen (assumed) so that the torch averages 2.1 m/min (Sec. II); the mean of
     # |dT/dt| = sqrt(H^2 + L^2 + 2 H L cos t) over a cycle, by quadrature apart from the solver

@@ -104,7 +104,7 @@ def test_a_figure_is_written_whole_or_not_at_all(tmp_path, monkeypatch):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from mechopt.plots import save_figure
+    from mechopt.figures import save_figure
     fig = plt.figure()
     target = tmp_path / "f.png"
     target.write_bytes(b"the old figure")

@@ -10,6 +10,7 @@ import mechopt
 from mechopt import registry
 from mechopt.benchmarks import STUDIES, study
 from mechopt.figures import FIGURES
+from mechopt.mechanisms import mechanisms
 
 ROOT = Path(__file__).resolve().parents[1]
 KIT = {"mechopt.errors", "mechopt.cache"}          # importable from every layer; imports nothing of mechopt
@@ -76,21 +77,115 @@ def test_no_package_folder_at_the_root_shadows_the_installed_one():
     assert Path(mechopt.__file__).resolve().parent != ROOT / "mechopt"
 
 
-def test_every_scenes_task_class_has_registered_figures():
-    missing = sorted({s.task_class.__name__ for s in registry.all_scenes()} - {c.__name__ for c in FIGURES})
+def test_every_scenes_solver_has_registered_figures():
+    missing = sorted({f"{s.id}: {s.solver.__name__}" for s in registry.all_scenes() if s.solver not in FIGURES})
     assert missing == []
 
 
-def test_a_task_without_figures_is_an_error_not_an_empty_list():
+def test_every_public_solver_of_a_mechanism_has_registered_figures():
+    """A scene may name any function a solver package exports (`press.simulate`): each draws."""
+    import importlib
+
+    from mechopt.solvers.result import Result
+    missing = []
+    for m in mechanisms():
+        package = importlib.import_module(m.solvers)
+        for name in package.__all__:
+            fn = getattr(package, name)
+            if not inspect.isfunction(fn) or fn in FIGURES:
+                continue
+            signature = inspect.signature(fn)          # a solver takes a task and returns a Result (a door: unannotated)
+            if list(signature.parameters)[:1] == ["task"] and signature.return_annotation in (Result, signature.empty):
+                missing.append(f"{m.solvers}.{name}")
+    assert missing == []
+
+
+def test_a_solver_without_figures_is_an_error_not_an_empty_list():
     from mechopt.errors import MechoptError
     from mechopt.figures.registry import figures_of
     scene = registry.find("loom/group1")
 
-    class Unregistered:
+    def unregistered(task):
         pass
-    run = registry.Run(scene.__class__(scene.path, scene.spec, Unregistered, scene.solver), None, [])
-    with pytest.raises(MechoptError, match="no figures registered for task .*Unregistered"):
+    run = registry.Run(scene.__class__(scene.path, scene.spec, scene.task_class, unregistered), None, [])
+    with pytest.raises(MechoptError, match=r"no figures registered for solver .*unregistered .*@figure\(unregistered\)"):
         figures_of(run)
+
+
+def test_figures_register_by_solver_and_the_old_form_fails_loudly():
+    from mechopt.errors import MechoptError
+    from mechopt.figures.registry import figure, register
+    from mechopt.models.press import PressDrive
+    from mechopt.solvers.press import steady_state
+    with pytest.raises(MechoptError, match=r"registered by solver now.*@figure\(solver_fn"):
+        register(PressDrive)
+    with pytest.raises(MechoptError, match="steady_state registered twice"):
+        figure(steady_state)(lambda run: {})
+
+
+def test_no_figure_calls_a_solver():
+    """Figures draw the Result: from the solvers they take the functions they register for, from
+    the packages' doors, never a solver module's own pieces to compute with."""
+    doors = {m.solvers for m in mechanisms()}
+    bad = []
+    for path in sorted((ROOT / "src" / "mechopt" / "figures").glob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("mechopt.solvers"):
+                bad += [f"{path.name}: {node.module}"] if node.module not in doors else []
+            elif isinstance(node, ast.Import):
+                bad += [f"{path.name}: {a.name}" for a in node.names if a.name.startswith("mechopt.solvers")]
+    assert bad == []
+
+
+# One table of mechanisms (issue 24, item 4): a fifth mechanism is one row plus its own files.
+
+SHARED_MODELS = {"__init__", "effects", "validity"}          # of every mechanism
+SPINE_FIGURES = {"__init__", "registry", "files", "sweep"}    # the registry, saving, the sweep's maps
+
+
+def test_every_mechanism_file_is_named_by_exactly_one_row():
+    named = lambda pick: sorted(n.rpartition(".")[2] for m in mechanisms() for n in pick(m))
+    models = {p.stem for p in (ROOT / "models").glob("*.py")} - SHARED_MODELS
+    assert named(lambda m: m.models) == sorted(models)
+    assert named(lambda m: [m.solvers]) == sorted(p.parent.name for p in (ROOT / "solvers").glob("*/__init__.py"))
+    assert named(lambda m: m.figures) == sorted({p.stem for p in (ROOT / "src" / "mechopt" / "figures").glob("*.py")}
+                                                - SPINE_FIGURES)
+    assert sorted(m.name for m in mechanisms()) == sorted(p.name for p in (ROOT / "cases").iterdir() if p.is_dir()
+                                                          and not p.name.startswith("_"))
+
+
+def test_every_row_imports_and_its_templates_are_scenes():
+    import importlib
+    for m in mechanisms():
+        for name in (*m.models, m.solvers, *m.figures, m.benchmark):
+            importlib.import_module(name)
+        for _, scene in m.templates:
+            assert registry.find(scene).id.startswith(m.name + "/")
+
+
+def test_the_readers_hold_no_list_of_mechanisms():
+    """The CLI's templates, the benchmark list and the figure registry read the table: no module
+    or scene of a row is written in them."""
+    readers = [ROOT / "src" / "mechopt" / "cli.py", ROOT / "benchmarks" / "__init__.py",
+               ROOT / "src" / "mechopt" / "figures" / "__init__.py", ROOT / "src" / "mechopt" / "figures" / "registry.py"]
+    names = {n for m in mechanisms() for n in (*m.figures, m.benchmark)}     # (cli imports a solver to use it)
+    names |= {scene for m in mechanisms() for _, scene in m.templates}
+    hits = {p.name: sorted(n for n in names if n in p.read_text(encoding="utf-8")) for p in readers}
+    assert {k: v for k, v in hits.items() if v} == {}
+
+
+def test_a_fifth_row_reaches_the_cli_and_the_benchmarks(monkeypatch):
+    from mechopt import cli
+    from mechopt import mechanisms as table
+    from mechopt.benchmarks import studies
+    fifth = table.Mechanism("press-copy", "A fifth", ("mechopt.models.press",), "mechopt.solvers.press",
+                            ("mechopt.figures.press",), "mechopt.benchmarks.press", (("my-press", "press/kd2322"),))
+    monkeypatch.setattr(table, "MECHANISMS", (*table.MECHANISMS, fifth))
+    assert studies()["press-copy"] == "mechopt.benchmarks.press"
+    assert table.templates()["my-press"] == "press/kd2322"
+    parser = cli._parser()
+    assert parser.parse_args(["new", "my-press", "x.toml"]).mechanism == "my-press"
+    assert parser.parse_args(["bench", "press-copy"]).study == "press-copy"
 
 
 @pytest.mark.parametrize("name", sorted(STUDIES))

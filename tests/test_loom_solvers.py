@@ -319,7 +319,7 @@ def test_a_hundred_thousand_events_solve_once_to_the_longest_path():
 
 
 def test_gantt_figure_is_written_for_a_solved_scene_and_skipped_for_an_infeasible_one(tmp_path):
-    from mechopt.plots import plot_run
+    from mechopt.figures import plot_run
     paths = plot_run(registry.run(registry.find("loom/group1")), tmp_path)
     assert [p.name for p in paths] == ["loom_group1_cyclogram.png"] and paths[0].stat().st_size > 10_000
     assert plot_run(registry.run(registry.find("loom/group1-window-conflict")), tmp_path) == []

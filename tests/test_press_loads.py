@@ -145,9 +145,9 @@ def test_a_failed_steady_state_comes_back_without_peaks(paper_task):
 
 def test_the_loads_scene_draws_loads_against_crank_angle_and_tool_travel_with_units(tmp_path):
     from mechopt import registry
-    from mechopt.plots import plot_run
+    from mechopt.figures import plot_run
     from mechopt.registry import Run
-    scene = registry.find("press/kd2322")
+    scene = dataclasses.replace(registry.find("press/kd2322"), solver=loads)     # figures follow the solver
     task = scene.build()[0]
     run = Run(scene, loads(task), [], task=task)
     figures = run.figures()

@@ -230,7 +230,7 @@ def test_status_words_map_without_passing_failure_as_success():
 # --- figure and benchmark helpers -------------------------------------------------------------------
 
 def test_figure_of_a_press_scene_is_written(tmp_path):
-    from mechopt.plots import plot_run
+    from mechopt.figures import plot_run
     paths = plot_run(registry.run(registry.find("press/kd2322-rigid-belt")), tmp_path)
     assert [p.name for p in paths] == ["press_kd2322-rigid-belt_cycle.png"] and paths[0].stat().st_size > 20_000
 

@@ -11,7 +11,7 @@ import pytest
 from mechopt import registry
 from mechopt.cli import main
 from mechopt.errors import SceneError
-from mechopt.plots import save_figure
+from mechopt.figures import save_figure
 from mechopt.report import write_report
 from mechopt.sweep import parse_grid, sweep
 from mechopt.units import unit_of

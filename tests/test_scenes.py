@@ -9,7 +9,7 @@ import mechopt
 from mechopt import registry
 from mechopt.cli import main
 from mechopt.errors import SceneError
-from mechopt.plots import plot_run
+from mechopt.figures import plot_run
 from mechopt.scene import load, parse_overrides
 from mechopt.solvers.cam_cutter.deviation import verified_deviation
 from mechopt.solvers.result import Status

@@ -260,7 +260,7 @@ def test_a_lever_without_a_cam_cannot_have_cam_parameters():
 
 
 def test_the_figure_draws_the_analogues_and_their_dynamic_errors(tmp_path):
-    from mechopt.plots import plot_run
+    from mechopt.figures import plot_run
     paths = plot_run(registry.run(registry.find("stop-impact/cam-dynamics")), tmp_path)
     assert sorted(p.name for p in paths) == ["stop-impact_cam-dynamics_analogues.png",
                                              "stop-impact_cam-dynamics_dynamic_errors.png"]

@@ -193,7 +193,7 @@ def test_bad_override_is_refused_by_the_scene_and_changes_nothing():
 
 
 def test_figures_draw_the_rebound_histories_and_the_amplitude_against_speed(tmp_path):
-    from mechopt.plots import plot_run
+    from mechopt.figures import plot_run
     paths = plot_run(registry.run(registry.find("stop-impact/rebound-280-420")), tmp_path)
     assert len(paths) == 2 and all(p.stat().st_size > 10_000 for p in paths)
     assert plot_run(registry.run(registry.find("stop-impact/frequencies")), tmp_path) == []

@@ -14,10 +14,10 @@ import tempfile
 from pathlib import Path
 
 from mechopt import describe, scenes
+from mechopt.mechanisms import mechanisms
 
 PAGE = "reference/scenes.md"
-MECHANISMS = {"cam-cutter": "Torch-guiding linkage (paper 000)", "press": "Crank press (paper 001)",
-              "loom": "Loom cyclogram (paper 004)", "stop-impact": "Lift lever at its stop (paper 004)"}
+MECHANISMS = {m.name: m.title for m in mechanisms()}       # section titles, from the one table
 COLUMNS = ("key", "kind", "unit", "mark", "range", "value", "why")
 LONGEST = 70            # a structure value (a whole network) is cut here: `mechopt describe` shows it all
 

@@ -266,9 +266,9 @@ def cam_dynamics(task: LeverStop, *, reltol: Tolerance = 1e-10,
     task.need_effect("cam_drive")
     start = time.perf_counter()
     speeds = [task.speed_nominal_rpm] + [n for n in task.speeds_rpm if n != task.speed_nominal_rpm]
-    values, build_s, left, arrays = {}, 0.0, [], {}
+    values, build_s, left, arrays, rises = {}, 0.0, [], {}, {}
     for n in speeds:
-        rise = follow_cam(task, n, reltol=reltol, points=points)
+        rise = rises[n] = follow_cam(task, n, reltol=reltol, points=points)
         build_s += rise.build_s
         if rise.status not in (Status.SOLVED, Status.INFEASIBLE):
             return Result(rise.status, values, Timing(build_s, time.perf_counter() - start - build_s),
@@ -279,6 +279,8 @@ def cam_dynamics(task: LeverStop, *, reltol: Tolerance = 1e-10,
         values[f"approach_velocity_m_s{suffix}"] = rise.approach_velocity_m_s
         values[f"dynamic_error_mm{suffix}"] = rise.dynamic_error_mm
         values[f"min_contact_force_N{suffix}"] = rise.min_contact_force_N
+        if rise.contact_xi is not None and suffix:
+            values[f"contact_angle_deg{suffix}"] = rise.contact_xi * task.t_deg
         if n == task.speed_nominal_rpm:
             nominal = rise
     rad = math.radians(task.t_deg)
@@ -290,7 +292,15 @@ def cam_dynamics(task: LeverStop, *, reltol: Tolerance = 1e-10,
     if nominal.contact_xi is not None:
         values["contact_angle_deg"] = nominal.contact_xi * task.t_deg
     arrays = {"phi_deg": nominal.xi * task.t_deg, "x_mm": nominal.X * H_mm, "s_mm": S * H_mm,
-              "dx_dphi_mm_per_rad": nominal.dX * H_mm / rad, "d2x_dphi2_mm_per_rad2": nominal.ddX * H_mm / rad**2}
+              "dx_dphi_mm_per_rad": nominal.dX * H_mm / rad, "d2x_dphi2_mm_per_rad2": nominal.ddX * H_mm / rad**2,
+              "ds_dphi_mm_per_rad": dS * H_mm / rad, "d2s_dphi2_mm_per_rad2": ddS * H_mm / rad**2}
+    # every other speed's rise on the nominal's angles (one table for --csv; NaN past its own end):
+    # (interpolated: at the grid points of xi the rises share, the samples are the rise's own)
+    for n, rise in rises.items():
+        if n != task.speed_nominal_rpm:
+            for name, series, scale in (("x_mm", rise.X, H_mm), ("dx_dphi_mm_per_rad", rise.dX, H_mm / rad),
+                                        ("d2x_dphi2_mm_per_rad2", rise.ddX, H_mm / rad**2)):
+                arrays[f"{name}_{_tag(n)}"] = np.interp(nominal.xi, rise.xi, series * scale, right=np.nan)
     ref_xi, ref_v0, ref_status = follow_cam_reference(task, task.speed_nominal_rpm)
     timing = lambda: Timing(build_s, time.perf_counter() - start - build_s)
     spread = abs(ref_v0 - nominal.approach_velocity_m_s) / max(abs(ref_v0), 1e-300)

@@ -19,19 +19,18 @@ import warnings
 from pathlib import Path
 
 from mechopt import __version__, registry
-from mechopt.benchmarks import STUDIES, study
+from mechopt.benchmarks import studies, study
 from mechopt.drivers import set_mostly_by
 from mechopt.errors import MechoptError, SceneError, SolverError
 from mechopt.files import write_text_atomic
+from mechopt.mechanisms import templates
 from mechopt.scene import parse_overrides
 from mechopt.solvers import interrupt
 from mechopt.solvers.result import Status
 
 OK, CHECK_FAILED, BAD_INPUT, NOT_SOLVED, INTERRUPTED = 0, 1, 2, 3, 130
 
-TEMPLATES = {"cam-cutter": "cam-cutter/minimax", "cam-table": "cam-cutter/other-profile", "press": "press/kd2322",
-             "press-design": "press/flywheel-design", "loom": "loom/group1",
-             "stop-impact": "stop-impact/rebound-177rpm", "cyclogram": "loom/packaging"}
+# `mechopt new NAME` starts from a scene named by a row of mechopt.mechanisms (`templates()`);
 # cam-table: the other-profile scene with its parsed curve replaced by a point table in a CSV beside the scene
 TABLE_CURVE = {"x_expr": None, "y_expr": None, "constants": None,
                "points_mm": '{ csv = "%s", columns = ["x_mm", "y_mm"] }'}
@@ -125,7 +124,7 @@ def _parser():
                               help="every key --set reaches: unit, mark, allowed range, current value")
     describe.add_argument("case", help="a scene id or a scene file's path")
     new = sub.add_parser("new", parents=[common], help="write a commented scene to start from")
-    new.add_argument("mechanism", choices=list(TEMPLATES),
+    new.add_argument("mechanism", choices=list(templates()),
                      help="cam-table: a cam given as a point table (a CSV written beside the scene); "
                           "press-design: the drive found by optimisation; cyclogram: a machine's timing "
                           "diagram from its table of operations (a CSV written beside the scene)")
@@ -146,7 +145,7 @@ def _parser():
                           help="scene ids, files or folders (default: every scene in the registry)")
     validate.add_argument("--json", type=Path, metavar="FILE")
     bench = sub.add_parser("bench", parents=[common], help="accuracy against time for a mechanism's solvers")
-    bench.add_argument("study", choices=list(STUDIES), help="a registered study (benchmarks/__init__.py)")
+    bench.add_argument("study", choices=list(studies()), help="a mechanism's study (mechopt/mechanisms.py) or sweep")
     bench.add_argument("--repeats", type=_positive_int, default=5, help="runs per point (>= 1); medians reported")
     bench.add_argument("--plot", type=Path, default=Path("out/bench"), metavar="DIR")
     bench.add_argument("--quick", action="store_true",
@@ -224,7 +223,7 @@ def _describe(args) -> int:
 def _new(args) -> int:
     if args.file.exists():
         raise SceneError(f"{args.file}: exists; name a new file (nothing was written)")
-    template = registry.find(TEMPLATES[args.mechanism])
+    template = registry.find(templates()[args.mechanism])
     text = scene_template(template, f"my/{args.file.stem}")
     suffix = {"cam-table": "points", "cyclogram": "ops"}.get(args.mechanism)
     table = args.file.with_name(f"{args.file.stem}-{suffix}.csv") if suffix else None
@@ -325,7 +324,7 @@ def _run(args) -> int:
         _write_text(args.csv, arrays_csv(result.arrays, args.csv))
         print(f"csv: {args.csv}")
     if args.plot:
-        from mechopt.plots import plot_run
+        from mechopt.figures import plot_run
         paths = plot_run(result, args.plot)
         for path in paths:
             print(f"plot: {path}")

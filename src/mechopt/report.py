@@ -2,7 +2,7 @@
 
 The page holds the validation table (every scene's expectations: published or derived value
 against the computed one, calibrations marked as such, not counted as reproductions), each scene's
-assumed and calibrated parameters with their reasons, each scene's figures (`mechopt.plots.plot_run`),
+assumed and calibrated parameters with their reasons, each scene's figures (`mechopt.figures.plot_run`),
 the maps of any sweep tables given (`mechopt.figures.sweep`) and the accuracy-vs-time plots that
 `mechopt bench` left in a folder (benchmarks are not re-run here: some take minutes). Every image
 is embedded in the page (base64 PNG), so the one file opens from disk, or as a mail attachment,
@@ -18,9 +18,9 @@ from pathlib import Path
 from mechopt import __version__, registry
 from mechopt.answers import answers_html
 from mechopt.drivers import set_mostly_by
+from mechopt.figures import plot_run
 from mechopt.figures.sweep import plot_sweep
 from mechopt.files import write_text_atomic
-from mechopt.plots import plot_run
 from mechopt.sweep import describe_axes, read_table, scene_hash
 from mechopt.units import unit_of
 

@@ -1,26 +1,36 @@
-"""Figures for the cam-cutting linkage scenes (models/cam_cutter.py)."""
+"""Figures for the cam-cutting linkage scenes (models/cam_cutter.py): drawn from the solvers'
+arrays (the path, its deviation), the limaçon traced from the linkage found."""
 import numpy as np
 
-from mechopt.figures.registry import new_figure, register
-from mechopt.models.cam_cutter import LinkageCheck, LinkageFit, LinkageLoads, ToolFamily, ideal_point, real_point
+from mechopt.figures.registry import figure, new_figure
+from mechopt.models.cam_cutter import real_point
 from mechopt.models.cam_profile import ProfileFit
-from mechopt.solvers.cam_cutter.deviation import path_distance
+from mechopt.solvers.cam_cutter import (
+    check,
+    evolve,
+    evolve_family,
+    fit_linkage,
+    grid_scan,
+    joint_loads,
+    minimax,
+    readjustable,
+    robust,
+)
 
 
-@register(LinkageFit, LinkageCheck)
+@figure(grid_scan, robust, evolve, check)
 def paths_and_deviation(run):
     """The two paths and the deviation along the ideal path, with the band."""
     task = run.task
     # the linkage a solver found, or the one a check was given
     H = run.result.values.get("H_mm", getattr(task, "H_mm", None))
     L = run.result.values.get("L_mm", getattr(task, "L_mm", None))
-    if H is None or L is None:
+    a = run.result.arrays
+    if H is None or L is None or not len(a.get("t_rad", ())):
         return {}             # no linkage found (an infeasible grid scan): nothing to draw
 
-    t = np.linspace(0.0, task.t_finish_rad, 2000)
-    ix, iy = ideal_point(t, task.a_mm, task.h_mm)
-    rx, ry = real_point(np.linspace(0, 2 * np.pi, 4000), H, L)
-    dist = path_distance(ix, iy, H, L)
+    t, ix, iy, dist = a["t_rad"], a["path_x_mm"], a["path_y_mm"], a["deviation_mm"]
+    rx, ry = _limacon(H, L)
 
     fig = new_figure(figsize=(12, 5))
     left, right = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1, 1.3]})
@@ -54,7 +64,19 @@ def paths_and_deviation(run):
     return {"paths": fig}
 
 
-@register(LinkageLoads)
+@figure(minimax, fit_linkage)
+def fitted_paths(run):
+    """The paths of a fitted linkage: a cam of any shape (`ProfileFit`) drawn as its torch path,
+    the paper's cardioid as the ideal path (the task says which question was asked)."""
+    return profile_path_and_band(run) if isinstance(run.task, ProfileFit) else paths_and_deviation(run)
+
+
+def _limacon(H, L):
+    """The whole limaçon (H, L) a linkage traces, closed: the picture's real path."""
+    return real_point(np.linspace(0, 2 * np.pi, 4000), H, L)
+
+
+@figure(joint_loads)
 def reactions_and_torque(run):
     """Reactions in the pairs and the driving torque over the cycle, with the condition number."""
     arrays = run.result.arrays
@@ -81,18 +103,15 @@ def reactions_and_torque(run):
     return {"loads": fig}
 
 
-@register(ProfileFit)
 def profile_path_and_band(run):
     """A cam of any shape: its torch path (and mirror), the limaçon, the deviation with the band
     and the point that sets it."""
-    task, values = run.task, run.result.values
-    if "H_mm" not in values:
+    task, values, a = run.task, run.result.values, run.result.arrays
+    if "H_mm" not in values or not len(a.get("t_rad", ())):
         return {}             # the NLP failed: no linkage to draw
     H, L = values["H_mm"], values["L_mm"]
-    t = np.linspace(task.t_start_rad, task.t_end_rad, 2000)
-    ix, iy = task.path_point(t)
-    rx, ry = real_point(np.linspace(0, 2 * np.pi, 4000), H, L)
-    dist = path_distance(ix, iy, H, L)
+    t, ix, iy, dist = a["t_rad"], a["path_x_mm"], a["path_y_mm"], a["deviation_mm"]
+    rx, ry = _limacon(H, L)
     fig = new_figure(figsize=(12, 5))
     left, right = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1, 1.3]})
     left.plot(rx, ry, lw=1.0, color="tab:orange", label=f"limaçon H={H:.3f}, L={L:.3f} mm")
@@ -112,7 +131,7 @@ def profile_path_and_band(run):
     return {"paths": fig}
 
 
-@register(ToolFamily)
+@figure(readjustable, evolve_family)
 def family_settings(run):
     """The readjustable tool: the wing length L(a) per nozzle h at the one H, and each cam's
     deviation against the band."""

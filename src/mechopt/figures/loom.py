@@ -1,7 +1,7 @@
 """Figures for the loom cyclogram scenes (models/loom.py): the cyclogram as a Gantt chart, and
 for a repaired LP (loom.repair_cyclogram) each exact limit's excess over the rounds."""
-from mechopt.figures.registry import new_figure, register
-from mechopt.models.loom import Cyclogram
+from mechopt.figures.registry import figure, new_figure
+from mechopt.solvers.loom import max_machine_speed, plan_cyclogram, repair_cyclogram
 
 ROW_IN = 0.35              # inches per operation row on a small network ...
 DENSE_ROWS = 40           # ... past which rows narrow to DENSE_ROW_IN and bars lose their own labels
@@ -9,13 +9,15 @@ DENSE_ROW_IN = 0.17
 CHAIN_SHOWN = 12          # events of the critical chain named in the title before it is shortened
 
 
-@register(Cyclogram)
-def gantt(run):
+@figure(plan_cyclogram)
+def gantt(run, headline=None):
     """One bar per operation from p(from) to p(to) over the machine angle, a row per operation:
     rows grouped by the operation's group (its own, else its first event's), groups in the order
     they start, and inside a group by start angle, so the chain reads as a staircase; the
     critical chain in red, every other operation's total float as a light tail. Past DENSE_ROWS
-    operations (a machine's whole timing table) rows narrow and bars lose their own labels."""
+    operations (a machine's whole timing table) rows narrow and bars lose their own labels.
+    `headline` heads the title (by default the LP's objective: the limiting operation on a machine,
+    else the span)."""
     values = run.result.values
     if "span_deg" not in values:
         return {}             # infeasible or unbounded: there are no event times to draw
@@ -67,14 +69,27 @@ def gantt(run):
     chain = diag.get("critical_chain") or []
     if len(chain) > CHAIN_SHOWN:
         chain = chain[:CHAIN_SHOWN // 2] + [f"... ({len(chain) - CHAIN_SHOWN} more)"] + chain[-CHAIN_SHOWN // 2:]
-    headline = (f"max speed {values['max_speed_rpm']:.2f} rpm" if "max_speed_rpm" in values
-                else f"limiting op {values['limiting_op_deg']:.2f} deg" if "limiting_op_deg" in values
-                else f"span {values['span_deg']:.2f} deg")
+    if headline is None:            # the objective the plan's LP minimised (a machine's limiting operation)
+        headline = (f"limiting op {values['limiting_op_deg']:.2f} deg" if "limiting_op_deg" in values
+                    else f"span {values['span_deg']:.2f} deg")
     ax.set_title(f"{run.scene.id}: {headline}, {len(arcs)} operations\ncritical chain (red) {' - '.join(chain)}",
                  fontsize=9, pad=22)
     ax.grid(True, axis="x", alpha=0.3)
-    rounds = diag.get("rounds")
-    return {"cyclogram": fig} | ({"repair_rounds": _repair_rounds(run, rounds)} if rounds else {})
+    return {"cyclogram": fig}
+
+
+@figure(max_machine_speed)
+def gantt_at_speed(run):
+    """The cyclogram at the machine's largest speed, headed by that speed."""
+    speed = run.result.values.get("max_speed_rpm")
+    return gantt(run, headline=None if speed is None else f"max speed {speed:.2f} rpm")
+
+
+@figure(repair_cyclogram)
+def repaired(run):
+    """The repaired cyclogram, and each exact limit's excess over the LP rounds."""
+    figures, rounds = gantt(run), run.result.diagnostics.get("rounds")
+    return figures | ({"repair_rounds": _repair_rounds(run, rounds)} if figures and rounds else {})
 
 
 def _group_bands(ax, groups):

@@ -1,17 +1,15 @@
 """Figures for the crank press scenes (models/press.py), after the paper's Figs. 8-10."""
 import numpy as np
 
-from mechopt.figures.registry import new_figure, register
-from mechopt.models.press import PressCatalogue, PressDesign, PressDrive
+from mechopt.figures.registry import figure, new_figure
+from mechopt.solvers.press import catalogue, design, events, ivp, loads, rk4, sensitivity, simulate, steady_state
 
 
-@register(PressDrive)
+@figure(events, steady_state, rk4, ivp, simulate)
 def cycle(run):
     """Force F and load Q against tool travel and crank angle (Figs. 8-10), crank speed and belt
     torque against time; one PNG per scene."""
     arrays = run.result.arrays
-    if "elasticity_speed_fluctuation" in arrays:        # press.sensitivity: a table, not a revolution
-        return elasticities(run)
     if not len(arrays.get("t_s", ())):
         return {}
     t, w, out = arrays["t_s"], arrays["omega_rad_s"], arrays
@@ -43,8 +41,14 @@ def cycle(run):
     for a in ax.ravel():
         a.grid(alpha=0.3)
     fig.suptitle(f"{run.scene.id}: {run.result.status.value}", fontsize=10)
-    figures = {"cycle": fig}
-    if "peak_rod_force_N" in run.result.values:         # the loads of one steady revolution (press.loads)
+    return {"cycle": fig}
+
+
+@figure(loads)
+def cycle_and_loads(run):
+    """The cycle figure and the loads of one steady revolution."""
+    figures = cycle(run)
+    if figures:
         figures["loads"] = _loads(run, np.degrees(run.result.arrays["phi_rad"]))     # 0 to 360, not wrapped
     return figures
 
@@ -89,6 +93,7 @@ def _loads(run, phi_deg):
     return fig
 
 
+@figure(sensitivity)
 def elasticities(run):
     """Bar chart of the elasticities (p / y) dy/dp of press.sensitivity: one panel per output, one bar
     per assumed parameter, longest first in the speed fluctuation's panel."""
@@ -117,7 +122,7 @@ def elasticities(run):
     return {"elasticities": fig}
 
 
-@register(PressDesign, PressCatalogue)
+@figure(design, catalogue)
 def designed(run):
     """The designed drive's steady revolution (the cycle figure) and its limits: crank speed against
     crank angle with the fluctuation band the design keeps, belt and motor torque with their limits."""

@@ -1,40 +1,60 @@
-"""Which figures a solved scene has: one function per task class, registered by name.
+"""Which figures a solved scene has: one function per solver, registered with `@figure(solver)`.
 
-A figure function takes a `Run` (its scene, result, task and settings) and returns
-`{name: matplotlib Figure}`, empty when the result has nothing to draw (an infeasible scan). It
-writes no file and touches no pyplot state: `mechopt.plots.plot_run` saves the figures, and a
-notebook shows them as they are.
+A figure function takes a `Run` and returns `{name: matplotlib Figure}`, empty when the result has
+nothing to draw (an infeasible scan). It draws the Result as it is: the arrays and values the
+solver returned (named with units), the scene's id and the limits the task states for labels; it
+computes nothing (what a picture needs that the solver did not return goes into that solver's
+`Result.arrays`). It writes no file and touches no pyplot state: `save_figure` saves, and a
+notebook shows the figures as they are.
+
+Which function draws a run is found by the run's solver (the function its scene names), never by
+looking at which values the result happens to hold.
 """
 from collections.abc import Callable
 
 from mechopt.errors import MechoptError
 
-FIGURES: dict[type, Callable] = {}
+FIGURES: dict[Callable, Callable] = {}
 
 
-def register(*task_classes: type) -> Callable:
-    """Register a figure function for these task classes (one function per class)."""
+def figure(*solvers: Callable) -> Callable:
+    """Register a figure function for these solver functions (one figure function per solver)."""
+    if not solvers or not all(callable(s) for s in solvers):
+        raise MechoptError(f"@figure takes the solver functions it draws, got {solvers!r}")
+
     def wrap(draw):
-        for cls in task_classes:
-            if cls in FIGURES:
-                raise MechoptError(f"figures for {cls.__name__} registered twice: {FIGURES[cls].__name__} "
-                                   f"and {draw.__name__}")
-            FIGURES[cls] = draw
+        for solver in solvers:
+            if solver in FIGURES:
+                raise MechoptError(f"figures for solver {_name(solver)} registered twice: "
+                                   f"{FIGURES[solver].__name__} and {draw.__name__}")
+            FIGURES[solver] = draw
         return draw
     return wrap
 
 
+def register(*task_classes):
+    """The old registration by task class: gone, so that a figure module written for it fails at
+    import, never silently draws nothing."""
+    names = ", ".join(getattr(c, "__name__", repr(c)) for c in task_classes)
+    raise MechoptError(f"@register({names}): figures are registered by solver now; write "
+                       f"@figure(solver_fn, ...) with the solver functions the scenes name "
+                       f"(from mechopt.figures.registry import figure)")
+
+
 def figures_of(run) -> dict:
-    """The figures of a solved scene, by name; an error when its task class has none registered."""
-    cls = run.scene.task_class
-    if cls not in FIGURES:
-        raise MechoptError(f"no figures registered for task {cls.__module__}.{cls.__name__} "
-                           f"(scene {run.scene.id}); register a function in mechopt/figures/ with "
-                           f"@register({cls.__name__})")
-    return FIGURES[cls](run)
+    """The figures of a solved scene, by name; an error when its solver has none registered."""
+    solver = run.scene.solver
+    if solver not in FIGURES:
+        raise MechoptError(f"no figures registered for solver {_name(solver)} (scene {run.scene.id}); "
+                           f"register a function in mechopt/figures/ with @figure({solver.__name__})")
+    return FIGURES[solver](run)
 
 
 def new_figure(**options):
     """A matplotlib Figure outside pyplot (nothing global to close, safe in sweeps and notebooks)."""
     from matplotlib.figure import Figure
     return Figure(**options)
+
+
+def _name(solver) -> str:
+    return f"{solver.__module__}.{getattr(solver, '__qualname__', solver)}"

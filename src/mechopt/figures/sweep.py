@@ -23,7 +23,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from mechopt.plots import save_figure
+from mechopt.figures.files import save_figure
 from mechopt.sweep import META_KEY, check_unique
 from mechopt.units import label as axis_label
 

@@ -2,10 +2,11 @@
 functions registered in `mechopt.figures`, saved here."""
 from pathlib import Path
 
+from mechopt.figures.registry import figures_of
+
 
 def figures(run) -> dict:
     """The figures of a solved scene as matplotlib Figures, by name (for a notebook: no files)."""
-    from mechopt.figures import figures_of
     return figures_of(run)
 
 

@@ -1,0 +1,59 @@
+"""The one table of mechanisms: each row names a mechanism's files, and the spine reads it.
+
+`mechopt new` offers the rows' templates, `mechopt bench` their benchmarks
+(`mechopt.benchmarks.studies`), and `mechopt.figures` imports their figure modules (which register
+their functions by solver). A fifth mechanism is one row here plus its own files:
+
+    cases/<name>/*.toml            its scenes (found by the registry: no list)
+    models/<module>.py             its physics (a scene's `task = "<module>.<Class>"`)
+    solvers/<package>/             its solvers (a scene's `solver = "<package>.<function>"`)
+    src/mechopt/figures/<m>.py     its figures, `@figure(solver, ...)`
+    benchmarks/<module>.py         its accuracy-against-time study, `cli(repeats, out_dir, progress=None)`
+
+setup.py discovers the packages, so none of them can drop out of a wheel. This module imports
+nothing: the rows are names, imported by the readers (a missing module is an import error there).
+"""
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Mechanism:
+    """One mechanism: its name (the cases folder and the benchmark's name), a title for the docs and
+    its modules by full dotted name."""
+    name: str
+    title: str
+    models: tuple[str, ...]            # the model module first, then its part files
+    solvers: str                       # the solver package
+    figures: tuple[str, ...]           # figure modules (they register by solver)
+    benchmark: str                     # the `mechopt bench <name>` study
+    templates: tuple[tuple[str, str], ...]    # (`mechopt new` name, the registry scene it copies)
+
+
+MECHANISMS = (
+    Mechanism("cam-cutter", "Torch-guiding linkage (paper 000)",
+              ("mechopt.models.cam_cutter", "mechopt.models.cam_profile"), "mechopt.solvers.cam_cutter",
+              ("mechopt.figures.cam_cutter",), "mechopt.benchmarks.cam_cutter",
+              (("cam-cutter", "cam-cutter/minimax"), ("cam-table", "cam-cutter/other-profile"))),
+    Mechanism("press", "Crank press (paper 001)",
+              ("mechopt.models.press",), "mechopt.solvers.press",
+              ("mechopt.figures.press",), "mechopt.benchmarks.press",
+              (("press", "press/kd2322"), ("press-design", "press/flywheel-design"))),
+    Mechanism("loom", "Loom cyclogram (paper 004)",
+              ("mechopt.models.loom",), "mechopt.solvers.loom",
+              ("mechopt.figures.loom",), "mechopt.benchmarks.loom",
+              (("loom", "loom/group1"), ("cyclogram", "loom/packaging"))),
+    Mechanism("stop-impact", "Lift lever at its stop (paper 004)",
+              ("mechopt.models.stop_impact", "mechopt.models.cam_follower"), "mechopt.solvers.stop_impact",
+              ("mechopt.figures.stop_impact",), "mechopt.benchmarks.stop_impact",
+              (("stop-impact", "stop-impact/rebound-177rpm"),)),
+)
+
+
+def mechanisms() -> tuple[Mechanism, ...]:
+    """The rows (read at call time, so a reader sees the table as it is)."""
+    return MECHANISMS
+
+
+def templates() -> dict[str, str]:
+    """`mechopt new` name -> the registry scene it starts from, over every row."""
+    return {name: scene for m in mechanisms() for name, scene in m.templates}
