@@ -361,6 +361,36 @@ def required_mean_torque_Nm(task: PressDrive) -> float:
     return cut_work_J(task) / (2 * np.pi) + friction
 
 
+def energy_swing_J(task: PressDrive, samples: int = 3600) -> float:
+    """Delta E, the largest energy the flywheel gives up over one revolution [J], from the load
+    diagram: a constant drive torque equal to the mean load (`required_mean_torque_Nm`) against the
+    cut (eq. (1) over the cut window, the work done so far being its antiderivative at the
+    penetration), the friction and the weights (their potential, `potential_J`). The surplus
+    E(phi) = M_mean phi - W_cut(phi) - M_tr phi - (V(phi) - V(0)) swings by max E - min E."""
+    phi = np.linspace(0.0, 2 * np.pi, samples + 1)
+    work = np.zeros_like(phi)
+    if task.cutting:
+        a, b = task.cut_window_rad()
+        phi = np.union1d(phi, [a, b])       # the cut's end is the surplus's kink: a sample there
+        Z = task.blank_thickness_mm
+        depth = task.travel(phi) * 1000 - (task.stroke_mm - Z - task.shortfall_mm)
+        depth = np.where(phi < a, 0.0, np.where(phi > b, Z, np.clip(depth, 0.0, Z)))
+        coeffs = [getattr(task, k) for k in FORCE_KEYS]
+        work = np.polynomial.polynomial.polyval(depth, [0, 0, *[c / (i + 2) for i, c in enumerate(coeffs)]]) / 1000
+    friction = task.friction_torque_Nm if task.friction else 0.0
+    surplus = (required_mean_torque_Nm(task) - friction) * phi - work - (potential_J(task, phi) - potential_J(task, 0.0))
+    return float(surplus.max() - surplus.min())
+
+
+def rule_of_thumb_flywheel_kgm2(task: PressDrive, speed_fluctuation: float) -> float:
+    """The textbook flywheel I = Delta E / (C_s omega^2) (`energy_swing_J`; C_s the allowed speed
+    fluctuation, omega `nominal_speed_rad_s`) less what the crank shaft already carries (the mean
+    J_k without the flywheel) [kg m2], at least 0. A start for the design, not an answer: it leaves
+    out the motor's slip, the belt and J_k(phi)."""
+    needed = energy_swing_J(task) / (speed_fluctuation * task.nominal_speed_rad_s**2)
+    return max(needed - (mean_crank_inertia_kgm2(task) - task.flywheel_inertia_kgm2), 0.0)
+
+
 def breakdown_torque_at_crank_Nm(task: PressDrive) -> float:
     """The most the motor can ever give, M_k, reduced to the crank: i M_k [N m] (inf for an ideal drive)."""
     return task.gear_ratio * task.motor_breakdown_torque_Nm if task.motor else float("inf")
@@ -753,9 +783,15 @@ class PressDesign(PressDrive):
         """(lowest, highest) allowed value of a design variable."""
         return tuple(getattr(self, key) for key in BOUNDS[name])
 
-    def start(self) -> dict[str, float]:
-        """The starting design: the press's own values (motor_scale 1), clipped into the bounds."""
-        own = {"flywheel_inertia_kgm2": self.flywheel_inertia_kgm2, "gear_ratio": self.gear_ratio,
+    def start(self, rule_of_thumb: bool = True) -> dict[str, float]:
+        """The starting design, clipped into the bounds: the press's own values (motor_scale 1), but
+        with a speed-fluctuation limit and the flywheel free (and `rule_of_thumb`), the flywheel of
+        `rule_of_thumb_flywheel_kgm2` for that limit (issue 24: a press far from the scene's flywheel
+        starts near its answer)."""
+        flywheel = self.flywheel_inertia_kgm2
+        if rule_of_thumb and self.max_speed_fluctuation is not None and "flywheel_inertia_kgm2" in self.variables:
+            flywheel = rule_of_thumb_flywheel_kgm2(self, self.max_speed_fluctuation)
+        own = {"flywheel_inertia_kgm2": flywheel, "gear_ratio": self.gear_ratio,
                "belt_stiffness_Nm_rad": self.belt_stiffness_Nm_rad or 0.0, "motor_scale": 1.0}
         return {k: float(np.clip(own[k], *self.bounds(k))) for k in self.variables}
 
