@@ -231,6 +231,14 @@ class PressDrive:
 
     def __post_init__(self):
         object.__setattr__(self, "effects", tuple(self.effects))
+        # which effects are on (`belt`, `motor`, `cutting`, `friction`) and the physical states in order
+        # (`state_names`: only those the effects call for), set once: the solvers' loops read them
+        # as attributes, not as calls into this module
+        on = {"belt": "belt_elasticity", "motor": "motor_characteristic", "cutting": "cutting_force",
+              "friction": "friction"}
+        for name, effect in on.items():
+            object.__setattr__(self, name, effect in self.effects)
+        object.__setattr__(self, "state_names", state_names(self.effects))
         check_effects(self)
         if self.kinematics not in KINEMATICS:
             raise ModelError(f"kinematics={self.kinematics!r}; allowed: {', '.join(KINEMATICS)}", key="kinematics")
@@ -271,23 +279,6 @@ class PressDrive:
                      f"plus shortfall_mm={self.shortfall_mm} is {need} mm, more than the stroke "
                      f"H = 2 crank_radius_mm = {2 * self.crank_radius_mm} mm: the tool never reaches the blank")
 
-    # which effects are on
-    @property
-    def belt(self) -> bool:
-        return "belt_elasticity" in self.effects
-
-    @property
-    def motor(self) -> bool:
-        return "motor_characteristic" in self.effects
-
-    @property
-    def cutting(self) -> bool:
-        return "cutting_force" in self.effects
-
-    @property
-    def friction(self) -> bool:
-        return "friction" in self.effects
-
     @property
     def r_m(self) -> float:
         return self.crank_radius_mm / 1000
@@ -296,11 +287,6 @@ class PressDrive:
     def stroke_mm(self) -> float:
         """H = 2 r [mm]."""
         return 2 * self.crank_radius_mm
-
-    @property
-    def state_names(self) -> tuple[str, ...]:
-        """The physical states, in order (only those the listed effects call for)."""
-        return state_names(self.effects)
 
     def travel(self, phi, m=np):
         """Tool travel X [m] (see `travel_m`)."""
@@ -394,6 +380,22 @@ def rule_of_thumb_flywheel_kgm2(task: PressDrive, speed_fluctuation: float) -> f
 def breakdown_torque_at_crank_Nm(task: PressDrive) -> float:
     """The most the motor can ever give, M_k, reduced to the crank: i M_k [N m] (inf for an ideal drive)."""
     return task.gear_ratio * task.motor_breakdown_torque_Nm if task.motor else float("inf")
+
+
+def stall_check(task: PressDrive) -> tuple[dict, str] | None:
+    """(values, message) when the motor cannot deliver a revolution's work even at its breakdown
+    torque, so no forward periodic motion exists; None otherwise (or without a motor). Every solver
+    asks this before any work (a stall is a finding, INFEASIBLE, not a failed integration)."""
+    need, most = required_mean_torque_Nm(task), breakdown_torque_at_crank_Nm(task)
+    if need <= most:
+        return None
+    friction = task.friction_torque_Nm if task.friction else 0.0
+    values = {"required_mean_torque_Nm": need, "breakdown_torque_at_crank_Nm": most,
+              "cut_work_J": cut_work_J(task), "friction_torque_Nm": friction}
+    return values, (f"the motor cannot deliver the cycle's work: mean load torque {need:.4g} N m at the crank "
+                    f"(cut work {cut_work_J(task):.4g} J per turn / 2 pi + friction {friction:.4g} N m) against "
+                    f"breakdown torque {most:.4g} N m (reduced to the crank: i {task.gear_ratio:.4g} x "
+                    f"{task.motor_breakdown_torque_Nm:.4g} N m at the motor)")
 
 
 def belt_mode_rad_s(task: PressDrive) -> float:
@@ -509,9 +511,8 @@ class Equations:
                                                "alpha_rad_s2", "rod_force_N", "rod_force_pin_N", "crank_torque_Nm",
                                                "main_bearing_load_N", "guide_force_N")
 
-    @property
-    def n_states(self) -> int:
-        return len(self.state_names)
+    def __post_init__(self):
+        object.__setattr__(self, "n_states", len(self.state_names))
 
 
 class Bound:
@@ -541,21 +542,11 @@ class Dynamics:
 
     OUTPUT_NAMES: ClassVar[tuple[str, ...]] = Equations.OUTPUT_NAMES
 
-    @property
-    def n_states(self) -> int:
-        return self.equations.n_states
-
-    @property
-    def rhs(self) -> Bound:
-        return Bound(self.equations.rhs, self.p)
-
-    @property
-    def switched(self) -> Bound:
-        return Bound(self.equations.switched, self.p)
-
-    @property
-    def outputs(self) -> Bound:
-        return Bound(self.equations.outputs, self.p)
+    def __post_init__(self):
+        # `n_states` and the Functions with p bound (`rhs`, `switched`, `outputs`: `Bound`), set once
+        for name in ("rhs", "switched", "outputs"):
+            object.__setattr__(self, name, Bound(getattr(self.equations, name), self.p))
+        object.__setattr__(self, "n_states", self.equations.n_states)
 
 
 # --- sizing: what a design may change --------------------------------------------------------------

@@ -50,6 +50,7 @@ from mechopt.models.press import (
     breakdown_torque_at_crank_Nm,
     required_mean_torque_Nm,
     single_stroke_margin_J,
+    stall_check,
     structure,
 )
 from mechopt.solvers.press.periodic import steady_state
@@ -64,7 +65,6 @@ from mechopt.solvers.press.problem import (
     march,
     piece_by_time,
     revolution,
-    stall_check,
     summarise,
     top_speed_rad_s,
 )
@@ -580,7 +580,7 @@ def _box(task, nodes, scales, slacks):
 
 
 def _stall(task):
-    """`problem.stall_check` at the biggest motor the bounds allow, with the least motor that could."""
+    """`models.press.stall_check` at the biggest motor the bounds allow, with the least motor that could."""
     most = {k: task.bounds(k)[1] for k in ("gear_ratio", "motor_scale") if k in task.variables}
     drive = task.drive(most)
     stalled = stall_check(drive)

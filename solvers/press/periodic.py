@@ -13,9 +13,12 @@ from mechopt.models.press import (
     breakdown_torque_at_crank_Nm,
     cut_work_J,
     required_mean_torque_Nm,
+    stall_check,
     structure,
 )
 from mechopt.solvers.press.problem import (
+    CUT_END,
+    CUT_START,
     TWO_PI,
     Limit,
     Samples,
@@ -32,7 +35,6 @@ from mechopt.solvers.press.problem import (
     nominal_speed_note,
     piece_by_time,
     revolution,
-    stall_check,
     summarise,
 )
 from mechopt.solvers.result import Result, Status, Timing
@@ -121,7 +123,8 @@ def steady_state(task: PressDrive, *, tol: Tolerance = 1e-10, samples: Samples =
         return Result(status, values, Timing(build, time.perf_counter() - t_start - build), message, violated,
                       diagnostics)
     status = Status.SOLVED if converged else Status.LIMIT
-    values, diagnostics, arrays = summarise(task, trace, cut_angles=task.cut_window_rad())
+    window = (float(p[CUT_START]), float(p[CUT_END])) if task.cutting else None     # p holds the cut's angles
+    values, diagnostics, arrays = summarise(task, trace, cut_angles=window)
     values["periodicity_residual"] = miss
     diagnostics |= {"newton_iterations": iterations, "initial_state": solution.tolist(),
                     "warm_start": warm is not None}
