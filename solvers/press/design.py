@@ -26,8 +26,8 @@ step only while the one before has not certified its answer (`RETRIES`, in this 
 3. `cut_continuation`: the design with the cut force at `CONTINUATION` of itself, then from its
    optimum (nodes, design, orbit) at the full force.
 
-INFEASIBLE (the limits conflict: phase 1 says so) and a stall end the ladder at once: a retry cannot
-change them. When no step certifies, the best attempt is returned with a hint that names the
+INFEASIBLE (the limits conflict: phase 1 says so), a stall and the rigid-belt limit end the ladder
+at once: a retry cannot change them. When no step certifies, the best attempt is returned with a hint that names the
 settings to try (`tol`, `max_iter`, `samples`, `start`; also `diagnostics["hint"]`), and
 `diagnostics["attempts"]` lists each step.
 """
@@ -257,7 +257,9 @@ def design(task: PressDesign, *, tol: Tolerance = 1e-10, samples: Samples = 16,
             tried = _design(task, tol, samples, max_iter, check_sensitivity, None, first)
         attempts.append({"step": step, "status": tried.status.value, "message": tried.message[:200]})
         result = tried if result is None or _rank(tried) < _rank(result) else result
-        if tried.status in (Status.SOLVED, Status.INFEASIBLE) or "belt_mode" in tried.violated:
+        # a conflict, a stall or the rigid-belt limit is the problem's, not the start's: no retry changes it
+        if tried.status in (Status.SOLVED, Status.INFEASIBLE) or "belt_mode" in tried.violated \
+                or "model" in tried.diagnostics:
             break
     timing = Timing(result.timing.build_s, time.perf_counter() - t_start - result.timing.build_s)
     diagnostics = result.diagnostics | {"attempts": attempts}
