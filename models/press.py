@@ -706,7 +706,8 @@ class PressDesign(PressDrive):
 
     `variables` (any of `DESIGN_VARIABLES`) are free within their bounds (`BOUNDS`: e.g.
     `flywheel_inertia_min_kgm2` ... `flywheel_inertia_max_kgm2`); the press's own values of them
-    are the starting design. `objective` is one of `OBJECTIVES`. Limits, each on when given:
+    are the starting design (`start`: the flywheel under a speed-fluctuation limit from the rule of
+    thumb instead). `objective` is one of `OBJECTIVES`. Limits, each on when given:
     `max_speed_fluctuation` ((omega_max - omega_min) / omega_mean over the revolution),
     `belt_slip_torque_Nm` (|belt torque| at the crank shaft), `motor_safety_factor` (|motor shaft
     torque| <= M_k / factor), `single_stroke_speed_drop` (see `single_stroke_margin_J`). With the
