@@ -364,7 +364,8 @@ def energy_swing_J(task: PressDrive, samples: int = 3600) -> float:
         coeffs = [getattr(task, k) for k in FORCE_KEYS]
         work = np.polynomial.polynomial.polyval(depth, [0, 0, *[c / (i + 2) for i, c in enumerate(coeffs)]]) / 1000
     friction = task.friction_torque_Nm if task.friction else 0.0
-    surplus = (required_mean_torque_Nm(task) - friction) * phi - work - (potential_J(task, phi) - potential_J(task, 0.0))
+    weights = potential_J(task, phi) - potential_J(task, 0.0)
+    surplus = (required_mean_torque_Nm(task) - friction) * phi - work - weights
     return float(surplus.max() - surplus.min())
 
 
@@ -781,7 +782,8 @@ class PressDesign(PressDrive):
         `rule_of_thumb_flywheel_kgm2` for that limit (issue 24: a press far from the scene's flywheel
         starts near its answer)."""
         flywheel = self.flywheel_inertia_kgm2
-        if rule_of_thumb and self.max_speed_fluctuation is not None and "flywheel_inertia_kgm2" in self.variables:
+        free = "flywheel_inertia_kgm2" in self.variables
+        if rule_of_thumb and free and self.max_speed_fluctuation is not None:
             flywheel = rule_of_thumb_flywheel_kgm2(self, self.max_speed_fluctuation)
         own = {"flywheel_inertia_kgm2": flywheel, "gear_ratio": self.gear_ratio,
                "belt_stiffness_Nm_rad": self.belt_stiffness_Nm_rad or 0.0, "motor_scale": 1.0}

@@ -128,7 +128,8 @@ def steady_state(task: PressDrive, *, tol: Tolerance = 1e-10, samples: Samples =
     values["periodicity_residual"] = miss
     diagnostics |= {"newton_iterations": iterations, "initial_state": solution.tolist(),
                     "warm_start": warm is not None}
-    how = f"chord steps with the last orbit's monodromy (Broyden-updated), {iterations}" if warm else f"Newton shooting, {iterations}"
+    how = (f"chord steps with the last orbit's monodromy (Broyden-updated), {iterations}" if warm
+           else f"Newton shooting, {iterations}")
     if status is Status.SOLVED and diagnostics["min_omega_rad_s"] <= 0:
         status = Status.FAILED
         message = (f"no forward periodic motion: {how} iterations converged to an orbit on "
