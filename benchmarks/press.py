@@ -280,6 +280,7 @@ def cli(repeats, out_dir, progress=None) -> str:
 # --- issue 24: what-ifs that re-solve on the structure's build ------------------------------------
 
 WHATIF = {"belt_stiffness_Nm_rad": 6e4}
+WHATIF_FAR = {"flywheel_inertia_kgm2": 7.5}     # 50 % off the last orbit: the Broyden steps' case
 SWEEP_SCENE = "press/kd2322"
 WHATIF_TARGETS = {"build_share": 0.10, "orbit_s": 0.050, "speedup": 5.0, "sweep_speedup": 5.0}
 
@@ -292,8 +293,9 @@ def _solve(overrides=None):
 
 def whatif_rows(repeats=7):
     """Fresh solves (every cache cleared first) against what-ifs (`WHATIF` after a solve of the scene
-    as it is, same process): medians of wall time, build_s and the periodic orbit's solve_s."""
-    fresh, whatif = [], []
+    as it is, same process): medians of wall time, build_s and the periodic orbit's solve_s; and the
+    orbit's solve_s of the far what-if `WHATIF_FAR` after a solve of the scene, with its steps."""
+    fresh, whatif, far = [], [], []
     for _ in range(repeats):
         cache.clear()
         wall, result = _solve()
@@ -302,11 +304,16 @@ def whatif_rows(repeats=7):
         wall, result = _solve(WHATIF)
         whatif.append((wall, result.timing.build_s, result.timing.solve_s, result.status.value,
                        result.diagnostics["newton_iterations"], result.values["periodicity_residual"]))
+        _solve()
+        _, result = _solve(WHATIF_FAR)
+        far.append((result.timing.solve_s, result.status.value, result.diagnostics["newton_iterations"],
+                    result.diagnostics["warm_start"]))
     med = lambda rows, i: statistics.median(r[i] for r in rows)
     return {"fresh_wall_s": med(fresh, 0), "fresh_build_s": med(fresh, 1), "whatif_wall_s": med(whatif, 0),
             "whatif_build_s": med(whatif, 1), "whatif_orbit_s": med(whatif, 2),
             "whatif_chord_steps": med(whatif, 4), "whatif_residual": max(r[5] for r in whatif),
-            "statuses": sorted({r[3] for r in fresh + whatif})}
+            "far_orbit_s": med(far, 0), "far_steps": med(far, 2), "far_warm": all(r[3] for r in far),
+            "statuses": sorted({r[3] for r in fresh + whatif} | {r[1] for r in far})}
 
 
 def sweep_rows(variants=1000, baseline_variants=40):
@@ -396,6 +403,8 @@ def whatif_table(w, s, path, c=None):
         f"  targets: build share {share:.3g} (< {t['build_share']:g}: {met[share < t['build_share']]}), orbit "
         f"{w['whatif_orbit_s'] * 1e3:.3g} ms (< {t['orbit_s'] * 1e3:g} ms: {met[w['whatif_orbit_s'] < t['orbit_s']]}),"
         f" fresh / what-if {speedup:.3g} (>= {t['speedup']:g}: {met[speedup >= t['speedup']]})",
+        f"  what-if {WHATIF_FAR}: periodic orbit {w['far_orbit_s'] * 1e3:.3g} ms, {w['far_steps']:g} "
+        f"{'Broyden steps from the last orbit' if w['far_warm'] else 'Newton steps (a cold solve)'}",
         f"sweep of {s['variants']} variants of one structure: {s['structure_per_s']:.4g} variants/s "
         f"({s['warm_started']} warm-started) against {s['rebuild_per_s']:.4g}/s rebuilding each; ratio "
         f"{ratio:.3g} (>= {t['sweep_speedup']:g}: {met[ratio >= t['sweep_speedup']]}); statuses {s['statuses']}",

@@ -231,6 +231,14 @@ class PressDrive:
 
     def __post_init__(self):
         object.__setattr__(self, "effects", tuple(self.effects))
+        # which effects are on (`belt`, `motor`, `cutting`, `friction`) and the physical states in order
+        # (`state_names`: only those the effects call for), set once: the solvers' loops read them
+        # as attributes, not as calls into this module
+        on = {"belt": "belt_elasticity", "motor": "motor_characteristic", "cutting": "cutting_force",
+              "friction": "friction"}
+        for name, effect in on.items():
+            object.__setattr__(self, name, effect in self.effects)
+        object.__setattr__(self, "state_names", state_names(self.effects))
         check_effects(self)
         if self.kinematics not in KINEMATICS:
             raise ModelError(f"kinematics={self.kinematics!r}; allowed: {', '.join(KINEMATICS)}", key="kinematics")
@@ -271,23 +279,6 @@ class PressDrive:
                      f"plus shortfall_mm={self.shortfall_mm} is {need} mm, more than the stroke "
                      f"H = 2 crank_radius_mm = {2 * self.crank_radius_mm} mm: the tool never reaches the blank")
 
-    # which effects are on
-    @property
-    def belt(self) -> bool:
-        return "belt_elasticity" in self.effects
-
-    @property
-    def motor(self) -> bool:
-        return "motor_characteristic" in self.effects
-
-    @property
-    def cutting(self) -> bool:
-        return "cutting_force" in self.effects
-
-    @property
-    def friction(self) -> bool:
-        return "friction" in self.effects
-
     @property
     def r_m(self) -> float:
         return self.crank_radius_mm / 1000
@@ -296,11 +287,6 @@ class PressDrive:
     def stroke_mm(self) -> float:
         """H = 2 r [mm]."""
         return 2 * self.crank_radius_mm
-
-    @property
-    def state_names(self) -> tuple[str, ...]:
-        """The physical states, in order (only those the listed effects call for)."""
-        return state_names(self.effects)
 
     def travel(self, phi, m=np):
         """Tool travel X [m] (see `travel_m`)."""
@@ -361,9 +347,56 @@ def required_mean_torque_Nm(task: PressDrive) -> float:
     return cut_work_J(task) / (2 * np.pi) + friction
 
 
+def energy_swing_J(task: PressDrive, samples: int = 3600) -> float:
+    """Delta E, the largest energy the flywheel gives up over one revolution [J], from the load
+    diagram: a constant drive torque equal to the mean load (`required_mean_torque_Nm`) against the
+    cut (eq. (1) over the cut window, the work done so far being its antiderivative at the
+    penetration), the friction and the weights (their potential, `potential_J`). The surplus
+    E(phi) = M_mean phi - W_cut(phi) - M_tr phi - (V(phi) - V(0)) swings by max E - min E."""
+    phi = np.linspace(0.0, 2 * np.pi, samples + 1)
+    work = np.zeros_like(phi)
+    if task.cutting:
+        a, b = task.cut_window_rad()
+        phi = np.union1d(phi, [a, b])       # the cut's end is the surplus's kink: a sample there
+        Z = task.blank_thickness_mm
+        depth = task.travel(phi) * 1000 - (task.stroke_mm - Z - task.shortfall_mm)
+        depth = np.where(phi < a, 0.0, np.where(phi > b, Z, np.clip(depth, 0.0, Z)))
+        coeffs = [getattr(task, k) for k in FORCE_KEYS]
+        work = np.polynomial.polynomial.polyval(depth, [0, 0, *[c / (i + 2) for i, c in enumerate(coeffs)]]) / 1000
+    friction = task.friction_torque_Nm if task.friction else 0.0
+    weights = potential_J(task, phi) - potential_J(task, 0.0)
+    surplus = (required_mean_torque_Nm(task) - friction) * phi - work - weights
+    return float(surplus.max() - surplus.min())
+
+
+def rule_of_thumb_flywheel_kgm2(task: PressDrive, speed_fluctuation: float) -> float:
+    """The textbook flywheel I = Delta E / (C_s omega^2) (`energy_swing_J`; C_s the allowed speed
+    fluctuation, omega `nominal_speed_rad_s`) less what the crank shaft already carries (the mean
+    J_k without the flywheel) [kg m2], at least 0. A start for the design, not an answer: it leaves
+    out the motor's slip, the belt and J_k(phi)."""
+    needed = energy_swing_J(task) / (speed_fluctuation * task.nominal_speed_rad_s**2)
+    return max(needed - (mean_crank_inertia_kgm2(task) - task.flywheel_inertia_kgm2), 0.0)
+
+
 def breakdown_torque_at_crank_Nm(task: PressDrive) -> float:
     """The most the motor can ever give, M_k, reduced to the crank: i M_k [N m] (inf for an ideal drive)."""
     return task.gear_ratio * task.motor_breakdown_torque_Nm if task.motor else float("inf")
+
+
+def stall_check(task: PressDrive) -> tuple[dict, str] | None:
+    """(values, message) when the motor cannot deliver a revolution's work even at its breakdown
+    torque, so no forward periodic motion exists; None otherwise (or without a motor). Every solver
+    asks this before any work (a stall is a finding, INFEASIBLE, not a failed integration)."""
+    need, most = required_mean_torque_Nm(task), breakdown_torque_at_crank_Nm(task)
+    if need <= most:
+        return None
+    friction = task.friction_torque_Nm if task.friction else 0.0
+    values = {"required_mean_torque_Nm": need, "breakdown_torque_at_crank_Nm": most,
+              "cut_work_J": cut_work_J(task), "friction_torque_Nm": friction}
+    return values, (f"the motor cannot deliver the cycle's work: mean load torque {need:.4g} N m at the crank "
+                    f"(cut work {cut_work_J(task):.4g} J per turn / 2 pi + friction {friction:.4g} N m) against "
+                    f"breakdown torque {most:.4g} N m (reduced to the crank: i {task.gear_ratio:.4g} x "
+                    f"{task.motor_breakdown_torque_Nm:.4g} N m at the motor)")
 
 
 def belt_mode_rad_s(task: PressDrive) -> float:
@@ -479,9 +512,8 @@ class Equations:
                                                "alpha_rad_s2", "rod_force_N", "rod_force_pin_N", "crank_torque_Nm",
                                                "main_bearing_load_N", "guide_force_N")
 
-    @property
-    def n_states(self) -> int:
-        return len(self.state_names)
+    def __post_init__(self):
+        object.__setattr__(self, "n_states", len(self.state_names))
 
 
 class Bound:
@@ -511,21 +543,11 @@ class Dynamics:
 
     OUTPUT_NAMES: ClassVar[tuple[str, ...]] = Equations.OUTPUT_NAMES
 
-    @property
-    def n_states(self) -> int:
-        return self.equations.n_states
-
-    @property
-    def rhs(self) -> Bound:
-        return Bound(self.equations.rhs, self.p)
-
-    @property
-    def switched(self) -> Bound:
-        return Bound(self.equations.switched, self.p)
-
-    @property
-    def outputs(self) -> Bound:
-        return Bound(self.equations.outputs, self.p)
+    def __post_init__(self):
+        # `n_states` and the Functions with p bound (`rhs`, `switched`, `outputs`: `Bound`), set once
+        for name in ("rhs", "switched", "outputs"):
+            object.__setattr__(self, name, Bound(getattr(self.equations, name), self.p))
+        object.__setattr__(self, "n_states", self.equations.n_states)
 
 
 # --- sizing: what a design may change --------------------------------------------------------------
@@ -685,7 +707,8 @@ class PressDesign(PressDrive):
 
     `variables` (any of `DESIGN_VARIABLES`) are free within their bounds (`BOUNDS`: e.g.
     `flywheel_inertia_min_kgm2` ... `flywheel_inertia_max_kgm2`); the press's own values of them
-    are the starting design. `objective` is one of `OBJECTIVES`. Limits, each on when given:
+    are the starting design (`start`: the flywheel under a speed-fluctuation limit from the rule of
+    thumb instead). `objective` is one of `OBJECTIVES`. Limits, each on when given:
     `max_speed_fluctuation` ((omega_max - omega_min) / omega_mean over the revolution),
     `belt_slip_torque_Nm` (|belt torque| at the crank shaft), `motor_safety_factor` (|motor shaft
     torque| <= M_k / factor), `single_stroke_speed_drop` (see `single_stroke_margin_J`). With the
@@ -753,9 +776,16 @@ class PressDesign(PressDrive):
         """(lowest, highest) allowed value of a design variable."""
         return tuple(getattr(self, key) for key in BOUNDS[name])
 
-    def start(self) -> dict[str, float]:
-        """The starting design: the press's own values (motor_scale 1), clipped into the bounds."""
-        own = {"flywheel_inertia_kgm2": self.flywheel_inertia_kgm2, "gear_ratio": self.gear_ratio,
+    def start(self, rule_of_thumb: bool = True) -> dict[str, float]:
+        """The starting design, clipped into the bounds: the press's own values (motor_scale 1), but
+        with a speed-fluctuation limit and the flywheel free (and `rule_of_thumb`), the flywheel of
+        `rule_of_thumb_flywheel_kgm2` for that limit (issue 24: a press far from the scene's flywheel
+        starts near its answer)."""
+        flywheel = self.flywheel_inertia_kgm2
+        free = "flywheel_inertia_kgm2" in self.variables
+        if rule_of_thumb and free and self.max_speed_fluctuation is not None:
+            flywheel = rule_of_thumb_flywheel_kgm2(self, self.max_speed_fluctuation)
+        own = {"flywheel_inertia_kgm2": flywheel, "gear_ratio": self.gear_ratio,
                "belt_stiffness_Nm_rad": self.belt_stiffness_Nm_rad or 0.0, "motor_scale": 1.0}
         return {k: float(np.clip(own[k], *self.bounds(k))) for k in self.variables}
 

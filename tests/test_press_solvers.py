@@ -468,3 +468,20 @@ def test_a_what_if_re_solves_on_the_structures_build_from_the_last_orbit():
     assert cold.status is Status.SOLVED and not cold.diagnostics["warm_start"]
     for key in ("omega_mean_rad_s", "speed_fluctuation", "peak_belt_torque_Nm", "motor_work_J"):
         assert warm.values[key] == pytest.approx(cold.values[key], rel=1e-8), key
+
+
+def test_a_far_what_if_converges_by_broyden_steps_instead_of_a_cold_newton_solve():
+    """A flywheel 50 % heavier than the last orbit's: with the old monodromy alone the chord steps
+    contract by ~0.08 each and ran out (CHORD_STEPS) into the cold solve; Broyden's update of the
+    Jacobian from each step's secant converges within them, to the cold solve's orbit."""
+    from mechopt.cache import clear
+    pd.steady_state(PAPER)
+    heavier = dataclasses.replace(PAPER, flywheel_inertia_kgm2=7.5)
+    warm = pd.steady_state(heavier)
+    assert warm.status is Status.SOLVED and warm.diagnostics["warm_start"], warm.message
+    assert warm.diagnostics["newton_iterations"] <= 3
+    clear()
+    cold = pd.steady_state(heavier)
+    assert not cold.diagnostics["warm_start"]
+    for key in ("omega_mean_rad_s", "speed_fluctuation", "peak_belt_torque_Nm"):
+        assert warm.values[key] == pytest.approx(cold.values[key], rel=1e-8), key

@@ -5,17 +5,17 @@ Rows go cheapest first (least rated power, then least breakdown torque), so the 
 first row with a feasible ratio: the rows before it are each shown infeasible, with the reason. A
 ratio is screened before any NLP when the motor's idle speed reduced by it (the fastest the crank
 can turn) is already below the speed band, when the motor cannot carry the cycle's mean load
-(`problem.stall_check`), or when the steady motion at the starting flywheel turns the crank clearly
+(`models.press.stall_check`), or when the steady motion at the starting flywheel turns the crank clearly
 off the band (one warm-started `steady_state`)."""
 import time
 
 import numpy as np
 
 from mechopt.errors import ModelError
-from mechopt.models.press import PressCatalogue
+from mechopt.models.press import PressCatalogue, stall_check
 from mechopt.solvers.press.design import design
 from mechopt.solvers.press.periodic import steady_state
-from mechopt.solvers.press.problem import Samples, stall_check
+from mechopt.solvers.press.problem import Samples
 from mechopt.solvers.result import Result, Status, Timing
 from mechopt.solvers.settings import Annotated, Interval, Tolerance
 

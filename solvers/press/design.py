@@ -12,24 +12,45 @@ optimum's state at phi = 0, one period): its period, mean speed, speed fluctuati
 torque and energy per stroke must agree with the NLP's to `VERIFY_REL` or the answer is at best
 INACCURATE. Active limits are reported with their multipliers in the user's terms (what a unit
 more of the limit is worth in the objective), and a variable on its bound is named.
+
+Start and retries (issue 24: a designer's own press must come out SOLVED at the default settings).
+Every number the NLP sees is of order 1 (`_scales`: variables by the start, states by the nominal
+speed and the belt's twist under the mean torque, limits by their value). With a speed-fluctuation
+limit and the flywheel free, the start is the textbook flywheel I = Delta E / (C_s omega^2) from the
+load diagram (`models.press.rule_of_thumb_flywheel_kgm2`), not the press's own flywheel. Then, each
+step only while the one before has not certified its answer (`RETRIES`, in this order):
+
+1. `rule_of_thumb`: coarse passes (CVODES at `COARSE_TOL`) place the speed extremes as nodes, a
+   fine pass at `tol` from there; an event-located check that misses re-solves once at tol / 10.
+2. `press_start`: the same from the press's own values (when they differ from step 1's start).
+3. `cut_continuation`: the design with the cut force at `CONTINUATION` of itself, then from its
+   optimum (nodes, design, orbit) at the full force.
+
+INFEASIBLE (the limits conflict: phase 1 says so), a stall and the rigid-belt limit end the ladder
+at once: a retry cannot change them. When no step certifies, the best attempt is returned with a hint that names the
+settings to try (`tol`, `max_iter`, `samples`, `start`; also `diagnostics["hint"]`), and
+`diagnostics["attempts"]` lists each step.
 """
 import time
 from dataclasses import dataclass, replace
 from itertools import pairwise
+from typing import Literal
 
 import casadi as ca
 import numpy as np
 from scipy.integrate import simpson
 
 from mechopt.cache import memoised
-from mechopt.errors import ModelError
+from mechopt.errors import ModelError, SettingError
 from mechopt.models.press import (
     BOUNDS,
+    FORCE_KEYS,
     Dynamics,
     PressDesign,
     breakdown_torque_at_crank_Nm,
     required_mean_torque_Nm,
     single_stroke_margin_J,
+    stall_check,
     structure,
 )
 from mechopt.solvers.press.periodic import steady_state
@@ -44,7 +65,6 @@ from mechopt.solvers.press.problem import (
     march,
     piece_by_time,
     revolution,
-    stall_check,
     summarise,
     top_speed_rad_s,
 )
@@ -70,6 +90,8 @@ WARM_START = {"ipopt.warm_start_init_point": "yes", "ipopt.warm_start_bound_push
 MAX_PASSES = 8               # NLP solves, each with the extremes of the one before as nodes
 CANDIDATES = 3               # local speed peaks (and troughs) refined to find the largest (smallest)
 DENSE = 400                  # samples per interval when locating the speed extremes (error ~1e-5 rad)
+CONTINUATION = 0.5           # the cut force's share in the first solve of the continuation retry
+RETRIES = ("rule_of_thumb", "press_start", "cut_continuation")     # the order the module doc explains
 MIN_SPEED_SHARE = 0.05       # omega >= this x nominal everywhere: the crank turns forward (d/dphi = d/dt / omega)
 UNITS = {"least_flywheel_inertia": ("flywheel_inertia_kgm2", "kg m2", "flywheel inertia"),
          "least_motor_rms_torque": ("motor_rms_torque_N_m", "N m", "motor RMS torque"),
@@ -185,7 +207,8 @@ def _nlp(task: PressDesign, nodes: tuple, tol: float, samples: int, scales: tupl
 
 
 def design(task: PressDesign, *, tol: Tolerance = 1e-10, samples: Samples = 16,
-           max_iter: Annotated[int, Interval(ge=1, le=3000)] = 200, check_sensitivity: bool = False) -> Result:
+           max_iter: Annotated[int, Interval(ge=1, le=3000)] = 200, check_sensitivity: bool = False,
+           start: Literal["rule_of_thumb", "press"] = "rule_of_thumb") -> Result:
     """The drive that minimises `task.objective` over `task.variables` subject to its limits, on
     the periodic steady motion (see the module doc and `models.press.PressDesign`).
 
@@ -197,6 +220,9 @@ def design(task: PressDesign, *, tol: Tolerance = 1e-10, samples: Samples = 16,
     max_iter : IPOPT iterations.
     check_sensitivity : re-solve with the first active limit 0.1 % looser and tighter and compare the
         central difference with the multiplier's sensitivity (`sensitivity_fd_rel_error`).
+    start : "rule_of_thumb" (the flywheel of `models.press.rule_of_thumb_flywheel_kgm2`, when the
+        flywheel is free under a speed-fluctuation limit) or "press" (the press's own values) for
+        the first try; the retries of the module doc follow when it does not certify.
 
     Returns a Result: SOLVED (IPOPT's Solve_Succeeded and the event-located check within
     `VERIFY_REL`); values: the design (`flywheel_inertia_kgm2`, ...), `speed_fluctuation`,
@@ -212,11 +238,65 @@ def design(task: PressDesign, *, tol: Tolerance = 1e-10, samples: Samples = 16,
     """
     if not isinstance(task, PressDesign):
         raise ModelError(f"task={type(task).__name__}: expected a PressDesign", key="task")
-    return _design(task, tol, samples, max_iter, check_sensitivity, None)
+    if start not in ("rule_of_thumb", "press"):
+        raise SettingError(f"start={start!r}: allowed 'rule_of_thumb', 'press'", key="start")
+    t_start = time.perf_counter()
+    first = task.start(rule_of_thumb=start == "rule_of_thumb")
+    attempts, result = [], None
+    for step in RETRIES:
+        if step == "press_start":
+            other = task.start(rule_of_thumb=start != "rule_of_thumb")
+            if other == first:
+                continue
+            tried = _design(task, tol, samples, max_iter, check_sensitivity, None, other)
+        elif step == "cut_continuation":
+            if not task.cutting:
+                continue
+            tried = _continued(task, tol, samples, max_iter, check_sensitivity, first)
+        else:
+            tried = _design(task, tol, samples, max_iter, check_sensitivity, None, first)
+        attempts.append({"step": step, "status": tried.status.value, "message": tried.message[:200]})
+        result = tried if result is None or _rank(tried) < _rank(result) else result
+        # a conflict, a stall or the rigid-belt limit is the problem's, not the start's: no retry changes it
+        if tried.status in (Status.SOLVED, Status.INFEASIBLE) or "belt_mode" in tried.violated \
+                or "model" in tried.diagnostics:
+            break
+    timing = Timing(result.timing.build_s, time.perf_counter() - t_start - result.timing.build_s)
+    diagnostics = result.diagnostics | {"attempts": attempts}
+    if result.status in (Status.SOLVED, Status.INFEASIBLE):
+        message = result.message if len(attempts) == 1 else \
+            f"{result.message} (after the retries {', '.join(a['step'] for a in attempts)})"
+        return replace(result, timing=timing, diagnostics=diagnostics, message=message)
+    hint = (f"not certified after the retries {', '.join(a['step'] for a in attempts)}; try: a looser or tighter "
+            f"CVODES tolerance (--set tol=1e-8, or 1e-11; now {tol:g}), more IPOPT iterations (--set max_iter="
+            f"{min(5 * max_iter, 3000)}; now {max_iter}), more samples per interval (--set samples={2 * samples}; "
+            f"now {samples}), the other start (--set start={'press' if start == 'rule_of_thumb' else 'rule_of_thumb'}"
+            f") with the press's flywheel_inertia_kgm2 near the answer, or wider bounds")
+    return replace(result, timing=timing, diagnostics=diagnostics | {"hint": hint}, message=f"{result.message}; {hint}")
 
 
-def _design(task, tol, samples, max_iter, check_sensitivity, warm):
-    """`design`; `warm` = (nodes, design, states at phi = 0) of a nearby optimum to start from."""
+def _rank(result):
+    """Which of two unfinished attempts to return: SOLVED, INFEASIBLE, INACCURATE, then the rest."""
+    order = (Status.SOLVED, Status.INFEASIBLE, Status.INACCURATE)
+    return order.index(result.status) if result.status in order else len(order)
+
+
+def _continued(task, tol, samples, max_iter, check_sensitivity, start):
+    """Retry `cut_continuation`: the design with the cut force at `CONTINUATION` of itself from
+    `start`, then at the full force from its optimum (its nodes, design and orbit at phi = 0)."""
+    softer = replace(task, **{k: CONTINUATION * getattr(task, k) for k in FORCE_KEYS})
+    first = _design(softer, tol, samples, max_iter, False, None, start)
+    if first.status is not Status.SOLVED:
+        return first
+    nodes = tuple(np.radians(first.diagnostics["nodes_deg"]))
+    design_ = {k: first.values[k] for k in task.variables}
+    y0 = np.asarray(first.diagnostics["node_state"])
+    return _design(task, tol, samples, max_iter, check_sensitivity, (nodes, design_, y0), design_)
+
+
+def _design(task, tol, samples, max_iter, check_sensitivity, warm, start=None):
+    """`design`'s one try from `start` (a design; the task's own start when None); `warm` =
+    (nodes, design, states at phi = 0) of a nearby optimum to start from instead."""
     t_start = time.perf_counter()
 
     def timing(build=0.0):
@@ -225,7 +305,7 @@ def _design(task, tol, samples, max_iter, check_sensitivity, warm):
     stall = _stall(task)
     if stall is not None:
         return Result(Status.INFEASIBLE, stall[0], timing(), stall[1], ("stall",))
-    start = task.start()
+    start = task.start() if start is None else start
     too_fast = belt_too_fast_per_revolution(task.drive(start), STEPS_PER_REVOLUTION, "the design NLP")
     if too_fast:
         return _on_rigid_belt(task, too_fast, tol=tol, samples=samples, max_iter=max_iter, t_start=t_start)
@@ -308,7 +388,8 @@ def _design(task, tol, samples, max_iter, check_sensitivity, warm):
     check = _verify(drive, np.r_[y0[:task.state_names.index("phi_rad")], 0.0,
                                  y0[task.state_names.index("phi_rad"):]], values, tol)
     values["verification_rel_error"] = check[0]
-    diagnostics |= {"ipopt": word, "iterations": solver.stats()["iter_count"], "passes": passes, "nodes_deg": np.degrees(nodes).tolist(),
+    diagnostics |= {"ipopt": word, "iterations": solver.stats()["iter_count"], "passes": passes,
+                    "nodes_deg": np.degrees(nodes).tolist(), "node_state": y0.tolist(),
                     "verification": check[1], "active": said}
     status, message = Status.SOLVED, f"IPOPT {word} in {solver.stats()['iter_count']} iterations; " + "; ".join(said)
     if check[0] > VERIFY_REL and tol > 10 * TIGHTEST_TOL and not _is_retry(warm):
@@ -501,7 +582,7 @@ def _box(task, nodes, scales, slacks):
 
 
 def _stall(task):
-    """`problem.stall_check` at the biggest motor the bounds allow, with the least motor that could."""
+    """`models.press.stall_check` at the biggest motor the bounds allow, with the least motor that could."""
     most = {k: task.bounds(k)[1] for k in ("gear_ratio", "motor_scale") if k in task.variables}
     drive = task.drive(most)
     stalled = stall_check(drive)

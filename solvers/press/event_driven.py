@@ -8,7 +8,7 @@ import time
 import numpy as np
 
 from mechopt.errors import MechoptError, ModelError
-from mechopt.models.press import PressDrive
+from mechopt.models.press import PressDrive, stall_check
 from mechopt.solvers.press.problem import (
     RIGID_LIMIT,
     TWO_PI,
@@ -27,7 +27,6 @@ from mechopt.solvers.press.problem import (
     nominal_speed_note,
     piece_by_time,
     refuse_work,
-    stall_check,
     summarise,
     top_speed_rad_s,
 )

@@ -20,11 +20,8 @@ from mechopt.models.press import (
     Dynamics,
     PressDrive,
     belt_mode_rad_s,
-    breakdown_torque_at_crank_Nm,
-    cut_work_J,
     dynamics,
     equations,
-    required_mean_torque_Nm,
     structure,
 )
 from mechopt.solvers.result import Status, from_casadi_integrator
@@ -85,21 +82,6 @@ def casadi_failure(exc: BaseException, doing: str) -> tuple[Status, str, dict]:
             "CV_CONV_FAILURE": "the corrector did not converge", "CV_ERR_FAILURE": "the error test kept failing"}
     return (from_casadi_integrator(raw), f"CVODES gave up ({what}: {hint.get(what, 'see diagnostics')}) {doing}",
             {"casadi_error": raw})
-
-
-def stall_check(task: PressDrive) -> tuple[dict, str] | None:
-    """(values, message) when the motor cannot deliver a revolution's work even at its breakdown
-    torque, so no forward periodic motion exists; None otherwise (or without a motor)."""
-    need, most = required_mean_torque_Nm(task), breakdown_torque_at_crank_Nm(task)
-    if need <= most:
-        return None
-    friction = task.friction_torque_Nm if task.friction else 0.0
-    values = {"required_mean_torque_Nm": need, "breakdown_torque_at_crank_Nm": most,
-              "cut_work_J": cut_work_J(task), "friction_torque_Nm": friction}
-    return values, (f"the motor cannot deliver the cycle's work: mean load torque {need:.4g} N m at the crank "
-                    f"(cut work {cut_work_J(task):.4g} J per turn / 2 pi + friction {friction:.4g} N m) against "
-                    f"breakdown torque {most:.4g} N m (reduced to the crank: i {task.gear_ratio:.4g} x "
-                    f"{task.motor_breakdown_torque_Nm:.4g} N m at the motor)")
 
 
 # --- the belt mode against what a method can afford ------------------------------------------
@@ -206,7 +188,7 @@ def summarise(task: PressDrive, trace: Trace, *, cut_angles=None) -> tuple[dict,
     (U, 0 or 1), the work integrals (`WORK_NAMES`) and the outputs of `Dynamics.OUTPUT_NAMES`."""
     dyn = dynamics_of(task)
     t, x, mode = trace.arrays()
-    out = np.asarray(dyn.outputs.map(len(t))(x.T, mode.T))
+    out = np.asarray(dyn.equations.outputs.map(len(t))(x.T, mode.T, dyn.p))
     names = dict(zip(Dynamics.OUTPUT_NAMES, out))
     n = dyn.n_states
     iphi, iw = task.state_names.index("phi_rad"), task.state_names.index("omega_rad_s")
@@ -247,7 +229,7 @@ def summarise(task: PressDrive, trace: Trace, *, cut_angles=None) -> tuple[dict,
         antiderivative = [0, 0, *[c / (i + 2) for i, c in enumerate(coeffs)]]      # of eq. (1), N mm
         per_cut_J = float(np.polynomial.polynomial.polyval(Z, antiderivative)) / 1000
         values["cuts"] = float(cut / per_cut_J) if per_cut_J > 0 else 0.0
-        window = task.cut_window_rad()
+        window = cut_angles if cut_angles is not None else task.cut_window_rad()
         turns = np.arange(np.floor(phi[0] / TWO_PI) - 1, np.floor(phi[-1] / TWO_PI) + 2) * TWO_PI
         whole = int(np.sum((turns + window[0] >= phi[0] - 1e-9) & (turns + window[1] <= phi[-1] + 1e-9)))
         partial = int(np.sum((turns + window[0] < phi[-1]) & (turns + window[1] > phi[-1] + 1e-9)))
@@ -514,9 +496,8 @@ class Revolution:
     variational: ca.Function
     grid: np.ndarray
 
-    @property
-    def n(self) -> int:
-        return len(self.state_names)
+    def __post_init__(self):
+        object.__setattr__(self, "n", len(self.state_names))     # states, set once (read per Newton step)
 
     def spans(self, p, numbers=False) -> list[tuple]:
         """(a, b, U) of each piece for p (numbers or symbols; with numbers, an empty cut is no piece)."""
