@@ -390,12 +390,15 @@ def distance_to_segment(Q, A, B):
     return np.hypot(*(AQ - along * AB))
 
 
-def mirrored(curve, t_end: float):
-    """A closed curve over [0, 2 t_end): `curve` on [0, t_end], then its mirror in the x axis
-    back to the start (a path symmetric about the x axis given by its upper half)."""
+def mirrored(curve, t_start: float, t_end: float):
+    """A closed curve over [0, 2 (t_end - t_start)): `curve` from t_start to t_end, then its mirror
+    in the x axis back to the start (a path symmetric about the x axis given by its upper half,
+    as paper 000's torch paths are)."""
+    span = t_end - t_start
+
     def closed(t):
         t = np.atleast_1d(np.asarray(t, dtype=float))
-        back = t > t_end
-        x, y = (np.asarray(v, dtype=float) for v in curve(np.where(back, 2 * t_end - t, t)))
+        back = t > span
+        x, y = (np.asarray(v, dtype=float) for v in curve(t_start + np.where(back, 2 * span - t, t)))
         return np.array([x, np.where(back, -y, y)])
     return closed
