@@ -46,6 +46,8 @@ Law = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]
 FOLLOWERS = ("translating", "oscillating")
 CLOSURES = ("spring", "groove")
 CHORD_SAMPLES = 64            # points inside a chord where its distance to the curve is measured
+CHORD_SHARE = 0.9             # of the chord a circle of the local radius allows: a margin for the
+                              # radius changing along it (the chords that still stray are halved)
 MAX_TABLE_POINTS = 200_000    # a tolerance finer than any shop needs stops here
 ORIENTATION = -1              # the pitch curve runs clockwise as the cam angle grows
 
@@ -259,11 +261,12 @@ FLANKS = {"spring": ("inner",), "groove": ("inner", "outer")}
 def flank(shape: CamShape, theta, side: Literal["inner", "outer"] = "inner", law: Law | None = None):
     """Points (2 x n, cam frame) [mm] of a profile flank: the envelope of the roller circles,
     P - r n_out (inner: the cam's surface, a groove's inner wall) or P + r n_out (a groove's outer
-    wall). Refused (ModelError naming the cam angle) where the flank is undercut."""
+    wall). Refused (ModelError naming the cam angle of the least radius among the angles given)
+    where the flank is undercut."""
     p = pitch(shape, theta, law)
     bad = undercut_at(p, shape.roller_radius_mm, side)
     if bad.any():
-        i = int(np.flatnonzero(bad)[0])
+        i = int(np.argmin(np.where(bad, np.abs(p.radius_mm), np.inf)))
         raise ModelError(_undercut_message(shape, side, float(p.theta[i]), float(p.radius_mm[i])), key="roller_radius_mm")
     sign = -1.0 if side == "inner" else 1.0
     return p.P + sign * shape.roller_radius_mm * p.normal
@@ -350,21 +353,39 @@ class PointTable:
     tolerance_mm: float
 
 
-def point_table(curve, tol_mm: float, *, period: float = 2 * math.pi, breaks=(), initial: int = 64) -> PointTable:
-    """Points of the closed curve `curve(t) -> (2 x n)` over t in [0, period), chosen adaptively
-    (a chord whose arc strays more than `tol_mm` from it is halved, so the points crowd where the
-    curve bends); `breaks` (corners, phase ends) are always points. The error stated is the
-    largest curve-to-chord distance measured at CHORD_SAMPLES points inside every chord (the arc's
-    bump over a chord is smooth, so the sampled largest is within ~1e-4 relative of the true one)."""
+def point_table(curve, tol_mm: float, *, period: float = 2 * math.pi, breaks=(), dense: int = 20_000) -> PointTable:
+    """Points of the closed curve `curve(t) -> (2 x n)` over t in [0, period), spaced by the
+    curvature: a chord of length c on an arc of radius rho strays c^2 / (8 rho) from it, so the
+    points are laid CHORD_SHARE * sqrt(8 rho tol) apart along the curve (rho from the circles
+    through `dense` consecutive points: any curve, no derivatives asked); a chord still straying
+    more than `tol_mm` is halved until none does. `breaks` (corners, phase ends) are always points.
+    The error stated is the largest curve-to-chord distance measured at CHORD_SAMPLES points inside
+    every chord (the arc's bump over a chord is smooth, so the sampled largest is within ~1e-4
+    relative of the true one)."""
     require(tol_mm > 0, f"chord_tol_mm={tol_mm!r}: must be > 0", key="chord_tol_mm")
-    t = np.unique(np.r_[np.linspace(0.0, period, initial, endpoint=False),
-                        [b % period for b in breaks]])
+    ends = np.unique(np.r_[0.0, [b % period for b in breaks], period])
+    td = np.unique(np.r_[np.linspace(0.0, period, dense, endpoint=False), ends[:-1]])
+    P = np.asarray(curve(td))
+    A, C = np.roll(P, 1, axis=1), np.roll(P, -1, axis=1)
+    step = np.hypot(*(C - P))                                   # from point k to k + 1 (the last closes)
+    ab, ca = np.hypot(*(P - A)), np.hypot(*(A - C))
+    cross = np.abs((P - A)[0] * (C - A)[1] - (P - A)[1] * (C - A)[0])
+    bend = 2 * cross / np.maximum(ab * step * ca, 1e-300)      # 1 / circumradius at each point
+    allowed = CHORD_SHARE * np.sqrt(8 * tol_mm / np.maximum(np.maximum(bend, np.roll(bend, -1)), 1e-12))
+    count = np.r_[0.0, np.cumsum(step / allowed)]              # chords needed from t = 0 up to each point
+    t_all = np.r_[td, period]
+    t = []
+    for lo, hi in zip(ends[:-1], ends[1:]):                    # whole chords between breaks
+        n_lo, n_hi = np.interp([lo, hi], t_all, count)
+        m = max(1, int(math.ceil(n_hi - n_lo)))
+        t.append(np.interp(n_lo + (n_hi - n_lo) * np.arange(m) / m, count, t_all))
+    t = np.unique(np.concatenate(t))
     while True:
-        ends = np.r_[t, period]
-        bad = chord_errors(curve, ends, CHORD_SAMPLES) > tol_mm
+        bad = chord_errors(curve, np.r_[t, period], CHORD_SAMPLES) > tol_mm
         if not bad.any():
             break
-        t = np.sort(np.r_[t, 0.5 * (ends[:-1] + ends[1:])[bad]])
+        edges = np.r_[t, period]
+        t = np.sort(np.r_[t, 0.5 * (edges[:-1] + edges[1:])[bad]])
         require(t.size <= MAX_TABLE_POINTS, f"chord_tol_mm={tol_mm:g} needs more than {MAX_TABLE_POINTS} points; "
                 "a coarser tolerance", key="chord_tol_mm")
     achieved = float(chord_errors(curve, np.r_[t, period], CHORD_SAMPLES).max())
