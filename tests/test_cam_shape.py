@@ -5,6 +5,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import mechopt
 from mechopt.errors import ModelError
@@ -204,3 +206,20 @@ def test_a_bad_tabulated_law_is_refused_by_name():
         tabulated_law([0, 0.5, 0.4, 1], [0, 0.5, 0.4, 1], [1] * 4, [0] * 4)
     with pytest.raises(ModelError, match="needs >= 2 nodes and S, S', S'' at each"):
         tabulated_law([0, 1], [0, 1], [1], [0, 0])
+
+
+@settings(max_examples=12, deadline=None)
+@given(base=st.floats(30.0, 80.0), stroke=st.floats(2.0, 30.0), rise=st.floats(60.0, 150.0),
+       law=st.sampled_from(["cycloidal", "modified_sine", "polynomial_345", "harmonic"]),
+       tol=st.sampled_from([0.05, 0.01]))
+def test_any_feasible_cams_flank_is_the_roller_away_from_its_pitch_and_its_table_keeps_the_tolerance(
+        base, stroke, rise, law, tol):
+    cam = _translating(base_radius_mm=base, stroke_mm=stroke, rise_deg=rise, return_deg=rise, dwell_deg=20.0,
+                       law=law, roller_radius_mm=5.0, max_pressure_angle_deg=89.0)
+    s = summarise(cam, samples=1440)
+    if s.undercut_margin_mm <= 0:
+        return
+    table = point_table(lambda t: flank(cam, t), tol, breaks=cam.phase_ends_rad())
+    assert table.chord_error_mm <= tol
+    p = pitch(cam, table.t)
+    assert np.allclose(np.hypot(*(p.P - table.xy.T)), 5.0)

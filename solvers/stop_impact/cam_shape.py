@@ -68,8 +68,8 @@ def shape_cam(task: CamShape, law: Law | None, *, samples: int = 7200) -> Result
                                             f"{values['chord_error_mm']:.4g} mm of their chords")
     return Result(status, values, Timing(0.0, time.perf_counter() - start), message=message,
                   violated=tuple(violated), arrays=arrays,
-                  diagnostics={"undercut_flank": s.undercut_flank, "closure": task.closure,
-                               "follower": task.follower})
+                  diagnostics={"undercut_flank": s.undercut_flank, "closure": task.closure, "follower": task.follower,
+                               "chord_error_mm": {name: t.chord_error_mm for name, t in tables.items()}})
 
 
 def _dense(task, law, samples):

@@ -319,7 +319,9 @@ def _run(args) -> int:
     overrides = parse_overrides(args.set)
     _check_outputs(json_file=args.json, plot_dir=args.plot, table_file=args.csv)
     if args.dxf is not None:
-        _check_outputs(plot_dir=args.dxf)
+        if args.dxf.exists() and not args.dxf.is_dir():
+            raise SceneError(f"--dxf {args.dxf}: an existing file, not a folder")
+        _writable_folder("--dxf", args.dxf)
     scene = registry.find(args.case)
     result = registry.run(scene, overrides, drivers=args.drivers or args.json is not None)
     _print_run(result)

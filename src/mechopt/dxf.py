@@ -57,8 +57,8 @@ def shop_curves(run) -> list[ShopCurve]:
 
 
 def _cam_curves(run):
-    arrays, error = run.arrays, run.values["chord_error_mm"]
-    return [ShopCurve(layer, np.column_stack([arrays[f"{name}_x_mm"], arrays[f"{name}_y_mm"]]), error, name)
+    arrays, errors = run.arrays, run.result.diagnostics["chord_error_mm"]
+    return [ShopCurve(layer, np.column_stack([arrays[f"{name}_x_mm"], arrays[f"{name}_y_mm"]]), errors[name], name)
             for name, layer in CAM_LAYERS.items() if f"{name}_x_mm" in arrays]
 
 
