@@ -102,8 +102,9 @@ class CamShape:
     `offset_mm` the translating follower's offset e; `centre_distance_mm` cam centre O to pivot A,
     `a_mm` pivot to roller, `b_mm` roller to C (oscillating); `chord_tol_mm` the point table's
     chordal error; `max_pressure_angle_deg` the limit a design must keep. Structure: `law` (one
-    of the library's; a synthesised law enters through `pitch`/`flank` with a `Law`), `follower`,
-    `closure` ("spring": one flank; "groove": both walls of a grooved cam).
+    of the library's; a synthesised law is passed as a `Law` to `pitch`, `flank`, `summarise` or
+    the solver `solvers.stop_impact.cam_shape.shape_cam`), `follower`, `closure` ("spring": one
+    flank; "groove": both walls of a grooved cam).
     """
     base_radius_mm: Annotated[float, Gt(0)]
     roller_radius_mm: Annotated[float, Gt(0)]
@@ -220,13 +221,12 @@ def _cam_frame(theta, v):
 class Pitch:
     """The pitch curve at cam angles `theta` [rad]: points P (2 x n, cam frame) [mm], unit
     outward normal, signed radius of curvature (> 0 convex, < 0 concave) [mm], pressure angle
-    [rad]; `orientation` +1 when P runs counter-clockwise as theta grows."""
+    [rad]. P runs clockwise as theta grows (ORIENTATION)."""
     theta: np.ndarray
     P: np.ndarray
     normal: np.ndarray
     radius_mm: np.ndarray
     pressure_rad: np.ndarray
-    orientation: int
 
 
 def pitch(shape: CamShape, theta, law: Law | None = None) -> Pitch:
@@ -245,7 +245,7 @@ def pitch(shape: CamShape, theta, law: Law | None = None) -> Pitch:
     with np.errstate(divide="ignore", invalid="ignore"):
         radius = np.where(cross != 0, ORIENTATION * speed**3 / np.where(cross != 0, cross, 1.0), np.inf)
     pressure = np.arctan2(np.abs(np.sum(moving * tangent, axis=0)), np.abs(np.sum(moving * normal, axis=0)))
-    return Pitch(theta, _cam_frame(theta, R), _cam_frame(theta, normal), radius, pressure, ORIENTATION)
+    return Pitch(theta, _cam_frame(theta, R), _cam_frame(theta, normal), radius, pressure)
 
 
 def _outward(tangent, orientation):
@@ -338,7 +338,7 @@ def summarise(shape: CamShape, law: Law | None = None, *, samples: int = 7200) -
 def check_undercut(shape: CamShape, summary: ShapeSummary) -> None:
     """ModelError naming the cam angle when a flank the cam needs is undercut."""
     if summary.undercut_margin_mm <= 0:
-        rho = summary.min_convex_radius_mm if summary.undercut_flank == "inner" else -summary.min_concave_radius_mm
+        rho = summary.min_convex_radius_mm if summary.undercut_flank == "inner" else summary.min_concave_radius_mm
         raise ModelError(_undercut_message(shape, summary.undercut_flank, math.radians(summary.undercut_deg), rho),
                          key="roller_radius_mm")
 

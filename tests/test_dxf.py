@@ -139,3 +139,10 @@ def test_the_stated_error_is_measured_not_assumed(lift):
     measured = chord_errors(curve, np.r_[t, 2 * math.pi], 64).max()
     assert measured <= lift.values["chord_error_mm"] + 1e-15
     assert measured > 0.5 * lift.task.chord_tol_mm                  # not a loose bound: the points are spent
+
+
+def test_without_ezdxf_the_cli_says_so_before_solving(monkeypatch, tmp_path, capsys):
+    monkeypatch.setitem(sys.modules, "ezdxf", None)
+    assert main(["run", LIFT, "--dxf", str(tmp_path)]) == 2
+    err = capsys.readouterr()
+    assert "pip install 'mechopt[dxf]'" in err.err and "status" not in err.out

@@ -322,6 +322,8 @@ def _run(args) -> int:
         if args.dxf.exists() and not args.dxf.is_dir():
             raise SceneError(f"--dxf {args.dxf}: an existing file, not a folder")
         _writable_folder("--dxf", args.dxf)
+        from mechopt.dxf import ezdxf_module
+        ezdxf_module()                      # a missing extra is said before the solve, not after
     scene = registry.find(args.case)
     result = registry.run(scene, overrides, drivers=args.drivers or args.json is not None)
     _print_run(result)

@@ -90,12 +90,18 @@ EXPORTS = {CamShape: _cam_curves, LinkageFit: _torch_curves, LinkageCheck: _torc
            LinkageLoads: _torch_curves, ProfileFit: _torch_curves}
 
 
-def dxf_bytes(curves, *, title: str = "") -> bytes:
-    """A DXF drawing (R2010, units mm) of closed LWPOLYLINEs, one layer per curve."""
+def ezdxf_module():
+    """The ezdxf package, or a MechoptError naming the extra that installs it."""
     try:
         import ezdxf
     except ImportError:
         raise MechoptError("writing DXF needs ezdxf: pip install 'mechopt[dxf]'") from None
+    return ezdxf
+
+
+def dxf_bytes(curves, *, title: str = "") -> bytes:
+    """A DXF drawing (R2010, units mm) of closed LWPOLYLINEs, one layer per curve."""
+    ezdxf = ezdxf_module()
     doc = ezdxf.new("R2010", setup=False)
     doc.header["$INSUNITS"] = INSUNITS_MM
     doc.header["$MEASUREMENT"] = 1                  # metric
@@ -142,8 +148,7 @@ def export_run(run, out_dir) -> list[tuple[Path, ShopCurve]]:
 
 def read_polylines(path) -> dict[str, np.ndarray]:
     """The closed polylines of a DXF file by layer (n x 2) [mm], as ezdxf reads them back."""
-    import ezdxf
-    doc = ezdxf.readfile(str(path))
+    doc = ezdxf_module().readfile(str(path))
     return {e.dxf.layer: np.array([(x, y) for x, y, *_ in e.get_points()]) for e in doc.modelspace()
             if e.dxftype() == "LWPOLYLINE" and e.closed}
 
@@ -159,5 +164,5 @@ def _perimeter(xy):
     return float(np.sum(np.hypot(*np.diff(closed, axis=0).T)))
 
 
-__all__ = ["EXPORTS", "NothingToExport", "ShopCurve", "chord_note", "dxf_bytes", "export_run", "read_polylines",
-           "shop_curves", "write_dxf"]
+__all__ = ["EXPORTS", "NothingToExport", "ShopCurve", "chord_note", "dxf_bytes", "export_run", "ezdxf_module",
+           "read_polylines", "shop_curves", "write_dxf"]
