@@ -37,7 +37,7 @@ from dataclasses import dataclass
 from typing import Annotated, Literal
 
 import numpy as np
-from annotated_types import Ge, Gt, Interval
+from annotated_types import Ge, Gt, Interval, doc
 
 from mechopt.errors import ModelError, require
 from mechopt.models.cam_follower import LAWS, law_values
@@ -112,7 +112,7 @@ class CamShape:
     rise_deg: Annotated[float, Interval(gt=0, lt=360)]
     return_deg: Annotated[float, Interval(gt=0, lt=360)]
     dwell_deg: Annotated[float, Ge(0)] = 0.0
-    offset_mm: float = 0.0
+    offset_mm: Annotated[float, doc("|offset| < base_radius_mm + roller_radius_mm")] = 0.0
     centre_distance_mm: Annotated[float, Ge(0)] = 0.0
     a_mm: Annotated[float, Ge(0)] = 0.0
     b_mm: Annotated[float, Ge(0)] = 0.0
