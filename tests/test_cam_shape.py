@@ -123,7 +123,7 @@ def test_a_roller_larger_than_the_least_radius_of_curvature_is_an_undercut_named
     cam = _lift_task(roller_radius_mm=30.0, base_radius_mm=45.0)      # the same pitch curve, a larger roller
     result = cam_profile(cam)
     assert result.status is Status.INFEASIBLE and result.violated == ("undercut",)
-    assert "undercut at cam angle 26.98" in result.message and "inner flank" in result.message
+    assert "convex radius of curvature 25.39 mm at cam angle 26.988 deg (inner flank)" in result.message
     assert "profile_x_mm" not in result.arrays and "pitch_x_mm" in result.arrays
     assert result.values["undercut_margin_mm"] == pytest.approx(25.39498 - 30.0, abs=1e-4)
     with pytest.raises(ModelError, match=r"undercut: roller_radius_mm=30 >= the pitch curve's convex radius .* "

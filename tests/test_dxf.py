@@ -87,7 +87,9 @@ def test_a_scene_with_nothing_to_export_says_so_and_writes_nothing(tmp_path, cap
 def test_an_undercut_cam_is_not_exported(tmp_path, capsys):
     code = main(["run", LIFT, "--dxf", str(tmp_path), "--set", "roller_radius_mm=30", "--set", "base_radius_mm=45"])
     assert code == 3
-    assert "status INFEASIBLE, nothing exported as DXF (undercut at cam angle 26.98" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "status INFEASIBLE, nothing exported as DXF (undercut: roller_radius_mm=30" in err
+    assert "at cam angle 26.988 deg (inner flank)" in err
     assert not list(tmp_path.iterdir())
 
 

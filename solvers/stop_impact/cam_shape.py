@@ -5,7 +5,8 @@ import time
 
 import numpy as np
 
-from mechopt.models.cam_shape import FLANKS, CamShape, Law, flank, pitch, point_table, summarise
+from mechopt.errors import ModelError
+from mechopt.models.cam_shape import FLANKS, CamShape, Law, check_undercut, flank, pitch, point_table, summarise
 from mechopt.solvers.result import Result, Status, Timing
 from mechopt.solvers.settings import Annotated, Interval
 
@@ -43,13 +44,12 @@ def shape_cam(task: CamShape, law: Law | None, *, samples: int = 7200) -> Result
     breaks = task.phase_ends_rad()
     tables = {"pitch": point_table(lambda t: pitch(task, t, law).P, task.chord_tol_mm, breaks=breaks)}
     violated, said = [], []
-    if s.undercut_margin_mm <= 0:
+    try:
+        check_undercut(task, s)
+    except ModelError as exc:           # the model's words, naming the cam angle: a status here, not a raise
         violated.append("undercut")
-        rho = s.min_convex_radius_mm if s.undercut_flank == "inner" else s.min_concave_radius_mm
-        said.append(f"undercut at cam angle {s.undercut_deg:.3f} deg ({s.undercut_flank} flank): roller_radius_mm="
-                    f"{task.roller_radius_mm:g} >= the pitch curve's radius of curvature {rho:.4g} mm there; no "
-                    "profile is made (a smaller roller, a larger base_radius_mm or a longer rise/return)")
-    else:
+        said.append(f"{exc}; no profile is made")
+    if not violated:
         for side in FLANKS[task.closure]:
             tables[FLANK_ARRAYS[side]] = point_table(lambda t, side=side: flank(task, t, side, law),
                                                      task.chord_tol_mm, breaks=breaks)
