@@ -223,3 +223,11 @@ def test_any_feasible_cams_flank_is_the_roller_away_from_its_pitch_and_its_table
     assert table.chord_error_mm <= tol
     p = pitch(cam, table.t)
     assert np.allclose(np.hypot(*(p.P - table.xy.T)), 5.0)
+
+
+def test_the_cam_is_drawn_with_its_curvature_and_an_undercut_one_without_a_profile():
+    assert set(mechopt.solve(LIFT).figures()) == {"profile", "curvature"}
+    undercut = mechopt.solve(LIFT, roller_radius_mm=30.0, base_radius_mm=45.0)
+    labels = [line.get_label() for line in undercut.figures()["profile"].axes[0].lines]
+    assert any(label.startswith("pitch curve") for label in labels)
+    assert not any(label.startswith("cam profile") for label in labels)

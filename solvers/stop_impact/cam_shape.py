@@ -69,6 +69,7 @@ def shape_cam(task: CamShape, law: Law | None, *, samples: int = 7200) -> Result
     return Result(status, values, Timing(0.0, time.perf_counter() - start), message=message,
                   violated=tuple(violated), arrays=arrays,
                   diagnostics={"undercut_flank": s.undercut_flank, "closure": task.closure, "follower": task.follower,
+                               "roller_radius_mm": task.roller_radius_mm,
                                "chord_error_mm": {name: t.chord_error_mm for name, t in tables.items()}})
 
 

@@ -34,7 +34,7 @@ def cam_shape_figures(run) -> dict:
     rho = np.asarray(arrays["radius_of_curvature_mm"])
     top.plot(arrays["cam_angle_deg"], 1.0 / rho, lw=1)        # curvature: no blow-up where rho passes infinity
     top.axhline(0, color="grey", lw=0.5)
-    roller = run.task.roller_radius_mm if run.task is not None else None
+    roller = run.result.diagnostics.get("roller_radius_mm")
     if roller:
         top.axhline(1.0 / roller, color="tab:red", lw=0.8, ls=":", label="1 / roller radius: the inner flank undercut above")
         top.legend(fontsize=8)
