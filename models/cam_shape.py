@@ -345,16 +345,20 @@ def check_undercut(shape: CamShape, summary: ShapeSummary) -> None:
 
 @dataclass(frozen=True)
 class PointTable:
-    """A closed curve as the shop takes it: parameters `t` and points `xy` (n x 2) [mm] whose
-    chords stay within `chord_error_mm` (measured, <= the tolerance asked) of the curve."""
+    """A curve as the shop takes it: parameters `t` and points `xy` (n x 2) [mm] whose chords
+    stay within `chord_error_mm` (measured, <= the tolerance asked) of the curve; `closed`: the
+    last point joins the first (else the last point is the curve's end)."""
     t: np.ndarray
     xy: np.ndarray
     chord_error_mm: float
     tolerance_mm: float
+    closed: bool = True
 
 
-def point_table(curve, tol_mm: float, *, period: float = 2 * math.pi, breaks=(), dense: int = 20_000) -> PointTable:
-    """Points of the closed curve `curve(t) -> (2 x n)` over t in [0, period), spaced by the
+def point_table(curve, tol_mm: float, *, period: float = 2 * math.pi, breaks=(), dense: int = 20_000,
+                closed: bool = True) -> PointTable:
+    """Points of the closed curve `curve(t) -> (2 x n)` over t in [0, period) (an open one, to its
+    end at t = period, with `closed=False`), spaced by the
     curvature: a chord of length c on an arc of radius rho strays c^2 / (8 rho) from it, so the
     points are laid CHORD_SHARE * sqrt(8 rho tol) apart along the curve (rho from the circles
     through `dense` consecutive points: any curve, no derivatives asked); a chord still straying
@@ -389,7 +393,8 @@ def point_table(curve, tol_mm: float, *, period: float = 2 * math.pi, breaks=(),
         require(t.size <= MAX_TABLE_POINTS, f"chord_tol_mm={tol_mm:g} needs more than {MAX_TABLE_POINTS} points; "
                 "a coarser tolerance", key="chord_tol_mm")
     achieved = float(chord_errors(curve, np.r_[t, period], CHORD_SAMPLES).max())
-    return PointTable(t, np.asarray(curve(t)).T.copy(), achieved, float(tol_mm))
+    t = t if closed else np.r_[t, period]
+    return PointTable(t, np.asarray(curve(t)).T.copy(), achieved, float(tol_mm), closed)
 
 
 def chord_errors(curve, ends, samples: int) -> np.ndarray:

@@ -148,3 +148,15 @@ def test_without_ezdxf_the_cli_says_so_before_solving(monkeypatch, tmp_path, cap
     assert main(["run", LIFT, "--dxf", str(tmp_path)]) == 2
     err = capsys.readouterr()
     assert "pip install 'mechopt[dxf]'" in err.err and "status" not in err.out
+
+
+def test_an_ideal_path_its_mirror_does_not_close_is_drawn_open_to_its_end(tmp_path):
+    run = mechopt.solve("cam-cutter/other-profile", t1_rad=2.5, err_width_mm=5.0)       # ends off the axis
+    curves = {c.layer: c for c in dxf.shop_curves(run)}
+    ideal = curves["IDEAL_PATH"]
+    assert curves["TORCH_PATH"].closed and not ideal.closed and ideal.chord_error_mm <= dxf.TORCH_TOL_MM
+    end = np.array(run.task.path_point(np.array([2.5]))).ravel()
+    assert ideal.xy[-1] == pytest.approx(end, abs=1e-12)
+    path = dxf.write_dxf(list(curves.values()), tmp_path / "open.dxf")
+    [polyline] = [e for e in ezdxf.readfile(str(path)).modelspace() if e.dxf.layer == "IDEAL_PATH"]
+    assert not polyline.closed

@@ -1,5 +1,5 @@
 """Curves for the shop as DXF (issue 23, item 4): a solved scene's cam profile, pitch curve or
-torch path as closed LWPOLYLINEs on named layers, units mm, each from a point table whose
+torch path as closed LWPOLYLINEs (open where a curve ends) on named layers, units mm, each from a point table whose
 chordal error is measured (`models/cam_shape.point_table`) and written into the drawing.
 
 Which curves a scene has is decided by its task class (`EXPORTS`): the lift cam
@@ -37,11 +37,13 @@ class NothingToExport(MechoptError):
 
 @dataclass(frozen=True)
 class ShopCurve:
-    """One closed curve for the drawing: its layer, points (n x 2) [mm] and measured chordal error."""
+    """One curve for the drawing: its layer, points (n x 2) [mm], measured chordal error, and
+    whether it closes (a cam, a torch path) or ends (an ideal path that its mirror does not close)."""
     layer: str
     xy: np.ndarray
     chord_error_mm: float
     what: str
+    closed: bool = True
 
 
 def shop_curves(run) -> list[ShopCurve]:
@@ -80,9 +82,12 @@ def _torch_curves(run):
         upper = lambda t: np.array(ideal_point(t, task.a_mm, task.h_mm))  # noqa: E731
     t0, t1 = task.t_start_rad, task.t_end_rad
     ends = upper(np.array([t0, t1]))
-    if np.all(np.abs(ends[1]) <= AXIS_REL * task.size_mm):      # else the path does not close by its mirror
+    if np.all(np.abs(ends[1]) <= AXIS_REL * task.size_mm):      # both ends on the axis: the mirror closes it
         ideal = point_table(mirrored(upper, t0, t1), TORCH_TOL_MM, period=2 * (t1 - t0), breaks=(t1 - t0,))
         curves.append(ShopCurve("IDEAL_PATH", ideal.xy, ideal.chord_error_mm, "ideal path and its mirror"))
+    else:                                                       # drawn as given, from its start to its end
+        ideal = point_table(lambda t: upper(t0 + t), TORCH_TOL_MM, period=t1 - t0, closed=False)
+        curves.append(ShopCurve("IDEAL_PATH", ideal.xy, ideal.chord_error_mm, "ideal path, open", closed=False))
     return curves
 
 
@@ -100,7 +105,7 @@ def ezdxf_module():
 
 
 def dxf_bytes(curves, *, title: str = "") -> bytes:
-    """A DXF drawing (R2010, units mm) of closed LWPOLYLINEs, one layer per curve."""
+    """A DXF drawing (R2010, units mm) of LWPOLYLINEs, one layer per curve."""
     ezdxf = ezdxf_module()
     doc = ezdxf.new("R2010", setup=False)
     doc.header["$INSUNITS"] = INSUNITS_MM
@@ -109,7 +114,7 @@ def dxf_bytes(curves, *, title: str = "") -> bytes:
     for curve in curves:
         if curve.layer not in doc.layers:
             doc.layers.add(curve.layer, color=LAYER_COLOURS.get(curve.layer, 7))
-        msp.add_lwpolyline([tuple(map(float, p)) for p in curve.xy], close=True,
+        msp.add_lwpolyline([tuple(map(float, p)) for p in curve.xy], close=curve.closed,
                            dxfattribs={"layer": curve.layer})
     if title:
         doc.header["$PROJECTNAME"] = title[:250]
@@ -147,21 +152,21 @@ def export_run(run, out_dir) -> list[tuple[Path, ShopCurve]]:
 
 
 def read_polylines(path) -> dict[str, np.ndarray]:
-    """The closed polylines of a DXF file by layer (n x 2) [mm], as ezdxf reads them back."""
+    """The polylines of a DXF file by layer (n x 2) [mm], as ezdxf reads them back."""
     doc = ezdxf_module().readfile(str(path))
     return {e.dxf.layer: np.array([(x, y) for x, y, *_ in e.get_points()]) for e in doc.modelspace()
-            if e.dxftype() == "LWPOLYLINE" and e.closed}
+            if e.dxftype() == "LWPOLYLINE"}
 
 
 def chord_note(curve: ShopCurve) -> str:
     """One line for the terminal: layer, points, chordal error."""
     return (f"{curve.layer}: {len(curve.xy)} points, chordal error {curve.chord_error_mm:.4g} mm "
-            f"({curve.what}; perimeter {_perimeter(curve.xy):.6g} mm)")
+            f"({curve.what}; length {_length(curve):.6g} mm)")
 
 
-def _perimeter(xy):
-    closed = np.vstack([xy, xy[:1]])
-    return float(np.sum(np.hypot(*np.diff(closed, axis=0).T)))
+def _length(curve):
+    xy = np.vstack([curve.xy, curve.xy[:1]]) if curve.closed else curve.xy
+    return float(np.sum(np.hypot(*np.diff(xy, axis=0).T)))
 
 
 __all__ = ["EXPORTS", "NothingToExport", "ShopCurve", "chord_note", "dxf_bytes", "export_run", "ezdxf_module",
