@@ -358,8 +358,8 @@ class PointTable:
 def point_table(curve, tol_mm: float, *, period: float = 2 * math.pi, breaks=(), dense: int = 20_000,
                 closed: bool = True) -> PointTable:
     """Points of the closed curve `curve(t) -> (2 x n)` over t in [0, period) (an open one, to its
-    end at t = period, with `closed=False`), spaced by the
-    curvature: a chord of length c on an arc of radius rho strays c^2 / (8 rho) from it, so the
+    end at t = period, with `closed=False`), spaced by the curvature: a chord of length c on an
+    arc of radius rho strays c^2 / (8 rho) from it, so the
     points are laid CHORD_SHARE * sqrt(8 rho tol) apart along the curve (rho from the circles
     through `dense` consecutive points: any curve, no derivatives asked); a chord still straying
     more than `tol_mm` is halved until none does. `breaks` (corners, phase ends) are always points.
@@ -369,13 +369,16 @@ def point_table(curve, tol_mm: float, *, period: float = 2 * math.pi, breaks=(),
     require(tol_mm > 0, f"chord_tol_mm={tol_mm!r}: must be > 0", key="chord_tol_mm")
     ends = np.unique(np.r_[0.0, [b % period for b in breaks], period])
     td = np.unique(np.r_[np.linspace(0.0, period, dense, endpoint=False), ends[:-1]])
-    P = np.asarray(curve(td))
-    A, C = np.roll(P, 1, axis=1), np.roll(P, -1, axis=1)
-    step = np.hypot(*(C - P))                                   # from point k to k + 1 (the last closes)
-    ab, ca = np.hypot(*(P - A)), np.hypot(*(A - C))
-    cross = np.abs((P - A)[0] * (C - A)[1] - (P - A)[1] * (C - A)[0])
-    bend = 2 * cross / np.maximum(ab * step * ca, 1e-300)      # 1 / circumradius at each point
-    allowed = CHORD_SHARE * np.sqrt(8 * tol_mm / np.maximum(np.maximum(bend, np.roll(bend, -1)), 1e-12))
+    Q = np.asarray(curve(np.r_[td, period]))                    # the last point: the first again if closed
+    step = np.hypot(*np.diff(Q, axis=1))                        # from point k to k + 1
+    before = np.c_[Q[:, -2:-1], Q[:, :-2]] if closed else np.c_[Q[:, 1:2], Q[:, :-2]]
+    after = Q[:, 1:]
+    here = Q[:, :-1]
+    ab, bc, ca = np.hypot(*(here - before)), step, np.hypot(*(before - after))
+    cross = np.abs((here - before)[0] * (after - before)[1] - (here - before)[1] * (after - before)[0])
+    bend = 2 * cross / np.maximum(ab * bc * ca, 1e-300)        # 1 / circumradius at each point
+    bend_next = np.r_[bend[1:], bend[0] if closed else bend[-1]]
+    allowed = CHORD_SHARE * np.sqrt(8 * tol_mm / np.maximum(np.maximum(bend, bend_next), 1e-12))
     count = np.r_[0.0, np.cumsum(step / allowed)]              # chords needed from t = 0 up to each point
     t_all = np.r_[td, period]
     t = []
