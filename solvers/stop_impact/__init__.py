@@ -10,7 +10,10 @@
                   spread of its predictions over the roots and the damping: `fit_roots`.
 * `cam_follower`  the lift cam's rise with the elastic lever (Fig. 4): contact with the plate,
                   approach velocity, dynamic errors, the roller's contact force.
+* `cam_shape`     the lift cam for the shop: pitch curve, profile, pressure angle, radius of
+                  curvature, undercut, point tables with their chordal error: `cam_profile`.
 """
+from mechopt.solvers.stop_impact.cam_shape import cam_profile
 from mechopt.solvers.stop_impact.entry_points import (
                                                       cam_dynamics,
                                                       impact_forces,
@@ -21,5 +24,5 @@ from mechopt.solvers.stop_impact.entry_points import (
 )
 from mechopt.solvers.stop_impact.fit import fit_roots
 
-__all__ = ["cam_dynamics", "fit_roots", "impact_forces", "linearise_amplitude", "natural_frequencies", "operating_point",
-           "rebound"]
+__all__ = ["cam_dynamics", "cam_profile", "fit_roots", "impact_forces", "linearise_amplitude", "natural_frequencies",
+           "operating_point", "rebound"]

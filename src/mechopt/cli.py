@@ -137,6 +137,8 @@ def _parser():
     run.add_argument("--drivers", action="store_true",
                      help="the headline values' largest elasticities to the assumed inputs (re-solves; always with --json)")
     run.add_argument("--plot", type=Path, metavar="DIR", help="write figures into DIR")
+    run.add_argument("--dxf", type=Path, metavar="DIR",
+                     help="write the cam profile or torch path as DXF (mm, closed polylines on named layers) into DIR")
     run.add_argument("--csv", type=Path, metavar="FILE",
                      help="write the run's arrays (trajectories: t_s, states, loads ...) as CSV columns")
     validate = sub.add_parser("validate", parents=[common],
@@ -315,6 +317,12 @@ def _your_params(scene) -> list[str]:
 def _run(args) -> int:
     overrides = parse_overrides(args.set)
     _check_outputs(json_file=args.json, plot_dir=args.plot, table_file=args.csv)
+    if args.dxf is not None:
+        if args.dxf.exists() and not args.dxf.is_dir():
+            raise SceneError(f"--dxf {args.dxf}: an existing file, not a folder")
+        _writable_folder("--dxf", args.dxf)
+        from mechopt.dxf import ezdxf_module
+        ezdxf_module()                      # a missing extra is said before the solve, not after
     scene = registry.find(args.case)
     result = registry.run(scene, overrides, drivers=args.drivers or args.json is not None)
     _print_run(result)
@@ -332,7 +340,23 @@ def _run(args) -> int:
             why = (f"status {result.status.value}: no solution to draw" if not result.success
                    else "its figures found nothing to draw in this result")
             print(f"plot: nothing drawn into {args.plot} ({why})", file=sys.stderr)
+    if args.dxf is not None:
+        return _write_dxf(result, args.dxf) or run_exit_code(result)
     return run_exit_code(result)
+
+
+def _write_dxf(run, folder) -> int:
+    """`run --dxf DIR`: the scene's curves as DXF, each layer's chordal error printed; a scene with
+    nothing to export says so on stderr (exit 1 when it solved: the file asked for is not there)."""
+    from mechopt.dxf import NothingToExport, chord_note, export_run
+    try:
+        written = export_run(run, folder)
+    except NothingToExport as exc:
+        print(f"dxf: {exc}", file=sys.stderr)
+        return CHECK_FAILED if run.success else 0
+    for path, curve in written:
+        print(f"dxf: {path} {chord_note(curve)}")
+    return 0
 
 
 def run_exit_code(run) -> int:

@@ -1,0 +1,162 @@
+"""The cam and the torch path to the shop (issue 23, item 4): `mechopt run SCENE --dxf DIR`
+writes closed polylines on named layers in mm that, re-read by ezdxf, match the model's curve
+within the stated chordal error; one writer at a time, never a partial file, and a scene with
+nothing to export says so."""
+import math
+import os
+import sys
+
+import ezdxf
+import numpy as np
+import pytest
+
+import mechopt
+from mechopt import dxf
+from mechopt.cli import main
+from mechopt.errors import MechoptError, SceneError
+from mechopt.files import take_lock
+from mechopt.models.cam_cutter import limacon_implicit, real_point
+from mechopt.models.cam_shape import chord_errors, distance_to_segment, flank, pitch
+
+LIFT = "stop-impact/lift-cam-profile"
+
+
+@pytest.fixture(scope="module")
+def lift():
+    return mechopt.solve(LIFT)
+
+
+def _within_chords(curve, t, xy, stated):
+    """The model's curve, sampled densely inside every chord between the file's vertices, stays
+    within the stated chordal error of that chord."""
+    ends = np.r_[t, 2 * math.pi]
+    frac = np.arange(1, 200) / 200
+    inner = ends[:-1, None] + frac * np.diff(ends)[:, None]
+    Q = np.asarray(curve(inner.ravel())).reshape(2, *inner.shape)
+    A, B = xy.T, np.roll(xy, -1, axis=0).T
+    worst = distance_to_segment(Q, A[:, :, None], B[:, :, None]).max()
+    assert worst <= stated * (1 + 1e-3), (worst, stated)
+    return worst
+
+
+def test_the_lift_cam_re_read_by_ezdxf_matches_the_model_within_its_chordal_error(lift, tmp_path):
+    [(path, _), *_] = dxf.export_run(lift, tmp_path)
+    doc = ezdxf.readfile(str(path))
+    assert doc.header["$INSUNITS"] == 4 and {"CAM_PROFILE", "CAM_GROOVE_OUTER", "PITCH_CURVE"} <= {layer.dxf.name for layer in doc.layers}
+    read = dxf.read_polylines(path)
+    stated = lift.values["chord_error_mm"]
+    assert stated <= lift.task.chord_tol_mm == 0.01
+    curves = {"CAM_PROFILE": ("profile", lambda t: flank(lift.task, t, "inner")),
+              "CAM_GROOVE_OUTER": ("groove_outer", lambda t: flank(lift.task, t, "outer")),
+              "PITCH_CURVE": ("pitch", lambda t: pitch(lift.task, t).P)}
+    for layer, (name, curve) in curves.items():
+        t = np.radians(lift.arrays[f"{name}_cam_angle_deg"])
+        xy = read[layer]
+        assert xy.shape == (t.size, 2)
+        assert np.allclose(xy, np.asarray(curve(t)).T, atol=1e-9), layer      # every vertex on the curve
+        _within_chords(curve, t, xy, stated)
+
+
+def test_the_torch_path_is_the_solved_limacon_and_the_ideal_path_on_another_layer(tmp_path):
+    run = mechopt.solve("cam-cutter/minimax")
+    [(path, torch), (_, ideal)] = dxf.export_run(run, tmp_path)
+    read = dxf.read_polylines(path)
+    H, L = run.values["H_mm"], run.values["L_mm"]
+    xy = read["TORCH_PATH"]
+    assert np.abs(limacon_implicit(xy[:, 0], xy[:, 1], H, L)).max() < 1e-6 * (H + L) ** 4
+    table = dxf.point_table(lambda s: np.array(real_point(s, H, L)), dxf.TORCH_TOL_MM)
+    assert np.allclose(xy, table.xy, atol=1e-9)
+    assert torch.chord_error_mm <= dxf.TORCH_TOL_MM and ideal.chord_error_mm <= dxf.TORCH_TOL_MM
+    _within_chords(lambda s: np.array(real_point(s, H, L)), table.t, xy, torch.chord_error_mm)
+    assert np.abs(read["IDEAL_PATH"][:, 1]).max() > 0 and read["IDEAL_PATH"][0] == pytest.approx([0.0, 0.0], abs=1e-12)
+
+
+def test_cli_run_dxf_writes_the_drawing_and_names_each_layers_error(tmp_path, capsys):
+    assert main(["run", LIFT, "--dxf", str(tmp_path / "shop")]) == 0
+    out = capsys.readouterr().out
+    assert "dxf: " in out and "CAM_PROFILE:" in out and "chordal error 0.00" in out
+    assert (tmp_path / "shop" / "stop-impact_lift-cam-profile.dxf").exists()
+
+
+def test_a_scene_with_nothing_to_export_says_so_and_writes_nothing(tmp_path, capsys):
+    assert main(["run", "stop-impact/frequencies", "--dxf", str(tmp_path)]) == 1
+    assert "nothing to export as DXF (task LeverStop)" in capsys.readouterr().err
+    assert not list(tmp_path.iterdir())
+
+
+def test_an_undercut_cam_is_not_exported(tmp_path, capsys):
+    code = main(["run", LIFT, "--dxf", str(tmp_path), "--set", "roller_radius_mm=30", "--set", "base_radius_mm=45"])
+    assert code == 3
+    err = capsys.readouterr().err
+    assert "status INFEASIBLE, nothing exported as DXF (undercut: roller_radius_mm=30" in err
+    assert "at cam angle 26.988 deg (inner flank)" in err
+    assert not list(tmp_path.iterdir())
+
+
+def test_a_second_writer_is_refused_and_the_first_ones_lock_is_left_alone(lift, tmp_path):
+    target = tmp_path / "cam.dxf"
+    fd = take_lock(tmp_path / "cam.dxf.lock")
+    try:
+        with pytest.raises(SceneError, match="cam.dxf is being written by another process"):
+            dxf.write_dxf(dxf.shop_curves(lift), target)
+        assert not target.exists()
+    finally:
+        os.close(fd)
+    dxf.write_dxf(dxf.shop_curves(lift), target)
+    assert target.exists() and not (tmp_path / "cam.dxf.lock").exists()
+
+
+def test_a_failed_write_leaves_no_partial_file(lift, tmp_path, monkeypatch):
+    def broken(curves, *, title=""):
+        raise OSError("disk full")
+    monkeypatch.setattr(dxf, "dxf_bytes", broken)
+    with pytest.raises(OSError, match="disk full"):
+        dxf.write_dxf(dxf.shop_curves(lift), tmp_path / "cam.dxf")
+    assert not list(tmp_path.iterdir())
+    monkeypatch.undo()
+    import mechopt.files
+    real = mechopt.files.os.replace
+    monkeypatch.setattr(mechopt.files.os, "replace", lambda *a: (_ for _ in ()).throw(OSError("no space")))
+    with pytest.raises(OSError, match="no space"):
+        dxf.write_dxf(dxf.shop_curves(lift), tmp_path / "cam.dxf")
+    monkeypatch.setattr(mechopt.files.os, "replace", real)
+    assert not list(tmp_path.iterdir())
+
+
+def test_without_ezdxf_the_error_names_the_extra(lift, monkeypatch):
+    monkeypatch.setitem(sys.modules, "ezdxf", None)
+    with pytest.raises(MechoptError, match=r"writing DXF needs ezdxf: pip install 'mechopt\[dxf\]'"):
+        dxf.dxf_bytes(dxf.shop_curves(lift))
+
+
+def test_a_file_where_the_dxf_folder_belongs_is_refused_before_any_work(tmp_path, capsys):
+    (tmp_path / "f").write_text("x")
+    assert main(["run", LIFT, "--dxf", str(tmp_path / "f")]) == 2
+    assert "an existing file, not a folder" in capsys.readouterr().err
+
+
+def test_the_stated_error_is_measured_not_assumed(lift):
+    t = np.radians(lift.arrays["profile_cam_angle_deg"])
+    curve = lambda s: flank(lift.task, s)                            # noqa: E731
+    measured = chord_errors(curve, np.r_[t, 2 * math.pi], 64).max()
+    assert measured <= lift.values["chord_error_mm"] + 1e-15
+    assert measured > 0.5 * lift.task.chord_tol_mm                  # not a loose bound: the points are spent
+
+
+def test_without_ezdxf_the_cli_says_so_before_solving(monkeypatch, tmp_path, capsys):
+    monkeypatch.setitem(sys.modules, "ezdxf", None)
+    assert main(["run", LIFT, "--dxf", str(tmp_path)]) == 2
+    err = capsys.readouterr()
+    assert "pip install 'mechopt[dxf]'" in err.err and "status" not in err.out
+
+
+def test_an_ideal_path_its_mirror_does_not_close_is_drawn_open_to_its_end(tmp_path):
+    run = mechopt.solve("cam-cutter/other-profile", t1_rad=2.5, err_width_mm=5.0)       # ends off the axis
+    curves = {c.layer: c for c in dxf.shop_curves(run)}
+    ideal = curves["IDEAL_PATH"]
+    assert curves["TORCH_PATH"].closed and not ideal.closed and ideal.chord_error_mm <= dxf.TORCH_TOL_MM
+    end = np.array(run.task.path_point(np.array([2.5]))).ravel()
+    assert ideal.xy[-1] == pytest.approx(end, abs=1e-12)
+    path = dxf.write_dxf(list(curves.values()), tmp_path / "open.dxf")
+    [polyline] = [e for e in ezdxf.readfile(str(path)).modelspace() if e.dxf.layer == "IDEAL_PATH"]
+    assert not polyline.closed
