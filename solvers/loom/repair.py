@@ -274,7 +274,7 @@ def _repaired(task, result, laws, history, start, status, message, violated=()):
                                                                             "sensitivity_convention")}
     diagnostics["rounds"] = history
     return Result(status, values, Timing(result.timing.build_s, time.perf_counter() - start - result.timing.build_s),
-                  message=message, violated=violated, diagnostics=diagnostics)
+                  message=message, violated=violated, diagnostics=diagnostics, arrays=result.arrays)   # the last plan's table
 
 
 _AMPLITUDE_BOUNDS = BuildCache("loom.amplitude_bound", maxsize=64)
