@@ -4,7 +4,6 @@ A scene names a task (`models/<module>.<Class>`), the effects it switches on, pa
 units in their names, a solver (`solvers/<module>.<function>`) with its settings, and what a
 source says should come out. Nothing from a scene runs before all of that validated.
 """
-import copy
 import dataclasses
 import importlib
 import inspect
@@ -411,8 +410,10 @@ def _path_example(structure, only=None):
 
 def _set_paths(path, structure, assignments):
     """A copy of the structure with `--set` paths applied: `a.b.c` walks tables, and
-    `list[k=v,k2=v2]` picks the one table of a list whose entries match."""
-    out = copy.deepcopy(dict(structure))
+    `list[k=v,k2=v2]` picks the one table of a list whose entries match (one pair is enough when
+    it matches one entry: `operations[from=9]`). Only the tables and lists on a path are copied:
+    a timing table of 10^5 operations is not deep-copied for one changed number."""
+    out = dict(structure)
     for key, value in assignments.items():
         node, parts = out, _path_parts(key)
         for i, part in enumerate(parts):
@@ -422,20 +423,47 @@ def _set_paths(path, structure, assignments):
                 raise SceneError(f"{path}: --set {key}: no entry {name!r} here; there are "
                                  f"{', '.join(node) if isinstance(node, dict) else 'none'}", key=key)
             if selector:
-                pairs = dict(p.split("=", 1) for p in re.split(r",\s*", selector.rstrip("]")) if "=" in p)
-                matches = [item for item in node[name] if isinstance(item, dict)
-                           and all(str(item.get(k)) == v for k, v in pairs.items())]
-                if len(matches) != 1:
-                    raise SceneError(f"{path}: --set {key}: [{selector} matches {len(matches)} entries of "
-                                     f"{name!r}, not one", key=key)
                 if last:
                     raise SceneError(f"{path}: --set {key}: name the entry to change after the selector", key=key)
-                node = matches[0]
+                node[name] = items = list(node[name]) if isinstance(node[name], list) else node[name]
+                pairs = _selector_pairs(path, key, name, selector, items)
+                matches = [j for j, item in enumerate(items) if isinstance(item, dict)
+                           and all(str(item.get(k)) == v for k, v in pairs.items())]
+                if len(matches) != 1:
+                    hint = "add a key" if matches else "none has those values; the form"
+                    raise SceneError(f"{path}: --set {key}: [{selector} matches {len(matches)} entries of "
+                                     f"{name!r}, not one ({hint}: {_selector_form(name, items)})", key=key)
+                items[matches[0]] = node = dict(items[matches[0]])
             elif last:
                 node[name] = value
             else:
-                node = node[name]
+                node[name] = node = dict(node[name]) if isinstance(node[name], dict) else node[name]
     return out
+
+
+def _selector_pairs(path, key, name, selector, items):
+    """The key=value pairs of a selector `[k=v,k2=v2]`; SceneError for a part without '=', or
+    a key no entry of the list has, naming the allowed forms."""
+    if not isinstance(items, list):
+        raise SceneError(f"{path}: --set {key}: {name!r} is not a list of tables; a selector [...] picks "
+                         "one table of a list", key=key)
+    parts = [p.strip() for p in selector.removesuffix("]").split(",")]
+    known = list(dict.fromkeys(k for item in items if isinstance(item, dict) for k in item))
+    for part in parts:
+        k, eq, v = part.partition("=")
+        if not eq or not k.strip() or not v.strip() or k.strip() not in known:
+            why = (f"{k.strip()!r} is no key of its entries (they have {', '.join(known)})" if eq and k.strip()
+                   and v.strip() else f"{part!r} is not key=value")
+            raise SceneError(f"{path}: --set {key}: [{selector}: {why}; allowed: {_selector_form(name, items)} "
+                             f"or any key=value pairs that match one entry", key=key)
+    return {k.strip(): v.strip() for k, _, v in (p.partition("=") for p in parts)}
+
+
+def _selector_form(name, items):
+    """An example selector from the list's first table: `operations[from=1,to=2]`."""
+    first = next((item for item in items if isinstance(item, dict)), {})
+    keys = [k for k in first if isinstance(first[k], str)][:2]
+    return f"{name}[{','.join(f'{k}={first[k]}' for k in keys)}]"
 
 
 _READING: set[Path] = set()          # scene files whose tables are being read: a loop of references is refused
