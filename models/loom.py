@@ -349,6 +349,36 @@ class Cyclogram:
     # walk over the graph's nodes or edges costs ~0.1 s at 10^5 events
 
     @cached_property
+    def index_arrays(self) -> tuple[tuple[str, ...], np.ndarray, np.ndarray]:
+        """(events in graph order without the isolated ones, tails, heads): the operations as
+        index arrays into those events, in `arcs` order (read-only; the solvers' view)."""
+        names, index = tuple(self.event_index), self.event_index
+        tails = np.fromiter((index[x] for x, _ in self.arcs), dtype=np.int64, count=len(self.arcs))
+        heads = np.fromiter((index[y] for _, y in self.arcs), dtype=np.int64, count=len(self.arcs))
+        tails.flags.writeable = heads.flags.writeable = False
+        return names, tails, heads
+
+    @cached_property
+    def event_index(self) -> dict[str, int]:
+        """Event -> its index in `index_arrays` (graph order, isolated events left out); not to be changed."""
+        isolated = set(self._isolated)
+        return {v: i for i, v in enumerate(v for v in self.graph if v not in isolated)}
+
+    @cached_property
+    def group_indices(self) -> dict[str, np.ndarray]:
+        """Group -> the indices (as `event_index`) of its events that have an operation."""
+        index = self.event_index
+        return {group: np.array([index[v] for v in events if v in index], dtype=np.int64)
+                for group, events in self._groups.items()}
+
+    @cached_property
+    def operation_labels(self) -> np.ndarray:
+        """Each operation as "from->to", in `arcs` order (read-only)."""
+        labels = np.array([f"{x}->{y}" for x, y in self.arcs], dtype=str)
+        labels.flags.writeable = False
+        return labels
+
+    @cached_property
     def first_event(self) -> str:
         return next(v for v in self.graph if self.graph.in_degree(v) == 0 and self.graph.out_degree(v) > 0)
 

@@ -161,6 +161,9 @@ class Scene:
     spec: SceneFile
     task_class: type
     solver: Any
+    # the build `load` validated, handed to the first build() without overrides: a scene read and
+    # run builds its task once (a 10^5-operation timing table costs seconds per build)
+    _validated: list = dataclasses.field(default_factory=list, compare=False, repr=False)
 
     @property
     def id(self) -> str:
@@ -242,6 +245,8 @@ class Scene:
         """The task instance and solver settings, overrides applied and validated like the file.
         A whole structure entry the scene does not have (`--set 'windows=[...]'`) is structure
         too: a table or list is never read as a parameter."""
+        if not overrides and self._validated:
+            return self._validated.pop()
         params, settings = self.split_overrides(overrides or {})
         long = _long_list(params)
         if long:
@@ -313,7 +318,7 @@ def loads(text: str, path: Path) -> Scene:
                              "that params does not give, set to 'scene-id:value_name'", key=key)
     scene = Scene(path, spec, task_class, solver)
     if not spec.derive:     # a derived scene is checked when its sources have run (registry.run)
-        scene.build()       # parameters, effects and settings must all be valid before anything runs
+        scene._validated.append(scene.build())   # parameters, effects and settings valid before anything runs
     return scene
 
 
