@@ -169,3 +169,29 @@ def test_two_independent_conflicts_are_both_named():
     assert "needs 5 deg more" in r.message and "independent of it" in r.message
     assert r.diagnostics["conflict_excess_deg"] == pytest.approx(5.0)
     assert r.diagnostics["conflicts"][0]["conflict_excess_deg"] == pytest.approx(5.0)
+
+
+def _numpy_levels(levels):
+    """The same Levels with the compiled passes switched off (the numpy reference)."""
+    plain = Levels.__new__(Levels)
+    plain.__dict__.update(levels.__dict__, _compiled=None)
+    return plain
+
+
+def test_the_compiled_passes_give_the_numpy_passes_answers_with_windows_and_syncs():
+    """kernel.py (numba) on a network past COMPILED_MIN_ARCS: every distance from the first and
+    to the last event, with windows and a sync as back arcs, equals the numpy levels' bit for bit."""
+    from benchmarks.loom import random_dag
+    from mechopt.solvers.loom.kernel import COMPILED_MIN_ARCS, kernels
+    if kernels() is None:
+        pytest.skip("numba not installed: the numpy passes are the only ones")
+    n = 20_000
+    tails, heads, w, (a, b, wmax) = random_dag(n, windows=200, seed=3)
+    assert len(tails) >= COMPILED_MIN_ARCS
+    levels = Levels(n, tails, heads)
+    assert levels._compiled
+    back = BackArcs(np.r_[b, 5, 6], np.r_[a, 6, 5], np.r_[-wmax, 0.0, 0.0])
+    plain = _numpy_levels(levels)
+    for fast, slow in ((levels.longest_from(0, w, back), plain.longest_from(0, w, back)),
+                       (levels.longest_to(n - 1, w, back), plain.longest_to(n - 1, w, back))):
+        np.testing.assert_array_equal(fast, slow)

@@ -24,6 +24,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import breadth_first_order
 
 from mechopt.cache import BuildCache
+from mechopt.solvers.loom.kernel import COMPILED_MIN_ARCS, kernels
 from mechopt.solvers.result import Status
 
 ROUND_OFF = 1e-12          # relative: an improvement below it (of the largest |w|) is round-off, not a cycle
@@ -74,6 +75,12 @@ class Levels:
         self.forward_order, self.forward_segments = _segments(level, self.heads, n, reverse=False)
         self.backward_order, self.backward_segments = _segments(level, self.tails, n, reverse=True)
         self._t_fwd, self._h_bwd = self.tails[self.forward_order], self.heads[self.backward_order]
+        # large networks: the compiled passes (kernel.py), each arc in order, when numba imports
+        self._compiled = kernels() if len(self.tails) >= COMPILED_MIN_ARCS else None
+        if self._compiled:      # the arcs' ends in pass order: the loop reads them in sequence
+            self._fwd_run = (self.forward_order, self._t_fwd, self.heads[self.forward_order])
+            bwd = np.ascontiguousarray(self.backward_order[::-1])        # last level first
+            self._bwd_run = (bwd, self.tails[bwd], self.heads[bwd])
 
     @classmethod
     def of(cls, n, tails, heads) -> "Levels":
@@ -83,11 +90,17 @@ class Levels:
 
     def forward(self, dist: np.ndarray, w: np.ndarray) -> None:
         """dist[v] = max(dist[v], dist[u] + w) over every DAG path, in place."""
-        _relax(dist, w[self.forward_order], self._t_fwd, self.forward_segments)
+        if self._compiled:
+            self._compiled[0](dist, *self._fwd_run, np.asarray(w, dtype=float))
+        else:
+            _relax(dist, w[self.forward_order], self._t_fwd, self.forward_segments)
 
     def backward(self, dist: np.ndarray, w: np.ndarray) -> None:
         """dist[u] = max(dist[u], w + dist[v]) over every DAG path (distances *to* a target), in place."""
-        _relax(dist, w[self.backward_order], self._h_bwd, self.backward_segments)
+        if self._compiled:
+            self._compiled[1](dist, *self._bwd_run, np.asarray(w, dtype=float))
+        else:
+            _relax(dist, w[self.backward_order], self._h_bwd, self.backward_segments)
 
     def longest_from(self, source: int, w: np.ndarray, back: BackArcs = NO_BACK_ARCS) -> np.ndarray:
         """Longest distances from `source` to every event (-inf: unreachable) [deg]; PositiveCycle
@@ -112,12 +125,13 @@ class Levels:
         return False
 
     def _rounds(self, dist, w, back, dag_pass, frm, to):
+        if not len(back):
+            dag_pass(dist, w)
+            return dist
         scale = np.abs(np.r_[w, back.weights])
         eps = ROUND_OFF * max(1.0, float(scale[np.isfinite(scale)].max(initial=0.0)))     # an arc may be -inf: cut
         for _ in range(len(back) + 2):
             dag_pass(dist, w)
-            if not len(back):
-                return dist
             cand = dist[frm] + back.weights
             gain = cand > dist[to] + eps
             if not gain.any():
@@ -173,9 +187,18 @@ def tight_arcs(tails, heads, w, dist, tol) -> np.ndarray:
     return np.flatnonzero(np.isfinite(dist[tails]) & (dist[tails] + w >= dist[heads] - tol))
 
 
+WALK_MIN_EVENTS = 10_000    # from this many events a_path first tries the walk back (no sort, no sparse matrix)
+
+
 def a_path(n, tails, heads, source, target) -> list[int] | None:
     """Indices of the arcs of one path source -> target (fewest arcs, breadth first); None when
-    there is none. Parallel arcs: one of them."""
+    there is none. Parallel arcs: one of them. From WALK_MIN_EVENTS events: first a walk back from
+    target along one arc into each event (tight arcs of a longest path reach the source that
+    way), breadth first only when the walk ends elsewhere or loops (a zero cycle of syncs)."""
+    if n >= WALK_MIN_EVENTS:
+        path = _walk_back(n, tails, heads, source, target)
+        if path is not None:
+            return path
     pair = tails * n + heads
     pairs, first = np.unique(pair, return_index=True)
     graph = sp.csr_matrix((np.ones(first.size), (tails[first], heads[first])), shape=(n, n))
@@ -188,6 +211,21 @@ def a_path(n, tails, heads, source, target) -> list[int] | None:
         nodes.append(v)
     nodes = np.array(nodes[::-1], dtype=np.int64)
     return first[np.searchsorted(pairs, nodes[:-1] * n + nodes[1:])].tolist()
+
+
+def _walk_back(n, tails, heads, source, target) -> list[int] | None:
+    """Arcs of a path source -> target found by following one arc into each event back from
+    target; None when the walk stops short of source or comes back on itself."""
+    into = np.full(n, -1, dtype=np.int64)
+    into[heads] = np.arange(len(heads))
+    path, v = [], int(target)
+    while v != source:
+        k = int(into[v])
+        if k < 0 or len(path) >= n:
+            return None
+        path.append(k)
+        v = int(tails[k])
+    return path[::-1]
 
 
 class HeldSpan:
