@@ -181,7 +181,7 @@ def _numpy_levels(levels):
 def test_the_compiled_passes_give_the_numpy_passes_answers_with_windows_and_syncs():
     """kernel.py (numba) on a network past COMPILED_MIN_ARCS: every distance from the first and
     to the last event, with windows and a sync as back arcs, equals the numpy levels' bit for bit."""
-    from benchmarks.loom import random_dag
+    from mechopt.benchmarks.loom import random_dag
     from mechopt.solvers.loom.kernel import COMPILED_MIN_ARCS, kernels
     if kernels() is None:
         pytest.skip("numba not installed: the numpy passes are the only ones")
