@@ -58,8 +58,10 @@ def plan_cyclogram(task: Cyclogram, *, method: Literal["graph", "lp"] = "graph",
     stress_form : "exact" sigma_max(t) <= [sigma_H] as t >= K/[sigma_H]; "linear" its tangent at t_ref.
     warm_start : pass cvxpy's warm start to the back end (with HiGHS it can slow re-solves).
     tol_deg : tolerance [deg] for float = 0 (critical), binding constraints and the cross-check.
-    check : also solve by the other method and compare: span (or limiting_op_deg) to tol_deg and,
-        where the critical chain is unique, every sens_*; a mismatch makes the result INACCURATE.
+    check : also solve by the other method and compare: status, span (or limiting_op_deg) to
+        tol_deg and, where the critical chain is unique, every sens_*; a mismatch makes the result
+        INACCURATE. The value check_rel is the objectives' difference per degree above 1 (the
+        loom scenes expect it below 1e-9: the LP as certificate in `mechopt validate`).
 
     Returns
     -------
@@ -822,11 +824,12 @@ def certify(result: Result, other: Result, tol_deg: float) -> Result:
     name = "limiting_op_deg" if "limiting_op_deg" in result.values else "span_deg"
     diagnostics = result.diagnostics | {"check": other.diagnostics.get("method", "?"), "check_status":
                                         other.status.value}
-    problems = []
+    problems, values = [], result.values
     if other.status is not result.status:
         problems.append(f"{other.diagnostics.get('method')} says {other.status.value}")
     elif result.status is Status.SOLVED:
         mine, theirs = result.values[name], other.values[name]
+        values = values | {"check_rel": abs(mine - theirs) / max(1.0, abs(theirs))}    # validate's certificate
         if not abs(mine - theirs) <= tol_deg * max(1.0, abs(theirs)):
             problems.append(f"{name} {mine!r} against {theirs!r}")
         chain = result.diagnostics.get("critical_chain", [])
@@ -837,8 +840,9 @@ def certify(result: Result, other: Result, tol_deg: float) -> Result:
                     problems.append(f"{key} {result.values[key]!r} against {other.values[key]!r}")
         diagnostics["check_abs_deg"] = abs(mine - theirs)
     if not problems:
-        return dataclasses.replace(result, diagnostics=diagnostics,
+        return dataclasses.replace(result, values=values, diagnostics=diagnostics,
                                    message=result.message + f"; checked by {diagnostics['check']}")
-    status = Status.INACCURATE if result.status is Status.SOLVED else result.status
-    return dataclasses.replace(result, status=status, diagnostics=diagnostics,
+    # the methods disagree: not certified, whichever said what (an INFEASIBLE the LP solves too)
+    status = Status.INACCURATE if result.status in (Status.SOLVED, Status.INFEASIBLE) else result.status
+    return dataclasses.replace(result, status=status, values=values, diagnostics=diagnostics,
                                message=result.message + "; check failed: " + ", ".join(problems))

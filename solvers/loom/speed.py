@@ -197,6 +197,8 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp",
         more["ranging_at_max_speed"] = sg.ranging(cycle, n_max, why)
     if check and not certified and chosen in ("graph", "lp"):
         certified = _check_by_other(chosen, task, net, phi, g, why, backend, n_max, more)
+        if "rel" in more["check"]:
+            values["check_rel"] = more["check"]["rel"]        # validate's certificate (loom scenes: < 1e-9)
     held = amp_bounds if chosen in ("lp", "graph") else _exact_amplitude_bounds(task, phi, scan_to_deg, scan_step_deg, n_max)
     for k, b in amp_bounds.items():      # the range of t on which the rebound was shown to hold, at n_max
         x, y = task.arcs[k]
