@@ -195,3 +195,24 @@ def test_the_compiled_passes_give_the_numpy_passes_answers_with_windows_and_sync
     for fast, slow in ((levels.longest_from(0, w, back), plain.longest_from(0, w, back)),
                        (levels.longest_to(n - 1, w, back), plain.longest_to(n - 1, w, back))):
         np.testing.assert_array_equal(fast, slow)
+
+
+def test_a_one_limit_what_if_is_solved_and_certified_by_the_held_graph():
+    """HeldSpan.solve (issue 22, item 5): [sigma_H] moved on loom/group1, the span is plan_cyclogram's
+    for the changed task, certified (times feasible, a tight chain of the same value); a window
+    the changed bounds cannot meet is INFEASIBLE; a wrong bound vector is not certified as another's."""
+    from mechopt.solvers.loom.graph import HeldSpan
+    from mechopt.solvers.loom.plan import Net, back_arcs
+    task = registry.find("loom/group1").build()[0]
+    net = Net(task, "exact")
+    held = HeldSpan(len(net.names), net.tails, net.heads, net.first, net.last, back_arcs(net, with_cycle=False)[0])
+    for sigma in (650.0, 800.0, 950.0):
+        changed = dataclasses.replace(task, sigma_H_limit_MPa=sigma)
+        status, span, p = held.solve(Net(changed, "exact").lb)
+        assert status is Status.SOLVED
+        assert span == pytest.approx(plan_cyclogram(changed).values["span_deg"], rel=1e-12)
+    tight = dataclasses.replace(task, windows=[{"from": "3", "to": "8", "max_deg": 40.0}])
+    tnet = Net(tight, "exact")
+    conflict = HeldSpan(len(tnet.names), tnet.tails, tnet.heads, tnet.first, tnet.last,
+                        back_arcs(tnet, with_cycle=False)[0])
+    assert conflict.solve(tnet.lb)[0] is Status.INFEASIBLE

@@ -17,6 +17,7 @@ it would cost a compile of seconds in every fresh process (a CLI run, the test s
 dependency for a part that is not the bottleneck of a run (building the model's dicts is);
 scipy.sparse.csgraph has no DAG pass and its Bellman-Ford is O(V E).
 """
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -230,15 +231,42 @@ def _walk_back(n, tails, heads, source, target) -> list[int] | None:
 
 class HeldSpan:
     """One network's span held for what-ifs (issue 22, item 5): a limit changed, the bounds
-    re-solved by a fresh numpy pass over the held levels, and an LP's re-solve certified by it.
+    re-solved by a fresh pass over the held levels with its own certificate (`solve`), and an
+    LP's re-solve certified by it (`certify`).
 
     Why a fresh pass and not an incremental one (only the affected cone moves): on loom/group1
     (11 events) the whole pass is a few tens of microseconds, about what finding the cone costs;
-    at 10^5 events a pass is ~10 ms (graph.py's docstring), and an incremental update would pay
+    at 10^5 events a compiled pass is ~2 ms (kernel.py), and an incremental update would pay
     only when one limit moves a small cone, which the what-if slider does not promise."""
 
     def __init__(self, n: int, tails, heads, first: int, last: int, back: BackArcs = NO_BACK_ARCS):
         self.levels, self.first, self.last, self.back = Levels.of(n, tails, heads), first, last, back
+        self.n = n
+        self._tails = np.r_[self.levels.tails, back.tails]        # every constraint p(head) - p(tail) >= w
+        self._heads = np.r_[self.levels.heads, back.heads]
+
+    def solve(self, lb: np.ndarray, tol_deg: float = 1e-9):
+        """(status, span [deg], event times) for bounds lb, certified by LP duality: the times
+        meet every constraint (primal feasible) and a chain of constraints met with equality
+        leads first -> last with bounds summing to the span (a dual solution of the same value),
+        both to tol_deg per degree above 1. SOLVED when both hold, INACCURATE when not (round-off
+        past tol_deg), INFEASIBLE (span and times None) on a positive cycle."""
+        try:
+            p = self.levels.longest_from(self.first, lb, self.back)
+        except PositiveCycle:
+            return Status.INFEASIBLE, None, None
+        span = float(p[self.last] - p[self.first])
+        w = np.r_[lb, self.back.weights]
+        slack = p[self._heads] - p[self._tails] - w
+        tol = tol_deg * max(1.0, abs(span))
+        feasible = bool(np.all(slack >= -tol))            # NaN (an unreached event) fails too
+        tight = np.flatnonzero(slack <= tol)
+        chain = _walk_back(self.n, self._tails[tight], self._heads[tight], self.first, self.last) if feasible else None
+        if chain is None and feasible:                      # a zero cycle in the walk: breadth first
+            chain = a_path(self.n, self._tails[tight], self._heads[tight], self.first, self.last)
+        dual = None if chain is None else math.fsum(w[tight[chain]].tolist())
+        ok = dual is not None and abs(dual - span) <= tol
+        return (Status.SOLVED if ok else Status.INACCURATE), span, p
 
     def span(self, lb: np.ndarray) -> float:
         """The longest path first -> last with bounds lb [deg]; PositiveCycle when none exists."""
