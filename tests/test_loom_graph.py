@@ -216,3 +216,49 @@ def test_a_one_limit_what_if_is_solved_and_certified_by_the_held_graph():
     conflict = HeldSpan(len(tnet.names), tnet.tails, tnet.heads, tnet.first, tnet.last,
                         back_arcs(tnet, with_cycle=False)[0])
     assert conflict.solve(tnet.lb)[0] is Status.INFEASIBLE
+
+
+def test_a_network_of_windows_only_no_dag_order():
+    """Every constraint a back arc (no precedence among the events, bounds of both signs as
+    windows would give): the Bellman-Ford rounds alone give each event's least time, the LP's
+    (scipy HiGHS: minimise p(v) with p(0) = 0) for every v; a ring of them is feasible by construction."""
+    rng = np.random.default_rng(7)
+    n = 40
+    p0 = rng.uniform(0.0, 100.0, n)
+    p0[0] = 0.0
+    pairs = np.array([(u, v) for u in range(n) for v in range(n) if u != v and rng.random() < 0.08] +
+                     [(k, (k + 1) % n) for k in range(n)])              # a ring reaches every event
+    u, v = pairs[:, 0], pairs[:, 1]
+    w = (p0[v] - p0[u]) - rng.uniform(0.0, 5.0, len(u)) * (rng.random(len(u)) < 0.8)   # some exactly tight
+    levels = Levels(n, np.zeros(0, np.int64), np.zeros(0, np.int64))
+    dist = levels.longest_from(0, np.zeros(0), BackArcs(u, v, w))
+    D = sp.csr_matrix((np.r_[np.ones(len(u)), -np.ones(len(u))], (np.r_[np.arange(len(u)), np.arange(len(u))],
+                                                                      np.r_[v, u])), shape=(len(u), n))
+    for target in (5, 17, n - 1):
+        c = np.zeros(n)
+        c[target] = 1.0
+        res = linprog(c, A_ub=-D, b_ub=-w, A_eq=sp.csr_matrix(([1.0], ([0], [0])), shape=(1, n)), b_eq=[0.0],
+                      bounds=(None, None), method="highs")
+        assert res.status == 0
+        assert dist[target] == pytest.approx(res.fun, rel=1e-9, abs=1e-9)
+    assert np.all(dist[v] - dist[u] >= w - 1e-9)                      # every window holds
+
+
+@pytest.mark.slow
+def test_a_million_events_certified_by_duality():
+    """10^6 events (the bench's layered network, 3 x 10^6 arcs): the earliest times meet every
+    bound, and a chain of bounds met with equality leads first -> last summing (fsum) to the span:
+    a primal and a dual solution of the same value, so the span is the LP's optimum."""
+    import math
+
+    from mechopt.benchmarks.loom import layered
+    from mechopt.solvers.loom.graph import a_path, tight_arcs
+    n = 1_000_000
+    tails, heads, w = layered(n)
+    dist = Levels(n, tails, heads).longest_from(0, w)
+    span = dist[n - 1]
+    assert np.all(np.isfinite(dist)) and np.all(dist[heads] - dist[tails] >= w - 1e-9 * span)
+    tight = tight_arcs(tails, heads, w, dist, 1e-9 * span)
+    chain = a_path(n, tails[tight], heads[tight], 0, n - 1)
+    assert chain and tails[tight[chain[0]]] == 0 and heads[tight[chain[-1]]] == n - 1
+    assert math.fsum(w[tight[chain]].tolist()) == pytest.approx(span, rel=1e-12)

@@ -136,19 +136,19 @@ def _plan_lp(task, *, stress_form, tol_deg, backend, warm_start) -> Result:
         if status is Status.INFEASIBLE:
             message += " (no positive cycle among the difference constraints: a numerical failure?)"
         return Result(status, {}, timing(), message=message, diagnostics=diagnostics)
-    values, more, overstressed, disagreement = _report(task, net, lp, tol_deg)
+    values, more, overstressed, disagreement, (p, floats) = _report(task, net, lp, tol_deg)
     diagnostics |= more
     solve_s = time.perf_counter() - start - build_s
     if disagreement:
         return Result(Status.INACCURATE, values, Timing(build_s, solve_s), message=disagreement,
-                      violated=overstressed, diagnostics=diagnostics, arrays=plan_arrays(net, values, diagnostics))
+                      violated=overstressed, diagnostics=diagnostics, arrays=plan_arrays(net, values, diagnostics, p, floats))
     objective = "limiting_op_deg" if net.limiting else "span_deg"
     message = (f"{objective} = {values[objective]:.6g} ({backend}, {stress_form} stress, "
                f"{'compiled' if fresh else 'DPP re-solve'}); {SENSITIVITY_CONVENTION}")
     if overstressed:      # the tangent under-estimates sigma_max: the linearised optimum breaks the true limit
         message += f"; the linearised stress limit lets sigma_max exceed [sigma_H] on {', '.join(overstressed)}"
     return Result(Status.SOLVED, values, Timing(build_s, solve_s), message=message, violated=overstressed,
-                  diagnostics=diagnostics, arrays=plan_arrays(net, values, diagnostics))
+                  diagnostics=diagnostics, arrays=plan_arrays(net, values, diagnostics, p, floats))
 
 
 PER_NAME_MAX_OPS = 10_000   # above it, per-event and per-operation figures live in Result.arrays only
@@ -376,7 +376,11 @@ def _report(task, net, lp, tol):
     floats = _floats(task, net, p, values, tol)
     diagnostics = {"binding": binding, "sens_min_deg": sens_min} | limit_diagnostics(task, net)
     diagnostics |= floats
-    return values, diagnostics, tuple(overstressed), disagreement
+    float_deg = floats.get("float_deg")
+    float_deg = np.fromiter(float_deg.values(), dtype=float, count=len(float_deg)) if isinstance(float_deg, dict) else None
+    if float_deg is not None and not per_name(net):      # large: the floats as the result's array only
+        diagnostics["float_deg"] = f"{len(float_deg)} operations: in the result's arrays (float_deg)"
+    return values, diagnostics, tuple(overstressed), disagreement, (p, float_deg)
 
 
 def limit_diagnostics(task, net) -> dict:
