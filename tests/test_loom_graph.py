@@ -246,15 +246,22 @@ def test_a_network_of_windows_only_no_dag_order():
 
 @pytest.mark.slow
 def test_a_million_events_certified_by_duality():
-    """10^6 events (the bench's layered network, 3 x 10^6 arcs): the earliest times meet every
+    """10^6 events (a layered network as the bench's, 3 x 10^6 arcs, parallel ones kept): the earliest times meet every
     bound, and a chain of bounds met with equality leads first -> last summing (fsum) to the span:
     a primal and a dual solution of the same value, so the span is the LP's optimum."""
     import math
 
-    from mechopt.benchmarks.loom import layered
     from mechopt.solvers.loom.graph import a_path, tight_arcs
-    n = 1_000_000
-    tails, heads, w = layered(n)
+    n, width = 1_000_000, 100                 # layers of 100 events, each fed by 3 of the layer before
+    rng = np.random.default_rng(0)
+    inner = np.arange(1, n - 1)
+    layer = (inner - 1) // width
+    tails = np.concatenate([np.where(layer == 0, 0, (layer - 1) * width + 1 + rng.integers(0, width, inner.size))
+                            for _ in range(3)])
+    heads = np.tile(inner, 3)
+    leaves = np.flatnonzero(np.bincount(tails, minlength=n)[:n - 1] == 0)
+    tails, heads = np.r_[tails, leaves], np.r_[heads, np.full(leaves.size, n - 1)]
+    w = rng.uniform(0.0, 30.0, tails.size)
     dist = Levels(n, tails, heads).longest_from(0, w)
     span = dist[n - 1]
     assert np.all(np.isfinite(dist)) and np.all(dist[heads] - dist[tails] >= w - 1e-9 * span)
