@@ -9,13 +9,15 @@ simple path uses each back arc at most once, so len(back) + 1 rounds settle ever
 unless a positive cycle exists: still improving after them is the proof of one (the cycle is
 then named by `plan.positive_cycle` on the labelled constraints).
 
-Why numpy over levels: measured on the layered 10^5-event network (3 x 10^5 arcs, 1000 levels)
-one forward and one backward pass with the floats take ~11 ms, at 10^6 events ~0.13 s (levels
-built once per structure: 0.09 s and 0.8 s), inside the issue's targets with no new dependency
-and no JIT warm-up. A compiled pass (numba; the issue measured 0.31 ms at 10^5) was not taken:
-it would cost a compile of seconds in every fresh process (a CLI run, the test suite) and a
-dependency for a part that is not the bottleneck of a run (building the model's dicts is);
-scipy.sparse.csgraph has no DAG pass and its Bellman-Ford is O(V E).
+Why numpy over levels, and a compiled pass for large networks: on the layered 10^5-event
+network (3 x 10^5 arcs, 1000 levels) a numpy pass costs ~10 us of Python per level and call,
+~9 ms per pass, so one forward and one backward pass with the floats, the critical chain and
+the duals took ~30 ms (issue 22's target: 20 ms). A compiled loop over the arcs in level order
+(kernel.py, numba) takes ~2 ms per pass: with it the whole solve measured ~9 ms (best of 15 on
+the shared 2-core machine; medians under load are in `mechopt bench loom`). numba stays
+optional (extra `fast`): it is imported only for networks of COMPILED_MIN_ARCS arcs and more
+(no scene of the package), its compiled code cached on disk, and without it the numpy levels
+give the same answers. scipy.sparse.csgraph has no DAG pass and its Bellman-Ford is O(V E).
 """
 import math
 from dataclasses import dataclass
