@@ -114,7 +114,9 @@ def _linprog(n, tails, heads, w):
 
 def _graph(n, tails, heads, w, back=NO_BACK_ARCS, tol=1e-9):
     """The graph method's kernel as plan_cyclogram runs it: levels (build), then earliest and
-    latest times, floats, one critical chain and the duals (arcs' uses on a longest path)."""
+    latest times, floats, one critical chain and the duals (arcs' uses on a longest path). From
+    2 x 10^4 arcs the passes are the compiled ones when numba is installed (solvers/loom/kernel.py;
+    MECHOPT_NO_NUMBA=1: the numpy levels)."""
     start = time.perf_counter()
     levels = Levels(n, tails, heads)
     build = time.perf_counter() - start
@@ -132,7 +134,7 @@ def _graph(n, tails, heads, w, back=NO_BACK_ARCS, tol=1e-9):
     return build, time.perf_counter() - start - build, float(span)
 
 
-METHODS = {"graph (numpy levels)": _graph, "networkx longest path": _networkx, "cvxpy + HiGHS": _cvxpy("HIGHS"),
+METHODS = {"graph (longest paths)": _graph, "networkx longest path": _networkx, "cvxpy + HiGHS": _cvxpy("HIGHS"),
            "cvxpy + Clarabel": _cvxpy("CLARABEL"), "scipy linprog (HiGHS)": _linprog}
 
 
@@ -199,7 +201,7 @@ def graph_targets(repeats=3, progress=None, big=1_000_000):
     rows = []
     tails, heads, w, windows = random_dag(100_000)
     back = BackArcs(windows[1], windows[0], -windows[2])
-    for method, call in (("graph (numpy levels)", lambda: _graph(100_000, tails, heads, w, back)),
+    for method, call in (("graph (longest paths)", lambda: _graph(100_000, tails, heads, w, back)),
                          ("cvxpy + HiGHS", lambda: _cvxpy_windows(100_000, tails, heads, w, windows))):
         runs = [call() for _ in range(repeats)]
         if progress:
@@ -209,7 +211,7 @@ def graph_targets(repeats=3, progress=None, big=1_000_000):
                      "total_s": statistics.median(r[0] + r[1] for r in runs), "span_deg": runs[-1][2]})
     tails, heads, w = layered(big)
     runs = [_graph(big, tails, heads, w) for _ in range(repeats)]
-    rows.append({"method": "graph (numpy levels)", "events": big, "arcs": len(tails), "case": "layered",
+    rows.append({"method": "graph (longest paths)", "events": big, "arcs": len(tails), "case": "layered",
                  "build_s": statistics.median(r[0] for r in runs), "solve_s": statistics.median(r[1] for r in runs),
                  "total_s": statistics.median(r[0] + r[1] for r in runs), "span_deg": runs[-1][2]})
     return rows
@@ -225,7 +227,7 @@ def graph_table(scale_rows, rows):
     by = {(r["method"], r["events"]): r for r in scale_rows}
     verdicts = []
     if ("cvxpy + HiGHS", 100_000) in by:
-        g, c = by["graph (numpy levels)", 100_000], by["cvxpy + HiGHS", 100_000]
+        g, c = by["graph (longest paths)", 100_000], by["cvxpy + HiGHS", 100_000]
         verdicts += [("graph_solve_1e5_layered_s", g["solve_s"], TARGETS["graph_solve_1e5_s"], "<="),
                      ("cvxpy_over_graph_1e5_layered", c["total_s"] / g["solve_s"], TARGETS["cvxpy_over_graph"], ">=")]
     g, c = rows[0], rows[1]
