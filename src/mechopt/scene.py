@@ -9,7 +9,6 @@ import importlib
 import inspect
 import math
 import os
-import re
 import tomllib
 from pathlib import Path
 from types import MappingProxyType
