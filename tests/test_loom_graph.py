@@ -114,6 +114,35 @@ def test_a_check_that_disagrees_is_inaccurate():
     r = certify(graph, wrong, 1e-6)
     assert r.status is Status.INACCURATE and "span_deg 114.75 against 100.0" in r.message
     assert certify(graph, lp, 1e-6).status is Status.SOLVED
+    assert certify(graph, lp, 1e-6).values["check_rel"] <= 1e-12
+    conflict = plan_cyclogram(registry.find("loom/group1-window-conflict").build()[0])
+    assert certify(conflict, lp, 1e-6).status is Status.INACCURATE          # the LP solves what the graph refuses
+
+
+def test_a_timing_table_past_ten_thousand_operations_reports_arrays_and_agrees_with_the_lp():
+    """Past PER_NAME_MAX_OPS the plan's per-event and per-operation figures are the result's
+    arrays (no p_* / t_* values, float_deg a note), consistent with the span, and the LP beside
+    it (check = true) gives the same span."""
+    from mechopt.benchmarks.loom import layered
+    from mechopt.solvers.loom.plan import PER_NAME_MAX_OPS
+    n = 4_000
+    tails, heads, w = layered(n)
+    assert len(tails) > PER_NAME_MAX_OPS
+    ops = [{"from": f"e{a}", "to": f"e{b}", "min_deg": float(x), "group": f"g{a * 2 // n}"}
+           for a, b, x in zip(tails.tolist(), heads.tolist(), w.tolist())]
+    r = plan_cyclogram(Cyclogram(operations=ops), check=True)
+    assert r.status is Status.SOLVED and r.values["check_rel"] <= 1e-9
+    assert not any(k.startswith(("p_", "t_")) for k in r.values)
+    assert isinstance(r.diagnostics["float_deg"], str)
+    a = r.arrays
+    bound = {f"{op['from']}->{op['to']}": op["min_deg"] for op in ops}
+    assert len(a["operation"]) == len(tails) and set(a["operation"]) == set(bound)
+    np.testing.assert_allclose(a["duration_deg"], a["end_deg"] - a["start_deg"])
+    assert np.all(a["duration_deg"] >= np.array([bound[op] for op in a["operation"]]) - 1e-9)
+    assert a["float_deg"].min() > -1e-9
+    assert a["end_deg"].max() == pytest.approx(r.values["span_deg"], rel=1e-12)
+    crit = set(r.diagnostics["critical_ops"])
+    assert all(a["float_deg"][k] <= 1e-6 for k, op in enumerate(a["operation"]) if op in crit)
 
 
 # ---------------------------------------------------------------- hard cases (issue 22)
