@@ -127,7 +127,8 @@ def _graph(n, tails, heads, w, back=NO_BACK_ARCS, tol=1e-9):
     floats = late[heads] - early[tails] - w
     critical = np.flatnonzero(floats <= tol * max(1.0, span))
     a_path(n, tails[critical], heads[critical], 0, n - 1)                        # the critical chain
-    all_t, all_h, all_w = np.r_[tails, back.tails], np.r_[heads, back.heads], np.r_[w, back.weights]
+    all_t, all_h, all_w = ((tails, heads, w) if not len(back) else
+                           (np.r_[tails, back.tails], np.r_[heads, back.heads], np.r_[w, back.weights]))
     tight = tight_arcs(all_t, all_h, all_w, early, tol * max(1.0, span))
     duals = np.bincount(tight[a_path(n, all_t[tight], all_h[tight], 0, n - 1)], minlength=len(all_t))
     assert duals[:len(tails)].max() >= 1

@@ -131,8 +131,13 @@ class Levels:
         if not len(back):
             dag_pass(dist, w)
             return dist
-        scale = np.abs(np.r_[w, back.weights])
-        eps = ROUND_OFF * max(1.0, float(scale[np.isfinite(scale)].max(initial=0.0)))     # an arc may be -inf: cut
+        eps = ROUND_OFF * max(1.0, _largest_finite(w), _largest_finite(back.weights))
+        # the back arcs relaxed once before the first pass too (any order of relaxations is Bellman-Ford's):
+        # a cycle's closing arc from the start then needs one DAG pass, not two
+        with np.errstate(invalid="ignore"):
+            cand = dist[frm] + back.weights
+        gain = cand > dist[to]
+        np.maximum.at(dist, to[gain], cand[gain])
         for _ in range(len(back) + 2):
             dag_pass(dist, w)
             cand = dist[frm] + back.weights
@@ -141,6 +146,18 @@ class Levels:
                 return dist
             np.maximum.at(dist, to[gain], cand[gain])
         raise PositiveCycle
+
+
+def _largest_finite(a) -> float:
+    """max |a| over its finite entries (0 when none): two reductions, no copy, unless an entry is
+    infinite (an arc cut to -inf for ranging)."""
+    if not len(a):
+        return 0.0
+    top, low = float(a.max()), float(a.min())
+    if math.isfinite(top) and math.isfinite(low):
+        return max(abs(top), abs(low))
+    finite = np.abs(a[np.isfinite(a)])
+    return float(finite.max(initial=0.0))
 
 
 def topological_levels(n: int, tails: np.ndarray, heads: np.ndarray) -> np.ndarray:
@@ -186,8 +203,10 @@ def _segments(level, ends, n, reverse):
 
 
 def tight_arcs(tails, heads, w, dist, tol) -> np.ndarray:
-    """Indices of the arcs on which dist[head] = dist[tail] + w within tol (dist finite)."""
-    return np.flatnonzero(np.isfinite(dist[tails]) & (dist[tails] + w >= dist[heads] - tol))
+    """Indices of the arcs on which dist[head] = dist[tail] + w within tol (dist finite: an
+    unreached end makes the difference -inf or NaN, never tight)."""
+    with np.errstate(invalid="ignore"):
+        return np.flatnonzero(dist[tails] + w - dist[heads] >= -tol)
 
 
 WALK_MIN_EVENTS = 10_000    # from this many events a_path first tries the walk back (no sort, no sparse matrix)

@@ -696,8 +696,8 @@ def _longest_schedule(net, levels, back, tol):
     else:
         p = dist
     m = len(net.tails)
-    tails, heads = np.r_[net.tails, back.tails], np.r_[net.heads, back.heads]
-    w = np.r_[lb, back.weights]
+    tails, heads, w = ((net.tails, net.heads, lb) if not len(back) else     # no copies of a large DAG's arcs
+                       (np.r_[net.tails, back.tails], np.r_[net.heads, back.heads], np.r_[lb, back.weights]))
     eps = tol * 1e-3 * max(1.0, abs(objective))
     tight = tight_arcs(tails, heads, w, dist, eps)
     path = np.asarray(a_path(len(net.names), tails[tight], heads[tight], source, target), dtype=np.int64)
