@@ -239,7 +239,8 @@ def _walk_back(n, tails, heads, source, target) -> list[int] | None:
     """Arcs of a path source -> target found by following one arc into each event back from
     target; None when the walk stops short of source or comes back on itself."""
     into = np.full(n, -1, dtype=np.int64)
-    into[heads] = np.arange(len(heads))
+    into[heads[::-1]] = np.arange(len(heads) - 1, -1, -1)      # the first arc listed into each event:
+    # a DAG arc before a window's or a sync's (they come last), so the walk rarely meets a zero cycle
     path, v = [], int(target)
     while v != source:
         k = int(into[v])
