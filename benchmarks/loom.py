@@ -54,7 +54,7 @@ TARGETS = {"cvxpy_highs_1e5_s": 1.5, "cvxpy_over_networkx_1e5": 2.0,
            "group1_fresh_over_resolve": 5.0,     # LP only: build + compile + solve against a DPP re-solve
            "machine_speed_10x100_s": 1.0,        # max_machine_speed, fresh (LP built, compiled and solved)
            # issue 22 item 4: the graph's speed, walk held (chain) or no walk (fitted), its speed the LP's
-           "what_if_graph_s": 2e-4,               # issue 22 item 5: one limit moved on loom/group1, graph pass
+           "what_if_graph_s": 2e-4,               # issue 22 item 5: one limit moved on loom/group1, graph pass + certificate
            "machine_speed_graph_s": 0.05, "lp_over_graph_speed": 1.0, "graph_lp_speed_rel": 1e-9,
            # issue 22: the graph solve with floats, critical chain and duals; against cvxpy + HiGHS in the same run
            "graph_solve_1e5_s": 0.02, "cvxpy_over_graph": 50.0, "graph_solve_1e6_s": 0.3}
@@ -114,7 +114,9 @@ def _linprog(n, tails, heads, w):
 
 def _graph(n, tails, heads, w, back=NO_BACK_ARCS, tol=1e-9):
     """The graph method's kernel as plan_cyclogram runs it: levels (build), then earliest and
-    latest times, floats, one critical chain and the duals (arcs' uses on a longest path)."""
+    latest times, floats, one critical chain and the duals (arcs' uses on a longest path). From
+    2 x 10^4 arcs the passes are the compiled ones when numba is installed (solvers/loom/kernel.py;
+    MECHOPT_NO_NUMBA=1: the numpy levels)."""
     start = time.perf_counter()
     levels = Levels(n, tails, heads)
     build = time.perf_counter() - start
@@ -125,14 +127,15 @@ def _graph(n, tails, heads, w, back=NO_BACK_ARCS, tol=1e-9):
     floats = late[heads] - early[tails] - w
     critical = np.flatnonzero(floats <= tol * max(1.0, span))
     a_path(n, tails[critical], heads[critical], 0, n - 1)                        # the critical chain
-    all_t, all_h, all_w = np.r_[tails, back.tails], np.r_[heads, back.heads], np.r_[w, back.weights]
+    all_t, all_h, all_w = ((tails, heads, w) if not len(back) else
+                           (np.r_[tails, back.tails], np.r_[heads, back.heads], np.r_[w, back.weights]))
     tight = tight_arcs(all_t, all_h, all_w, early, tol * max(1.0, span))
     duals = np.bincount(tight[a_path(n, all_t[tight], all_h[tight], 0, n - 1)], minlength=len(all_t))
     assert duals[:len(tails)].max() >= 1
     return build, time.perf_counter() - start - build, float(span)
 
 
-METHODS = {"graph (numpy levels)": _graph, "networkx longest path": _networkx, "cvxpy + HiGHS": _cvxpy("HIGHS"),
+METHODS = {"graph (longest paths)": _graph, "networkx longest path": _networkx, "cvxpy + HiGHS": _cvxpy("HIGHS"),
            "cvxpy + Clarabel": _cvxpy("CLARABEL"), "scipy linprog (HiGHS)": _linprog}
 
 
@@ -199,7 +202,7 @@ def graph_targets(repeats=3, progress=None, big=1_000_000):
     rows = []
     tails, heads, w, windows = random_dag(100_000)
     back = BackArcs(windows[1], windows[0], -windows[2])
-    for method, call in (("graph (numpy levels)", lambda: _graph(100_000, tails, heads, w, back)),
+    for method, call in (("graph (longest paths)", lambda: _graph(100_000, tails, heads, w, back)),
                          ("cvxpy + HiGHS", lambda: _cvxpy_windows(100_000, tails, heads, w, windows))):
         runs = [call() for _ in range(repeats)]
         if progress:
@@ -209,7 +212,7 @@ def graph_targets(repeats=3, progress=None, big=1_000_000):
                      "total_s": statistics.median(r[0] + r[1] for r in runs), "span_deg": runs[-1][2]})
     tails, heads, w = layered(big)
     runs = [_graph(big, tails, heads, w) for _ in range(repeats)]
-    rows.append({"method": "graph (numpy levels)", "events": big, "arcs": len(tails), "case": "layered",
+    rows.append({"method": "graph (longest paths)", "events": big, "arcs": len(tails), "case": "layered",
                  "build_s": statistics.median(r[0] for r in runs), "solve_s": statistics.median(r[1] for r in runs),
                  "total_s": statistics.median(r[0] + r[1] for r in runs), "span_deg": runs[-1][2]})
     return rows
@@ -225,7 +228,7 @@ def graph_table(scale_rows, rows):
     by = {(r["method"], r["events"]): r for r in scale_rows}
     verdicts = []
     if ("cvxpy + HiGHS", 100_000) in by:
-        g, c = by["graph (numpy levels)", 100_000], by["cvxpy + HiGHS", 100_000]
+        g, c = by["graph (longest paths)", 100_000], by["cvxpy + HiGHS", 100_000]
         verdicts += [("graph_solve_1e5_layered_s", g["solve_s"], TARGETS["graph_solve_1e5_s"], "<="),
                      ("cvxpy_over_graph_1e5_layered", c["total_s"] / g["solve_s"], TARGETS["cvxpy_over_graph"], ">=")]
     g, c = rows[0], rows[1]
@@ -332,8 +335,9 @@ def what_if(repeats=5, progress=None, warm_max=WARM_MAX_EVENTS):
 
 def sigma_what_if(task, fresh_lp_s, repeats):
     """Issue 22, item 5 on loom/group1: [sigma_H] moved, the stress rows' bounds recomputed as a
-    vector and the span re-solved by a fresh graph pass (`HeldSpan`), and the held HiGHS model
-    re-solved and certified by that pass; against the fresh LP build + solve (`fresh_lp_s`)."""
+    vector and the span re-solved by a fresh graph pass certified by LP duality (`HeldSpan.solve`:
+    the times feasible, a tight chain of the same value), and the held HiGHS model re-solved and
+    certified by a pass; against the fresh LP build + solve (`fresh_lp_s`)."""
     net = cyclogram_lp.Net(task, "exact")
     rows = np.asarray(net.stress_rows, dtype=np.int64)
     floor, k_ref = task.min_angles_deg()[rows], net.stress_ref[0] * net.stress_ref[1]
@@ -352,8 +356,11 @@ def sigma_what_if(task, fresh_lp_s, repeats):
     if not np.allclose(bounds(700.0), check, rtol=1e-15, atol=0.0):
         raise RuntimeError("the what-if's bounds are not the model's")
 
-    def graph_pass():
-        return graph.span(bounds(next(sigmas)))
+    def graph_pass():                     # the fresh pass with its own certificate (primal and dual)
+        status, span, _ = graph.solve(bounds(next(sigmas)))
+        if status.value != "SOLVED":
+            raise RuntimeError(f"graph what-if: {status.value}")
+        return span
 
     def certified_resolve():
         new = bounds(next(sigmas))
@@ -362,7 +369,7 @@ def sigma_what_if(task, fresh_lp_s, repeats):
         if verdict.value != "SOLVED":
             raise RuntimeError(f"held HiGHS re-solve: {status.value}, certificate {verdict.value}")
     runs = max(repeats, 200)              # microseconds: many runs for a stable median
-    return {"case": "loom/group1 [sigma_H] (graph pass | held + cert.)", "fresh_s": fresh_lp_s,
+    return {"case": "loom/group1 [sigma_H] (graph + cert. | held + cert.)", "fresh_s": fresh_lp_s,
             "resolve_cold_s": _median_time(graph_pass, runs), "resolve_warm_s": _median_time(certified_resolve, runs)}
 
 

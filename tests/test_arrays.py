@@ -12,12 +12,6 @@ from mechopt.units import unit_of
 WITHOUT_ARRAYS = {
     "loom/group1-window-conflict": "INFEASIBLE: no plan exists, the answer is the conflicting chain (its message)",
     "stop-impact/frequencies": "closed-form scalars (stiffnesses, frequencies, contact time): no series to sample",
-    # the solvers of these are edited on other branches this round (solvers/loom/repair.py, speed.py):
-    # the repair's last plan and the speed's schedule carry no arrays yet
-    "loom/group1-repaired": "solvers/loom/repair.py does not pass its last plan's arrays on (yet)",
-    "loom/group1-repaired-paper-reading": "solvers/loom/repair.py, as loom/group1-repaired",
-    "loom/machine-speed": "solvers/loom/speed.py returns values only (yet)",
-    "loom/machine-speed-paper-reading": "solvers/loom/speed.py, as loom/machine-speed",
 }
 LABEL_COLUMNS = {"parameter", "operation"}       # text naming a table's rows
 # numbers with no unit: a flag, counts and indices, a ratio, and a column whose rows each have their

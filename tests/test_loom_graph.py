@@ -114,6 +114,35 @@ def test_a_check_that_disagrees_is_inaccurate():
     r = certify(graph, wrong, 1e-6)
     assert r.status is Status.INACCURATE and "span_deg 114.75 against 100.0" in r.message
     assert certify(graph, lp, 1e-6).status is Status.SOLVED
+    assert certify(graph, lp, 1e-6).values["check_rel"] <= 1e-12
+    conflict = plan_cyclogram(registry.find("loom/group1-window-conflict").build()[0])
+    assert certify(conflict, lp, 1e-6).status is Status.INACCURATE          # the LP solves what the graph refuses
+
+
+def test_a_timing_table_past_ten_thousand_operations_reports_arrays_and_agrees_with_the_lp():
+    """Past PER_NAME_MAX_OPS the plan's per-event and per-operation figures are the result's
+    arrays (no p_* / t_* values, float_deg a note), consistent with the span, and the LP beside
+    it (check = true) gives the same span."""
+    from mechopt.benchmarks.loom import layered
+    from mechopt.solvers.loom.plan import PER_NAME_MAX_OPS
+    n = 4_000
+    tails, heads, w = layered(n)
+    assert len(tails) > PER_NAME_MAX_OPS
+    ops = [{"from": f"e{a}", "to": f"e{b}", "min_deg": float(x), "group": f"g{a * 2 // n}"}
+           for a, b, x in zip(tails.tolist(), heads.tolist(), w.tolist())]
+    r = plan_cyclogram(Cyclogram(operations=ops), check=True)
+    assert r.status is Status.SOLVED and r.values["check_rel"] <= 1e-9
+    assert not any(k.startswith(("p_", "t_")) for k in r.values)
+    assert isinstance(r.diagnostics["float_deg"], str)
+    a = r.arrays
+    bound = {f"{op['from']}->{op['to']}": op["min_deg"] for op in ops}
+    assert len(a["operation"]) == len(tails) and set(a["operation"]) == set(bound)
+    np.testing.assert_allclose(a["duration_deg"], a["end_deg"] - a["start_deg"])
+    assert np.all(a["duration_deg"] >= np.array([bound[op] for op in a["operation"]]) - 1e-9)
+    assert a["float_deg"].min() > -1e-9
+    assert a["end_deg"].max() == pytest.approx(r.values["span_deg"], rel=1e-12)
+    crit = set(r.diagnostics["critical_ops"])
+    assert all(a["float_deg"][k] <= 1e-6 for k, op in enumerate(a["operation"]) if op in crit)
 
 
 # ---------------------------------------------------------------- hard cases (issue 22)
@@ -169,3 +198,103 @@ def test_two_independent_conflicts_are_both_named():
     assert "needs 5 deg more" in r.message and "independent of it" in r.message
     assert r.diagnostics["conflict_excess_deg"] == pytest.approx(5.0)
     assert r.diagnostics["conflicts"][0]["conflict_excess_deg"] == pytest.approx(5.0)
+
+
+def _numpy_levels(levels):
+    """The same Levels with the compiled passes switched off (the numpy reference)."""
+    plain = Levels.__new__(Levels)
+    plain.__dict__.update(levels.__dict__, _compiled=None)
+    return plain
+
+
+def test_the_compiled_passes_give_the_numpy_passes_answers_with_windows_and_syncs():
+    """kernel.py (numba) on a network past COMPILED_MIN_ARCS: every distance from the first and
+    to the last event, with windows and a sync as back arcs, equals the numpy levels' bit for bit."""
+    from mechopt.benchmarks.loom import random_dag
+    from mechopt.solvers.loom.kernel import COMPILED_MIN_ARCS, kernels
+    if kernels() is None:
+        pytest.skip("numba not installed: the numpy passes are the only ones")
+    n = 20_000
+    tails, heads, w, (a, b, wmax) = random_dag(n, windows=200, seed=3)
+    assert len(tails) >= COMPILED_MIN_ARCS
+    levels = Levels(n, tails, heads)
+    assert levels._compiled
+    back = BackArcs(np.r_[b, 5, 6], np.r_[a, 6, 5], np.r_[-wmax, 0.0, 0.0])
+    plain = _numpy_levels(levels)
+    for fast, slow in ((levels.longest_from(0, w, back), plain.longest_from(0, w, back)),
+                       (levels.longest_to(n - 1, w, back), plain.longest_to(n - 1, w, back))):
+        np.testing.assert_array_equal(fast, slow)
+
+
+def test_a_one_limit_what_if_is_solved_and_certified_by_the_held_graph():
+    """HeldSpan.solve (issue 22, item 5): [sigma_H] moved on loom/group1, the span is plan_cyclogram's
+    for the changed task, certified (times feasible, a tight chain of the same value); a window
+    the changed bounds cannot meet is INFEASIBLE; a wrong bound vector is not certified as another's."""
+    from mechopt.solvers.loom.graph import HeldSpan
+    from mechopt.solvers.loom.plan import Net, back_arcs
+    task = registry.find("loom/group1").build()[0]
+    net = Net(task, "exact")
+    held = HeldSpan(len(net.names), net.tails, net.heads, net.first, net.last, back_arcs(net, with_cycle=False)[0])
+    for sigma in (650.0, 800.0, 950.0):
+        changed = dataclasses.replace(task, sigma_H_limit_MPa=sigma)
+        status, span, p = held.solve(Net(changed, "exact").lb)
+        assert status is Status.SOLVED
+        assert span == pytest.approx(plan_cyclogram(changed).values["span_deg"], rel=1e-12)
+    tight = dataclasses.replace(task, windows=[{"from": "3", "to": "8", "max_deg": 40.0}])
+    tnet = Net(tight, "exact")
+    conflict = HeldSpan(len(tnet.names), tnet.tails, tnet.heads, tnet.first, tnet.last,
+                        back_arcs(tnet, with_cycle=False)[0])
+    assert conflict.solve(tnet.lb)[0] is Status.INFEASIBLE
+
+
+def test_a_network_of_windows_only_no_dag_order():
+    """Every constraint a back arc (no precedence among the events, bounds of both signs as
+    windows would give): the Bellman-Ford rounds alone give each event's least time, the LP's
+    (scipy HiGHS: minimise p(v) with p(0) = 0) for every v; a ring of them is feasible by construction."""
+    rng = np.random.default_rng(7)
+    n = 40
+    p0 = rng.uniform(0.0, 100.0, n)
+    p0[0] = 0.0
+    pairs = np.array([(u, v) for u in range(n) for v in range(n) if u != v and rng.random() < 0.08] +
+                     [(k, (k + 1) % n) for k in range(n)])              # a ring reaches every event
+    u, v = pairs[:, 0], pairs[:, 1]
+    w = (p0[v] - p0[u]) - rng.uniform(0.0, 5.0, len(u)) * (rng.random(len(u)) < 0.8)   # some exactly tight
+    levels = Levels(n, np.zeros(0, np.int64), np.zeros(0, np.int64))
+    dist = levels.longest_from(0, np.zeros(0), BackArcs(u, v, w))
+    D = sp.csr_matrix((np.r_[np.ones(len(u)), -np.ones(len(u))], (np.r_[np.arange(len(u)), np.arange(len(u))],
+                                                                      np.r_[v, u])), shape=(len(u), n))
+    for target in (5, 17, n - 1):
+        c = np.zeros(n)
+        c[target] = 1.0
+        res = linprog(c, A_ub=-D, b_ub=-w, A_eq=sp.csr_matrix(([1.0], ([0], [0])), shape=(1, n)), b_eq=[0.0],
+                      bounds=(None, None), method="highs")
+        assert res.status == 0
+        assert dist[target] == pytest.approx(res.fun, rel=1e-9, abs=1e-9)
+    assert np.all(dist[v] - dist[u] >= w - 1e-9)                      # every window holds
+
+
+@pytest.mark.slow
+def test_a_million_events_certified_by_duality():
+    """10^6 events (a layered network as the bench's, 3 x 10^6 arcs, parallel ones kept): the earliest times meet every
+    bound, and a chain of bounds met with equality leads first -> last summing (fsum) to the span:
+    a primal and a dual solution of the same value, so the span is the LP's optimum."""
+    import math
+
+    from mechopt.solvers.loom.graph import a_path, tight_arcs
+    n, width = 1_000_000, 100                 # layers of 100 events, each fed by 3 of the layer before
+    rng = np.random.default_rng(0)
+    inner = np.arange(1, n - 1)
+    layer = (inner - 1) // width
+    tails = np.concatenate([np.where(layer == 0, 0, (layer - 1) * width + 1 + rng.integers(0, width, inner.size))
+                            for _ in range(3)])
+    heads = np.tile(inner, 3)
+    leaves = np.flatnonzero(np.bincount(tails, minlength=n)[:n - 1] == 0)
+    tails, heads = np.r_[tails, leaves], np.r_[heads, np.full(leaves.size, n - 1)]
+    w = rng.uniform(0.0, 30.0, tails.size)
+    dist = Levels(n, tails, heads).longest_from(0, w)
+    span = dist[n - 1]
+    assert np.all(np.isfinite(dist)) and np.all(dist[heads] - dist[tails] >= w - 1e-9 * span)
+    tight = tight_arcs(tails, heads, w, dist, 1e-9 * span)
+    chain = a_path(n, tails[tight], heads[tight], 0, n - 1)
+    assert chain and tails[tight[chain[0]]] == 0 and heads[tight[chain[-1]]] == n - 1
+    assert math.fsum(w[tight[chain]].tolist()) == pytest.approx(span, rel=1e-12)

@@ -181,3 +181,18 @@ def test_chain_helper_lower_bounds_are_the_min_angles():
 def test_a_bad_override_of_the_machine_is_one_error_naming_the_key(override, match):
     with pytest.raises(SceneError, match=match):
         registry.run(registry.find("loom/machine"), override)
+
+
+def test_a_selector_by_one_key_picks_its_one_operation_and_a_malformed_one_is_refused():
+    """`--set 'operations[from=9].min_deg=50'` (one key, one matching operation) works as documented;
+    a part without '=' or a key no operation has is refused, naming the allowed form."""
+    from mechopt.scene import parse_overrides
+    scene = registry.find("loom/group1")
+    task, _ = scene.build(parse_overrides(["operations[from=9].min_deg=50"]))
+    assert task.min_angles_deg()[task.arcs.index(("9", "10"))] == 50.0
+    assert scene.build()[0].min_angles_deg()[task.arcs.index(("9", "10"))] == 30.0       # the file is intact
+    for pair, match in (("operations[9].min_deg=50", r"'9' is not key=value; allowed: operations\[from=1,to=2\]"),
+                        ("operations[form=9].min_deg=50", r"'form' is no key of its entries \(they have from, to"),
+                        ("operations[from=99].min_deg=50", r"matches 0 entries .*none has those values")):
+        with pytest.raises(SceneError, match=match):
+            scene.build(parse_overrides([pair]))

@@ -9,14 +9,17 @@ simple path uses each back arc at most once, so len(back) + 1 rounds settle ever
 unless a positive cycle exists: still improving after them is the proof of one (the cycle is
 then named by `plan.positive_cycle` on the labelled constraints).
 
-Why numpy over levels: measured on the layered 10^5-event network (3 x 10^5 arcs, 1000 levels)
-one forward and one backward pass with the floats take ~11 ms, at 10^6 events ~0.13 s (levels
-built once per structure: 0.09 s and 0.8 s), inside the issue's targets with no new dependency
-and no JIT warm-up. A compiled pass (numba; the issue measured 0.31 ms at 10^5) was not taken:
-it would cost a compile of seconds in every fresh process (a CLI run, the test suite) and a
-dependency for a part that is not the bottleneck of a run (building the model's dicts is);
-scipy.sparse.csgraph has no DAG pass and its Bellman-Ford is O(V E).
+Why numpy over levels, and a compiled pass for large networks: on the layered 10^5-event
+network (3 x 10^5 arcs, 1000 levels) a numpy pass costs ~10 us of Python per level and call,
+~9 ms per pass, so one forward and one backward pass with the floats, the critical chain and
+the duals took ~30 ms (issue 22's target: 20 ms). A compiled loop over the arcs in level order
+(kernel.py, numba) takes ~2 ms per pass: with it the whole solve measured ~9 ms (best of 15 on
+the shared 2-core machine; medians under load are in `mechopt bench loom`). numba stays
+optional (extra `fast`): it is imported only for networks of COMPILED_MIN_ARCS arcs and more
+(no scene of the package), its compiled code cached on disk, and without it the numpy levels
+give the same answers. scipy.sparse.csgraph has no DAG pass and its Bellman-Ford is O(V E).
 """
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,6 +27,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import breadth_first_order
 
 from mechopt.cache import BuildCache
+from mechopt.solvers.loom.kernel import COMPILED_MIN_ARCS, kernels
 from mechopt.solvers.result import Status
 
 ROUND_OFF = 1e-12          # relative: an improvement below it (of the largest |w|) is round-off, not a cycle
@@ -74,6 +78,12 @@ class Levels:
         self.forward_order, self.forward_segments = _segments(level, self.heads, n, reverse=False)
         self.backward_order, self.backward_segments = _segments(level, self.tails, n, reverse=True)
         self._t_fwd, self._h_bwd = self.tails[self.forward_order], self.heads[self.backward_order]
+        # large networks: the compiled passes (kernel.py), each arc in order, when numba imports
+        self._compiled = kernels() if len(self.tails) >= COMPILED_MIN_ARCS else None
+        if self._compiled:      # the arcs' ends in pass order: the loop reads them in sequence
+            self._fwd_run = (self.forward_order, self._t_fwd, self.heads[self.forward_order])
+            bwd = np.ascontiguousarray(self.backward_order[::-1])        # last level first
+            self._bwd_run = (bwd, self.tails[bwd], self.heads[bwd])
 
     @classmethod
     def of(cls, n, tails, heads) -> "Levels":
@@ -83,11 +93,17 @@ class Levels:
 
     def forward(self, dist: np.ndarray, w: np.ndarray) -> None:
         """dist[v] = max(dist[v], dist[u] + w) over every DAG path, in place."""
-        _relax(dist, w[self.forward_order], self._t_fwd, self.forward_segments)
+        if self._compiled:
+            self._compiled[0](dist, *self._fwd_run, np.asarray(w, dtype=float))
+        else:
+            _relax(dist, w[self.forward_order], self._t_fwd, self.forward_segments)
 
     def backward(self, dist: np.ndarray, w: np.ndarray) -> None:
         """dist[u] = max(dist[u], w + dist[v]) over every DAG path (distances *to* a target), in place."""
-        _relax(dist, w[self.backward_order], self._h_bwd, self.backward_segments)
+        if self._compiled:
+            self._compiled[1](dist, *self._bwd_run, np.asarray(w, dtype=float))
+        else:
+            _relax(dist, w[self.backward_order], self._h_bwd, self.backward_segments)
 
     def longest_from(self, source: int, w: np.ndarray, back: BackArcs = NO_BACK_ARCS) -> np.ndarray:
         """Longest distances from `source` to every event (-inf: unreachable) [deg]; PositiveCycle
@@ -112,18 +128,36 @@ class Levels:
         return False
 
     def _rounds(self, dist, w, back, dag_pass, frm, to):
-        scale = np.abs(np.r_[w, back.weights])
-        eps = ROUND_OFF * max(1.0, float(scale[np.isfinite(scale)].max(initial=0.0)))     # an arc may be -inf: cut
+        if not len(back):
+            dag_pass(dist, w)
+            return dist
+        eps = ROUND_OFF * max(1.0, _largest_finite(w), _largest_finite(back.weights))
+        # the back arcs relaxed once before the first pass too (any order of relaxations is Bellman-Ford's):
+        # a cycle's closing arc from the start then needs one DAG pass, not two
+        with np.errstate(invalid="ignore"):
+            cand = dist[frm] + back.weights
+        gain = cand > dist[to]
+        np.maximum.at(dist, to[gain], cand[gain])
         for _ in range(len(back) + 2):
             dag_pass(dist, w)
-            if not len(back):
-                return dist
             cand = dist[frm] + back.weights
             gain = cand > dist[to] + eps
             if not gain.any():
                 return dist
             np.maximum.at(dist, to[gain], cand[gain])
         raise PositiveCycle
+
+
+def _largest_finite(a) -> float:
+    """max |a| over its finite entries (0 when none): two reductions, no copy, unless an entry is
+    infinite (an arc cut to -inf for ranging)."""
+    if not len(a):
+        return 0.0
+    top, low = float(a.max()), float(a.min())
+    if math.isfinite(top) and math.isfinite(low):
+        return max(abs(top), abs(low))
+    finite = np.abs(a[np.isfinite(a)])
+    return float(finite.max(initial=0.0))
 
 
 def topological_levels(n: int, tails: np.ndarray, heads: np.ndarray) -> np.ndarray:
@@ -169,13 +203,24 @@ def _segments(level, ends, n, reverse):
 
 
 def tight_arcs(tails, heads, w, dist, tol) -> np.ndarray:
-    """Indices of the arcs on which dist[head] = dist[tail] + w within tol (dist finite)."""
-    return np.flatnonzero(np.isfinite(dist[tails]) & (dist[tails] + w >= dist[heads] - tol))
+    """Indices of the arcs on which dist[head] = dist[tail] + w within tol (dist finite: an
+    unreached end makes the difference -inf or NaN, never tight)."""
+    with np.errstate(invalid="ignore"):
+        return np.flatnonzero(dist[tails] + w - dist[heads] >= -tol)
+
+
+WALK_MIN_EVENTS = 10_000    # from this many events a_path first tries the walk back (no sort, no sparse matrix)
 
 
 def a_path(n, tails, heads, source, target) -> list[int] | None:
     """Indices of the arcs of one path source -> target (fewest arcs, breadth first); None when
-    there is none. Parallel arcs: one of them."""
+    there is none. Parallel arcs: one of them. From WALK_MIN_EVENTS events: first a walk back from
+    target along one arc into each event (tight arcs of a longest path reach the source that
+    way), breadth first only when the walk ends elsewhere or loops (a zero cycle of syncs)."""
+    if n >= WALK_MIN_EVENTS:
+        path = _walk_back(n, tails, heads, source, target)
+        if path is not None:
+            return path
     pair = tails * n + heads
     pairs, first = np.unique(pair, return_index=True)
     graph = sp.csr_matrix((np.ones(first.size), (tails[first], heads[first])), shape=(n, n))
@@ -190,17 +235,60 @@ def a_path(n, tails, heads, source, target) -> list[int] | None:
     return first[np.searchsorted(pairs, nodes[:-1] * n + nodes[1:])].tolist()
 
 
+def _walk_back(n, tails, heads, source, target) -> list[int] | None:
+    """Arcs of a path source -> target found by following one arc into each event back from
+    target; None when the walk stops short of source or comes back on itself."""
+    into = np.full(n, -1, dtype=np.int64)
+    into[heads[::-1]] = np.arange(len(heads) - 1, -1, -1)      # the first arc listed into each event:
+    # a DAG arc before a window's or a sync's (they come last), so the walk rarely meets a zero cycle
+    path, v = [], int(target)
+    while v != source:
+        k = int(into[v])
+        if k < 0 or len(path) >= n:
+            return None
+        path.append(k)
+        v = int(tails[k])
+    return path[::-1]
+
+
 class HeldSpan:
     """One network's span held for what-ifs (issue 22, item 5): a limit changed, the bounds
-    re-solved by a fresh numpy pass over the held levels, and an LP's re-solve certified by it.
+    re-solved by a fresh pass over the held levels with its own certificate (`solve`), and an
+    LP's re-solve certified by it (`certify`).
 
     Why a fresh pass and not an incremental one (only the affected cone moves): on loom/group1
     (11 events) the whole pass is a few tens of microseconds, about what finding the cone costs;
-    at 10^5 events a pass is ~10 ms (graph.py's docstring), and an incremental update would pay
+    at 10^5 events a compiled pass is ~2 ms (kernel.py), and an incremental update would pay
     only when one limit moves a small cone, which the what-if slider does not promise."""
 
     def __init__(self, n: int, tails, heads, first: int, last: int, back: BackArcs = NO_BACK_ARCS):
         self.levels, self.first, self.last, self.back = Levels.of(n, tails, heads), first, last, back
+        self.n = n
+        self._tails = np.r_[self.levels.tails, back.tails]        # every constraint p(head) - p(tail) >= w
+        self._heads = np.r_[self.levels.heads, back.heads]
+
+    def solve(self, lb: np.ndarray, tol_deg: float = 1e-9):
+        """(status, span [deg], event times) for bounds lb, certified by LP duality: the times
+        meet every constraint (primal feasible) and a chain of constraints met with equality
+        leads first -> last with bounds summing to the span (a dual solution of the same value),
+        both to tol_deg per degree above 1. SOLVED when both hold, INACCURATE when not (round-off
+        past tol_deg), INFEASIBLE (span and times None) on a positive cycle."""
+        try:
+            p = self.levels.longest_from(self.first, lb, self.back)
+        except PositiveCycle:
+            return Status.INFEASIBLE, None, None
+        span = float(p[self.last] - p[self.first])
+        w = np.r_[lb, self.back.weights]
+        slack = p[self._heads] - p[self._tails] - w
+        tol = tol_deg * max(1.0, abs(span))
+        feasible = bool(np.all(slack >= -tol))            # NaN (an unreached event) fails too
+        tight = np.flatnonzero(slack <= tol)
+        chain = _walk_back(self.n, self._tails[tight], self._heads[tight], self.first, self.last) if feasible else None
+        if chain is None and feasible:                      # a zero cycle in the walk: breadth first
+            chain = a_path(self.n, self._tails[tight], self._heads[tight], self.first, self.last)
+        dual = None if chain is None else math.fsum(w[tight[chain]].tolist())
+        ok = dual is not None and abs(dual - span) <= tol
+        return (Status.SOLVED if ok else Status.INACCURATE), span, p
 
     def span(self, lb: np.ndarray) -> float:
         """The longest path first -> last with bounds lb [deg]; PositiveCycle when none exists."""

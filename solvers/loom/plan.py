@@ -58,8 +58,10 @@ def plan_cyclogram(task: Cyclogram, *, method: Literal["graph", "lp"] = "graph",
     stress_form : "exact" sigma_max(t) <= [sigma_H] as t >= K/[sigma_H]; "linear" its tangent at t_ref.
     warm_start : pass cvxpy's warm start to the back end (with HiGHS it can slow re-solves).
     tol_deg : tolerance [deg] for float = 0 (critical), binding constraints and the cross-check.
-    check : also solve by the other method and compare: span (or limiting_op_deg) to tol_deg and,
-        where the critical chain is unique, every sens_*; a mismatch makes the result INACCURATE.
+    check : also solve by the other method and compare: status, span (or limiting_op_deg) to
+        tol_deg and, where the critical chain is unique, every sens_*; a mismatch makes the result
+        INACCURATE. The value check_rel is the objectives' difference per degree above 1 (the
+        loom scenes expect it below 1e-9: the LP as certificate in `mechopt validate`).
 
     Returns
     -------
@@ -134,31 +136,44 @@ def _plan_lp(task, *, stress_form, tol_deg, backend, warm_start) -> Result:
         if status is Status.INFEASIBLE:
             message += " (no positive cycle among the difference constraints: a numerical failure?)"
         return Result(status, {}, timing(), message=message, diagnostics=diagnostics)
-    values, more, overstressed, disagreement = _report(task, net, lp, tol_deg)
+    values, more, overstressed, disagreement, (p, floats) = _report(task, net, lp, tol_deg)
     diagnostics |= more
     solve_s = time.perf_counter() - start - build_s
     if disagreement:
         return Result(Status.INACCURATE, values, Timing(build_s, solve_s), message=disagreement,
-                      violated=overstressed, diagnostics=diagnostics, arrays=plan_arrays(net, values, diagnostics))
+                      violated=overstressed, diagnostics=diagnostics, arrays=plan_arrays(net, values, diagnostics, p, floats))
     objective = "limiting_op_deg" if net.limiting else "span_deg"
     message = (f"{objective} = {values[objective]:.6g} ({backend}, {stress_form} stress, "
                f"{'compiled' if fresh else 'DPP re-solve'}); {SENSITIVITY_CONVENTION}")
     if overstressed:      # the tangent under-estimates sigma_max: the linearised optimum breaks the true limit
         message += f"; the linearised stress limit lets sigma_max exceed [sigma_H] on {', '.join(overstressed)}"
     return Result(Status.SOLVED, values, Timing(build_s, solve_s), message=message, violated=overstressed,
-                  diagnostics=diagnostics, arrays=plan_arrays(net, values, diagnostics))
+                  diagnostics=diagnostics, arrays=plan_arrays(net, values, diagnostics, p, floats))
 
 
-def plan_arrays(net, values, diagnostics) -> dict:
+PER_NAME_MAX_OPS = 10_000   # above it, per-event and per-operation figures live in Result.arrays only
+
+
+def per_name(net) -> bool:
+    """Whether the values and diagnostics name every event and operation (p_*, t_*, float_deg, ...):
+    up to PER_NAME_MAX_OPS operations. A timing table of 10^5 rows gets its figures as arrays: a
+    dict entry per operation costs more than the solve (issue 22: 0.4 s of dicts against 10 ms)."""
+    return len(net.tails) <= PER_NAME_MAX_OPS
+
+
+def plan_arrays(net, values, diagnostics, p=None, floats=None) -> dict:
     """The plan as a table, one row per operation named `operation` ("3->7"): its start and end
-    event times, its duration and its total float [deg] (`--csv`; the values hold the same by name)."""
-    p = np.array([values[f"p_{v}_deg"] for v in net.names])
-    keys = [f"{x}->{y}" for x, y in net.arcs]
-    arrays = {"operation": np.array(keys, dtype=str), "start_deg": p[net.tails], "end_deg": p[net.heads],
+    event times, its duration and its total float [deg] (`--csv`; for networks up to
+    PER_NAME_MAX_OPS operations the values hold the same by name). `p` (event times in net order)
+    and `floats` (per operation) default to the values' p_* and the diagnostics' float_deg."""
+    if p is None:
+        p = np.array([values[f"p_{v}_deg"] for v in net.names])
+    arrays = {"operation": net.task.operation_labels, "start_deg": p[net.tails], "end_deg": p[net.heads],
               "duration_deg": p[net.heads] - p[net.tails]}
-    floats = diagnostics.get("float_deg")
-    if isinstance(floats, dict):            # else "not available" (round-off): no column
-        arrays["float_deg"] = [floats[k] for k in keys]
+    if floats is None and isinstance(diagnostics.get("float_deg"), dict):    # else "not available" (round-off)
+        floats = list(diagnostics["float_deg"].values())
+    if floats is not None:
+        arrays["float_deg"] = floats
     return arrays
 
 
@@ -227,14 +242,10 @@ class Net:
 
     def _index_arrays(self, task):
         self.task = task
-        isolated = set(task.isolated_events)
-        self.names = [v for v in task.event_names if v not in isolated]
-        index = {v: i for i, v in enumerate(self.names)}
-        self.index = index
-        arcs = task.arcs
-        self.arcs = arcs
-        self.tails = np.fromiter((index[x] for x, _ in arcs), dtype=np.int64, count=len(arcs))
-        self.heads = np.fromiter((index[y] for _, y in arcs), dtype=np.int64, count=len(arcs))
+        names, self.tails, self.heads = task.index_arrays       # cached on the task: built once per network
+        self.names = list(names)
+        self.index = index = task.event_index                   # shared with the task: read only
+        self.arcs = task.arcs
         self.first, self.last = index[task.first_event], index[task.last_event]
         self.window_idx = [(index[a], index[b]) for a, b, _ in task.window_arcs()]
         self.sync_idx = [(index[a], index[b]) for a, b in task.sync_pairs()]
@@ -365,13 +376,20 @@ def _report(task, net, lp, tol):
     floats = _floats(task, net, p, values, tol)
     diagnostics = {"binding": binding, "sens_min_deg": sens_min} | limit_diagnostics(task, net)
     diagnostics |= floats
-    return values, diagnostics, tuple(overstressed), disagreement
+    float_deg = floats.get("float_deg")
+    float_deg = np.fromiter(float_deg.values(), dtype=float, count=len(float_deg)) if isinstance(float_deg, dict) else None
+    if float_deg is not None and not per_name(net):      # large: the floats as the result's array only
+        diagnostics["float_deg"] = f"{len(float_deg)} operations: in the result's arrays (float_deg)"
+    return values, diagnostics, tuple(overstressed), disagreement, (p, float_deg)
 
 
 def limit_diagnostics(task, net) -> dict:
     """Which limit sets each operation's bound, and the linearised stress bound's gap."""
+    why = net.lb_why
+    keep = range(len(why)) if per_name(net) else [k for k in (*net.stress_rows, *net.amp_rows, *task.time_arcs())
+                                                  if why[k] != "min_angle"]   # large: the laws' arcs only
     return {"sensitivity_convention": SENSITIVITY_CONVENTION,
-            "bound_source": {f"{x}->{y}": net.lb_why[k] for k, (x, y) in enumerate(net.arcs)},
+            "bound_source": {"{}->{}".format(*net.arcs[k]): why[k] for k in sorted(set(keep))},
             "stress_gap_deg": {f"{x}->{y}": _stress_gap(task, k) for k, (x, y) in
                                ((k, net.arcs[k]) for k in net.stress_rows)}}
 
@@ -384,8 +402,9 @@ def schedule_values(task, net, p):
     values = {"span_deg": span}
     if net.limiting:
         values["limiting_op_deg"] = float(p[net.limiting[1]] - p[net.limiting[0]])
-    values |= {f"p_{v}_deg": float(p[i]) for i, v in enumerate(net.names)}
-    values |= {f"t_{x}_{y}_deg": float(t[k]) for k, (x, y) in enumerate(net.arcs)}
+    if per_name(net):
+        values |= {f"p_{v}_deg": float(p[i]) for i, v in enumerate(net.names)}
+        values |= {f"t_{x}_{y}_deg": float(t[k]) for k, (x, y) in enumerate(net.arcs)}
     for k in net.amp_rows:
         x, y = net.arcs[k]
         values[f"amplitude_{x}_{y}_mm"] = float(amplitude_mm(task.amplitude_slope_mm_per_deg,
@@ -393,10 +412,9 @@ def schedule_values(task, net, p):
     for k in net.stress_rows:
         x, y = net.arcs[k]
         values[f"sigma_{x}_{y}_MPa"] = float(stress_MPa(*task.stress_reference(k), t[k]))
-    for group, members in task.groups.items():
-        times = [p[net.index[v]] for v in members if v in net.index]
-        if times:
-            values[f"span_{group}_deg"] = float(max(times) - min(times))
+    for group, members in task.group_indices.items():
+        if members.size:
+            values[f"span_{group}_deg"] = float(p[members].max() - p[members].min())
     overstressed = [f"contact_stress[{x}->{y}]" for k, (x, y) in ((k, net.arcs[k]) for k in net.stress_rows)
                     if values[f"sigma_{x}_{y}_MPa"] > task.sigma_H_limit_MPa * (1 + 1e-9)]
     return values, tuple(overstressed)
@@ -645,7 +663,8 @@ def _plan_graph(task, *, stress_form, tol_deg) -> Result:
     values |= sens
     values["longest_path_deg"] = objective if not net.limiting else \
         float(levels.longest_from(net.first, net.lb, back_arcs(net, with_cycle=False)[0])[net.last])
-    floats = graph_floats(net, levels, back, lb_at, values["span_deg"], tol_deg)
+    float_deg = float_array(net, levels, back, lb_at, values["span_deg"])
+    floats = graph_floats(net, levels, back, lb_at, values["span_deg"], tol_deg, float_deg)
     diagnostics |= {"binding": binding, "sens_min_deg": sens_min} | limit_diagnostics(task, net) | floats
     if not net.limiting and len(net.tails) <= RANGING_MAX_TABLE:
         diagnostics["ranging_deg"] = _ranging(net, levels, back, uses, floats, objective)
@@ -654,7 +673,7 @@ def _plan_graph(task, *, stress_form, tol_deg) -> Result:
     if overstressed:
         message += f"; the linearised stress limit lets sigma_max exceed [sigma_H] on {', '.join(overstressed)}"
     return Result(Status.SOLVED, values, Timing(build_s, time.perf_counter() - start - build_s), message=message,
-                  violated=overstressed, diagnostics=diagnostics, arrays=plan_arrays(net, values, diagnostics))
+                  violated=overstressed, diagnostics=diagnostics, arrays=plan_arrays(net, values, diagnostics, p, float_deg))
 
 
 def _longest_schedule(net, levels, back, tol):
@@ -677,8 +696,8 @@ def _longest_schedule(net, levels, back, tol):
     else:
         p = dist
     m = len(net.tails)
-    tails, heads = np.r_[net.tails, back.tails], np.r_[net.heads, back.heads]
-    w = np.r_[lb, back.weights]
+    tails, heads, w = ((net.tails, net.heads, lb) if not len(back) else     # no copies of a large DAG's arcs
+                       (np.r_[net.tails, back.tails], np.r_[net.heads, back.heads], np.r_[lb, back.weights]))
     eps = tol * 1e-3 * max(1.0, abs(objective))
     tight = tight_arcs(tails, heads, w, dist, eps)
     path = np.asarray(a_path(len(net.names), tails[tight], heads[tight], source, target), dtype=np.int64)
@@ -690,23 +709,33 @@ def _limiting_arc(net):
     return next(k for k in range(len(net.tails)) if (net.tails[k], net.heads[k]) == net.limiting)
 
 
-def graph_floats(net, levels, back, lb, span, tol):
-    """Total float LS(y) - ES(x) - lb of every operation for bounds lb in a span [deg], as
-    `schedule_floats`: earliest times from first, latest from the longest paths to first with
-    p(last) - p(first) <= span as one more back arc."""
+def float_array(net, levels, back, lb, span):
+    """Total float LS(y) - ES(x) - lb of every operation for bounds lb in a span [deg] (None:
+    round-off made a zero cycle positive): earliest times from first, latest from the longest
+    paths to first with p(last) - p(first) <= span as one more back arc."""
     early = levels.longest_from(net.first, lb, back)
     closed = BackArcs(np.r_[back.tails, net.last], np.r_[back.heads, net.first], np.r_[back.weights, -span])
     try:
         late = -levels.longest_to(net.first, lb, closed)
     except PositiveCycle:
+        return None
+    return late[net.heads] - early[net.tails] - lb
+
+
+def graph_floats(net, levels, back, lb, span, tol, floats=None):
+    """The floats of `float_array` (or `floats`, computed before) as `schedule_floats` gives
+    them: {float_deg (by operation; a note for networks past PER_NAME_MAX_OPS, whose floats are
+    the result's float_deg array), critical_ops (float <= tol), critical_chain}."""
+    floats = float_array(net, levels, back, lb, span) if floats is None else floats
+    if floats is None:
         return {"floats": "not available: round-off made a zero cycle positive"}
-    floats = late[net.heads] - early[net.tails] - lb
     critical = np.flatnonzero(floats <= tol)
     path = a_path(len(net.names), net.tails[critical], net.heads[critical], net.first, net.last)
     chain = [] if path is None else [net.names[net.first]] + [net.names[net.heads[critical[k]]] for k in path]
-    keys = [f"{x}->{y}" for x, y in net.arcs]
-    return {"float_deg": dict(zip(keys, floats.tolist())), "critical_ops": [keys[k] for k in critical],
-            "critical_chain": chain}
+    labels = net.task.operation_labels
+    float_deg = (dict(zip(labels.tolist(), floats.tolist())) if per_name(net)
+                 else f"{len(floats)} operations: in the result's arrays (float_deg)")
+    return {"float_deg": float_deg, "critical_ops": labels[critical].tolist(), "critical_chain": chain}
 
 
 def _graph_sensitivities(task, net, p, d_lb, d_back, kinds, tol):
@@ -715,9 +744,14 @@ def _graph_sensitivities(task, net, p, d_lb, d_back, kinds, tol):
     t = p[net.heads] - p[net.tails]
     phi, why = task.min_angles_deg(), net.lb_why
     sens, binding, sens_min = {}, [], {}
-    phi_set = np.array([w in ("min_angle", "min_time") for w in why], dtype=bool)
+    phi_set = np.ones(len(why), dtype=bool)          # [phi] sets the bound, except where a law does
+    laws = np.array([k for k in (*net.stress_rows, *net.amp_rows) if why[k] not in ("min_angle", "min_time")],
+                    dtype=np.int64)
+    phi_set[laws] = False
     d_phi = np.where(phi_set, d_lb, 0.0) + 0.0
-    for k in np.flatnonzero((t - phi <= tol) | (d_phi != 0)).tolist():
+    # past PER_NAME_MAX_OPS the binding [phi] are those with a dual (on the path), not every tight one
+    listed = (t - phi <= tol) | (d_phi != 0) if per_name(net) else d_phi != 0
+    for k in np.flatnonzero(listed).tolist():
         x, y = net.arcs[k]
         if t[k] - phi[k] <= tol:
             binding.append({"constraint": f"min_angle[{x}->{y}]", "dual_deg_per_deg": float(d_phi[k])})
@@ -794,11 +828,12 @@ def certify(result: Result, other: Result, tol_deg: float) -> Result:
     name = "limiting_op_deg" if "limiting_op_deg" in result.values else "span_deg"
     diagnostics = result.diagnostics | {"check": other.diagnostics.get("method", "?"), "check_status":
                                         other.status.value}
-    problems = []
+    problems, values = [], result.values
     if other.status is not result.status:
         problems.append(f"{other.diagnostics.get('method')} says {other.status.value}")
     elif result.status is Status.SOLVED:
         mine, theirs = result.values[name], other.values[name]
+        values = values | {"check_rel": abs(mine - theirs) / max(1.0, abs(theirs))}    # validate's certificate
         if not abs(mine - theirs) <= tol_deg * max(1.0, abs(theirs)):
             problems.append(f"{name} {mine!r} against {theirs!r}")
         chain = result.diagnostics.get("critical_chain", [])
@@ -809,8 +844,9 @@ def certify(result: Result, other: Result, tol_deg: float) -> Result:
                     problems.append(f"{key} {result.values[key]!r} against {other.values[key]!r}")
         diagnostics["check_abs_deg"] = abs(mine - theirs)
     if not problems:
-        return dataclasses.replace(result, diagnostics=diagnostics,
+        return dataclasses.replace(result, values=values, diagnostics=diagnostics,
                                    message=result.message + f"; checked by {diagnostics['check']}")
-    status = Status.INACCURATE if result.status is Status.SOLVED else result.status
-    return dataclasses.replace(result, status=status, diagnostics=diagnostics,
+    # the methods disagree: not certified, whichever said what (an INFEASIBLE the LP solves too)
+    status = Status.INACCURATE if result.status in (Status.SOLVED, Status.INFEASIBLE) else result.status
+    return dataclasses.replace(result, status=status, values=values, diagnostics=diagnostics,
                                message=result.message + "; check failed: " + ", ".join(problems))

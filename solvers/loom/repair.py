@@ -168,7 +168,8 @@ def repair_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] =
                      max_rounds: Annotated[int, Interval(ge=1, le=100)] = 20,
                      scan_to_deg: Annotated[float, Interval(gt=0.0, le=360.0)] = 60.0,
                      scan_step_deg: Annotated[float, Interval(ge=1e-3, le=10.0)] = 0.25,
-                     tol_mm: Tolerance = 1e-9, tol_MPa: Tolerance = 1e-6, tol_deg: Tolerance = 1e-6) -> Result:
+                     tol_mm: Tolerance = 1e-9, tol_MPa: Tolerance = 1e-6, tol_deg: Tolerance = 1e-6,
+                     check: bool = False) -> Result:
     """The LP of `plan_cyclogram`, checked against the exact laws at its optimum and repaired by
     sequential LP (issue 14, part 4).
 
@@ -195,7 +196,8 @@ def repair_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] =
     was found ("newton" or "exact"). SOLVED when the exact laws hold to the tolerances; LIMIT after
     max_rounds without it; INFEASIBLE when the rebound exceeds its limit even at scan_to_deg (no
     values; diagnostics best_t_deg and best_amplitude_mm, the least rebound on the range); an
-    LP that fails in a round returns its status, with the rounds so far.
+    LP that fails in a round returns its status, with the rounds so far. `check`: every round's
+    plan solved by both methods (plan_cyclogram's check); the last round's check_rel is kept.
     """
     start = time.perf_counter()
     laws = _exact_limits(task, stress_form, scan_to_deg, scan_step_deg)
@@ -209,7 +211,7 @@ def repair_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] =
         current = dataclasses.replace(task, amplitude_slope_mm_per_deg=amplitude[0].slope,
                                       amplitude_intercept_mm=amplitude[0].intercept)
     for round_ in range(1, max_rounds + 1):
-        result = plan_cyclogram(current, backend=backend, stress_form=stress_form, tol_deg=tol_deg)
+        result = plan_cyclogram(current, backend=backend, stress_form=stress_form, tol_deg=tol_deg, check=check)
         if result.status is not Status.SOLVED:
             return dataclasses.replace(result, message=f"round {round_}: {result.message}",
                                        diagnostics=result.diagnostics | {"rounds": history})
@@ -274,7 +276,7 @@ def _repaired(task, result, laws, history, start, status, message, violated=()):
                                                                             "sensitivity_convention")}
     diagnostics["rounds"] = history
     return Result(status, values, Timing(result.timing.build_s, time.perf_counter() - start - result.timing.build_s),
-                  message=message, violated=violated, diagnostics=diagnostics)
+                  message=message, violated=violated, diagnostics=diagnostics, arrays=result.arrays)   # the last plan's table
 
 
 _AMPLITUDE_BOUNDS = BuildCache("loom.amplitude_bound", maxsize=64)

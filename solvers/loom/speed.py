@@ -21,6 +21,7 @@ from mechopt.solvers.loom.plan import (
     dag_times,
     graph_floats,
     longest_distances,
+    plan_arrays,
     positive_cycle,
     schedule_floats,
 )
@@ -196,6 +197,8 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp",
         more["ranging_at_max_speed"] = sg.ranging(cycle, n_max, why)
     if check and not certified and chosen in ("graph", "lp"):
         certified = _check_by_other(chosen, task, net, phi, g, why, backend, n_max, more)
+        if "rel" in more["check"]:
+            values["check_rel"] = more["check"]["rel"]        # validate's certificate (loom scenes: < 1e-9)
     held = amp_bounds if chosen in ("lp", "graph") else _exact_amplitude_bounds(task, phi, scan_to_deg, scan_step_deg, n_max)
     for k, b in amp_bounds.items():      # the range of t on which the rebound was shown to hold, at n_max
         x, y = task.arcs[k]
@@ -204,15 +207,16 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp",
         values[f"amplitude_holds_from_{x}_{y}_deg"] = at.from_deg * scale
         values[f"amplitude_holds_to_{x}_{y}_deg"] = at.to_deg * scale
     diagnostics |= more
+    arrays = plan_arrays(net, values, diagnostics)          # the schedule at the highest speed, per operation
     if certified:
-        return Result(Status.INACCURATE, values, timing(), message=certified, diagnostics=diagnostics)
+        return Result(Status.INACCURATE, values, timing(), message=certified, diagnostics=diagnostics, arrays=arrays)
     reason = ("every law a function of n / t" if scales else "the rebound is not a function of n / t") \
         + f" (probe {probe:.2g})"
     message = (f"max_speed_rpm = {n_max:.6g} ({chosen}{': ' + reason if method == 'auto' else ''}); limiting "
                f"group {more['limiting_group']}, constraint {more['limiting_constraint']}")
     if "check" in more:
         message += f"; checked by the {more['check']['method']} ({more['check']['rel']:.1g} relative)"
-    return Result(Status.SOLVED, values, timing(), message=message, diagnostics=diagnostics)
+    return Result(Status.SOLVED, values, timing(), message=message, diagnostics=diagnostics, arrays=arrays)
 
 
 def _speed_lp(task, net, phi, g, backend):

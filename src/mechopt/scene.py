@@ -4,13 +4,11 @@ A scene names a task (`models/<module>.<Class>`), the effects it switches on, pa
 units in their names, a solver (`solvers/<module>.<function>`) with its settings, and what a
 source says should come out. Nothing from a scene runs before all of that validated.
 """
-import copy
 import dataclasses
 import importlib
 import inspect
 import math
 import os
-import re
 import tomllib
 from pathlib import Path
 from types import MappingProxyType
@@ -162,6 +160,9 @@ class Scene:
     spec: SceneFile
     task_class: type
     solver: Any
+    # the build `load` validated, handed to the first build() without overrides: a scene read and
+    # run builds its task once (a 10^5-operation timing table costs seconds per build)
+    _validated: list = dataclasses.field(default_factory=list, compare=False, repr=False)
 
     @property
     def id(self) -> str:
@@ -243,6 +244,8 @@ class Scene:
         """The task instance and solver settings, overrides applied and validated like the file.
         A whole structure entry the scene does not have (`--set 'windows=[...]'`) is structure
         too: a table or list is never read as a parameter."""
+        if not overrides and self._validated:
+            return self._validated.pop()
         params, settings = self.split_overrides(overrides or {})
         long = _long_list(params)
         if long:
@@ -314,7 +317,7 @@ def loads(text: str, path: Path) -> Scene:
                              "that params does not give, set to 'scene-id:value_name'", key=key)
     scene = Scene(path, spec, task_class, solver)
     if not spec.derive:     # a derived scene is checked when its sources have run (registry.run)
-        scene.build()       # parameters, effects and settings must all be valid before anything runs
+        scene._validated.append(scene.build())   # parameters, effects and settings valid before anything runs
     return scene
 
 
@@ -411,8 +414,10 @@ def _path_example(structure, only=None):
 
 def _set_paths(path, structure, assignments):
     """A copy of the structure with `--set` paths applied: `a.b.c` walks tables, and
-    `list[k=v,k2=v2]` picks the one table of a list whose entries match."""
-    out = copy.deepcopy(dict(structure))
+    `list[k=v,k2=v2]` picks the one table of a list whose entries match (one pair is enough when
+    it matches one entry: `operations[from=9]`). Only the tables and lists on a path are copied:
+    a timing table of 10^5 operations is not deep-copied for one changed number."""
+    out = dict(structure)
     for key, value in assignments.items():
         node, parts = out, _path_parts(key)
         for i, part in enumerate(parts):
@@ -422,20 +427,47 @@ def _set_paths(path, structure, assignments):
                 raise SceneError(f"{path}: --set {key}: no entry {name!r} here; there are "
                                  f"{', '.join(node) if isinstance(node, dict) else 'none'}", key=key)
             if selector:
-                pairs = dict(p.split("=", 1) for p in re.split(r",\s*", selector.rstrip("]")) if "=" in p)
-                matches = [item for item in node[name] if isinstance(item, dict)
-                           and all(str(item.get(k)) == v for k, v in pairs.items())]
-                if len(matches) != 1:
-                    raise SceneError(f"{path}: --set {key}: [{selector} matches {len(matches)} entries of "
-                                     f"{name!r}, not one", key=key)
                 if last:
                     raise SceneError(f"{path}: --set {key}: name the entry to change after the selector", key=key)
-                node = matches[0]
+                node[name] = items = list(node[name]) if isinstance(node[name], list) else node[name]
+                pairs = _selector_pairs(path, key, name, selector, items)
+                matches = [j for j, item in enumerate(items) if isinstance(item, dict)
+                           and all(str(item.get(k)) == v for k, v in pairs.items())]
+                if len(matches) != 1:
+                    hint = "add a key" if matches else "none has those values; the form"
+                    raise SceneError(f"{path}: --set {key}: [{selector} matches {len(matches)} entries of "
+                                     f"{name!r}, not one ({hint}: {_selector_form(name, items)})", key=key)
+                items[matches[0]] = node = dict(items[matches[0]])
             elif last:
                 node[name] = value
             else:
-                node = node[name]
+                node[name] = node = dict(node[name]) if isinstance(node[name], dict) else node[name]
     return out
+
+
+def _selector_pairs(path, key, name, selector, items):
+    """The key=value pairs of a selector `[k=v,k2=v2]`; SceneError for a part without '=', or
+    a key no entry of the list has, naming the allowed forms."""
+    if not isinstance(items, list):
+        raise SceneError(f"{path}: --set {key}: {name!r} is not a list of tables; a selector [...] picks "
+                         "one table of a list", key=key)
+    parts = [p.strip() for p in selector.removesuffix("]").split(",")]
+    known = list(dict.fromkeys(k for item in items if isinstance(item, dict) for k in item))
+    for part in parts:
+        k, eq, v = part.partition("=")
+        if not eq or not k.strip() or not v.strip() or k.strip() not in known:
+            why = (f"{k.strip()!r} is no key of its entries (they have {', '.join(known)})" if eq and k.strip()
+                   and v.strip() else f"{part!r} is not key=value")
+            raise SceneError(f"{path}: --set {key}: [{selector}: {why}; allowed: {_selector_form(name, items)} "
+                             f"or any key=value pairs that match one entry", key=key)
+    return {k.strip(): v.strip() for k, _, v in (p.partition("=") for p in parts)}
+
+
+def _selector_form(name, items):
+    """An example selector from the list's first table: `operations[from=1,to=2]`."""
+    first = next((item for item in items if isinstance(item, dict)), {})
+    keys = [k for k in first if isinstance(first[k], str)][:2]
+    return f"{name}[{','.join(f'{k}={first[k]}' for k in keys)}]"
 
 
 _READING: set[Path] = set()          # scene files whose tables are being read: a loop of references is refused

@@ -37,7 +37,7 @@ def read_rows(path, *, what, example, max_bytes=MAX_BYTES, max_rows=MAX_ROWS):
     first = next(line for line in lines if line.strip())
     delimiter = ";" if first.count(";") > first.count(",") else ","
     rows = [(number, row) for number, row in enumerate(csv.reader(lines, delimiter=delimiter), start=1)
-            if any(c.strip() for c in row)]
+            if "".join(row).strip()]            # a blank row: every cell empty or spaces (one join, not a loop)
     header = [h.strip() for h in rows[0][1]]
     return header, rows[1:], delimiter
 
@@ -65,17 +65,20 @@ def read_records(path, columns, kinds, *, required=(), what, example, max_rows=M
         raise ModelError(f"{path}: header {quote(delimiter.join(header), 80)}: {'; '.join(problems)} "
                          f"(allowed columns: {', '.join(kinds)})", key="path")
     out = []
+    typed = [(column, kinds[column] is not str) for column in header]
+    # a comma between columns: a number cell is what float() reads (number() without its decimal comma)
+    read = float if delimiter == "," else (lambda cell: number(cell, delimiter))
     for line, cells in rows:
         if len(cells) > len(header):
             raise ModelError(f"{path}: line {line}: {len(cells)} cells, the header names {len(header)}", key="path")
         row = {}
-        for column, cell in zip(header, cells):
+        for (column, numeric), cell in zip(typed, cells):
             cell = cell.strip()
             if not cell:
                 continue
-            if kinds[column] is not str:
+            if numeric:
                 try:
-                    row[column] = number(cell, delimiter)
+                    row[column] = read(cell)
                 except ValueError:
                     raise ModelError(f"{path}: line {line}, column {column}: expected a number, got {quote(cell)}",
                                      key="path") from None
