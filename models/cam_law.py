@@ -169,13 +169,14 @@ def elastic_response(ddS, lam: float, zeta: float, h: float):
     """(e, e') at the nodes of a uniform grid of step h in xi (from rest at node 0) for each column
     of `ddS` (nodes x inputs): the follower's relative error driven by -S''. Linear in ddS."""
     ddS = np.asarray(ddS, float)
+    flat = ddS.ndim == 1
+    u = ddS[:, None] if flat else ddS
     Phi, Ga, Gb = step_matrices(lam, zeta, h)
-    nodes = ddS.shape[0]
-    e, de = np.zeros_like(ddS), np.zeros_like(ddS)
-    drive = Ga[:, None, None] * ddS[None, :-1] + Gb[:, None, None] * np.diff(ddS, axis=0)[None] / h
-    y = np.zeros((2,) + ddS.shape[1:])
-    for k in range(nodes - 1):
-        y = Phi @ y.reshape(2, -1) + drive[:, k].reshape(2, -1)
-        y = y.reshape((2,) + ddS.shape[1:])
-        e[k + 1], de[k + 1] = y[0], y[1]
+    drive = Ga[:, None, None] * u[None, :-1] + Gb[:, None, None] * np.diff(u, axis=0)[None] / h
+    out = np.zeros((2,) + u.shape)
+    y = np.zeros((2, u.shape[1]))
+    for k in range(u.shape[0] - 1):
+        y = Phi @ y + drive[:, k]
+        out[:, k + 1] = y
+    e, de = (out[0, :, 0], out[1, :, 0]) if flat else (out[0], out[1])
     return e, de
