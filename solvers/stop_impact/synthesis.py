@@ -50,7 +50,8 @@ from mechopt.solvers.stop_impact.cam_follower import follow_cam, follower_data
 from mechopt.solvers.stop_impact.law import RollerLeftCam, rebound_amplitude_mm
 from mechopt.solvers.stop_impact.response import closed_form_amplitude_m, response_parts
 
-__all__ = ["LinearLever", "band_speeds", "design_law", "law_of", "linear_lever", "predicted_rebounds_mm",
+__all__ = ["BASES", "LinearLever", "SpeedResponse", "WindowLP", "band_speeds", "design_law", "law_of", "linear_lever",
+           "predicted_rebounds_mm", "rebound_envelope", "speed_response", "v0_limit_m_s",
            "rebound_of_v0_mm", "synthesise_law"]
 
 
@@ -60,7 +61,7 @@ def law_of(result: Result) -> SplineLaw:
     knots, coeffs = np.asarray(result.arrays["law_knots"]), np.asarray(result.arrays["law_coefficients"])
     return SplineLaw(tuple(map(float, knots)), tuple(map(float, coeffs)), knots.size - coeffs.size - 1)
 
-DWELL_XI = 0.5                  # the grid runs this far past the rise: C may reach its plate in the dwell
+DWELL_XI = 0.3                  # the grid runs this far past the rise: C may reach its plate in the dwell
 RISE_NODES = 600                # at least this many grid nodes over the rise (a multiple of the knots)
 ROW_SPACING_XI = (0.015, 0.004)  # LP rows this far apart before / after ARRIVAL_FROM_XI (the full grid is checked after)
 ARRIVAL_FROM_XI = 0.55          # where the plate comes near: rows close enough that X' cannot peak between them
@@ -69,8 +70,10 @@ BIG_X, BIG_V = 2.0, 30.0        # big-M of the window's masks: above any X - tar
 WINDOW_CANDIDATES = (0.7, 0.8, 0.9)            # xi_a scanned first, then halved steps around the best
 WINDOW_REFINE = 1               # halvings of the scan step around the best window
 ENVELOPE_POINTS = 2049          # time samples of eq. (2)'s window for the envelope's lines
+ROOT_FTOL = 1e-4                # the least phase: r*(t) within this of the limit (relative) ends the search
+MAX_PHASE_STEPS = 40
 HIGHS_OPTIONS = {"solver": "simplex", "simplex_strategy": 4}   # primal simplex: 10x the dual's speed on these
-_BASES = BuildCache("stop_impact.synthesis_bases", maxsize=8)
+BASES = BuildCache("stop_impact.synthesis_bases", maxsize=8)
 
 
 @dataclass(frozen=True)
@@ -98,7 +101,7 @@ class LinearLever:
 def linear_lever(coefficients: int, continuity: int) -> LinearLever:
     """The grid and kinematic matrices for `coefficients` free spline coefficients (cached)."""
     key = (coefficients, continuity)
-    return _BASES.get(key, lambda: _build_lever(coefficients, continuity))[0]
+    return BASES.get(key, lambda: _build_lever(coefficients, continuity))[0]
 
 
 def _build_lever(coefficients, continuity):
@@ -128,7 +131,7 @@ def rebound_of_v0_mm(task: LeverStop, v0_m_s: float) -> float:
     return closed_form_amplitude_m(task.impact(0.0, v0_m_s=float(v0_m_s)))[0] * 1e3
 
 
-def _envelope(task, v_top):
+def rebound_envelope(task, v_top):
     """Lines (g [mm per m/s], p [mm]) whose maximum is the rebound for v0 in [0, v_top]: the
     grid lines that are the largest for some v0 there (a <= max(0, max_j g_j v0 + p_j))."""
     unit = task.impact(0.0, v0_m_s=1.0)
@@ -140,7 +143,7 @@ def _envelope(task, v_top):
     return g[keep], p[keep]
 
 
-def _v0_limit(task, limit_mm):
+def v0_limit_m_s(task, limit_mm):
     """The largest v0 whose rebound keeps `limit_mm` (the rebound grows with v0) [m/s]."""
     f = lambda v: rebound_of_v0_mm(task, v) - limit_mm
     if f(0.0) > 0:
@@ -155,16 +158,16 @@ def _v0_limit(task, limit_mm):
 # ---------------------------------------------------------------- one LP
 
 @dataclass
-class _Speed:
+class SpeedResponse:
     rpm: float
     lam: float
     T: float
     resp: tuple
 
 
-def _speed(task, lever, rpm, t_deg):
+def speed_response(task, lever, rpm, t_deg):
     lam, zeta, H, target, T = follower_data(task, rpm, t_deg)
-    return _Speed(rpm, lam, T, lever.response(lam, zeta))
+    return SpeedResponse(rpm, lam, T, lever.response(lam, zeta))
 
 
 def _rows(lever):
@@ -177,7 +180,7 @@ def _rows(lever):
     return rows
 
 
-class _WindowLP:
+class WindowLP:
     """The LP at one phase angle and set of speeds, built once; the arrival window's start xi_a is
     a cvxpy Parameter (which rows hold, by a big-M mask in the right-hand side: DPP), so each
     candidate window is a re-solve, not a rebuild. `slack`: each family of limits gets a slack
@@ -215,7 +218,7 @@ class _WindowLP:
                 X0[rows] + XB[rows] @ c - self.target - BIG_X * self.before,   # below the plate before xi_a
                 self.target - (X0[-1] + XB[-1] @ c)])                    # on it by the grid's end
             families.setdefault("approach", []).append(dX0[rows] + dXB[rows] @ c - u - BIG_V * self.after)
-            rebound = cp.hstack([g * scale * u + p for g, p in zip(*lines)])
+            rebound = lines[0] * scale * u + lines[1]
             families.setdefault("rebound", []).append(rebound - (limit_mm if r is None else r))
             if closure is not None:      # the roller stays on its cam: N = F + m H X'' / T^2 >= 0
                 families.setdefault("cam_contact", []).append(-(ddX0[rows] + ddXB[rows] @ c)
@@ -291,7 +294,8 @@ class _Design:
 
 
 def design_law(task: LeverStop, t_deg: float, band_rpm: tuple, *, objective="least_rebound", coefficients=100,
-               continuity=2, sample_speeds=5, dense_step_rpm=5.0, bounds=None, rounds=4, samples=None) -> _Design:
+               continuity=2, sample_speeds=5, dense_step_rpm=5.0, bounds=None, rounds=4, samples=None,
+               around=None) -> _Design:
     """The best law at phase angle `t_deg` over the speed band: the LP over the arrival window
     (`_scan`), the dense check between the sampled speeds, a failing speed added and the LP solved
     again (at most `rounds` times)."""
@@ -303,15 +307,15 @@ def design_law(task: LeverStop, t_deg: float, band_rpm: tuple, *, objective="lea
         samples = list(np.linspace(lo, hi, sample_speeds)) if sample_speeds > 1 else [hi]
     samples = [float(n) for n in samples]
     dense = band_speeds(band_rpm, dense_step_rpm)
-    lines = _envelope(task, 4 * max(_v0_limit(task, limit), 1e-3))
+    lines = rebound_envelope(task, 4 * max(v0_limit_m_s(task, limit), 1e-3))
     lps = 0
     for _ in range(rounds):
-        speeds = [_speed(task, lever, n, t_deg) for n in samples]
-        lp = _WindowLP(task, lever, speeds, t_deg, objective=objective, limit_mm=limit, bounds=bounds, lines=lines)
-        (status, c, value, xa), count = _scan(lp)
+        speeds = [speed_response(task, lever, n, t_deg) for n in samples]
+        lp = WindowLP(task, lever, speeds, t_deg, objective=objective, limit_mm=limit, bounds=bounds, lines=lines)
+        (status, c, value, xa), count = _scan(lp, around)
         lps += count
         if status is Status.INFEASIBLE:
-            slack = _WindowLP(task, lever, speeds, t_deg, objective=objective, limit_mm=limit, bounds=bounds,
+            slack = WindowLP(task, lever, speeds, t_deg, objective=objective, limit_mm=limit, bounds=bounds,
                               lines=lines, slack=True)
             (_, _, _, xa), count = _scan(slack)
             sl = slack.solve(xa)[3]
@@ -338,21 +342,27 @@ def band_speeds(band_rpm, step_rpm):
     return np.unique(np.concatenate([np.arange(lo, hi, step_rpm), [hi]])).astype(float)
 
 
-def _scan(lp):
-    """((status, c, value, xi_a) of the best window, LPs solved): WINDOW_CANDIDATES, then steps
-    halved around the best (the value is not convex in xi_a: a scan, stated, not a proof)."""
+def _scan(lp, around=None):
+    """((status, c, value, xi_a) of the best window, LPs solved): WINDOW_CANDIDATES (or, `around` a
+    window that was best at a neighbouring t, it and its neighbours), then steps halved around the
+    best (the value is not convex in xi_a: a scan, stated, not a proof)."""
     tried = {}
+    step = WINDOW_CANDIDATES[1] - WINDOW_CANDIDATES[0]
+    first = WINDOW_CANDIDATES if around is None else (around - step / 2, around, around + step / 2)
 
     def at(xa):
         xa = round(float(xa), 12)
         if xa not in tried and 0.0 < xa <= 1.0 + DWELL_XI:
             tried[xa] = lp.solve(xa)
         return tried.get(xa)
-    for xa in WINDOW_CANDIDATES:
+    for xa in first:
         out = at(xa)
-        if out[0] not in (Status.SOLVED, Status.INFEASIBLE):
+        if out is not None and out[0] not in (Status.SOLVED, Status.INFEASIBLE):
             return (out[0], None, math.inf, xa), len(tried)
-    step = WINDOW_CANDIDATES[1] - WINDOW_CANDIDATES[0]
+    if around is not None:
+        step /= 2
+        if not any(math.isfinite(v[2]) for v in tried.values()):      # lost it: the full scan
+            return _scan(lp)
     for _ in range(WINDOW_REFINE):
         best = min(tried, key=lambda k: tried[k][2])
         if not math.isfinite(tried[best][2]):
@@ -436,6 +446,11 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
     values |= {"t_deg": t_deg, "lp_value": design.value, "window_xi": design.window_xi, "lps": float(design.lps)}
     if objective == "least_phase":
         values["t_min_deg_synthesized"] = t_deg
+        t_cyc = _library_least_phase(task, "cycloidal", band, phase_from_deg, phase_to_deg, phase_tol_deg,
+                                     dense_step_rpm)
+        if t_cyc is not None:
+            values["t_min_deg_cycloidal"] = t_cyc
+            values["phase_gain_percent"] = 100.0 * (1.0 - t_deg / t_cyc)
     dense = band_speeds(band, dense_step_rpm)
     pred = predicted_rebounds_mm(task, law, t_deg, dense, lever=lever)
     worst = int(np.argmax([p[0] for p in pred]))
@@ -485,36 +500,70 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
 
 
 def _least_phase(task, band, lo, hi, tol, common):
-    """Bisection on t of "the least rebound over the band <= limit" (assumed to fall as t grows:
-    stated, not proven); the speeds the dense check added are kept for the next steps."""
+    """The least t with the least rebound over the band <= limit: regula falsi (Illinois) on
+    r*(t) - limit, r*(t) the least-rebound LP's value, assumed to fall as t grows (stated, not
+    proven); a t with no law at all (below the kinematic minimum) is a bisection step. The speeds
+    the dense check added and the best window are carried to the next t."""
     limit = task.amplitude_limit_mm
-    samples = None
-    steps = 0
+    state = {"samples": None, "around": None, "steps": 0}
+
+    def excess(t):
+        d = design_law(task, t, band, objective="least_rebound", samples=state["samples"], around=state["around"],
+                       **common)
+        state["steps"] += 1
+        if d.status is Status.SOLVED:
+            state["samples"], state["around"] = d.speeds, d.window_xi
+            return d.value - limit, d
+        return (math.inf if d.status is Status.INFEASIBLE else math.nan), d
+    f_hi, best = excess(hi)
+    if not f_hi <= 0:
+        if best.status is Status.SOLVED:
+            best = dataclasses.replace(best, status=Status.INFEASIBLE, violated=("amplitude",),
+                                       message=f"no law keeps amplitude_limit_mm={limit:g} over {band[0]:g}-{band[1]:g} "
+                                               f"rpm even at t = {hi:g} deg: the best is {best.value:.4g} mm")
+        return best, hi, state["steps"]
+    f_lo, low = excess(lo)
+    if f_lo <= 0:                                   # the bracket's bottom already keeps it
+        return low, lo, state["steps"]
+    side = 0
+    while hi - lo > tol:
+        if math.isfinite(f_lo):
+            mid = hi - f_hi * (hi - lo) / (f_hi - f_lo)
+            mid = min(max(mid, lo + 0.1 * tol), hi - 0.1 * tol)
+        else:
+            mid = 0.5 * (lo + hi)
+        f_mid, d = excess(mid)
+        if math.isnan(f_mid):
+            return d, mid, state["steps"]
+        if f_mid <= 0:
+            hi, f_hi, best = mid, f_mid, d
+            if side == -1 and math.isfinite(f_lo):
+                f_lo /= 2                           # Illinois: the stale end's weight halved
+            side = -1
+        else:
+            lo, f_lo = mid, f_mid
+            if side == 1:
+                f_hi /= 2
+            side = 1
+        if -f_hi <= ROOT_FTOL * limit or state["steps"] >= MAX_PHASE_STEPS:   # r*(hi) is the limit to the LP's digits
+            break
+    return best, hi, state["steps"]
+
+
+def _library_least_phase(task, law, band, lo, hi, tol, step):
+    """The least t in [lo, hi] at which the library `law` keeps the limit over the band (the linear
+    model's rebound at every `step` rpm; bisection, as for the synthesised law); None if not at hi."""
+    dense = band_speeds(band, step)
+    limit = task.amplitude_limit_mm
 
     def ok(t):
-        nonlocal samples
-        d = design_law(task, t, band, objective="least_rebound", samples=samples, **common)
-        if d.status is Status.SOLVED:
-            samples = d.speeds
-        return d.status is Status.SOLVED and d.value <= limit, d
-    good, top = ok(hi)
-    steps += 1
-    if not good:
-        if top.status is Status.SOLVED:
-            top = dataclasses.replace(top, status=Status.INFEASIBLE, violated=("amplitude",),
-                                      message=f"no law keeps amplitude_limit_mm={limit:g} over {band[0]:g}-{band[1]:g} "
-                                              f"rpm even at t = {hi:g} deg: the best is {top.value:.4g} mm")
-        return top, hi, steps
-    best = top
+        return max(p[0] for p in predicted_rebounds_mm(task, law, t, dense)) <= limit
+    if not ok(hi):
+        return None
     while hi - lo > tol:
         mid = 0.5 * (lo + hi)
-        good, d = ok(mid)
-        steps += 1
-        if good:
-            hi, best = mid, d
-        else:
-            lo = mid
-    return best, hi, steps
+        lo, hi = (lo, mid) if ok(mid) else (mid, hi)
+    return hi
 
 
 def _unsolved(design, values, diagnostics, start, build_s, t_deg, limit, task=None, band=None, step=5.0):
