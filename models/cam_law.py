@@ -180,3 +180,19 @@ def elastic_response(ddS, lam: float, zeta: float, h: float):
         out[:, k + 1] = y
     e, de = (out[0, :, 0], out[1, :, 0]) if flat else (out[0], out[1])
     return e, de
+
+
+def elastic_responses(ddS, lams, zeta: float, h: float):
+    """(e, e') (speeds x nodes) of one input `ddS` (nodes) at several lambdas at once: the dense
+    check's many speeds in one pass over the grid."""
+    u = np.asarray(ddS, float)
+    steps = [step_matrices(lam, zeta, h) for lam in np.atleast_1d(lams)]
+    Phi = np.array([s[0] for s in steps])                       # (K, 2, 2)
+    Ga, Gb = np.array([s[1] for s in steps]), np.array([s[2] for s in steps])     # (K, 2)
+    drive = Ga[:, :, None] * u[None, None, :-1] + Gb[:, :, None] * (np.diff(u) / h)[None, None, :]   # (K, 2, N-1)
+    out = np.zeros((len(steps), 2, u.size))
+    y = np.zeros((len(steps), 2))
+    for k in range(u.size - 1):
+        y = np.einsum("kij,kj->ki", Phi, y) + drive[:, :, k]
+        out[:, :, k + 1] = y
+    return out[:, 0], out[:, 1]

@@ -42,7 +42,7 @@ from scipy.optimize import brentq
 from mechopt.cache import BuildCache
 from mechopt.errors import ModelError
 from mechopt.models.cam_follower import LAWS, law_values, rise_duration_s
-from mechopt.models.cam_law import SplineBasis, SplineLaw, elastic_response, intervals_for
+from mechopt.models.cam_law import SplineBasis, SplineLaw, elastic_response, elastic_responses, intervals_for
 from mechopt.models.stop_impact import LeverStop
 from mechopt.solvers.result import Result, Status, Timing, from_cvxpy
 from mechopt.solvers.settings import Annotated, Interval, NonNegative
@@ -263,11 +263,12 @@ def predicted_rebounds_mm(task: LeverStop, law: SplineLaw | str, t_deg: float, s
     lever = lever or linear_lever(100, 2)
     H = task.stroke_mm * 1e-3
     S, dS, ddS = law_values(law, lever.xi)
+    speeds = [float(n) for n in np.atleast_1d(speeds_rpm)]
+    data = [follower_data(task, n, t_deg) for n in speeds]
+    e, de = elastic_responses(ddS, [d[0] for d in data], data[0][1], lever.step)
     out = []
-    for n in np.atleast_1d(speeds_rpm):
-        lam, zeta, _, target, T = follower_data(task, float(n), t_deg)
-        e, de = elastic_response(ddS[:, None], lam, zeta, lever.step)
-        X, dX = S + e[:, 0], dS + de[:, 0]
+    for k, (lam, zeta, _, target, T) in enumerate(data):
+        X, dX = S + e[k], dS + de[k]
         hit = np.flatnonzero((X[:-1] < target) & (X[1:] >= target))
         if not hit.size:
             out.append((0.0, math.nan, 0.0))
