@@ -156,13 +156,15 @@ class SplineLaw:
         return expr
 
 
-def step_matrices(lam: float, zeta: float, h: float):
+def step_matrices(lam, zeta: float, h: float):
     """(Phi, Ga, Gb) of the first-order hold: y_{k+1} = Phi y_k + Ga u_k + Gb (u_{k+1} - u_k) / h
-    for y = (e, e'), y' = [[0, 1], [-lam^2, -2 zeta lam]] y + [0, -1] u, u linear over the step."""
-    M = np.zeros((4, 4))
-    M[0, 1], M[1, 0], M[1, 1], M[1, 2], M[2, 3] = 1.0, -lam * lam, -2.0 * zeta * lam, -1.0, 1.0
+    for y = (e, e'), y' = [[0, 1], [-lam^2, -2 zeta lam]] y + [0, -1] u, u linear over the step.
+    `lam` may be an array: one stacked matrix exponential for all (shapes (..., 2, 2), (..., 2))."""
+    lam = np.asarray(lam, float)
+    M = np.zeros(lam.shape + (4, 4))
+    M[..., 0, 1], M[..., 1, 0], M[..., 1, 1], M[..., 1, 2], M[..., 2, 3] = 1.0, -lam * lam, -2.0 * zeta * lam, -1.0, 1.0
     E = expm(M * h)
-    return E[:2, :2], E[:2, 2], E[:2, 3]
+    return E[..., :2, :2], E[..., :2, 2], E[..., :2, 3]
 
 
 def elastic_response(ddS, lam: float, zeta: float, h: float):
@@ -186,12 +188,10 @@ def elastic_responses(ddS, lams, zeta: float, h: float):
     """(e, e') (speeds x nodes) of one input `ddS` (nodes) at several lambdas at once: the dense
     check's many speeds in one pass over the grid."""
     u = np.asarray(ddS, float)
-    steps = [step_matrices(lam, zeta, h) for lam in np.atleast_1d(lams)]
-    Phi = np.array([s[0] for s in steps])                       # (K, 2, 2)
-    Ga, Gb = np.array([s[1] for s in steps]), np.array([s[2] for s in steps])     # (K, 2)
+    Phi, Ga, Gb = step_matrices(np.atleast_1d(lams), zeta, h)     # (K, 2, 2), (K, 2), (K, 2)
     drive = Ga[:, :, None] * u[None, None, :-1] + Gb[:, :, None] * (np.diff(u) / h)[None, None, :]   # (K, 2, N-1)
-    out = np.zeros((len(steps), 2, u.size))
-    y = np.zeros((len(steps), 2))
+    out = np.zeros((Phi.shape[0], 2, u.size))
+    y = np.zeros((Phi.shape[0], 2))
     for k in range(u.size - 1):
         y = np.einsum("kij,kj->ki", Phi, y) + drive[:, :, k]
         out[:, :, k + 1] = y

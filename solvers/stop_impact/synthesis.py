@@ -72,7 +72,7 @@ WINDOW_REFINE = 1               # halvings of the scan step around the best wind
 ENVELOPE_POINTS = 2049          # time samples of eq. (2)'s window for the envelope's lines
 ROOT_FTOL = 1e-4                # the least phase: r*(t) within this of the limit (relative) ends the search
 MAX_PHASE_STEPS = 40
-HIGHS_OPTIONS = {"solver": "simplex", "simplex_strategy": 4}   # primal simplex: 10x the dual's speed on these
+HIGHS_OPTIONS = {"solver": "simplex", "simplex_strategy": 1, "presolve": "off"}   # dual simplex, warm from the last window
 BASES = BuildCache("stop_impact.synthesis_bases", maxsize=8)
 
 
@@ -357,9 +357,7 @@ def _scan(lp, around=None):
             tried[xa] = lp.solve(xa)
         return tried.get(xa)
     for xa in first:
-        out = at(xa)
-        if out is not None and out[0] not in (Status.SOLVED, Status.INFEASIBLE):
-            return (out[0], None, math.inf, xa), len(tried)
+        at(xa)
     if around is not None:
         step /= 2
         if not any(math.isfinite(v[2]) for v in tried.values()):      # lost it: the full scan
@@ -373,6 +371,10 @@ def _scan(lp, around=None):
         at(best + step)
     best = min(tried, key=lambda k: tried[k][2])
     status, c, value, _ = tried[best]
+    if status is Status.INFEASIBLE:         # a window HiGHS failed on is no proof of infeasibility
+        failed = [k for k, v in tried.items() if v[0] not in (Status.SOLVED, Status.INFEASIBLE)]
+        if failed:
+            return (tried[failed[0]][0], None, math.inf, failed[0]), len(tried)
     return (status, c, value, best), len(tried)
 
 
