@@ -296,10 +296,11 @@ class _Design:
 
 def design_law(task: LeverStop, t_deg: float, band_rpm: tuple, *, objective="least_rebound", coefficients=100,
                continuity=2, sample_speeds=5, dense_step_rpm=5.0, bounds=None, rounds=4, samples=None,
-               around=None) -> _Design:
+               around=None, dense_bar_mm=None) -> _Design:
     """The best law at phase angle `t_deg` over the speed band: the LP over the arrival window
     (`_scan`), the dense check between the sampled speeds, a failing speed added and the LP solved
-    again (at most `rounds` times)."""
+    again (at most `rounds` times). The dense check holds the law to the LP's own value (least
+    rebound) or to the limit (`dense_bar_mm`, the least phase's question: is the limit kept?)."""
     bounds = bounds or {}
     lever = linear_lever(coefficients, continuity)
     limit = task.amplitude_limit_mm
@@ -329,8 +330,8 @@ def design_law(task: LeverStop, t_deg: float, band_rpm: tuple, *, objective="lea
         law = lever.basis.law(c)
         pred = predicted_rebounds_mm(task, law, t_deg, dense, lever=lever)
         worst = int(np.argmax([p[0] for p in pred]))
-        bar = value if objective == "least_rebound" else limit
-        if pred[worst][0] <= bar * (1 + 1e-3) + 1e-9 or float(dense[worst]) in samples:
+        bar = dense_bar_mm if dense_bar_mm is not None else value if objective == "least_rebound" else limit
+        if pred[worst][0] <= bar * (1 + 1e-3) + 1e-4 * limit or float(dense[worst]) in samples:
             return _Design(Status.SOLVED, law, value, xa, samples, lps)
         samples = sorted(samples + [float(dense[worst])])       # broken between samples: sample it too
     return _Design(Status.LIMIT, law, value, xa, samples, lps,
@@ -498,7 +499,9 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
     if compare:
         _compare(task, law, t_deg, sorted(set(design.speeds)), values)
     return Result(status, values, Timing(build_s, time.perf_counter() - start - build_s), message=message,
-                  arrays=arrays, diagnostics=diagnostics | {"sampled_speeds_rpm": list(design.speeds)},
+                  arrays=arrays, diagnostics=diagnostics | {"sampled_speeds_rpm": list(design.speeds),
+                                                            "law_knots": list(law.knots),
+                                                            "law_coefficients": list(law.coefficients)},
                   warnings=warnings)
 
 
@@ -512,7 +515,7 @@ def _least_phase(task, band, lo, hi, tol, common):
 
     def excess(t):
         d = design_law(task, t, band, objective="least_rebound", samples=state["samples"], around=state["around"],
-                       **common)
+                       dense_bar_mm=limit, **common)
         state["steps"] += 1
         if d.status is Status.SOLVED:
             state["samples"], state["around"] = d.speeds, d.window_xi
