@@ -92,17 +92,30 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
     chain = float(rebound_amplitude_mm(designed.lever_model, n, t37))     # the loop closed by the chain
     values |= {"speed_rpm": n, "gain_percent": 100.0 * (n / values["speed_rpm_baseline"] - 1.0), "t_3_7_deg": t37,
                "t_3_7_deg_baseline": baseline.values["t_3_7_deg"], "rebound_chain_mm": chain}
-    values |= {k: v for k, v in plan.values.items() if k.startswith(("p_", "t_")) and k not in values}
+    values |= {k: v for k, v in plan.values.items()
+               if k.startswith(("p_", "t_", "sigma_", "amplitude_")) and k not in values}
     status = Status.SOLVED if chain <= task.amplitude_limit_mm * (1 + 1e-6) else Status.INACCURATE
     limiting = plan.diagnostics.get("limiting_constraint", "-")
+    lift = _lift_bound(plan) or "no speed bound (its angle floor)"
     message = (f"{n:.6g} rpm with the synthesised lift law against {values['speed_rpm_baseline']:.6g} rpm with "
-               f"{task.lever_model.law} ({values['gain_percent']:+.2f} %); limiting: {limiting} "
+               f"{task.lever_model.law} ({values['gain_percent']:+.2f} %); the lift's t(3,7) now set by {lift} "
+               f"(baseline: {_lift_bound(baseline) or '-'}); limiting: {limiting} "
                f"(baseline {baseline.diagnostics.get('limiting_constraint', '-')}); the chain at t(3,7) = {t37:.4g} deg: "
                f"{chain:.4g} mm")
     diagnostics = {"limiting_constraint": limiting, "limiting_group": plan.diagnostics.get("limiting_group"),
                    "critical_chain": plan.diagnostics.get("critical_chain"),
                    "baseline_limiting_constraint": baseline.diagnostics.get("limiting_constraint"),
+                   "lift_bound": lift, "baseline_lift_bound": _lift_bound(baseline),
+                   "limiting": plan.diagnostics.get("limiting"),
                    "law": str(law)}
     arrays = dict(law_run.arrays) | {k: v for k, v in plan.arrays.items()}
     return Result(status, values, Timing(0.0, time.perf_counter() - start), message=message, diagnostics=diagnostics,
                   arrays=arrays, warnings=plan.warnings)
+
+
+def _lift_bound(plan):
+    """Which speed bound sets the lift's operation (3,7) on the plan's critical chain, if one does."""
+    for row in plan.diagnostics.get("limiting") or ():
+        if row["constraint"].endswith("[3->7]"):
+            return row["constraint"]
+    return None
