@@ -41,7 +41,7 @@ from scipy.optimize import brentq
 
 from mechopt.cache import BuildCache
 from mechopt.errors import ModelError
-from mechopt.models.cam_follower import LAWS, law_values, rise_duration_s
+from mechopt.models.cam_follower import LAWS, law_values
 from mechopt.models.cam_law import SplineBasis, SplineLaw, elastic_response, elastic_responses, intervals_for
 from mechopt.models.stop_impact import LeverStop
 from mechopt.solvers.result import Result, Status, Timing, from_cvxpy
@@ -470,7 +470,6 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
               "rebound_predicted_mm": np.array([p[0] for p in pred]),
               "law_knots": np.asarray(law.knots), "law_coefficients": np.asarray(law.coefficients)}
     status, message, warnings = Status.SOLVED, f"{objective}: {law} at t = {t_deg:.6g} deg", ()
-    solve_s = time.perf_counter() - start - build_s
     if verify:
         check_speeds = sorted(set(design.speeds) | {float(dense[worst])})
         chain_task = dataclasses.replace(task, law=law)
