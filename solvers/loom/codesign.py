@@ -107,7 +107,7 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
                    "baseline_limiting_constraint": baseline.diagnostics.get("limiting_constraint"),
                    "lift_bound": lift, "baseline_lift_bound": _lift_bound(baseline),
                    "limiting": plan.diagnostics.get("limiting"),
-                   "law": str(law)}
+                   "law": str(law), "law_knots": list(law.knots), "law_coefficients": list(law.coefficients)}
     arrays = dict(law_run.arrays) | {k: v for k, v in plan.arrays.items()}
     return Result(status, values, Timing(0.0, time.perf_counter() - start), message=message, diagnostics=diagnostics,
                   arrays=arrays, warnings=plan.warnings)

@@ -56,9 +56,9 @@ __all__ = ["BASES", "LinearLever", "SpeedResponse", "WindowLP", "band_speeds", "
 
 
 def law_of(result: Result) -> SplineLaw:
-    """The synthesised law of a `synthesise_law` Result (its arrays law_knots, law_coefficients):
+    """The synthesised law of a `synthesise_law` Result (its diagnostics law_knots, law_coefficients):
     `law_of(run.result).values(xi)` gives S and its first three derivatives on any xi grid (the shop's input)."""
-    knots, coeffs = np.asarray(result.arrays["law_knots"]), np.asarray(result.arrays["law_coefficients"])
+    knots, coeffs = np.asarray(result.diagnostics["law_knots"]), np.asarray(result.diagnostics["law_coefficients"])
     return SplineLaw(tuple(map(float, knots)), tuple(map(float, coeffs)), knots.size - coeffs.size - 1)
 
 DWELL_XI = 0.3                  # the grid runs this far past the rise: C may reach its plate in the dwell
@@ -466,9 +466,13 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
     values |= {"peak_velocity_mm_per_rad": float(np.abs(dS).max()) * H_mm / t_rad,
                "peak_acceleration_mm_per_rad2": float(np.abs(ddS).max()) * H_mm / t_rad**2,
                "peak_jerk_mm_per_rad3": float(np.abs(dddS).max()) * H_mm / t_rad**3}
-    arrays = {"xi": xi, "S": S, "dS": dS, "ddS": ddS, "dddS": dddS, "speed_rpm": dense.astype(float),
-              "rebound_predicted_mm": np.array([p[0] for p in pred]),
-              "law_knots": np.asarray(law.knots), "law_coefficients": np.asarray(law.coefficients)}
+    arrays = _analogues(law, xi, H_mm, t_rad, "") | {"speed_rpm": dense.astype(float),
+                                                     "rebound_predicted_mm": np.array([p[0] for p in pred])}
+    if compare:          # the library laws' analogues at the same t, and the cycloid's rebound against speed
+        for name in LAWS:
+            arrays |= _analogues(name, xi, H_mm, t_rad, f"{name}_")
+        arrays["rebound_cycloidal_predicted_mm"] = np.array(
+            [p[0] for p in predicted_rebounds_mm(task, "cycloidal", t_deg, dense, lever=lever)])
     status, message, warnings = Status.SOLVED, f"{objective}: {law} at t = {t_deg:.6g} deg", ()
     if verify:
         check_speeds = sorted(set(design.speeds) | {float(dense[worst])})
@@ -597,6 +601,13 @@ def _compare(task, law, t_deg, speeds, values):
         ddS = law_values(each, np.linspace(0, 1, 2001))[2]
         values[f"{name}_peak_acceleration_mm_per_rad2"] = float(np.abs(ddS).max()) * task.stroke_mm / math.radians(
             t_deg)**2
+
+
+def _analogues(law, xi, H_mm, t_rad, prefix):
+    """The law's travel of C and its analogues against the cam angle over the rise [mm, mm/rad^k]."""
+    S, dS, ddS = law_values(law, xi)[:3]
+    return {f"{prefix}phi_deg": xi * math.degrees(t_rad), f"{prefix}s_mm": S * H_mm,
+            f"{prefix}ds_dphi_mm_per_rad": dS * H_mm / t_rad, f"{prefix}d2s_dphi2_mm_per_rad2": ddS * H_mm / t_rad**2}
 
 
 def _tag(speed_rpm):
