@@ -83,15 +83,10 @@ class SplineBasis:
         xi = np.clip(np.asarray(xi, float), 0.0, 1.0)
         k, p, fixed = self.knots, self.degree, self.continuity + 1
         count = k.size - p - 1
+        every = BSpline(k, np.eye(count), p, extrapolate=False)     # all basis functions at once
         out = []
         for d in range(order + 1):
-            full = np.empty((xi.size, count))
-            for i in range(count):         # one basis function at a time: exact derivatives
-                unit = np.zeros(count)
-                unit[i] = 1.0
-                full[:, i] = BSpline(k, unit, p, extrapolate=False).derivative(d)(xi) if d else \
-                    BSpline(k, unit, p, extrapolate=False)(xi)
-            full = np.nan_to_num(full)
+            full = np.nan_to_num((every.derivative(d) if d else every)(xi))
             out.append((full[:, count - fixed:].sum(axis=1), full[:, fixed:count - fixed]))
         return out
 
