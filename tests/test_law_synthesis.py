@@ -106,3 +106,13 @@ def test_bad_band_and_bracket_are_named(lever):
         synthesise_law(lever, band_low_rpm=500.0)
     with pytest.raises(ModelError, match="phase_from_deg=40.*empty bracket"):
         synthesise_law(lever, phase_from_deg=40.0, phase_to_deg=30.0)
+
+
+def test_the_least_peak_acceleration_keeping_the_limit_is_below_the_cycloids(lever):
+    """At the chain's t and 420 rpm the cycloid (570 mm/rad^2) rebounds 0.101 mm; a law keeping
+    0.1 mm needs less acceleration than that, and no rest-to-rest rise needs less than 4 / (2 pi) of it."""
+    run = synthesise_law(lever, objective="least_acceleration", coefficients=16, band_low_rpm=420.0, sample_speeds=1,
+                         compare=False)
+    assert run.status is Status.SOLVED, run.message
+    assert 4 / (2 * np.pi) * ACCEL * (1 - 1e-3) < run.values["peak_acceleration_mm_per_rad2"] < ACCEL
+    assert run.values["rebound_max_chain_mm"] <= lever.amplitude_limit_mm * (1 + 2e-3)
