@@ -17,8 +17,15 @@ Objectives (`objective`):
 * "least_rebound"      min over c of the largest rebound at the sampled speeds, at t = t_deg;
 * "least_acceleration" min of the peak |S''| with the rebound <= amplitude_limit_mm, at t_deg;
 * "least_phase"        the least t with the least rebound <= amplitude_limit_mm over the band:
-                       bisection on t (to `phase_tol_deg`), assuming the least rebound falls as t
-                       grows (more time, slower arrival); each step is the least-rebound LP.
+                       regula falsi (Illinois) on r*(t) - limit in [phase_from_deg, phase_to_deg]
+                       to `phase_tol_deg` or r* within 1e-4 of the limit, r*(t) the least-rebound
+                       LP's value, assumed to fall as t grows (more time, slower arrival: stated,
+                       not proven); a t below the kinematic minimum is a bisection step.
+
+Each LP is held in HiGHS's dual simplex, warm from the window before; the rows are sampled on the
+grid (every 0.015 in xi early in the rise, 0.004 near the plate), the roller's force kept 5 % above
+zero there, and the full grid (the dense check) and the chain judge the result. Not modelled: the
+pressure angle, the radius of curvature against the roller and the Hertz stress of the law.
 
 Robust over the speed band [band_low_rpm, band_high_rpm]: constraints at `sample_speeds` speeds,
 then the linear model is checked densely (every `dense_step_rpm`) between them; a speed that
@@ -410,7 +417,7 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
         holds and the step of the dense check between them [rpm].
     max_velocity_mm_per_rad, max_acceleration_mm_per_rad2, max_jerk_mm_per_rad3 : kinematic bounds
         on the analogues of C's travel (0: none).
-    phase_from_deg, phase_to_deg, phase_tol_deg : the bisection's bracket and tolerance on t.
+    phase_from_deg, phase_to_deg, phase_tol_deg : the search's bracket and tolerance on t [deg].
     verify, agreement_rel : run the law through follow_cam (CVODES) and eq. (2) and require the
         linear prediction to agree within agreement_rel (else INACCURATE).
     compare : the four library laws at the same t and speeds (values `<law>_rebound_mm_<rpm>` ...).
