@@ -40,7 +40,7 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
                            scan_to_deg: Annotated[float, Interval(gt=0.0, le=360.0)] = 60.0,
                            scan_step_deg: Annotated[float, Interval(ge=1e-3, le=10.0)] = 0.25) -> Result:
     """The machine's highest speed with the lift's law synthesised (module docstring), against the
-    same machine with its lever's own law (`speed_rpm_baseline`).
+    same machine with its lever's own law (`speed_baseline_rpm`).
 
     Parameters
     ----------
@@ -50,7 +50,7 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
         phase_tol_deg : the synthesis' (`synthesise_law`); the band is [band_low_rpm, speed_rpm].
     scan_to_deg, scan_step_deg : the engine's exact-bound scan (`max_machine_speed`).
 
-    Values: speed_rpm, speed_rpm_baseline, gain_percent, t_min_deg_synthesized (at n_ref),
+    Values: speed_rpm, speed_baseline_rpm, gain_percent, t_min_synthesized_deg (at n_ref),
     t_3_7_deg and the chain's rebound there (rebound_chain_mm); diagnostics: the limiting cycle
     and constraint of both plans.
     """
@@ -75,29 +75,30 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
                              phase_from_deg=phase_from_deg, phase_to_deg=phase_to_deg, phase_tol_deg=phase_tol_deg,
                              compare=False)
     synth_s = time.perf_counter() - synth_start
-    values = {"speed_rpm_baseline": baseline.values["max_speed_rpm"], "synthesis_s": synth_s}
+    values = {"speed_baseline_rpm": baseline.values["max_speed_rpm"]}
+    took = {"synthesis_s": synth_s}                     # timings go to diagnostics: values are results
     if law_run.status is not Status.SOLVED:
         return Result(law_run.status, values, Timing(0.0, time.perf_counter() - start),
                       message=f"the lift's law: {law_run.message}", violated=law_run.violated)
     law = law_of(law_run)
-    values["t_min_deg_synthesized"] = law_run.values["t_min_deg_synthesized"]
+    values["t_min_synthesized_deg"] = law_run.values["t_min_synthesized_deg"]
     plan_start = time.perf_counter()
     designed = dataclasses.replace(task, lever={**task.lever, "law": law})
     plan = max_machine_speed(designed, **speed_settings)
-    values["replan_s"] = time.perf_counter() - plan_start
+    took["replan_s"] = time.perf_counter() - plan_start
     if plan.status is not Status.SOLVED:
         return Result(plan.status, values, Timing(0.0, time.perf_counter() - start),
                       message=f"the re-planned machine: {plan.message}", violated=plan.violated)
     n, t37 = plan.values["max_speed_rpm"], plan.values["t_3_7_deg"]
     chain = float(rebound_amplitude_mm(designed.lever_model, n, t37))     # the loop closed by the chain
-    values |= {"speed_rpm": n, "gain_percent": 100.0 * (n / values["speed_rpm_baseline"] - 1.0), "t_3_7_deg": t37,
-               "t_3_7_deg_baseline": baseline.values["t_3_7_deg"], "rebound_chain_mm": chain}
+    values |= {"speed_rpm": n, "gain_percent": 100.0 * (n / values["speed_baseline_rpm"] - 1.0), "t_3_7_deg": t37,
+               "t_3_7_baseline_deg": baseline.values["t_3_7_deg"], "rebound_chain_mm": chain}
     values |= {k: v for k, v in plan.values.items()
                if k.startswith(("p_", "t_", "sigma_", "amplitude_")) and k not in values}
     status = Status.SOLVED if chain <= task.amplitude_limit_mm * (1 + 1e-6) else Status.INACCURATE
     limiting = plan.diagnostics.get("limiting_constraint", "-")
     lift = _lift_bound(plan) or "no speed bound (its angle floor)"
-    message = (f"{n:.6g} rpm with the synthesised lift law against {values['speed_rpm_baseline']:.6g} rpm with "
+    message = (f"{n:.6g} rpm with the synthesised lift law against {values['speed_baseline_rpm']:.6g} rpm with "
                f"{task.lever_model.law} ({values['gain_percent']:+.2f} %); the lift's t(3,7) now set by {lift} "
                f"(baseline: {_lift_bound(baseline) or '-'}); limiting: {limiting} "
                f"(baseline {baseline.diagnostics.get('limiting_constraint', '-')}); the chain at t(3,7) = {t37:.4g} deg: "
@@ -105,7 +106,7 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
     diagnostics = {"limiting_constraint": limiting, "limiting_group": plan.diagnostics.get("limiting_group"),
                    "critical_chain": plan.diagnostics.get("critical_chain"),
                    "baseline_limiting_constraint": baseline.diagnostics.get("limiting_constraint"),
-                   "lift_bound": lift, "baseline_lift_bound": _lift_bound(baseline),
+                   "lift_bound": lift, "timing": took, "baseline_lift_bound": _lift_bound(baseline),
                    "limiting": plan.diagnostics.get("limiting"),
                    "law": str(law), "law_knots": list(law.knots), "law_coefficients": list(law.coefficients)}
     arrays = dict(law_run.arrays) | {k: v for k, v in plan.arrays.items()}

@@ -456,11 +456,11 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
     lever = linear_lever(coefficients, continuity)
     values |= {"t_deg": t_deg, "lp_value": design.value, "window_xi": design.window_xi, "lps": float(design.lps)}
     if objective == "least_phase":
-        values["t_min_deg_synthesized"] = t_deg
+        values["t_min_synthesized_deg"] = t_deg
         t_cyc = _library_least_phase(task, "cycloidal", band, phase_from_deg, phase_to_deg, phase_tol_deg,
                                      dense_step_rpm)
         if t_cyc is not None:
-            values["t_min_deg_cycloidal"] = t_cyc
+            values["t_min_cycloidal_deg"] = t_cyc
             values["phase_gain_percent"] = 100.0 * (1.0 - t_deg / t_cyc)
     dense = band_speeds(band, dense_step_rpm)
     pred = predicted_rebounds_mm(task, law, t_deg, dense, lever=lever)
