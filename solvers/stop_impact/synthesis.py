@@ -44,6 +44,7 @@ from typing import Literal
 
 import cvxpy as cp
 import numpy as np
+from scipy import sparse
 from scipy.optimize import brentq
 
 from mechopt.cache import BuildCache
@@ -128,7 +129,8 @@ def _build_lever(coefficients, continuity):
                                         + [[1.0]]))
     # a cubic's acceleration is linear between knots (its peak at one) and its jerk constant: these
     # points hold those bounds exactly, the velocity's and a quartic's to O(h^2)
-    return LinearLever(basis, xi, step, rise, tuple(kin), tuple(basis.matrices(quarters, order=3)))
+    bounds = tuple((off, sparse.csr_matrix(mat)) for off, mat in basis.matrices(quarters, order=3))   # banded
+    return LinearLever(basis, xi, step, rise, tuple(kin), bounds)
 
 
 # ---------------------------------------------------------------- rebound as a function of v0
