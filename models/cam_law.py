@@ -117,8 +117,9 @@ class SplineLaw:
         Examples
         --------
         >>> law = SplineBasis(8).law(np.linspace(0.1, 0.9, 5))
-        >>> [round(float(v[0]), 12) for v in law.values([0.0, 1.0, 1.5])[0:1]]
-        [0.0]
+        >>> S, dS, ddS, dddS = law.values([0.0, 1.0, 1.5])
+        >>> [round(float(v), 12) for v in S], [round(float(v), 12) for v in dS]
+        ([0.0, 1.0, 1.0], [0.0, 0.0, 0.0])
         """
         xi = np.atleast_1d(np.asarray(xi, float))
         inside = np.clip(xi, 0.0, 1.0)
