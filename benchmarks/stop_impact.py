@@ -27,7 +27,8 @@ from mechopt.solvers.stop_impact.entry_points import AGREEMENT_REL
 from mechopt.solvers.stop_impact.law import impact_at, rebound_amplitude_mm
 from mechopt.solvers.stop_impact.response import closed_form_amplitude_m, ode_amplitude_m, quadrature_amplitude_m
 
-__all__ = ["SCENES", "cam_rows", "cam_table", "cli", "evaluations", "law_cost", "plot", "table"]
+__all__ = ["SCENES", "cam_rows", "cam_table", "cli", "evaluations", "law_cost", "plot", "synthesis_rows",
+           "synthesis_table", "table"]
 
 SCENES = {"280 rpm": ("stop-impact/rebound-280-420", 280.0), "177 rpm + preload": ("stop-impact/rebound-177rpm", 177.0)}
 CAM_SCENE, CAM_SPEEDS = "stop-impact/cam-dynamics", (280.0, 420.0)
@@ -173,4 +174,68 @@ def cli(repeats, out_dir, progress=None, quick=False) -> str:
     rows = evaluations(repeats=repeats, progress=progress, quick=quick)
     cam = cam_rows(repeats=repeats, progress=progress, quick=quick)
     cost = law_cost(repeats=1 if quick else min(repeats, 3), progress=progress, points=20 if quick else LAW_SAMPLE)
-    return "\n".join([table(rows), "", cam_table(cam, cost), *(f"plot: {p}" for p in plot(rows, cam, out_dir))])
+    synth = synthesis_table(synthesis_rows(repeats=1 if quick else min(repeats, 3), progress=progress, quick=quick))
+    return "\n".join([table(rows), "", cam_table(cam, cost), "", synth,
+                      *(f"plot: {p}" for p in plot(rows, cam, out_dir))])
+
+
+# ---------------------------------------------------------------- issue 23: law synthesis
+
+SYNTH_COEFFICIENTS = (100, 300, 1000)
+DE_SECONDS = 60.0                       # differential evolution's budget (it does not reach the LP's optimum)
+
+
+def synthesis_rows(repeats=3, progress=None, quick=False):
+    """The least-rebound law at the chain's t and 420 rpm (one speed, one arrival window xi_a =
+    0.85: one LP), cold (the spline space built afresh) for 10^2 ... 10^3 coefficients; against
+    scipy's differential_evolution over the same spline (its coefficients boxed to [-0.5, 1.5],
+    the same rebound as objective through the same linear lever, the LP's limits as a penalty)
+    given DE_SECONDS, one run: its best rebound and time beside the LP's."""
+    from scipy.optimize import differential_evolution
+
+    from mechopt.solvers.stop_impact import synthesis as sy
+    task = registry.find("stop-impact/amplitude-law").build()[0]
+    rows = []
+    for k in SYNTH_COEFFICIENTS[:1] if quick else SYNTH_COEFFICIENTS:
+        def cold():
+            sy.BASES.clear()
+            lever = sy.linear_lever(k, 2)
+            speed = sy.speed_response(task, lever, 420.0, task.t_deg)
+            lines = sy.rebound_envelope(task, 4 * sy.v0_limit_m_s(task, task.amplitude_limit_mm))
+            lp = sy.WindowLP(task, lever, [speed], task.t_deg, objective="least_rebound",
+                              limit_mm=task.amplitude_limit_mm, bounds={"max_acceleration_mm_per_rad2": 570.0},
+                              lines=lines)
+            return lp.solve(0.85)
+        seconds, out = _median_time(cold, repeats)
+        rows.append({"method": f"LP (cvxpy + HiGHS), {k} coefficients", "seconds": seconds, "rebound_mm": out[2]})
+        if progress:
+            progress(f"LP {k}: {seconds:.3g} s")
+    k = SYNTH_COEFFICIENTS[0]
+    lever = sy.linear_lever(k, 2)
+    speed = sy.speed_response(task, lever, 420.0, task.t_deg)
+    (X0, XB), (dX0, dXB), _ = speed.resp
+    H = task.stroke_mm * 1e-3
+    target = 1.0 - task.preload_mm / task.stroke_mm
+    _, (_, _), (a0, A), _ = lever.bound_kin
+    acc = 570.0 * np.radians(task.t_deg)**2 / task.stroke_mm
+    window = lever.xi >= 0.85
+
+    def objective(c):      # the LP's problem as a penalty: the rebound of the window's peak X'
+        X, dX = X0 + XB @ c, dX0 + dXB @ c
+        over = max(0.0, (X[~window] - target).max()) + max(0.0, target - X[-1]) + max(0.0, np.abs(a0 + A @ c).max() - acc)
+        return sy.rebound_of_v0_mm(task, max(dX[window].max(), 0.0) * H / speed.T) + 1e3 * over
+    start = time.perf_counter()
+    de = differential_evolution(objective, [(-0.5, 1.5)] * k, maxiter=100000, tol=0, seed=1, polish=False,
+                                callback=lambda *a, **kw: time.perf_counter() - start > (5.0 if quick else DE_SECONDS))
+    rows.append({"method": f"scipy differential_evolution, {k} coefficients", "seconds": time.perf_counter() - start,
+                 "rebound_mm": float(de.fun)})
+    return rows
+
+
+def synthesis_table(rows):
+    base = rows[0]
+    lines = ["law synthesis, least rebound at t = 35.59 deg, 420 rpm (cold; medians)",
+             f"{'method':48s} {'seconds':>9s} {'rebound mm':>11s} {'time / LP(100)':>15s}"]
+    for r in rows:
+        lines.append(f"{r['method']:48s} {r['seconds']:9.3g} {r['rebound_mm']:11.4g} {r['seconds'] / base['seconds']:15.3g}")
+    return "\n".join(lines)

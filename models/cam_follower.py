@@ -35,6 +35,7 @@ import numpy as np
 
 from mechopt.cache import memoised
 from mechopt.errors import ModelError
+from mechopt.models.cam_law import SplineLaw
 
 LAWS = ("cycloidal", "modified_sine", "polynomial_345", "harmonic")
 
@@ -42,6 +43,9 @@ LAWS = ("cycloidal", "modified_sine", "polynomial_345", "harmonic")
 def law_displacement(law: str, xi):
     """S(xi), the normalised displacement of the motion law `law` over the rise xi in [0, 1]
     (a CasADi expression of the CasADi symbol `xi`)."""
+    if isinstance(law, SplineLaw):
+        raise ModelError(f"law={law}: a spline law gives S'' (casadi_ddS) and numbers (values), not S as "
+                         "an expression", key="law")
     if law == "cycloidal":
         return xi - ca.sin(2 * math.pi * xi) / (2 * math.pi)
     if law == "polynomial_345":
@@ -59,8 +63,13 @@ def law_displacement(law: str, xi):
 
 @memoised(maxsize=16)
 def law_function(law: str) -> ca.Function:
-    """CasADi function xi -> (S, S', S'') of the law during the rise (derivatives by AD)."""
+    """CasADi function xi -> (S, S', S'') of the law during the rise (derivatives by AD). A
+    synthesised `SplineLaw` (models/cam_law.py) gives S'' alone: S and S' come out as 0 (the
+    integrators read S'' only; numbers come from `law_values`)."""
     xi = ca.SX.sym("xi")
+    if isinstance(law, SplineLaw):
+        zero = ca.SX(0)
+        return ca.Function("law_spline", [xi], [zero, zero, law.casadi_ddS(xi)], ["xi"], ["S", "dS", "ddS"])
     s = law_displacement(law, xi)
     ds = ca.gradient(s, xi)
     return ca.Function(f"law_{law}", [xi], [s, ds, ca.gradient(ds, xi)], ["xi"], ["S", "dS", "ddS"])
@@ -70,6 +79,8 @@ def law_values(law: str, xi):
     """(S, S', S'') at the phases `xi` (array), the dwell (S = 1, S' = S'' = 0) past xi = 1 and
     rest (S = 0) before 0: numbers for plots and the scipy reference."""
     xi = np.atleast_1d(np.asarray(xi, dtype=float))
+    if isinstance(law, SplineLaw):
+        return law.values(xi)[:3]
     inside = np.clip(xi, 0.0, 1.0)
     out = law_function(law).map(xi.size)(inside[None, :])
     s, ds, dds = (np.asarray(v, dtype=float).ravel() for v in out)

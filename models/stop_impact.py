@@ -63,6 +63,7 @@ from annotated_types import Interval
 
 from mechopt.errors import ModelError, require
 from mechopt.models.cam_follower import LAWS
+from mechopt.models.cam_law import SplineLaw
 from mechopt.models.effects import Effect, check_effects
 
 
@@ -158,7 +159,7 @@ class LeverStop:
     closure_force_N: Annotated[float | None, stated("closure_force_N")] = None
     law_slope_mm_per_deg: Annotated[float | None, Interval(lt=0)] = None
     law_intercept_mm: Annotated[float | None, Interval(gt=0)] = None
-    law: str = ""
+    law: str | SplineLaw = ""       # a library law's name, or a synthesised law (solvers/stop_impact/synthesis.py)
     launch: Literal["pulse_plus_v0", "restitution"] = "pulse_plus_v0"   # LAUNCHES
     speeds_rpm: tuple = ()
     effects: tuple = ()
@@ -193,7 +194,7 @@ class LeverStop:
         _require(self, "law_slope_mm_per_deg", self.law_slope_mm_per_deg is None or self.law_slope_mm_per_deg < 0,
                  "must be < 0 (the rebound falls as the lift gets more phase)")
         _require(self, "law_intercept_mm", self.law_intercept_mm is None or self.law_intercept_mm > 0, "must be > 0")
-        _require(self, "law", self.law in ("", *LAWS), f"is not a motion law; allowed: {', '.join(LAWS)}")
+        _require(self, "law", isinstance(self.law, SplineLaw) or self.law in ("", *LAWS), f"is not a motion law; allowed: {', '.join(LAWS)}")
         _require(self, "launch", self.launch in LAUNCHES, f"is not a launch reading; allowed: {', '.join(LAUNCHES)}")
         if self.launch == "restitution":     # C leaves at k v0: needs k and the approach it reverses
             for effect in ("initial_velocity", "impact_pulse"):

@@ -14,10 +14,11 @@
   (part 5);
 * `event_time`: the LP's matrices, and `HeldLP`, the LP held in HiGHS for many bound changes.
 """
+from mechopt.solvers.loom.codesign import codesign_machine_speed
 from mechopt.solvers.loom.event_time import HeldLP, build_event_time_lp, incidence
 from mechopt.solvers.loom.plan import conflict_chain, plan_cyclogram, positive_cycle
 from mechopt.solvers.loom.repair import exact_amplitude_bound, repair_cyclogram
 from mechopt.solvers.loom.speed import max_machine_speed
 
-__all__ = ["HeldLP", "build_event_time_lp", "conflict_chain", "exact_amplitude_bound", "incidence",
+__all__ = ["HeldLP", "build_event_time_lp", "codesign_machine_speed", "conflict_chain", "exact_amplitude_bound", "incidence",
            "max_machine_speed", "plan_cyclogram", "positive_cycle", "repair_cyclogram"]

@@ -8,6 +8,8 @@
                   `operating_point`, `cam_dynamics`.
 * `fit`           every root of the chain's calibration (stroke, t) on the published law, and the
                   spread of its predictions over the roots and the damping: `fit_roots`.
+* `synthesis`     the lift cam's law synthesised as a spline under the rebound limit over a speed
+                  band (LPs in cvxpy), checked by the chain: `synthesise_law`.
 * `cam_follower`  the lift cam's rise with the elastic lever (Fig. 4): contact with the plate,
                   approach velocity, dynamic errors, the roller's contact force.
 * `cam_shape`     the lift cam for the shop: pitch curve, profile, pressure angle, radius of
@@ -23,6 +25,7 @@ from mechopt.solvers.stop_impact.entry_points import (
                                                       rebound,
 )
 from mechopt.solvers.stop_impact.fit import fit_roots
+from mechopt.solvers.stop_impact.synthesis import synthesise_law
 
 __all__ = ["cam_dynamics", "cam_profile", "fit_roots", "impact_forces", "linearise_amplitude", "natural_frequencies",
-           "operating_point", "rebound"]
+           "operating_point", "rebound", "synthesise_law"]

@@ -1,0 +1,623 @@
+"""The lift cam's motion law synthesised under the lever's dynamic limits (issue 23, item 1), and
+checked by the chain that did not design it (item 2).
+
+The law is a spline in xi (models/cam_law.py): S = s0 + B c. At a fixed speed n and phase angle t
+the elastic lever's relative error e is linear in c (superposition), so are X = S + e, its
+velocity X' and acceleration X'' (what the roller must push), and the kinematic analogues.
+What is not linear is *where* C meets its plate (X = 1 - preload / H). It is made linear by an
+arrival window: C stays below the plate before xi_a (X <= target), and from xi_a to the end of the
+grid its velocity stays below u_k, with X >= target at the end so that it does arrive. Then the
+approach velocity is at most u_k H / T_k whatever the exact contact, and the rebound of eq. (2),
+max_s (v0 g(s) + p(s)) (v0 and the pulse scale together, the preload does not), is a convex
+piecewise-linear function of v0: r >= g_j v0 + p_j, one row per line of its upper envelope. xi_a
+is scanned (a few candidates, then the neighbours of the best): each candidate is one LP in
+cvxpy (HiGHS), status checked.
+
+Objectives (`objective`):
+* "least_rebound"      min over c of the largest rebound at the sampled speeds, at t = t_deg;
+* "least_acceleration" min of the peak |S''| with the rebound <= amplitude_limit_mm, at t_deg;
+* "least_phase"        the least t with the least rebound <= amplitude_limit_mm over the band:
+                       regula falsi (Illinois) on r*(t) - limit in [phase_from_deg, phase_to_deg]
+                       to `phase_tol_deg` or r* within 1e-4 of the limit, r*(t) the least-rebound
+                       LP's value, assumed to fall as t grows (more time, slower arrival: stated,
+                       not proven); a t below the kinematic minimum is a bisection step.
+
+Each LP is held in HiGHS's dual simplex, warm from the window before; the rows are sampled on the
+grid (every 0.015 in xi early in the rise, 0.004 near the plate), the roller's force kept 5 % above
+zero there, and the full grid (the dense check) and the chain judge the result. Not modelled: the
+pressure angle, the radius of curvature against the roller and the Hertz stress of the law.
+
+Robust over the speed band [band_low_rpm, band_high_rpm]: constraints at `sample_speeds` speeds,
+then the linear model is checked densely (every `dense_step_rpm`) between them; a speed that
+breaks the limit (or the LP's bound) is added to the samples and the LP solved again.
+
+Verification: the law found runs through follow_cam (CVODES, the contact located) and the closed
+form of eq. (2) at every sampled speed and at the dense check's worst; the linear prediction must
+agree within `agreement_rel` (else INACCURATE). The four library laws are run at the same t and
+speeds beside it: rebound, dynamic error, peak acceleration.
+"""
+import dataclasses
+import math
+import time
+from dataclasses import dataclass
+from typing import Literal
+
+import cvxpy as cp
+import numpy as np
+from scipy import sparse
+from scipy.optimize import brentq
+
+from mechopt.cache import BuildCache
+from mechopt.errors import ModelError
+from mechopt.models.cam_follower import LAWS, law_values
+from mechopt.models.cam_law import SplineBasis, SplineLaw, elastic_response, elastic_responses, intervals_for
+from mechopt.models.stop_impact import LeverStop
+from mechopt.solvers.result import Result, Status, Timing, from_cvxpy
+from mechopt.solvers.settings import Annotated, Interval, NonNegative
+from mechopt.solvers.stop_impact.cam_follower import follow_cam, follower_data
+from mechopt.solvers.stop_impact.law import RollerLeftCam, rebound_amplitude_mm
+from mechopt.solvers.stop_impact.response import closed_form_amplitude_m, response_parts
+
+__all__ = ["BASES", "LinearLever", "SpeedResponse", "WindowLP", "band_speeds", "design_law", "law_of", "linear_lever",
+           "predicted_rebounds_mm", "rebound_envelope", "speed_response", "v0_limit_m_s",
+           "rebound_of_v0_mm", "synthesise_law"]
+
+
+def law_of(result: Result) -> SplineLaw:
+    """The synthesised law of a `synthesise_law` Result (its diagnostics law_knots, law_coefficients):
+    `law_of(run.result).values(xi)` gives S and its first three derivatives on any xi grid (the shop's input)."""
+    knots, coeffs = np.asarray(result.diagnostics["law_knots"]), np.asarray(result.diagnostics["law_coefficients"])
+    return SplineLaw(tuple(map(float, knots)), tuple(map(float, coeffs)), knots.size - coeffs.size - 1)
+
+DWELL_XI = 0.3                  # the grid runs this far past the rise: C may reach its plate in the dwell
+RISE_NODES = 600                # at least this many grid nodes over the rise (a multiple of the knots)
+ROW_SPACING_XI = (0.015, 0.004)  # LP rows this far apart before / after ARRIVAL_FROM_XI (the full grid is checked after)
+ARRIVAL_FROM_XI = 0.55          # where the plate comes near: rows close enough that X' cannot peak between them
+CONTACT_MARGIN = 0.05           # the roller's force kept above 5 % of the closure at the rows (it peaks between them)
+BIG_X, BIG_V = 2.0, 30.0        # big-M of the window's masks: above any X - target, X' a useful rise has
+WINDOW_CANDIDATES = (0.7, 0.8, 0.9)            # xi_a scanned first, then halved steps around the best
+WINDOW_REFINE = 1               # halvings of the scan step around the best window
+ENVELOPE_POINTS = 2049          # time samples of eq. (2)'s window for the envelope's lines
+ROOT_FTOL = 1e-4                # the least phase: r*(t) within this of the limit (relative) ends the search
+MAX_PHASE_STEPS = 40
+HIGHS_OPTIONS = {"solver": "simplex", "simplex_strategy": 1, "presolve": "off"}   # dual simplex, warm from the last window
+BASES = BuildCache("stop_impact.synthesis_bases", maxsize=8)
+
+
+@dataclass(frozen=True)
+class LinearLever:
+    """The spline space on its grid: the matrices of S, S', S'', S''' at the nodes (affine in the
+    free coefficients: value = offset + matrix @ c), built once per (coefficients, continuity)."""
+    basis: SplineBasis
+    xi: np.ndarray                      # nodes over [0, 1 + DWELL_XI], knots among them
+    step: float
+    rise: np.ndarray                    # mask of the nodes in [0, 1]
+    kin: tuple                          # ((s0, B), (d0, D), (a0, A), (j0, J)) at the nodes
+    bound_kin: tuple                    # the same at the knots and quarter points: where the bounds hold
+
+    def response(self, lam: float, zeta: float):
+        """((X0, XB), (dX0, dXB), (ddX0, ddXB)) of the elastic lever at lambda: affine in c."""
+        (s0, B), (d0, D), (a0, A), _ = self.kin
+        e, de = elastic_response(np.column_stack([a0, A]), lam, zeta, self.step)
+        dde = -np.column_stack([a0, A]) - 2 * zeta * lam * de - lam * lam * e
+        X = (s0 + e[:, 0], B + e[:, 1:])
+        dX = (d0 + de[:, 0], D + de[:, 1:])
+        ddX = (a0 + dde[:, 0], A + dde[:, 1:])
+        return X, dX, ddX
+
+
+def linear_lever(coefficients: int, continuity: int) -> LinearLever:
+    """The grid and kinematic matrices for `coefficients` free spline coefficients (cached)."""
+    key = (coefficients, continuity)
+    return BASES.get(key, lambda: _build_lever(coefficients, continuity))[0]
+
+
+def _build_lever(coefficients, continuity):
+    basis = SplineBasis(intervals_for(coefficients, continuity), continuity)
+    per = max(1, math.ceil(RISE_NODES / basis.intervals))
+    step = 1.0 / (basis.intervals * per)
+    xi = np.arange(0, round((1 + DWELL_XI) / step) + 1) * step
+    rise = xi <= 1.0 + 1e-12
+    mats = basis.matrices(xi[rise], order=3)
+    dwell = (~rise).sum()
+    kin = []
+    for d, (off, mat) in enumerate(mats):
+        off = np.concatenate([off, np.full(dwell, 1.0 if d == 0 else 0.0)])
+        kin.append((off, np.vstack([mat, np.zeros((dwell, mat.shape[1]))])))
+    breaks = np.unique(basis.knots)
+    quarters = np.unique(np.concatenate([breaks[:-1] + f * np.diff(breaks) for f in (0.0, 0.25, 0.5, 0.75)]
+                                        + [[1.0]]))
+    # a cubic's acceleration is linear between knots (its peak at one) and its jerk constant: these
+    # points hold those bounds exactly, the velocity's and a quartic's to O(h^2)
+    bounds = tuple((off, sparse.csr_matrix(mat)) for off, mat in basis.matrices(quarters, order=3))   # banded
+    return LinearLever(basis, xi, step, rise, tuple(kin), bounds)
+
+
+# ---------------------------------------------------------------- rebound as a function of v0
+
+def rebound_of_v0_mm(task: LeverStop, v0_m_s: float) -> float:
+    """The first rebound of eq. (2) [mm] for an approach velocity v0 (closed form)."""
+    return closed_form_amplitude_m(task.impact(0.0, v0_m_s=float(v0_m_s)))[0] * 1e3
+
+
+def rebound_envelope(task, v_top):
+    """Lines (g [mm per m/s], p [mm]) whose maximum is the rebound for v0 in [0, v_top]: the
+    grid lines that are the largest for some v0 there (a <= max(0, max_j g_j v0 + p_j))."""
+    unit = task.impact(0.0, v0_m_s=1.0)
+    s = np.linspace(0.0, unit.window_s, ENVELOPE_POINTS)
+    moving, pressed = response_parts(unit, s)
+    g, p = moving[0] * 1e3, pressed[0] * 1e3
+    v = np.linspace(0.0, v_top, 400)
+    keep = np.unique(np.argmax(np.outer(v, g) + p, axis=1))
+    return g[keep], p[keep]
+
+
+def v0_limit_m_s(task, limit_mm):
+    """The largest v0 whose rebound keeps `limit_mm` (the rebound grows with v0) [m/s]."""
+    f = lambda v: rebound_of_v0_mm(task, v) - limit_mm
+    if f(0.0) > 0:
+        raise ModelError(f"amplitude_limit_mm={limit_mm}: the preload alone throws C further; no approach keeps it",
+                         key="amplitude_limit_mm")
+    hi = 0.1
+    while f(hi) < 0:
+        hi *= 2
+    return brentq(f, 0.0, hi, xtol=1e-14)
+
+
+# ---------------------------------------------------------------- one LP
+
+@dataclass
+class SpeedResponse:
+    rpm: float
+    lam: float
+    T: float
+    resp: tuple
+
+
+def speed_response(task, lever, rpm, t_deg):
+    lam, zeta, H, target, T = follower_data(task, rpm, t_deg)
+    return SpeedResponse(rpm, lam, T, lever.response(lam, zeta))
+
+
+def _rows(lever):
+    """The grid nodes the LP holds its dynamic limits at: sparse early in the rise, dense where C
+    approaches its plate, and the grid's last node."""
+    coarse, fine = (max(1, round(h / lever.step)) for h in ROW_SPACING_XI)
+    index = np.arange(lever.xi.size)
+    rows = np.where(lever.xi < ARRIVAL_FROM_XI, index % coarse == 0, index % fine == 0)
+    rows[-1] = True
+    return rows
+
+
+class WindowLP:
+    """The LP at one phase angle and set of speeds, built once; the arrival window's start xi_a is
+    a cvxpy Parameter (which rows hold, by a big-M mask in the right-hand side: DPP), so each
+    candidate window is a re-solve, not a rebuild. `slack`: each family of limits gets a slack
+    and the sum is minimised (which limits bind when nothing is feasible)."""
+
+    def __init__(self, task, lever, speeds, t_deg, *, objective, limit_mm, bounds, lines, slack=False):
+        H = task.stroke_mm * 1e-3
+        self.target = 1.0 - (task.preload_mm * 1e-3 / H if "preload" in task.effects else 0.0)
+        rows = _rows(lever)
+        self.xi = lever.xi[rows]
+        self.c = c = cp.Variable(lever.basis.size)
+        self.before = cp.Parameter(self.xi.size, nonneg=True)      # 0 where the row holds, 1 where not
+        self.after = cp.Parameter(self.xi.size, nonneg=True)
+        families = {}
+        t_rad = math.radians(t_deg)
+        _, (d0, D), (a0, A), (j0, J) = lever.bound_kin
+        for name, (off, mat), power, key in (("velocity", (d0, D), 1, "max_velocity_mm_per_rad"),
+                                             ("acceleration", (a0, A), 2, "max_acceleration_mm_per_rad2"),
+                                             ("jerk", (j0, J), 3, "max_jerk_mm_per_rad3")):
+            if bounds.get(key):
+                lim = bounds[key] * t_rad**power / task.stroke_mm      # the bound on the analogue of S
+                expr = off + mat @ c
+                families[name] = [expr - lim, -expr - lim]
+        self.peak = peak = cp.Variable() if objective == "least_acceleration" else None
+        if peak is not None:
+            expr = a0 + A @ c
+            families["objective"] = [expr - peak, -expr - peak]
+        self.r = r = cp.Variable() if peak is None else None
+        closure = task.closure_force_N if "cam_drive" in task.effects and task.closure_force_N is not None else None
+        for sp in speeds:
+            (X0, XB), (dX0, dXB), (ddX0, ddXB) = sp.resp
+            scale = H / sp.T                                            # X' -> m/s
+            u = cp.Variable()
+            families.setdefault("arrival", []).extend([
+                X0[rows] + XB[rows] @ c - self.target - BIG_X * self.before,   # below the plate before xi_a
+                self.target - (X0[-1] + XB[-1] @ c)])                    # on it by the grid's end
+            families.setdefault("approach", []).append(dX0[rows] + dXB[rows] @ c - u - BIG_V * self.after)
+            rebound = lines[0] * scale * u + lines[1]
+            families.setdefault("rebound", []).append(rebound - (limit_mm if r is None else r))
+            if closure is not None:      # the roller stays on its cam: N = F + m H X'' / T^2 >= 0
+                families.setdefault("cam_contact", []).append(-(ddX0[rows] + ddXB[rows] @ c)
+                                                              - (1 - CONTACT_MARGIN) * closure * sp.T**2
+                                                              / (task.mass_kg * H))
+        self.slacks = {}
+        constraints = []
+        for name, pieces in families.items():
+            if slack and name != "objective":
+                self.slacks[name] = cp.Variable(nonneg=True)
+                constraints += [piece <= self.slacks[name] for piece in pieces]
+            else:
+                constraints += [piece <= 0 for piece in pieces]
+        goal = sum(self.slacks.values()) if slack else (peak if peak is not None else r)
+        self.problem = cp.Problem(cp.Minimize(goal), constraints)
+
+    def solve(self, window_xi):
+        """(status, c, value, slacks) with the arrival window starting at xi_a = window_xi."""
+        self.before.value = (self.xi >= window_xi).astype(float)
+        # the velocity rows start a row early: C may cross between the last row below and the window
+        self.after.value = (self.xi < window_xi - 1.01 * ROW_SPACING_XI[1]).astype(float)
+        try:
+            self.problem.solve(solver=cp.HIGHS, highs_options=HIGHS_OPTIONS)
+        except (cp.error.SolverError, ValueError):      # cvxpy raises ValueError on HiGHS' "unknown"
+            try:                                         # the primal simplex gave up: HiGHS' default once
+                self.problem.solve(solver=cp.HIGHS)
+            except (cp.error.SolverError, ValueError) as exc:
+                return Status.FAILED, None, math.inf, {"message": str(exc)}
+        status = from_cvxpy(self.problem.status)
+        if status is not Status.SOLVED:
+            return status, None, math.inf, {}
+        return (status, np.asarray(self.c.value).ravel(), float(self.problem.value),
+                {k: float(v.value) for k, v in self.slacks.items()})
+
+
+# ---------------------------------------------------------------- predictions on the full grid
+
+def predicted_rebounds_mm(task: LeverStop, law: SplineLaw | str, t_deg: float, speeds_rpm, *, lever=None):
+    """The linear model's rebound [mm], contact xi and approach velocity [m/s] at each speed
+    (the crossing X = target on the grid, X' interpolated there): what the synthesis predicts,
+    for the chain to confirm. A library law's name works too (its S'' sampled on the grid)."""
+    lever = lever or linear_lever(100, 2)
+    H = task.stroke_mm * 1e-3
+    S, dS, ddS = law_values(law, lever.xi)
+    speeds = [float(n) for n in np.atleast_1d(speeds_rpm)]
+    data = [follower_data(task, n, t_deg) for n in speeds]
+    e, de = elastic_responses(ddS, [d[0] for d in data], data[0][1], lever.step)
+    out = []
+    for k, (lam, zeta, _, target, T) in enumerate(data):
+        X, dX = S + e[k], dS + de[k]
+        hit = np.flatnonzero((X[:-1] < target) & (X[1:] >= target))
+        if not hit.size:
+            out.append((0.0, math.nan, 0.0))
+            continue
+        j = int(hit[0])
+        w = (target - X[j]) / (X[j + 1] - X[j])
+        v0 = (dX[j] + w * (dX[j + 1] - dX[j])) * H / T
+        out.append((rebound_of_v0_mm(task, v0), float(lever.xi[j] + w * lever.step), float(v0)))
+    return out
+
+
+# ---------------------------------------------------------------- the search
+
+@dataclass
+class _Design:
+    status: Status
+    law: SplineLaw | None
+    value: float
+    window_xi: float
+    speeds: list
+    lps: int
+    message: str = ""
+    violated: tuple = ()
+
+
+def design_law(task: LeverStop, t_deg: float, band_rpm: tuple, *, objective="least_rebound", coefficients=100,
+               continuity=2, sample_speeds=5, dense_step_rpm=5.0, bounds=None, rounds=4, samples=None,
+               around=None, dense_bar_mm=None) -> _Design:
+    """The best law at phase angle `t_deg` over the speed band: the LP over the arrival window
+    (`_scan`), the dense check between the sampled speeds, a failing speed added and the LP solved
+    again (at most `rounds` times). The dense check holds the law to the LP's own value (least
+    rebound) or to the limit (`dense_bar_mm`, the least phase's question: is the limit kept?)."""
+    bounds = bounds or {}
+    lever = linear_lever(coefficients, continuity)
+    limit = task.amplitude_limit_mm
+    lo, hi = band_rpm
+    if samples is None:
+        samples = list(np.linspace(lo, hi, sample_speeds)) if sample_speeds > 1 else [hi]
+    samples = [float(n) for n in samples]
+    dense = band_speeds(band_rpm, dense_step_rpm)
+    lines = rebound_envelope(task, 4 * max(v0_limit_m_s(task, limit), 1e-3))
+    lps = 0
+    for _ in range(rounds):
+        speeds = [speed_response(task, lever, n, t_deg) for n in samples]
+        lp = WindowLP(task, lever, speeds, t_deg, objective=objective, limit_mm=limit, bounds=bounds, lines=lines)
+        (status, c, value, xa), count = _scan(lp, around)
+        lps += count
+        if status is Status.INFEASIBLE:
+            slack = WindowLP(task, lever, speeds, t_deg, objective=objective, limit_mm=limit, bounds=bounds,
+                              lines=lines, slack=True)
+            (_, _, _, xa), count = _scan(slack)
+            sl = slack.solve(xa)[3]
+            binding = tuple(k for k, v in sl.items() if v > 1e-9)
+            return _Design(Status.INFEASIBLE, None, math.inf, xa, samples, lps + count,
+                           f"no law at t = {t_deg:.6g} deg keeps every limit at {', '.join(f'{n:g}' for n in samples)} "
+                           f"rpm; binding: {', '.join(binding) or 'none found'}", binding)
+        if status is not Status.SOLVED:
+            return _Design(status, None, math.inf, xa, samples, lps, f"HiGHS: {status.value} at xi_a = {xa:g}")
+        law = lever.basis.law(c)
+        pred = predicted_rebounds_mm(task, law, t_deg, dense, lever=lever)
+        worst = int(np.argmax([p[0] for p in pred]))
+        bar = dense_bar_mm if dense_bar_mm is not None else value if objective == "least_rebound" else limit
+        if pred[worst][0] <= bar * (1 + 1e-3) + 1e-4 * limit or float(dense[worst]) in samples:
+            return _Design(Status.SOLVED, law, value, xa, samples, lps)
+        samples = sorted(samples + [float(dense[worst])])       # broken between samples: sample it too
+    return _Design(Status.LIMIT, law, value, xa, samples, lps,
+                   f"the dense check still fails at {dense[worst]:g} rpm after {rounds} rounds")
+
+
+def band_speeds(band_rpm, step_rpm):
+    """The dense check's speeds: every `step_rpm` across the band, both ends included [rpm]."""
+    lo, hi = band_rpm
+    return np.unique(np.concatenate([np.arange(lo, hi, step_rpm), [hi]])).astype(float)
+
+
+def _scan(lp, around=None):
+    """((status, c, value, xi_a) of the best window, LPs solved): WINDOW_CANDIDATES (or, `around` a
+    window that was best at a neighbouring t, it and its neighbours), then steps halved around the
+    best (the value is not convex in xi_a: a scan, stated, not a proof)."""
+    tried = {}
+    step = WINDOW_CANDIDATES[1] - WINDOW_CANDIDATES[0]
+    first = WINDOW_CANDIDATES if around is None else (around - step / 2, around, around + step / 2)
+
+    def at(xa):
+        xa = round(float(xa), 12)
+        if xa not in tried and 0.0 < xa <= 1.0 + DWELL_XI:
+            tried[xa] = lp.solve(xa)
+        return tried.get(xa)
+    for xa in first:
+        at(xa)
+    if around is not None:
+        step /= 2
+        if not any(math.isfinite(v[2]) for v in tried.values()):      # lost it: the full scan
+            return _scan(lp)
+    for _ in range(WINDOW_REFINE):
+        best = min(tried, key=lambda k: tried[k][2])
+        if not math.isfinite(tried[best][2]):
+            break
+        step /= 2
+        at(best - step)
+        at(best + step)
+    best = min(tried, key=lambda k: tried[k][2])
+    status, c, value, _ = tried[best]
+    if status is Status.INFEASIBLE:         # a window HiGHS failed on is no proof of infeasibility
+        failed = [k for k, v in tried.items() if v[0] not in (Status.SOLVED, Status.INFEASIBLE)]
+        if failed:
+            return (tried[failed[0]][0], None, math.inf, failed[0]), len(tried)
+    return (status, c, value, best), len(tried)
+
+
+# ---------------------------------------------------------------- the solver a scene names
+
+def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_rebound", "least_acceleration"]
+                   = "least_phase",
+                   coefficients: Annotated[int, Interval(ge=2, le=2000)] = 100,
+                   continuity: Literal[2, 3] = 2,
+                   band_low_rpm: Annotated[float, Interval(gt=0, le=1e5)] = 280.0,
+                   band_high_rpm: Annotated[float, Interval(gt=0, le=1e5)] = 420.0,
+                   sample_speeds: Annotated[int, Interval(ge=1, le=50)] = 5,
+                   dense_step_rpm: Annotated[float, Interval(gt=0, le=1e4)] = 5.0,
+                   max_velocity_mm_per_rad: NonNegative = 0.0,
+                   max_acceleration_mm_per_rad2: NonNegative = 0.0,
+                   max_jerk_mm_per_rad3: NonNegative = 0.0,
+                   phase_from_deg: Annotated[float, Interval(gt=0, lt=360)] = 10.0,
+                   phase_to_deg: Annotated[float, Interval(gt=0, lt=360)] = 60.0,
+                   phase_tol_deg: Annotated[float, Interval(gt=0, le=1)] = 0.01,
+                   verify: bool = True,
+                   agreement_rel: Annotated[float, Interval(gt=0, le=0.5)] = 2e-3,
+                   compare: bool = True) -> Result:
+    """Synthesise the lift cam's law (module docstring) and check it by the chain.
+
+    Parameters
+    ----------
+    task : the lever (effects cam_drive and the impact's), `stroke_mm`, `amplitude_limit_mm` the
+        rebound limit [mm], `t_deg` the phase angle for the fixed-angle objectives [deg].
+    objective : "least_phase" | "least_rebound" | "least_acceleration".
+    coefficients, continuity : free spline coefficients; C2 (cubic) or C3 (quartic) at the dwells.
+    band_low_rpm, band_high_rpm, sample_speeds, dense_step_rpm : the speed band, the speeds the LP
+        holds and the step of the dense check between them [rpm].
+    max_velocity_mm_per_rad, max_acceleration_mm_per_rad2, max_jerk_mm_per_rad3 : kinematic bounds
+        on the analogues of C's travel (0: none).
+    phase_from_deg, phase_to_deg, phase_tol_deg : the search's bracket and tolerance on t [deg].
+    verify, agreement_rel : run the law through follow_cam (CVODES) and eq. (2) and require the
+        linear prediction to agree within agreement_rel (else INACCURATE).
+    compare : the four library laws at the same t and speeds (values `<law>_rebound_mm_<rpm>` ...).
+    """
+    task.need("stroke_mm", "amplitude_limit_mm")
+    task.need_effect("cam_drive")
+    if band_low_rpm > band_high_rpm:
+        raise ModelError(f"band_low_rpm={band_low_rpm} > band_high_rpm={band_high_rpm}: the band is empty",
+                         key="band_low_rpm")
+    if phase_from_deg >= phase_to_deg:
+        raise ModelError(f"phase_from_deg={phase_from_deg} >= phase_to_deg={phase_to_deg}: empty bracket",
+                         key="phase_from_deg")
+    start = time.perf_counter()
+    bounds = {"max_velocity_mm_per_rad": max_velocity_mm_per_rad,
+              "max_acceleration_mm_per_rad2": max_acceleration_mm_per_rad2, "max_jerk_mm_per_rad3": max_jerk_mm_per_rad3}
+    band = (band_low_rpm, band_high_rpm)
+    common = dict(coefficients=coefficients, continuity=continuity, sample_speeds=sample_speeds,
+                  dense_step_rpm=dense_step_rpm, bounds=bounds)
+    limit = task.amplitude_limit_mm
+    build0 = time.perf_counter()
+    linear_lever(coefficients, continuity)
+    build_s = time.perf_counter() - build0
+    values, diagnostics = {}, {}
+    if objective == "least_phase":
+        design, t_deg, steps = _least_phase(task, band, phase_from_deg, phase_to_deg, phase_tol_deg, common)
+        diagnostics["bisection_steps"] = steps
+        if design.status is not Status.SOLVED:
+            return _unsolved(design, values, diagnostics, start, build_s, t_deg, limit, task, band, dense_step_rpm)
+    else:
+        task.need("t_deg")
+        t_deg = task.t_deg
+        design = design_law(task, t_deg, band, objective=objective, **common)
+        if design.status is not Status.SOLVED:
+            return _unsolved(design, values, diagnostics, start, build_s, t_deg, limit, task, band, dense_step_rpm)
+    law = design.law
+    lever = linear_lever(coefficients, continuity)
+    values |= {"t_deg": t_deg, "lp_value": design.value, "window_xi": design.window_xi, "lps": float(design.lps)}
+    if objective == "least_phase":
+        values["t_min_synthesized_deg"] = t_deg
+        t_cyc = _library_least_phase(task, "cycloidal", band, phase_from_deg, phase_to_deg, phase_tol_deg,
+                                     dense_step_rpm)
+        if t_cyc is not None:
+            values["t_min_cycloidal_deg"] = t_cyc
+            values["phase_gain_percent"] = 100.0 * (1.0 - t_deg / t_cyc)
+    dense = band_speeds(band, dense_step_rpm)
+    pred = predicted_rebounds_mm(task, law, t_deg, dense, lever=lever)
+    worst = int(np.argmax([p[0] for p in pred]))
+    values |= {"rebound_max_predicted_mm": pred[worst][0], "rebound_max_speed_rpm": float(dense[worst])}
+    xi = np.linspace(0, 1, 2001)
+    S, dS, ddS, dddS = law.values(xi)
+    t_rad = math.radians(t_deg)
+    H_mm = task.stroke_mm
+    values |= {"peak_velocity_mm_per_rad": float(np.abs(dS).max()) * H_mm / t_rad,
+               "peak_acceleration_mm_per_rad2": float(np.abs(ddS).max()) * H_mm / t_rad**2,
+               "peak_jerk_mm_per_rad3": float(np.abs(dddS).max()) * H_mm / t_rad**3}
+    arrays = _analogues(law, xi, H_mm, t_rad, "") | {"speed_rpm": dense.astype(float),
+                                                     "rebound_predicted_mm": np.array([p[0] for p in pred])}
+    if compare:          # the library laws' analogues at the same t, and the cycloid's rebound against speed
+        for name in LAWS:
+            arrays |= _analogues(name, xi, H_mm, t_rad, f"{name}_")
+        arrays["rebound_cycloidal_predicted_mm"] = np.array(
+            [p[0] for p in predicted_rebounds_mm(task, "cycloidal", t_deg, dense, lever=lever)])
+    status, message, warnings = Status.SOLVED, f"{objective}: {law} at t = {t_deg:.6g} deg", ()
+    if verify:
+        check_speeds = sorted(set(design.speeds) | {float(dense[worst])})
+        chain_task = dataclasses.replace(task, law=law)
+        worst_gap = 0.0
+        for n in check_speeds:
+            try:
+                chain = float(rebound_amplitude_mm(chain_task, n, t_deg))
+            except RollerLeftCam as exc:
+                return Result(Status.INACCURATE, values, Timing(build_s, time.perf_counter() - start - build_s),
+                              message=f"the chain at {n:g} rpm: {exc}", arrays=arrays, diagnostics=diagnostics)
+            own = predicted_rebounds_mm(task, law, t_deg, [n], lever=lever)[0][0]
+            gap = abs(chain - own) / max(limit, 1e-300)
+            worst_gap = max(worst_gap, gap)
+            values[f"rebound_chain_mm_{_tag(n)}"] = chain
+            values[f"rebound_predicted_mm_{_tag(n)}"] = own
+        values["chain_rel_diff"] = worst_gap
+        values["rebound_max_chain_mm"] = max(values[f"rebound_chain_mm_{_tag(n)}"] for n in check_speeds)
+        if worst_gap > agreement_rel:
+            status = Status.INACCURATE
+        over = values["rebound_max_chain_mm"] - limit
+        if objective != "least_rebound" and over > agreement_rel * limit:
+            status = Status.INACCURATE
+            message += f"; the chain's rebound exceeds amplitude_limit_mm by {over:.3g} mm"
+        message += (f"; the chain (CVODES + eq. (2)) agrees with the linear prediction to {worst_gap:.1e} of the "
+                    f"limit at {len(check_speeds)} speeds (tolerance {agreement_rel:g})")
+    if compare:
+        _compare(task, law, t_deg, sorted(set(design.speeds)), values)
+    return Result(status, values, Timing(build_s, time.perf_counter() - start - build_s), message=message,
+                  arrays=arrays, diagnostics=diagnostics | {"sampled_speeds_rpm": list(design.speeds),
+                                                            "law_knots": list(law.knots),
+                                                            "law_coefficients": list(law.coefficients)},
+                  warnings=warnings)
+
+
+def _least_phase(task, band, lo, hi, tol, common):
+    """The least t with the least rebound over the band <= limit: regula falsi (Illinois) on
+    r*(t) - limit, r*(t) the least-rebound LP's value, assumed to fall as t grows (stated, not
+    proven); a t with no law at all (below the kinematic minimum) is a bisection step. The speeds
+    the dense check added and the best window are carried to the next t."""
+    limit = task.amplitude_limit_mm
+    state = {"samples": None, "around": None, "steps": 0}
+
+    def excess(t):
+        d = design_law(task, t, band, objective="least_rebound", samples=state["samples"], around=state["around"],
+                       dense_bar_mm=limit, **common)
+        state["steps"] += 1
+        if d.status is Status.SOLVED:
+            state["samples"], state["around"] = d.speeds, d.window_xi
+            return d.value - limit, d
+        return (math.inf if d.status is Status.INFEASIBLE else math.nan), d
+    f_hi, best = excess(hi)
+    if not f_hi <= 0:
+        if best.status is Status.SOLVED:
+            best = dataclasses.replace(best, status=Status.INFEASIBLE, violated=("amplitude",),
+                                       message=f"no law keeps amplitude_limit_mm={limit:g} over {band[0]:g}-{band[1]:g} "
+                                               f"rpm even at t = {hi:g} deg: the best is {best.value:.4g} mm")
+        return best, hi, state["steps"]
+    f_lo, low = excess(lo)
+    if f_lo <= 0:                                   # the bracket's bottom already keeps it
+        return low, lo, state["steps"]
+    side = 0
+    while hi - lo > tol:
+        if math.isfinite(f_lo):
+            mid = hi - f_hi * (hi - lo) / (f_hi - f_lo)
+            mid = min(max(mid, lo + 0.1 * tol), hi - 0.1 * tol)
+        else:
+            mid = 0.5 * (lo + hi)
+        f_mid, d = excess(mid)
+        if math.isnan(f_mid):
+            return d, mid, state["steps"]
+        if f_mid <= 0:
+            hi, f_hi, best = mid, f_mid, d
+            if side == -1 and math.isfinite(f_lo):
+                f_lo /= 2                           # Illinois: the stale end's weight halved
+            side = -1
+        else:
+            lo, f_lo = mid, f_mid
+            if side == 1:
+                f_hi /= 2
+            side = 1
+        if -f_hi <= ROOT_FTOL * limit or state["steps"] >= MAX_PHASE_STEPS:   # r*(hi) is the limit to the LP's digits
+            break
+    return best, hi, state["steps"]
+
+
+def _library_least_phase(task, law, band, lo, hi, tol, step):
+    """The least t in [lo, hi] at which the library `law` keeps the limit over the band (the linear
+    model's rebound at every `step` rpm; bisection, as for the synthesised law); None if not at hi."""
+    dense = band_speeds(band, step)
+    limit = task.amplitude_limit_mm
+
+    def ok(t):
+        return max(p[0] for p in predicted_rebounds_mm(task, law, t, dense)) <= limit
+    if not ok(hi):
+        return None
+    while hi - lo > tol:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if ok(mid) else (mid, hi)
+    return hi
+
+
+def _unsolved(design, values, diagnostics, start, build_s, t_deg, limit, task=None, band=None, step=5.0):
+    """No law: the status and what binds; with a best law (the limit missed), the best achievable
+    rebound over the band and the speed where it is set."""
+    values = values | {"t_deg": t_deg}
+    if design.law is not None and task is not None:
+        dense = band_speeds(band, step)
+        pred = [p[0] for p in predicted_rebounds_mm(task, design.law, t_deg, dense)]
+        worst = int(np.argmax(pred))
+        values |= {"rebound_best_mm": pred[worst], "rebound_best_speed_rpm": float(dense[worst])}
+    return Result(design.status, values, Timing(build_s, time.perf_counter() - start - build_s),
+                  message=design.message, violated=design.violated, diagnostics=diagnostics)
+
+
+def _compare(task, law, t_deg, speeds, values):
+    """The synthesised law beside the four library laws at the same t and speeds (the chain)."""
+    for name, each in [("synthesized", law)] + [(k, k) for k in LAWS]:
+        other = dataclasses.replace(task, law=each)
+        for n in speeds:
+            rise = follow_cam(other, n, t_deg)
+            tag = f"{name}_{{}}_{_tag(n)}"
+            if rise.status is Status.SOLVED:
+                values[tag.format("rebound_mm")] = float(rebound_amplitude_mm(other, n, t_deg))
+            values[tag.format("dynamic_error_mm")] = rise.dynamic_error_mm
+        ddS = law_values(each, np.linspace(0, 1, 2001))[2]
+        values[f"{name}_peak_acceleration_mm_per_rad2"] = float(np.abs(ddS).max()) * task.stroke_mm / math.radians(
+            t_deg)**2
+
+
+def _analogues(law, xi, H_mm, t_rad, prefix):
+    """The law's travel of C and its analogues against the cam angle over the rise [mm, mm/rad^k]."""
+    S, dS, ddS = law_values(law, xi)[:3]
+    return {f"{prefix}phi_deg": xi * math.degrees(t_rad), f"{prefix}s_mm": S * H_mm,
+            f"{prefix}ds_dphi_mm_per_rad": dS * H_mm / t_rad, f"{prefix}d2s_dphi2_mm_per_rad2": ddS * H_mm / t_rad**2}
+
+
+def _tag(speed_rpm):
+    return f"{speed_rpm:g}".replace(".", "p")

@@ -1,0 +1,118 @@
+"""Issue 23, items 1-2: the lift cam's law synthesised as a spline under the rebound limit, and
+checked by the chain (CVODES rise, eq. (2)) that did not design it."""
+import dataclasses
+
+import numpy as np
+import pytest
+
+from mechopt import registry
+from mechopt.errors import ModelError
+from mechopt.models.cam_follower import law_values
+from mechopt.models.cam_law import SplineBasis, elastic_response
+from mechopt.solvers.result import Status
+from mechopt.solvers.stop_impact.cam_follower import follow_cam, follower_data
+from mechopt.solvers.stop_impact.synthesis import design_law, law_of, predicted_rebounds_mm, synthesise_law
+
+ACCEL = 570.0       # mm/rad^2: the cycloid's peak at the chain's t = 35.59 deg
+
+
+@pytest.fixture(scope="module")
+def lever():
+    return registry.find("stop-impact/amplitude-law").build()[0]
+
+
+@pytest.mark.parametrize("continuity", [2, 3])
+def test_a_spline_law_rests_and_dwells_to_its_continuity(continuity):
+    basis = SplineBasis(12, continuity)
+    law = basis.law(np.random.default_rng(1).uniform(-1, 2, basis.size))
+    ends = [np.array(v) for v in law.values([0.0, 1.0])]
+    assert ends[0] == pytest.approx([0.0, 1.0], abs=1e-12)
+    for d in range(1, continuity + 1):
+        assert ends[d] == pytest.approx([0.0, 0.0], abs=1e-9)
+    s = law.values([-0.5, 1.5])
+    assert s[0] == pytest.approx([0.0, 1.0]) and all(np.all(v == 0) for v in s[1:])
+
+
+def test_the_superposed_response_matches_cvodes_on_a_spline_law(lever):
+    """The linear model's X' at the contact against follow_cam on the same spline (cycloid fitted)."""
+    basis = SplineBasis(40)
+    xi = np.linspace(0, 1, 801)
+    (s0, B), *_ = basis.matrices(xi, order=0)
+    law = basis.law(np.linalg.lstsq(B, law_values("cycloidal", xi)[0] - s0, rcond=None)[0])
+    rise = follow_cam(dataclasses.replace(lever, law=law), 420.0)
+    predicted = predicted_rebounds_mm(lever, law, lever.t_deg, [420.0])[0]
+    assert rise.status is Status.SOLVED
+    assert predicted[1] == pytest.approx(rise.contact_xi, rel=1e-5)
+    assert predicted[2] == pytest.approx(rise.approach_velocity_m_s, rel=1e-4)
+
+
+def test_the_elastic_response_is_linear_in_its_input(lever):
+    lam, zeta, *_ = follower_data(lever, 350.0, 30.0)
+    u = np.random.default_rng(2).normal(size=(200, 2))
+    both = elastic_response(u @ [2.0, -3.0], lam, zeta, 0.005)[0]
+    parts = elastic_response(u, lam, zeta, 0.005)[0]
+    assert both == pytest.approx(parts @ [2.0, -3.0], abs=1e-12)
+
+
+def test_a_phase_angle_below_the_kinematic_minimum_is_infeasible_naming_the_bound(lever):
+    """Any rest-to-rest rise needs |S''| >= 4: under the cycloid's peak acceleration the least t is
+    35.59 sqrt(4 / (2 pi)) = 28.4 deg; at 20 deg the acceleration bound binds."""
+    task = dataclasses.replace(lever, t_deg=20.0)
+    run = synthesise_law(task, objective="least_rebound", coefficients=16, band_low_rpm=420.0, sample_speeds=1,
+                         max_acceleration_mm_per_rad2=ACCEL, verify=False, compare=False)
+    assert run.status is Status.INFEASIBLE
+    assert "acceleration" in run.violated and "acceleration" in run.message
+
+
+def test_a_law_that_holds_at_sampled_speeds_but_not_between_is_caught(lever):
+    """Two sampled speeds: the least-rebound law between them breaks its own bound, the dense check
+    says so (one round), and with more rounds the failing speed is sampled and the LP re-solved."""
+    band = (340.0, 420.0)
+    once = design_law(lever, lever.t_deg, band, coefficients=10, sample_speeds=2, rounds=1,
+                      bounds={"max_acceleration_mm_per_rad2": ACCEL})
+    assert once.status is Status.LIMIT and "dense check" in once.message
+    more = design_law(lever, lever.t_deg, band, coefficients=10, sample_speeds=2, rounds=4,
+                      bounds={"max_acceleration_mm_per_rad2": ACCEL})
+    assert len(more.speeds) > 2
+    if more.status is Status.SOLVED:
+        dense = np.arange(340.0, 421.0, 5.0)
+        worst = max(p[0] for p in predicted_rebounds_mm(lever, more.law, lever.t_deg, dense))
+        assert worst <= more.value * (1 + 1e-3) + 1e-9
+
+
+def test_a_synthesised_law_is_verified_by_the_chain_and_beats_the_cycloid(lever):
+    run = synthesise_law(lever, objective="least_rebound", coefficients=20, band_low_rpm=420.0, sample_speeds=1,
+                         max_acceleration_mm_per_rad2=ACCEL, compare=False)
+    assert run.status is Status.SOLVED, run.message
+    assert run.values["chain_rel_diff"] < 2e-3
+    cycloid = predicted_rebounds_mm(lever, "cycloidal", lever.t_deg, [420.0])[0][0]
+    assert run.values["rebound_chain_mm_420"] < cycloid
+    assert run.values["peak_acceleration_mm_per_rad2"] <= ACCEL * (1 + 1e-6)
+    law = law_of(run)
+    assert law.values([1.0])[0] == pytest.approx([1.0])
+
+
+def test_a_limit_no_law_keeps_gives_the_best_rebound_and_its_speed(lever):
+    task = dataclasses.replace(lever, amplitude_limit_mm=1e-3)
+    run = synthesise_law(task, objective="least_phase", coefficients=12, band_low_rpm=400.0, sample_speeds=2,
+                         max_acceleration_mm_per_rad2=ACCEL, phase_from_deg=30.0, phase_to_deg=31.0, verify=False,
+                         compare=False)
+    assert run.status is Status.INFEASIBLE
+    assert run.values["rebound_best_mm"] > 1e-3 and 400.0 <= run.values["rebound_best_speed_rpm"] <= 420.0
+
+
+def test_bad_band_and_bracket_are_named(lever):
+    with pytest.raises(ModelError, match="band_low_rpm=500.*band is empty"):
+        synthesise_law(lever, band_low_rpm=500.0)
+    with pytest.raises(ModelError, match="phase_from_deg=40.*empty bracket"):
+        synthesise_law(lever, phase_from_deg=40.0, phase_to_deg=30.0)
+
+
+def test_the_least_peak_acceleration_keeping_the_limit_is_below_the_cycloids(lever):
+    """At the chain's t and 420 rpm the cycloid (570 mm/rad^2) rebounds 0.101 mm; a law keeping
+    0.1 mm needs less acceleration than that, and no rest-to-rest rise needs less than 4 / (2 pi) of it."""
+    run = synthesise_law(lever, objective="least_acceleration", coefficients=16, band_low_rpm=420.0, sample_speeds=1,
+                         compare=False)
+    assert run.status is Status.SOLVED, run.message
+    assert 4 / (2 * np.pi) * ACCEL * (1 - 1e-3) < run.values["peak_acceleration_mm_per_rad2"] < ACCEL
+    assert run.values["rebound_max_chain_mm"] <= lever.amplitude_limit_mm * (1 + 2e-3)
