@@ -94,7 +94,7 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
     values |= {"speed_rpm": n, "gain_percent": 100.0 * (n / values["speed_baseline_rpm"] - 1.0), "t_3_7_deg": t37,
                "t_3_7_baseline_deg": baseline.values["t_3_7_deg"], "rebound_chain_mm": chain}
     values |= {k: v for k, v in plan.values.items()
-               if k.startswith(("p_", "t_", "sigma_", "amplitude_")) and k not in values}
+               if (k.startswith(("p_", "t_", "sigma_", "amplitude_")) or k == "span_deg") and k not in values}
     status = Status.SOLVED if chain <= task.amplitude_limit_mm * (1 + 1e-6) else Status.INACCURATE
     limiting = plan.diagnostics.get("limiting_constraint", "-")
     lift = _lift_bound(plan) or "no speed bound (its angle floor)"
@@ -105,6 +105,8 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
                f"{chain:.4g} mm")
     diagnostics = {"limiting_constraint": limiting, "limiting_group": plan.diagnostics.get("limiting_group"),
                    "critical_chain": plan.diagnostics.get("critical_chain"),
+                   "critical_ops": plan.diagnostics.get("critical_ops", []),
+                   "float_deg": plan.diagnostics.get("float_deg", {}),
                    "baseline_limiting_constraint": baseline.diagnostics.get("limiting_constraint"),
                    "lift_bound": lift, "timing": took, "baseline_lift_bound": _lift_bound(baseline),
                    "limiting": plan.diagnostics.get("limiting"),
