@@ -25,7 +25,7 @@ import pytest  # noqa: E402
 from mechopt import registry  # noqa: E402
 
 _SOLVED: dict = {}        # (scene file, its bytes, drivers) -> Run
-_DRAWN: dict = {}         # id of a remembered Run -> (the Run, the folder its PNGs were first drawn in)
+_DRAWN: dict = {}         # (scene file, its bytes) -> the PNGs first drawn of a remembered run of it
 
 
 def _remembered_run(real):
@@ -42,15 +42,16 @@ def _remembered_run(real):
 
 
 def _remembered_figures(real, folder):
+    # by scene file, with or without drivers: the figures read a result's values and arrays, which
+    # the drivers (an entry of its diagnostics) leave as they are
     def plot_run(run, out_dir):
-        drawn = _DRAWN.get(id(run))
-        if drawn is None or drawn[0] is not run:
-            if not any(run is kept for kept in _SOLVED.values()):
-                return real(run, out_dir)
-            first = folder / str(len(_DRAWN))
-            drawn = _DRAWN[id(run)] = (run, real(run, first))
+        key = next((key[:2] for key, kept in _SOLVED.items() if kept is run), None)
+        if key is None:
+            return real(run, out_dir)
+        if key not in _DRAWN:
+            _DRAWN[key] = real(run, folder / str(len(_DRAWN)))
         Path(out_dir).mkdir(parents=True, exist_ok=True)
-        return [Path(shutil.copy(png, Path(out_dir) / png.name)) for png in drawn[1]]
+        return [Path(shutil.copy(png, Path(out_dir) / png.name)) for png in _DRAWN[key]]
     return plot_run
 
 
