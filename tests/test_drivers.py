@@ -49,7 +49,7 @@ def test_structure_entries_are_reached_and_fixed_inputs_are_not():
     assert "amplitude_limit_mm" not in keys              # given
 
 
-def test_machine_speed_is_set_mostly_by_the_flight_time(tmp_path):
+def test_machine_speed_is_set_mostly_by_the_flight_time(tmp_path, solved_once):
     out = tmp_path / "run.json"
     assert main(["run", "loom/machine-speed", "--json", str(out)]) == 0
     drivers = json.loads(out.read_text())["diagnostics"]["drivers"]

@@ -3,7 +3,10 @@ docs/results.md), run in order as written, in a fresh folder: every one must wor
 designer's machine); the Dask example runs on a local cluster standing in for `scheduler-host`.
 The `bench` lines run with `--repeats 1` (a missed timing target, exit 1, is a measurement on a
 busy machine, not a fault), and the `dask scheduler` / `dask worker` lines start services: those
-two are named here and left out."""
+two are named here and left out. The commands run in this process (`main(argv)`), and a package
+scene solved as its file says is solved once for them all (validate, then three reports: the
+`solved_once` fixture of conftest.py); the what-ifs and sweeps solve what they ask. A command the
+pages give twice word for word (the quick bench) runs the first time only."""
 import re
 import shlex
 import shutil
@@ -45,7 +48,7 @@ def test_the_readme_names_its_commands():
 
 
 @pytest.mark.slow
-def test_every_readme_command_runs_in_order(tmp_path, monkeypatch):
+def test_every_readme_command_runs_in_order(tmp_path, monkeypatch, solved_once):
     from distributed import LocalCluster
     shutil.copytree(ROOT / "examples", tmp_path / "examples")
     monkeypatch.chdir(tmp_path)
@@ -59,13 +62,15 @@ def test_every_readme_command_runs_in_order(tmp_path, monkeypatch):
             argv = shrunk(shlex.split(command)[1:])
             if argv[0] == "bench":
                 argv += ["--repeats", "1"]
+                if argv in ran:         # given twice word for word: measured once
+                    continue
                 assert main(argv) in (0, 1), command
             else:
                 assert main(argv) == 0, command
-            ran.append(argv[0])
+            ran.append(argv)
     finally:
         cluster.close()
-    assert {"cases", "describe", "run", "validate", "sweep", "report", "new", "fit-force", "bench"} <= set(ran)
+    assert {"cases", "describe", "run", "validate", "sweep", "report", "new", "fit-force", "bench"} <= {a[0] for a in ran}
     assert (tmp_path / "out" / "bench" / "cam_cutter_work_precision.png").is_file()
 
 

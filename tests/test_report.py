@@ -23,13 +23,15 @@ SCENES = ("loom/group1", "stop-impact/frequencies")
 
 
 @pytest.fixture(scope="module")
-def page(tmp_path_factory):
+def page(tmp_path_factory, solve_once_patches):
     """The full default report (every scene of the registry) with a sweep's maps and a bench plot:
-    made once, read by every test here (and looked at in a browser)."""
+    made once, read by every test here (and looked at in a browser). Its scenes are solved once per
+    session (conftest.py: validate and the README's commands need the same runs)."""
     root = tmp_path_factory.mktemp("report")
     with pytest.MonkeyPatch.context() as patch:          # the package's scenes only, whatever ran before
         patch.setattr(registry, "_USER_FOLDERS", [])
         patch.delenv(registry.ENV_CASES, raising=False)
+        solve_once_patches(patch)
         return _default_report(root)
 
 

@@ -18,7 +18,7 @@ GOOD = registry.cases_dir() / "cam-cutter" / "paper-grid.toml"
 
 
 @pytest.mark.parametrize("scene", registry.all_scenes(), ids=lambda s: s.id)
-def test_scene_reproduces_its_expectations(scene):
+def test_scene_reproduces_its_expectations(scene, solved_once):
     run = registry.run(scene)
     failed = [f"{c.name}: got {c.got}, expected {c.expected} ({c.kind}, {c.where})" for c in run.checks if not c.ok]
     assert not failed, f"{scene.id} ({scene.spec.source}): " + "; ".join(failed)
@@ -126,7 +126,7 @@ def test_cli_run_writes_the_documented_json(tmp_path):
     assert (tmp_path / "cam-cutter_paper-grid_paths.png").stat().st_size > 10_000
 
 
-def test_cli_validate_passes_and_reports_every_check(tmp_path, capsys):
+def test_cli_validate_passes_and_reports_every_check(tmp_path, capsys, solved_once):
     out = tmp_path / "v.json"
     assert main(["validate", "--json", str(out)]) == 0
     runs = json.loads(out.read_text())

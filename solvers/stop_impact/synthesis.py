@@ -80,7 +80,8 @@ WINDOW_REFINE = 1               # halvings of the scan step around the best wind
 ENVELOPE_POINTS = 2049          # time samples of eq. (2)'s window for the envelope's lines
 ROOT_FTOL = 1e-4                # the least phase: r*(t) within this of the limit (relative) ends the search
 MAX_PHASE_STEPS = 40
-HIGHS_OPTIONS = {"solver": "simplex", "simplex_strategy": 1, "presolve": "off"}   # dual simplex, warm from the last window
+HIGHS_OPTIONS = {"solver": "simplex", "simplex_strategy": 1, "presolve": "off",   # dual simplex, warm from the last window
+                 "output_flag": False}       # options given, cvxpy no longer silences HiGHS' banner
 BASES = BuildCache("stop_impact.synthesis_bases", maxsize=8)
 
 
@@ -253,7 +254,7 @@ class WindowLP:
             self.problem.solve(solver=cp.HIGHS, highs_options=HIGHS_OPTIONS)
         except (cp.error.SolverError, ValueError):      # cvxpy raises ValueError on HiGHS' "unknown"
             try:                                         # the primal simplex gave up: HiGHS' default once
-                self.problem.solve(solver=cp.HIGHS)
+                self.problem.solve(solver=cp.HIGHS, highs_options={"output_flag": False})
             except (cp.error.SolverError, ValueError) as exc:
                 return Status.FAILED, None, math.inf, {"message": str(exc)}
         status = from_cvxpy(self.problem.status)
