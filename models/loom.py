@@ -52,6 +52,7 @@ from annotated_types import Gt, Le, Lt
 
 from mechopt.errors import MechoptError, ModelError
 from mechopt.models.effects import Effect
+from mechopt.models.provenance import provenance_problem
 from mechopt.models.stop_impact import LeverStop
 
 STRESS_FORMS = ("exact", "linear")
@@ -594,11 +595,9 @@ def _entry(entry, key, allowed, required):
     missing = [k for k in required if k not in entry]
     if missing:
         raise ModelError(f"{key}: missing {', '.join(missing)}", key=key)
-    mark = entry.get("mark", "given")
-    if mark not in ("given", "assumed", "calibrated"):
-        raise ModelError(f"{key}.mark={mark!r}: allowed given, assumed, calibrated", key=key)
-    if mark != "given" and not str(entry.get("why", "")).strip():
-        raise ModelError(f"{key}: marked '{mark}' needs a 'why' (the reasoning or the figure fitted)", key=key)
+    problem = provenance_problem(entry.get("mark", "given"), entry.get("why", ""))
+    if problem:
+        raise ModelError(f"{key}{'.' if problem.startswith('mark=') else ': '}{problem}", key=key)
 
 
 def _known_event(g, name, key):

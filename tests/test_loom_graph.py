@@ -7,6 +7,7 @@ import pytest
 import scipy.sparse as sp
 from scipy.optimize import linprog
 
+import mechopt
 from mechopt import registry
 from mechopt.errors import ModelError
 from mechopt.models.loom import Cyclogram
@@ -298,3 +299,20 @@ def test_a_million_events_certified_by_duality():
     chain = a_path(n, tails[tight], heads[tight], 0, n - 1)
     assert chain and tails[tight[chain[0]]] == 0 and heads[tight[chain[-1]]] == n - 1
     assert math.fsum(w[tight[chain]].tolist()) == pytest.approx(span, rel=1e-12)
+
+
+def test_a_tie_of_two_bounds_is_a_non_unique_dual_not_a_failed_certificate():
+    # at 700 MPa the stress bound ties another bound: d span / d sigma_H differs from below and
+    # from above, and the graph and the LP may each return any value between (both are duals)
+    run = mechopt.solve("loom/group1", sigma_H_limit_MPa=700.0, check=True)
+    assert run.result.status is Status.SOLVED
+    below, above = run.result.diagnostics["sens_not_unique"]["sens_sigma_H_deg_per_MPa"]
+    task, h = run.task, 0.01                      # independent: the LP's spans at 700 -+ h
+    span = [plan_cyclogram(dataclasses.replace(task, sigma_H_limit_MPa=s), method="lp").values["span_deg"]
+            for s in (700.0 - h, 700.0, 700.0 + h)]
+    assert below == pytest.approx((span[1] - span[0]) / h, rel=1e-3)
+    assert above == pytest.approx((span[2] - span[1]) / h, rel=1e-3)
+    assert below != pytest.approx(above, rel=0.1)
+    assert min(below, above) - 1e-9 <= run.result.values["sens_sigma_H_deg_per_MPa"] <= max(below, above) + 1e-9
+    at_800 = mechopt.solve("loom/group1", sigma_H_limit_MPa=800.0, check=True).result
+    assert at_800.status is Status.SOLVED and "sens_not_unique" not in at_800.diagnostics

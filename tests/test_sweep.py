@@ -242,7 +242,7 @@ def test_unreachable_scheduler_is_refused_and_nothing_is_written(tmp_path):
 def test_plots_one_line_per_expected_output_and_a_map(tmp_path):
     scene = registry.find(LOOM)
     line = sw.sweep(scene, _grid("amplitude_limit_mm=0.05:0.15:4"), progress=False)
-    assert outputs_of(line, scene) == ["t_3_7_deg", "span_deg"]
+    assert outputs_of(line, scene) == ["t_3_7_deg", "span_deg", "check_rel"]
     paths = plot_sweep(line, tmp_path, scene=scene)
     assert [p.name for p in paths] == [f"sweep_{o}_vs_amplitude_limit_mm.png" for o in outputs_of(line, scene)]
     cam = registry.find(CAM)

@@ -20,6 +20,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 from mechopt.cache import memoised
 from mechopt.errors import MechoptError, ModelError, SceneError, SettingError
 from mechopt.files import quote, read_regular
+from mechopt.models.provenance import provenance_problem
 from mechopt.solvers.result import Status
 from mechopt.solvers.settings import declared_range, describe_range, setting_problem
 from mechopt.tables import number, read_records, read_rows
@@ -49,10 +50,9 @@ class Param(BaseModel):
     def _explained(self):
         if isinstance(self.value, float) and not math.isfinite(self.value):
             raise ValueError(f"value = {self.value}: expected a finite number")
-        if self.mark != "given" and not self.why.strip():
-            raise ValueError(f"a parameter marked '{self.mark}' needs a 'why' (the reasoning or the figure fitted)")
-        if (self.mark == "calibrated") != bool(self.on.strip()):
-            raise ValueError("'on' (the value a parameter was fitted to) goes with mark = 'calibrated', and only there")
+        problem = provenance_problem(self.mark, self.why, self.on)
+        if problem:
+            raise ValueError(f"a parameter {problem}" if problem.startswith("marked") else problem)
         return self
 
 
