@@ -446,9 +446,9 @@ def machine_speed(repeats=3, progress=None):
     phi = np.fromiter((d for *_, d in task.graph.edges(data="min_deg")), dtype=float, count=len(task.arcs))
     solver = SpeedGraph(task, cyclogram_lp.Net.structure(task), phi, g)
     seconds = statistics.median(_time(solver.highest_speed) for _ in range(max(repeats, 5)))
-    n_core = solver.highest_speed()[0]
+    n_core, _, steps = solver.highest_speed()
     rows.append({"case": "graph solve alone, chain", "seconds": seconds, "speed_rpm": n_core, "status": "SOLVED",
-                 "steps": solver.highest_speed()[2]})
+                 "steps": steps})
     return {"events": len(tasks["chain"].graph), "arcs": len(tasks["chain"].arcs), "rows": rows,
             "limiting": chain.diagnostics["limiting_constraint"],
             "limiting_cycle_ops": len(chain.diagnostics["limiting_cycle"]) - 1}

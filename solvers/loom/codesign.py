@@ -111,7 +111,7 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
                    "lift_bound": lift, "timing": took, "baseline_lift_bound": _lift_bound(baseline),
                    "limiting": plan.diagnostics.get("limiting"),
                    "law": str(law), "law_knots": list(law.knots), "law_coefficients": list(law.coefficients)}
-    arrays = dict(law_run.arrays) | {k: v for k, v in plan.arrays.items()}
+    arrays = dict(law_run.arrays) | plan.arrays
     return Result(status, values, Timing(0.0, time.perf_counter() - start), message=message, diagnostics=diagnostics,
                   arrays=arrays, warnings=plan.warnings)
 

@@ -95,7 +95,7 @@ def plan_cyclogram(task: Cyclogram, *, method: Literal["graph", "lp"] = "graph",
     other = (_plan_lp(task, stress_form=stress_form, tol_deg=tol_deg, backend=backend, warm_start=warm_start)
              if method == "graph" else _plan_graph(task, stress_form=stress_form, tol_deg=tol_deg))
     graph = functools.partial(_plan_graph, stress_form=stress_form, tol_deg=tol_deg)
-    return certify(result, other, tol_deg, one_sided=lambda key: one_sided_sensitivity(task, key, graph))
+    return certify(result, other, tol_deg, one_sided=lambda key: one_sided_sensitivity(task, key, graph, result))
 
 
 # a limit a sens_* is taken with respect to: its task field (window and cycle duals are compared as they are)
@@ -103,18 +103,19 @@ SENS_LIMITS = {"sens_sigma_H_deg_per_MPa": "sigma_H_limit_MPa", "sens_amplitude_
 ONE_SIDED_STEP = 1e-6          # relative step of the limit for the one-sided derivatives
 
 
-def one_sided_sensitivity(task, key, solve) -> tuple[float, float] | None:
+def one_sided_sensitivity(task, key, solve, at: Result) -> tuple[float, float] | None:
     """d(objective)/d(limit) from below and from above, by `solve` (the graph) at the limit -+ h:
     where two bounds tie at the optimum they differ, and every value between them is a dual (the
-    LP and the graph may each return a different one). None for a sens_* of no scalar limit."""
+    LP and the graph may each return a different one); `at` is the solved result at the limit.
+    None for a sens_* of no scalar limit."""
     field = SENS_LIMITS.get(key)
     limit = getattr(task, field, None) if field else None
     if limit is None:
         return None
     h = ONE_SIDED_STEP * max(1.0, abs(limit))
     spans = []
-    for value in (limit - h, limit, limit + h):
-        r = solve(dataclasses.replace(task, **{field: value}))
+    for value in (limit - h, None, limit + h):
+        r = at if value is None else solve(dataclasses.replace(task, **{field: value}))
         if r.status is not Status.SOLVED:
             return None
         spans.append(r.values.get("limiting_op_deg", r.values["span_deg"]))
@@ -687,7 +688,7 @@ def _plan_graph(task, *, stress_form, tol_deg) -> Result:
     values |= sens
     values["longest_path_deg"] = objective if not net.limiting else \
         float(levels.longest_from(net.first, net.lb, back_arcs(net, with_cycle=False)[0])[net.last])
-    float_deg = float_array(net, levels, back, lb_at, values["span_deg"])
+    float_deg = float_array(net, levels, back, lb_at, values["span_deg"], early=p)    # p: the earliest times
     floats = graph_floats(net, levels, back, lb_at, values["span_deg"], tol_deg, float_deg)
     diagnostics |= {"binding": binding, "sens_min_deg": sens_min} | limit_diagnostics(task, net) | floats
     if not net.limiting and len(net.tails) <= RANGING_MAX_TABLE:
@@ -733,11 +734,12 @@ def _limiting_arc(net):
     return next(k for k in range(len(net.tails)) if (net.tails[k], net.heads[k]) == net.limiting)
 
 
-def float_array(net, levels, back, lb, span):
+def float_array(net, levels, back, lb, span, early=None):
     """Total float LS(y) - ES(x) - lb of every operation for bounds lb in a span [deg] (None:
-    round-off made a zero cycle positive): earliest times from first, latest from the longest
-    paths to first with p(last) - p(first) <= span as one more back arc."""
-    early = levels.longest_from(net.first, lb, back)
+    round-off made a zero cycle positive): earliest times from first (`early`, when the caller
+    holds them), latest from the longest paths to first with p(last) - p(first) <= span as one
+    more back arc."""
+    early = levels.longest_from(net.first, lb, back) if early is None else early
     closed = BackArcs(np.r_[back.tails, net.last], np.r_[back.heads, net.first], np.r_[back.weights, -span])
     try:
         late = -levels.longest_to(net.first, lb, closed)

@@ -188,7 +188,7 @@ def summarise(task: PressDrive, trace: Trace, *, cut_angles=None) -> tuple[dict,
     (U, 0 or 1), the work integrals (`WORK_NAMES`) and the outputs of `Dynamics.OUTPUT_NAMES`."""
     dyn = dynamics_of(task)
     t, x, mode = trace.arrays()
-    out = np.asarray(dyn.equations.outputs.map(len(t))(x.T, mode.T, dyn.p))
+    out = np.asarray(dyn.outputs.map(len(t))(x.T, mode.T))
     names = dict(zip(Dynamics.OUTPUT_NAMES, out))
     n = dyn.n_states
     iphi, iw = task.state_names.index("phi_rad"), task.state_names.index("omega_rad_s")

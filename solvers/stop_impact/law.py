@@ -79,7 +79,7 @@ def rebound_amplitude_mm(task: LeverStop, speed_rpm, t_deg, *, grid_points: int 
         return (r * closed_form_amplitude_m(unit)[0] * 1e3).reshape(speed.shape)
     grid = np.linspace(0.0, unit.window_s, grid_points)
     g, p = (part[0] for part in response_parts(unit, grid))
-    lines, breaks = _upper_envelope(g, p)
+    lines, breaks = upper_envelope(g, p)
     j = lines[np.searchsorted(breaks, r)]
     s = grid[j]
     best = r * g[j] + p[j]
@@ -103,7 +103,7 @@ def _amplitude_or(lost, task, speed_rpm, t_deg):
         return lost
 
 
-def _upper_envelope(slopes, offsets):
+def upper_envelope(slopes, offsets):
     """Lines y = slope * r + offset: (indices of the lines on the upper envelope, in order of r,
     and the r where each hands over to the next)."""
     order = np.lexsort((offsets, slopes))            # by slope, then offset: the last of equals wins
