@@ -118,8 +118,16 @@ def quote(value, limit: int = 40) -> str:
 def take_lock(path) -> int | None:
     """An open descriptor holding an exclusive lock on the file `path` (created if absent), or None
     when another process holds it. A symbolic link, folder, FIFO or device at `path` is refused
-    (ValueError), never followed: a lock is written to, and a link would make it truncate its target."""
-    path = Path(path)
+    (ValueError), never followed: a lock is written to, and a link would make it truncate its target.
+    A lock its holder removed as we opened it is let go and the new file taken (`holds`)."""
+    while True:
+        fd = _lock_once(Path(path))
+        if fd is None or holds(fd, path):
+            return fd
+        os.close(fd)
+
+
+def _lock_once(path):
     if path.is_symlink():
         raise ValueError(f"{path}: a symbolic link where a lock file belongs; remove it (it is not followed)")
     flags = os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0)

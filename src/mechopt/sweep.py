@@ -477,17 +477,13 @@ class _Store:
     def _take(self):
         """A descriptor holding `<out>.lock` (its pid written in it), or SceneError: held by another
         sweep, or not a regular file (a symbolic link is never followed)."""
-        while True:
-            try:
-                fd = take_lock(self.lock_path)
-            except ValueError as exc:
-                raise SceneError(f"{exc}; nothing was written", key="out") from None
-            if fd is None:
-                raise SceneError(f"{self.path} is being written by another sweep (pid {self._holder()}); "
-                                 f"wait for it or choose another --out", key="out")
-            if holds(fd, self.lock_path):   # else its holder removed it as we opened it: take the new one
-                break
-            os.close(fd)
+        try:
+            fd = take_lock(self.lock_path)
+        except ValueError as exc:
+            raise SceneError(f"{exc}; nothing was written", key="out") from None
+        if fd is None:
+            raise SceneError(f"{self.path} is being written by another sweep (pid {self._holder()}); "
+                             f"wait for it or choose another --out", key="out")
         os.ftruncate(fd, 0)
         os.write(fd, f"{os.getpid()}\n".encode())
         return fd
