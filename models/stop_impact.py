@@ -95,6 +95,11 @@ STATED_RANGE = {
 }
 
 
+def speed_tag(speed_rpm) -> str:
+    """A speed as a value-name suffix: 280.0 -> '280', 177.5 -> '177p5' (mechopt.units reads it back)."""
+    return f"{speed_rpm:g}".replace(".", "p")
+
+
 def stated(key):
     """The stated range of an input as its field's annotation."""
     low, high = STATED_RANGE[key]

@@ -10,7 +10,7 @@ from scipy.optimize import brentq
 
 from mechopt.errors import ModelError, SolverError
 from mechopt.models.cam_follower import law_values
-from mechopt.models.stop_impact import LeverStop
+from mechopt.models.stop_impact import LeverStop, speed_tag
 from mechopt.solvers.result import Result, Status, Timing
 from mechopt.solvers.settings import Annotated, Interval, Tolerance
 from mechopt.solvers.stop_impact.cam_follower import follow_cam, follow_cam_reference, follower_data
@@ -58,8 +58,8 @@ def impact_forces(task: LeverStop) -> Result:
     for n in task.speeds_rpm:
         v0 = approach_velocity_m_s(task, n)
         F = float(task.impact_force_N(v0))
-        values |= {f"impact_force_N_{_tag(n)}": F, f"impulse_Ns_{_tag(n)}": F * task.contact_time_s,
-                   f"approach_velocity_m_s_{_tag(n)}": v0}
+        values |= {f"impact_force_N_{speed_tag(n)}": F, f"impulse_Ns_{speed_tag(n)}": F * task.contact_time_s,
+                   f"approach_velocity_m_s_{speed_tag(n)}": v0}
         for name, value in zip(table, (n, F, F * task.contact_time_s, v0)):
             table[name].append(value)            # the same, one row per speed (`--csv`)
     return Result(Status.SOLVED, values, Timing(0.0, time.perf_counter() - start),
@@ -87,7 +87,7 @@ def rebound(task: LeverStop, *, method: Literal["closed_form", "quadrature", "od
         except RollerLeftCam as exc:
             return _without_cam(exc, values, Timing(build_s, time.perf_counter() - start - build_s))
         t_s = histories.setdefault("t_s", np.linspace(0.0, imp.window_s, HISTORY_POINTS))
-        histories[f"q_mm_{_tag(n)}"] = closed_form_response(imp, t_s)[0] * 1e3
+        histories[f"q_mm_{speed_tag(n)}"] = closed_form_response(imp, t_s)[0] * 1e3
         runs = {name: methods[name](imp) for name in ([method] + [k for k in methods if k != method]
                                                       if cross_check else [method])}
         build_s += sum(r[2] for r in runs.values())
@@ -97,21 +97,21 @@ def rebound(task: LeverStop, *, method: Literal["closed_form", "quadrature", "od
                           Timing(build_s, time.perf_counter() - start - build_s),
                           message=f"{method}: {own_status.value} at {n:g} rpm, no amplitude reported",
                           diagnostics=diagnostics)
-        values[f"rebound_mm_{_tag(n)}"] = amp * 1e3
+        values[f"rebound_mm_{speed_tag(n)}"] = amp * 1e3
         if cross_check:
             bad = [k for k, r in runs.items() if r[1] is not Status.SOLVED or not math.isfinite(r[0])]
             spread = max(abs(r[0] - amp) for k, r in runs.items() if k not in bad) / max(amp, 1e-300)
-            diagnostics[f"methods_{_tag(n)}"] = {k: {"mm": r[0] * 1e3, "status": r[1].value} for k, r in runs.items()}
-            values[f"methods_max_rel_diff_{_tag(n)}"] = spread
+            diagnostics[f"methods_{speed_tag(n)}"] = {k: {"mm": r[0] * 1e3, "status": r[1].value} for k, r in runs.items()}
+            values[f"methods_max_rel_diff_{speed_tag(n)}"] = spread
             if spread > AGREEMENT_REL or bad:
                 status = Status.INACCURATE
                 notes.append(f"{n:g} rpm: methods differ by {spread:.2e} relative"
                              + (f", {bad} not solved" if bad else ""))
             event_mm, contact_s, ev_status, ev_message = simulate_contact(task, n, v0_m_s=imp.v0_m_s)
             if ev_status is Status.SOLVED:
-                values[f"rebound_event_mm_{_tag(n)}"] = event_mm
-                values[f"contact_time_event_s_{_tag(n)}"] = contact_s
-            diagnostics[f"event_driven_{_tag(n)}"] = ev_message
+                values[f"rebound_event_mm_{speed_tag(n)}"] = event_mm
+                values[f"contact_time_event_s_{speed_tag(n)}"] = contact_s
+            diagnostics[f"event_driven_{speed_tag(n)}"] = ev_message
     values["contact_time_s"] = task.contact_time_s
     agreed = "closed form, quadrature and ODE agree within 1e-8" if cross_check else "no cross-check"
     message = f"{method}; " + ("; ".join(notes) if notes else agreed)
@@ -245,11 +245,6 @@ def _need_speeds(task):
         raise ModelError("speeds_rpm=[]: give the main-shaft speeds to report (structure table)", key="speeds_rpm")
 
 
-def _tag(speed_rpm):
-    """Speed as a value-name suffix: 280.0 -> '280', 177.5 -> '177p5'."""
-    return f"{speed_rpm:g}".replace(".", "p")
-
-
 def cam_dynamics(task: LeverStop, *, reltol: Tolerance = 1e-10,
                  points: Annotated[int, Interval(ge=11, le=100_000)] = 1001) -> Result:
     """The lift cam's rise with the elastic lever (paper 004, Fig. 4) at each speed of
@@ -275,7 +270,7 @@ def cam_dynamics(task: LeverStop, *, reltol: Tolerance = 1e-10,
                           message=f"{n:g} rpm: {rise.message}")
         if rise.status is Status.INFEASIBLE:
             left.append(rise.message)
-        suffix = "" if n == task.speed_nominal_rpm else f"_{_tag(n)}"
+        suffix = "" if n == task.speed_nominal_rpm else f"_{speed_tag(n)}"
         values[f"approach_velocity_m_s{suffix}"] = rise.approach_velocity_m_s
         values[f"dynamic_error_mm{suffix}"] = rise.dynamic_error_mm
         values[f"min_contact_force_N{suffix}"] = rise.min_contact_force_N
@@ -300,7 +295,7 @@ def cam_dynamics(task: LeverStop, *, reltol: Tolerance = 1e-10,
         if n != task.speed_nominal_rpm:
             for name, series, scale in (("x_mm", rise.X, H_mm), ("dx_dphi_mm_per_rad", rise.dX, H_mm / rad),
                                         ("d2x_dphi2_mm_per_rad2", rise.ddX, H_mm / rad**2)):
-                arrays[f"{name}_{_tag(n)}"] = np.interp(nominal.xi, rise.xi, series * scale, right=np.nan)
+                arrays[f"{name}_{speed_tag(n)}"] = np.interp(nominal.xi, rise.xi, series * scale, right=np.nan)
     ref_xi, ref_v0, ref_status = follow_cam_reference(task, task.speed_nominal_rpm)
     timing = lambda: Timing(build_s, time.perf_counter() - start - build_s)
     spread = abs(ref_v0 - nominal.approach_velocity_m_s) / max(abs(ref_v0), 1e-300)

@@ -16,7 +16,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from mechopt.errors import ModelError
-from mechopt.models.stop_impact import LeverStop
+from mechopt.models.stop_impact import LeverStop, speed_tag
 from mechopt.solvers.result import Result, Status, Timing
 from mechopt.solvers.settings import Annotated, Interval, NonNegative, Positive, Tolerance
 from mechopt.solvers.stop_impact.law import RollerLeftCam, amplitude_law, approach_velocity_m_s, rebound_amplitude_mm
@@ -158,7 +158,7 @@ class _Fit:
             task = dataclasses.replace(task, damping_ratio=damping_ratio)
         out = {}
         for n in task.speeds_rpm:
-            tag = f"{n:g}".replace(".", "p")
+            tag = speed_tag(n)
             try:                        # where the roller leaves its cam: no prediction (NaN, left out of spreads)
                 v0 = approach_velocity_m_s(task, n, t_deg)
             except RollerLeftCam as exc:

@@ -51,7 +51,7 @@ from mechopt.cache import BuildCache
 from mechopt.errors import ModelError
 from mechopt.models.cam_follower import LAWS, law_values
 from mechopt.models.cam_law import SplineBasis, SplineLaw, elastic_response, elastic_responses, intervals_for
-from mechopt.models.stop_impact import LeverStop
+from mechopt.models.stop_impact import LeverStop, speed_tag
 from mechopt.solvers.result import Result, Status, Timing, from_cvxpy
 from mechopt.solvers.settings import Annotated, Interval, NonNegative
 from mechopt.solvers.stop_impact.cam_follower import follow_cam, follower_data
@@ -499,10 +499,10 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
             own = predicted_rebounds_mm(task, law, t_deg, [n], lever=lever)[0][0]
             gap = abs(chain - own) / max(limit, 1e-300)
             worst_gap = max(worst_gap, gap)
-            values[f"rebound_chain_mm_{_tag(n)}"] = chain
-            values[f"rebound_predicted_mm_{_tag(n)}"] = own
+            values[f"rebound_chain_mm_{speed_tag(n)}"] = chain
+            values[f"rebound_predicted_mm_{speed_tag(n)}"] = own
         values["chain_rel_diff"] = worst_gap
-        values["rebound_max_chain_mm"] = max(values[f"rebound_chain_mm_{_tag(n)}"] for n in check_speeds)
+        values["rebound_max_chain_mm"] = max(values[f"rebound_chain_mm_{speed_tag(n)}"] for n in check_speeds)
         if worst_gap > agreement_rel:
             status = Status.INACCURATE
         over = values["rebound_max_chain_mm"] - limit
@@ -606,7 +606,7 @@ def _compare(task, law, t_deg, speeds, values):
         other = dataclasses.replace(task, law=each)
         for n in speeds:
             rise = follow_cam(other, n, t_deg)
-            tag = f"{name}_{{}}_{_tag(n)}"
+            tag = f"{name}_{{}}_{speed_tag(n)}"
             if rise.status is Status.SOLVED:
                 values[tag.format("rebound_mm")] = float(rebound_amplitude_mm(other, n, t_deg))
             values[tag.format("dynamic_error_mm")] = rise.dynamic_error_mm
@@ -622,5 +622,3 @@ def _analogues(law, xi, H_mm, t_rad, prefix):
             f"{prefix}ds_dphi_mm_per_rad": dS * H_mm / t_rad, f"{prefix}d2s_dphi2_mm_per_rad2": ddS * H_mm / t_rad**2}
 
 
-def _tag(speed_rpm):
-    return f"{speed_rpm:g}".replace(".", "p")

@@ -20,7 +20,7 @@ SYMBOLS = {"mm": "mm", "m": "m", "um": "µm", "s": "s", "ms": "ms", "deg": "deg"
            "GPa": "GPa", "Hz": "Hz", "rpm": "rpm", "J": "J", "W": "W"}
 POWERS = {"1": "", "2": "²", "3": "³", "4": "⁴"}
 _ATOM = re.compile(rf"({'|'.join(sorted(SYMBOLS, key=len, reverse=True))})([1-4]?)")
-_TAG = re.compile(r"\d+(\.\d+)?")
+_TAG = re.compile(r"\d+(p\d+)?")      # a speed tag (models.stop_impact.speed_tag: 177.5 -> 177p5)
 
 
 def _atom(token: str) -> str | None:

@@ -10,6 +10,7 @@ analogues and their dynamic errors at each speed (Fig. 4).
 """
 
 from mechopt.figures.registry import figure, new_figure
+from mechopt.models.stop_impact import speed_tag
 from mechopt.solvers.stop_impact import (
     cam_dynamics,
     fit_roots,
@@ -58,11 +59,6 @@ def cam_rises(run):
     return {"analogues": analogues, "dynamic_errors": errors}
 
 
-def _tag(speed_rpm):
-    """A speed as the solvers' name suffix: 280.0 -> '280', 177.5 -> '177p5'."""
-    return f"{speed_rpm:g}".replace(".", "p")
-
-
 def _cam_rises(run):
     """Fig. 4: the displacement, velocity and acceleration analogues of C over the rise (against
     the cam angle, up to the nominal speed's contact with the plate) at each speed, beside the
@@ -79,7 +75,7 @@ def _cam_rises(run):
         ax.plot(phi, kin, "k--", lw=1, label=f"{task.law} law (rigid lever)")
     plate_mm = a["x_mm"][-1]            # the nominal rise ends where C meets the plate: every contact is there
     for n in speeds:
-        suffix = "" if n == task.speed_nominal_rpm else f"_{_tag(n)}"
+        suffix = "" if n == task.speed_nominal_rpm else f"_{speed_tag(n)}"
         for row, (name, kin) in enumerate(zip(names, kinematic)):
             got = a[name + suffix]
             axes[0][row].plot(phi, got, lw=1.1, label=f"n = {n:g} rpm")
@@ -104,7 +100,7 @@ def _histories(run, speeds=None, limit_mm=None):
     fig = new_figure(figsize=(8, 4.5))
     ax = fig.subplots()
     for n in task.speeds_rpm if speeds is None else speeds:
-        q = a["q_mm"] if speeds is not None else a[f"q_mm_{_tag(n)}"]
+        q = a["q_mm"] if speeds is not None else a[f"q_mm_{speed_tag(n)}"]
         ax.plot(a["t_s"] * 1e3, q, lw=1.2, label=f"n = {n:g} rpm, t = {task.t_deg:g} deg")
     if limit_mm is not None:
         ax.axhline(limit_mm, color="tab:red", ls=":", label=f"amplitude limit {limit_mm:g} mm")
@@ -120,20 +116,20 @@ def _amplitude_vs_speed(run):
     """The computed first rebounds against speed (joined), the event-driven contact's beside them
     and the source's points."""
     task, values = run.task, run.result.values
-    speeds = [n for n in task.speeds_rpm if f"rebound_mm_{_tag(n)}" in values]
+    speeds = [n for n in task.speeds_rpm if f"rebound_mm_{speed_tag(n)}" in values]
     fig = new_figure(figsize=(7, 4.5))
     ax = fig.subplots()
-    ax.plot(speeds, [values[f"rebound_mm_{_tag(n)}"] for n in speeds], "o-", mfc="none",
+    ax.plot(speeds, [values[f"rebound_mm_{speed_tag(n)}"] for n in speeds], "o-", mfc="none",
             label=f"computed, eq. (2), t = {task.t_deg:g} deg")
     published = [(name, e.value) for name, e in run.scene.spec.expect.items()
                  if name.startswith("rebound_mm_") and isinstance(e.value, (int, float))]
     if published:
-        speed_of = {f"rebound_mm_{_tag(n)}": n for n in task.speeds_rpm}
+        speed_of = {f"rebound_mm_{speed_tag(n)}": n for n in task.speeds_rpm}
         ax.plot([speed_of[k] for k, _ in published], [v for _, v in published], "kx", ms=8,
                 label=f"source ({run.scene.spec.expect[published[0][0]].kind})")
-    events = [n for n in speeds if f"rebound_event_mm_{_tag(n)}" in values]
+    events = [n for n in speeds if f"rebound_event_mm_{speed_tag(n)}" in values]
     if events:
-        ax.plot(events, [values[f"rebound_event_mm_{_tag(n)}"] for n in events], "s", ms=4,
+        ax.plot(events, [values[f"rebound_event_mm_{speed_tag(n)}"] for n in events], "s", ms=4,
                 label="event-driven contact (stiffness switch)")
     ax.set(xlabel="main shaft speed n [rpm]", ylabel="first rebound [mm]", title=f"{run.scene.id}")
     ax.legend(fontsize=8)
