@@ -428,3 +428,11 @@ def test_a_table_names_its_rows_in_a_label_column(tmp_path):
     row = dict(zip(header, lines[1 + names.index("flywheel_inertia_kgm2")].split(",")))
     assert float(row["elasticity_speed_fluctuation"]) == pytest.approx(
         run.values["speed_fluctuation_elasticity_flywheel_inertia_kgm2"], rel=1e-9)
+
+
+@pytest.mark.parametrize("bounds, message", [((float("nan"), 0.2, 2), r"nan is not a finite number"),
+                                             ((0.1, 1e300, 2), r"1e\+300 is beyond")])
+def test_an_api_sweep_axis_meets_the_command_lines_rule(bounds, message):
+    # the API's axis ends pass the --grid rule (sweep.axis_value_problem) before any variant is solved
+    with pytest.raises(mechopt.SceneError, match=message):
+        mechopt.sweep("loom/group1", grid={"amplitude_limit_mm": bounds})

@@ -79,6 +79,9 @@ def _axis(kind, key, bounds, size):
     low, high, *num = bounds
     if any(isinstance(x, bool) or not isinstance(x, (int, float)) for x in (low, high)):
         raise SceneError(f"{kind}[{key!r}] = {bounds!r}: expected numbers {form}", key=key)
+    for end in (low, high):
+        if _studies.axis_value_problem(float(end)):
+            raise SceneError(f"{kind}[{key!r}] = {bounds!r}: {end!r} {_studies.axis_value_problem(float(end))}", key=key)
     if low > high:
         raise SceneError(f"{kind}[{key!r}] = {bounds!r}: {low:g} > {high:g}; give the range low to high", key=key)
     if num and (isinstance(num[0], bool) or not isinstance(num[0], int) or num[0] < 1):

@@ -785,14 +785,22 @@ def _split(text, flag, form, count):
     return key.strip(), numbers
 
 
+def axis_value_problem(value: float) -> str:
+    """What is wrong with an axis end ('' when nothing): the one rule of the CLI and the API."""
+    if not math.isfinite(value):
+        return "is not a finite number"
+    if abs(value) > AXIS_LIMIT:
+        return f"is beyond ±{AXIS_LIMIT:g}; no parameter or setting of a mechanism is that large"
+    return ""
+
+
 def _number(text, flag, word, name):
     try:
         value = float(word)
     except ValueError:
         value = math.nan
-    if not math.isfinite(value):
-        raise SceneError(f"{flag} {text!r}: {name} = {word!r} is not a finite number", key=split_assignment(text)[0])
-    if abs(value) > AXIS_LIMIT:
-        raise SceneError(f"{flag} {text!r}: {name} = {word} is beyond ±{AXIS_LIMIT:g}; no parameter or setting "
-                         f"of a mechanism is that large", key=split_assignment(text)[0])
+    problem = axis_value_problem(value)
+    if problem:
+        shown = repr(word) if problem.startswith("is not") else word
+        raise SceneError(f"{flag} {text!r}: {name} = {shown} {problem}", key=split_assignment(text)[0])
     return value
