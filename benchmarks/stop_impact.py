@@ -213,7 +213,7 @@ def synthesis_rows(repeats=3, progress=None, quick=False):
     k = SYNTH_COEFFICIENTS[0]
     lever = sy.linear_lever(k, 2)
     speed = sy.speed_response(task, lever, 420.0, task.t_deg)
-    (X0, XB), (dX0, dXB), _ = speed.resp
+    (X0, XB), (dX0, dXB), _ = lever.response(speed.lam, speed.zeta)
     H = task.stroke_mm * 1e-3
     target = 1.0 - task.preload_mm / task.stroke_mm
     _, (_, _), (a0, A), _ = lever.bound_kin

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
+from scipy import sparse
 from scipy.interpolate import BSpline
 from scipy.linalg import expm
 
@@ -79,15 +80,29 @@ class SplineBasis:
         return np.concatenate([np.zeros(fixed), np.asarray(free, float), np.ones(fixed)])
 
     def matrices(self, xi, order: int = 3):
-        """[(s0, B)] for derivatives 0..order at `xi` in [0, 1]: S^(k)(xi) = s0_k + B_k c."""
+        """[(s0, B)] for derivatives 0..order at `xi` in [0, 1]: S^(k)(xi) = s0_k + B_k c, B_k sparse
+        (CSR: a row holds degree + 1 basis functions). The k-th derivative's basis is the degree
+        p - k design matrix on the inner knots times the coefficients' scaled differences
+        (de Boor), so no dense (points x coefficients) table is ever formed."""
         xi = np.clip(np.asarray(xi, float), 0.0, 1.0)
-        k, p, fixed = self.knots, self.degree, self.continuity + 1
-        count = k.size - p - 1
-        every = BSpline(k, np.eye(count), p, extrapolate=False)     # all basis functions at once
+        t, p, fixed = self.knots, self.degree, self.continuity + 1
+        count = t.size - p - 1
+        to_derivative = sparse.identity(count, format="csr")    # coefficients of S^(k) from all of S's
         out = []
         for d in range(order + 1):
-            full = np.nan_to_num((every.derivative(d) if d else every)(xi))
-            out.append((full[:, count - fixed:].sum(axis=1), full[:, fixed:count - fixed]))
+            deg = p - d
+            if deg < 0:
+                full = sparse.csr_matrix((xi.size, count))
+            else:
+                knots = t[d:t.size - d]
+                full = (BSpline.design_matrix(xi, knots, deg) @ to_derivative).tocsr()
+            if 0 < deg and d < order:
+                n = to_derivative.shape[0]
+                width = knots[deg + 1:deg + n] - knots[1:n]            # t_{i+deg+1} - t_{i+1}
+                diff = sparse.diags([-np.ones(n - 1), np.ones(n - 1)], [0, 1], shape=(n - 1, n))
+                to_derivative = (sparse.diags(deg / width) @ diff @ to_derivative).tocsr()
+            offset = np.asarray(full[:, count - fixed:].sum(axis=1)).ravel()
+            out.append((offset, full[:, fixed:count - fixed].tocsr()))
         return out
 
     def law(self, free, label: str = "synthesised") -> "SplineLaw":

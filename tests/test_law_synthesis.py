@@ -38,12 +38,41 @@ def test_the_superposed_response_matches_cvodes_on_a_spline_law(lever):
     basis = SplineBasis(40)
     xi = np.linspace(0, 1, 801)
     (s0, B), *_ = basis.matrices(xi, order=0)
-    law = basis.law(np.linalg.lstsq(B, law_values("cycloidal", xi)[0] - s0, rcond=None)[0])
+    law = basis.law(np.linalg.lstsq(B.toarray(), law_values("cycloidal", xi)[0] - s0, rcond=None)[0])
     rise = follow_cam(dataclasses.replace(lever, law=law), 420.0)
     predicted = predicted_rebounds_mm(lever, law, lever.t_deg, [420.0])[0]
     assert rise.status is Status.SOLVED
     assert predicted[1] == pytest.approx(rise.contact_xi, rel=1e-5)
     assert predicted[2] == pytest.approx(rise.approach_velocity_m_s, rel=1e-4)
+
+
+@pytest.mark.parametrize("continuity", [2, 3])
+def test_the_sparse_basis_matrices_match_scipys_spline_derivatives(continuity):
+    """S^(k) = s0 + B c from the design matrices and de Boor's differences, against scipy's own
+    BSpline.derivative on the full coefficients, at random xi (ends included)."""
+    basis = SplineBasis(50, continuity)
+    free = np.random.default_rng(3).uniform(-1, 2, basis.size)
+    xi = np.concatenate([[0.0, 1.0], np.random.default_rng(4).uniform(0, 1, 300)])
+    for d, (s0, B) in enumerate(basis.matrices(xi, order=3)):
+        assert s0 + B @ free == pytest.approx(basis.law(free).values(xi)[d], rel=1e-9, abs=1e-6)
+
+
+def test_the_lps_two_forms_of_the_lever_give_the_same_law(lever, monkeypatch):
+    """The dense superposition and the states tied by the exact step are one map: the same LP's
+    value in both forms, at a size each form would not pick by itself."""
+    from mechopt.solvers.stop_impact import synthesis as sy
+    answers = []
+    for first in (10**9, 0):                        # dense, then states
+        monkeypatch.setattr(sy, "STATE_FORM_FROM", first)
+        sy.BASES.clear()
+        lp_lever = sy.linear_lever(250, 2)
+        speed = sy.speed_response(lever, lp_lever, 420.0, lever.t_deg)
+        lines = sy.rebound_envelope(lever, 4 * sy.v0_limit_m_s(lever, lever.amplitude_limit_mm))
+        lp = sy.WindowLP(lever, lp_lever, [speed], lever.t_deg, objective="least_rebound",
+                         limit_mm=lever.amplitude_limit_mm, bounds={"max_acceleration_mm_per_rad2": ACCEL}, lines=lines)
+        answers.append(lp.solve(0.85))
+    assert [a[0] for a in answers] == [Status.SOLVED, Status.SOLVED]
+    assert answers[1][2] == pytest.approx(answers[0][2], rel=1e-7)
 
 
 def test_the_elastic_response_is_linear_in_its_input(lever):

@@ -22,7 +22,9 @@ Objectives (`objective`):
                        LP's value, assumed to fall as t grows (more time, slower arrival: stated,
                        not proven); a t below the kinematic minimum is a bisection step.
 
-Each LP is held in HiGHS's dual simplex, warm from the window before; the rows are sampled on the
+Each LP is built once per phase angle (the window a Parameter: a re-solve per window) and solved
+by HiGHS's dual simplex; the lever enters as a dense response matrix for few coefficients and as
+state variables tied by the exact step for many (`elastic_states`); the rows are sampled on the
 grid (every 0.015 in xi early in the rise, 0.004 near the plate), the roller's force kept 5 % above
 zero there, and the full grid (the dense check) and the chain judge the result. Not modelled: the
 pressure angle, the radius of curvature against the roller and the Hertz stress of the law.
@@ -50,7 +52,8 @@ from scipy.optimize import brentq
 from mechopt.cache import BuildCache
 from mechopt.errors import ModelError
 from mechopt.models.cam_follower import LAWS, law_values
-from mechopt.models.cam_law import SplineBasis, SplineLaw, elastic_response, elastic_responses, intervals_for
+from mechopt.models.cam_law import (SplineBasis, SplineLaw, elastic_response, elastic_responses, intervals_for,
+                                    step_matrices)
 from mechopt.models.stop_impact import LeverStop, speed_tag
 from mechopt.solvers.result import Result, Status, Timing, from_cvxpy
 from mechopt.solvers.settings import Annotated, Interval, NonNegative
@@ -74,6 +77,7 @@ RISE_NODES = 600                # at least this many grid nodes over the rise (a
 ROW_SPACING_XI = (0.015, 0.004)  # LP rows this far apart before / after ARRIVAL_FROM_XI (the full grid is checked after)
 ARRIVAL_FROM_XI = 0.55          # where the plate comes near: rows close enough that X' cannot peak between them
 CONTACT_MARGIN = 0.05           # the roller's force kept above 5 % of the closure at the rows (it peaks between them)
+STATE_FORM_FROM = 200           # coefficients from which the LP carries the lever's states (elastic_states)
 BIG_X, BIG_V = 2.0, 30.0        # big-M of the window's masks: above any X - target, X' a useful rise has
 WINDOW_CANDIDATES = (0.7, 0.8, 0.9)            # xi_a scanned first, then halved steps around the best
 WINDOW_REFINE = 1               # halvings of the scan step around the best window
@@ -82,6 +86,9 @@ ROOT_FTOL = 1e-4                # the least phase: r*(t) within this of the limi
 MAX_PHASE_STEPS = 40
 HIGHS_OPTIONS = {"solver": "simplex", "simplex_strategy": 1, "presolve": "off",   # dual simplex, warm from the last window
                  "output_flag": False}       # options given, cvxpy no longer silences HiGHS' banner
+# the states' LP is presolved: its tie rows fold away (10^3 coefficients, one LP: 0.8 s against 2.1 s without;
+# the dense LP at 24 coefficients is ~15x slower with presolve across the least-phase search)
+STATE_HIGHS_OPTIONS = HIGHS_OPTIONS | {"presolve": "on"}
 BASES = BuildCache("stop_impact.synthesis_bases", maxsize=8)
 
 
@@ -97,13 +104,16 @@ class LinearLever:
     bound_kin: tuple                    # the same at the knots and quarter points: where the bounds hold
 
     def response(self, lam: float, zeta: float):
-        """((X0, XB), (dX0, dXB), (ddX0, ddXB)) of the elastic lever at lambda: affine in c."""
+        """((X0, XB), (dX0, dXB), (ddX0, ddXB)) of the elastic lever at lambda: affine in c, the
+        matrices dense (superposition of every basis function's response; a derivative-free
+        peer's objective, not the LP's: `elastic_states` keeps the LP sparse)."""
         (s0, B), (d0, D), (a0, A), _ = self.kin
-        e, de = elastic_response(np.column_stack([a0, A]), lam, zeta, self.step)
-        dde = -np.column_stack([a0, A]) - 2 * zeta * lam * de - lam * lam * e
-        X = (s0 + e[:, 0], B + e[:, 1:])
-        dX = (d0 + de[:, 0], D + de[:, 1:])
-        ddX = (a0 + dde[:, 0], A + dde[:, 1:])
+        inputs = np.column_stack([a0, A.toarray()])
+        e, de = elastic_response(inputs, lam, zeta, self.step)
+        dde = -inputs - 2 * zeta * lam * de - lam * lam * e
+        X = (s0 + e[:, 0], B.toarray() + e[:, 1:])
+        dX = (d0 + de[:, 0], D.toarray() + de[:, 1:])
+        ddX = (a0 + dde[:, 0], inputs[:, 1:] + dde[:, 1:])
         return X, dX, ddX
 
 
@@ -124,13 +134,13 @@ def _build_lever(coefficients, continuity):
     kin = []
     for d, (off, mat) in enumerate(mats):
         off = np.concatenate([off, np.full(dwell, 1.0 if d == 0 else 0.0)])
-        kin.append((off, np.vstack([mat, np.zeros((dwell, mat.shape[1]))])))
+        kin.append((off, sparse.vstack([mat, sparse.csr_matrix((dwell, mat.shape[1]))], format="csr")))
     breaks = np.unique(basis.knots)
     quarters = np.unique(np.concatenate([breaks[:-1] + f * np.diff(breaks) for f in (0.0, 0.25, 0.5, 0.75)]
                                         + [[1.0]]))
     # a cubic's acceleration is linear between knots (its peak at one) and its jerk constant: these
     # points hold those bounds exactly, the velocity's and a quartic's to O(h^2)
-    bounds = tuple((off, sparse.csr_matrix(mat)) for off, mat in basis.matrices(quarters, order=3))   # banded
+    bounds = tuple(basis.matrices(quarters, order=3))       # banded
     return LinearLever(basis, xi, step, rise, tuple(kin), bounds)
 
 
@@ -172,15 +182,42 @@ def v0_limit_m_s(task, limit_mm):
 
 @dataclass
 class SpeedResponse:
+    """The lever at one speed: lambda = omega t / Omega, its damping ratio, the rise's time T [s]."""
     rpm: float
     lam: float
+    zeta: float
     T: float
-    resp: tuple
 
 
 def speed_response(task, lever, rpm, t_deg):
     lam, zeta, H, target, T = follower_data(task, rpm, t_deg)
-    return SpeedResponse(rpm, lam, T, lever.response(lam, zeta))
+    return SpeedResponse(rpm, lam, zeta, T)
+
+
+def elastic_states(lever, speed, c, rows):
+    """(ties, X at `rows`, X at the grid's end, X' and X'' at `rows`): the elastic lever at one speed
+    as affine expressions in the coefficients c. Two forms of one map, chosen by size (measured, one
+    LP at 420 rpm, HiGHS dual simplex): below STATE_FORM_FROM coefficients the superposition's
+    dense response matrix (few columns; 24 coefficients x 5 speeds: ~8x faster than the states);
+    from it on, e and e' as LP variables at every node tied to c by the exact first-order-hold step
+    (models/cam_law.py `step_matrices`): each row holds a few coefficients (10^3 coefficients:
+    2.1 s against 6.4 s dense)."""
+    last = lever.xi.size - 1
+    if lever.basis.size < STATE_FORM_FROM:
+        (X0, XB), (dX0, dXB), (ddX0, ddXB) = lever.response(speed.lam, speed.zeta)
+        return ([], X0[rows] + XB[rows] @ c, X0[last] + XB[last] @ c, dX0[rows] + dXB[rows] @ c,
+                ddX0[rows] + ddXB[rows] @ c)
+    (s0, B), (d0, D), (a0, A), _ = lever.kin
+    Phi, Ga, Gb = step_matrices(speed.lam, speed.zeta, lever.step)
+    e, de = cp.Variable(lever.xi.size), cp.Variable(lever.xi.size)
+    u = a0 + A @ c                                      # S'' at the nodes, linear between them
+    slope = (u[1:] - u[:-1]) / lever.step
+    ties = [e[0] == 0, de[0] == 0,
+            e[1:] == Phi[0, 0] * e[:-1] + Phi[0, 1] * de[:-1] + Ga[0] * u[:-1] + Gb[0] * slope,
+            de[1:] == Phi[1, 0] * e[:-1] + Phi[1, 1] * de[:-1] + Ga[1] * u[:-1] + Gb[1] * slope]
+    X, dX = s0 + B @ c + e, d0 + D @ c + de
+    ddX = -2 * speed.zeta * speed.lam * de - speed.lam ** 2 * e         # X'' = S'' + e''
+    return ties, X[rows], X[last], dX[rows], ddX[rows]
 
 
 def _rows(lever):
@@ -223,22 +260,23 @@ class WindowLP:
             families["objective"] = [expr - peak, -expr - peak]
         self.r = r = cp.Variable() if peak is None else None
         closure = task.closure_force_N if "cam_drive" in task.effects and task.closure_force_N is not None else None
+        ties, rows = [], np.flatnonzero(rows)
         for sp in speeds:
-            (X0, XB), (dX0, dXB), (ddX0, ddXB) = sp.resp
+            tie, X, X_end, dX, ddX = elastic_states(lever, sp, c, rows)
+            ties += tie
             scale = H / sp.T                                            # X' -> m/s
             u = cp.Variable()
             families.setdefault("arrival", []).extend([
-                X0[rows] + XB[rows] @ c - self.target - BIG_X * self.before,   # below the plate before xi_a
-                self.target - (X0[-1] + XB[-1] @ c)])                    # on it by the grid's end
-            families.setdefault("approach", []).append(dX0[rows] + dXB[rows] @ c - u - BIG_V * self.after)
+                X - self.target - BIG_X * self.before,                  # below the plate before xi_a
+                self.target - X_end])                                   # on it by the grid's end
+            families.setdefault("approach", []).append(dX - u - BIG_V * self.after)
             rebound = lines[0] * scale * u + lines[1]
             families.setdefault("rebound", []).append(rebound - (limit_mm if r is None else r))
             if closure is not None:      # the roller stays on its cam: N = F + m H X'' / T^2 >= 0
-                families.setdefault("cam_contact", []).append(-(ddX0[rows] + ddXB[rows] @ c)
-                                                              - (1 - CONTACT_MARGIN) * closure * sp.T**2
+                families.setdefault("cam_contact", []).append(-ddX - (1 - CONTACT_MARGIN) * closure * sp.T**2
                                                               / (task.mass_kg * H))
         self.slacks = {}
-        constraints = []
+        constraints = list(ties)
         for name, pieces in families.items():
             if slack and name != "objective":
                 self.slacks[name] = cp.Variable(nonneg=True)
@@ -247,6 +285,7 @@ class WindowLP:
                 constraints += [piece <= 0 for piece in pieces]
         goal = sum(self.slacks.values()) if slack else (peak if peak is not None else r)
         self.problem = cp.Problem(cp.Minimize(goal), constraints)
+        self.options = STATE_HIGHS_OPTIONS if ties else HIGHS_OPTIONS
 
     def solve(self, window_xi):
         """(status, c, value, slacks) with the arrival window starting at xi_a = window_xi."""
@@ -254,7 +293,7 @@ class WindowLP:
         # the velocity rows start a row early: C may cross between the last row below and the window
         self.after.value = (self.xi < window_xi - 1.01 * ROW_SPACING_XI[1]).astype(float)
         try:
-            self.problem.solve(solver=cp.HIGHS, highs_options=HIGHS_OPTIONS)
+            self.problem.solve(solver=cp.HIGHS, highs_options=self.options)
         except (cp.error.SolverError, ValueError):      # cvxpy raises ValueError on HiGHS' "unknown"
             try:                                         # the primal simplex gave up: HiGHS' default once
                 self.problem.solve(solver=cp.HIGHS, highs_options={"output_flag": False})
