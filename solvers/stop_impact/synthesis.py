@@ -41,6 +41,7 @@ speeds beside it: rebound, dynamic error, peak acceleration.
 import dataclasses
 import math
 import time
+import warnings
 from dataclasses import dataclass
 from typing import Literal
 
@@ -89,6 +90,7 @@ HIGHS_OPTIONS = {"solver": "simplex", "simplex_strategy": 1, "presolve": "off", 
 # the states' LP is presolved: its tie rows fold away (10^3 coefficients, one LP: 0.8 s against 2.1 s without;
 # the dense LP at 24 coefficients is ~15x slower with presolve across the least-phase search)
 STATE_HIGHS_OPTIONS = HIGHS_OPTIONS | {"presolve": "on"}
+GIVE_UP_RATIO, GIVE_UP_FLOOR_S = 10.0, 1.0      # a window slower than this is given up (WindowLP.solve)
 BASES = BuildCache("stop_impact.synthesis_bases", maxsize=8)
 
 
@@ -286,22 +288,33 @@ class WindowLP:
         goal = sum(self.slacks.values()) if slack else (peak if peak is not None else r)
         self.problem = cp.Problem(cp.Minimize(goal), constraints)
         self.options = STATE_HIGHS_OPTIONS if ties else HIGHS_OPTIONS
+        self.slowest_s, self.given_up = 0.0, 0
 
     def solve(self, window_xi):
-        """(status, c, value, slacks) with the arrival window starting at xi_a = window_xi."""
+        """(status, c, value, slacks) with the arrival window starting at xi_a = window_xi. A window
+        HiGHS has not settled in GIVE_UP_RATIO times the slowest window solved here (at least
+        GIVE_UP_FLOOR_S) is given up: LIMIT, counted in `given_up`, no proof of infeasibility (on the
+        co-design's lever a few infeasible windows took 2-16 s against 0.3 s for any solved one)."""
         self.before.value = (self.xi >= window_xi).astype(float)
         # the velocity rows start a row early: C may cross between the last row below and the window
         self.after.value = (self.xi < window_xi - 1.01 * ROW_SPACING_XI[1]).astype(float)
-        try:
-            self.problem.solve(solver=cp.HIGHS, highs_options=self.options)
-        except (cp.error.SolverError, ValueError):      # cvxpy raises ValueError on HiGHS' "unknown"
-            try:                                         # the primal simplex gave up: HiGHS' default once
-                self.problem.solve(solver=cp.HIGHS, highs_options={"output_flag": False})
-            except (cp.error.SolverError, ValueError) as exc:
-                return Status.FAILED, None, math.inf, {"message": str(exc)}
+        budget = {"time_limit": max(GIVE_UP_FLOOR_S, GIVE_UP_RATIO * self.slowest_s)}
+        start = time.perf_counter()
+        with warnings.catch_warnings():                  # a time limit is a status here, not a warning
+            warnings.filterwarnings("ignore", "Solution may be inaccurate", UserWarning)
+            try:
+                self.problem.solve(solver=cp.HIGHS, highs_options=self.options | budget)
+            except (cp.error.SolverError, ValueError):      # cvxpy raises ValueError on HiGHS' "unknown"
+                try:                                         # the primal simplex gave up: HiGHS' default once
+                    self.problem.solve(solver=cp.HIGHS, highs_options={"output_flag": False} | budget)
+                except (cp.error.SolverError, ValueError) as exc:
+                    return Status.FAILED, None, math.inf, {"message": str(exc)}
         status = from_cvxpy(self.problem.status)
+        if status is Status.LIMIT:
+            self.given_up += 1
         if status is not Status.SOLVED:
             return status, None, math.inf, {}
+        self.slowest_s = max(self.slowest_s, time.perf_counter() - start)
         return (status, np.asarray(self.c.value).ravel(), float(self.problem.value),
                 {k: float(v.value) for k, v in self.slacks.items()})
 
@@ -344,15 +357,17 @@ class _Design:
     lps: int
     message: str = ""
     violated: tuple = ()
+    given_up: int = 0               # windows HiGHS did not settle in time (WindowLP.solve)
 
 
 def design_law(task: LeverStop, t_deg: float, band_rpm: tuple, *, objective="least_rebound", coefficients=100,
                continuity=2, sample_speeds=5, dense_step_rpm=5.0, bounds=None, rounds=4, samples=None,
-               around=None, dense_bar_mm=None) -> _Design:
+               around=None, dense_bar_mm=None, explain=True) -> _Design:
     """The best law at phase angle `t_deg` over the speed band: the LP over the arrival window
     (`_scan`), the dense check between the sampled speeds, a failing speed added and the LP solved
     again (at most `rounds` times). The dense check holds the law to the LP's own value (least
-    rebound) or to the limit (`dense_bar_mm`, the least phase's question: is the limit kept?)."""
+    rebound) or to the limit (`dense_bar_mm`, the least phase's question: is the limit kept?). `explain`: when
+    no window is feasible, a slack LP names the limits that bind (the least phase's search skips it)."""
     bounds = bounds or {}
     lever = linear_lever(coefficients, continuity)
     limit = task.amplitude_limit_mm
@@ -362,12 +377,15 @@ def design_law(task: LeverStop, t_deg: float, band_rpm: tuple, *, objective="lea
     samples = [float(n) for n in samples]
     dense = band_speeds(band_rpm, dense_step_rpm)
     lines = rebound_envelope(task, 4 * max(v0_limit_m_s(task, limit), 1e-3))
-    lps = 0
+    lps = given_up = 0
     for _ in range(rounds):
         speeds = [speed_response(task, lever, n, t_deg) for n in samples]
         lp = WindowLP(task, lever, speeds, t_deg, objective=objective, limit_mm=limit, bounds=bounds, lines=lines)
         (status, c, value, xa), count = _scan(lp, around)
-        lps += count
+        lps, given_up = lps + count, given_up + lp.given_up
+        if status is Status.INFEASIBLE and not explain:
+            return _Design(Status.INFEASIBLE, None, math.inf, xa, samples, lps,
+                           f"no law at t = {t_deg:.6g} deg keeps every limit", given_up=given_up)
         if status is Status.INFEASIBLE:
             slack = WindowLP(task, lever, speeds, t_deg, objective=objective, limit_mm=limit, bounds=bounds,
                               lines=lines, slack=True)
@@ -376,18 +394,19 @@ def design_law(task: LeverStop, t_deg: float, band_rpm: tuple, *, objective="lea
             binding = tuple(k for k, v in sl.items() if v > 1e-9)
             return _Design(Status.INFEASIBLE, None, math.inf, xa, samples, lps + count,
                            f"no law at t = {t_deg:.6g} deg keeps every limit at {', '.join(f'{n:g}' for n in samples)} "
-                           f"rpm; binding: {', '.join(binding) or 'none found'}", binding)
+                           f"rpm; binding: {', '.join(binding) or 'none found'}", binding, given_up)
         if status is not Status.SOLVED:
-            return _Design(status, None, math.inf, xa, samples, lps, f"HiGHS: {status.value} at xi_a = {xa:g}")
+            return _Design(status, None, math.inf, xa, samples, lps, f"HiGHS: {status.value} at xi_a = {xa:g}",
+                           given_up=given_up)
         law = lever.basis.law(c)
         pred = predicted_rebounds_mm(task, law, t_deg, dense, lever=lever)
         worst = int(np.argmax([p[0] for p in pred]))
         bar = dense_bar_mm if dense_bar_mm is not None else value if objective == "least_rebound" else limit
         if pred[worst][0] <= bar * (1 + 1e-3) + 1e-4 * limit or float(dense[worst]) in samples:
-            return _Design(Status.SOLVED, law, value, xa, samples, lps)
+            return _Design(Status.SOLVED, law, value, xa, samples, lps, given_up=given_up)
         samples = sorted(samples + [float(dense[worst])])       # broken between samples: sample it too
     return _Design(Status.LIMIT, law, value, xa, samples, lps,
-                   f"the dense check still fails at {dense[worst]:g} rpm after {rounds} rounds")
+                   f"the dense check still fails at {dense[worst]:g} rpm after {rounds} rounds", given_up=given_up)
 
 
 def band_speeds(band_rpm, step_rpm):
@@ -487,14 +506,15 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
     build_s = time.perf_counter() - build0
     values, diagnostics = {}, {}
     if objective == "least_phase":
-        design, t_deg, steps = _least_phase(task, band, phase_from_deg, phase_to_deg, phase_tol_deg, common)
-        diagnostics["bisection_steps"] = steps
+        design, t_deg, search = _least_phase(task, band, phase_from_deg, phase_to_deg, phase_tol_deg, common)
+        diagnostics |= {"bisection_steps": search["steps"], "windows_given_up": search["given_up"]}
         if design.status is not Status.SOLVED:
             return _unsolved(design, values, diagnostics, start, build_s, t_deg, limit, task, band, dense_step_rpm)
     else:
         task.need("t_deg")
         t_deg = task.t_deg
         design = design_law(task, t_deg, band, objective=objective, **common)
+        diagnostics["windows_given_up"] = design.given_up
         if design.status is not Status.SOLVED:
             return _unsolved(design, values, diagnostics, start, build_s, t_deg, limit, task, band, dense_step_rpm)
     law = design.law
@@ -563,29 +583,34 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
 def _least_phase(task, band, lo, hi, tol, common):
     """The least t with the least rebound over the band <= limit: regula falsi (Illinois) on
     r*(t) - limit, r*(t) the least-rebound LP's value, assumed to fall as t grows (stated, not
-    proven); a t with no law at all (below the kinematic minimum) is a bisection step. The speeds
-    the dense check added and the best window are carried to the next t."""
+    proven); a t with no law at all (below the kinematic minimum, or every window given up by
+    HiGHS: counted, the search moves up) is a bisection step. The speeds the dense check added and
+    the best window are carried to the next t."""
     limit = task.amplitude_limit_mm
-    state = {"samples": None, "around": None, "steps": 0}
+    state = {"samples": None, "around": None, "steps": 0, "given_up": 0}
 
     def excess(t):
         d = design_law(task, t, band, objective="least_rebound", samples=state["samples"], around=state["around"],
-                       dense_bar_mm=limit, **common)
+                       dense_bar_mm=limit, explain=False, **common)
         state["steps"] += 1
+        state["given_up"] += d.given_up
         if d.status is Status.SOLVED:
             state["samples"], state["around"] = d.speeds, d.window_xi
             return d.value - limit, d
-        return (math.inf if d.status is Status.INFEASIBLE else math.nan), d
+        # no window solved, some given up (LIMIT): no law found here, the search moves up (counted)
+        return (math.inf if d.status in (Status.INFEASIBLE, Status.LIMIT) and d.law is None else math.nan), d
     f_hi, best = excess(hi)
     if not f_hi <= 0:
+        if best.status is Status.INFEASIBLE:         # no law even at the bracket's top: name what binds
+            best = design_law(task, hi, band, objective="least_rebound", dense_bar_mm=limit, **common)
         if best.status is Status.SOLVED:
             best = dataclasses.replace(best, status=Status.INFEASIBLE, violated=("amplitude",),
                                        message=f"no law keeps amplitude_limit_mm={limit:g} over {band[0]:g}-{band[1]:g} "
                                                f"rpm even at t = {hi:g} deg: the best is {best.value:.4g} mm")
-        return best, hi, state["steps"]
+        return best, hi, state
     f_lo, low = excess(lo)
     if f_lo <= 0:                                   # the bracket's bottom already keeps it
-        return low, lo, state["steps"]
+        return low, lo, state
     side = 0
     while hi - lo > tol:
         if math.isfinite(f_lo):
@@ -595,7 +620,7 @@ def _least_phase(task, band, lo, hi, tol, common):
             mid = 0.5 * (lo + hi)
         f_mid, d = excess(mid)
         if math.isnan(f_mid):
-            return d, mid, state["steps"]
+            return d, mid, state
         if f_mid <= 0:
             hi, f_hi, best = mid, f_mid, d
             if side == -1 and math.isfinite(f_lo):
@@ -608,7 +633,7 @@ def _least_phase(task, band, lo, hi, tol, common):
             side = 1
         if -f_hi <= ROOT_FTOL * limit or state["steps"] >= MAX_PHASE_STEPS:   # r*(hi) is the limit to the LP's digits
             break
-    return best, hi, state["steps"]
+    return best, hi, state
 
 
 def _library_least_phase(task, law, band, lo, hi, tol, step):
