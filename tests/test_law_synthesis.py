@@ -145,3 +145,17 @@ def test_the_least_peak_acceleration_keeping_the_limit_is_below_the_cycloids(lev
     assert run.status is Status.SOLVED, run.message
     assert 4 / (2 * np.pi) * ACCEL * (1 - 1e-3) < run.values["peak_acceleration_mm_per_rad2"] < ACCEL
     assert run.values["rebound_max_chain_mm"] <= lever.amplitude_limit_mm * (1 + 2e-3)
+
+
+def test_a_c3_law_is_verified_by_the_chain_with_its_jerk_zero_at_the_dwells(lever):
+    """C3 (quartic) is checked by the chain like C2: its linear prediction agrees with CVODES +
+    eq. (2) within the tolerance (a quartic's S'' is not linear between nodes: the first-order hold
+    errs by O(h^2), stated in models/cam_law.py), and its jerk is zero where the rise meets the dwells."""
+    run = synthesise_law(lever, objective="least_rebound", coefficients=24, continuity=3, band_low_rpm=280.0,
+                         max_acceleration_mm_per_rad2=ACCEL, compare=False)
+    assert run.status is Status.SOLVED
+    assert run.values["chain_rel_diff"] < 2e-3
+    law = law_of(run)
+    assert law.degree == 4
+    jerk_peak = np.abs(law.values(np.linspace(0, 1, 2001))[3]).max()
+    assert np.abs(law.values([0.0, 1.0])[3]).max() < 1e-9 * jerk_peak
