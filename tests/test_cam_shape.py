@@ -231,3 +231,29 @@ def test_the_cam_is_drawn_with_its_curvature_and_an_undercut_one_without_a_profi
     labels = [line.get_label() for line in undercut.figures()["profile"].axes[0].lines]
     assert any(label.startswith("pitch curve") for label in labels)
     assert not any(label.startswith("cam profile") for label in labels)
+
+
+def test_a_synthesised_laws_cam_is_checked_like_a_library_laws():
+    """The shop's path for a synthesised law (issue 23): the spline law of `synthesise_law` shapes
+    the lift cam through `shape_cam`, and its least radii and largest pressure angle agree with the
+    independent polygon computation on the same law's S alone. The radii to 1e-3: a cubic's S'''
+    jumps at its knots, so the radius has a corner there (the least convex one sits on a knot at
+    128.55 deg, slopes ~1200 mm/rad), which the polygon's triples round off by O(h) (6e-4 here,
+    measured); the pressure angle, smooth, to 1e-5."""
+    import dataclasses
+    from types import SimpleNamespace
+
+    from mechopt.solvers.stop_impact.synthesis import law_of, synthesise_law
+    lever = find("stop-impact/amplitude-law").build()[0]
+    run = synthesise_law(lever, objective="least_rebound", coefficients=24, band_low_rpm=280.0, sample_speeds=3,
+                         max_acceleration_mm_per_rad2=570.0, verify=False, compare=False)
+    assert run.status is Status.SOLVED
+    law = law_of(run)
+    cam = dataclasses.replace(_lift_task(), rise_deg=lever.t_deg, return_deg=lever.t_deg)
+    ours = shape_cam(cam, lambda xi: law.values(xi)[:3])
+    assert ours.status is Status.SOLVED
+    convex, concave, phi = _polygon_checks(SimpleNamespace(**(dataclasses.asdict(cam) | {"law": law})))
+    for name, got, rel in (("min_radius_of_curvature_mm", convex, 1e-3), ("min_concave_radius_mm", concave, 1e-3),
+                           ("max_pressure_angle_deg", phi, 1e-5)):
+        assert ours.values[name] == pytest.approx(got, rel=rel), name
+    assert ours.values["min_radius_of_curvature_mm"] <= convex      # the polygon rounds the corner up
