@@ -232,10 +232,24 @@ def synthesis_rows(repeats=3, progress=None, quick=False):
     return rows
 
 
+DE_OVER_LP_TARGET = 50.0                # issue 23: the LP at least 50x faster than the derivative-free peer
+
+
 def synthesis_table(rows):
+    """The rows, and issue 23's verdict: differential evolution's time over the LP's at the same
+    coefficients, in the same run (a peer stopped by its budget before the LP's optimum makes the
+    ratio a lower bound: said)."""
     base = rows[0]
     lines = ["law synthesis, least rebound at t = 35.59 deg, 420 rpm (cold; medians)",
              f"{'method':48s} {'seconds':>9s} {'rebound mm':>11s} {'time / LP(100)':>15s}"]
     for r in rows:
         lines.append(f"{r['method']:48s} {r['seconds']:9.3g} {r['rebound_mm']:11.4g} {r['seconds'] / base['seconds']:15.3g}")
+    de = rows[-1]
+    ratio = de["seconds"] / base["seconds"]
+    short = de["rebound_mm"] > base["rebound_mm"] * (1 + 1e-3)
+    verdict = ("met" if ratio >= DE_OVER_LP_TARGET else
+               "undecided: DE's budget ended first" if short else "MISSED")
+    lines.append(f"differential evolution / LP at {SYNTH_COEFFICIENTS[0]} coefficients: {ratio:.3g}"
+                 f"{' or more (DE stopped by its budget above the LP optimum)' if short else ''} "
+                 f"(>= {DE_OVER_LP_TARGET:g}: {verdict})")
     return "\n".join(lines)
