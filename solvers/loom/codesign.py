@@ -109,6 +109,7 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
                    "float_deg": plan.diagnostics.get("float_deg", {}),
                    "baseline_limiting_constraint": baseline.diagnostics.get("limiting_constraint"),
                    "lift_bound": lift, "timing": took, "baseline_lift_bound": _lift_bound(baseline),
+                   "windows_given_up": law_run.diagnostics.get("windows_given_up", 0),
                    "limiting": plan.diagnostics.get("limiting"),
                    "law": str(law), "law_knots": list(law.knots), "law_coefficients": list(law.coefficients)}
     arrays = dict(law_run.arrays) | plan.arrays
