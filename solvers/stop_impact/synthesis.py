@@ -29,6 +29,9 @@ grid (every 0.015 in xi early in the rise, 0.004 near the plate), the roller's f
 zero there, and the full grid (the dense check) and the chain judge the result. Not modelled: the
 pressure angle, the radius of curvature against the roller and the Hertz stress of the law.
 
+A t whose kinematic bounds alone conflict (below the kinematic minimum) is refused by one small
+LP before any window is tried, naming the bounds that bind (`kinematic_conflict`).
+
 Robust over the speed band [band_low_rpm, band_high_rpm]: constraints at `sample_speeds` speeds,
 then the linear model is checked densely (every `dense_step_rpm`) between them; a speed that
 breaks the limit (or the LP's bound) is added to the samples and the LP solved again.
@@ -228,6 +231,40 @@ def elastic_states(lever, speed, c, rows):
     return ties, X[rows], X[last], dX[rows], ddX[rows]
 
 
+def kinematic_rows(lever, c, t_deg, stroke_mm, bounds):
+    """{family: [expressions <= 0]} of the kinematic bounds given (velocity, acceleration, jerk of
+    C's travel against the cam angle), held at the knots and quarter points (`bound_kin`)."""
+    families = {}
+    t_rad = math.radians(t_deg)
+    _, (d0, D), (a0, A), (j0, J) = lever.bound_kin
+    for name, (off, mat), power, key in (("velocity", (d0, D), 1, "max_velocity_mm_per_rad"),
+                                         ("acceleration", (a0, A), 2, "max_acceleration_mm_per_rad2"),
+                                         ("jerk", (j0, J), 3, "max_jerk_mm_per_rad3")):
+        if bounds.get(key):
+            lim = bounds[key] * t_rad**power / stroke_mm      # the bound on the analogue of S
+            expr = off + mat @ c
+            families[name] = [expr - lim, -expr - lim]
+    return families
+
+
+def kinematic_conflict(lever, t_deg, stroke_mm, bounds):
+    """The kinematic bounds that no rest-to-rest law of the space keeps at `t_deg` (a tuple, empty
+    when some law keeps them all): one small LP with a slack per bound, the lever left out. Any
+    window's LP holds these rows too, so a conflict here is infeasibility for every window, found
+    without them (below the kinematic minimum they took HiGHS 1-16 s each)."""
+    c = cp.Variable(lever.basis.size)
+    families = kinematic_rows(lever, c, t_deg, stroke_mm, bounds)
+    if not families:
+        return ()
+    slacks = {name: cp.Variable(nonneg=True) for name in families}
+    problem = cp.Problem(cp.Minimize(sum(slacks.values())),
+                         [piece <= slacks[name] for name, pieces in families.items() for piece in pieces])
+    problem.solve(solver=cp.HIGHS, highs_options={"output_flag": False})
+    if from_cvxpy(problem.status) is not Status.SOLVED:
+        return ()                                   # no verdict here: the windows' LPs decide
+    return tuple(name for name, v in slacks.items() if v.value > 1e-9)
+
+
 def _rows(lever):
     """The grid nodes the LP holds its dynamic limits at: sparse early in the rise, dense where C
     approaches its plate, and the grid's last node."""
@@ -252,16 +289,8 @@ class WindowLP:
         self.c = c = cp.Variable(lever.basis.size)
         self.before = cp.Parameter(self.xi.size, nonneg=True)      # 0 where the row holds, 1 where not
         self.after = cp.Parameter(self.xi.size, nonneg=True)
-        families = {}
-        t_rad = math.radians(t_deg)
-        _, (d0, D), (a0, A), (j0, J) = lever.bound_kin
-        for name, (off, mat), power, key in (("velocity", (d0, D), 1, "max_velocity_mm_per_rad"),
-                                             ("acceleration", (a0, A), 2, "max_acceleration_mm_per_rad2"),
-                                             ("jerk", (j0, J), 3, "max_jerk_mm_per_rad3")):
-            if bounds.get(key):
-                lim = bounds[key] * t_rad**power / task.stroke_mm      # the bound on the analogue of S
-                expr = off + mat @ c
-                families[name] = [expr - lim, -expr - lim]
+        families = kinematic_rows(lever, c, t_deg, task.stroke_mm, bounds)
+        _, _, (a0, A), _ = lever.bound_kin
         self.peak = peak = cp.Variable() if objective == "least_acceleration" else None
         if peak is not None:
             expr = a0 + A @ c
@@ -383,6 +412,11 @@ def design_law(task: LeverStop, t_deg: float, band_rpm: tuple, *, objective="lea
         samples = list(np.linspace(lo, hi, sample_speeds)) if sample_speeds > 1 else [hi]
     samples = [float(n) for n in samples]
     dense = band_speeds(band_rpm, dense_step_rpm)
+    conflict = kinematic_conflict(lever, t_deg, task.stroke_mm, bounds)
+    if conflict:
+        return _Design(Status.INFEASIBLE, None, math.inf, math.nan, samples, 1,
+                       f"no law at t = {t_deg:.6g} deg keeps the kinematic bounds: binding: {', '.join(conflict)}",
+                       conflict)
     lines = rebound_envelope(task, 4 * max(v0_limit_m_s(task, limit), 1e-3))
     lps = given_up = 0
     for _ in range(rounds):
