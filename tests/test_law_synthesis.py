@@ -159,3 +159,13 @@ def test_a_c3_law_is_verified_by_the_chain_with_its_jerk_zero_at_the_dwells(leve
     assert law.degree == 4
     jerk_peak = np.abs(law.values(np.linspace(0, 1, 2001))[3]).max()
     assert np.abs(law.values([0.0, 1.0])[3]).max() < 1e-9 * jerk_peak
+
+
+def test_the_kinematic_conflict_names_only_the_bound_that_binds(lever):
+    """Below the kinematic minimum with a generous velocity bound beside the acceleration's: one
+    small LP refuses the angle before any window, and names the acceleration alone (a rise over
+    20 deg needs ~100 mm/rad on average, far below 1000; its |S''| >= 4 needs 1150 mm/rad^2, twice 570)."""
+    from mechopt.solvers.stop_impact.synthesis import kinematic_conflict, linear_lever
+    both = {"max_velocity_mm_per_rad": 1000.0, "max_acceleration_mm_per_rad2": ACCEL}
+    assert kinematic_conflict(linear_lever(16, 2), 20.0, lever.stroke_mm, both) == ("acceleration",)
+    assert kinematic_conflict(linear_lever(16, 2), 40.0, lever.stroke_mm, both) == ()
