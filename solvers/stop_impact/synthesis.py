@@ -193,16 +193,21 @@ def v0_limit_m_s(task, limit_mm):
 
 @dataclass
 class SpeedResponse:
-    """The lever at one speed: lambda = omega t / Omega, its damping ratio, the rise's time T [s]."""
+    """The lever at one speed: lambda = omega t / Omega, its damping ratio, the rise's time T [s],
+    and the dense response (`LinearLever.response`) when the LP takes that form (else None)."""
     rpm: float
     lam: float
     zeta: float
     T: float
+    resp: tuple | None = None
 
 
 def speed_response(task, lever, rpm, t_deg):
+    """The lever at `rpm`; its dense response computed here, once, below STATE_FORM_FROM coefficients
+    (the form `elastic_states` then takes)."""
     lam, zeta, H, target, T = follower_data(task, rpm, t_deg)
-    return SpeedResponse(rpm, lam, zeta, T)
+    dense = lever.basis.size < STATE_FORM_FROM
+    return SpeedResponse(rpm, lam, zeta, T, lever.response(lam, zeta) if dense else None)
 
 
 def elastic_states(lever, speed, c, rows):
@@ -214,8 +219,8 @@ def elastic_states(lever, speed, c, rows):
     (models/cam_law.py `step_matrices`): each row holds a few coefficients (10^3 coefficients:
     0.75 s presolved against 6.4 s dense)."""
     last = lever.xi.size - 1
-    if lever.basis.size < STATE_FORM_FROM:
-        (X0, XB), (dX0, dXB), (ddX0, ddXB) = lever.response(speed.lam, speed.zeta)
+    if speed.resp is not None:
+        (X0, XB), (dX0, dXB), (ddX0, ddXB) = speed.resp
         return ([], X0[rows] + XB[rows] @ c, X0[last] + XB[last] @ c, dX0[rows] + dXB[rows] @ c,
                 ddX0[rows] + ddXB[rows] @ c)
     (s0, B), (d0, D), (a0, A), _ = lever.kin
@@ -247,6 +252,18 @@ def kinematic_rows(lever, c, t_deg, stroke_mm, bounds):
     return families
 
 
+def limit_rows(families, slack=False, keep=("objective",)):
+    """(slacks, constraints) of {family: [expressions <= 0]}: each family but `keep` gets its own
+    nonnegative slack when `slack` (minimising their sum names the limits that bind)."""
+    slacks, constraints = {}, []
+    for name, pieces in families.items():
+        bound = 0
+        if slack and name not in keep:
+            bound = slacks[name] = cp.Variable(nonneg=True)
+        constraints += [piece <= bound for piece in pieces]
+    return slacks, constraints
+
+
 def kinematic_conflict(lever, t_deg, stroke_mm, bounds):
     """The kinematic bounds that no rest-to-rest law of the space keeps at `t_deg` (a tuple, empty
     when some law keeps them all): one small LP with a slack per bound, the lever left out. Any
@@ -256,12 +273,14 @@ def kinematic_conflict(lever, t_deg, stroke_mm, bounds):
     families = kinematic_rows(lever, c, t_deg, stroke_mm, bounds)
     if not families:
         return ()
-    slacks = {name: cp.Variable(nonneg=True) for name in families}
-    problem = cp.Problem(cp.Minimize(sum(slacks.values())),
-                         [piece <= slacks[name] for name, pieces in families.items() for piece in pieces])
-    problem.solve(solver=cp.HIGHS, highs_options={"output_flag": False})
-    if from_cvxpy(problem.status) is not Status.SOLVED:
+    slacks, constraints = limit_rows(families, slack=True)
+    problem = cp.Problem(cp.Minimize(sum(slacks.values())), constraints)
+    try:
+        problem.solve(solver=cp.HIGHS, highs_options={"output_flag": False})
+    except (cp.error.SolverError, ValueError):
         return ()                                   # no verdict here: the windows' LPs decide
+    if from_cvxpy(problem.status) is not Status.SOLVED:
+        return ()
     return tuple(name for name, v in slacks.items() if v.value > 1e-9)
 
 
@@ -312,14 +331,8 @@ class WindowLP:
             if closure is not None:      # the roller stays on its cam: N = F + m H X'' / T^2 >= 0
                 families.setdefault("cam_contact", []).append(-ddX - (1 - CONTACT_MARGIN) * closure * sp.T**2
                                                               / (task.mass_kg * H))
-        self.slacks = {}
-        constraints = list(ties)
-        for name, pieces in families.items():
-            if slack and name != "objective":
-                self.slacks[name] = cp.Variable(nonneg=True)
-                constraints += [piece <= self.slacks[name] for piece in pieces]
-            else:
-                constraints += [piece <= 0 for piece in pieces]
+        self.slacks, constraints = limit_rows(families, slack)
+        constraints += ties
         goal = sum(self.slacks.values()) if slack else (peak if peak is not None else r)
         self.problem = cp.Problem(cp.Minimize(goal), constraints)
         self.options = STATE_HIGHS_OPTIONS if ties else HIGHS_OPTIONS
