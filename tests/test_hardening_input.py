@@ -294,3 +294,36 @@ def test_a_sweep_sends_the_csv_table_its_scene_references_to_the_workers(tmp_pat
     assert rows[0]["status"] == "SOLVED", rows[0]["message"]
     with pytest.raises(SceneError, match=r"cam.csv: cannot read: No such file"):
         loads(source.text, path)         # without what was sent, the table is not there
+
+
+def test_threads_loading_scenes_at_once_see_no_false_loop(tmp_path, monkeypatch):
+    """While one thread reads the base of s.toml, another loads t.toml whose base is s.toml: each
+    thread's chain of scenes being read is its own (a shared one made the second a false loop)."""
+    import mechopt.scene as scene_module
+    kd2322 = Path(registry.find("press/kd2322").path)
+    (tmp_path / "s.toml").write_text(f'id = "mine/s"\ntitle = "s"\nsource = "t"\ntask = "press.PressDrive"\n'
+                                     f'solver = "press.steady_state"\nbase = {{ scene = "{kd2322}" }}\n', encoding="utf-8")
+    (tmp_path / "t.toml").write_text('id = "mine/t"\ntitle = "t"\nsource = "t"\ntask = "press.PressDrive"\n'
+                                     'solver = "press.steady_state"\nbase = { scene = "s.toml" }\n', encoding="utf-8")
+    inside, done = threading.Event(), threading.Event()
+    real = scene_module.read_regular
+
+    def slow_base(path, **kw):              # the first thread pauses inside s.toml's base
+        if Path(path).resolve() == kd2322.resolve() and threading.current_thread().name == "first":
+            inside.set()
+            done.wait(30)
+        return real(path, **kw)
+
+    monkeypatch.setattr(scene_module, "read_regular", slow_base)
+    errors = []
+    first = threading.Thread(target=lambda: scene_module.load(tmp_path / "s.toml"), name="first")
+    first.start()
+    assert inside.wait(30)
+    try:
+        scene_module.load(tmp_path / "t.toml")
+    except SceneError as exc:
+        errors.append(str(exc))
+    finally:
+        done.set()
+        first.join(60)
+    assert errors == []

@@ -10,6 +10,8 @@ import inspect
 import math
 import os
 import tomllib
+from contextlib import contextmanager
+from contextvars import ContextVar
 from pathlib import Path
 from types import MappingProxyType
 from typing import Annotated, Any, Literal, get_args, get_origin
@@ -302,12 +304,9 @@ def loads(text: str, path: Path) -> Scene:
     except ValidationError as exc:
         raise SceneError(f"{path}: " + "; ".join(_explain(e) for e in exc.errors())) from None
     task_class = _resolve(path, "task", spec.task, "mechopt.models")
-    _READING.add(path.resolve())
-    try:
+    with _reading(path):
         spec = spec.model_copy(update={"structure": _read_tables(path, spec.structure,
                                                                  getattr(task_class, "CSV_TABLES", {}))})
-    finally:
-        _READING.discard(path.resolve())
     solver = _resolve(path, "solver", spec.solver, "mechopt.solvers")
     fields = task_fields(task_class)
     for key, ref in spec.derive.items():
@@ -470,7 +469,19 @@ def _selector_form(name, items):
     return f"{name}[{','.join(f'{k}={first[k]}' for k in keys)}]"
 
 
-_READING: set[Path] = set()          # scene files whose tables are being read: a loop of references is refused
+# scene files whose tables are being read: a loop of references is refused. A context variable, so
+# that threads loading scenes at once each see only their own chain (a shared set made one thread's
+# chain look like another's loop)
+_READING: ContextVar[frozenset] = ContextVar("mechopt_scene_reading", default=frozenset())
+
+
+@contextmanager
+def _reading(path):
+    token = _READING.set(_READING.get() | {path.resolve()})
+    try:
+        yield
+    finally:
+        _READING.reset(token)
 
 
 def _read_tables(path, structure, records=None):
@@ -544,13 +555,10 @@ def _other_scene(path, where, value):
         raise SceneError(f'{path}: {where}: a model from another scene is {{ scene = "../other/scene.toml", '
                          f'drop = ["name", ...] }}; got {value!r}', key=where)
     source_path = (path.parent / value["scene"]).resolve()
-    if source_path in _READING:
+    if source_path in _READING.get():
         raise SceneError(f"{path}: {where}: {value['scene']} leads back to a scene being read (a loop)", key=where)
-    _READING.add(path.resolve())
-    try:
+    with _reading(path):
         source = load(source_path)
-    finally:
-        _READING.discard(path.resolve())
     unknown = sorted(set(drop) - set(source.spec.params) - set(source.spec.structure))
     if unknown:
         raise SceneError(f"{path}: {where}.drop: {', '.join(unknown)} not in {value['scene']}", key=where)
