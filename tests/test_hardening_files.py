@@ -124,7 +124,8 @@ def test_a_full_disk_is_one_clear_line(tmp_path, monkeypatch, capsys):
     code = cli.main(["run", LOOM, "--json", str(tmp_path / "r.json")])
     err = capsys.readouterr().err
     assert code == 1 and err.strip().splitlines()[-1] == (
-        f"error: cannot write {tmp_path / 'r.json'}: No space left on device (the run itself finished; "
+        f"error: cannot write {tmp_path / 'r.json'}: No space left on device (the run itself finished: its result "
+        "was computed but not written; "
         "free some space or choose another place and run it again)")
 
 

@@ -127,13 +127,13 @@ def test_kill_between_merge_and_removing_the_parts_leaves_no_variant_twice(tmp_p
         with pytest.raises(_Kill):
             sw.sweep(scene, _grid(GRID), out=out, chunk=3, progress=False)
     assert pq.read_table(out).num_rows == 10 and len(list((tmp_path / "s.parquet.parts").glob("*.parquet"))) == 4
-    (tmp_path / "s.parquet.4242.tmp").write_bytes(b"half a merge")    # a kill during the write itself
+    (tmp_path / "s.parquet.4242.tmp").write_bytes(b"not the sweep's")    # named as the old temporaries were
     calls = _counting(monkeypatch)
     table = sw.sweep(scene, _grid(GRID), out=out, chunk=3, progress=False)
     assert calls == []
     assert _values(table).equals(_values(clean))
     assert _values(sw.read_table(out)[0]).equals(_values(clean))
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.parquet"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.parquet", "s.parquet.4242.tmp"]   # not its own: kept
 
 
 def test_a_table_with_variants_twice_is_refused_and_a_rerun_repairs_it(tmp_path, monkeypatch, clean):
@@ -178,13 +178,13 @@ def test_a_damaged_part_is_named_and_recomputed(tmp_path, monkeypatch, clean, da
 def test_an_unreadable_part_is_named_and_recomputed(tmp_path, monkeypatch, clean):
     out, parts = _two_parts(tmp_path, monkeypatch)
     calls = _counting(monkeypatch)
-    read = sw.Path.read_bytes
+    read = sw.read_regular
 
-    def refused(self):              # as an unreadable file (chmod 0 does not stop root)
-        if self == parts[0]:
+    def refused(path, **how):       # as an unreadable file (chmod 0 does not stop root)
+        if path == parts[0]:
             raise PermissionError(13, "Permission denied")
-        return read(self)
-    monkeypatch.setattr(sw.Path, "read_bytes", refused)
+        return read(path, **how)
+    monkeypatch.setattr(sw, "read_regular", refused)
     with pytest.warns(sw.SweepWarning, match=r"part-000000000.parquet: unreadable \(Permission denied\); "
                                              r"its 3 variants are recomputed"):
         table = sw.sweep(registry.find(LOOM), _grid(GRID), out=out, chunk=3, progress=False)

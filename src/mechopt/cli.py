@@ -22,7 +22,7 @@ from mechopt import __version__, registry
 from mechopt.benchmarks import studies, study
 from mechopt.drivers import set_mostly_by
 from mechopt.errors import MechoptError, SceneError, SolverError
-from mechopt.files import write_text_atomic
+from mechopt.files import NotWritten, output_problem, write_text_atomic
 from mechopt.mechanisms import templates
 from mechopt.scene import parse_overrides
 from mechopt.solvers import interrupt
@@ -62,9 +62,11 @@ def main(argv=None) -> int:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return OK
     except OSError as exc:
-        if exc.errno not in WRITE_FAILURES:
+        if exc.errno not in WRITE_FAILURES and not isinstance(exc, NotWritten):
             raise
-        print(f"error: cannot write {exc.filename or 'an output'}: {exc.strerror} (the run itself finished; "
+        done = ("nothing was run and nothing written" if args.command == "new"
+                else "the run itself finished: its result was computed but not written")
+        print(f"error: cannot write {exc.filename or 'an output'}: {exc.strerror} ({done}; "
               "free some space or choose another place and run it again)", file=sys.stderr)
         return CHECK_FAILED
     finally:
@@ -223,27 +225,67 @@ def _describe(args) -> int:
 
 
 def _new(args) -> int:
-    if args.file.exists():
-        raise SceneError(f"{args.file}: exists; name a new file (nothing was written)")
+    """Write a scene (and its CSV table) to start from: every name and content checked first (the
+    scene loads with its table), then all written, none over an existing file; a failure removes
+    what this call wrote."""
+    from mechopt.scene import id_problem
     template = registry.find(templates()[args.mechanism])
-    text = scene_template(template, f"my/{args.file.stem}")
+    new_id = f"my/{args.file.stem}"
+    if id_problem(new_id):
+        raise SceneError(f"{args.file}: the new scene's id would be {new_id!r}: {id_problem(new_id)}; name the file "
+                         "with such characters, e.g. my-press.toml (nothing was written)", key="id")
+    text = scene_template(template, new_id)
     suffix = {"cam-table": "points", "cyclogram": "ops"}.get(args.mechanism)
     table = args.file.with_name(f"{args.file.stem}-{suffix}.csv") if suffix else None
+    contents = {}
     if table is not None:
-        if table.exists():
-            raise SceneError(f"{table}: exists; name a new scene file (nothing was written)")
         if args.mechanism == "cam-table":
             text = _with_table(text, table.name)
-            _write_text(table, limacon_table())
+            contents[table] = limacon_table()
         else:               # the timing table beside the template, renamed with the scene
             text = text.replace(f'csv = "{template.path.stem}-ops.csv"', f'csv = "{table.name}"')
-            _write_text(table, (template.path.parent / f"{template.path.stem}-ops.csv").read_text(encoding="utf-8"))
+            contents[table] = (template.path.parent / f"{template.path.stem}-ops.csv").read_text(encoding="utf-8")
+    contents[args.file] = text
+    _check_new(contents)
+    from mechopt.files import shipped
     from mechopt.scene import loads
-    loads(text, args.file)                     # what we write must load
-    _write_text(args.file, text)
+    with shipped({str(p.resolve()): c.encode("utf-8") for p, c in contents.items()}):
+        loads(text, args.file)                     # what we write must load (its table read from `contents`)
+    _write_new(contents)
     print(f"scene: {args.file} (from {template.id})" + (f", {suffix}: {table}" if table else "")
           + f"; try: mechopt run {args.file}")
     return OK
+
+
+def _check_new(contents):
+    """Refuse, before anything is written, a file of `new` that exists or cannot be created."""
+    for path in contents:
+        if path.exists() or path.is_symlink():
+            raise SceneError(f"{path}: exists; name a new file (nothing was written)")
+        problem = output_problem(path)
+        if problem:
+            raise SceneError(f"{path}: {problem} (nothing was written)")
+        _writable_folder("new", path.parent)
+
+
+def _write_new(contents):
+    """Write every file of `contents`, none over an existing file; on any failure remove what was written."""
+    written = []
+    try:
+        for path, text in contents.items():
+            write_text_atomic(path, text, replace=False)
+            written.append(path)
+    except FileExistsError:
+        _remove(written)
+        raise SceneError(f"{path}: exists (made while `new` ran); name a new file (nothing was written)") from None
+    except BaseException:
+        _remove(written)
+        raise
+
+
+def _remove(paths):
+    for path in paths:
+        path.unlink(missing_ok=True)
 
 
 def limacon_table() -> str:
@@ -321,9 +363,13 @@ def _run(args) -> int:
         if args.dxf.exists() and not args.dxf.is_dir():
             raise SceneError(f"--dxf {args.dxf}: an existing file, not a folder")
         _writable_folder("--dxf", args.dxf)
+        _probe("--dxf", args.dxf, folder=True)
         from mechopt.dxf import ezdxf_module
         ezdxf_module()                      # a missing extra is said before the solve, not after
     scene = registry.find(args.case)
+    if args.dxf is not None:
+        from mechopt.dxf import dxf_path
+        _check_outputs(table_file=dxf_path(scene, args.dxf), table_flag="--dxf")
     result = registry.run(scene, overrides, drivers=args.drivers or args.json is not None)
     _print_run(result)
     if args.json:
@@ -489,18 +535,27 @@ COMMANDS = {"cases": _cases, "describe": _describe, "new": _new, "run": _run, "v
             "bench": _bench, "fit-force": _fit_force, "sweep": _sweep, "report": _report}
 
 
-def _check_outputs(*, json_file=None, plot_dir=None, table_file=None):
+def _check_outputs(*, json_file=None, plot_dir=None, table_file=None, table_flag="--out/--csv"):
     """Refuse an output that cannot be written before any work is done."""
-    for flag, path, example in (("--json", json_file, "result.json"), ("--out/--csv", table_file, "table.parquet")):
+    for flag, path, example in (("--json", json_file, "result.json"), (table_flag, table_file, "table.parquet")):
         if path is None:
             continue
         if path.is_dir() or str(path).endswith(os.sep) or path.name in ("", ".", ".."):
             raise SceneError(f"{flag} {path}: a folder; give a file name, e.g. {path / example}")
         _writable_folder(flag, path.parent)
+        _probe(flag, path, longest_suffix=len(".parts"))
     if plot_dir is not None:
         if plot_dir.exists() and not plot_dir.is_dir():
             raise SceneError(f"--plot/--out {plot_dir}: an existing file, not a folder")
         _writable_folder("--plot/--out", plot_dir)
+        _probe("--plot/--out", plot_dir, folder=True)
+
+
+def _probe(flag, path, **how):
+    """Refuse what `files.output_problem` finds (a name too long, a dangling link, no file creatable there)."""
+    problem = output_problem(path, **how)
+    if problem:
+        raise SceneError(f"{flag} {path}: {problem}; nothing was run")
 
 
 def _writable_folder(flag, folder):

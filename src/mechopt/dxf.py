@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from mechopt.errors import MechoptError, SceneError
-from mechopt.files import take_lock, write_bytes_atomic
+from mechopt.files import holds, make_folder, take_lock, write_bytes_atomic
 from mechopt.models.cam_cutter import LinkageCheck, LinkageFit, LinkageLoads, ideal_point, real_point
 from mechopt.models.cam_profile import ProfileFit
 from mechopt.models.cam_shape import CamShape, mirrored, point_table
@@ -127,7 +127,7 @@ def write_dxf(curves, path) -> Path:
     """Write `curves` to `path` whole or not at all, one writer at a time (SceneError when
     another process is writing it); returns the path."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    make_folder(path.parent)
     lock = path.with_name(f"{path.name}.lock")
     try:
         fd = take_lock(lock)
@@ -138,7 +138,8 @@ def write_dxf(curves, path) -> Path:
     try:
         return write_bytes_atomic(path, dxf_bytes(curves, title=path.stem))
     finally:
-        lock.unlink(missing_ok=True)
+        if holds(fd, lock):              # still ours (not removed and replaced by another writer's)
+            lock.unlink(missing_ok=True)
         os.close(fd)
 
 
@@ -146,9 +147,14 @@ def export_run(run, out_dir) -> list[tuple[Path, ShopCurve]]:
     """Write a solved scene's curves as `<scene>.dxf` in `out_dir` (all layers in one drawing);
     (path, curve) per curve written. NothingToExport when the scene has none."""
     curves = shop_curves(run)
-    path = Path(out_dir) / f"{run.scene.id.replace('/', '_')}.dxf"
+    path = dxf_path(run.scene, out_dir)
     write_dxf(curves, path)
     return [(path, c) for c in curves]
+
+
+def dxf_path(scene, out_dir) -> Path:
+    """Where `export_run` writes a scene's drawing: `<out_dir>/<scene id, / as _>.dxf`."""
+    return Path(out_dir) / f"{scene.id.replace('/', '_')}.dxf"
 
 
 def read_polylines(path) -> dict[str, np.ndarray]:
@@ -169,5 +175,5 @@ def _length(curve):
     return float(np.sum(np.hypot(*np.diff(xy, axis=0).T)))
 
 
-__all__ = ["EXPORTS", "NothingToExport", "ShopCurve", "chord_note", "dxf_bytes", "export_run", "ezdxf_module",
+__all__ = ["EXPORTS", "NothingToExport", "ShopCurve", "chord_note", "dxf_bytes", "dxf_path", "export_run", "ezdxf_module",
            "read_polylines", "shop_curves", "write_dxf"]

@@ -70,12 +70,11 @@ def write_report(out_dir, *, scenes: Sequence | None = None, runs: Sequence | No
     with tempfile.TemporaryDirectory() as scratch:
         parts = ["<h1>mechopt: validation report</h1>", _provenance(runs, command), _contents(runs),
                  "<h2 id='validation'>Validation</h2>", _validation(runs),
-                 "<h2>Scenes</h2>", *(_scene_section(run, Path(scratch)) for run in runs)]
+                 "<h2>Scenes</h2>", *(_scene_section(run, Path(scratch) / f"scene_{k}") for k, run in enumerate(runs))]
         if tables:
             parts += ["<h2>What-if maps</h2>",
                       *(_sweep_section(*t, Path(scratch) / f"sweep_{k}") for k, t in enumerate(tables))]
         parts += ["<h2>Accuracy against time</h2>", _bench(bench_dir)]
-    out_dir.mkdir(parents=True, exist_ok=True)
     page = out_dir / "index.html"
     write_text_atomic(page, "<!doctype html><html><head><meta charset='utf-8'><title>mechopt report</title>"
                       "<meta name='viewport' content='width=device-width,initial-scale=1'>"
@@ -133,13 +132,14 @@ def _contents(runs):
     return f"<nav><h2>Contents</h2><ul><li><a href='#validation'>validation</a></li>{items}</ul></nav>"
 
 
-def _scene_section(run, scratch):
-    """Its status, values and warnings first, then how it was made, then its figures."""
+def _scene_section(run, folder):
+    """Its status, values and warnings first, then how it was made, then its figures (drawn into
+    `folder`, a private scratch folder: named by number, never by the scene's id)."""
     scene, r = run.scene, run.result
     slug = scene.id.replace("/", "_")
     marked = [(k, p.value, p.mark, p.why + (f" (fitted to {p.on})" if p.on else ""))
               for k, p in scene.spec.params.items() if p.mark != "given"]
-    images = "".join(_image(p) for p in plot_run(run, scratch / slug))
+    images = "".join(_image(p) for p in plot_run(run, folder))
     return (f"<h3 id='{_e(slug)}'>{_e(scene.id)}: {_e(scene.spec.title)}</h3>"
             + answers_html(run)
             + "".join(f"<p>{_e(w)}</p>" for w in set_mostly_by(r.diagnostics.get("drivers", {})))

@@ -9,6 +9,7 @@ import importlib
 import inspect
 import math
 import os
+import re
 import tomllib
 from contextlib import contextmanager
 from contextvars import ContextVar
@@ -17,7 +18,7 @@ from types import MappingProxyType
 from typing import Annotated, Any, Literal, get_args, get_origin
 
 from annotated_types import DocInfo
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from mechopt.cache import memoised
 from mechopt.errors import MechoptError, ModelError, SceneError, SettingError
@@ -32,6 +33,18 @@ Number = int | float
 STATUS_WORDS = tuple(s.value for s in Status)
 MAX_SCENE_BYTES = 1_000_000      # a scene is a page of TOML; its tables of points come from CSV files
 MAX_LIST_ITEMS = 100             # a list typed into a scene or a --set (speeds, operations); longer: a CSV
+MAX_ID_CHARS = 100               # an id names files (<id>.dxf, <id>_<figure>.png): far below a name's 255 bytes
+_ID_FORM = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*(/[A-Za-z0-9][A-Za-z0-9._-]*)*")
+
+
+def id_problem(text: str) -> str | None:
+    """Why `text` cannot be a scene's id (which names its output files), or None."""
+    if len(text) > MAX_ID_CHARS:
+        return f"{len(text)} characters; an id has at most {MAX_ID_CHARS}"
+    if not _ID_FORM.fullmatch(text):
+        return ("expected names separated by '/', each of letters, digits, '.', '_' and '-' starting with a "
+                "letter or digit (e.g. 'my/press-2'); an id names the run's files")
+    return None
 
 
 class Param(BaseModel):
@@ -153,6 +166,14 @@ class SceneFile(BaseModel):
     expect: dict[str, Expectation] = {}
     headline: list[str] = []                 # values the README or report shows: their drivers (mechopt.drivers)
     headline_fixed: dict[str, str] = {}      # inputs not varied for the drivers, each with why
+
+    @field_validator("id")
+    @classmethod
+    def _usable_as_a_file_name(cls, value):
+        problem = id_problem(value)
+        if problem:
+            raise ValueError(problem)
+        return value
 
 
 @dataclasses.dataclass(frozen=True)

@@ -17,7 +17,8 @@ a file of another sweep is refused rather than mixed.
 
 Integrity: one writer per ``--out`` (an OS lock on ``<out>.lock``, opened without following a
 link and re-checked at every chunk; a second sweep is refused at once); only files named as this
-sweep's own are read or removed; each part has a sha256 beside it (``part-N.parquet.sha256``), and
+sweep's own are read or removed (a temporary only when its name is recorded in the sweep's own
+lock, never by a pattern); each part has a sha256 beside it (``part-N.parquet.sha256``), and
 a part that fails it is named, dropped and recomputed; the merge writes a temporary file, fsyncs it
 and renames it over ``<out>``, and drops part rows already in ``<out>``, so a kill at any moment
 leaves no variant twice. A table with a variant stored twice is refused when read or drawn. A
@@ -36,6 +37,7 @@ import json
 import math
 import os
 import re
+import stat
 import sys
 import warnings
 from collections.abc import Callable
@@ -51,8 +53,9 @@ import pyarrow.parquet as pq
 from mechopt import registry
 from mechopt.cache import BuildCache
 from mechopt.errors import MechoptError, SceneError, SolverError
-from mechopt.files import holds, quote, recorded, shipped, take_lock, write_bytes_atomic
-from mechopt.scene import Scene, loads, path_head, solver_options, split_assignment, task_fields
+from mechopt.files import (NAME_ROOM, holds, open_regular, quote, read_regular, recorded, shipped, take_lock,
+                           temporary_target, write_bytes_atomic)
+from mechopt.scene import MAX_SCENE_BYTES, Scene, loads, path_head, solver_options, split_assignment, task_fields
 
 __all__ = ["Axis", "SweepSpec", "SceneText", "SweepInterrupted", "SweepWarning", "parse_grid", "parse_random",
            "grid_values", "count_variants", "plan", "sweep", "run_chunk", "read_table", "check_unique", "scene_hash", "describe_axes"]
@@ -63,6 +66,9 @@ MAX_VARIANTS = 1_000_000
 BYTES_PER_VARIANT = 400         # plan dicts (~190 B, 2 keys) and table; the audit saw 3.3 GB for 10^7
 AXIS_LIMIT = 1e12               # no length, stress, speed or setting of a mechanism is larger
 GRID_DIGITS = 12                # grid values keep this many significant digits (0.075, not 0.07500000000000001)
+MAX_TABLE_BYTES = 4 * 10**9     # a table or part read back: 10^6 variants of a few dozen columns are far less
+MAX_LOCK_BYTES = 4096           # a lock file holds a pid and the temporary in flight
+MAX_CHECK_BYTES = 200           # a part's checksum file: 64 hex digits and a count
 
 
 class SweepInterrupted(MechoptError):
@@ -90,12 +96,14 @@ class SceneText:
     @classmethod
     def of(cls, scene: Scene) -> "SceneText":
         try:
-            data = Path(scene.path).read_bytes()
+            data = read_regular(scene.path, max_bytes=MAX_SCENE_BYTES, what="a scene file")
             with recorded() as referenced:
                 loads(data.decode("utf-8"), Path(scene.path))
         except OSError as exc:
             raise SceneError(f"{scene.path}: cannot read the scene file to send it to the workers: "
                              f"{exc.strerror}") from None
+        except ValueError as exc:        # no longer a regular file, or grown past a scene's size
+            raise SceneError(f"{exc} (the scene file changed after it was loaded)") from None
         return cls(data.decode("utf-8"), str(scene.path), hashlib.sha256(data).hexdigest(),
                    tuple(sorted(referenced.items())))
 
@@ -313,6 +321,9 @@ def sweep(scene: Scene, grid=(), random=(), *, samples: int = 0, seed: int = 0, 
     if scheduler and workers > 1:
         raise SceneError("give either --scheduler (the cluster's workers run it) or --workers, not both",
                          key="workers")
+    if out is not None:
+        _check_out(Path(out))
+    workers = _local_workers(workers, scheduler)
     spec, variants = plan(scene, grid, random, samples=samples, seed=seed, max_variants=max_variants)
     source = SceneText.of(scene)
     meta = {"case": spec.case, "spec": json.loads(spec.as_json()), "scene_sha256": source.sha256}
@@ -330,7 +341,7 @@ def sweep(scene: Scene, grid=(), random=(), *, samples: int = 0, seed: int = 0, 
         count = len(done)
         try:
             for got in (_on_dask(client, source, chunks, lost) if client
-                        else _on_pool(workers, source, chunks) if workers > 1
+                        else _on_pool(min(workers, len(chunks)), source, chunks) if workers > 1
                         else (_solve_rows(scene, c) for c in chunks)):
                 if store:
                     store.write_part(got)
@@ -361,14 +372,29 @@ def sweep(scene: Scene, grid=(), random=(), *, samples: int = 0, seed: int = 0, 
     return table
 
 
+def _check_out(out):
+    """Refuse an `out` that names no file (a folder, '.', '') before any work."""
+    if out.name in ("", ".", "..") or out.is_dir():
+        raise SceneError(f"{out}: a folder; --out names the table's file, e.g. "
+                         f"{out / 'sweep.parquet'}", key="out")
+
+
+def _local_workers(workers, scheduler):
+    """`workers` capped at this machine's cores (more processes than cores only slow each other
+    down), said as a SweepWarning; a scheduler's cluster is not capped."""
+    cores = os.cpu_count() or 1
+    if scheduler or workers <= cores:
+        return workers
+    warnings.warn(f"workers = {workers}: this machine has {cores} cores, so {cores} processes are used "
+                  "(give --scheduler to run on more machines)", SweepWarning, stacklevel=3)
+    return cores
+
+
 def read_table(path) -> tuple[pa.Table, dict]:
     """A sweep's table and its metadata (case, spec, scene hash); refuses a Parquet file of no sweep
     and a table with a variant stored twice."""
     meta = _read_meta(path)
-    try:
-        table = pq.read_table(path)
-    except (OSError, pa.ArrowInvalid) as exc:
-        raise SceneError(f"{path}: not a readable Parquet file ({exc})") from None
+    table = _read_parquet(path)
     wanted = {**{k: "a number" for k in _keys(meta)}, "variant": "int64", "status": "string", "message": "string"}
     wrong = [name for name, kind in wanted.items() if name not in table.column_names
              or (kind != "a number" and str(table.schema.field(name).type) != kind)
@@ -395,10 +421,7 @@ def check_unique(table: pa.Table, where) -> None:
 def _read_meta(path) -> dict:
     """The sweep metadata of a Parquet file, from its footer only."""
     path = Path(path)
-    try:
-        schema = pq.read_schema(path)
-    except (OSError, pa.ArrowInvalid) as exc:
-        raise SceneError(f"{path}: not a readable Parquet file ({exc})") from None
+    schema = _read_parquet(path, pq.read_schema)
     raw = (schema.metadata or {}).get(META_KEY)
     if raw is None:
         raise SceneError(f"{path}: a Parquet file but not a mechopt sweep (no {META_KEY.decode()} metadata); "
@@ -416,6 +439,18 @@ def _read_meta(path) -> dict:
         raise SceneError(f"{path}: its {META_KEY.decode()} metadata is not a sweep's: {problem}; "
                          f"this file was not written by mechopt sweep (choose another --out)", key="out")
     return meta
+
+
+def _read_parquet(path, read=pq.read_table, **how):
+    """`read(file, **how)` of the Parquet file `path`, refused (SceneError) unless it is a regular file
+    of at most MAX_TABLE_BYTES (a FIFO would block the sweep for ever, a device never end)."""
+    try:
+        with open_regular(path, max_bytes=MAX_TABLE_BYTES, what="a sweep's table") as f:
+            return read(f, **how)
+    except (OSError, pa.ArrowInvalid) as exc:
+        raise SceneError(f"{path}: not a readable Parquet file ({exc})") from None
+    except ValueError as exc:            # not a regular file, or too large
+        raise SceneError(str(exc), key="out") from None
 
 
 MAX_META_BYTES = 100_000
@@ -465,8 +500,6 @@ class _Store:
         fd = self._take()
         self._lock = fd
         try:
-            for stale in self.path.parent.glob(f"{self.path.name}.*.tmp"):   # a merge killed mid-write
-                stale.unlink()
             self._drop_damaged()
             for file in self._files():
                 self._own(file)
@@ -476,17 +509,75 @@ class _Store:
 
     def _take(self):
         """A descriptor holding `<out>.lock` (its pid written in it), or SceneError: held by another
-        sweep, or not a regular file (a symbolic link is never followed)."""
+        sweep, or not a regular file of one name (a link is never followed or written through), or
+        holding text no sweep writes. The temporaries a killed sweep recorded in it are removed."""
         try:
             fd = take_lock(self.lock_path)
         except ValueError as exc:
             raise SceneError(f"{exc}; nothing was written", key="out") from None
+        except OSError as exc:
+            raise SceneError(f"{self.lock_path}: cannot create the sweep's lock file ({exc.strerror}); "
+                             "nothing was written: choose another --out", key="out") from None
         if fd is None:
             raise SceneError(f"{self.path} is being written by another sweep (pid {self._holder()}); "
                              f"wait for it or choose another --out", key="out")
-        os.ftruncate(fd, 0)
-        os.write(fd, f"{os.getpid()}\n".encode())
+        try:
+            stale = self._recorded(fd)
+        except BaseException:
+            os.close(fd)
+            raise
+        self._lock = fd
+        for name in stale:
+            self._remove_stale(name)
+        self._note_temporary(None)
         return fd
+
+    def _recorded(self, fd) -> list[str]:
+        """The temporaries a sweep killed while writing recorded in the lock (see `_note_temporary`);
+        SceneError for a lock holding anything else (a file of the user's: it is not truncated)."""
+        os.lseek(fd, 0, os.SEEK_SET)
+        text = os.read(fd, MAX_LOCK_BYTES + 1).decode("utf-8", "replace")
+        lines = text.splitlines()
+        if len(text) > MAX_LOCK_BYTES or (text and (not text.endswith("\n") or not lines[0].isdigit()
+                                                     or not all(map(self._is_temporary, lines[1:])))):
+            raise SceneError(f"{self.lock_path}: holds text no sweep writes (a sweep's lock holds its pid); it is "
+                             "left as it is: remove it, or choose another --out", key="out")
+        return lines[1:]
+
+    def _is_temporary(self, name):
+        """Whether `name` (relative to out's folder) is a temporary this sweep's writes would create:
+        of `<out>` beside it, or of a part or its checksum in `<out>.parts`."""
+        folder, _, base = name.rpartition("/")
+        target = temporary_target(base)
+        if folder == "":
+            return target == self.path.name[:NAME_ROOM]
+        return (folder == self.parts.name and target is not None
+                and (_PART_NAME.fullmatch(target) or _PART_NAME.fullmatch(target.removesuffix(".sha256"))) is not None)
+
+    def _remove_stale(self, name):
+        """A temporary a killed sweep of this --out recorded: removed if it is still a regular file of one name."""
+        stale = self.path.parent / name
+        try:
+            found = os.stat(stale, follow_symlinks=False)
+        except OSError:
+            return
+        if stat.S_ISREG(found.st_mode) and found.st_nlink == 1:
+            stale.unlink(missing_ok=True)
+
+    def _note_temporary(self, tmp):
+        """Record in the lock the temporary being written (None: none), so that a sweep killed while
+        writing has its temporary removed by the next one, and nothing else."""
+        text = f"{os.getpid()}\n" + (f"{tmp.relative_to(self.path.parent).as_posix()}\n" if tmp else "")
+        os.ftruncate(self._lock, 0)
+        os.lseek(self._lock, 0, os.SEEK_SET)
+        os.write(self._lock, text.encode())
+
+    def _write(self, path, data):
+        """`data` into `path` atomically, its temporary recorded in the lock while it exists."""
+        try:
+            write_bytes_atomic(path, data, on_temporary=self._note_temporary)
+        finally:
+            self._note_temporary(None)
 
     def check_lock(self):
         """Re-check that `<out>.lock` is still the file this sweep holds (someone may delete it, and a
@@ -516,9 +607,11 @@ class _Store:
 
     def _holder(self):
         try:
-            return self.lock_path.read_text().strip() or "unknown"
-        except OSError:
+            first = read_regular(self.lock_path, max_bytes=MAX_LOCK_BYTES, what="a lock file",
+                                 follow_links=False).split(b"\n", 1)[0]
+        except (OSError, ValueError):
             return "unknown"
+        return first.decode() if first.isdigit() else "unknown"
 
     def _own(self, path):
         theirs = _read_meta(path)
@@ -535,17 +628,24 @@ class _Store:
                 raise SceneError(f"{part}: not a file this sweep wrote (a folder or a link); it is left as it is: "
                                  f"remove it by hand and re-run", key="out")
             check = part.with_name(part.name + ".sha256")
+            if check.is_symlink() or (check.exists() and not check.is_file()):
+                raise SceneError(f"{check}: not a file this sweep wrote (a link, FIFO, device or folder); it is left "
+                                 f"as it is: remove it by hand and re-run", key="out")
             try:
-                want, _, count = check.read_text().partition(" ")
+                want, _, count = read_regular(check, max_bytes=MAX_CHECK_BYTES, what="a part's checksum file",
+                                              follow_links=False).decode().partition(" ")
                 count = int(count)
             except (OSError, ValueError):
                 why, want, count = "no checksum (the sweep stopped while writing it)", None, None
             if want is not None:
                 try:
-                    got = hashlib.sha256(part.read_bytes()).hexdigest()
+                    got = hashlib.sha256(read_regular(part, max_bytes=MAX_TABLE_BYTES, what="a sweep's part",
+                                                      follow_links=False)).hexdigest()
                     why = None if got == want else "damaged (checksum mismatch)"
                 except OSError as exc:
                     why = f"unreadable ({exc.strerror})"
+                except ValueError as exc:
+                    why = f"not a part ({exc})"
             if why:
                 what = f"its {count} variants are" if count is not None else "its variants are"
                 warnings.warn(f"{part}: {why}; {what} recomputed", SweepWarning, stacklevel=4)
@@ -557,7 +657,7 @@ class _Store:
                                      f"by hand and re-run", key="out") from None
 
     def done(self) -> set[int]:
-        tables = [pq.read_table(p, columns=["variant"]) for p in self._files()]
+        tables = [_read_parquet(p, columns=["variant"]) for p in self._files()]
         return {int(v) for t in tables for v in t.column("variant").to_pylist()}
 
     def write_part(self, rows):
@@ -568,9 +668,8 @@ class _Store:
         sink = pa.BufferOutputStream()
         pq.write_table(_table(rows, _keys(self.meta), self.meta), sink)
         data = sink.getvalue().to_pybytes()
-        write_bytes_atomic(path, data)      # a part is whole or absent, even if the sweep is killed mid-write
-        write_bytes_atomic(path.with_name(path.name + ".sha256"),
-                      f"{hashlib.sha256(data).hexdigest()} {len(rows)}\n".encode())
+        self._write(path, data)      # a part is whole or absent, even if the sweep is killed mid-write
+        self._write(path.with_name(path.name + ".sha256"), f"{hashlib.sha256(data).hexdigest()} {len(rows)}\n".encode())
 
     def consolidate(self) -> pa.Table:
         """Merge `out` and the parts into `out` (atomic); part rows already in `out` (a merge killed
@@ -578,7 +677,7 @@ class _Store:
         self.check_lock()
         tables, seen, merged = [], pa.array([], pa.int64()), self._files()
         for file in merged:
-            table = pq.read_table(file)
+            table = _read_parquet(file)
             table = table.filter(pc.invert(pc.is_in(table.column("variant"), value_set=seen)))
             table = _unique_variants(table)
             seen = pa.concat_arrays([seen, table.column("variant").combine_chunks()])
@@ -589,7 +688,7 @@ class _Store:
             {META_KEY: json.dumps(self.meta, sort_keys=True).encode()})
         sink = pa.BufferOutputStream()
         pq.write_table(table, sink)
-        write_bytes_atomic(self.path, sink.getvalue().to_pybytes())
+        self._write(self.path, sink.getvalue().to_pybytes())
         self._remove_parts([p for p in merged if p != self.path])      # all of them are in the file now
         return table
 

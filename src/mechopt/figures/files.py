@@ -12,8 +12,8 @@ def figures(run) -> dict:
 
 def plot_run(run, out_dir) -> list[Path]:
     """Write the figures of a solved scene into out_dir as `<scene>_<name>.png`; their paths."""
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
+    from mechopt.files import make_folder
+    out_dir = make_folder(out_dir)
     stem = run.scene.id.replace("/", "_")
     return [save_figure(fig, out_dir / f"{stem}_{name}.png") for name, fig in figures(run).items()]
 
