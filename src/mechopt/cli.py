@@ -22,7 +22,7 @@ from mechopt import __version__, registry
 from mechopt.benchmarks import studies, study
 from mechopt.drivers import set_mostly_by
 from mechopt.errors import MechoptError, SceneError, SolverError
-from mechopt.files import NotWritten, output_problem, write_text_atomic
+from mechopt.files import NotWritten, name_problem, output_problem, write_text_atomic
 from mechopt.mechanisms import templates
 from mechopt.scene import parse_overrides
 from mechopt.solvers import interrupt
@@ -360,6 +360,7 @@ def _run(args) -> int:
     overrides = parse_overrides(args.set)
     _check_outputs(json_file=args.json, plot_dir=args.plot, table_file=args.csv)
     if args.dxf is not None:
+        _short_names("--dxf", args.dxf)
         if args.dxf.exists() and not args.dxf.is_dir():
             raise SceneError(f"--dxf {args.dxf}: an existing file, not a folder")
         _writable_folder("--dxf", args.dxf)
@@ -369,7 +370,7 @@ def _run(args) -> int:
     scene = registry.find(args.case)
     if args.dxf is not None:
         from mechopt.dxf import dxf_path
-        _check_outputs(table_file=dxf_path(scene, args.dxf), table_flag="--dxf")
+        _check_outputs(table_file=dxf_path(scene, args.dxf), table_flag="--dxf", table_suffix=len(".lock"))
     result = registry.run(scene, overrides, drivers=args.drivers or args.json is not None)
     _print_run(result)
     if args.json:
@@ -481,7 +482,7 @@ def _sweep(args) -> int:
     random = [sweep.parse_random(r) for r in args.random]
     scene = registry.find(args.case)
     out = args.out or Path("out/sweep") / f"{scene.id.replace('/', '_')}.parquet"
-    _check_outputs(table_file=out, plot_dir=args.plot)
+    _check_outputs(table_file=out, plot_dir=args.plot, table_suffix=len(".parts"))
     with warnings.catch_warnings(record=True) as said:
         warnings.simplefilter("always", sweep.SweepWarning)
         try:
@@ -535,20 +536,30 @@ COMMANDS = {"cases": _cases, "describe": _describe, "new": _new, "run": _run, "v
             "bench": _bench, "fit-force": _fit_force, "sweep": _sweep, "report": _report}
 
 
-def _check_outputs(*, json_file=None, plot_dir=None, table_file=None, table_flag="--out/--csv"):
-    """Refuse an output that cannot be written before any work is done."""
+def _check_outputs(*, json_file=None, plot_dir=None, table_file=None, table_flag="--out/--csv", table_suffix=0):
+    """Refuse an output that cannot be written before any work is done (`table_suffix`: the
+    characters its writer adds to the table's name for files beside it: `.parts`, `.lock`)."""
     for flag, path, example in (("--json", json_file, "result.json"), (table_flag, table_file, "table.parquet")):
         if path is None:
             continue
+        _short_names(flag, path, table_suffix if path is table_file else 0)
         if path.is_dir() or str(path).endswith(os.sep) or path.name in ("", ".", ".."):
             raise SceneError(f"{flag} {path}: a folder; give a file name, e.g. {path / example}")
         _writable_folder(flag, path.parent)
-        _probe(flag, path, longest_suffix=len(".parts"))
+        _probe(flag, path, longest_suffix=table_suffix if path is table_file else 0)
     if plot_dir is not None:
+        _short_names("--plot/--out", plot_dir)
         if plot_dir.exists() and not plot_dir.is_dir():
             raise SceneError(f"--plot/--out {plot_dir}: an existing file, not a folder")
         _writable_folder("--plot/--out", plot_dir)
         _probe("--plot/--out", plot_dir, folder=True)
+
+
+def _short_names(flag, path, longest_suffix=0):
+    """Refuse a name too long for a file system (first: even asking whether it exists fails)."""
+    problem = name_problem(path, longest_suffix)
+    if problem:
+        raise SceneError(f"{flag} {path}: {problem}; nothing was run")
 
 
 def _probe(flag, path, **how):

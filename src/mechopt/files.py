@@ -121,16 +121,27 @@ def _sync_folder(folder):
         os.close(fd)
 
 
+def name_problem(path, longest_suffix: int = 0) -> str | None:
+    """Why a part of `path` is too long a file name (with `longest_suffix` characters a writer adds
+    to its last part), or None."""
+    path = Path(path)
+    for part in path.parts:
+        added = longest_suffix if part == path.name else 0
+        if len(os.fsencode(part)) + added > NAME_MAX:
+            return (f"the name {part[:40]}... is {len(part)} characters" + (f" (+{added} added)" if added else "")
+                    + f"; a file name has at most {NAME_MAX}")
+    return None
+
+
 def output_problem(path, *, folder: bool = False, longest_suffix: int = 0) -> str | None:
     """Why `path` cannot be written as an output file (or, `folder=True`, made the output folder),
     said before any work, or None: a name too long (with `longest_suffix` characters the writer
     adds), a dangling link, a folder where a file goes or the reverse, or a nearest existing folder
     in which no file can be created (tried: a read-only mount, /proc, no permission)."""
     path = Path(path)
-    for part in path.parts:
-        if len(os.fsencode(part)) + (longest_suffix if part == path.name else 0) > NAME_MAX:
-            return (f"the name {part[:40]}... is {len(part)} characters" + (f" (+{longest_suffix} added)"
-                    if longest_suffix else "") + f"; a file name has at most {NAME_MAX}")
+    problem = name_problem(path, longest_suffix)
+    if problem:
+        return problem
     if path.is_symlink() and not path.exists():
         return f"{path} is a symbolic link to nothing"
     if folder and path.exists() and not path.is_dir():
