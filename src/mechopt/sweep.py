@@ -522,14 +522,12 @@ class _Store:
             raise SceneError(f"{self.path} is being written by another sweep (pid {self._holder()}); "
                              f"wait for it or choose another --out", key="out")
         try:
-            stale = self._recorded(fd)
+            for name in self._recorded(fd):
+                self._remove_stale(name)
+            _lock_text(fd, f"{os.getpid()}\n")
         except BaseException:
             os.close(fd)
             raise
-        self._lock = fd
-        for name in stale:
-            self._remove_stale(name)
-        self._note_temporary(None)
         return fd
 
     def _recorded(self, fd) -> list[str]:
@@ -538,7 +536,7 @@ class _Store:
         os.lseek(fd, 0, os.SEEK_SET)
         text = os.read(fd, MAX_LOCK_BYTES + 1).decode("utf-8", "replace")
         lines = text.splitlines()
-        if len(text) > MAX_LOCK_BYTES or (text and (not text.endswith("\n") or not lines[0].isdigit()
+        if len(text) > MAX_LOCK_BYTES or (text and (not text.endswith("\n") or not re.fullmatch(r"[0-9]+", lines[0])
                                                      or not all(map(self._is_temporary, lines[1:])))):
             raise SceneError(f"{self.lock_path}: holds text no sweep writes (a sweep's lock holds its pid); it is "
                              "left as it is: remove it, or choose another --out", key="out")
@@ -567,10 +565,7 @@ class _Store:
     def _note_temporary(self, tmp):
         """Record in the lock the temporary being written (None: none), so that a sweep killed while
         writing has its temporary removed by the next one, and nothing else."""
-        text = f"{os.getpid()}\n" + (f"{tmp.relative_to(self.path.parent).as_posix()}\n" if tmp else "")
-        os.ftruncate(self._lock, 0)
-        os.lseek(self._lock, 0, os.SEEK_SET)
-        os.write(self._lock, text.encode())
+        _lock_text(self._lock, f"{os.getpid()}\n" + (f"{tmp.relative_to(self.path.parent).as_posix()}\n" if tmp else ""))
 
     def _write(self, path, data):
         """`data` into `path` atomically, its temporary recorded in the lock while it exists."""
@@ -715,6 +710,13 @@ class _Store:
 
 
 _PART_NAME = re.compile(r"part-\d{9}\.parquet")
+
+
+def _lock_text(fd, text):
+    """The whole content of the lock file held by `fd` (checked to be the sweep's own: `_Store._take`)."""
+    os.ftruncate(fd, 0)
+    os.lseek(fd, 0, os.SEEK_SET)
+    os.write(fd, text.encode())
 
 
 def _unique_variants(table):
