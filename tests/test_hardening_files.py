@@ -176,7 +176,8 @@ def test_run_outputs_never_follow_links_or_folders_at_temporary_names(tmp_path, 
     targets = [out / "r.json", out / "dxf" / "cam-cutter_pure-cardioid.dxf",
                out / "plot" / "cam-cutter_pure-cardioid_paths.png"]
     _plant(targets, victim)
-    code = cli.main(["run", CARDIOID, "--json", str(targets[0]), "--dxf", str(out / "dxf"), "--plot", str(out / "plot")])
+    code = cli.main(["run", CARDIOID, "--json", str(targets[0]), "--dxf", str(out / "dxf"),
+                     "--plot", str(out / "plot")])
     assert code == 0, capsys.readouterr().err
     assert victim.read_text() == "precious" and all(t.is_file() and not t.is_symlink() for t in targets)
 

@@ -175,5 +175,5 @@ def _length(curve):
     return float(np.sum(np.hypot(*np.diff(xy, axis=0).T)))
 
 
-__all__ = ["EXPORTS", "NothingToExport", "ShopCurve", "chord_note", "dxf_bytes", "dxf_path", "export_run", "ezdxf_module",
-           "read_polylines", "shop_curves", "write_dxf"]
+__all__ = ["EXPORTS", "NothingToExport", "ShopCurve", "chord_note", "dxf_bytes", "dxf_path", "export_run",
+           "ezdxf_module", "read_polylines", "shop_curves", "write_dxf"]

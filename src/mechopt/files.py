@@ -40,9 +40,9 @@ def write_bytes_atomic(path, data: bytes, *, replace: bool = True, on_temporary=
     except OSError as exc:
         raise NotWritten(exc.errno, exc.strerror or str(exc), str(path)) from exc
     try:
-        if on_temporary is not None:
-            on_temporary(tmp)
         with os.fdopen(fd, "wb") as f:
+            if on_temporary is not None:
+                on_temporary(tmp)
             f.write(data)
             f.flush()
             os.fsync(f.fileno())
@@ -96,7 +96,7 @@ def _link_new(tmp, path):
     """Give the written temporary the name `path` only if nothing has it (FileExistsError
     otherwise): a hard link is atomic and never replaces."""
     try:
-        os.link(tmp, path, follow_symlinks=False)
+        os.link(tmp, path)
     except FileExistsError:
         raise FileExistsError(errno.EEXIST, "exists (not overwritten)", str(path)) from None
     except OSError as exc:

@@ -565,7 +565,8 @@ class _Store:
     def _note_temporary(self, tmp):
         """Record in the lock the temporary being written (None: none), so that a sweep killed while
         writing has its temporary removed by the next one, and nothing else."""
-        _lock_text(self._lock, f"{os.getpid()}\n" + (f"{tmp.relative_to(self.path.parent).as_posix()}\n" if tmp else ""))
+        in_flight = f"{tmp.relative_to(self.path.parent).as_posix()}\n" if tmp else ""
+        _lock_text(self._lock, f"{os.getpid()}\n{in_flight}")
 
     def _write(self, path, data):
         """`data` into `path` atomically, its temporary recorded in the lock while it exists."""
