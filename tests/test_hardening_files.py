@@ -393,3 +393,10 @@ def test_local_workers_are_capped_at_the_cores_and_it_is_said(monkeypatch):
     with pytest.warns(sw.SweepWarning, match=r"workers = 1000: this machine has 2 cores, so 2 processes are used"):
         assert sw.sweep(scene, _axes(), workers=1000, chunk=1, progress=False).num_rows == 3
     assert seen == [2]
+
+
+@pytest.mark.parametrize("out", ["/proc/o.parquet", "/proc/x/o.parquet"])
+def test_a_sweep_out_where_no_file_can_be_made_is_one_error_before_any_work(monkeypatch, out):
+    monkeypatch.setattr(registry, "run", lambda *a, **k: pytest.fail("solved before the output was checked"))
+    with pytest.raises(SceneError, match=r"/proc.*: cannot (make the folder of --out|create the sweep's lock file)"):
+        sw.sweep(registry.find(LOOM), _axes(), out=out, progress=False)

@@ -53,8 +53,8 @@ import pyarrow.parquet as pq
 from mechopt import registry
 from mechopt.cache import BuildCache
 from mechopt.errors import MechoptError, SceneError, SolverError
-from mechopt.files import (NAME_ROOM, holds, open_regular, quote, read_regular, recorded, shipped, take_lock,
-                           temporary_target, write_bytes_atomic)
+from mechopt.files import (NAME_ROOM, holds, make_folder, open_regular, quote, read_regular, recorded, shipped,
+                           take_lock, temporary_target, write_bytes_atomic)
 from mechopt.scene import MAX_SCENE_BYTES, Scene, loads, path_head, solver_options, split_assignment, task_fields
 
 __all__ = ["Axis", "SweepSpec", "SceneText", "SweepInterrupted", "SweepWarning", "parse_grid", "parse_random",
@@ -493,7 +493,11 @@ class _Store:
         if self.path.is_dir():
             raise SceneError(f"{self.path}: a folder; --out names the table's file, e.g. {self.path / 'sweep.parquet'}",
                              key="out")
-        self.path.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            make_folder(self.path.parent)
+        except OSError as exc:
+            raise SceneError(f"{self.path.parent}: cannot make the folder of --out ({exc.strerror}); nothing was "
+                             "written: choose another --out", key="out") from None
         if self.parts.is_symlink() or (self.parts.exists() and not self.parts.is_dir()):
             raise SceneError(f"{self.parts}: not this sweep's folder of parts (a symbolic link or a file); it is "
                              f"not followed: remove it, or choose another --out", key="out")
