@@ -66,8 +66,9 @@ def main(argv=None) -> int:
             raise
         done = ("nothing was run and nothing written" if args.command == "new"
                 else "the run itself finished: its result was computed but not written")
-        print(f"error: cannot write {exc.filename or 'an output'}: {exc.strerror} ({done}; "
-              "free some space or choose another place and run it again)", file=sys.stderr)
+        todo = "free some space or choose another place" if exc.errno in WRITE_FAILURES else "choose another place"
+        print(f"error: cannot write {exc.filename or 'an output'}: {exc.strerror} ({done}; {todo} and run it again)",
+              file=sys.stderr)
         return CHECK_FAILED
     finally:
         if as_command:
