@@ -20,7 +20,7 @@ from pathlib import Path
 
 from mechopt import __version__, registry
 from mechopt.benchmarks import studies, study
-from mechopt.drivers import set_mostly_by
+from mechopt.drivers import set_mostly_by, steps_of
 from mechopt.errors import MechoptError, SceneError, SolverError
 from mechopt.files import write_text_atomic
 from mechopt.mechanisms import templates
@@ -548,7 +548,8 @@ def _print_run(run):
         print(f"violated: {', '.join(r.violated)}")
     for sentence in r.warnings:
         print(f"warning: {sentence}")
-    for sentence in set_mostly_by(r.diagnostics.get("drivers", {})):
+    drivers = r.diagnostics.get("drivers", {})
+    for sentence in set_mostly_by(drivers) + steps_of(drivers):
         print(f"drivers: {sentence}")
     _print_table(("value", "got"), [(k, _fmt(v)) for k, v in r.values.items()])
     if run.checks:

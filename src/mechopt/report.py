@@ -17,7 +17,7 @@ from pathlib import Path
 
 from mechopt import __version__, registry
 from mechopt.answers import answers_html
-from mechopt.drivers import set_mostly_by
+from mechopt.drivers import set_mostly_by, steps_of
 from mechopt.figures import plot_run
 from mechopt.figures.sweep import plot_sweep
 from mechopt.files import write_text_atomic
@@ -142,7 +142,8 @@ def _scene_section(run, scratch):
     images = "".join(_image(p) for p in plot_run(run, scratch / slug))
     return (f"<h3 id='{_e(slug)}'>{_e(scene.id)}: {_e(scene.spec.title)}</h3>"
             + answers_html(run)
-            + "".join(f"<p>{_e(w)}</p>" for w in set_mostly_by(r.diagnostics.get("drivers", {})))
+            + "".join(f"<p>{_e(w)}</p>" for w in set_mostly_by(r.diagnostics.get("drivers", {}))
+                      + steps_of(r.diagnostics.get("drivers", {})))
             + f"<p><i>{_e(scene.spec.source)}</i><br>build {r.timing.build_s:.4f} s, solve {r.timing.solve_s:.4f} s</p>"
             + (f"<details><summary>{len(marked)} assumed / calibrated parameters</summary>"
                + _table(["parameter", "value", "unit", "mark", "why"],
