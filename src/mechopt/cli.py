@@ -390,6 +390,9 @@ def _validate(args) -> int:
             print(f"  {c.verdict.replace('_', ' ')}: {c.name}: {c.reason}")
         elif c.verdict == "reproduced" and c.readings_after_figure:
             print(f"  reproduced with readings chosen after the figure: {c.name}: {'; '.join(c.readings_after_figure)}")
+        elif c.verdict == "alternative":
+            print(f"  alternative reading, not counted as reproduced: {c.name}: matched here; the reading taken is "
+                  f"{c.alternative_to}'s")
     unchecked = [r.scene.id for r in runs if not r.checks]
     if unchecked:
         print(f"scenes with no expectations (solved, nothing to check): {', '.join(unchecked)}")
