@@ -118,6 +118,17 @@ def test_machine_speed_is_set_mostly_by_the_flight_time(tmp_path, solved_once):
     n = [registry.run("loom/machine-speed", {top["input"]: v}).values["max_speed_rpm"] for v in (59.5, 60.5)]
     assert top["derivative"] == pytest.approx(n[1] - n[0], rel=0.02)
     assert top["elasticity"] == pytest.approx(-0.676, abs=0.01)
+    # every input evaluated within the count budget; the lever's lengths are steps, not elasticities: the
+    # wavy rebound's local minimum, 0.2 % above the limit, starts to cross it and t(3,7) jumps
+    assert drivers["skipped"] == {} and drivers["resolves"] <= drivers["max_resolves"]
+    steps = {r["input"]: r for r in drivers["steps"]["max_speed_rpm"]}
+    ranked = {r["input"] for mark in ("assumed", "calibrated") for r in drivers["values"]["max_speed_rpm"][mark]}
+    step = steps["lever.b_mm.value"]
+    assert "lever.b_mm.value" not in ranked and step["jump"] > 3.0 and abs(step["slope_below"]) < 1.0
+    lo, hi = step["jump_between"]
+    assert 0 < hi - lo <= 1.2 / 2 ** BISECTIONS * (1 + 1e-9)
+    ends = [registry.run("loom/machine-speed", {"lever.b_mm.value": v}).values["max_speed_rpm"] for v in (lo, hi)]
+    assert ends[1] - ends[0] == pytest.approx(step["jump"], rel=1e-6)
 
 
 def test_validate_sweeps_and_a_plain_run_do_not_pay_for_drivers(capsys):
