@@ -1,6 +1,8 @@
 """Thread safety: the build caches, the cvxpy problems re-solved with new Parameter values, and a
 sweep on one Dask worker running four tasks at once in threads, every row against the serial sweep."""
 import itertools
+import os
+import sys
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -97,3 +99,28 @@ def test_lp_solves_through_the_api_on_four_threads_match_serial_ones():
         threaded = list(pool.map(answer, variants))
     assert {status for status, _ in serial} == {"SOLVED"} and any(k.startswith("sens_") for k in serial[0][1])
     assert [i for i, (a, b) in enumerate(zip(threaded, serial)) if a != b] == []
+
+
+def test_threads_making_the_first_highs_object_together_leave_stdout_where_it_was(monkeypatch):
+    """Each thread's swap of descriptor 1 staggered after the one before it has begun: unguarded, a
+    later thread saves the earlier one's stderr as its "stdout" and restores that, last."""
+    from mechopt.solvers import highs
+    arrived = itertools.count()
+
+    class Staggered:            # sys.stdout, whose flush (the swap's first step) waits its turn
+        def flush(self):
+            time.sleep(0.02 * next(arrived))
+
+    class SlowHighs:            # the first Highs object, made while descriptor 1 is swapped
+        def __init__(self):
+            time.sleep(0.1)
+    monkeypatch.setattr(highs.highspy, "Highs", SlowHighs)
+    monkeypatch.setattr(sys, "stdout", Staggered())
+    highs.banner_to_stderr.cache_clear()
+    before = os.fstat(1)
+    try:
+        _at_once(highs.banner_to_stderr)
+    finally:
+        highs.banner_to_stderr.cache_clear()
+    after = os.fstat(1)
+    assert (after.st_dev, after.st_ino) == (before.st_dev, before.st_ino)
