@@ -127,7 +127,8 @@ def test_a_variant_carries_its_base_readings_unless_a_row_names_its_own():
 
 
 @pytest.mark.parametrize("extra, words", [
-    ('kind = "follows"\nverdict = "not_reproduced"\nreason = "x"\n', "verdict is for a figure of the source .* not a follows"),
+    ('kind = "follows"\nverdict = "not_reproduced"\nreason = "x"\n',
+     "verdict is for a figure of the source .* not a follows"),
     ('kind = "derived"\nalternative_to = "stop-impact/frequencies"\n', "alternative_to is for a figure of the source"),
     ('kind = "published"\nalternative_to = "stop-impact/frequencies"\nverdict = "not_reproduced"\nreason = "x"\n',
      "a declared miss .* has no alternative reading"),
@@ -142,9 +143,9 @@ def test_an_alternative_to_no_scene_is_named_and_the_file_left_out(tmp_path, mon
     folder = tmp_path / "mine"
     folder.mkdir()
     text = SOURCE.read_text(encoding="utf-8").replace('id = "stop-impact/frequencies"', 'id = "mine/frequencies"')
-    (folder / "frequencies.toml").write_text(text + '\n[expect.c_free_N_per_mm]\nvalue = 2848.3\nrel = 1e-3\n'
-                                             'kind = "published"\nwhere = "x"\nalternative_to = "stop-impact/frequences"\n',
-                                             encoding="utf-8")
+    row = ('[expect.c_free_N_per_mm]\nvalue = 2848.3\nrel = 1e-3\nkind = "published"\nwhere = "x"\n'
+           'alternative_to = "stop-impact/frequences"\n')
+    (folder / "frequencies.toml").write_text(text + "\n" + row, encoding="utf-8")
     monkeypatch.setenv(registry.ENV_CASES, str(folder))
     found = registry.catalogue()
     assert "mine/frequencies" not in {s.id for s in found.scenes}

@@ -109,7 +109,7 @@ def elasticities(solve, inputs, headline, values, *, max_resolves: int = MAX_RES
         skipped[item.key] = f"beyond the first {MAX_INPUTS} inputs"
     for name, rows in steps.items():
         for row in rows:
-            spent += _bracket_the_jump(solve, name, values[name], row, max(0, max_resolves - spent))
+            spent += _bracket_the_jump(solve, name, row, max(0, max_resolves - spent))
     ranked = {name: {mark: sorted((r for r in rows if r["mark"] == mark), key=lambda r: -abs(r["elasticity"]))[:TOP]
                      for mark in MARKS} for name, rows in per_value.items()}
     # an assumption is the doubt a reader weighs; a calibrated input is pinned by the figure it was fitted to
@@ -145,7 +145,7 @@ def _slopes(item, step, y, y_up, y_down) -> dict:
                   "jump_between": [lo, hi], "values_at_ends": [y_lo, y_hi], "bisections": 0, "bracket_note": ""}
 
 
-def _bracket_the_jump(solve, name, y, row, allowed: int) -> int:
+def _bracket_the_jump(solve, name, row, allowed: int) -> int:
     """Narrow `row`'s bracket of the jump by bisection re-solves (at most BISECTIONS and `allowed`),
     in place; the re-solves spent. A midpoint whose value lies nearer the smooth line from the lower
     end than from the upper end's is below the jump."""

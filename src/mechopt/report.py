@@ -83,6 +83,9 @@ def write_report(out_dir, *, scenes: Sequence | None = None, runs: Sequence | No
     return page
 
 
+CSS_OF_VERDICT = {"calibrated": "cal", "alternative": "cal", "reproduced": "ok", "derived": "ok", "follows": "ok"}
+
+
 def _validation(runs):
     """The counts per verdict and the misses first; every check in a table folded below."""
     checks = [c for r in runs for c in r.checks]
@@ -91,8 +94,7 @@ def _validation(runs):
     for run in runs:
         assumed = sum(m == "assumed" for m in run.scene.marks().values())
         for c in run.checks:
-            css = "fail" if not c.ok else {"calibrated": "cal", "alternative": "cal", "reproduced": "ok", "derived": "ok",
-                                               "follows": "ok"}.get(c.verdict, "miss")
+            css = "fail" if not c.ok else CSS_OF_VERDICT.get(c.verdict, "miss")
             verdict = f"<span class='{css}'>{_e(c.label if c.ok else 'FAIL (' + c.label + ')')}</span>"
             why = f"<span class='long'>{_e(c.reason or c.where)}</span>"
             rows.append((registry.VERDICTS.index(c.verdict),
@@ -107,7 +109,8 @@ def _validation(runs):
     return (f"<p><b>{_e(registry.summary_line(checks))}</b></p>{tallies}"
             + (f"<h3>Misses ({len(misses)})</h3>" + _table(["case", "quantity", "expected (source)", "computed",
                                                             "verdict", "why"], [m[1] for m in misses], wide=True)
-               if misses else "<p>no misses: every check is reproduced, an alternative reading, calibrated, derived or follows</p>")
+               if misses else "<p>no misses: every check is reproduced, an alternative reading, calibrated, derived "
+               "or follows</p>")
             + f"<details><summary>every check ({len(checks)}), misses first</summary>"
             + _table(["case", "quantity", "kind", "expected (source)", "computed", "verdict", "where / why missed",
                       "assumed params"], [r[1] for r in rows], wide=True) + "</details>")
