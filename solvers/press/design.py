@@ -111,7 +111,7 @@ class _Block:
     stop: int
 
 
-@memoised(maxsize=8)
+@memoised(maxsize=8, per_thread=True)     # an nlpsol: one per thread (see BuildCache)
 def _nlp(task: PressDesign, nodes: tuple, tol: float, samples: int, scales: tuple, elastic: bool, max_iter: int,
          near: bool = False, coarse: bool = False, warm: bool = False):
     """(nlpsol, blocks, (lbg, ubg), Function w -> figures, number of slacks). With `elastic`, the

@@ -28,10 +28,14 @@ class BuildCache:
 
     Safe under threads (Dask workers run several tasks at once in one process): the table has its
     lock, each key is built once however many threads ask for it together, and `held` lends a
-    build to one thread at a time, for a solver object whose state is set and then solved."""
+    build to one thread at a time, for a solver object whose state is set and then solved.
+    `per_thread` keeps one build per thread instead: for CasADi's integrators, nlpsols and
+    rootfinders, whose calls from two threads at once crash the process (their memory is one per
+    object) and whose `stats()` tell the last call's, whichever thread made it. `maxsize` counts
+    every thread's builds."""
 
-    def __init__(self, name: str, maxsize: int):
-        self.name, self.maxsize = name, maxsize
+    def __init__(self, name: str, maxsize: int, *, per_thread: bool = False):
+        self.name, self.maxsize, self.per_thread = name, maxsize, per_thread
         self._items: OrderedDict[Hashable, _Kept] = OrderedDict()
         self._lock = threading.Lock()                      # the table
         self._building: dict[Hashable, threading.Lock] = {}   # a key being built: the others wait for it
@@ -52,7 +56,11 @@ class BuildCache:
         with kept.lock:
             yield kept.value, seconds
 
+    def _key(self, key):
+        return (threading.get_ident(), key) if self.per_thread else key
+
     def _kept(self, key, build) -> tuple[_Kept, float]:
+        key = self._key(key)
         with self._lock:
             if key in self._items:
                 self._items.move_to_end(key)
@@ -88,13 +96,14 @@ class BuildCache:
         return len(self._items)
 
     def __contains__(self, key: Hashable) -> bool:
-        return key in self._items
+        return self._key(key) in self._items
 
 
-def memoised(maxsize: int) -> Callable:
-    """Cache a pure function of hashable arguments in a registered `BuildCache` (`fn.cache`)."""
+def memoised(maxsize: int, *, per_thread: bool = False) -> Callable:
+    """Cache a pure function of hashable arguments in a registered `BuildCache` (`fn.cache`);
+    `per_thread` as there (for builds holding CasADi solvers)."""
     def wrap(fn):
-        cache = BuildCache(f"{fn.__module__}.{fn.__qualname__}", maxsize)
+        cache = BuildCache(f"{fn.__module__}.{fn.__qualname__}", maxsize, per_thread=per_thread)
 
         @functools.wraps(fn)
         def cached(*args):
