@@ -62,7 +62,7 @@ UNNAMED = {
     ("press/kd2322-rigid-belt", "cut_end_deg"), ("press/kd2322-rigid-belt", "omega_mean_rad_s"),
     ("press/kd2322", "peak_force_N"), ("press/kd2322", "cut_work_J"), ("press/kd2322", "cut_end_deg"),
     ("press/kd2322", "omega_mean_rad_s"), ("press/loads", "peak_rod_force_at_deg"),
-    ("press/loads", "peak_main_bearing_load_at_deg"), ("press/motor-design", "omega_mean_rad_s"),
+    ("press/loads", "peak_main_bearing_load_at_deg"),
     ("press/sensitivity", "speed_fluctuation"), ("press/sensitivity", "omega_min_deg"),
     ("press/sensitivity", "peak_belt_torque_Nm"), ("press/sensitivity", "omega_mean_rad_s"),
     ("press/start-up", "peak_force_N"), ("press/start-up", "cut_end_deg"),

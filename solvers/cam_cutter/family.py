@@ -40,7 +40,7 @@ __all__ = ["readjustable", "family_minimax", "served_range", "fixed_H_deviation"
 BOX_PAD_PER_A = 0.5          # default box: the members' matched linkages +- a/2
 BOX_WIDEN_FACTOR = 4.0
 SEARCH_FACTOR = 4.0          # served_range looks for the ends within a_min / 4 .. a_max * 4
-_BUILDS = BuildCache("cam_cutter.family_nlp", maxsize=32)
+_BUILDS = BuildCache("cam_cutter.family_nlp", maxsize=32, per_thread=True)    # CasADi solvers: see BuildCache
 # fit.minimax's back ends; qrqp's own iterations capped: on a family's first, cold round an
 # uncapped active-set QP can cycle for minutes (15 cams: 36 s) where IPOPT takes 0.2 s
 _OPTIONS = {"ipopt": NLP_OPTIONS["ipopt"],

@@ -544,7 +544,7 @@ def check(task: LinkageCheck, *, count: Nodes = 1000,
                   arrays=deviation_arrays(task, H, L))
 
 
-_NLP_BUILDS = BuildCache("cam_cutter.minimax_nlp", maxsize=64)
+_NLP_BUILDS = BuildCache("cam_cutter.minimax_nlp", maxsize=64, per_thread=True)    # CasADi solvers: see BuildCache
 
 
 def _minimax_nlp(k: int, method: str):

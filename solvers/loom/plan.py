@@ -136,8 +136,15 @@ def _plan_lp(task, *, stress_form, tol_deg, backend, warm_start) -> Result:
         return lp
     # cvxpy caches one compiled chain per problem and solver
     key = (backend, *net.signature())
-    fresh = key not in LP_BUILDS
-    lp, _ = LP_BUILDS.get(key, build)
+    # its parameters, the solve and the reading of values and duals are one state: one thread at a time
+    with LP_BUILDS.held(key, build) as (lp, compiled_s):
+        return _solve_held_lp(task, net, lp, start, compiled_s > 0, stress_form=stress_form, tol_deg=tol_deg,
+                              backend=backend, warm_start=warm_start)
+
+
+def _solve_held_lp(task, net, lp, start, fresh, *, stress_form, tol_deg, backend, warm_start) -> Result:
+    """The cached event-time LP `lp` (held by this thread) solved for `task`: parameters set,
+    solved, its answer checked and read."""
     set_parameters(lp, task, net)
     build_s = time.perf_counter() - start
     try:

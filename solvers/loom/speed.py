@@ -251,18 +251,19 @@ def _speed_lp(task, net, phi, g, backend):
         if "window_deg" in prm:
             prm["window_deg"].value = np.array([w for _, _, w in task.window_arcs()])
     start = time.perf_counter()
-    (problem, n, prm), _ = LP_BUILDS.get(key, build)
-    set_values(prm)
-    build_s = time.perf_counter() - start
-    try:
-        problem.solve(solver=backend, warm_start=False)
-    except cp.error.SolverError as exc:
-        return None, Status.FAILED, f"{backend} failed: {exc}", build_s, {}
-    status = from_cvxpy(problem.status)
-    extra = {"solver_status": problem.status}
-    if status is Status.SOLVED:
-        return float(n.value), status, "", build_s, extra
-    return None, status, f"{backend}: {problem.status}", build_s, extra
+    # its parameters, the solve and the reading of n are one state: one thread at a time
+    with LP_BUILDS.held(key, build) as ((problem, n, prm), _):
+        set_values(prm)
+        build_s = time.perf_counter() - start
+        try:
+            problem.solve(solver=backend, warm_start=False)
+        except cp.error.SolverError as exc:
+            return None, Status.FAILED, f"{backend} failed: {exc}", build_s, {}
+        status = from_cvxpy(problem.status)
+        extra = {"solver_status": problem.status}
+        if status is Status.SOLVED:
+            return float(n.value), status, "", build_s, extra
+        return None, status, f"{backend}: {problem.status}", build_s, extra
 
 
 CHECK_RTOL = 1e-9                # the graph's speed against the LP's (check = true)

@@ -78,7 +78,6 @@ NODE_MOVE_RAD = 1e-4         # a speed extreme further than this from a stage bo
 MISSED_SPREAD = 3e-7         # re-solve while the samples' speed spread misses the dense one by more (relative)
 STEPS_PER_REVOLUTION = 300   # belt-mode steps (a tenth of its period) per revolution the NLP takes on (~120 Hz)
 RIGID_RATIO = 1000           # belt mode / revolution frequency past which the rigid belt is its limit (SOLVED there)
-MAX_WALL_S = 60.0            # IPOPT's wall-time limit per solve: LIMIT past it
 COARSE_TOL = 1e-7             # CVODES tolerance of the first pass, which only finds where the extremes go
 COARSE_ITER = 60              # and its IPOPT iterations
 COARSE_MISSED = 1e-4          # a coarse pass whose spread misses the dense one by less is followed by a fine one
@@ -112,7 +111,7 @@ class _Block:
     stop: int
 
 
-@memoised(maxsize=8)
+@memoised(maxsize=8, per_thread=True)     # an nlpsol: one per thread (see BuildCache)
 def _nlp(task: PressDesign, nodes: tuple, tol: float, samples: int, scales: tuple, elastic: bool, max_iter: int,
          near: bool = False, coarse: bool = False, warm: bool = False):
     """(nlpsol, blocks, (lbg, ubg), Function w -> figures, number of slacks). With `elastic`, the
@@ -195,12 +194,13 @@ def _nlp(task: PressDesign, nodes: tuple, tol: float, samples: int, scales: tupl
     ubg = np.concatenate([np.full(r[1].numel(), float(r[3])) for r in rows])
     # from a nearby start the barrier stays small (monotone): the adaptive rule can raise it from
     # 1e-6 to 1e3 on the first infeasible steps and wander back over ~50 quasi-Newton iterations
+    # no wall-time limit: max_iter (a count) ends a solve, so a busy machine gives the same design
     solver = ca.nlpsol("design", "ipopt", {"x": x, "f": objective, "g": g},
                        {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
                         "ipopt.hessian_approximation": "limited-memory",
                         "ipopt.tol": 1e-5 if coarse else 1e-8, "ipopt.constr_viol_tol": 1e-7 if coarse else 1e-10,
                         "ipopt.mu_strategy": "monotone" if near else "adaptive", "ipopt.max_iter": min(max_iter, COARSE_ITER) if coarse else max_iter,
-                        "ipopt.max_wall_time": MAX_WALL_S, "ipopt.mu_init": 1e-6 if near else 0.1,
+                        "ipopt.mu_init": 1e-6 if near else 0.1,
                         "error_on_fail": False} | (WARM_START if warm else {}))
     figures = ca.Function("figures", [x], [d, ca.vertcat(*Y), period, rms, energy, g, omega])
     return solver, tuple(blocks), (lbg, ubg), figures, slacks

@@ -42,7 +42,7 @@ from mechopt.solvers.settings import Annotated, Interval, Tolerance
 
 STEPS_PER_REVOLUTION = 2500     # belt-mode steps per revolution steady_state takes on (1 kHz belt: ~3 s)
 CHORD_STEPS = 4                 # warm start: Broyden steps from the last monodromy before a full Newton solve
-LAST_ORBIT = BuildCache("press.periodic.last_orbit", 16)      # per (structure, tol, samples): y0, Jacobian
+LAST_ORBIT = BuildCache("press.periodic.last_orbit", 16, per_thread=True)   # per (structure, tol, samples): y0, Jacobian
 
 
 def steady_state(task: PressDrive, *, tol: Tolerance = 1e-10, samples: Samples = 60,

@@ -321,7 +321,7 @@ class Piece:
         return self.integrator(x0=x0, p=np.r_[p, self.p])
 
 
-@memoised(maxsize=32)
+@memoised(maxsize=32, per_thread=True)    # a CVODES integrator: one per thread (see BuildCache)
 def time_piece(key: tuple, tol: float, samples: int) -> ca.Function:
     """CVODES over a piece of duration p[0] in mode p[1:4] with the press's p (`PARAMETERS`) after
     them (time scaled to [0, 1]): the states at `samples` equally spaced times, the last being the
@@ -536,7 +536,7 @@ class Revolution:
         return trace, y[:n - 1]
 
 
-@memoised(maxsize=16)
+@memoised(maxsize=16, per_thread=True)    # CVODES integrators: one per thread (see BuildCache)
 def revolution(key: tuple, tol: float, samples: int) -> Revolution:
     """The `Revolution` of a structure (`models.press.structure`), built once per (structure, tol, samples)."""
     eq = equations(key)

@@ -50,7 +50,7 @@ def _symbols(task: PressDesign):
     return y, phi, u, p, x, ca.vertcat(u, 1, 0), dyn, gear
 
 
-@memoised(maxsize=8)
+@memoised(maxsize=8, per_thread=True)     # CVODES integrators: one per thread (see BuildCache)
 def intervals(task: PressDesign, nodes: tuple[float, ...], tol: float, samples: int):
     """[(CVODES integrator, its output angles, U)] for the intervals between `nodes` [rad]. The
     integrator's state: the states other than phi; its quadratures `QUADRATURES` (cumulative at each
@@ -88,7 +88,7 @@ def probe(task: PressDesign, samples: int) -> ca.Function:
     return one.map(samples)
 
 
-@memoised(maxsize=8)
+@memoised(maxsize=8, per_thread=True)     # a CVODES integrator: one per thread (see BuildCache)
 def reach(task: PressDesign, tol: float) -> ca.Function:
     """(states other than phi at angle a, U, design p, a, angle L further) -> (those states at a + L,
     the crank's angular acceleration there [rad/s2]): CVODES over s in [0, 1] with phi = a + s L, to

@@ -31,7 +31,7 @@ def dwell_length(lam, t_deg):
     periods, cycle = DWELL_PERIODS * 2 * math.pi / lam, 360.0 / t_deg - 1.0
     return min(periods, cycle), cycle < periods
 
-_BUILDS = BuildCache("stop_impact.cam_integrators", maxsize=16)
+_BUILDS = BuildCache("stop_impact.cam_integrators", maxsize=16, per_thread=True)    # CVODES: see BuildCache
 
 
 @dataclass(frozen=True)

@@ -203,7 +203,7 @@ _SEVERITY = [Status.SOLVED, Status.INACCURATE, Status.LIMIT, Status.FAILED]
 
 # --- ODE (CasADi)
 
-_ODE_BUILDS = BuildCache("stop_impact.ode_integrators", maxsize=8)
+_ODE_BUILDS = BuildCache("stop_impact.ode_integrators", maxsize=8, per_thread=True)    # CVODES: see BuildCache
 
 
 def _ode_integrators(points, reltol=1e-13):

@@ -20,7 +20,7 @@ from pathlib import Path
 
 from mechopt import __version__, registry
 from mechopt.benchmarks import studies, study
-from mechopt.drivers import set_mostly_by
+from mechopt.drivers import set_mostly_by, steps_of
 from mechopt.errors import MechoptError, SceneError, SolverError
 from mechopt.files import NotWritten, name_problem, output_problem, write_text_atomic
 from mechopt.mechanisms import templates
@@ -438,6 +438,9 @@ def _validate(args) -> int:
             print(f"  {c.verdict.replace('_', ' ')}: {c.name}: {c.reason}")
         elif c.verdict == "reproduced" and c.readings_after_figure:
             print(f"  reproduced with readings chosen after the figure: {c.name}: {'; '.join(c.readings_after_figure)}")
+        elif c.verdict == "alternative":
+            print(f"  alternative reading, not counted as reproduced: {c.name}: matched here; the reading taken is "
+                  f"{c.alternative_to}'s")
     unchecked = [r.scene.id for r in runs if not r.checks]
     if unchecked:
         print(f"scenes with no expectations (solved, nothing to check): {', '.join(unchecked)}")
@@ -615,7 +618,8 @@ def _print_run(run):
         print(f"violated: {', '.join(r.violated)}")
     for sentence in r.warnings:
         print(f"warning: {sentence}")
-    for sentence in set_mostly_by(r.diagnostics.get("drivers", {})):
+    drivers = r.diagnostics.get("drivers", {})
+    for sentence in set_mostly_by(drivers) + steps_of(drivers):
         print(f"drivers: {sentence}")
     _print_table(("value", "got"), [(k, _fmt(v)) for k, v in r.values.items()])
     if run.checks:

@@ -18,17 +18,20 @@ from mechopt.units import unit_of
 
 # Every check's verdict, the misses first: the order in which validate lists and counts them.
 VERDICTS = ("failed", "unexpectedly_reproduced", "not_reproduced", "not_reproducible",
-            "reproduced", "calibrated", "derived")
+            "reproduced", "alternative", "calibrated", "derived", "follows")
 MISSES = VERDICTS[:4]
 
 
 @dataclass(frozen=True)
 class Check:
     """One expectation against the result. `verdict` says what it shows:
-    reproduced (a figure of the source, met by a model not fitted to it), calibrated (agreement by
-    construction), derived (an independent computation, a bound or a status), not_reproduced (a declared
-    miss: computed, outside the tolerance), not_reproducible (the source lacks what is needed), failed,
-    or unexpectedly_reproduced (a declared miss that now passes: the declaration is to be corrected).
+    reproduced (a figure of the source, met by a model not fitted to it), alternative (a figure met under
+    a reading that excludes the one the scene `alternative_to` names takes: reported, not counted as a
+    reproduction), calibrated (agreement by construction), derived (an independent computation, a bound
+    or a status), follows (a row that restates what the status certifies: it cannot fail while SOLVED),
+    not_reproduced (a declared miss: computed, outside the tolerance), not_reproducible (the source lacks
+    what is needed), failed, or unexpectedly_reproduced (a declared miss that now passes: the
+    declaration is to be corrected).
     `ok` is whether validation passes it: a declared miss does, as pytest's xfail."""
     name: str
     expected: str            # as the scene states it: "1.5 ± 0.01", "<= 0.2", "INFEASIBLE"
@@ -42,12 +45,13 @@ class Check:
     reason: str = ""          # why a declared miss is missed
     gap: float | None = None  # (got - expected) / |expected|, where both are numbers
     readings_after_figure: tuple[str, ...] = ()   # readings chosen with the published figure in view
+    alternative_to: str = ""  # the scene whose reading excludes this row's (verdict alternative)
 
     def as_dict(self):
         return {"name": self.name, "expected": self.expected, "got": self.got, "tol": self.tol,
                 "ok": self.ok, "verdict": self.verdict, "kind": self.kind, "where": self.where,
                 "calibrated": self.calibrated, "reason": self.reason, "gap": self.gap,
-                "readings_after_figure": list(self.readings_after_figure)}
+                "readings_after_figure": list(self.readings_after_figure), "alternative_to": self.alternative_to}
 
     @property
     def label(self) -> str:
@@ -56,6 +60,8 @@ class Check:
             return f"not reproduced ({self.gap:+.1%})"
         if self.verdict == "reproduced" and self.readings_after_figure:
             return "reproduced (readings chosen after the figure)"
+        if self.verdict == "alternative":
+            return f"alternative (the reading taken: {self.alternative_to})"
         return self.verdict.replace("_", " ")
 
 
@@ -67,8 +73,12 @@ def verdict_of(exp, met: bool, calibrated: bool) -> str:
         return "unexpectedly_reproduced" if met else "not_reproduced"
     if not met:
         return "failed"
+    if exp.kind == "follows":
+        return "follows"
     if calibrated:
         return "calibrated"
+    if exp.alternative_to:
+        return "alternative"
     return "reproduced" if exp.kind in ("published", "experimental") else "derived"
 
 
@@ -229,13 +239,16 @@ def _catalogue(folders: tuple[Path, ...]) -> Catalogue:
                 continue
             scenes.append(scene)
     expected = {name for s in scenes for name in s.spec.expect}
+    ids = {s.id for s in scenes}
     ours = [s for s in scenes if s.path.is_relative_to(cases_dir())]
     for scene in ours:
         _check_calibration_targets(scene, expected)
+        _check_alternatives(scene, ids)
     kept = list(ours)
     for scene in scenes[len(ours):]:
         try:
             _check_calibration_targets(scene, expected)
+            _check_alternatives(scene, ids)
             kept.append(scene)
         except SceneError as exc:
             problems.append(str(exc))
@@ -261,6 +274,15 @@ def _check_calibration_targets(scene, expected):
             near = difflib.get_close_matches(param.on, sorted(expected), n=2)
             raise SceneError(f"{scene.path}: params.{key}.on = {param.on!r}: no scene expects that value"
                              + (f"; did you mean {', '.join(near)}?" if near else ""), key=key)
+
+
+def _check_alternatives(scene, ids):
+    """An alternative reading names the scene whose reading is taken: a typo would hide which one counts."""
+    for name, exp in scene.spec.expect.items():
+        if exp.alternative_to and exp.alternative_to not in ids:
+            near = difflib.get_close_matches(exp.alternative_to, sorted(ids), n=2)
+            raise SceneError(f"{scene.path}: expect.{name}.alternative_to = {exp.alternative_to!r}: no such scene"
+                             + (f"; did you mean {', '.join(near)}?" if near else ""), key=name)
 
 
 def is_path(ref: str) -> bool:
@@ -396,7 +418,8 @@ def check(scene: Scene, result: Result) -> list[Check]:
             verdict = "failed"
         gap = (got - exp.value) / abs(exp.value) if numeric and isinstance(got, float) and exp.value else None
         out.append(Check(name, exp.describe(), got, tol, verdict not in ("failed", "unexpectedly_reproduced"),
-                         exp.kind, exp.where, calibrated, verdict, exp.reason, gap, tuple(exp.readings_after_figure)))
+                         exp.kind, exp.where, calibrated, verdict, exp.reason, gap, tuple(exp.readings_after_figure),
+                         exp.alternative_to))
     return out
 
 

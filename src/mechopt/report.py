@@ -17,7 +17,7 @@ from pathlib import Path
 
 from mechopt import __version__, registry
 from mechopt.answers import answers_html
-from mechopt.drivers import set_mostly_by
+from mechopt.drivers import set_mostly_by, steps_of
 from mechopt.figures import plot_run
 from mechopt.figures.sweep import plot_sweep
 from mechopt.files import write_text_atomic
@@ -82,6 +82,9 @@ def write_report(out_dir, *, scenes: Sequence | None = None, runs: Sequence | No
     return page
 
 
+CSS_OF_VERDICT = {"calibrated": "cal", "alternative": "cal", "reproduced": "ok", "derived": "ok", "follows": "ok"}
+
+
 def _validation(runs):
     """The counts per verdict and the misses first; every check in a table folded below."""
     checks = [c for r in runs for c in r.checks]
@@ -90,7 +93,7 @@ def _validation(runs):
     for run in runs:
         assumed = sum(m == "assumed" for m in run.scene.marks().values())
         for c in run.checks:
-            css = "fail" if not c.ok else {"calibrated": "cal", "reproduced": "ok", "derived": "ok"}.get(c.verdict, "miss")
+            css = "fail" if not c.ok else CSS_OF_VERDICT.get(c.verdict, "miss")
             verdict = f"<span class='{css}'>{_e(c.label if c.ok else 'FAIL (' + c.label + ')')}</span>"
             why = f"<span class='long'>{_e(c.reason or c.where)}</span>"
             rows.append((registry.VERDICTS.index(c.verdict),
@@ -105,7 +108,8 @@ def _validation(runs):
     return (f"<p><b>{_e(registry.summary_line(checks))}</b></p>{tallies}"
             + (f"<h3>Misses ({len(misses)})</h3>" + _table(["case", "quantity", "expected (source)", "computed",
                                                             "verdict", "why"], [m[1] for m in misses], wide=True)
-               if misses else "<p>no misses: every check is reproduced, calibrated or derived</p>")
+               if misses else "<p>no misses: every check is reproduced, an alternative reading, calibrated, derived "
+               "or follows</p>")
             + f"<details><summary>every check ({len(checks)}), misses first</summary>"
             + _table(["case", "quantity", "kind", "expected (source)", "computed", "verdict", "where / why missed",
                       "assumed params"], [r[1] for r in rows], wide=True) + "</details>")
@@ -142,7 +146,8 @@ def _scene_section(run, folder):
     images = "".join(_image(p) for p in plot_run(run, folder))
     return (f"<h3 id='{_e(slug)}'>{_e(scene.id)}: {_e(scene.spec.title)}</h3>"
             + answers_html(run)
-            + "".join(f"<p>{_e(w)}</p>" for w in set_mostly_by(r.diagnostics.get("drivers", {})))
+            + "".join(f"<p>{_e(w)}</p>" for w in set_mostly_by(r.diagnostics.get("drivers", {}))
+                      + steps_of(r.diagnostics.get("drivers", {})))
             + f"<p><i>{_e(scene.spec.source)}</i><br>build {r.timing.build_s:.4f} s, solve {r.timing.solve_s:.4f} s</p>"
             + (f"<details><summary>{len(marked)} assumed / calibrated parameters</summary>"
                + _table(["parameter", "value", "unit", "mark", "why"],

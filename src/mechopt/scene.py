@@ -79,7 +79,8 @@ class Expectation(BaseModel):
     rel: float | None = Field(default=None, gt=0)
     max: Number | None = None
     min: Number | None = None
-    kind: Literal["published", "experimental", "derived"]
+    # follows: a row that restates what the status already certifies (it cannot fail while SOLVED)
+    kind: Literal["published", "experimental", "derived", "follows"]
     where: str
     follows: str = ""      # why agreement is by construction (it follows from a calibration): not a reproduction
     # A declared miss, as pytest's xfail: "not_reproduced" (computed, outside the tolerance: shown with its gap,
@@ -89,14 +90,19 @@ class Expectation(BaseModel):
     # readings taken with the published figure in view: a reproduction that needs them says so
     readings_after_figure: list[str] = []
     of: str = ""           # the result's value this row checks, when not the row's own name (a second figure of it)
+    # a figure met under a reading that excludes the one the scene named here takes (chosen before the
+    # figure): its match is reported, not counted as a reproduction
+    alternative_to: str = ""
 
     @model_validator(mode="after")
     def _one_form(self):
         if bool(self.verdict) != bool(self.reason.strip()):
             raise ValueError("'reason' goes with a declared verdict (not_reproduced, not_reproducible), and only there")
-        if self.verdict and self.kind == "derived":
-            raise ValueError(f"verdict = {self.verdict!r} is for a figure of the source (kind published or "
-                             "experimental), not a derived check")
+        if (self.verdict or self.alternative_to) and self.kind in ("derived", "follows"):
+            raise ValueError(f"{'verdict' if self.verdict else 'alternative_to'} is for a figure of the source "
+                             f"(kind published or experimental), not a {self.kind} check")
+        if self.verdict and self.alternative_to:
+            raise ValueError("a declared miss (verdict) has no alternative reading (alternative_to): give one")
         if self.verdict == "not_reproducible":
             if not isinstance(self.value, (int, float)) or isinstance(self.value, bool):
                 raise ValueError("a not_reproducible figure states the source's number as 'value'")
@@ -565,7 +571,19 @@ def _on_base(path, raw):
     params = {name: p.model_dump(exclude_defaults=True) for name, p in source.spec.params.items() if name not in drop}
     structure = {name: v for name, v in source.spec.structure.items() if name not in drop}
     return raw | {"params": params | raw.get("params", {}), "structure": structure | raw.get("structure", {}),
-                  "effects": raw.get("effects", list(source.spec.effects))}
+                  "effects": raw.get("effects", list(source.spec.effects)),
+                  "expect": _with_base_readings(raw.get("expect", {}), source)}
+
+
+def _with_base_readings(expect, source):
+    """The scene's figures of the source, each carrying the readings its base's figures were chosen
+    after (the model it runs is the base's, readings and all), unless the row names its own."""
+    readings = list(dict.fromkeys(r for e in source.spec.expect.values() for r in e.readings_after_figure))
+    if not readings or not isinstance(expect, dict):
+        return expect
+    return {name: ({"readings_after_figure": readings} | row
+                   if isinstance(row, dict) and row.get("kind") in ("published", "experimental") else row)
+            for name, row in expect.items()}
 
 
 def _other_scene(path, where, value):
