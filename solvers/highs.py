@@ -8,7 +8,6 @@ import threading
 
 import highspy
 
-
 # functools.cache lets threads that arrive together all run the body: two swaps of descriptor 1
 # interleaved would save the other's stderr as "stdout" and leave it there
 _SWAPPING = threading.Lock()

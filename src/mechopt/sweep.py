@@ -53,8 +53,19 @@ import pyarrow.parquet as pq
 from mechopt import registry
 from mechopt.cache import BuildCache
 from mechopt.errors import MechoptError, SceneError, SolverError
-from mechopt.files import (NAME_ROOM, holds, make_folder, open_regular, quote, read_regular, recorded, shipped,
-                           take_lock, temporary_target, write_bytes_atomic)
+from mechopt.files import (
+    NAME_ROOM,
+    holds,
+    make_folder,
+    open_regular,
+    quote,
+    read_regular,
+    recorded,
+    shipped,
+    take_lock,
+    temporary_target,
+    write_bytes_atomic,
+)
 from mechopt.scene import MAX_SCENE_BYTES, Scene, loads, path_head, solver_options, split_assignment, task_fields
 
 __all__ = ["Axis", "SweepSpec", "SceneText", "SweepInterrupted", "SweepWarning", "parse_grid", "parse_random",
