@@ -327,3 +327,48 @@ def test_threads_loading_scenes_at_once_see_no_false_loop(tmp_path, monkeypatch)
         done.set()
         first.join(60)
     assert errors == []
+
+
+# --- issue 35: no traceback from a link loop, a long chain of scenes, a deep expression, a solver's limit -----
+
+def test_a_scene_that_is_a_symlink_loop_is_one_clear_line(tmp_path, capsys):
+    loop = tmp_path / "loop.toml"
+    loop.symlink_to("loop.toml")
+    assert cli.main(["run", str(loop)]) == cli.BAD_INPUT
+    assert capsys.readouterr().err.strip() == f"error: {loop}: cannot read: Too many levels of symbolic links"
+    with pytest.raises(SceneError, match=r"loop.toml: cannot read: Too many levels of symbolic links"):
+        load(_scene(tmp_path, "[]", text='base = {{ scene = "loop.toml" }}\n' + SCENE))
+
+
+def test_a_chain_of_300_base_scenes_is_refused_naming_the_limit(tmp_path):
+    from mechopt import scene as scene_mod
+    MAX_CHAIN = getattr(scene_mod, "MAX_CHAIN", 32)
+    _scene(tmp_path, "[[0, 0], [1, 1], [2, 0]]", name="s0.toml")
+    head = 'base = {{ scene = "s{}.toml" }}\nid = "c/s{}"\ntitle = "t"\nsource = "s"\ntask = "cam_profile.ProfileFit"\n' \
+           'solver = "cam_cutter.minimax"\n[params]\n'
+    for k in range(1, 301):
+        (tmp_path / f"s{k}.toml").write_text(head.format(k - 1, k))
+    with pytest.raises(SceneError, match=rf"s{300 - MAX_CHAIN}.toml: base: s{299 - MAX_CHAIN}.toml makes a chain of "
+                                         rf"references \(base, scene = ...\) of more than {MAX_CHAIN} scenes; a chain "
+                                         rf"holds at most {MAX_CHAIN}"):
+        load(tmp_path / "s300.toml")
+
+
+@pytest.mark.parametrize("expression, match", [
+    ("-" * 1990 + "t", r"x_expr: operators nested more than 100 levels deep; at most 100"),
+    ("1" * 1999, r"x_expr: a number of 1,999 digits beyond a float's range \(at most 1.8e308\)"),
+], ids=["unary-minus", "digits"])
+def test_a_deep_or_huge_expression_is_one_clear_line(expression, match):
+    with pytest.raises(SceneError, match=r"other-profile.toml: structure.x_expr: " + match):
+        registry.find("cam-cutter/other-profile").build({"x_expr": expression})
+
+
+def test_the_press_sensitivity_at_its_step_limit_is_a_status_not_a_traceback(monkeypatch):
+    import importlib
+    sensitivity = importlib.import_module("mechopt.solvers.press.sensitivity")
+    task, _ = registry.find("press/sensitivity").build()
+    # CVODES stops as it does with a 0.01 kg m2 flywheel (`--set flywheel_inertia_kgm2=0.01`), in a fraction of its time
+    monkeypatch.setattr(sensitivity, "MAX_STEPS", 20, raising=False)
+    r = sensitivity.sensitivity(task, tol=1e-6)
+    assert r.status.value == "LIMIT" and r.values == {}
+    assert r.message.startswith("CVODES gave up (CV_TOO_MUCH_WORK: more steps than allowed") and "Traceback" not in r.message

@@ -73,13 +73,19 @@ def read_regular(path, *, max_bytes: int, what: str) -> bytes:
     (`what` names it in the message: "a scene file")
     (not as `st_size` says: /dev/zero reports 0 and never ends; a FIFO would block forever).
     Raises OSError (a missing or unreadable file) or ValueError naming `what` and the limit."""
-    key = str(Path(path).resolve())
+    key = str(real_path(path))
     data = _SHIPPED.get().get(key)
     if data is None:
         data = _read_regular(path, max_bytes, what)
     for got in _RECORDERS.get():
         got[key] = data
     return data
+
+
+def real_path(path) -> Path:
+    """`path` with its symbolic links followed as far as they go. A loop of links is left for
+    open() to refuse (ELOOP: one clear line), where Path.resolve raises RuntimeError (Python < 3.13)."""
+    return Path(os.path.realpath(path))
 
 
 def _read_regular(path, max_bytes, what):

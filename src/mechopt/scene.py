@@ -21,7 +21,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from mechopt.cache import memoised
 from mechopt.errors import MechoptError, ModelError, SceneError, SettingError
-from mechopt.files import quote, read_regular
+from mechopt.files import quote, read_regular, real_path
 from mechopt.models.provenance import provenance_problem
 from mechopt.solvers.result import Status
 from mechopt.solvers.settings import declared_range, describe_range, setting_problem
@@ -31,6 +31,7 @@ from mechopt.units import unit_of
 Number = int | float
 STATUS_WORDS = tuple(s.value for s in Status)
 MAX_SCENE_BYTES = 1_000_000      # a scene is a page of TOML; its tables of points come from CSV files
+MAX_CHAIN = 32                   # scenes a chain of base / scene references reads (a variant of a variant ...)
 MAX_LIST_ITEMS = 100             # a list typed into a scene or a --set (speeds, operations); longer: a CSV
 
 
@@ -477,7 +478,7 @@ _READING: ContextVar[frozenset] = ContextVar("mechopt_scene_reading", default=fr
 
 @contextmanager
 def _reading(path):
-    token = _READING.set(_READING.get() | {path.resolve()})
+    token = _READING.set(_READING.get() | {real_path(path)})
     try:
         yield
     finally:
@@ -554,9 +555,12 @@ def _other_scene(path, where, value):
             isinstance(drop, list) and all(isinstance(d, str) for d in drop)):
         raise SceneError(f'{path}: {where}: a model from another scene is {{ scene = "../other/scene.toml", '
                          f'drop = ["name", ...] }}; got {value!r}', key=where)
-    source_path = (path.parent / value["scene"]).resolve()
+    source_path = real_path(path.parent / value["scene"])
     if source_path in _READING.get():
         raise SceneError(f"{path}: {where}: {value['scene']} leads back to a scene being read (a loop)", key=where)
+    if len(_READING.get()) >= MAX_CHAIN:        # deeper, the reading itself would run out of stack
+        raise SceneError(f"{path}: {where}: {value['scene']} makes a chain of references (base, scene = ...) of "
+                         f"more than {MAX_CHAIN} scenes; a chain holds at most {MAX_CHAIN}", key=where)
     with _reading(path):
         source = load(source_path)
     unknown = sorted(set(drop) - set(source.spec.params) - set(source.spec.structure))
