@@ -26,7 +26,7 @@ from mechopt.solvers.loom.plan import (
     schedule_floats,
 )
 from mechopt.solvers.loom.repair import cached_amplitude_bound, exact_amplitude_mm
-from mechopt.solvers.result import Result, Status, Timing, from_cvxpy
+from mechopt.solvers.result import NAMED, Result, Status, Timing, from_cvxpy, some_of
 from mechopt.solvers.settings import Interval
 
 
@@ -180,12 +180,12 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp",
     if status is Status.INFEASIBLE:
         chain = _conflict_at(task, net, phi) or _conflict_at(task, net, np.maximum(phi, g * rtol))
         groups = list(dict.fromkeys(task.graph.nodes[v]["group"] or "-" for v, _, _ in chain))
-        diagnostics["conflict_groups"] = groups
-        message = ("no speed fits: conflicting chain " + "; ".join(label for _, label, _ in chain)
+        diagnostics |= {"conflict_groups": groups[:NAMED], "conflict_length": len(chain)}
+        message = ("no speed fits: conflicting chain " + some_of(label for _, label, _ in chain)
                    + f" (needs {math.fsum(w for _, _, w in chain):.6g} deg more than its limits allow as n -> 0;"
-                   + f" groups {', '.join(groups)})")
+                   + f" groups {some_of(groups, sep=', ')})")
         return Result(Status.INFEASIBLE, {}, timing(), message=message,
-                      violated=tuple(label for _, label, _ in chain), diagnostics=diagnostics)
+                      violated=tuple(label for _, label, _ in chain[:NAMED]), diagnostics=diagnostics)
     if status is Status.UNBOUNDED:
         message += ": no limit grows with the speed on a chain the cycle closes (no stress, rebound or min_ms there)"
     if status is not Status.SOLVED:

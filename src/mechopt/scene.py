@@ -25,7 +25,7 @@ from mechopt.files import quote, read_regular, real_path
 from mechopt.models.provenance import provenance_problem
 from mechopt.solvers.result import Status
 from mechopt.solvers.settings import declared_range, describe_range, setting_problem
-from mechopt.tables import number, read_records, read_rows
+from mechopt.tables import check_header, number, read_records, read_rows
 from mechopt.units import unit_of
 
 Number = int | float
@@ -572,6 +572,7 @@ def _other_scene(path, where, value):
 def _csv_rows(csv_path, columns, key):
     try:
         header, rows, delimiter = read_rows(csv_path, what="a point table", example=",".join(columns))
+        check_header(csv_path, header, columns, ", ".join(columns))
     except ModelError as exc:
         raise SceneError(f"{exc} (the table for structure.{key})", key=key) from None
     missing = [c for c in columns if c not in header]
