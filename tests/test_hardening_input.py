@@ -495,3 +495,13 @@ def test_a_sweep_of_a_fractional_number_of_samples_is_refused_naming_its_type(sa
     with pytest.raises(SceneError, match=rf"--samples {samples!r}: expected a whole number \(int\) of random draws, "
                                          rf"not {type(samples).__name__}"):
         sw.plan(registry.find("loom/group1"), random=[sw.parse_random("amplitude_limit_mm=0.1:0.2")], samples=samples)
+
+
+@pytest.mark.parametrize("case, assignment, where", [
+    ("stop-impact/rebound-177rpm", "speeds_rpm=[{}]", r"structure.speeds_rpm\[0\]"),
+    ("loom/group1", "operations[from=3,to=7].min_deg={}", r"structure.operations\[\d+\].min_deg"),
+    ("cam-cutter/other-profile", "constants.A_mm={}", r"structure.constants.A_mm"),
+], ids=["list", "selector", "table"])
+def test_a_1999_digit_integer_in_a_structure_is_refused_naming_its_path(case, assignment, where):
+    with pytest.raises(SceneError, match=where + r": a number beyond a float's range \(at most 1.8e308\)"):
+        registry.find(case).build(parse_overrides([assignment.format("1" * 1999)]))

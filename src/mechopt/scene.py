@@ -666,6 +666,25 @@ def _build_task(path, task_class, effects, params, structure=None):
     except MechoptError as exc:
         table = "structure" if exc.key and path_head(exc.key) in structure else "params"
         raise SceneError(f"{path}: {table}.{exc.key}: {exc}" if exc.key else f"{path}: {exc}", key=exc.key) from None
+    except OverflowError:                # an integer of hundreds of digits in a table: no float holds it
+        where = _beyond_float(structure) or "structure"
+        raise SceneError(f"{path}: {where}: a number beyond a float's range (at most 1.8e308)",
+                         key=path_head(where.removeprefix("structure."))) from None
+
+
+def _beyond_float(structure):
+    """The path (`structure.operations[2].min_deg`) of an integer in the tables and lists of
+    `structure` that no float holds, or None; walked without recursion (a table may nest deeply)."""
+    stack = [("structure", structure)]
+    while stack:
+        at, value = stack.pop()
+        if isinstance(value, dict):
+            stack += [(f"{at}.{k}", v) for k, v in value.items()]
+        elif isinstance(value, (list, tuple)):
+            stack += [(f"{at}[{i}]", v) for i, v in enumerate(value)]
+        elif isinstance(value, int) and not isinstance(value, bool) and not abs(value) <= 1.7976931348623157e308:
+            return at
+    return None
 
 
 @memoised(maxsize=256)
