@@ -25,17 +25,8 @@ class Status(str, Enum):
 
 
 SHOWN = 4          # values a Result's repr names before "... N more"
-NAMED = 20         # items of a list a message names (a conflicting chain's constraints); the rest are counted
 MAX_MESSAGE = 10_000      # characters of a Result's message: a safety net under each solver's own bound
 MAX_VIOLATED = 100        # names of broken limits a Result keeps; the message says how many more there were
-
-
-def some_of(items, limit: int = NAMED, sep: str = "; ") -> str:
-    """The first `limit` items joined by `sep`, and how many more there are ("a; b ... and 999,998
-    more"): a message stays a line whatever the size of the problem it speaks of."""
-    items = list(items)
-    shown = sep.join(map(str, items[:limit]))
-    return shown if len(items) <= limit else f"{shown} ... and {len(items) - limit:,} more"
 
 
 def _bounded(message: str, violated: tuple) -> tuple[str, tuple]:

@@ -386,7 +386,7 @@ def _chain(n, cycle_deg=10.0):
 @pytest.mark.parametrize("method", ["graph", "lp"])
 def test_an_infeasible_chain_of_2000_operations_is_named_in_a_bounded_message(method):
     from mechopt.solvers.loom import plan_cyclogram
-    from mechopt.solvers.result import NAMED
+    from mechopt.errors import NAMED
     r = plan_cyclogram(_chain(2000), method=method)
     assert r.status.value == "INFEASIBLE"
     assert r.message.startswith("infeasible: conflicting chain t(e0->e1) >= 1 deg (min_angle); ")
@@ -505,3 +505,16 @@ def test_a_sweep_of_a_fractional_number_of_samples_is_refused_naming_its_type(sa
 def test_a_1999_digit_integer_in_a_structure_is_refused_naming_its_path(case, assignment, where):
     with pytest.raises(SceneError, match=where + r": a number beyond a float's range \(at most 1.8e308\)"):
         registry.find(case).build(parse_overrides([assignment.format("1" * 1999)]))
+
+
+@pytest.mark.parametrize("operations, match", [
+    ([{"from": f"e{k}", "to": f"e{k + 1}", "min_deg": 1.0} for k in range(3000)]
+     + [{"from": "e3000", "to": "e0", "min_deg": 1.0}], r"precedence cycle e\d+ -> .* \.\.\. and 2,98\d more: an event"),
+    ([{"from": f"s{k}", "to": "end", "min_deg": 1.0} for k in range(3000)],
+     r"found first \['s0', .* \.\.\. and 2,980 more\] and last \['end'\]"),
+], ids=["cycle", "starts"])
+def test_a_timing_network_error_names_a_bounded_part_of_a_large_network(operations, match):
+    from mechopt.models.loom import Cyclogram
+    with pytest.raises(ModelError, match=match) as exc:
+        Cyclogram(operations=operations, cycle_deg=360.0)
+    assert len(str(exc.value)) < 1000

@@ -9,7 +9,7 @@ import cvxpy as cp
 import numpy as np
 
 from mechopt.cache import BuildCache
-from mechopt.errors import ModelError
+from mechopt.errors import NAMED, ModelError, some_of
 from mechopt.models.loom import MAX_RPM, Cyclogram
 from mechopt.solvers.loom.event_time import HeldLP, incidence
 from mechopt.solvers.loom.graph import Levels, a_path, tight_arcs
@@ -26,7 +26,7 @@ from mechopt.solvers.loom.plan import (
     schedule_floats,
 )
 from mechopt.solvers.loom.repair import cached_amplitude_bound, exact_amplitude_mm
-from mechopt.solvers.result import NAMED, Result, Status, Timing, from_cvxpy, some_of
+from mechopt.solvers.result import Result, Status, Timing, from_cvxpy
 from mechopt.solvers.settings import Interval
 
 
