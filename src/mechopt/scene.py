@@ -579,10 +579,10 @@ def _csv_rows(csv_path, columns, key):
     if missing:
         raise SceneError(f"{csv_path}: header {quote(header)} lacks {', '.join(missing)} (structure.{key}.columns)",
                          key=key)
-    out = []
+    out, at = [], [header.index(c) for c in columns]       # looked up once, not per row
     for line, cells in rows:
         try:
-            row = [number(cells[header.index(c)], delimiter) for c in columns]
+            row = [number(cells[i], delimiter) for i in at]
         except (ValueError, IndexError):
             raise SceneError(f"{csv_path}: line {line} ({quote(delimiter.join(cells))}): expected numbers in "
                              f"{', '.join(columns)}", key=key) from None
