@@ -51,8 +51,9 @@ def read_rows(path, *, what, example, max_bytes=MAX_BYTES, max_rows=MAX_ROWS, ma
 
 def _rows_below_header(raw: bytes) -> int:
     """Rows under the header, counted on the bytes before any parsing: lines holding more than
-    spaces, less one (a last line break ends the last row, it starts none)."""
-    lines = raw.count(b"\n") + 1
+    spaces, less one (a last line break ends the last row, it starts none). A lone CR ends a line
+    too, as csv reads it (old Mac files)."""
+    lines = raw.count(b"\n") + raw.count(b"\r") - raw.count(b"\r\n") + 1
     return max(lines - len(_BLANK_LINE.findall(raw)) - 1, 0)
 
 
