@@ -61,7 +61,8 @@ def parse_expression(text, constants=(), *, key="x_expr"):
     except SyntaxError as exc:
         raise ModelError(f"{key}={text!r}: not an expression ({exc.msg})", key=key) from None
     except (RecursionError, MemoryError):
-        raise ModelError(f"{key}: operators nested too deeply; at most {EXPRESSION_MAX_DEPTH} levels", key=key) from None
+        raise ModelError(f"{key}: operators nested too deeply; at most {EXPRESSION_MAX_DEPTH} levels",
+                         key=key) from None
     if _nesting(tree) > EXPRESSION_MAX_DEPTH:
         raise ModelError(f"{key}: operators nested more than {EXPRESSION_MAX_DEPTH} levels deep; at most "
                          f"{EXPRESSION_MAX_DEPTH}", key=key)

@@ -345,8 +345,8 @@ def test_a_chain_of_300_base_scenes_is_refused_naming_the_limit(tmp_path):
     from mechopt import scene as scene_mod
     MAX_CHAIN = getattr(scene_mod, "MAX_CHAIN", 32)
     _scene(tmp_path, "[[0, 0], [1, 1], [2, 0]]", name="s0.toml")
-    head = 'base = {{ scene = "s{}.toml" }}\nid = "c/s{}"\ntitle = "t"\nsource = "s"\ntask = "cam_profile.ProfileFit"\n' \
-           'solver = "cam_cutter.minimax"\n[params]\n'
+    head = ('base = {{ scene = "s{}.toml" }}\nid = "c/s{}"\ntitle = "t"\nsource = "s"\n'
+            'task = "cam_profile.ProfileFit"\nsolver = "cam_cutter.minimax"\n[params]\n')
     for k in range(1, 301):
         (tmp_path / f"s{k}.toml").write_text(head.format(k - 1, k))
     with pytest.raises(SceneError, match=rf"s{300 - MAX_CHAIN}.toml: base: s{299 - MAX_CHAIN}.toml makes a chain of "
@@ -372,7 +372,8 @@ def test_the_press_sensitivity_at_its_step_limit_is_a_status_not_a_traceback(mon
     monkeypatch.setattr(sensitivity, "MAX_STEPS", 20, raising=False)
     r = sensitivity.sensitivity(task, tol=1e-6)
     assert r.status.value == "LIMIT" and r.values == {}
-    assert r.message.startswith("CVODES gave up (CV_TOO_MUCH_WORK: more steps than allowed") and "Traceback" not in r.message
+    assert r.message.startswith("CVODES gave up (CV_TOO_MUCH_WORK: more steps than allowed")
+    assert "Traceback" not in r.message and "\n" not in r.message
 
 
 # --- issue 35: bounded messages and checks, tables read as meant, nothing of a foreign file echoed ------------
@@ -509,7 +510,8 @@ def test_a_1999_digit_integer_in_a_structure_is_refused_naming_its_path(case, as
 
 @pytest.mark.parametrize("operations, match", [
     ([{"from": f"e{k}", "to": f"e{k + 1}", "min_deg": 1.0} for k in range(3000)]
-     + [{"from": "e3000", "to": "e0", "min_deg": 1.0}], r"precedence cycle e\d+ -> .* \.\.\. and 2,98\d more: an event"),
+     + [{"from": "e3000", "to": "e0", "min_deg": 1.0}],
+     r"precedence cycle e\d+ -> .* \.\.\. and 2,98\d more: an event"),
     ([{"from": f"s{k}", "to": "end", "min_deg": 1.0} for k in range(3000)],
      r"found first \['s0', .* \.\.\. and 2,980 more\] and last \['end'\]"),
 ], ids=["cycle", "starts"])
