@@ -38,6 +38,7 @@ _BINARY = {ast.Add: lambda a, b: a + b, ast.Sub: lambda a, b: a - b, ast.Mult: l
            ast.Div: lambda a, b: a / b, ast.Pow: lambda a, b: a ** b}
 PLACEMENTS = ("start_at_origin", "as_given")
 EXPRESSION_MAX_CHARS = 2000
+EXPRESSION_MAX_DEPTH = 100  # nested operators; building and evaluating the expression recurse once per level
 CUSP_SPEED_REL = 1e-6       # |c'| below this fraction of its largest value on the range: a cusp
 
 
@@ -59,10 +60,19 @@ def parse_expression(text, constants=(), *, key="x_expr"):
         tree = ast.parse(text.strip(), mode="eval").body
     except SyntaxError as exc:
         raise ModelError(f"{key}={text!r}: not an expression ({exc.msg})", key=key) from None
+    except (RecursionError, MemoryError):
+        raise ModelError(f"{key}: operators nested too deeply; at most {EXPRESSION_MAX_DEPTH} levels",
+                         key=key) from None
+    if _nesting(tree) > EXPRESSION_MAX_DEPTH:
+        raise ModelError(f"{key}: operators nested more than {EXPRESSION_MAX_DEPTH} levels deep; at most "
+                         f"{EXPRESSION_MAX_DEPTH}", key=key)
     allowed_names = {"t", "pi", *constants}
 
     def build(node):
         if isinstance(node, ast.Constant) and type(node.value) in (int, float):
+            if not abs(node.value) <= 1.7976931348623157e308:     # an integer of hundreds of digits: no float holds it
+                digits = f" of {len(str(abs(node.value))):,} digits" if isinstance(node.value, int) else ""
+                raise ModelError(f"{key}: a number{digits} beyond a float's range (at most 1.8e308)", key=key)
             value = float(node.value)
             return lambda t, v, m: value
         if isinstance(node, ast.Name):
@@ -91,6 +101,17 @@ def parse_expression(text, constants=(), *, key="x_expr"):
                          f"unary minus and {', '.join(FUNCTIONS)}, pi", key=key)
 
     return build(tree)
+
+
+def _nesting(tree) -> int:
+    """How deeply an expression's nodes nest, counted without recursion (a recursive count would
+    fail on the very input it guards against)."""
+    deepest, stack = 0, [(tree, 1)]
+    while stack:
+        node, depth = stack.pop()
+        deepest = max(deepest, depth)
+        stack += [(child, depth + 1) for child in ast.iter_child_nodes(node) if isinstance(child, ast.expr)]
+    return deepest
 
 
 def constant_values(constants, key="constants"):

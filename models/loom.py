@@ -50,7 +50,7 @@ import networkx as nx
 import numpy as np
 from annotated_types import Gt, Le, Lt
 
-from mechopt.errors import MechoptError, ModelError
+from mechopt.errors import MechoptError, ModelError, some_of
 from mechopt.models.effects import Effect
 from mechopt.models.provenance import provenance_problem
 from mechopt.models.stop_impact import LeverStop
@@ -260,7 +260,7 @@ class Cyclogram:
                        amplitude=amplitude, name=str(op.get("name", "")), group=str(op.get("group", "")))
         if not nx.is_directed_acyclic_graph(g):
             cycle = nx.find_cycle(g)
-            chain = " -> ".join([cycle[0][0]] + [v for _, v in cycle])
+            chain = some_of([cycle[0][0]] + [v for _, v in cycle], sep=" -> ")
             raise ModelError(f"operations: precedence cycle {chain}: an event cannot precede itself", key="operations")
         self._check_ends(g)
         return g
@@ -311,8 +311,9 @@ class Cyclogram:
         starts = [v for v in linked if g.in_degree(v) == 0]
         ends = [v for v in linked if g.out_degree(v) == 0]
         if len(starts) != 1 or len(ends) != 1:
-            raise ModelError(f"operations: a cyclogram needs one first and one last event; found first "
-                             f"{starts} and last {ends} (join them with zero-angle operations)", key="operations")
+            listed = [f"[{some_of(map(repr, events), sep=', ')}]" for events in (starts, ends)]
+            raise ModelError(f"operations: a cyclogram needs one first and one last event; found first {listed[0]} "
+                             f"and last {listed[1]} (join them with zero-angle operations)", key="operations")
         _table(self.windows, "windows", list)
         for k, w in enumerate(self.windows):
             key = f"windows[{k}]"
@@ -602,7 +603,7 @@ def _entry(entry, key, allowed, required):
 
 def _known_event(g, name, key):
     if name not in g:
-        raise ModelError(f"{key}: unknown event {name!r}; events: {', '.join(g.nodes)}", key=key)
+        raise ModelError(f"{key}: unknown event {name!r}; events: {some_of(g.nodes, sep=', ')}", key=key)
 
 
 def _linked_event(g, name, key):

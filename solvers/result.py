@@ -25,6 +25,19 @@ class Status(str, Enum):
 
 
 SHOWN = 4          # values a Result's repr names before "... N more"
+MAX_MESSAGE = 10_000      # characters of a Result's message: a safety net under each solver's own bound
+MAX_VIOLATED = 100        # names of broken limits a Result keeps; the message says how many more there were
+
+
+def _bounded(message: str, violated: tuple) -> tuple[str, tuple]:
+    """(message, violated) within MAX_MESSAGE characters and MAX_VIOLATED names, each cut saying
+    how much was left out (an unbounded list printed 87 MB and wrote a 110 MB --json)."""
+    if len(message) > MAX_MESSAGE:
+        message = f"{message[:MAX_MESSAGE]}... (and {len(message) - MAX_MESSAGE:,} more characters)"
+    if len(violated) > MAX_VIOLATED:       # said after the cut, so that the cut never hides it
+        message += f" (violated names the first {MAX_VIOLATED} of {len(violated):,} broken limits)"
+        violated = violated[:MAX_VIOLATED]
+    return message, violated
 
 
 @dataclass(frozen=True)
@@ -66,6 +79,9 @@ class Result:
         if isinstance(self.warnings, str) or not all(isinstance(w, str) for w in self.warnings):
             raise SolverError(f"warnings must be a tuple of sentences, got {self.warnings!r}")
         object.__setattr__(self, "warnings", tuple(dict.fromkeys(self.warnings)))
+        message, violated = _bounded(str(self.message), tuple(self.violated))
+        object.__setattr__(self, "message", message)
+        object.__setattr__(self, "violated", violated)
 
     def with_warnings(self, more) -> "Result":
         """This result with more warnings (each sentence once)."""

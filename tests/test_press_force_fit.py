@@ -135,7 +135,7 @@ def test_semicolon_decimal_comma_and_any_case_header_read_the_same_numbers(tmp_p
     (b"travel_mm,load_N\n1,1e400\n", r"bad\.csv: line 2: '1e400' in column 2 is inf N, outside \[-1e\+12, 1e\+12\] N"),
     (b"travel_mm,load_N\n1e300,2\n", r"bad\.csv: line 2: '1e300' in column 1 is 1e\+300 mm, outside \[-1e\+06, 1e\+06\] mm"),
     (b"travel_m,load_N\n2000,2\n", r"bad\.csv: line 2: '2000' in column 1 is 2e\+06 mm, outside"),
-    (b"travel_mm,load_N\nnan,2\n", r"bad\.csv: line 2: 'nan' in column 1 is nan mm, outside"),
+    (b"travel_mm,load_N\nnan,2\n", r"bad\.csv: line 2: \['nan', '2'\] is not a number in every column"),
     (b"x;y\n1;2\n", r"bad\.csv: no 'travel_<unit>' column in header \['x', 'y'\]; expected travel_<mm\|m\|um>,"
                     r"load_<N\|kN>"),
 ])

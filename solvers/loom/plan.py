@@ -29,7 +29,7 @@ import networkx as nx
 import numpy as np
 
 from mechopt.cache import BuildCache
-from mechopt.errors import ModelError
+from mechopt.errors import NAMED, ModelError, some_of
 from mechopt.models.loom import Cyclogram, amplitude_mm, stress_bound_deg, stress_MPa
 from mechopt.solvers.loom.event_time import EventTimeLP, build_event_time_lp
 from mechopt.solvers.loom.graph import BackArcs, Levels, PositiveCycle, a_path, tight_arcs
@@ -178,7 +178,7 @@ def _solve_held_lp(task, net, lp, start, fresh, *, stress_form, tol_deg, backend
     message = (f"{objective} = {values[objective]:.6g} ({backend}, {stress_form} stress, "
                f"{'compiled' if fresh else 'DPP re-solve'}); {SENSITIVITY_CONVENTION}")
     if overstressed:      # the tangent under-estimates sigma_max: the linearised optimum breaks the true limit
-        message += f"; the linearised stress limit lets sigma_max exceed [sigma_H] on {', '.join(overstressed)}"
+        message += f"; the linearised stress limit lets sigma_max exceed [sigma_H] on {some_of(overstressed, sep=', ')}"
     return Result(Status.SOLVED, values, Timing(build_s, solve_s), message=message, violated=overstressed,
                   diagnostics=diagnostics, arrays=plan_arrays(net, values, diagnostics, p, floats))
 
@@ -210,13 +210,15 @@ def plan_arrays(net, values, diagnostics, p=None, floats=None) -> dict:
 
 
 def _infeasible(chain, timing, diagnostics, note="") -> Result:
-    """INFEASIBLE, naming the conflicting chain (a positive cycle of the constraints)."""
+    """INFEASIBLE, naming the conflicting chain (a positive cycle of the constraints): its first
+    NAMED constraints and events, and its length (a chain of 10^6 operations is counted, not listed)."""
     excess = math.fsum(w for _, _, w in chain)
-    diagnostics = diagnostics | {"conflict_events": [v for v, _, _ in chain], "conflict_excess_deg": excess}
-    message = "infeasible: conflicting chain " + "; ".join(label for _, label, _ in chain)
+    diagnostics = diagnostics | {"conflict_events": [v for v, _, _ in chain[:NAMED]], "conflict_length": len(chain),
+                                 "conflict_excess_deg": excess}
+    message = "infeasible: conflicting chain " + some_of(label for _, label, _ in chain)
     message += f" (needs {excess:.6g} deg more than its limits allow){note}"
-    return Result(Status.INFEASIBLE, {}, timing, message=message, violated=tuple(label for _, label, _ in chain),
-                  diagnostics=diagnostics)
+    return Result(Status.INFEASIBLE, {}, timing, message=message,
+                  violated=tuple(label for _, label, _ in chain[:NAMED]), diagnostics=diagnostics)
 
 
 def _may_conflict(net) -> bool:
@@ -703,7 +705,7 @@ def _plan_graph(task, *, stress_form, tol_deg) -> Result:
     name = "limiting_op_deg" if net.limiting else "span_deg"
     message = f"{name} = {values[name]:.6g} (graph, {stress_form} stress); {SENSITIVITY_CONVENTION}"
     if overstressed:
-        message += f"; the linearised stress limit lets sigma_max exceed [sigma_H] on {', '.join(overstressed)}"
+        message += f"; the linearised stress limit lets sigma_max exceed [sigma_H] on {some_of(overstressed, sep=', ')}"
     return Result(Status.SOLVED, values, Timing(build_s, time.perf_counter() - start - build_s), message=message,
                   violated=overstressed, diagnostics=diagnostics, arrays=plan_arrays(net, values, diagnostics, p, float_deg))
 

@@ -9,7 +9,7 @@ import cvxpy as cp
 import numpy as np
 
 from mechopt.cache import BuildCache
-from mechopt.errors import ModelError
+from mechopt.errors import NAMED, ModelError, some_of
 from mechopt.models.loom import MAX_RPM, Cyclogram
 from mechopt.solvers.loom.event_time import HeldLP, incidence
 from mechopt.solvers.loom.graph import Levels, a_path, tight_arcs
@@ -180,12 +180,12 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp",
     if status is Status.INFEASIBLE:
         chain = _conflict_at(task, net, phi) or _conflict_at(task, net, np.maximum(phi, g * rtol))
         groups = list(dict.fromkeys(task.graph.nodes[v]["group"] or "-" for v, _, _ in chain))
-        diagnostics["conflict_groups"] = groups
-        message = ("no speed fits: conflicting chain " + "; ".join(label for _, label, _ in chain)
+        diagnostics |= {"conflict_groups": groups[:NAMED], "conflict_length": len(chain)}
+        message = ("no speed fits: conflicting chain " + some_of(label for _, label, _ in chain)
                    + f" (needs {math.fsum(w for _, _, w in chain):.6g} deg more than its limits allow as n -> 0;"
-                   + f" groups {', '.join(groups)})")
+                   + f" groups {some_of(groups, sep=', ')})")
         return Result(Status.INFEASIBLE, {}, timing(), message=message,
-                      violated=tuple(label for _, label, _ in chain), diagnostics=diagnostics)
+                      violated=tuple(label for _, label, _ in chain[:NAMED]), diagnostics=diagnostics)
     if status is Status.UNBOUNDED:
         message += ": no limit grows with the speed on a chain the cycle closes (no stress, rebound or min_ms there)"
     if status is not Status.SOLVED:

@@ -13,13 +13,14 @@ import time
 import casadi as ca
 import numpy as np
 
-from mechopt.errors import ModelError
+from mechopt.errors import MechoptError, ModelError
 from mechopt.models.press import WORK_NAMES, Equations, PressDrive, equations, parameters, structure
 from mechopt.solvers.press.periodic import steady_state
-from mechopt.solvers.press.problem import TWO_PI, check_task
+from mechopt.solvers.press.problem import TWO_PI, casadi_failure, check_task
 from mechopt.solvers.result import Result, Status, Timing, from_rootfinder
 from mechopt.solvers.settings import Annotated, Interval, Tolerance
 
+MAX_STEPS = 100_000                 # CVODES steps per piece of the revolution (its max_num_steps)
 ROD_SIGN = "rod_weight_sign"        # +1: the rod's weight helps on the way down (the model's reading); -1: the table's
 OUTPUTS = ("speed_fluctuation", "omega_min_deg", "peak_belt_torque_Nm", "omega_mean_rad_s", "cut_work_J",
            "motor_work_J")
@@ -74,7 +75,7 @@ class _Orbit:
         xdot, _ = rhs(x, U, p)
         dy = ca.vertcat(*[xdot[i] for i in keep], 1, xdot[n:]) / x[self.iw]
         self.piece = ca.integrator("piece", "cvodes", {"x": y, "t": s, "p": q, "ode": (b - a) * dy}, 0.0, 1.0,
-                                   {"abstol": tol, "reltol": tol, "max_num_steps": 100000})
+                                   {"abstol": tol, "reltol": tol, "max_num_steps": MAX_STEPS})
         # d(g)/d(phi) along the motion for g = crank speed and belt torque (x_full with its derivative)
         xf, pf, Uf = ca.SX.sym("xf", n + works), ca.SX.sym("pf", n_p), ca.SX.sym("Uf")
         xdot, belt = rhs(xf, Uf, pf)
@@ -163,6 +164,18 @@ def sensitivity(task: PressDrive, *, tol: Tolerance = 1e-10, max_iter: Annotated
     if base.status is not Status.SOLVED:
         return Result(base.status, base.values, base.timing, f"no periodic orbit to differentiate: {base.message}",
                       base.violated, base.diagnostics)
+    try:
+        return _differentiate(task, base, tol, max_iter, verify_step, t_start)
+    except RuntimeError as exc:          # CasADi raises where CVODES stops (too many steps): a status, not a crash
+        if isinstance(exc, MechoptError):
+            raise
+        status, message, failure = casadi_failure(exc, "differentiating the periodic orbit: no derivatives")
+        return Result(status, {}, Timing(0.0, time.perf_counter() - t_start), message, (),
+                      base.diagnostics | failure)
+
+
+def _differentiate(task, base, tol, max_iter, verify_step, t_start) -> Result:
+    """`sensitivity`'s answer from the steady orbit `base`: the rootfinder through it and its derivatives."""
     names = assumed_parameters(task)
     orbit = _Orbit(task, names, tol, base.arrays)
     n_p = len(names) + 1

@@ -6,8 +6,10 @@ message names the file, key and allowed range; nothing was computed or written),
 (INFEASIBLE, LIMIT, INACCURATE, FAILED), 130 interrupted.
 """
 import argparse
+import csv
 import errno
 import inspect
+import io
 import json
 import os
 import re
@@ -531,9 +533,21 @@ def arrays_csv(arrays, where) -> str:
     if len(lengths) != 1:
         raise SceneError(f"--csv {where}: the arrays have different lengths {sorted(lengths)}; use --json")
     names = list(arrays)
-    rows = zip(*(arrays[n] for n in names))
-    cell = lambda x: x if isinstance(x, str) else f"{x:.12g}"       # noqa: E731  (a label column's text as it is)
-    return ",".join(names) + "\n" + "".join(",".join(map(cell, row)) + "\n" for row in rows)
+    cell = lambda x: text_cell(x) if isinstance(x, str) else f"{x:.12g}"       # noqa: E731  (a label column: text)
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")       # quotes a cell holding a comma, quote or line break
+    writer.writerow(map(text_cell, names))
+    writer.writerows(map(cell, row) for row in zip(*(arrays[n] for n in names)))
+    return out.getvalue()
+
+
+FORMULA_START = ("=", "+", "-", "@", "\t", "\r")     # a spreadsheet reads a cell starting so as a formula
+
+
+def text_cell(text: str) -> str:
+    """A text cell of a CSV made safe to open in a spreadsheet: one starting like a formula
+    (=HYPERLINK(...), +, -, @) gets a leading ' (OWASP, CSV injection); numbers are written apart."""
+    return "'" + text if text.startswith(FORMULA_START) else text
 
 
 COMMANDS = {"cases": _cases, "describe": _describe, "new": _new, "run": _run, "validate": _validate,

@@ -31,6 +31,17 @@ class SolverError(MechoptError, RuntimeError):
     """A numerical back end crashed or returned something unusable (not: infeasible, which is a status)."""
 
 
+NAMED = 20         # items of a list a message names (a conflicting chain's constraints); the rest are counted
+
+
+def some_of(items, limit: int = NAMED, sep: str = "; ") -> str:
+    """The first `limit` items joined by `sep`, and how many more there are ("a; b ... and 999,998
+    more"): a message stays a line whatever the size of the problem it speaks of."""
+    items = list(items)
+    shown = sep.join(map(str, items[:limit]))
+    return shown if len(items) <= limit else f"{shown} ... and {len(items) - limit:,} more"
+
+
 def require(ok: bool, message: str, *, key: str | None = None, kind: type[MechoptError] = ModelError) -> None:
     """Raise `kind(message, key=key)` unless `ok`: the one way a rule on an input is written."""
     if not ok:

@@ -193,7 +193,7 @@ def read_regular(path, *, max_bytes: int, what: str, follow_links: bool = True) 
     (not as `st_size` says: /dev/zero reports 0 and never ends; a FIFO would block forever).
     `follow_links=False` refuses a symbolic link (OSError ELOOP): for files only mechopt writes.
     Raises OSError (a missing or unreadable file) or ValueError naming `what` and the limit."""
-    key = str(Path(path).resolve())
+    key = str(real_path(path))
     data = _SHIPPED.get().get(key)
     if data is None:
         with open_regular(path, max_bytes=max_bytes, what=what, follow_links=follow_links) as f:
@@ -201,6 +201,12 @@ def read_regular(path, *, max_bytes: int, what: str, follow_links: bool = True) 
     for got in _RECORDERS.get():
         got[key] = data
     return data
+
+
+def real_path(path) -> Path:
+    """`path` with its symbolic links followed as far as they go. A loop of links is left for
+    open() to refuse (ELOOP: one clear line), where Path.resolve raises RuntimeError (Python < 3.13)."""
+    return Path(os.path.realpath(path))
 
 
 @contextmanager

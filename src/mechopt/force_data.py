@@ -8,7 +8,7 @@ import numpy as np
 
 from mechopt.errors import ModelError
 from mechopt.files import quote
-from mechopt.tables import MAX_BYTES, number, read_rows
+from mechopt.tables import MAX_BYTES, check_header, number, read_rows
 
 TRAVEL_UNITS_MM = {"mm": 1.0, "m": 1000.0, "um": 1e-3}
 LOAD_UNITS_N = {"N": 1.0, "kN": 1000.0}
@@ -26,6 +26,7 @@ def read_force_csv(path):
     path = Path(path)
     header, rows, delimiter = read_rows(path, what="a load-travel record", example="travel_mm,load_N",
                                         max_bytes=MAX_BYTES)
+    check_header(path, header, lambda name: name.partition("_")[0].lower() in ("travel", "load"), EXPECTED_HEADER)
     travel_col = _column(path, header, "travel", TRAVEL_UNITS_MM)
     load_col = _column(path, header, "load", LOAD_UNITS_N)
     x, f = [], []

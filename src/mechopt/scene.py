@@ -22,16 +22,17 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from mechopt.cache import memoised
 from mechopt.errors import MechoptError, ModelError, SceneError, SettingError
-from mechopt.files import quote, read_regular
+from mechopt.files import quote, read_regular, real_path
 from mechopt.models.provenance import provenance_problem
 from mechopt.solvers.result import Status
 from mechopt.solvers.settings import declared_range, describe_range, setting_problem
-from mechopt.tables import number, read_records, read_rows
+from mechopt.tables import check_header, number, read_records, read_rows
 from mechopt.units import unit_of
 
 Number = int | float
 STATUS_WORDS = tuple(s.value for s in Status)
 MAX_SCENE_BYTES = 1_000_000      # a scene is a page of TOML; its tables of points come from CSV files
+MAX_CHAIN = 32                   # scenes a chain of base / scene references reads (a variant of a variant ...)
 MAX_LIST_ITEMS = 100             # a list typed into a scene or a --set (speeds, operations); longer: a CSV
 MAX_ID_CHARS = 100               # an id names files (<id>.dxf, <id>_<figure>.png): far below a name's 255 bytes
 _ID_FORM = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*(/[A-Za-z0-9][A-Za-z0-9._-]*)*")
@@ -504,7 +505,7 @@ _READING: ContextVar[frozenset] = ContextVar("mechopt_scene_reading", default=fr
 
 @contextmanager
 def _reading(path):
-    token = _READING.set(_READING.get() | {path.resolve()})
+    token = _READING.set(_READING.get() | {real_path(path)})
     try:
         yield
     finally:
@@ -593,9 +594,12 @@ def _other_scene(path, where, value):
             isinstance(drop, list) and all(isinstance(d, str) for d in drop)):
         raise SceneError(f'{path}: {where}: a model from another scene is {{ scene = "../other/scene.toml", '
                          f'drop = ["name", ...] }}; got {value!r}', key=where)
-    source_path = (path.parent / value["scene"]).resolve()
+    source_path = real_path(path.parent / value["scene"])
     if source_path in _READING.get():
         raise SceneError(f"{path}: {where}: {value['scene']} leads back to a scene being read (a loop)", key=where)
+    if len(_READING.get()) >= MAX_CHAIN:        # deeper, the reading itself would run out of stack
+        raise SceneError(f"{path}: {where}: {value['scene']} makes a chain of references (base, scene = ...) of "
+                         f"more than {MAX_CHAIN} scenes; a chain holds at most {MAX_CHAIN}", key=where)
     with _reading(path):
         source = load(source_path)
     unknown = sorted(set(drop) - set(source.spec.params) - set(source.spec.structure))
@@ -607,16 +611,17 @@ def _other_scene(path, where, value):
 def _csv_rows(csv_path, columns, key):
     try:
         header, rows, delimiter = read_rows(csv_path, what="a point table", example=",".join(columns))
+        check_header(csv_path, header, columns, ", ".join(columns))
     except ModelError as exc:
         raise SceneError(f"{exc} (the table for structure.{key})", key=key) from None
     missing = [c for c in columns if c not in header]
     if missing:
         raise SceneError(f"{csv_path}: header {quote(header)} lacks {', '.join(missing)} (structure.{key}.columns)",
                          key=key)
-    out = []
+    out, at = [], [header.index(c) for c in columns]       # looked up once, not per row
     for line, cells in rows:
         try:
-            row = [number(cells[header.index(c)], delimiter) for c in columns]
+            row = [number(cells[i], delimiter) for i in at]
         except (ValueError, IndexError):
             raise SceneError(f"{csv_path}: line {line} ({quote(delimiter.join(cells))}): expected numbers in "
                              f"{', '.join(columns)}", key=key) from None
@@ -700,6 +705,25 @@ def _build_task(path, task_class, effects, params, structure=None):
     except MechoptError as exc:
         table = "structure" if exc.key and path_head(exc.key) in structure else "params"
         raise SceneError(f"{path}: {table}.{exc.key}: {exc}" if exc.key else f"{path}: {exc}", key=exc.key) from None
+    except OverflowError:                # an integer of hundreds of digits in a table: no float holds it
+        where = _beyond_float(structure) or "structure"
+        raise SceneError(f"{path}: {where}: a number beyond a float's range (at most 1.8e308)",
+                         key=path_head(where.removeprefix("structure."))) from None
+
+
+def _beyond_float(structure):
+    """The path (`structure.operations[2].min_deg`) of an integer in the tables and lists of
+    `structure` that no float holds, or None; walked without recursion (a table may nest deeply)."""
+    stack = [("structure", structure)]
+    while stack:
+        at, value = stack.pop()
+        if isinstance(value, dict):
+            stack += [(f"{at}.{k}", v) for k, v in value.items()]
+        elif isinstance(value, (list, tuple)):
+            stack += [(f"{at}[{i}]", v) for i, v in enumerate(value)]
+        elif isinstance(value, int) and not isinstance(value, bool) and not abs(value) <= 1.7976931348623157e308:
+            return at
+    return None
 
 
 @memoised(maxsize=256)

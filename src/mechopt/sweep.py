@@ -208,6 +208,9 @@ def plan(scene: Scene, grid=(), random=(), *, samples: int = 0, seed: int = 0,
     """
     if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**63:
         raise SceneError(f"--seed {seed!r}: expected a whole number from 0 to 2**63 - 1", key="seed")
+    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)):     # int(2.5) would run 2
+        raise SceneError(f"--samples {samples!r}: expected a whole number (int) of random draws, not "
+                         f"{type(samples).__name__}", key="samples")
     spec = SweepSpec(scene.id, tuple(grid), tuple(random), int(samples), int(seed))
     if not spec.grid and not spec.random:
         raise SceneError("a sweep needs at least one --grid KEY=START:STOP:NUM or --random KEY=LOW:HIGH")

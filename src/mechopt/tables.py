@@ -3,19 +3,27 @@ columns (then often a decimal comma), UTF-8 with or without a byte-order mark, b
 anywhere. The one reader of the force fit's load-travel records and of scenes' point tables;
 every error names the file (and the line)."""
 import csv
+import io
+import re
+from collections import Counter
 from pathlib import Path
 
-from mechopt.errors import ModelError
+from mechopt.errors import ModelError, some_of
 from mechopt.files import quote, read_regular
 
 MAX_BYTES = 100_000_000      # read whole into memory: refuse what is plainly not a table of readings
 MAX_ROWS = 1_000_000         # counted before parsing: a table of more readings takes minutes to refuse
+MAX_COLUMNS = 100            # a table of readings or operations has a few; its header checks grow with the count
+_BLANK_LINE = re.compile(rb"^[ \t\r]*$", re.MULTILINE)
+_COLUMN_NAME = re.compile(r"[^\W\d]\w{0,63}")     # a header's cell: a name (x_mm, Travel_kN, min_deg), not text
+_PLAIN_NUMBER = "0123456789.+-eE"                  # what a decimal literal is made of (float() takes more)
 
 
-def read_rows(path, *, what, example, max_bytes=MAX_BYTES, max_rows=MAX_ROWS):
+def read_rows(path, *, what, example, max_bytes=MAX_BYTES, max_rows=MAX_ROWS, max_columns=MAX_COLUMNS):
     """(header, [(line number, cells)], delimiter) of the CSV file `path`, a regular file of at most
-    `max_bytes` bytes and `max_rows` lines; `what` names the record in a size error ("a load-travel
-    record"), `example` the header it should have."""
+    `max_bytes` bytes, `max_rows` rows below its header and `max_columns` columns; `what` names the
+    record in a size error ("a load-travel record"), `example` the header it should have. A cell
+    holding a line break or a NUL character is refused (a name is one line of text)."""
     path = Path(path)
     try:
         raw = read_regular(path, max_bytes=max_bytes, what=what)
@@ -23,29 +31,89 @@ def read_rows(path, *, what, example, max_bytes=MAX_BYTES, max_rows=MAX_ROWS):
         raise ModelError(f"{path}: cannot read: {exc.strerror}", key="path") from None
     except ValueError as exc:
         raise ModelError(str(exc), key="path") from None
-    lines = raw.count(b"\n") + 1
-    if lines > max_rows + 1:
-        raise ModelError(f"{path}: {lines:,} lines; {what} has at most {max_rows:,} rows", key="path")
+    rows = _rows_below_header(raw)
+    if rows > max_rows:
+        raise ModelError(f"{path}: {rows:,} rows; {what} has at most {max_rows:,} rows", key="path")
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         raise ModelError(f"{path}: not UTF-8 text (byte 0x{raw[exc.start]:02x} at offset {exc.start}); "
                          f"save it as UTF-8 CSV with a header such as {example}", key="path") from None
-    lines = text.splitlines()
-    if not any(line.strip() for line in lines):
+    first = re.search(r"\S[^\r\n]*", text)
+    if first is None:
         raise ModelError(f"{path}: empty file; expected a header such as {example}", key="path")
-    first = next(line for line in lines if line.strip())
-    delimiter = ";" if first.count(";") > first.count(",") else ","
-    rows = [(number, row) for number, row in enumerate(csv.reader(lines, delimiter=delimiter), start=1)
-            if "".join(row).strip()]            # a blank row: every cell empty or spaces (one join, not a loop)
+    delimiter = ";" if first[0].count(";") > first[0].count(",") else ","
+    rows = _parse(path, text, delimiter, what, max_columns)
+    _refuse_nul(path, text, rows)
     header = [h.strip() for h in rows[0][1]]
     return header, rows[1:], delimiter
 
 
+def _rows_below_header(raw: bytes) -> int:
+    """Rows under the header, counted on the bytes before any parsing: lines holding more than
+    spaces, less one (a last line break ends the last row, it starts none). A lone CR ends a line
+    too, as csv reads it (old Mac files)."""
+    lines = raw.count(b"\n") + raw.count(b"\r") - raw.count(b"\r\n") + 1
+    return max(lines - len(_BLANK_LINE.findall(raw)) - 1, 0)
+
+
+def _parse(path, text, delimiter, what, max_columns):
+    """[(line number, cells)] of the non-blank rows; a quoted cell running over a line break, a
+    header of more than `max_columns` cells and what the csv module cannot read are refused by line."""
+    reader = csv.reader(io.StringIO(text, newline=""), delimiter=delimiter)
+    rows, line = [], 0
+    try:
+        for cells in reader:
+            start, line = line + 1, reader.line_num
+            if line != start:
+                raise ModelError(f"{path}: line {start}: a line break inside a quoted cell; every cell of {what} "
+                                 "is one line", key="path")
+            if "".join(cells).strip():       # a blank row: every cell empty or spaces (one join, not a loop)
+                if not rows and len(cells) > max_columns:
+                    raise ModelError(f"{path}: line {start}: a header of {len(cells):,} columns; {what} has at most "
+                                     f"{max_columns}", key="path")
+                rows.append((start, cells))
+    except csv.Error as exc:
+        limit = csv.field_size_limit()
+        why = (f"a cell longer than {limit:,} characters, the most a cell may hold" if "field limit" in str(exc)
+               else f"not CSV ({exc})")
+        raise ModelError(f"{path}: line {reader.line_num}: {why}", key="path") from None
+    return rows
+
+
+def _refuse_nul(path, text, rows):
+    """A NUL character anywhere is refused, naming its line and column (a binary file, or a cell
+    a program would cut short there): by the header's name when that is a name, else by number."""
+    if "\x00" not in text:
+        return
+    header = [h.strip() for h in rows[0][1]]
+    line, column = next((line, i) for line, cells in rows for i, cell in enumerate(cells) if "\x00" in cell)
+    named = line != rows[0][0] and column < len(header) and _COLUMN_NAME.fullmatch(header[column])
+    raise ModelError(f"{path}: line {line}, column {header[column] if named else column + 1}: a NUL character; "
+                     "a CSV table is text", key="path")
+
+
+def check_header(path, header, known, example):
+    """Refuse a first line that is no header of this table (`known`: the column names it takes,
+    or a test of one), quoting nothing of it: a header of names (x_mm, min_deg), at least two of
+    them or one the table takes, is named in later errors; any other file (a key, /etc/passwd)
+    is only said not to be such a table."""
+    takes = known if callable(known) else set(known).__contains__
+    names = all(_COLUMN_NAME.fullmatch(h) for h in header)
+    if not (names and (len(header) >= 2 or any(takes(h) for h in header))):
+        raise ModelError(f"{path}: not a CSV table with columns {example} (its first line is no header of "
+                         "column names)", key="path")
+
+
 def number(cell, delimiter) -> float:
-    """A cell as a float; a decimal comma is read when ';' separates the columns."""
+    """A cell as a float: a plain decimal literal (12, -0.5, 3e-4), with a decimal comma when ';'
+    separates the columns. ValueError for what float() takes besides (1_0, inf, nan, other digits)."""
     cell = cell.strip()
-    return float(cell.replace(",", ".") if delimiter == ";" else cell)
+    if delimiter == ";":
+        cell = cell.replace(",", ".")
+    if cell.strip(_PLAIN_NUMBER):        # a character outside the literal's (strip leaves it, wherever it is)
+        raise ValueError(f"not a plain decimal number: {cell!r}")
+    return float(cell)
 
 
 MAX_TEXT = 200               # a name cell in a timing table: an event or an operation, not a paragraph
@@ -58,16 +126,17 @@ def read_records(path, columns, kinds, *, required=(), what, example, max_rows=M
     left out of its row (an optional value not given), unless its column is in `required`.
     Errors name the file, the line and the column, and quote a cell short."""
     header, rows, delimiter = read_rows(path, what=what, example=example, max_rows=max_rows)
-    problems = [f"lacks {c}" for c in columns if c not in header]
-    problems += [f"unknown column {quote(c)}" for c in header if c not in kinds][:3]
-    problems += [f"{quote(c)} given twice" for c in sorted(set(header)) if header.count(c) > 1][:3]
+    check_header(path, header, kinds, example)
+    counts = Counter(header)                 # one pass: header.count per name was quadratic
+    problems = [f"lacks {c}" for c in columns if c not in counts]
+    problems += [f"unknown column {quote(c)}" for c in counts if c not in kinds][:3]
+    problems += [f"{quote(c)} given twice" for c, n in counts.items() if n > 1][:3]
     if problems:
-        raise ModelError(f"{path}: header {quote(delimiter.join(header), 80)}: {'; '.join(problems)} "
+        raise ModelError(f"{path}: header {some_of(header, 12, delimiter)}: {'; '.join(problems)} "
                          f"(allowed columns: {', '.join(kinds)})", key="path")
     out = []
     typed = [(column, kinds[column] is not str) for column in header]
-    # a comma between columns: a number cell is what float() reads (number() without its decimal comma)
-    read = float if delimiter == "," else (lambda cell: number(cell, delimiter))
+    read = lambda cell: number(cell, delimiter)        # noqa: E731
     for line, cells in rows:
         if len(cells) > len(header):
             raise ModelError(f"{path}: line {line}: {len(cells)} cells, the header names {len(header)}", key="path")
