@@ -1,0 +1,73 @@
+"""User text in figures drawn literally (mathtext never parses a name), and Ctrl-C honoured inside a
+large HiGHS LP and during interpreter shutdown (exit 130, never death by SIGINT)."""
+import csv
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from matplotlib import cbook
+from matplotlib.text import Text
+
+from mechopt import cli, registry
+from mechopt import sweep as sw
+from mechopt.figures import figures
+from mechopt.figures import sweep as sweep_figures
+from mechopt.report import write_report
+
+PACKAGING = registry.cases_dir() / "loom" / "packaging.toml"
+HOSTILE = ("$x^$", r"$\frac{", "a_b", "100%")        # mathtext would fail on the first two, set the third
+
+
+# --- figures -------------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def hostile_scene(tmp_path_factory):
+    """The packaging machine with every operation, group and one event named with mathtext specials."""
+    folder = tmp_path_factory.mktemp("hostile-names")
+    with (PACKAGING.parent / "packaging-ops.csv").open(encoding="utf-8") as f:
+        rows = list(csv.reader(f))
+    for k, row in enumerate(rows[1:]):
+        row[2] = f"{HOSTILE[k % 4]} {row[2]}"                                  # name
+        row[3] = f"{HOSTILE[(k + 1) % 4]}{row[3]}"                             # group
+        row[:2] = [{"feed.back": "$y_$back"}.get(event, event) for event in row[:2]]
+    with (folder / "packaging-ops.csv").open("w", newline="", encoding="utf-8") as f:
+        csv.writer(f).writerows(rows)
+    text = PACKAGING.read_text(encoding="utf-8").replace('id = "loom/packaging"', 'id = "mine/hostile-names"')
+    (folder / "s.toml").write_text(text, encoding="utf-8")
+    return folder / "s.toml"
+
+
+def _drawn(fig) -> list[str]:
+    """Every text of a figure as matplotlib draws it; none may be read as mathtext."""
+    texts = [t.get_text() for t in fig.findobj(Text) if t.get_text()]
+    assert not [t for t in texts if cbook.is_math_text(t)]
+    return [t.replace(r"\$", "$") for t in texts]
+
+
+def test_names_with_mathtext_specials_are_drawn_literally(hostile_scene):
+    run = registry.run(registry.find(str(hostile_scene)))
+    drawn = "\n".join(line for fig in figures(run).values() for line in _drawn(fig))
+    for name in (*HOSTILE, "$y_$back"):
+        assert name in drawn
+
+
+def test_run_plot_writes_the_figure_of_a_scene_with_dollar_names(hostile_scene, tmp_path):
+    assert cli.main(["run", str(hostile_scene), "--plot", str(tmp_path / "figs")]) == cli.OK
+    assert [p.name for p in (tmp_path / "figs").iterdir()] == ["mine_hostile-names_cyclogram.png"]
+
+
+def test_report_and_sweep_maps_draw_dollar_axis_names_literally(hostile_scene, tmp_path, monkeypatch):
+    scene = registry.find(str(hostile_scene))
+    out = tmp_path / "o.parquet"
+    sw.sweep(scene, [sw.parse_grid("operations[from=feed.end,to=$y_$back].min_deg=50:60:2"),
+                     sw.parse_grid("speed_rpm=50:60:2")], out=out, progress=False)
+    drawn = []
+    save = sweep_figures.save_figure
+    monkeypatch.setattr(sweep_figures, "save_figure", lambda fig, path: drawn.extend(_drawn(fig)) or save(fig, path))
+    page = write_report(tmp_path / "rep", runs=[registry.run(scene)], sweeps=[out])
+    assert page.is_file() and "<img" in page.read_text(encoding="utf-8")
+    assert any("$y_$back" in line for line in drawn)
