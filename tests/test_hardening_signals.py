@@ -71,3 +71,60 @@ def test_report_and_sweep_maps_draw_dollar_axis_names_literally(hostile_scene, t
     page = write_report(tmp_path / "rep", runs=[registry.run(scene)], sweeps=[out])
     assert page.is_file() and "<img" in page.read_text(encoding="utf-8")
     assert any("$y_$back" in line for line in drawn)
+
+
+# --- Ctrl-C inside a large HiGHS LP --------------------------------------------------------------
+
+MARKED_COMMAND = """
+import sys
+from highspy._core import _Highs
+from mechopt import cli
+real = _Highs.run
+def run(self):                      # markers on stderr around every HiGHS solve of a large LP
+    large = self.getNumRow() >= 5000
+    print("LP running" if large else "", file=sys.stderr, flush=True)
+    status = real(self)
+    print(f"LP finished: {self.getModelStatus()}" if large else "", file=sys.stderr, flush=True)
+    return status
+_Highs.run = run
+sys.argv = ["mechopt", *sys.argv[1:]]
+sys.exit(cli.main())
+"""
+
+
+def _large_lp_scene(folder, events=6000):
+    """A cyclogram of `events` events and about 5 operations each, planned by cvxpy's HiGHS LP
+    (method lp): about 35,000 rows, some seconds of HiGHS' presolve on a quiet machine."""
+    import numpy as np
+    rng = np.random.default_rng(1)
+    tails = rng.integers(0, events - 1, 4 * events)
+    heads = np.minimum(tails + rng.integers(1, 50, 4 * events), events - 1)
+    tails = np.r_[np.zeros(events - 1, int), tails, np.arange(1, events - 1)]        # start -> every event,
+    heads = np.r_[np.arange(1, events), heads, np.full(events - 2, events - 1)]      # every event -> end
+    arcs = {(a, b): d for a, b, d in zip(tails, heads, rng.uniform(1, 5, len(tails))) if a != b}
+    lines = ["from,to,min_deg", *(f"e{a},e{b},{d:.3f}" for (a, b), d in arcs.items())]
+    (folder / "ops.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    scene = folder / "large.toml"
+    scene.write_text('id = "mine/large-lp"\ntitle = "a large event-time LP"\nsource = "a test"\n'
+                     'task = "loom.Cyclogram"\nsolver = "loom.plan_cyclogram"\n[params]\n'
+                     '[solver_settings]\nmethod = "lp"\n[structure]\n'
+                     'operations = { csv = "ops.csv", columns = ["from", "to", "min_deg"] }\n', encoding="utf-8")
+    return scene
+
+
+def test_ctrl_c_inside_a_large_highs_lp_exits_130_at_once_and_writes_nothing(tmp_path):
+    scene, out = _large_lp_scene(tmp_path), tmp_path / "r.json"
+    proc = subprocess.Popen([sys.executable, "-c", MARKED_COMMAND, "run", str(scene), "--json", str(out)],
+                            stderr=subprocess.PIPE, text=True, cwd=tmp_path)
+    said = []
+    for line in proc.stderr:
+        said.append(line)
+        if line.startswith("LP running"):
+            break
+    time.sleep(0.5)                 # inside HiGHS now
+    assert proc.poll() is None, "".join(said)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=300)
+    assert proc.returncode == cli.INTERRUPTED, err[-2000:]
+    assert "LP finished" not in err             # the command did not wait for the LP to end
+    assert "Traceback" not in err and not out.exists() and not list(tmp_path.glob("r.json*"))

@@ -6,6 +6,7 @@ message names the file, key and allowed range; nothing was computed or written),
 (INFEASIBLE, LIMIT, INACCURATE, FAILED), 130 interrupted.
 """
 import argparse
+import atexit
 import errno
 import inspect
 import json
@@ -50,14 +51,14 @@ def main(argv=None) -> int:
             return code
     except MechoptError as exc:
         if interrupt.pending():         # a back end turned Ctrl-C into an error of its own
-            return _interrupted()
+            return _interrupted(as_command)
         if isinstance(exc, SolverError):        # the input was valid; the back end failed on it
             print(f"error: not solved: {short(exc)}", file=sys.stderr)
             return NOT_SOLVED
         print(f"error: {short(exc)}", file=sys.stderr)
         return BAD_INPUT
     except KeyboardInterrupt:
-        return _interrupted()
+        return _interrupted(as_command)
     except BrokenPipeError:             # `mechopt cases | head`: the reader left, not an error of ours
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return OK
@@ -72,25 +73,32 @@ def main(argv=None) -> int:
             _exit_on_interrupt()
 
 
-def _interrupted():
+def _interrupted(as_command=False):
     print("interrupted (a sweep keeps its finished chunks: re-run the same command to resume)", file=sys.stderr)
+    if as_command and interrupt.abandoned():    # a solver thread still in C code (a large LP's presolve):
+        _leave(INTERRUPTED)                     # the interpreter's clean-up must not run beside it
     return INTERRUPTED
+
+
+def _leave(code):
+    """End the process now with `code`, the standard streams flushed."""
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):
+            pass
+    os._exit(code)
 
 
 def _exit_on_interrupt():
     """From here on (the interpreter shutting down: Dask's and the pool's threads joined), Ctrl-C
-    ends the process with 130 at once, not with a traceback and death by SIGINT (-2)."""
+    ends the process with 130 at once, not with a traceback and death by SIGINT (-2). From the
+    exit hooks on, SIGINT is ignored: the interpreter then resets a Python-level handler to the
+    default (death by SIGINT) before it tears the modules down, but leaves an ignored one ignored."""
     if threading.current_thread() is not threading.main_thread():
         return
-
-    def stop(signum, frame):
-        for stream in (sys.stdout, sys.stderr):
-            try:
-                stream.flush()
-            except (OSError, ValueError):
-                pass
-        os._exit(INTERRUPTED)
-    signal.signal(signal.SIGINT, stop)
+    signal.signal(signal.SIGINT, lambda signum, frame: _leave(INTERRUPTED))
+    atexit.register(signal.signal, signal.SIGINT, signal.SIG_IGN)     # registered last: the first hook run
 
 
 # a disk that filled up or turned read-only after the outputs were checked (before the work)
