@@ -1,6 +1,7 @@
 """User text in figures drawn literally (mathtext never parses a name), and Ctrl-C honoured inside a
 large HiGHS LP and during interpreter shutdown (exit 130, never death by SIGINT)."""
 import csv
+import json
 import os
 import signal
 import subprocess
@@ -83,9 +84,10 @@ real = _Highs.run
 def run(self):                      # markers on stderr around every HiGHS solve of a large LP
     large = self.getNumRow() >= 5000
     print("LP running" if large else "", file=sys.stderr, flush=True)
-    status = real(self)
-    print(f"LP finished: {self.getModelStatus()}" if large else "", file=sys.stderr, flush=True)
-    return status
+    try:
+        return real(self)
+    finally:                        # also when the KeyboardInterrupt is raised as the LP returns
+        print(f"LP ended: {self.getModelStatus().name}" if large else "", file=sys.stderr, flush=True)
 _Highs.run = run
 sys.argv = ["mechopt", *sys.argv[1:]]
 sys.exit(cli.main())
@@ -126,5 +128,63 @@ def test_ctrl_c_inside_a_large_highs_lp_exits_130_at_once_and_writes_nothing(tmp
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=300)
     assert proc.returncode == cli.INTERRUPTED, err[-2000:]
-    assert "LP finished" not in err             # the command did not wait for the LP to end
+    assert "LP ended: kOptimal" not in err      # the command did not wait for the LP to end
     assert "Traceback" not in err and not out.exists() and not list(tmp_path.glob("r.json*"))
+
+
+# --- Ctrl-C at any moment of a short command, interpreter exit included ----------------------------
+
+LATE_SIGNAL = """
+import os, signal, sys
+from mechopt import cli
+class Late:                         # torn down with the module, after the interpreter let go of signals
+    def __del__(self):
+        os.kill(os.getpid(), signal.SIGINT)
+late = Late()
+sys.argv = ["mechopt", "describe", "loom/packaging"]
+sys.exit(cli.main())
+"""
+
+
+def test_a_sigint_while_the_interpreter_tears_down_does_not_kill_the_command():
+    done = subprocess.run([sys.executable, "-c", LATE_SIGNAL], capture_output=True, text=True, timeout=300)
+    assert done.returncode in (cli.OK, cli.INTERRUPTED), (done.returncode, done.stderr[-2000:])
+
+
+FORKED_COMMANDS = """
+import json, os, signal, sys, time
+from mechopt import cli
+out, delays = sys.argv[1], json.loads(sys.argv[2])
+argv = ["run", "loom/packaging", "--json", out]
+cli.main(argv)                      # warm: the forks below spend their life solving, writing and exiting
+
+
+def command(delay):
+    ready, go = os.pipe()
+    pid = os.fork()
+    if pid == 0:                    # the command, as `mechopt ...` runs it, to its interpreter's very end
+        parser = cli._parser
+        cli._parser = lambda: os.write(go, b"!") and parser()       # it has started: its first step
+        sys.argv = ["mechopt", *argv]
+        sys.exit(cli.main())
+    os.read(ready, 1)
+    time.sleep(delay)
+    try:
+        os.kill(pid, signal.SIGINT)
+    except ProcessLookupError:
+        pass
+    return os.waitstatus_to_exitcode(os.waitpid(pid, 0)[1])
+
+
+print(json.dumps([command(d) for d in delays]))
+"""
+
+
+def test_ctrl_c_at_any_moment_of_a_command_exits_0_or_130_never_by_the_signal(tmp_path):
+    """SIGINT sent at spread moments of `mechopt run loom/packaging --json` (solve, write and the
+    interpreter's exit: about 2 s here, mostly tearing the modules down): never death by SIGINT."""
+    delays = [0.0, 0.1, 0.5, 1.2]
+    done = subprocess.run([sys.executable, "-c", FORKED_COMMANDS, str(tmp_path / "r.json"), str(delays)],
+                          capture_output=True, text=True, timeout=300)
+    codes = json.loads(done.stdout.strip().splitlines()[-1]) if done.returncode == 0 else done.stderr[-2000:]
+    assert set(codes) <= {cli.OK, cli.INTERRUPTED}, list(zip(delays, codes))

@@ -39,11 +39,11 @@ TABLE_CURVE = {"x_expr": None, "y_expr": None, "constants": None,
 
 def main(argv=None) -> int:
     as_command = argv is None            # the process is this command (not a test or a caller's script)
-    argv = sys.argv[1:] if argv is None else list(argv)
-    args = _parser().parse_args(argv)
-    args.argv = argv
     try:
-        with interrupt.honoured():
+        with interrupt.honoured():      # from the first step: Ctrl-C while parsing exits 130 too
+            argv = sys.argv[1:] if argv is None else list(argv)
+            args = _parser().parse_args(argv)
+            args.argv = argv
             for folder in args.cases:
                 registry.add_cases(folder)
             code = COMMANDS[args.command](args)
