@@ -51,14 +51,14 @@ def main(argv=None) -> int:
             return code
     except MechoptError as exc:
         if interrupt.pending():         # a back end turned Ctrl-C into an error of its own
-            return _interrupted(as_command)
+            return _interrupted()
         if isinstance(exc, SolverError):        # the input was valid; the back end failed on it
             print(f"error: not solved: {short(exc)}", file=sys.stderr)
             return NOT_SOLVED
         print(f"error: {short(exc)}", file=sys.stderr)
         return BAD_INPUT
     except KeyboardInterrupt:
-        return _interrupted(as_command)
+        return _interrupted()
     except BrokenPipeError:             # `mechopt cases | head`: the reader left, not an error of ours
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return OK
@@ -73,10 +73,8 @@ def main(argv=None) -> int:
             _exit_on_interrupt()
 
 
-def _interrupted(as_command=False):
+def _interrupted():
     print("interrupted (a sweep keeps its finished chunks: re-run the same command to resume)", file=sys.stderr)
-    if as_command and interrupt.abandoned():    # a solver thread still in C code (a large LP's presolve):
-        _leave(INTERRUPTED)                     # the interpreter's clean-up must not run beside it
     return INTERRUPTED
 
 
@@ -97,6 +95,8 @@ def _exit_on_interrupt():
     default (death by SIGINT) before it tears the modules down, but leaves an ignored one ignored."""
     if threading.current_thread() is not threading.main_thread():
         return
+    if interrupt.abandoned():       # a solver thread left in C code by Ctrl-C (a large LP's presolve):
+        _leave(INTERRUPTED)         # the interpreter's clean-up must not run beside it
     signal.signal(signal.SIGINT, lambda signum, frame: _leave(INTERRUPTED))
     atexit.register(signal.signal, signal.SIGINT, signal.SIG_IGN)     # registered last: the first hook run
 
