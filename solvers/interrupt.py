@@ -65,9 +65,11 @@ def polled():
     polls it from a Python callback, and an exception raised there would unwind through C++).
     On leaving it, a Ctrl-C that arrived is raised as the handler in force before would have:
     KeyboardInterrupt (the flag kept for the spine when `honoured()` is active), or that handler
-    called. Main thread only (elsewhere no signal arrives), and not while SIGINT is ignored: there
-    the block runs as it is."""
-    if threading.current_thread() is not threading.main_thread() or signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    called. Main thread only (elsewhere no signal arrives), and not while SIGINT is ignored or
+    handled outside Python: there the block runs as it is."""
+    in_c = signal.getsignal(signal.SIGINT) is None          # a handler set outside Python: left alone
+    if threading.current_thread() is not threading.main_thread() or in_c or \
+            signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
         yield
         return
     outer = signal.signal(signal.SIGINT, _note)

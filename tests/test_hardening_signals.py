@@ -188,3 +188,23 @@ def test_ctrl_c_at_any_moment_of_a_command_exits_0_or_130_never_by_the_signal(tm
                           capture_output=True, text=True, timeout=300)
     codes = json.loads(done.stdout.strip().splitlines()[-1]) if done.returncode == 0 else done.stderr[-2000:]
     assert set(codes) <= {cli.OK, cli.INTERRUPTED}, list(zip(delays, codes))
+
+
+def test_inside_polled_a_ctrl_c_waits_for_the_block_end_then_goes_to_the_handler_outside():
+    from mechopt.solvers import interrupt
+    seen = []
+    before = signal.signal(signal.SIGINT, lambda signum, frame: seen.append(signum))
+    try:
+        with interrupt.polled():
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.05)                    # the handler runs here: it only records
+            assert interrupt.pending() and not seen
+        assert seen == [signal.SIGINT] and not interrupt.pending()
+        with pytest.raises(KeyboardInterrupt), interrupt.honoured(), interrupt.polled():
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.05)
+    finally:
+        signal.signal(signal.SIGINT, before)
+    assert interrupt.pending()                  # for the spine's check(), as honoured() keeps it
+    with pytest.raises(KeyboardInterrupt):
+        interrupt.check()
