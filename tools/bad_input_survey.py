@@ -786,8 +786,8 @@ def csv_line_break_name(folder):
 
 def lift_cam(folder, id_):
     """The lift cam's profile scene as a user's file with id `id_`."""
-    text = LIFT_CAM.read_text(encoding="utf-8").replace('id = "stop-impact/lift-cam-profile"', f"id = {json.dumps(id_)}")
-    return write(folder, "s.toml", text)
+    text = LIFT_CAM.read_text(encoding="utf-8")
+    return write(folder, "s.toml", text.replace('id = "stop-impact/lift-cam-profile"', f"id = {json.dumps(id_)}"))
 
 
 def id_empty(folder):
