@@ -47,10 +47,13 @@ class InterruptibleHighs(RealHighs):
     def __init__(self):
         super().__init__()
         self.abandoned = threading.Event()
+        self.worker = None
         for name in INTERRUPT_CALLBACKS:
             getattr(self, name).subscribe(_stop_if_interrupted, self.abandoned)
 
     def run(self):
+        if self.worker is not None:             # a run abandoned by Ctrl-C may still hold this model
+            self._reclaim()
         if self.getNumRow() < THREADED_ROWS or threading.current_thread() is not threading.main_thread():
             with interrupt.polled():
                 return super().run()
@@ -61,15 +64,22 @@ class InterruptibleHighs(RealHighs):
         outcome = {}
         worker = threading.Thread(target=lambda: outcome.setdefault("status", RealHighs.run(self)),
                                   name="highs-run", daemon=True)
-        worker.start()
-        with interrupt.polled():
+        with interrupt.polled():                # before the start: a Ctrl-C from now on finds the worker
+            worker.start()
             while worker.is_alive() and not interrupt.pending():
                 worker.join(WAIT_S)
+            self.worker = worker
             if worker.is_alive():
                 self.abandoned.set()            # its callbacks stop it at the next iteration
                 interrupt.abandon(worker)
-        worker.join()                           # only when the handler outside ignored the Ctrl-C
+        self._reclaim()                         # here only when the handler outside let the Ctrl-C pass
         return outcome["status"]
+
+    def _reclaim(self):
+        """Wait for an abandoned run to end, and let the next run go uninterrupted."""
+        self.worker.join()
+        self.worker = None
+        self.abandoned.clear()
 
 
 @functools.cache

@@ -208,3 +208,36 @@ def test_inside_polled_a_ctrl_c_waits_for_the_block_end_then_goes_to_the_handler
     assert interrupt.pending()                  # for the spine's check(), as honoured() keeps it
     with pytest.raises(KeyboardInterrupt):
         interrupt.check()
+
+
+def test_a_held_model_whose_run_was_abandoned_solves_again(monkeypatch):
+    """After Ctrl-C left a large run behind, the next run of the same model waits for it and is not
+    itself stopped (the held LP of a bisection is reused)."""
+    import numpy as np
+    from highspy._core import _Highs
+
+    from mechopt.solvers import highs, interrupt
+    monkeypatch.setattr(highs, "THREADED_ROWS", 1)               # this small LP runs beside the main thread
+    calls = []
+
+    def slow_run(self):                     # the first run gets Ctrl-C and is still busy when it is abandoned
+        if not calls:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.5)
+        calls.append(1)
+        return _Highs.run(self)
+    monkeypatch.setattr(highs.RealHighs, "run", slow_run, raising=False)
+    h = highs.InterruptibleHighs()
+    h.setOptionValue("output_flag", False)
+    h.addVars(2, np.zeros(2), np.full(2, 10.0))
+    h.changeColsCost(2, np.arange(2, dtype=np.int32), np.array([-1.0, -1.0]))
+    h.addRows(1, np.array([-np.inf]), np.array([4.0]), 2, np.array([0], dtype=np.int32),
+              np.arange(2, dtype=np.int32), np.ones(2))
+    with pytest.raises(KeyboardInterrupt), interrupt.honoured():
+        h.run()
+    assert not calls and h.worker is not None                  # raised while the first run was still busy
+    with pytest.raises(KeyboardInterrupt):
+        interrupt.check()                                       # the spine consumes the Ctrl-C
+    h.run()
+    assert len(calls) == 2 and h.getModelStatus().name == "kOptimal"
+    assert h.getInfo().objective_function_value == pytest.approx(-4.0)
