@@ -9,10 +9,11 @@ import scipy.sparse as sp
 from cvxpy.reductions.solvers.conic_solvers.highs_conif import HIGHS as HIGHS_SOLVER
 
 from mechopt.errors import SolverError
-from mechopt.solvers.highs import banner_to_stderr
+from mechopt.solvers.highs import InterruptibleHighs, banner_to_stderr, interruptible_everywhere
 from mechopt.solvers.result import Status, from_cvxpy
 
 banner_to_stderr()          # before any HiGHS model, ours or cvxpy's: stdout is for results
+interruptible_everywhere()  # ... and Ctrl-C stops an LP at its next iteration, not at its end
 
 
 @dataclass
@@ -115,7 +116,7 @@ class HeldLP:
                            np.zeros(int(with_cycle))]
         self.lower = np.r_[np.zeros(self.arcs), np.full(self.windows, -inf), np.zeros(len(sync_arcs)),
                            np.full(int(with_cycle), -inf)]
-        self.highs = highspy.Highs()
+        self.highs = InterruptibleHighs()
         self.highs.setOptionValue("output_flag", False)
         col_lo, col_hi = np.full(n, -inf), np.full(n, inf)
         col_lo[first] = col_hi[first] = 0.0                      # the anchor

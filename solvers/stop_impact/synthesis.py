@@ -65,6 +65,7 @@ from mechopt.models.cam_law import (
     step_matrices,
 )
 from mechopt.models.stop_impact import LeverStop, speed_tag
+from mechopt.solvers.highs import banner_to_stderr, interruptible_everywhere
 from mechopt.solvers.result import Result, Status, Timing, from_cvxpy
 from mechopt.solvers.settings import Annotated, Interval, NonNegative
 from mechopt.solvers.stop_impact.cam_follower import follow_cam, follower_data
@@ -74,6 +75,9 @@ from mechopt.solvers.stop_impact.response import closed_form_amplitude_m, respon
 __all__ = ["BASES", "LinearLever", "SpeedResponse", "WindowLP", "band_speeds", "design_law", "law_of", "linear_lever",
            "predicted_rebounds_mm", "rebound_envelope", "speed_response", "v0_limit_m_s",
            "rebound_of_v0_mm", "synthesise_law"]
+
+banner_to_stderr()          # stdout is for results, and Ctrl-C stops a window LP at its next iteration
+interruptible_everywhere()
 
 
 def law_of(result: Result) -> SplineLaw:

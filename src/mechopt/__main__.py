@@ -1,6 +1,9 @@
 """`python -m mechopt` is the `mechopt` command."""
 import sys
 
-from mechopt.cli import main
+try:
+    from mechopt.cli import main
+except KeyboardInterrupt:       # Ctrl-C while the command was still loading: nothing was done
+    sys.exit(130)
 
 sys.exit(main())

@@ -6,6 +6,7 @@ message names the file, key and allowed range; nothing was computed or written),
 (INFEASIBLE, LIMIT, INACCURATE, FAILED), 130 interrupted.
 """
 import argparse
+import atexit
 import csv
 import errno
 import inspect
@@ -40,11 +41,11 @@ TABLE_CURVE = {"x_expr": None, "y_expr": None, "constants": None,
 
 def main(argv=None) -> int:
     as_command = argv is None            # the process is this command (not a test or a caller's script)
-    argv = sys.argv[1:] if argv is None else list(argv)
-    args = _parser().parse_args(argv)
-    args.argv = argv
     try:
-        with interrupt.honoured():
+        with interrupt.honoured():      # from the first step: Ctrl-C while parsing exits 130 too
+            argv = sys.argv[1:] if argv is None else list(argv)
+            args = _parser().parse_args(argv)
+            args.argv = argv
             for folder in args.cases:
                 registry.add_cases(folder)
             code = COMMANDS[args.command](args)
@@ -82,20 +83,27 @@ def _interrupted():
     return INTERRUPTED
 
 
+def _leave(code):
+    """End the process now with `code`, the standard streams flushed."""
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):
+            pass
+    os._exit(code)
+
+
 def _exit_on_interrupt():
     """From here on (the interpreter shutting down: Dask's and the pool's threads joined), Ctrl-C
-    ends the process with 130 at once, not with a traceback and death by SIGINT (-2)."""
+    ends the process with 130 at once, not with a traceback and death by SIGINT (-2). From the
+    exit hooks on, SIGINT is ignored: the interpreter then resets a Python-level handler to the
+    default (death by SIGINT) before it tears the modules down, but leaves an ignored one ignored."""
     if threading.current_thread() is not threading.main_thread():
         return
-
-    def stop(signum, frame):
-        for stream in (sys.stdout, sys.stderr):
-            try:
-                stream.flush()
-            except (OSError, ValueError):
-                pass
-        os._exit(INTERRUPTED)
-    signal.signal(signal.SIGINT, stop)
+    if interrupt.abandoned():       # a solver thread left in C code by Ctrl-C (a large LP's presolve):
+        _leave(INTERRUPTED)         # the interpreter's clean-up must not run beside it
+    signal.signal(signal.SIGINT, lambda signum, frame: _leave(INTERRUPTED))
+    atexit.register(signal.signal, signal.SIGINT, signal.SIG_IGN)     # registered last: the first hook run
 
 
 # a disk that filled up or turned read-only after the outputs were checked (before the work)

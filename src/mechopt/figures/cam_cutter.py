@@ -3,6 +3,7 @@ arrays (the path, its deviation), the limaçon traced from the linkage found."""
 import numpy as np
 
 from mechopt.figures.registry import figure, new_figure
+from mechopt.figures.text import literal
 from mechopt.models.cam_cutter import real_point
 from mechopt.models.cam_profile import ProfileFit
 from mechopt.solvers.cam_cutter import (
@@ -53,7 +54,7 @@ def paths_and_deviation(run):
     left.set_xlabel("x [mm]")
     left.set_ylabel("y [mm]")
     left.legend(loc="upper left", fontsize=8)
-    left.set_title(run.scene.id)
+    left.set_title(literal(run.scene.id))
 
     right.plot(t, dist * 1000, color="tab:orange", label="distance ideal -> real path")
     right.axhline(task.err_width_mm * 1000, color="tab:red", ls=":", label=f"band: err_width = {task.err_width_mm * 1000:g} µm")
@@ -89,7 +90,7 @@ def reactions_and_torque(run):
                         ("O_slide", "block on link (normal force)")):
         top.semilogy(phi, arrays[f"R_{pair}_N"], lw=1.0, label=label)
     top.set_ylabel("reaction [N]")
-    top.set_title(f"{run.scene.id}: reactions grow as 1/|cos(phi/2)| where the crank pin crosses O "
+    top.set_title(f"{literal(run.scene.id)}: reactions grow as 1/|cos(phi/2)| where the crank pin crosses O "
                   f"({run.result.status.value})", fontsize=9)
     top.legend(fontsize=8, ncol=2)
     middle.plot(phi, arrays["M_N_m"], color="black", lw=1.0)
@@ -121,7 +122,7 @@ def profile_path_and_band(run):
     if where:
         left.plot(*where, "x", color="tab:red", ms=9, label="largest deviation")
     left.set_aspect("equal")
-    left.set(xlabel="x [mm]", ylabel="y [mm]", title=run.scene.id)
+    left.set(xlabel="x [mm]", ylabel="y [mm]", title=literal(run.scene.id))
     left.legend(loc="upper left", fontsize=8)
     right.plot(t, dist * 1000, color="tab:orange", label="distance path -> limaçon")
     right.axhline(task.err_width_mm * 1000, color="tab:red", ls=":", label=f"band {task.err_width_mm * 1000:g} µm")
@@ -146,7 +147,7 @@ def family_settings(run):
         left.plot(a[mine], L[mine], "o-", label=f"h = {nozzle:g} mm")
         right.plot(a[mine], dev[mine] * 1000, "o-", label=f"h = {nozzle:g} mm")
     left.set(xlabel="cam size a [mm]", ylabel="wing length L [mm]",
-             title=f"{run.scene.id}: settings at one H = {values['H_mm']:.4f} mm")
+             title=f"{literal(run.scene.id)}: settings at one H = {values['H_mm']:.4f} mm")
     right.axhline(run.task.err_width_mm * 1000, color="tab:red", ls=":", label="band")
     served = [values.get(k) for k in ("a_served_min_mm", "a_served_max_mm")]
     if None not in served:

@@ -4,6 +4,7 @@ angle against the cam angle. They read the Result's arrays only."""
 import numpy as np
 
 from mechopt.figures.registry import figure, new_figure
+from mechopt.figures.text import literal
 from mechopt.solvers.stop_impact import cam_profile
 
 CURVES = {"pitch": ("pitch curve", "tab:red", "--"), "profile": ("cam profile", "black", "-"),
@@ -26,7 +27,7 @@ def cam_shape_figures(run) -> dict:
     ax.set_aspect("equal")
     ax.set_xlabel("x [mm] (cam frame)")
     ax.set_ylabel("y [mm]")
-    ax.set_title(f"{run.scene.id}: chordal error {values.get('chord_error_mm', float('nan')):.3g} mm")
+    ax.set_title(f"{literal(run.scene.id)}: chordal error {values.get('chord_error_mm', float('nan')):.3g} mm")
     ax.legend(fontsize=8, loc="upper right")
     out = {"profile": fig}
     fig2 = new_figure(figsize=(7, 5))

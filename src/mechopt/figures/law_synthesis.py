@@ -5,6 +5,7 @@ import numpy as np
 
 from mechopt.figures.loom import gantt
 from mechopt.figures.registry import figure, new_figure
+from mechopt.figures.text import literal
 from mechopt.models.cam_follower import LAWS
 from mechopt.solvers.loom import codesign_machine_speed
 from mechopt.solvers.stop_impact import synthesise_law
@@ -41,7 +42,8 @@ def _laws(run):
         ax.grid(True, alpha=0.3)
     axes[0].legend(fontsize=7)
     axes[-1].set_xlabel("cam angle over the rise [deg]")
-    axes[0].set_title(f"{run.scene.id}: the laws at t = {run.result.values.get('t_deg', float('nan')):.4g} deg", fontsize=9)
+    t_deg = run.result.values.get('t_deg', float('nan'))
+    axes[0].set_title(f"{literal(run.scene.id)}: the laws at t = {t_deg:.4g} deg", fontsize=9)
     return fig
 
 

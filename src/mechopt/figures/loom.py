@@ -1,6 +1,7 @@
 """Figures for the loom cyclogram scenes (models/loom.py): the cyclogram as a Gantt chart, and
 for a repaired LP (loom.repair_cyclogram) each exact limit's excess over the rounds."""
 from mechopt.figures.registry import figure, new_figure
+from mechopt.figures.text import literal
 from mechopt.solvers.loom import max_machine_speed, plan_cyclogram, repair_cyclogram
 
 ROW_IN = 0.35              # inches per operation row on a small network ...
@@ -50,14 +51,14 @@ def gantt(run, headline=None):
         if slack > 1e-9 and not hot:
             ax.barh(row, slack, left=start[x, y] + angle, height=0.25, color="tab:blue", alpha=0.25)
         if not dense:
-            text = f"{x}-{y}"
+            text = literal(f"{x}-{y}")
             inside = angle > max(0.06, 0.011 * len(text)) * max(end, 1e-9)   # a narrow bar: its label beside it
             ax.text(start[x, y] + angle / 2 if inside else start[x, y] + angle + 0.005 * end, row, text,
                     ha="center" if inside else "left", va="center", fontsize=7,
                     color="white" if inside else "black")
     _group_bands(ax, [group[a] for a in arcs])
     ax.set_yticks(range(len(arcs)))
-    ax.set_yticklabels([f"{label[x, y]} ({x}-{y})" for x, y in arcs], fontsize=6 if dense else 7)
+    ax.set_yticklabels([literal(f"{label[x, y]} ({x}-{y})") for x, y in arcs], fontsize=6 if dense else 7)
     ax.set_ylim(len(arcs) - 0.5, -0.5)
     from matplotlib.patches import Patch
     ax.legend(handles=[Patch(color="tab:red", label="critical operation (no float)"),
@@ -72,8 +73,8 @@ def gantt(run, headline=None):
     if headline is None:            # the objective the plan's LP minimised (a machine's limiting operation)
         headline = (f"limiting op {values['limiting_op_deg']:.2f} deg" if "limiting_op_deg" in values
                     else f"span {values['span_deg']:.2f} deg")
-    ax.set_title(f"{run.scene.id}: {headline}, {len(arcs)} operations\ncritical chain (red) {' - '.join(chain)}",
-                 fontsize=9, pad=22)
+    ax.set_title(f"{literal(run.scene.id)}: {headline}, {len(arcs)} operations\n"
+                 f"critical chain (red) {literal(' - '.join(chain))}", fontsize=9, pad=22)
     ax.grid(True, axis="x", alpha=0.3)
     return {"cyclogram": fig}
 
@@ -102,7 +103,7 @@ def _group_bands(ax, groups):
             continue
         if band % 2:
             ax.axhspan(top - 0.5, row - 0.5, color="0.92", zorder=0)
-        ax.text(1.005, (top + row - 1) / 2, groups[top] or "(no group)", transform=ax.get_yaxis_transform(),
+        ax.text(1.005, (top + row - 1) / 2, literal(groups[top] or "(no group)"), transform=ax.get_yaxis_transform(),
                 rotation=90, ha="left", va="center", fontsize=8)
         top, band = row, band + 1
 
@@ -118,13 +119,13 @@ def _repair_rounds(run, rounds):
         rows = [next(r for r in rnd["limits"] if r["limit"] == name) for rnd in rounds]
         value = rows[0].get("exact_mm", rows[0].get("exact_MPa")) - rows[0]["excess"]     # the limit
         excess = [max(abs(r["excess"]) / value, 1e-17) for r in rows]
-        line, = ax.semilogy([rnd["round"] for rnd in rounds], excess, marker="o", label=name)
+        line, = ax.semilogy([rnd["round"] for rnd in rounds], excess, marker="o", label=literal(name))
         exact = [(rnd["round"], e) for rnd, r, e in zip(rounds, rows, excess) if r.get("cut") == "exact"]
         if exact:
             ax.semilogy(*zip(*exact), linestyle="none", marker="s", markersize=11, markerfacecolor="none",
-                        color=line.get_color(), label=f"{name}: next cut at the exact bound")
+                        color=line.get_color(), label=f"{literal(name)}: next cut at the exact bound")
     ax.set(xlabel="LP round", ylabel="|exact - limit| / limit at the round's optimum",
-           title=f"{run.scene.id}: exact laws at each round's optimum")
+           title=f"{literal(run.scene.id)}: exact laws at each round's optimum")
     ax.set_xticks([rnd["round"] for rnd in rounds])
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)

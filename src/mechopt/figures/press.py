@@ -2,6 +2,7 @@
 import numpy as np
 
 from mechopt.figures.registry import figure, new_figure
+from mechopt.figures.text import literal
 from mechopt.solvers.press import catalogue, design, events, ivp, loads, rk4, sensitivity, simulate, steady_state
 
 
@@ -40,7 +41,7 @@ def cycle(run):
     ax[1, 1].set_ylabel("belt torque [N m]" if task.belt else "motor torque, reduced [N m]")
     for a in ax.ravel():
         a.grid(alpha=0.3)
-    fig.suptitle(f"{run.scene.id}: {run.result.status.value}", fontsize=10)
+    fig.suptitle(f"{literal(run.scene.id)}: {run.result.status.value}", fontsize=10)
     return {"cycle": fig}
 
 
@@ -89,7 +90,7 @@ def _loads(run, phi_deg):
     for a_ in ax.ravel():
         a_.grid(alpha=0.3)
         a_.legend(fontsize=7)
-    fig.suptitle(f"{run.scene.id}: loads over one steady revolution ({run.result.status.value})", fontsize=10)
+    fig.suptitle(f"{literal(run.scene.id)}: loads over one steady revolution ({run.result.status.value})", fontsize=10)
     return fig
 
 
@@ -109,15 +110,15 @@ def elasticities(run):
     axes = fig.subplots(nrows, ncols, sharey=True, squeeze=False).ravel()
     for ax, name in zip(axes, outputs):
         ax.barh(np.arange(len(rows)), a[f"elasticity_{name}"][order])
-        ax.set_title(name, fontsize=9)
+        ax.set_title(literal(name), fontsize=9)
         ax.axvline(0, color="k", lw=0.5)
         ax.grid(alpha=0.3, axis="x")
         ax.tick_params(axis="y", labelsize=8)
     for ax in axes[len(outputs):]:
         ax.remove()                          # the grid's empty places: no panel
-    axes[0].set_yticks(np.arange(len(rows)), [rows[i] for i in order], fontsize=8)
+    axes[0].set_yticks(np.arange(len(rows)), [literal(rows[i]) for i in order], fontsize=8)
     fig.supxlabel("elasticity: % change of the output per % change of the parameter")
-    fig.suptitle(f"{run.scene.id}: what the periodic motion owes to each assumed value "
+    fig.suptitle(f"{literal(run.scene.id)}: what the periodic motion owes to each assumed value "
                  f"({run.result.status.value})", fontsize=10)
     return {"elasticities": fig}
 
@@ -160,5 +161,6 @@ def designed(run):
         a.grid(alpha=0.3)
         a.legend(fontsize=7)
     design = ", ".join(f"{k} = {values[k]:.4g}" for k in task.variables)
-    fig.suptitle(f"{run.scene.id}: {task.objective} -> {design} ({run.result.status.value})", fontsize=10)
+    fig.suptitle(f"{literal(run.scene.id)}: {literal(task.objective)} -> {literal(design)} "
+                 f"({run.result.status.value})", fontsize=10)
     return figures | {"design": fig}

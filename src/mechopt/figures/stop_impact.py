@@ -10,6 +10,7 @@ analogues and their dynamic errors at each speed (Fig. 4).
 """
 
 from mechopt.figures.registry import figure, new_figure
+from mechopt.figures.text import literal
 from mechopt.models.stop_impact import speed_tag
 from mechopt.solvers.stop_impact import (
     cam_dynamics,
@@ -72,7 +73,7 @@ def _cam_rises(run):
     figs = [new_figure(figsize=(8, 9)) for _ in range(2)]
     axes = [fig.subplots(3, 1, sharex=True) for fig in figs]
     for ax, kin in zip(axes[0], kinematic):
-        ax.plot(phi, kin, "k--", lw=1, label=f"{task.law} law (rigid lever)")
+        ax.plot(phi, kin, "k--", lw=1, label=f"{literal(task.law)} law (rigid lever)")
     plate_mm = a["x_mm"][-1]            # the nominal rise ends where C meets the plate: every contact is there
     for n in speeds:
         suffix = "" if n == task.speed_nominal_rpm else f"_{speed_tag(n)}"
@@ -88,7 +89,7 @@ def _cam_rises(run):
             ax.grid(alpha=0.3)
         rows[-1].set_xlabel("cam angle into the rise phi [deg] (to the contact with the plate)")
         rows[0].legend(fontsize=7)
-        fig.suptitle(f"{run.scene.id}: " + ("dynamic errors of the motion law" if which else
+        fig.suptitle(f"{literal(run.scene.id)}: " + ("dynamic errors of the motion law" if which else
                                             "analogues with the elastic lever (cf. paper's Fig. 4)"))
     return figs[0], figs[1]
 
@@ -107,7 +108,7 @@ def _histories(run, speeds=None, limit_mm=None):
     ax.axvspan(0, 2 * task.contact_time_s * 1e3, color="0.9", label="impact pulse (2 tau)")
     ax.axhline(0, color="k", lw=0.6)
     ax.set(xlabel="time after contact [ms]", ylabel="q: C off the plate [mm]",
-           title=f"{run.scene.id}: rebound after contact, eq. (2) (cf. paper's Fig. 8)")
+           title=f"{literal(run.scene.id)}: rebound after contact, eq. (2) (cf. paper's Fig. 8)")
     ax.legend(fontsize=8)
     return fig
 
@@ -131,7 +132,7 @@ def _amplitude_vs_speed(run):
     if events:
         ax.plot(events, [values[f"rebound_event_mm_{speed_tag(n)}"] for n in events], "s", ms=4,
                 label="event-driven contact (stiffness switch)")
-    ax.set(xlabel="main shaft speed n [rpm]", ylabel="first rebound [mm]", title=f"{run.scene.id}")
+    ax.set(xlabel="main shaft speed n [rpm]", ylabel="first rebound [mm]", title=f"{literal(run.scene.id)}")
     ax.legend(fontsize=8)
     return fig
 
@@ -148,6 +149,6 @@ def _law(run):
     ax.axhline(task.amplitude_limit_mm, color="tab:red", ls=":", label=f"limit {task.amplitude_limit_mm:g} mm")
     ax.axvline(v["t_3_7_min_deg"], color="0.5", lw=0.8)
     ax.set(xlabel="phase angle t(3,7) [deg]", ylabel="first rebound a [mm]",
-           title=f"{run.scene.id}: n = {task.speed_nominal_rpm:g} rpm")
+           title=f"{literal(run.scene.id)}: n = {task.speed_nominal_rpm:g} rpm")
     ax.legend(fontsize=8)
     return fig

@@ -24,6 +24,7 @@ from typing import NamedTuple
 import numpy as np
 
 from mechopt.figures.files import save_figure
+from mechopt.figures.text import literal
 from mechopt.sweep import META_KEY, check_unique
 from mechopt.units import label as axis_label
 
@@ -125,6 +126,7 @@ def plot_sweep(table, out_dir, *, scene=None, outputs=None) -> list[Path]:
     matplotlib.use("Agg")
     case = scene.id if scene else _meta(table).get("case", "sweep")
     check_unique(table, f"sweep table of {case}")     # a twice-written table would draw wrong maps
+    title = literal(case)                             # a table from anywhere names its case
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     keys = _swept(table)
@@ -132,15 +134,15 @@ def plot_sweep(table, out_dir, *, scene=None, outputs=None) -> list[Path]:
     paths = []
     for output in outputs or outputs_of(table, scene):
         if table.num_rows == 0:
-            fig, name = _empty(case, output), f"sweep_{output}_vs_{'_'.join(keys[:2])}.png"
+            fig, name = _empty(title, output), f"sweep_{output}_vs_{'_'.join(keys[:2])}.png"
         elif len(keys) == 1:
-            fig, name = _line(table, keys[0], output, case), f"sweep_{output}_vs_{keys[0]}.png"
+            fig, name = _line(table, keys[0], output, title), f"sweep_{output}_vs_{keys[0]}.png"
         elif not regular:
-            fig, name = _scatter(table, keys, output, case), f"sweep_{output}_vs_{keys[0]}_{keys[1]}.png"
+            fig, name = _scatter(table, keys, output, title), f"sweep_{output}_vs_{keys[0]}_{keys[1]}.png"
         elif len(keys) == 2:
-            fig, name = _panels(table, keys, output, case), f"sweep_{output}_vs_{keys[0]}_{keys[1]}.png"
+            fig, name = _panels(table, keys, output, title), f"sweep_{output}_vs_{keys[0]}_{keys[1]}.png"
         else:
-            fig, name = _panels(table, keys, output, case), f"sweep_{output}_vs_{keys[0]}_{keys[1]}_by_{keys[2]}.png"
+            fig, name = _panels(table, keys, output, title), f"sweep_{output}_vs_{keys[0]}_{keys[1]}_by_{keys[2]}.png"
         paths.append(save_figure(fig, out_dir / _file_name(name)))
     return paths
 
@@ -155,7 +157,7 @@ def _empty(case, output):
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(6.4, 4.6))
     ax.set_axis_off()
-    ax.set_title(f"{case}: {output}\nno variants in the table: nothing to draw", fontsize=10)
+    ax.set_title(f"{case}: {literal(output)}\nno variants in the table: nothing to draw", fontsize=10)
     return fig
 
 
@@ -172,9 +174,9 @@ def _line(table, key, output, case):
     if bad.any():
         ax.plot(x[bad], np.where(np.isnan(y[bad]), floor, y[bad]), "x", color="tab:red", ms=7,
                 label=f"not solved: {_statuses(table, bad)} (no value: on the floor)")
-    ax.set_xlabel(axis_label(key))
-    ax.set_ylabel(axis_label(output))
-    ax.set_title(f"{case}: {output}", fontsize=10)
+    ax.set_xlabel(_axis(key))
+    ax.set_ylabel(_axis(output))
+    ax.set_title(f"{case}: {literal(output)}", fontsize=10)
     ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2, frameon=False)
     ax.grid(alpha=0.3)
     return fig
@@ -189,13 +191,13 @@ def _scatter(table, keys, output, case):
     shown = solved & np.isfinite(y)
     dots = ax.scatter(x[shown], z[shown], c=y[shown], s=30, cmap="viridis", label="SOLVED")
     if shown.any():
-        fig.colorbar(dots, ax=ax, label=axis_label(output))
+        fig.colorbar(dots, ax=ax, label=_axis(output))
     if (~solved).any():
         ax.plot(x[~solved], z[~solved], "x", color="tab:red", ms=7, label=f"not solved: {_statuses(table, ~solved)}")
-    ax.set_xlabel(axis_label(keys[0]))
-    ax.set_ylabel(axis_label(keys[1]))
-    more = f"; {', '.join(keys[2:])} overlaid" if len(keys) > 2 else ""
-    ax.set_title(f"{case}: {output}\nrandom points, not a grid{more}", fontsize=10)
+    ax.set_xlabel(_axis(keys[0]))
+    ax.set_ylabel(_axis(keys[1]))
+    more = f"; {literal(', '.join(keys[2:]))} overlaid" if len(keys) > 2 else ""
+    ax.set_title(f"{case}: {literal(output)}\nrandom points, not a grid{more}", fontsize=10)
     ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2, frameon=False)
     ax.grid(alpha=0.3)
     return fig
@@ -211,14 +213,14 @@ def _panels(table, keys, output, case):
     for key in keys[3:]:                   # a fourth key and beyond: held at their middle value
         values = np.unique(_floats(table, key))
         fixed[key] = values[(len(values) - 1) // 2]
-        notes.append(f"{key} held at {fixed[key]:g} (of {len(values)} values swept)")
+        notes.append(f"{literal(key)} held at {fixed[key]:g} (of {len(values)} values swept)")
     by = keys[2] if len(keys) > 2 else None
     shown = [None]
     if by:
         values = np.unique(_floats(table, by))
         shown = list(values[np.unique(np.linspace(0, len(values) - 1, MAX_PANELS).round().astype(int))])
         if len(shown) < len(values):
-            notes.append(f"{len(shown)} of {len(values)} values of {by} shown")
+            notes.append(f"{len(shown)} of {len(values)} values of {literal(by)} shown")
     grids = [grid_of(table, x_key, y_key, output, fixed | ({by: v} if by else {})) for v in shown]
     lines = [boundary_of(g) for g in grids]
     overview = by is not None and len(shown) > 1 and any(lines)
@@ -234,14 +236,14 @@ def _panels(table, keys, output, case):
     mesh = None
     for ax, grid, line, value in zip(axes, grids, lines, shown):
         mesh = _map(ax, grid, line, scale, levels, x_key, y_key)
-        ax.set_title(f"{by} = {value:g}" if by else "", fontsize=9)
+        ax.set_title(f"{literal(by)} = {value:g}" if by else "", fontsize=9)
     if coloured.size:
-        fig.colorbar(mesh, cax=fig.add_subplot(spec[:, -1]), label=axis_label(output))
+        fig.colorbar(mesh, cax=fig.add_subplot(spec[:, -1]), label=_axis(output))
     if overview:
         _overview(axes[-1], grids, lines, by, shown, x_key, y_key)
     spare = nrows * ncols > total          # an empty slot holds the legend, else it goes under the first map
     _legend(fig.add_subplot(spec[-1, -2]) if spare else axes[0], grids, lines, levels, output, spare)
-    what = f"{output} over {x_key} × {y_key}" + (f", by {by}" if by else "")
+    what = literal(f"{output} over {x_key} × {y_key}" + (f", by {by}" if by else ""))
     chars = int(fig.get_figwidth() * 10)          # ~10 characters an inch at 11 pt: wrap, never clip
     fig.suptitle("\n".join(textwrap.wrap(f"{case}: {what}", chars) + textwrap.wrap("; ".join(notes), chars)),
                  fontsize=11)
@@ -279,8 +281,8 @@ def _map(ax, grid, lines, scale, levels, x_key, y_key):
         ax.plot(line[:, 0], line[:, 1], color="black", lw=2.0)
     ax.set_xlim(xe[0], xe[-1])
     ax.set_ylim(ye[0], ye[-1])
-    ax.set_xlabel(axis_label(x_key))
-    ax.set_ylabel(axis_label(y_key))
+    ax.set_xlabel(_axis(x_key))
+    ax.set_ylabel(_axis(y_key))
     return mesh
 
 
@@ -291,14 +293,14 @@ def _overview(ax, grids, lines, by, shown, x_key, y_key):
     colours = plt.get_cmap("plasma")(np.linspace(0.0, 0.85, len(shown)))
     for colour, grid, line, value in zip(colours, grids, lines, shown):
         side = "" if line else ": all SOLVED" if grid.solved.all() else ": none SOLVED" if not grid.solved.any() else ""
-        ax.plot(*(line[0].T if line else ([], [])), color=colour, lw=2.0, label=f"{by} = {value:g}{side}")
+        ax.plot(*(line[0].T if line else ([], [])), color=colour, lw=2.0, label=f"{literal(by)} = {value:g}{side}")
         for part in line[1:]:
             ax.plot(part[:, 0], part[:, 1], color=colour, lw=2.0)
     xe, ye = _edges(grids[0].xs), _edges(grids[0].ys)
     ax.set_xlim(xe[0], xe[-1])
     ax.set_ylim(ye[0], ye[-1])
-    ax.set_xlabel(axis_label(x_key))
-    ax.set_ylabel(axis_label(y_key))
+    ax.set_xlabel(_axis(x_key))
+    ax.set_ylabel(_axis(y_key))
     ax.grid(alpha=0.3)
     ax.set_title("feasibility boundaries", fontsize=9)
     ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), frameon=False)
@@ -312,14 +314,14 @@ def _legend(ax, grids, lines, levels, output, alone):
     if bad:
         words = ", ".join(f"{w} ×{bad.count(w)}" for w in sorted(set(bad)))
         handles.append((Patch(facecolor=(1.0, 1.0, 1.0, 0.35), edgecolor="0.45", hatch="///"),
-                        f"not solved: {words} (coloured where the solver gave a value)"))
+                        f"not solved: {literal(words)} (coloured where the solver gave a value)"))
     if any((~np.isfinite(g.z) & (g.status != None)).any() for g in grids):      # noqa: E711
         handles.append(((Patch(facecolor="0.85", edgecolor="0.45", hatch="///"),
                          Line2D([], [], ls="", marker="x", color="tab:red")), "no value"))
     if any(lines):
         handles.append((Line2D([], [], color="black", lw=2.0), "feasibility boundary (SOLVED | not)"))
     if len(levels):
-        handles.append((Line2D([], [], color="white", lw=0.8, path_effects=_halo()), f"isolines of {output}"))
+        handles.append((Line2D([], [], color="white", lw=0.8, path_effects=_halo()), f"isolines of {literal(output)}"))
     if alone:
         ax.set_axis_off()
     if handles:
@@ -362,6 +364,11 @@ def _regular(table, keys):
     return len(points) == table.num_rows
 
 
+def _axis(name):
+    """A swept key or output as an axis label, drawn as written."""
+    return literal(axis_label(name))
+
+
 def _meta(table):
     raw = (table.schema.metadata or {}).get(META_KEY)
     return json.loads(raw) if raw else {}
@@ -373,7 +380,7 @@ def _solved(table):
 
 def _statuses(table, mask):
     words = np.array(table.column("status").to_pylist(), dtype=object)[mask]
-    return ", ".join(f"{w} ×{int((words == w).sum())}" for w in sorted(set(words)))
+    return literal(", ".join(f"{w} ×{int((words == w).sum())}" for w in sorted(set(words))))
 
 
 def _swept(table):
