@@ -30,7 +30,7 @@ import numpy as np
 from annotated_types import Ge, Gt, Interval, doc
 from scipy.interpolate import CubicSpline
 
-from mechopt.errors import ModelError
+from mechopt.errors import ModelError, quote
 from mechopt.models.cam_cutter import LinkageFit, real_point
 
 FUNCTIONS = ("sin", "cos", "tan", "exp", "log", "sqrt", "abs")
@@ -53,13 +53,13 @@ def parse_expression(text, constants=(), *, key="x_expr"):
     name, an attribute, a string, a comparison) is a ModelError naming `key` and what was found.
     `values` maps each constant to a number; `m` is numpy or casadi."""
     if not isinstance(text, str) or not text.strip():
-        raise ModelError(f"{key}={text!r}: expected an expression in t, e.g. '50*cos(t)'", key=key)
+        raise ModelError(f"{key}={quote(text, 80)}: expected an expression in t, e.g. '50*cos(t)'", key=key)
     if len(text) > EXPRESSION_MAX_CHARS:
         raise ModelError(f"{key}: {len(text)} characters; at most {EXPRESSION_MAX_CHARS}", key=key)
     try:
         tree = ast.parse(text.strip(), mode="eval").body
     except SyntaxError as exc:
-        raise ModelError(f"{key}={text!r}: not an expression ({exc.msg})", key=key) from None
+        raise ModelError(f"{key}={quote(text, 80)}: not an expression ({exc.msg})", key=key) from None
     except (RecursionError, MemoryError):
         raise ModelError(f"{key}: operators nested too deeply; at most {EXPRESSION_MAX_DEPTH} levels",
                          key=key) from None
@@ -77,7 +77,7 @@ def parse_expression(text, constants=(), *, key="x_expr"):
             return lambda t, v, m: value
         if isinstance(node, ast.Name):
             if node.id not in allowed_names:
-                raise ModelError(f"{key}={text!r}: unknown name {node.id!r}; allowed: t, pi"
+                raise ModelError(f"{key}={quote(text, 80)}: unknown name {node.id!r}; allowed: t, pi"
                                  + "".join(f", {c}" for c in constants) + " (constants are given in 'constants')",
                                  key=key)
             if node.id == "t":
@@ -97,7 +97,7 @@ def parse_expression(text, constants=(), *, key="x_expr"):
             name, inner = node.func.id, build(node.args[0])
             return lambda t, v, m: _function(name, m)(inner(t, v, m))
         what = ast.get_source_segment(text.strip(), node) or type(node).__name__
-        raise ModelError(f"{key}={text!r}: {what!r} is not allowed; use numbers, t, constants, + - * / **, "
+        raise ModelError(f"{key}={quote(text, 80)}: {what!r} is not allowed; use numbers, t, constants, + - * / **, "
                          f"unary minus and {', '.join(FUNCTIONS)}, pi", key=key)
 
     return build(tree)

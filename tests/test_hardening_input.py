@@ -15,8 +15,8 @@ import pytest
 
 from mechopt import cli, registry
 from mechopt import sweep as sw
-from mechopt.errors import ModelError, SceneError
-from mechopt.files import quote, read_regular
+from mechopt.errors import ModelError, SceneError, quote
+from mechopt.files import read_regular
 from mechopt.scene import load, loads, parse_overrides
 from mechopt.tables import read_rows
 
@@ -520,3 +520,20 @@ def test_a_timing_network_error_names_a_bounded_part_of_a_large_network(operatio
     with pytest.raises(ModelError, match=match) as exc:
         Cyclogram(operations=operations, cycle_deg=360.0)
     assert len(str(exc.value)) < 1000
+
+
+def test_a_grid_of_a_whole_number_setting_must_hold_whole_numbers():
+    """samples (per piece, an int setting) swept at 2.5 was run as 2 unsaid; whole grids still run."""
+    scene = registry.find("press/loads")
+    with pytest.raises(SceneError, match=r"--grid samples: samples is a whole-number solver setting, but the grid "
+                                         r"holds 2.5"):
+        sw.plan(scene, grid=[sw.parse_grid("samples=2.5:2.5:1")])
+    _, variants = sw.plan(scene, grid=[sw.parse_grid("samples=8:16:3")])
+    assert [v["samples"] for v in variants] == [8, 12, 16]
+
+
+def test_an_expression_given_as_a_huge_number_is_named_not_echoed():
+    """--set x_expr=<1999 digits> is no expression: the message says so and quotes a short prefix."""
+    with pytest.raises(SceneError) as caught:
+        registry.find("cam-cutter/other-profile").build(parse_overrides(["x_expr=" + "9" * 1999]))
+    assert "expected an expression in t" in str(caught.value) and len(str(caught.value)) < 400

@@ -51,7 +51,7 @@ def _edited(tmp_path, old, new, name="bad.toml"):
     ('abs = 0.005', 'abs = 0.0', r"expect\.H_mm\.abs: Input should be greater than 0"),
     ('abs = 0.005', 'rel = -1.0', r"expect\.H_mm\.rel: Input should be greater than 0"),
     ('value = 59.45\nabs = 0.005', 'value = 59.45', r"expect\.H_mm: .*needs a tolerance"),
-    ('kind = "published"', 'kind = "rumoured"', r"expect\.H_mm\.kind: Input should be 'published', 'experimental' or 'derived'"),
+    ('kind = "published"', 'kind = "rumoured"', r"expect\.H_mm\.kind: Input should be 'published', 'experimental', 'derived' or 'follows'"),
     ('effects = ["torch_offset"]', 'effects = ["torch_offset", "wind"]', r"effects: unknown \['wind'\]; LinkageFit knows torch_offset"),
     ('effects = ["torch_offset"]', 'effects = []', r"params\.h_mm belongs to effect 'torch_offset'"),
     ('solver = "cam_cutter.grid_scan"', 'solver = "cam_cutter.grid_scna"',

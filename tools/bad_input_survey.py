@@ -939,11 +939,18 @@ def _limit_memory():
     os.setsid()
 
 
+def _files(folder) -> dict:
+    """path -> (size, mtime_ns) of every regular file under `folder` (links not followed)."""
+    return {f: (f.stat().st_size, f.stat().st_mtime_ns) for f in Path(folder).rglob("*")
+            if f.is_file() and not f.is_symlink()}
+
+
 def classify(probe: Probe) -> dict:
     with tempfile.TemporaryDirectory() as folder:
         made = probe.setup(folder)
         argv, check = made if isinstance(made, tuple) else (made, None)
-        start, start_wall = time.monotonic(), time.time() - 1.0
+        inputs = _files(folder)              # the probe's own input files: not the command's output
+        start = time.monotonic()
         proc = subprocess.Popen([PY, *argv], cwd=folder, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                 text=True, errors="replace", preexec_fn=_limit_memory)
         signalled = None
@@ -965,8 +972,8 @@ def classify(probe: Probe) -> dict:
         if not problem and signalled and probe.exit_within_s and time.monotonic() - signalled > probe.exit_within_s:
             problem = f"Ctrl-C honoured only {time.monotonic() - signalled:.1f} s after it came"
         if not problem and probe.max_output is not None:
-            written = len(out) + len(err) + sum(f.stat().st_size for f in Path(folder).rglob("*") if f.is_file()
-                                                and not f.is_symlink() and f.stat().st_mtime >= start_wall)
+            written = len(out) + len(err) + sum(stamp[0] for path, stamp in _files(folder).items()
+                                                if inputs.get(path) != stamp)
             problem = f"{written:,} bytes of output (bound {probe.max_output:,})" if written > probe.max_output \
                 else None
         echoed = probe.echo_of and echoes(probe.echo_of, out + err)

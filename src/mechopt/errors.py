@@ -46,3 +46,13 @@ def require(ok: bool, message: str, *, key: str | None = None, kind: type[Mechop
     """Raise `kind(message, key=key)` unless `ok`: the one way a rule on an input is written."""
     if not ok:
         raise kind(message, key=key)
+
+
+def quote(value, limit: int = 40) -> str:
+    """A short, escaped prefix of a value read from a file: an error names the file and line but
+    echoes no more of its content (a reference may name a key file or /etc/passwd)."""
+    try:
+        text = repr(value)
+    except RecursionError:
+        return "(a value nested too deeply to show)"
+    return text if len(text) <= limit else f"{text[:limit]}... ({len(text)} characters)"

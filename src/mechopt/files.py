@@ -244,16 +244,6 @@ def _read_bounded(f, path, max_bytes, what):
     return b"".join(chunks)
 
 
-def quote(value, limit: int = 40) -> str:
-    """A short, escaped prefix of a value read from a file: an error names the file and line but
-    echoes no more of its content (a reference may name a key file or /etc/passwd)."""
-    try:
-        text = repr(value)
-    except RecursionError:
-        return "(a value nested too deeply to show)"
-    return text if len(text) <= limit else f"{text[:limit]}... ({len(text)} characters)"
-
-
 def take_lock(path) -> int | None:
     """An open descriptor holding an exclusive lock on the file `path` (created if absent), or None
     when another process holds it. A symbolic link, folder, FIFO or device at `path` is refused

@@ -21,8 +21,8 @@ from annotated_types import DocInfo
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from mechopt.cache import memoised
-from mechopt.errors import MechoptError, ModelError, SceneError, SettingError
-from mechopt.files import quote, read_regular, real_path
+from mechopt.errors import MechoptError, ModelError, SceneError, SettingError, quote
+from mechopt.files import read_regular, real_path
 from mechopt.models.provenance import provenance_problem
 from mechopt.solvers.result import Status
 from mechopt.solvers.settings import declared_range, describe_range, setting_problem

@@ -52,13 +52,12 @@ import pyarrow.parquet as pq
 
 from mechopt import registry
 from mechopt.cache import BuildCache
-from mechopt.errors import MechoptError, SceneError, SolverError
+from mechopt.errors import MechoptError, SceneError, SolverError, quote
 from mechopt.files import (
     NAME_ROOM,
     holds,
     make_folder,
     open_regular,
-    quote,
     read_regular,
     recorded,
     shipped,
@@ -202,7 +201,8 @@ def plan(scene: Scene, grid=(), random=(), *, samples: int = 0, seed: int = 0,
     """Check the axes against the scene and expand them into variants (dicts of overrides).
 
     Every key must be a parameter of the scene's task or a numeric setting of its solver, swept
-    once. Whole-number settings (``count``) take rounded values. Variant ``i`` is the i-th grid
+    once. Whole-number settings (``count``) take grids of whole numbers only (``samples=2.5`` is
+    refused, not run as 2) and rounded random draws. Variant ``i`` is the i-th grid
     point (last axis fastest) of the ``i // n_grid``-th random sample. The count is checked
     against `max_variants` before anything is expanded.
     """
@@ -223,6 +223,8 @@ def plan(scene: Scene, grid=(), random=(), *, samples: int = 0, seed: int = 0,
         raise SceneError(f"swept twice: {', '.join(twice)}; give each key one range", key=twice[0])
     _check_size(count_variants(spec.grid, spec.random, spec.samples), max_variants)
     kinds = {key: _kind(scene, key) for key in spec.keys}
+    for a in spec.grid:
+        _require_whole(a, kinds[a.key])
     grids = [[kinds[a.key](v) for v in grid_values(a)] for a in spec.grid]
     points = list(itertools.product(*grids))
     if not spec.random:
@@ -232,6 +234,16 @@ def plan(scene: Scene, grid=(), random=(), *, samples: int = 0, seed: int = 0,
                         size=(spec.samples, len(spec.random)))
     return spec, [dict(zip(spec.keys, (*p, *(kinds[a.key](v) for a, v in zip(spec.random, row)))))
                   for row in draws for p in points]
+
+
+def _require_whole(axis, kind):
+    """A grid of a whole-number setting must hold whole numbers: rounding 2.5 would run 2 unsaid."""
+    if kind is float:
+        return
+    broken = [v for v in grid_values(axis) if abs(v - round(v)) > 1e-9 * max(1.0, abs(v))]
+    if broken:
+        raise SceneError(f"--grid {axis.key}: {axis.key} is a whole-number solver setting, but the grid holds "
+                         f"{broken[0]:g}; choose START, STOP and NUM whose points are whole numbers", key=axis.key)
 
 
 def _check_size(count, limit):
