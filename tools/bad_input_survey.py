@@ -746,8 +746,8 @@ def new_read_only(folder):
     return mechopt("new", "cyclogram", locked / "m.toml")
 
 
-def ctrl_c_large_lp(folder, events=6000):
-    """A cyclogram of 6000 events planned by cvxpy's HiGHS LP (some 35,000 rows: seconds of
+def ctrl_c_large_lp(folder, events=20000):
+    """A cyclogram of 20,000 events planned by cvxpy's HiGHS LP (some 120,000 rows: tens of seconds of
     presolve); Ctrl-C 8 s in, inside the LP on a quiet machine."""
     import numpy as np
     rng = np.random.default_rng(1)
