@@ -2,6 +2,10 @@
 asserted in tests): each mechanism's, named by its row in `mechopt.mechanisms`, and the sweep's.
 A study has `cli(repeats, out_dir, progress=None) -> str` (the printed table; figures into out_dir).
 A study that is missing or fails to import is an error, not a silently shorter list."""
+
+if __name__ != "mechopt.benchmarks":      # `import benchmarks` from the repository root: a second, different copy
+    raise ImportError(f"{__name__}: this folder is the package mechopt.benchmarks; import mechopt.benchmarks "
+                      "(installed by `pip install -e .`), not benchmarks from the repository root")
 import importlib
 
 from mechopt.mechanisms import mechanisms

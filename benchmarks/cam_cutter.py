@@ -31,8 +31,8 @@ import statistics
 import time
 
 from mechopt import registry
-from mechopt.cache import clear as clear_caches
 from mechopt.figures import save_figure
+from mechopt.kit.cache import clear as clear_caches
 from mechopt.models.cam_cutter import ToolFamily
 from mechopt.solvers.cam_cutter import family as family_fit
 from mechopt.solvers.cam_cutter import fit as trajectory_fit

@@ -36,8 +36,8 @@ import scipy.sparse as sp
 from scipy.optimize import linprog
 
 from mechopt import registry
-from mechopt.cache import clear as clear_caches
 from mechopt.figures import save_figure
+from mechopt.kit.cache import clear as clear_caches
 from mechopt.models.loom import Cyclogram
 from mechopt.solvers.loom import HeldLP, build_event_time_lp, incidence, max_machine_speed, plan_cyclogram
 from mechopt.solvers.loom import plan as cyclogram_lp

@@ -30,8 +30,9 @@ import numpy as np
 from scipy.optimize import minimize
 
 import mechopt
-from mechopt import cache, registry
+from mechopt import registry
 from mechopt.figures import save_figure
+from mechopt.kit import cache
 from mechopt.solvers import press as pd
 
 __all__ = ["DESIGN_SCENES", "DURATION_S", "PAPER_TASK", "at_accuracy", "catalogue_rows", "cli", "cycle_timing",

@@ -24,8 +24,8 @@ import numpy as np
 from annotated_types import Ge, Gt, Interval, Le, doc
 from scipy.optimize import brentq
 
-from mechopt.cache import memoised
-from mechopt.errors import ModelError
+from mechopt.kit.cache import memoised
+from mechopt.kit.errors import ModelError
 from mechopt.models.effects import Effect
 
 

@@ -33,8 +33,8 @@ import math
 import casadi as ca
 import numpy as np
 
-from mechopt.cache import memoised
-from mechopt.errors import ModelError
+from mechopt.kit.cache import memoised
+from mechopt.kit.errors import ModelError
 from mechopt.models.cam_law import SplineLaw
 
 LAWS = ("cycloidal", "modified_sine", "polynomial_345", "harmonic")

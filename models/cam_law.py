@@ -27,7 +27,7 @@ from scipy import sparse
 from scipy.interpolate import BSpline
 from scipy.linalg import expm
 
-from mechopt.errors import ModelError
+from mechopt.kit.errors import ModelError
 
 CONTINUITIES = (2, 3)
 

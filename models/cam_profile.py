@@ -30,7 +30,7 @@ import numpy as np
 from annotated_types import Ge, Gt, Interval, doc
 from scipy.interpolate import CubicSpline
 
-from mechopt.errors import ModelError, quote
+from mechopt.kit.errors import ModelError, quote
 from mechopt.models.cam_cutter import LinkageFit, real_point
 
 FUNCTIONS = ("sin", "cos", "tan", "exp", "log", "sqrt", "abs")

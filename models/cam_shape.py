@@ -39,7 +39,7 @@ from typing import Annotated, Literal
 import numpy as np
 from annotated_types import Ge, Gt, Interval, doc
 
-from mechopt.errors import ModelError, require
+from mechopt.kit.errors import ModelError, require
 from mechopt.models.cam_follower import LAWS, law_values
 
 Law = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]

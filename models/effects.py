@@ -13,7 +13,7 @@ def check_effects(task) -> None:
     """The one rule of effects, for every task with an `EFFECTS` table: each listed effect is
     known, and an effect's own parameters are given exactly when the effect is listed (None
     otherwise): an effect that is not listed adds no parameter, state or term."""
-    from mechopt.errors import ModelError
+    from mechopt.kit.errors import ModelError
     known = type(task).EFFECTS
     unknown = [e for e in task.effects if e not in known]
     if unknown:

@@ -50,7 +50,7 @@ import networkx as nx
 import numpy as np
 from annotated_types import Gt, Le, Lt
 
-from mechopt.errors import MechoptError, ModelError, some_of
+from mechopt.kit.errors import MechoptError, ModelError, some_of
 from mechopt.models.effects import Effect
 from mechopt.models.provenance import provenance_problem
 from mechopt.models.stop_impact import LeverStop

@@ -68,8 +68,8 @@ import numpy as np
 from annotated_types import Ge, Gt, Le, Lt
 from scipy.optimize import brentq
 
-from mechopt.cache import memoised
-from mechopt.errors import ModelError
+from mechopt.kit.cache import memoised
+from mechopt.kit.errors import ModelError
 from mechopt.models.effects import Effect, check_effects
 
 KINEMATICS = ("paper", "exact")

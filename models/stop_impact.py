@@ -61,7 +61,7 @@ from typing import Annotated, ClassVar, Literal
 
 from annotated_types import Interval
 
-from mechopt.errors import ModelError, require
+from mechopt.kit.errors import ModelError, require
 from mechopt.models.cam_follower import LAWS
 from mechopt.models.cam_law import SplineLaw
 from mechopt.models.effects import Effect, check_effects

@@ -392,8 +392,8 @@ def test_a_range_relative_to_another_input_is_shown_as_declared():
 @pytest.mark.parametrize("scene", mechopt.scenes(), ids=lambda s: s.id)
 def test_describe_shows_the_declared_range_of_every_number(scene):
     """Ranges are declared on the model's fields (Annotated): describe and the loader read them there."""
+    from mechopt.kit.settings import declared_range
     from mechopt.scene import task_fields
-    from mechopt.solvers.settings import declared_range
     fields = task_fields(scene.task_class)
     for row in scene.describe():
         if row["kind"] != "parameter" or row["key"] in RELATIVE or "float" not in str(fields[row["key"]].type):

@@ -3,7 +3,7 @@ one line naming the file, the key and what is allowed; the scene is left as it w
 import pytest
 
 from mechopt import registry
-from mechopt.errors import SceneError
+from mechopt.kit.errors import SceneError
 from mechopt.scene import load
 
 

@@ -5,10 +5,10 @@ import pytest
 from scipy.optimize import minimize_scalar
 
 from mechopt import registry
+from mechopt.kit.result import Status
 from mechopt.models.cam_cutter import ToolFamily, finish_angle, ideal_point, matched_linkage
 from mechopt.solvers.cam_cutter import evolve_family, readjustable
 from mechopt.solvers.cam_cutter.deviation import path_distance
-from mechopt.solvers.result import Status
 
 
 def best_for_cam(a, h, H, t_samples=900):

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from mechopt import registry
+from mechopt.kit.result import Status
 from mechopt.solvers.cam_cutter.certificate import box_lower_bound, largest_distance, lipschitz_radius
-from mechopt.solvers.result import Status
 
 
 @pytest.mark.parametrize("hH, hL", [(0.0, 1.0), (1.0, 0.0), (1.0, 1.0), (3.0, 0.2), (0.01, 2.5)])

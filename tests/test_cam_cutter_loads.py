@@ -4,10 +4,10 @@ import dataclasses
 import numpy as np
 import pytest
 
-from mechopt.errors import ModelError, SettingError
+from mechopt.kit.errors import ModelError, SettingError
+from mechopt.kit.result import Status
 from mechopt.models.cam_cutter import LinkageLoads, linkage_energy, linkage_positions, real_point, real_velocity
 from mechopt.solvers.cam_cutter.kinetostatics import joint_loads, load_system
-from mechopt.solvers.result import Status
 
 H, L = 59.45, 47.52
 

@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mechopt.errors import ModelError
+from mechopt.kit.errors import ModelError
 from mechopt.models.cam_cutter import (
     LinkageFit,
     decimal_reading,

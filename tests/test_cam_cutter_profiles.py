@@ -11,7 +11,8 @@ from scipy.optimize import minimize
 from scipy.spatial import cKDTree
 
 from mechopt import registry
-from mechopt.errors import ModelError, SceneError
+from mechopt.kit.errors import ModelError, SceneError
+from mechopt.kit.result import Status
 from mechopt.models.cam_cutter import LinkageFit, finish_angle, ideal_normal, ideal_point
 from mechopt.models.cam_profile import (
     ExpressionCurve,
@@ -22,7 +23,6 @@ from mechopt.models.cam_profile import (
     unit_normal,
 )
 from mechopt.solvers.cam_cutter import minimax
-from mechopt.solvers.result import Status
 
 ROOT = Path(__file__).resolve().parents[1]
 CARDIOID = ("a*(2*cos(t)+cos(2*t))", "a*(2*sin(t)+sin(2*t))")     # eq. (1)

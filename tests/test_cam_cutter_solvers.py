@@ -14,11 +14,11 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from mechopt import registry
-from mechopt.errors import ModelError, SceneError, SettingError, SolverError
+from mechopt.kit.errors import ModelError, SceneError, SettingError, SolverError
+from mechopt.kit.result import Result, Status, Timing, from_ipopt, from_sqpmethod
 from mechopt.models.cam_cutter import LinkageCheck, LinkageFit, ideal_normal, ideal_point, limacon_implicit
 from mechopt.solvers.cam_cutter.deviation import normal_deviation, path_distance, verified_deviation
 from mechopt.solvers.cam_cutter.fit import check, evolve, grid_scan, minimax, robust
-from mechopt.solvers.result import Result, Status, Timing, from_ipopt, from_sqpmethod
 
 PROPERTY = settings(max_examples=30, deadline=None)
 H_PUBLISHED_MM, L_PUBLISHED_MM = 59.45, 47.52     # Podchasov (2021), Sec. IV

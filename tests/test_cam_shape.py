@@ -9,7 +9,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import mechopt
-from mechopt.errors import ModelError
+from mechopt.kit.errors import ModelError
+from mechopt.kit.result import Status
 from mechopt.models.cam_follower import law_values
 from mechopt.models.cam_shape import (
     CamShape,
@@ -22,7 +23,6 @@ from mechopt.models.cam_shape import (
     tabulated_law,
 )
 from mechopt.registry import find
-from mechopt.solvers.result import Status
 from mechopt.solvers.stop_impact import cam_profile
 from mechopt.solvers.stop_impact.cam_shape import shape_cam
 

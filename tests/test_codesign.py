@@ -4,9 +4,9 @@ import dataclasses
 import pytest
 
 from mechopt import registry
-from mechopt.errors import ModelError
+from mechopt.kit.errors import ModelError
+from mechopt.kit.result import Status
 from mechopt.solvers.loom.codesign import codesign_machine_speed
-from mechopt.solvers.result import Status
 from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
 from mechopt.solvers.stop_impact.synthesis import law_of
 

@@ -9,7 +9,7 @@ import pytest
 from mechopt import registry
 from mechopt.cli import main
 from mechopt.drivers import BISECTIONS, REL_STEP, elasticities, is_step, set_mostly_by, steps_of, uncertain_inputs
-from mechopt.solvers.result import Result, Status, Timing
+from mechopt.kit.result import Result, Status, Timing
 
 
 def _fake(values):

@@ -13,8 +13,8 @@ import pytest
 import mechopt
 from mechopt import dxf
 from mechopt.cli import main
-from mechopt.errors import MechoptError, SceneError
 from mechopt.files import take_lock
+from mechopt.kit.errors import MechoptError, SceneError
 from mechopt.models.cam_cutter import limacon_implicit, real_point
 from mechopt.models.cam_shape import chord_errors, distance_to_segment, flank, pitch
 

@@ -12,7 +12,7 @@ import pytest
 
 from mechopt import cli, files, registry
 from mechopt import sweep as sw
-from mechopt.errors import SceneError
+from mechopt.kit.errors import SceneError
 
 LOOM = "loom/group1"
 

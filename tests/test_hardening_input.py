@@ -15,8 +15,8 @@ import pytest
 
 from mechopt import cli, registry
 from mechopt import sweep as sw
-from mechopt.errors import ModelError, SceneError, quote
 from mechopt.files import read_regular
+from mechopt.kit.errors import ModelError, SceneError, quote
 from mechopt.scene import load, loads, parse_overrides
 from mechopt.tables import read_rows
 
@@ -277,7 +277,7 @@ def test_derive_naming_a_missing_scene_names_the_file_and_the_key(tmp_path):
 
 
 def test_a_solver_error_is_not_solved_not_bad_input(monkeypatch, capsys):
-    from mechopt.errors import SolverError
+    from mechopt.kit.errors import SolverError
     monkeypatch.setattr(registry, "run", lambda *a, **k: (_ for _ in ()).throw(SolverError("CVODES gave up")))
     assert cli.main(["run", "loom/group1"]) == cli.NOT_SOLVED
     assert capsys.readouterr().err.strip() == "error: not solved: CVODES gave up"
@@ -386,7 +386,7 @@ def _chain(n, cycle_deg=10.0):
 
 @pytest.mark.parametrize("method", ["graph", "lp"])
 def test_an_infeasible_chain_of_2000_operations_is_named_in_a_bounded_message(method):
-    from mechopt.errors import NAMED
+    from mechopt.kit.errors import NAMED
     from mechopt.solvers.loom import plan_cyclogram
     r = plan_cyclogram(_chain(2000), method=method)
     assert r.status.value == "INFEASIBLE"
@@ -397,7 +397,7 @@ def test_an_infeasible_chain_of_2000_operations_is_named_in_a_bounded_message(me
 
 
 def test_a_result_bounds_any_message_and_list_of_broken_limits():
-    from mechopt.solvers.result import MAX_MESSAGE, MAX_VIOLATED, Result, Status, Timing
+    from mechopt.kit.result import MAX_MESSAGE, MAX_VIOLATED, Result, Status, Timing
     r = Result(Status.INFEASIBLE, {}, Timing(0, 0), message="x" * 10**6, violated=tuple(f"v{k}" for k in range(10**4)))
     assert len(r.violated) == MAX_VIOLATED and r.violated[-1] == f"v{MAX_VIOLATED - 1}"
     assert len(r.message) < MAX_MESSAGE + 120

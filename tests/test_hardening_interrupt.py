@@ -14,9 +14,9 @@ import pytest
 
 from mechopt import cli, registry
 from mechopt import sweep as sw
-from mechopt.errors import SolverError
-from mechopt.solvers import interrupt
-from mechopt.solvers.result import Result, Status
+from mechopt.kit import interrupt
+from mechopt.kit.errors import SolverError
+from mechopt.kit.result import Result, Status
 
 LOOM = "loom/group1"
 

@@ -190,7 +190,7 @@ def test_ctrl_c_at_any_moment_of_a_command_exits_0_or_130_never_by_the_signal(tm
 
 
 def test_inside_polled_a_ctrl_c_waits_for_the_block_end_then_goes_to_the_handler_outside():
-    from mechopt.solvers import interrupt
+    from mechopt.kit import interrupt
     seen = []
     before = signal.signal(signal.SIGINT, lambda signum, frame: seen.append(signum))
     try:
@@ -215,7 +215,7 @@ def test_a_held_model_whose_run_was_abandoned_solves_again(monkeypatch):
     import numpy as np
     from highspy._core import _Highs
 
-    from mechopt.solvers import highs, interrupt
+    from mechopt.kit import highs, interrupt
     monkeypatch.setattr(highs, "THREADED_ROWS", 1)               # this small LP runs beside the main thread
     calls = []
 

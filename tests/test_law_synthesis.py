@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from mechopt import registry
-from mechopt.errors import ModelError
+from mechopt.kit.errors import ModelError
+from mechopt.kit.result import Status
 from mechopt.models.cam_follower import law_values
 from mechopt.models.cam_law import SplineBasis, elastic_response
-from mechopt.solvers.result import Status
 from mechopt.solvers.stop_impact.cam_follower import follow_cam, follower_data
 from mechopt.solvers.stop_impact.synthesis import design_law, law_of, predicted_rebounds_mm, synthesise_law
 

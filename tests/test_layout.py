@@ -2,6 +2,8 @@
 benchmark is registered, and nothing at the repository root shadows the installed package."""
 import ast
 import inspect
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -13,8 +15,8 @@ from mechopt.figures import FIGURES
 from mechopt.mechanisms import mechanisms
 
 ROOT = Path(__file__).resolve().parents[1]
-KIT = {"mechopt.errors", "mechopt.cache"}          # importable from every layer; imports nothing of mechopt
-SPINE = ({"mechopt." + p.stem for p in (ROOT / "src" / "mechopt").glob("*.py")} - KIT) | {"mechopt.figures", "mechopt.benchmarks"}
+KIT = ROOT / "src" / "mechopt" / "kit"     # importable from every layer; imports nothing of mechopt outside itself
+SPINE = {"mechopt." + p.stem for p in (ROOT / "src" / "mechopt").glob("*.py")} | {"mechopt.figures", "mechopt.benchmarks"}
 IO = {"tomllib", "json", "pyarrow", "pickle", "shelve", "csv", "sqlite3", "shutil", "tempfile", "dask", "distributed"}
 
 
@@ -39,10 +41,11 @@ def offending(folder: str, forbidden) -> dict[str, list[str]]:
     return bad
 
 
-def test_the_kit_imports_nothing_of_mechopt():
-    for name in KIT:
-        path = ROOT / "src" / "mechopt" / f"{name.split('.')[1]}.py"
-        assert not {m for m in imports_of(path) if m.startswith("mechopt")}, path
+def test_the_kit_imports_nothing_of_mechopt_outside_itself():
+    modules = sorted(KIT.glob("*.py"))
+    assert {p.stem for p in modules} >= {"errors", "cache", "result", "settings", "interrupt", "highs"}
+    for path in modules:
+        assert not {m for m in imports_of(path) if m.startswith("mechopt") and not m.startswith("mechopt.kit")}, path
 
 
 def test_no_model_imports_a_solver_the_spine_or_io():
@@ -69,7 +72,7 @@ def test_no_model_or_solver_opens_a_file():
 def test_the_rule_is_checked_on_the_code_it_names():
     # the test above would pass on an empty tree: make sure it reads the real folders
     assert len(list((ROOT / "models").glob("*.py"))) >= 5 and len(list((ROOT / "solvers").rglob("*.py"))) >= 10
-    assert "mechopt.solvers.result" in imports_of(ROOT / "solvers" / "loom" / "plan.py")
+    assert "mechopt.kit.result" in imports_of(ROOT / "solvers" / "loom" / "plan.py")
 
 
 def test_no_package_folder_at_the_root_shadows_the_installed_one():
@@ -86,7 +89,7 @@ def test_every_public_solver_of_a_mechanism_has_registered_figures():
     """A scene may name any function a solver package exports (`press.simulate`): each draws."""
     import importlib
 
-    from mechopt.solvers.result import Result
+    from mechopt.kit.result import Result
     missing = []
     for m in mechanisms():
         package = importlib.import_module(m.solvers)
@@ -101,8 +104,8 @@ def test_every_public_solver_of_a_mechanism_has_registered_figures():
 
 
 def test_a_solver_without_figures_is_an_error_not_an_empty_list():
-    from mechopt.errors import MechoptError
     from mechopt.figures.registry import figures_of
+    from mechopt.kit.errors import MechoptError
     scene = registry.find("loom/group1")
 
     def unregistered(task):
@@ -113,8 +116,8 @@ def test_a_solver_without_figures_is_an_error_not_an_empty_list():
 
 
 def test_figures_register_by_solver_and_the_old_form_fails_loudly():
-    from mechopt.errors import MechoptError
     from mechopt.figures.registry import figure, register
+    from mechopt.kit.errors import MechoptError
     from mechopt.models.press import PressDrive
     from mechopt.solvers.press import steady_state
     with pytest.raises(MechoptError, match=r"registered by solver now.*@figure\(solver_fn"):
@@ -209,3 +212,23 @@ def test_no_module_imports_another_modules_private_name():
                     bad += [f"{path.relative_to(ROOT)}: {node.module}.{a.name}" for a in node.names
                             if a.name.startswith("_") and not a.name.startswith("__")]
     assert bad == []
+
+
+def _python(code: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=300)
+
+
+@pytest.mark.parametrize("folder", ["models", "solvers", "cases", "benchmarks"])
+def test_a_root_folder_imported_by_its_bare_name_says_which_package_it_is(folder):
+    done = _python(f"import {folder}")
+    assert done.returncode != 0 and f"import mechopt.{folder}" in done.stderr.splitlines()[-1]
+
+
+def test_import_mechopt_loads_no_numerics_until_a_name_is_used():
+    heavy = ["numpy", "cvxpy", "casadi", "numba", "matplotlib", "pandas", "scipy", "networkx", "pyarrow"]
+    done = _python(f"import sys, mechopt; print([m for m in {heavy!r} if m in sys.modules]); "
+                   "print(mechopt.__version__, callable(mechopt.sweep), 'numpy' in sys.modules)")
+    assert done.returncode == 0, done.stderr
+    first, second = done.stdout.splitlines()
+    assert first == "[]"
+    assert second.endswith("True True")       # mechopt.sweep imported the sweep machinery, and it is callable

@@ -9,12 +9,12 @@ from scipy.optimize import linprog
 
 import mechopt
 from mechopt import registry
-from mechopt.errors import ModelError
+from mechopt.kit.errors import ModelError
+from mechopt.kit.result import Status
 from mechopt.models.loom import Cyclogram
 from mechopt.solvers.loom import plan_cyclogram, repair_cyclogram
 from mechopt.solvers.loom.graph import BackArcs, Levels, PositiveCycle
 from mechopt.solvers.loom.plan import certify, positive_cycle
-from mechopt.solvers.result import Status
 
 
 def random_blocks(count, size, seed):

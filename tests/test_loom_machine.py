@@ -6,11 +6,11 @@ from pathlib import Path
 import pytest
 
 from mechopt import registry
-from mechopt.errors import ModelError, SceneError
+from mechopt.kit.errors import ModelError, SceneError
+from mechopt.kit.result import Status
 from mechopt.models.loom import Cyclogram
 from mechopt.scene import load
 from mechopt.solvers.loom import plan_cyclogram
-from mechopt.solvers.result import Status
 
 CASES = Path(registry.cases_dir()) / "loom"
 

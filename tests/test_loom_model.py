@@ -6,7 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from mechopt import registry
-from mechopt.errors import ModelError, SceneError
+from mechopt.kit.errors import ModelError, SceneError
 from mechopt.models.loom import Cyclogram, amplitude_bound_deg, amplitude_mm, stress_bound_deg, stress_MPa
 from mechopt.scene import load
 

@@ -19,10 +19,10 @@ from stop_impact_fitted import FREE, J_A_FITTED_KGM2, LEVER
 
 import mechopt.solvers.loom.repair as loom_solver
 from mechopt import clear_caches, registry
-from mechopt.errors import ModelError, SceneError
+from mechopt.kit.errors import ModelError, SceneError
+from mechopt.kit.result import Status
 from mechopt.models.loom import lever_stop
 from mechopt.solvers.loom import plan_cyclogram, repair_cyclogram
-from mechopt.solvers.result import Status
 from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
 
 LIMIT_MM, SIGMA_H_MPA = 0.1, 800.0

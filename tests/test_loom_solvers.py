@@ -12,12 +12,12 @@ import pytest
 
 from mechopt import registry
 from mechopt.benchmarks.loom import layered
-from mechopt.cache import clear as clear_caches
-from mechopt.errors import SolverError
+from mechopt.kit.cache import clear as clear_caches
+from mechopt.kit.errors import SolverError
+from mechopt.kit.result import Status
 from mechopt.models.loom import Cyclogram
 from mechopt.solvers.loom import plan as cyclogram_lp
 from mechopt.solvers.loom import plan_cyclogram
-from mechopt.solvers.result import Status
 
 T_3_7_MIN_DEG = (0.208 - 0.1) / 0.003          # from the published law and limit
 

@@ -16,10 +16,10 @@ from stop_impact_fitted import FREE, J_A_FITTED_KGM2, LEVER
 
 import mechopt.solvers.loom.repair as loom_solver
 from mechopt import clear_caches, registry
-from mechopt.errors import ModelError
+from mechopt.kit.errors import ModelError
+from mechopt.kit.result import Status
 from mechopt.models.loom import Cyclogram, lever_stop
 from mechopt.solvers.loom import exact_amplitude_bound, max_machine_speed, plan_cyclogram
-from mechopt.solvers.result import Status
 from mechopt.solvers.stop_impact.law import RollerLeftCam, rebound_amplitude_mm
 
 CHAIN_FIXED_DEG = 20 + 10 + 15 + 5 + 20 + 15 + 25     # [phi] along 1-3-7-8-9-10-10.1-10.2-11-12-13-24

@@ -9,9 +9,9 @@ import pytest
 
 from mechopt import registry
 from mechopt.benchmarks.loom import machine
+from mechopt.kit.result import Status
 from mechopt.models.loom import Cyclogram
 from mechopt.solvers.loom import max_machine_speed, plan_cyclogram
-from mechopt.solvers.result import Status
 
 CHAIN_FIXED_DEG = 20 + 10 + 15 + 5 + 20 + 15 + 25     # [phi] along loom/machine-speed's critical chain
 STRESS_9_10_DEG_PER_RPM = 900 * 30 / (800 * 420)

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from mechopt import load
-from mechopt.errors import ModelError
+from mechopt.kit.errors import ModelError
+from mechopt.kit.result import Status
 from mechopt.solvers.press import catalogue, design
-from mechopt.solvers.result import Status
 
 SCENE = load("press/motor-catalogue")
 TASK = SCENE.build()[0]

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from mechopt import load
-from mechopt.errors import ModelError, SettingError
+from mechopt.kit.errors import ModelError, SettingError
+from mechopt.kit.result import Status
 from mechopt.models.press import (
     FORCE_KEYS,
     cut_work_J,
@@ -23,7 +24,6 @@ from mechopt.models.press import (
     structure,
 )
 from mechopt.solvers.press import design, steady_state
-from mechopt.solvers.result import Status
 
 
 @pytest.fixture(scope="module")

@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from mechopt import registry
-from mechopt.errors import ModelError
+from mechopt.kit.errors import ModelError
 from mechopt.models.press import (
     PressDrive,
     coefficient_b,
@@ -196,7 +196,7 @@ def test_effect_parameters_must_match_the_effects():
 
 
 def test_a_refused_scene_override_names_the_key_and_changes_nothing():
-    from mechopt.errors import SceneError
+    from mechopt.kit.errors import SceneError
     scene = registry.find("press/kd2322")
     before = scene.params()
     with pytest.raises(SceneError, match=r"params\.rod_ratio = 1\.2: allowed > 0 \.\.\. 1 \(excl\.\)"):

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from mechopt import registry
-from mechopt.errors import ModelError
+from mechopt.kit.errors import ModelError
+from mechopt.kit.result import Status
 from mechopt.solvers.press import sensitivity
 from mechopt.solvers.press.sensitivity import OUTPUTS
-from mechopt.solvers.result import Status
 
 PAPER, _ = registry.find("press/kd2322").build()
 

@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 
 from mechopt import registry
-from mechopt.errors import ModelError
+from mechopt.kit.errors import ModelError
+from mechopt.kit.result import Status, from_ivp, from_rootfinder
 from mechopt.models.press import PressDrive, mean_crank_inertia_kgm2
 from mechopt.solvers import press as pd
 from mechopt.solvers.press import problem
 from mechopt.solvers.press.problem import initial_state, paper_U
-from mechopt.solvers.result import Status, from_ivp, from_rootfinder
 
 PAPER, _ = registry.find("press/kd2322").build()
 CUT_WORK_J = (90.93 * 3**5 / 5 - 4 * 3**4 / 4 - 406.8 * 3**3 / 3 + 1075.68 * 3**2 / 2) / 1000   # integral of eq. (1)
@@ -380,7 +380,7 @@ def test_work_past_the_stated_limits_is_refused_before_it_starts(call, match):
 def test_a_set_override_past_the_limits_is_refused_naming_the_key():
     with pytest.raises(ModelError, match=r"duration_s=3600\.0 means about"):
         registry.run(registry.find("press/start-up"), {"duration_s": 3600.0})
-    from mechopt.errors import SceneError
+    from mechopt.kit.errors import SceneError
     with pytest.raises(SceneError, match=r"max_events"):
         registry.run(registry.find("press/start-up"), {"max_events": 10**7})
 
@@ -454,7 +454,7 @@ def test_the_nominal_speed_under_a_motor_is_said_to_be_a_start_guess_only():
 def test_a_what_if_re_solves_on_the_structures_build_from_the_last_orbit():
     """Issue 24: other numbers, same structure: no new build (equations, revolution), the orbit
     warm-started from the last one by chord steps, and the same orbit as a cold solve."""
-    from mechopt.cache import clear
+    from mechopt.kit.cache import clear
     from mechopt.models.press import equations
     pd.steady_state(PAPER)
     builds = len(equations.cache), len(problem.revolution.cache)
@@ -474,7 +474,7 @@ def test_a_far_what_if_converges_by_broyden_steps_instead_of_a_cold_newton_solve
     """A flywheel 50 % heavier than the last orbit's: with the old monodromy alone the chord steps
     contract by ~0.08 each and ran out (CHORD_STEPS) into the cold solve; Broyden's update of the
     Jacobian from each step's secant converges within them, to the cold solve's orbit."""
-    from mechopt.cache import clear
+    from mechopt.kit.cache import clear
     pd.steady_state(PAPER)
     heavier = dataclasses.replace(PAPER, flywheel_inertia_kgm2=7.5)
     warm = pd.steady_state(heavier)

@@ -10,8 +10,8 @@ import pytest
 
 from mechopt import registry
 from mechopt.cli import main
-from mechopt.errors import SceneError
 from mechopt.figures import save_figure
+from mechopt.kit.errors import SceneError
 from mechopt.report import write_report
 from mechopt.sweep import parse_grid, sweep
 from mechopt.units import unit_of
@@ -233,7 +233,7 @@ def test_a_results_warnings_are_shown_before_its_values():
     from types import SimpleNamespace
 
     from mechopt.answers import answers_html
-    from mechopt.solvers.result import Result, Status, Timing
+    from mechopt.kit.result import Result, Status, Timing
     result = Result(Status.SOLVED, {"H_mm": 59.60184}, Timing(0.0, 0.0),
                     warnings=("the optimum is on the bound flywheel_max",))
     run = SimpleNamespace(result=result, ok=True, value_rows=lambda: [("H_mm", 59.60184, "mm", "computed")])

@@ -8,11 +8,11 @@ import pytest
 import mechopt
 from mechopt import registry
 from mechopt.cli import main
-from mechopt.errors import SceneError
 from mechopt.figures import plot_run
+from mechopt.kit.errors import SceneError
+from mechopt.kit.result import Status
 from mechopt.scene import load, parse_overrides
 from mechopt.solvers.cam_cutter.deviation import verified_deviation
-from mechopt.solvers.result import Status
 
 GOOD = registry.cases_dir() / "cam-cutter" / "paper-grid.toml"
 
@@ -162,7 +162,7 @@ def test_ci_runs_exactly_the_readme_test_command():
 
 
 def test_cvxpy_status_words_map_without_passing_inaccurate_as_optimal():
-    from mechopt.solvers.result import from_cvxpy
+    from mechopt.kit.result import from_cvxpy
     assert from_cvxpy("optimal") is Status.SOLVED
     assert from_cvxpy("optimal_inaccurate") is Status.INACCURATE
     assert from_cvxpy("infeasible") is Status.INFEASIBLE and from_cvxpy("solver_error") is Status.FAILED
@@ -202,7 +202,7 @@ def test_a_bad_derivation_is_refused_by_name(tmp_path, ref, match):
 
 def test_a_number_from_an_unexpected_status_does_not_pass():
     scene = registry.find("cam-cutter/minimax")
-    from mechopt.solvers.result import Result, Timing
+    from mechopt.kit.result import Result, Timing
     inaccurate = Result(Status.INACCURATE, {"max_deviation_mm": 0.06, "H_mm": 59.6, "L_mm": 47.4}, Timing(0.0, 0.0))
     checks = {c.name: c for c in registry.check(scene, inaccurate)}
     assert not checks["max_deviation_mm"].ok and not checks["status"].ok

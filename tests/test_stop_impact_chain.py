@@ -15,10 +15,10 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from mechopt import registry
-from mechopt.errors import ModelError, SceneError, SolverError
+from mechopt.kit.errors import ModelError, SceneError, SolverError
+from mechopt.kit.result import Status
 from mechopt.models.cam_follower import LAWS, law_values, rise_duration_s
 from mechopt.models.stop_impact import LeverStop
-from mechopt.solvers.result import Status
 from mechopt.solvers.stop_impact.cam_follower import follow_cam, follow_cam_reference
 from mechopt.solvers.stop_impact.entry_points import (
     _rigid_approach_m_s,

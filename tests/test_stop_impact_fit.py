@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from mechopt import registry
-from mechopt.errors import ModelError
-from mechopt.solvers.result import Status
+from mechopt.kit.errors import ModelError
+from mechopt.kit.result import Status
 from mechopt.solvers.stop_impact import fit_roots
 from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
 

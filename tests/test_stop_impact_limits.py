@@ -3,8 +3,8 @@ never a long run or an input error for a physical outcome."""
 import pytest
 
 from mechopt import registry
-from mechopt.errors import SceneError
-from mechopt.solvers.result import Status
+from mechopt.kit.errors import SceneError
+from mechopt.kit.result import Status
 
 
 def test_a_preload_past_the_stroke_is_refused_before_any_work():

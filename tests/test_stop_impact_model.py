@@ -15,7 +15,7 @@ from scipy.integrate import cumulative_trapezoid
 from stop_impact_fitted import fitted_task
 
 from mechopt import registry
-from mechopt.errors import ModelError, SceneError
+from mechopt.kit.errors import ModelError, SceneError
 from mechopt.models.stop_impact import LeverStop, reduced_stiffness_N_per_m
 
 PROPERTY = settings(max_examples=25, deadline=None)

@@ -6,7 +6,7 @@ import math
 import pytest
 
 from mechopt import registry
-from mechopt.errors import ModelError
+from mechopt.kit.errors import ModelError
 from mechopt.models.stop_impact import LeverStop
 from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
 

@@ -14,9 +14,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from stop_impact_fitted import fitted_task
 
-from mechopt.errors import ModelError
+from mechopt.kit.errors import ModelError
+from mechopt.kit.result import Status, from_casadi_integrator, from_quadpack
 from mechopt.models.stop_impact import Impact
-from mechopt.solvers.result import Status, from_casadi_integrator, from_quadpack
 from mechopt.solvers.stop_impact import entry_points, response
 from mechopt.solvers.stop_impact.contact import simulate_contact
 from mechopt.solvers.stop_impact.entry_points import linearise_amplitude, operating_point, rebound

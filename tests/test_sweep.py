@@ -14,8 +14,8 @@ import pytest
 from mechopt import registry
 from mechopt import sweep as sw
 from mechopt.cli import main
-from mechopt.errors import SceneError, SolverError
 from mechopt.figures.sweep import outputs_of, plot_sweep
+from mechopt.kit.errors import SceneError, SolverError
 
 CAM = "cam-cutter/minimax"
 LOOM = "loom/group1"

@@ -17,8 +17,8 @@ import pytest
 from mechopt import registry
 from mechopt import scene as scene_mod
 from mechopt import sweep as sw
-from mechopt.errors import SceneError
 from mechopt.figures.sweep import plot_sweep
+from mechopt.kit.errors import SceneError
 
 LOOM = "loom/group1"
 GRID = "amplitude_limit_mm=0.05:0.15:10"      # 10 variants; chunk 3 makes parts of 3, 3, 3, 1

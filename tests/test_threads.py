@@ -14,7 +14,7 @@ import pytest
 import mechopt
 from mechopt import registry
 from mechopt import sweep as sw
-from mechopt.cache import BuildCache
+from mechopt.kit.cache import BuildCache
 
 LOOM = "loom/group1"
 AXES = ("amplitude_limit_mm=0.05:0.2:20", "sigma_H_limit_MPa=600:1000:10")       # 200 variants
@@ -130,7 +130,7 @@ def test_lp_solves_through_the_api_on_four_threads_match_serial_ones():
 def test_threads_making_the_first_highs_object_together_leave_stdout_where_it_was(monkeypatch):
     """Each thread's swap of descriptor 1 staggered after the one before it has begun: unguarded, a
     later thread saves the earlier one's stderr as its "stdout" and restores that, last."""
-    from mechopt.solvers import highs
+    from mechopt.kit import highs
     arrived = itertools.count()
 
     class Staggered:            # sys.stdout, whose flush (the swap's first step) waits its turn

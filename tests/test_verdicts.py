@@ -6,7 +6,7 @@ import pytest
 
 from mechopt import registry
 from mechopt.cli import main
-from mechopt.errors import SceneError
+from mechopt.kit.errors import SceneError
 
 SOURCE = Path(registry.find("stop-impact/frequencies").path)
 

@@ -8,10 +8,10 @@ import pytest
 
 from mechopt import registry
 from mechopt.cli import main
-from mechopt.errors import SolverError
+from mechopt.kit.errors import SolverError
+from mechopt.kit.result import Result, Status, Timing
 from mechopt.models.press import cutting_force_N, travel_m
 from mechopt.models.validity import PAPER_KINEMATICS_TOLERANCE, out_of_range, paper_kinematics_error
-from mechopt.solvers.result import Result, Status, Timing
 
 
 def test_result_keeps_warnings_once_as_sentences():

@@ -160,7 +160,7 @@ def second_writer(rows):
     fd = os.open(str(out) + ".lock", os.O_RDWR | os.O_CREAT)
     fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
     held.append(fd)
-from mechopt.errors import MechoptError
+from mechopt.kit.errors import MechoptError
 try:
     sweep.sweep(registry.find("loom/group1"), [sweep.parse_grid("amplitude_limit_mm=0.1:0.12:4")], out=out,
                 chunk=1, progress=False, on_chunk=second_writer)
@@ -659,7 +659,7 @@ def stale_tmp_folder(folder):
 
 
 def sweep_out_dot(folder):
-    return snippet("from mechopt import registry, sweep\nfrom mechopt.errors import MechoptError\ntry:\n"
+    return snippet("from mechopt import registry, sweep\nfrom mechopt.kit.errors import MechoptError\ntry:\n"
                    "    sweep.sweep(registry.find('loom/group1'), [sweep.parse_grid('amplitude_limit_mm=0.1:0.12:2')],"
                    " out='.', progress=False)\nexcept MechoptError as exc:\n"
                    "    print('error:', exc, file=sys.stderr)\n    sys.exit(2)\n")

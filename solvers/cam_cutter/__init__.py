@@ -8,7 +8,7 @@ over the cycle (Sec. V re-derived); `family.readjustable` one H for a family of 
 `fit` and `family` share. `fit_linkage(task, method=...)` is the one door to the four
 ways of finding the linkage, as `scipy.integrate.solve_ivp` has one for its methods.
 """
-from mechopt.errors import SceneError
+from mechopt.kit.errors import SceneError
 from mechopt.solvers.cam_cutter.family import evolve_family, readjustable
 from mechopt.solvers.cam_cutter.fit import check, evolve, grid_scan, minimax, robust
 from mechopt.solvers.cam_cutter.kinetostatics import joint_loads

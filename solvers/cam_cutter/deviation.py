@@ -16,7 +16,7 @@ the lower half cuts the mirror image, so a crossing just below the axis is a rea
 import numpy as np
 from scipy.spatial import cKDTree
 
-from mechopt.cache import memoised
+from mechopt.kit.cache import memoised
 from mechopt.models.cam_cutter import ideal_normal, ideal_point
 
 

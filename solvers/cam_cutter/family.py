@@ -21,7 +21,9 @@ from typing import Literal
 import casadi as ca
 import numpy as np
 
-from mechopt.cache import BuildCache
+from mechopt.kit.cache import BuildCache
+from mechopt.kit.result import Result, Status, Timing
+from mechopt.kit.settings import Annotated, Interval, check_settings
 from mechopt.models.cam_cutter import (
     PAPER_A_MM,
     ToolFamily,
@@ -32,8 +34,6 @@ from mechopt.models.cam_cutter import (
 )
 from mechopt.solvers.cam_cutter.deviation import foot_points, verified_deviation
 from mechopt.solvers.cam_cutter.problem import NLP_OPTIONS, ROUND_VERTICES, foot_and_band, pad_nodes, solve_round
-from mechopt.solvers.result import Result, Status, Timing
-from mechopt.solvers.settings import Annotated, Interval, check_settings
 
 __all__ = ["readjustable", "family_minimax", "served_range", "fixed_H_deviation", "evolve_family"]
 

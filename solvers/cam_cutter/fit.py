@@ -19,8 +19,10 @@ import casadi as ca
 import numpy as np
 from scipy.optimize import differential_evolution
 
-from mechopt.cache import BuildCache
-from mechopt.errors import ModelError
+from mechopt.kit.cache import BuildCache
+from mechopt.kit.errors import ModelError
+from mechopt.kit.result import Result, Status, Timing
+from mechopt.kit.settings import Annotated, Ge, Interval, Tolerance, check_settings
 from mechopt.models.cam_cutter import (
     PAPER_A_MM,
     LinkageCheck,
@@ -44,8 +46,6 @@ from mechopt.solvers.cam_cutter.deviation import (
     verified_deviation_on,
 )
 from mechopt.solvers.cam_cutter.problem import NLP_OPTIONS, ROUND_VERTICES, foot_and_band, pad_nodes, solve_round
-from mechopt.solvers.result import Result, Status, Timing
-from mechopt.solvers.settings import Annotated, Ge, Interval, Tolerance, check_settings
 
 Nodes = Annotated[int, Interval(ge=2, le=1_000_000)]      # COUNT: nodes on the ideal path
 

@@ -12,10 +12,10 @@ import time
 import casadi as ca
 import numpy as np
 
-from mechopt.cache import BuildCache
+from mechopt.kit.cache import BuildCache
+from mechopt.kit.result import Result, Status, Timing
+from mechopt.kit.settings import Annotated, Interval, check_settings
 from mechopt.models.cam_cutter import LOAD_UNKNOWNS, LinkageLoads, linkage_energy, linkage_positions
-from mechopt.solvers.result import Result, Status, Timing
-from mechopt.solvers.settings import Annotated, Interval, check_settings
 
 __all__ = ["joint_loads", "load_system"]
 

@@ -5,8 +5,8 @@ solve and the node working set. Public, so that no solver module reaches into an
 import casadi as ca
 import numpy as np
 
+from mechopt.kit.result import Status, from_ipopt, from_sqpmethod
 from mechopt.models.cam_cutter import real_point, real_velocity
-from mechopt.solvers.result import Status, from_ipopt, from_sqpmethod
 
 __all__ = ["NLP_OPTIONS", "ROUND_VERTICES", "foot_and_band", "solve_round", "pad_nodes"]
 

@@ -19,11 +19,11 @@ t(3,7) >= n / r*: the same linear arc the graph engine already takes for the cyc
 import dataclasses
 import time
 
-from mechopt.errors import ModelError
+from mechopt.kit.errors import ModelError
+from mechopt.kit.result import Result, Status, Timing
+from mechopt.kit.settings import Annotated, Interval
 from mechopt.models.loom import Cyclogram
 from mechopt.solvers.loom.speed import max_machine_speed
-from mechopt.solvers.result import Result, Status, Timing
-from mechopt.solvers.settings import Annotated, Interval
 from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
 from mechopt.solvers.stop_impact.synthesis import law_of, synthesise_law
 

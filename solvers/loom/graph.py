@@ -26,9 +26,9 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import breadth_first_order
 
-from mechopt.cache import BuildCache
+from mechopt.kit.cache import BuildCache
+from mechopt.kit.result import Status
 from mechopt.solvers.loom.kernel import COMPILED_MIN_ARCS, kernels
-from mechopt.solvers.result import Status
 
 ROUND_OFF = 1e-12          # relative: an improvement below it (of the largest |w|) is round-off, not a cycle
 

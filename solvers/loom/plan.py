@@ -28,13 +28,13 @@ import cvxpy as cp
 import networkx as nx
 import numpy as np
 
-from mechopt.cache import BuildCache
-from mechopt.errors import NAMED, ModelError, some_of
+from mechopt.kit.cache import BuildCache
+from mechopt.kit.errors import NAMED, ModelError, some_of
+from mechopt.kit.result import Result, Status, Timing, from_cvxpy
+from mechopt.kit.settings import Tolerance
 from mechopt.models.loom import Cyclogram, amplitude_mm, stress_bound_deg, stress_MPa
 from mechopt.solvers.loom.event_time import EventTimeLP, build_event_time_lp
 from mechopt.solvers.loom.graph import BackArcs, Levels, PositiveCycle, a_path, tight_arcs
-from mechopt.solvers.result import Result, Status, Timing, from_cvxpy
-from mechopt.solvers.settings import Tolerance
 
 SENSITIVITY_CONVENTION = ("sens_* = d(objective)/d(limit): change of the objective [deg] per unit increase "
                           "of the limit; negative means a looser limit shortens the span")

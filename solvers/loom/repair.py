@@ -11,12 +11,12 @@ from typing import Annotated, Literal
 import numpy as np
 from scipy.optimize import brentq
 
-from mechopt.cache import BuildCache
-from mechopt.errors import ModelError
+from mechopt.kit.cache import BuildCache
+from mechopt.kit.errors import ModelError
+from mechopt.kit.result import Result, Status, Timing
+from mechopt.kit.settings import Interval, Tolerance
 from mechopt.models.loom import Cyclogram, stress_bound_deg, stress_MPa
 from mechopt.solvers.loom.plan import plan_cyclogram
-from mechopt.solvers.result import Result, Status, Timing
-from mechopt.solvers.settings import Interval, Tolerance
 from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
 
 

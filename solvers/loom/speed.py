@@ -8,8 +8,10 @@ from typing import Annotated, Literal
 import cvxpy as cp
 import numpy as np
 
-from mechopt.cache import BuildCache
-from mechopt.errors import NAMED, ModelError, some_of
+from mechopt.kit.cache import BuildCache
+from mechopt.kit.errors import NAMED, ModelError, some_of
+from mechopt.kit.result import Result, Status, Timing, from_cvxpy
+from mechopt.kit.settings import Interval
 from mechopt.models.loom import MAX_RPM, Cyclogram
 from mechopt.solvers.loom.event_time import HeldLP, incidence
 from mechopt.solvers.loom.graph import Levels, a_path, tight_arcs
@@ -26,8 +28,6 @@ from mechopt.solvers.loom.plan import (
     schedule_floats,
 )
 from mechopt.solvers.loom.repair import cached_amplitude_bound, exact_amplitude_mm
-from mechopt.solvers.result import Result, Status, Timing, from_cvxpy
-from mechopt.solvers.settings import Interval
 
 
 def _angle_floors_deg(task: Cyclogram) -> np.ndarray:

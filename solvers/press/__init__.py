@@ -50,6 +50,6 @@ def simulate(task, *, method: Method = "events", **options):
     'SOLVED'
     """
     if method not in METHODS:
-        from mechopt.errors import SceneError
+        from mechopt.kit.errors import SceneError
         raise SceneError(f"method={method!r}: allowed {', '.join(METHODS)}", key="method")
     return METHODS[method](task, **options)

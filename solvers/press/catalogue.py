@@ -11,13 +11,13 @@ import time
 
 import numpy as np
 
-from mechopt.errors import ModelError
+from mechopt.kit.errors import ModelError
+from mechopt.kit.result import Result, Status, Timing
+from mechopt.kit.settings import Annotated, Interval, Tolerance
 from mechopt.models.press import PressCatalogue, stall_check
 from mechopt.solvers.press.design import design
 from mechopt.solvers.press.periodic import steady_state
 from mechopt.solvers.press.problem import Samples
-from mechopt.solvers.result import Result, Status, Timing
-from mechopt.solvers.settings import Annotated, Interval, Tolerance
 
 BAND_SLACK = 0.01       # a ratio whose steady speed misses the band by more is not designed
 

@@ -40,8 +40,10 @@ import casadi as ca
 import numpy as np
 from scipy.integrate import simpson
 
-from mechopt.cache import memoised
-from mechopt.errors import ModelError, SettingError
+from mechopt.kit.cache import memoised
+from mechopt.kit.errors import ModelError, SettingError
+from mechopt.kit.result import Result, Status, Timing, from_ipopt
+from mechopt.kit.settings import Annotated, Interval, Tolerance
 from mechopt.models.press import (
     BOUNDS,
     FORCE_KEYS,
@@ -69,8 +71,6 @@ from mechopt.solvers.press.problem import (
     top_speed_rad_s,
 )
 from mechopt.solvers.press.shooting import QUADRATURES, cutting_on, intervals, probe, reach, stage_angles
-from mechopt.solvers.result import Result, Status, Timing, from_ipopt
-from mechopt.solvers.settings import Annotated, Interval, Tolerance
 
 TIGHTEST_TOL = 1e-12         # CVODES tolerance the retry after a missed check goes no further than
 VERIFY_REL = 1e-6            # the event-located simulation must give the NLP's figures to this

@@ -7,7 +7,9 @@ import time
 
 import numpy as np
 
-from mechopt.errors import MechoptError, ModelError
+from mechopt.kit.errors import MechoptError, ModelError
+from mechopt.kit.result import Result, Status, Timing
+from mechopt.kit.settings import Annotated, Interval, Positive, Tolerance
 from mechopt.models.press import PressDrive, stall_check
 from mechopt.solvers.press.problem import (
     RIGID_LIMIT,
@@ -30,8 +32,6 @@ from mechopt.solvers.press.problem import (
     summarise,
     top_speed_rad_s,
 )
-from mechopt.solvers.result import Result, Status, Timing
-from mechopt.solvers.settings import Annotated, Interval, Positive, Tolerance
 
 MAX_PIECES = 50_000          # ~25 s of CVODES calls
 MAX_SAMPLES = 1_000_000      # states and outputs kept: ~250 MB

@@ -6,8 +6,10 @@ import time
 import casadi as ca
 import numpy as np
 
-from mechopt.cache import memoised
-from mechopt.errors import ModelError
+from mechopt.kit.cache import memoised
+from mechopt.kit.errors import ModelError
+from mechopt.kit.result import Result, Status, Timing
+from mechopt.kit.settings import Annotated, Interval, NonNegative, Positive
 from mechopt.models.press import PressDrive
 from mechopt.solvers.press.problem import (
     Duration,
@@ -23,8 +25,6 @@ from mechopt.solvers.press.problem import (
     stable_step_s,
     summarise,
 )
-from mechopt.solvers.result import Result, Status, Timing
-from mechopt.solvers.settings import Annotated, Interval, NonNegative, Positive
 
 MAX_STEPS = 500_000         # per run (refinement included): ~200 MB of samples and outputs, seconds
 

@@ -11,8 +11,8 @@ import time
 
 import numpy as np
 
-from mechopt.errors import ModelError
-from mechopt.solvers.result import Result, Status, Timing
+from mechopt.kit.errors import ModelError
+from mechopt.kit.result import Result, Status, Timing
 
 __all__ = ["fit_force"]
 

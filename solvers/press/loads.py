@@ -14,11 +14,11 @@ their peaks during the cut relative to ours.
 """
 import numpy as np
 
+from mechopt.kit.result import Result
+from mechopt.kit.settings import Annotated, Interval, Tolerance
 from mechopt.models.press import PressDrive
 from mechopt.solvers.press.periodic import steady_state
 from mechopt.solvers.press.problem import Samples
-from mechopt.solvers.result import Result
-from mechopt.solvers.settings import Annotated, Interval, Tolerance
 
 # array name -> value stem; peaks are of the magnitude (a rod in tension or a torque braking counts too)
 LOADS = {"rod_force_N": "rod_force_N", "rod_force_pin_N": "rod_force_pin_N", "crank_torque_Nm": "crank_torque_Nm",

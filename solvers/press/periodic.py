@@ -6,8 +6,10 @@ import time
 
 import numpy as np
 
-from mechopt.cache import BuildCache
-from mechopt.errors import MechoptError, ModelError
+from mechopt.kit.cache import BuildCache
+from mechopt.kit.errors import MechoptError, ModelError
+from mechopt.kit.result import Result, Status, Timing
+from mechopt.kit.settings import Annotated, Interval, Tolerance
 from mechopt.models.press import (
     PressDrive,
     breakdown_torque_at_crank_Nm,
@@ -37,8 +39,6 @@ from mechopt.solvers.press.problem import (
     revolution,
     summarise,
 )
-from mechopt.solvers.result import Result, Status, Timing
-from mechopt.solvers.settings import Annotated, Interval, Tolerance
 
 STEPS_PER_REVOLUTION = 2500     # belt-mode steps per revolution steady_state takes on (1 kHz belt: ~3 s)
 CHORD_STEPS = 4                 # warm start: Broyden steps from the last monodromy before a full Newton solve

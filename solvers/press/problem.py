@@ -11,8 +11,9 @@ import casadi as ca
 import numpy as np
 from annotated_types import Interval
 
-from mechopt.cache import memoised
-from mechopt.errors import ModelError
+from mechopt.kit.cache import memoised
+from mechopt.kit.errors import ModelError
+from mechopt.kit.result import Status, from_casadi_integrator
 from mechopt.models.press import (
     FORCE_KEYS,
     PARAMETERS,
@@ -24,7 +25,6 @@ from mechopt.models.press import (
     equations,
     structure,
 )
-from mechopt.solvers.result import Status, from_casadi_integrator
 
 TWO_PI = 2 * np.pi
 ANGLE_TOL_RAD = 1e-12          # events are located to this in crank angle (omega ~ 25: 4e-14 s) near phi = 0

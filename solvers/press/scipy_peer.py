@@ -7,6 +7,8 @@ import casadi as ca
 import numpy as np
 from scipy.integrate import DOP853, RK45, solve_ivp
 
+from mechopt.kit.result import Result, Status, Timing, from_ivp
+from mechopt.kit.settings import NonNegative, Tolerance
 from mechopt.models.press import PressDrive
 from mechopt.solvers.press.problem import (
     TWO_PI,
@@ -26,8 +28,6 @@ from mechopt.solvers.press.problem import (
     summarise,
     top_speed_rad_s,
 )
-from mechopt.solvers.result import Result, Status, Timing, from_ivp
-from mechopt.solvers.settings import NonNegative, Tolerance
 
 MAX_REVOLUTIONS = 100        # solve_ivp calls a Python right-hand side: ~0.25 s per revolution (Radau)
 MAX_STEPS = 20_000           # steps an explicit method may need (~10 s)

@@ -13,12 +13,12 @@ import time
 import casadi as ca
 import numpy as np
 
-from mechopt.errors import MechoptError, ModelError
+from mechopt.kit.errors import MechoptError, ModelError
+from mechopt.kit.result import Result, Status, Timing, from_rootfinder
+from mechopt.kit.settings import Annotated, Interval, Tolerance
 from mechopt.models.press import WORK_NAMES, Equations, PressDrive, equations, parameters, structure
 from mechopt.solvers.press.periodic import steady_state
 from mechopt.solvers.press.problem import TWO_PI, casadi_failure, check_task
-from mechopt.solvers.result import Result, Status, Timing, from_rootfinder
-from mechopt.solvers.settings import Annotated, Interval, Tolerance
 
 MAX_STEPS = 100_000                 # CVODES steps per piece of the revolution (its max_num_steps)
 ROD_SIGN = "rod_weight_sign"        # +1: the rod's weight helps on the way down (the model's reading); -1: the table's

@@ -13,7 +13,7 @@ from itertools import pairwise
 import casadi as ca
 import numpy as np
 
-from mechopt.cache import memoised
+from mechopt.kit.cache import memoised
 from mechopt.models.press import WORK_NAMES, Dynamics, PressDesign, design_parameters, equations, sizing, structure
 from mechopt.solvers.press.problem import TWO_PI
 

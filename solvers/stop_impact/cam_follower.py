@@ -16,11 +16,11 @@ import casadi as ca
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from mechopt.cache import BuildCache
-from mechopt.errors import MechoptError
+from mechopt.kit.cache import BuildCache
+from mechopt.kit.errors import MechoptError
+from mechopt.kit.result import Status, from_casadi_integrator, from_ivp
 from mechopt.models.cam_follower import law_function, law_values, relative_acceleration, rise_duration_s
 from mechopt.models.stop_impact import LeverStop
-from mechopt.solvers.result import Status, from_casadi_integrator, from_ivp
 
 DWELL_PERIODS = 4.0         # how long after the rise C may still reach its plate [natural periods]
 

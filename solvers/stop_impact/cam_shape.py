@@ -5,10 +5,10 @@ import time
 
 import numpy as np
 
-from mechopt.errors import ModelError
+from mechopt.kit.errors import ModelError
+from mechopt.kit.result import Result, Status, Timing
+from mechopt.kit.settings import Annotated, Interval
 from mechopt.models.cam_shape import FLANKS, CamShape, Law, check_undercut, flank, pitch, point_table, summarise
-from mechopt.solvers.result import Result, Status, Timing
-from mechopt.solvers.settings import Annotated, Interval
 
 __all__ = ["cam_profile", "shape_cam"]
 

@@ -4,8 +4,8 @@ import math
 
 from scipy.integrate import solve_ivp
 
+from mechopt.kit.result import Status, from_ivp
 from mechopt.models.stop_impact import LeverStop
-from mechopt.solvers.result import Status, from_ivp
 
 
 def simulate_contact(task: LeverStop, speed_rpm, *, v0_m_s: float | None = None, rtol: float = 1e-11):

@@ -8,11 +8,11 @@ from typing import Literal
 import numpy as np
 from scipy.optimize import brentq
 
-from mechopt.errors import ModelError, SolverError
+from mechopt.kit.errors import ModelError, SolverError
+from mechopt.kit.result import Result, Status, Timing
+from mechopt.kit.settings import Annotated, Interval, Tolerance
 from mechopt.models.cam_follower import law_values
 from mechopt.models.stop_impact import LeverStop, speed_tag
-from mechopt.solvers.result import Result, Status, Timing
-from mechopt.solvers.settings import Annotated, Interval, Tolerance
 from mechopt.solvers.stop_impact.cam_follower import follow_cam, follow_cam_reference, follower_data
 from mechopt.solvers.stop_impact.contact import simulate_contact
 from mechopt.solvers.stop_impact.law import (

@@ -15,10 +15,10 @@ import time
 import numpy as np
 from scipy.optimize import brentq
 
-from mechopt.errors import ModelError
+from mechopt.kit.errors import ModelError
+from mechopt.kit.result import Result, Status, Timing
+from mechopt.kit.settings import Annotated, Interval, NonNegative, Positive, Tolerance
 from mechopt.models.stop_impact import LeverStop, speed_tag
-from mechopt.solvers.result import Result, Status, Timing
-from mechopt.solvers.settings import Annotated, Interval, NonNegative, Positive, Tolerance
 from mechopt.solvers.stop_impact.law import RollerLeftCam, amplitude_law, approach_velocity_m_s, rebound_amplitude_mm
 
 ROOT_AGREEMENT_REL = 1e-7       # the polished root's tangent against the law, relative

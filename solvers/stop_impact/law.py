@@ -10,10 +10,10 @@ Two sources of the approach velocity v0, by the task's effects:
 """
 import numpy as np
 
-from mechopt.cache import memoised
-from mechopt.errors import ModelError, SolverError
+from mechopt.kit.cache import memoised
+from mechopt.kit.errors import ModelError, SolverError
+from mechopt.kit.result import Status
 from mechopt.models.stop_impact import Impact, LeverStop
-from mechopt.solvers.result import Status
 from mechopt.solvers.stop_impact.cam_follower import follow_cam
 from mechopt.solvers.stop_impact.response import closed_form_amplitude_m, response_parts
 

@@ -19,10 +19,10 @@ import numpy as np
 from scipy.integrate import quad
 from scipy.optimize import minimize_scalar
 
-from mechopt.cache import BuildCache
-from mechopt.errors import MechoptError
+from mechopt.kit.cache import BuildCache
+from mechopt.kit.errors import MechoptError
+from mechopt.kit.result import Status, from_casadi_integrator, from_quadpack
 from mechopt.models.stop_impact import Impact
-from mechopt.solvers.result import Status, from_casadi_integrator, from_quadpack
 
 GRID_POINTS = 257               # coarse search for the first rebound before Newton polishes it
 SMALL_PULSE = 1e-3              # omega * tau below this: the pulse is expanded about its centre

@@ -53,8 +53,11 @@ import numpy as np
 from scipy import sparse
 from scipy.optimize import brentq
 
-from mechopt.cache import BuildCache
-from mechopt.errors import ModelError
+from mechopt.kit.cache import BuildCache
+from mechopt.kit.errors import ModelError
+from mechopt.kit.highs import banner_to_stderr, interruptible_everywhere
+from mechopt.kit.result import Result, Status, Timing, from_cvxpy
+from mechopt.kit.settings import Annotated, Interval, NonNegative
 from mechopt.models.cam_follower import LAWS, law_values
 from mechopt.models.cam_law import (
     SplineBasis,
@@ -65,9 +68,6 @@ from mechopt.models.cam_law import (
     step_matrices,
 )
 from mechopt.models.stop_impact import LeverStop, speed_tag
-from mechopt.solvers.highs import banner_to_stderr, interruptible_everywhere
-from mechopt.solvers.result import Result, Status, Timing, from_cvxpy
-from mechopt.solvers.settings import Annotated, Interval, NonNegative
 from mechopt.solvers.stop_impact.cam_follower import follow_cam, follower_data
 from mechopt.solvers.stop_impact.law import RollerLeftCam, rebound_amplitude_mm
 from mechopt.solvers.stop_impact.response import closed_form_amplitude_m, response_parts

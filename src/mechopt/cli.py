@@ -24,12 +24,12 @@ from pathlib import Path
 from mechopt import __version__, registry
 from mechopt.benchmarks import studies, study
 from mechopt.drivers import set_mostly_by, steps_of
-from mechopt.errors import MechoptError, SceneError, SolverError
 from mechopt.files import NotWritten, name_problem, output_problem, write_text_atomic
+from mechopt.kit import interrupt
+from mechopt.kit.errors import MechoptError, SceneError, SolverError
+from mechopt.kit.result import Status
 from mechopt.mechanisms import templates
 from mechopt.scene import parse_overrides
-from mechopt.solvers import interrupt
-from mechopt.solvers.result import Status
 
 OK, CHECK_FAILED, BAD_INPUT, NOT_SOLVED, INTERRUPTED = 0, 1, 2, 3, 130
 

@@ -18,8 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from mechopt.errors import MechoptError, SceneError
 from mechopt.files import holds, make_folder, take_lock, write_bytes_atomic
+from mechopt.kit.errors import MechoptError, SceneError
 from mechopt.models.cam_cutter import LinkageCheck, LinkageFit, LinkageLoads, ideal_point, real_point
 from mechopt.models.cam_profile import ProfileFit
 from mechopt.models.cam_shape import CamShape, mirrored, point_table

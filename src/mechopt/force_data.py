@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mechopt.errors import ModelError, quote
+from mechopt.kit.errors import ModelError, quote
 from mechopt.tables import MAX_BYTES, check_header, number, read_rows
 
 TRAVEL_UNITS_MM = {"mm": 1.0, "m": 1000.0, "um": 1e-3}

@@ -7,13 +7,13 @@ from importlib.resources import files
 from pathlib import Path
 from typing import Any
 
-from mechopt.cache import memoised
 from mechopt.drivers import elasticities, uncertain_inputs
-from mechopt.errors import MechoptError, SceneError
+from mechopt.kit import interrupt
+from mechopt.kit.cache import memoised
+from mechopt.kit.errors import MechoptError, SceneError
+from mechopt.kit.result import Result, Status
 from mechopt.models.validity import out_of_range
 from mechopt.scene import Scene, load, scene_files
-from mechopt.solvers import interrupt
-from mechopt.solvers.result import Result, Status
 from mechopt.units import unit_of
 
 # Every check's verdict, the misses first: the order in which validate lists and counts them.

@@ -20,12 +20,12 @@ from typing import Annotated, Any, Literal, get_args, get_origin
 from annotated_types import DocInfo
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from mechopt.cache import memoised
-from mechopt.errors import MechoptError, ModelError, SceneError, SettingError, quote
 from mechopt.files import read_regular, real_path
+from mechopt.kit.cache import memoised
+from mechopt.kit.errors import MechoptError, ModelError, SceneError, SettingError, quote
+from mechopt.kit.result import Status
+from mechopt.kit.settings import declared_range, describe_range, setting_problem
 from mechopt.models.provenance import provenance_problem
-from mechopt.solvers.result import Status
-from mechopt.solvers.settings import declared_range, describe_range, setting_problem
 from mechopt.tables import check_header, number, read_records, read_rows
 from mechopt.units import unit_of
 

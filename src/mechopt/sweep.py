@@ -39,6 +39,7 @@ import os
 import re
 import stat
 import sys
+import types
 import warnings
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
@@ -51,8 +52,6 @@ import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
 from mechopt import registry
-from mechopt.cache import BuildCache
-from mechopt.errors import MechoptError, SceneError, SolverError, quote
 from mechopt.files import (
     NAME_ROOM,
     holds,
@@ -65,10 +64,12 @@ from mechopt.files import (
     temporary_target,
     write_bytes_atomic,
 )
+from mechopt.kit.cache import BuildCache
+from mechopt.kit.errors import MechoptError, SceneError, SolverError, quote
 from mechopt.scene import MAX_SCENE_BYTES, Scene, loads, path_head, solver_options, split_assignment, task_fields
 
 __all__ = ["Axis", "SweepSpec", "SceneText", "SweepInterrupted", "SweepWarning", "parse_grid", "parse_random",
-           "grid_values", "count_variants", "plan", "sweep", "run_chunk", "read_table", "check_unique", "scene_hash", "describe_axes"]
+           "grid_values", "count_variants", "plan", "sweep", "run_chunk", "read_table", "check_unique", "scene_hash", "describe_axes", "study"]
 
 META_KEY = b"mechopt.sweep"
 FIXED_COLUMNS = ("variant", "status", "message", "warnings", "build_s", "solve_s")
@@ -936,3 +937,49 @@ def _number(text, flag, word, name):
         shown = repr(word) if problem.startswith("is not") else word
         raise SceneError(f"{flag} {text!r}: {name} = {shown} {problem}", key=split_assignment(text)[0])
     return value
+
+
+def study(scene, grid: dict | None = None, random: dict | None = None, *, samples: int = 0, seed: int = 0,
+          out=None, progress: bool = False, **options):
+    """Every variant of a scene (a Scene, a registry id or a scene file's path) as one pyarrow Table.
+
+    grid : {key: (start, stop, num)}, num evenly spaced values each, all combinations.
+    random : {key: (low, high)}, `samples` uniform draws (seeded) combined with every grid point.
+    out : a Parquet file to write (and to resume from); further options as `mechopt.sweep.sweep`
+    (workers, scheduler, chunk, max_variants). A variant that fails is a row with its status.
+    """
+    from mechopt.api import python_words
+    with python_words():
+        axes = [_python_axis("grid", key, bounds, 3) for key, bounds in (grid or {}).items()]
+        draws = [_python_axis("random", key, bounds, 2) for key, bounds in (random or {}).items()]
+        return sweep(registry.find(scene), axes, draws, samples=samples, seed=seed, out=out, progress=progress,
+                     **options)
+
+
+def _python_axis(kind, key, bounds, size):
+    form = "(start, stop, num)" if size == 3 else "(low, high)"
+    if not isinstance(bounds, (tuple, list)) or len(bounds) != size:
+        raise SceneError(f"{kind}[{key!r}] = {bounds!r}: expected {form}", key=key)
+    low, high, *num = bounds
+    if any(isinstance(x, bool) or not isinstance(x, (int, float)) for x in (low, high)):
+        raise SceneError(f"{kind}[{key!r}] = {bounds!r}: expected numbers {form}", key=key)
+    for end in (low, high):
+        if axis_value_problem(float(end)):
+            raise SceneError(f"{kind}[{key!r}] = {bounds!r}: {end!r} {axis_value_problem(float(end))}", key=key)
+    if low > high:
+        raise SceneError(f"{kind}[{key!r}] = {bounds!r}: {low:g} > {high:g}; give the range low to high", key=key)
+    if num and (isinstance(num[0], bool) or not isinstance(num[0], int) or num[0] < 1):
+        raise SceneError(f"{kind}[{key!r}] = {bounds!r}: num = {num[0]!r}; expected a whole number >= 1", key=key)
+    return Axis(key, float(low), float(high), *num)
+
+
+class _CallableStudies(types.ModuleType):
+    """`mechopt.sweep(...)` runs a study (`study`) while `mechopt.sweep.<name>` stays this module."""
+
+    def __call__(self, *args, **kwargs):
+        return study(*args, **kwargs)
+
+    __call__.__doc__ = study.__doc__
+
+
+sys.modules[__name__].__class__ = _CallableStudies

@@ -8,8 +8,8 @@ import re
 from collections import Counter
 from pathlib import Path
 
-from mechopt.errors import ModelError, quote, some_of
 from mechopt.files import read_regular
+from mechopt.kit.errors import ModelError, quote, some_of
 
 MAX_BYTES = 100_000_000      # read whole into memory: refuse what is plainly not a table of readings
 MAX_ROWS = 1_000_000         # counted before parsing: a table of more readings takes minutes to refuse

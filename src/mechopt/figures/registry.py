@@ -12,7 +12,7 @@ looking at which values the result happens to hold.
 """
 from collections.abc import Callable
 
-from mechopt.errors import MechoptError
+from mechopt.kit.errors import MechoptError
 
 FIGURES: dict[Callable, Callable] = {}
 

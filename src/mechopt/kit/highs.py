@@ -25,7 +25,7 @@ import threading
 
 import highspy
 
-from mechopt.solvers import interrupt
+from mechopt.kit import interrupt
 
 # functools.cache lets threads that arrive together all run the body: two swaps of descriptor 1
 # interleaved would save the other's stderr as "stdout" and leave it there

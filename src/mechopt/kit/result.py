@@ -7,7 +7,7 @@ from enum import Enum
 
 import numpy as np
 
-from mechopt.errors import SolverError
+from mechopt.kit.errors import SolverError
 
 
 class Status(str, Enum):

@@ -8,7 +8,7 @@ skipped it). While `honoured()` is active, SIGINT also sets a flag that no back 
 `check()` after every solver call, so an interrupted solve is never stored or reported; a solver
 may call it after a CasADi call inside a loop, so that it stops at once rather than at its end.
 
-A back end that polls for Ctrl-C from its own loop (HiGHS' interrupt callback, solvers/highs.py)
+A back end that polls for Ctrl-C from its own loop (HiGHS' interrupt callback, src/mechopt/kit/highs.py)
 runs inside `polled()`: there SIGINT only records itself, the back end stops at its next poll of
 `pending()`, and the KeyboardInterrupt is raised when the block ends.
 """

@@ -2,7 +2,7 @@
 input (`key`) when there is one, and each is also the builtin it is a kind of (a bad number is a
 ValueError, a crashed back end a RuntimeError), so a caller may catch either.
 
-This module and `mechopt.cache` are the kit: importable from models, solvers and the spine alike,
+Part of the kit (`mechopt.kit`): importable from models, solvers and the spine alike,
 and importing nothing from mechopt themselves (tests/test_layout.py).
 """
 

@@ -13,7 +13,7 @@ from typing import Annotated, Literal, get_args, get_origin
 
 from annotated_types import Ge, Gt, Interval, Le
 
-from mechopt.errors import SettingError
+from mechopt.kit.errors import SettingError
 
 Positive = Annotated[float, Gt(0)]
 NonNegative = Annotated[float, Ge(0)]
@@ -36,7 +36,7 @@ def check_settings(solver, **values) -> None:
 
 def setting_problem(option: inspect.Parameter, value) -> str:
     """What is wrong with a value for a solver setting ('' when nothing): its type, its choices
-    (a Literal) or its range (annotated_types constraints in the signature, see solvers/settings.py)."""
+    (a Literal) or its range (annotated_types constraints in the signature, see src/mechopt/kit/settings.py)."""
     annotation, default = option.annotation, option.default
     if get_origin(annotation) is Literal:
         choices = get_args(annotation)
