@@ -20,8 +20,18 @@ takes `method=`: `mechopt.solvers.press.simulate`, `mechopt.solvers.cam_cutter.f
 `mechopt.solvers.stop_impact.rebound`.
 """
 import importlib
+from typing import TYPE_CHECKING
 
 from mechopt.kit.errors import MechoptError, ModelError, SceneError, SettingError, SolverError
+
+if TYPE_CHECKING:       # for readers, type checkers and the docs; at run time __getattr__ imports each when used
+    from mechopt import sweep
+    from mechopt.api import describe, solve
+    from mechopt.kit.cache import clear as clear_caches
+    from mechopt.kit.result import Result, Status
+    from mechopt.registry import Run, add_cases
+    from mechopt.registry import all_scenes as scenes
+    from mechopt.registry import find as load
 
 __all__ = ["load", "solve", "sweep", "describe", "scenes", "add_cases", "clear_caches", "Run", "Result", "Status",
            "MechoptError", "ModelError", "SceneError", "SettingError", "SolverError", "__version__"]
