@@ -27,7 +27,7 @@ def test_a_failed_check_exits_1(tmp_path):
 
 @pytest.mark.parametrize("args, match", [
     (["run", "loom/group1", "--json", "."], r"--json \.: a folder"),
-    (["run", "loom/group1", "--set", "colour=1"], r"--set colour: unknown key"),
+    (["run", "loom/group1", "--set", "colour=1"], r"colour: unknown key"),
     (["run", "no/such-case"], r"unknown case 'no/such-case'"),
     (["run", "missing.toml"], r"missing\.toml: no such scene file"),
     (["validate", "nowhere-folder/"], r"no such scene file|unknown case"),

@@ -220,7 +220,7 @@ def test_the_report_escapes_every_value_of_a_hostile_sweep_table(tmp_path):
 # --- section 3: no hang --------------------------------------------------------------------------
 
 def test_a_list_of_500_speeds_is_refused_before_any_work():
-    with pytest.raises(SceneError, match=r"rebound-177rpm.toml: --set speeds_rpm: 500 entries; a list given here holds "
+    with pytest.raises(SceneError, match=r"rebound-177rpm.toml: speeds_rpm: 500 entries; a list given here holds "
                                          r"at most 100"):
         registry.run("stop-impact/rebound-177rpm", {"speeds_rpm": [177] * 500})
 

@@ -33,7 +33,7 @@ FITTED_LEVER = {k: v for k, v in LEVER.items() if k != "t_deg"} | {
 @pytest.fixture(scope="module")
 def task():
     scene = registry.find("loom/group1-repaired")
-    return scene.build(registry._derived_params(scene))[0]
+    return registry._pose(scene, {})[0]
 
 
 @pytest.fixture(scope="module")
@@ -179,7 +179,7 @@ def test_the_exact_law_needs_a_speed(task):
 
 @pytest.mark.parametrize("override, match", [
     ({"lever.E_GPa.value": -1.0}, r"structure\.lever\.E_GPa: lever\.E_GPa=-1\.0 must be > 0"),
-    ({"lever.colour": 1.0}, r"--set lever\.colour: no entry 'colour' here; there are effects, law, E_GPa"),
+    ({"lever.colour": 1.0}, r"lever\.colour: no entry 'colour' here; there are effects, law, E_GPa"),
     ({"lever.mass_kg": {"value": 1.0, "mark": "assumed"}}, r"lever\.mass_kg: marked 'assumed' needs a 'why'"),
     ({"lever.law": "square"}, r"lever\.law=.*square.* is not a motion law; allowed: cycloidal"),
     ({"speed_rpm": 0.0}, r"params\.speed_rpm = 0\.0: allowed > 0 \.\.\. 1e\+06"),

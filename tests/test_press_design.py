@@ -229,7 +229,8 @@ def test_a_design_that_cannot_be_certified_says_which_settings_to_try(flywheel_t
     result = design(flywheel_task, max_iter=2)
     assert result.status is Status.LIMIT
     assert [a["step"] for a in result.diagnostics["attempts"]] == ["rule_of_thumb", "press_start", "cut_continuation"]
-    for setting in ("--set tol=", "--set max_iter=10", "--set samples=32", "--set start=press"):
+    assert "--set" not in result.message       # a setting is named by its key, in a scene, a --set or a call
+    for setting in ("(tol=", "(max_iter=10", "(samples=32", "(start=press"):
         assert setting in result.message and setting in result.diagnostics["hint"]
 
 

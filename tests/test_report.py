@@ -8,7 +8,7 @@ from pathlib import Path
 import matplotlib
 import pytest
 
-from mechopt import registry
+from mechopt import registry, verdicts
 from mechopt.cli import main
 from mechopt.figures import save_figure
 from mechopt.kit.errors import SceneError
@@ -84,7 +84,7 @@ def test_calibrations_are_marked_and_not_counted_as_reproductions(page):
     reproduced = sum(c.ok and not c.calibrated and c.kind in ("published", "experimental") and c.verdict == "reproduced"
                      for c in checks)
     derived = sum(c.ok and not c.calibrated and c.kind == "derived" for c in checks)
-    misses = sum(c.verdict in registry.MISSES for c in checks)
+    misses = sum(c.verdict in verdicts.MISSES for c in checks)
     # a restated status and a figure met under an excluded reading are counted apart from all of these
     apart = sum(c.ok and c.verdict in ("follows", "alternative") for c in checks)
     assert reproduced + derived + fitted + misses + apart == len(checks) and derived >= 1
@@ -226,7 +226,7 @@ def test_validation_opens_with_the_counts_and_the_misses_and_folds_the_full_tabl
     assert f"<details><summary>every check ({total}), misses first</summary>" in section
     assert len([r for r in _rows(section) if len(r) == 8]) == total
     misses = section[:section.index("<details>")]
-    assert all(any(v.replace("_", " ") in row[4] for v in registry.MISSES) for row in _rows(misses) if len(row) == 6)
+    assert all(any(v.replace("_", " ") in row[4] for v in verdicts.MISSES) for row in _rows(misses) if len(row) == 6)
 
 
 def test_a_results_warnings_are_shown_before_its_values():

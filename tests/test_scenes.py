@@ -6,7 +6,7 @@ from pathlib import Path
 import pytest
 
 import mechopt
-from mechopt import registry
+from mechopt import registry, verdicts
 from mechopt.cli import main
 from mechopt.figures import plot_run
 from mechopt.kit.errors import SceneError
@@ -92,7 +92,7 @@ def test_duplicate_ids_are_refused(cases_in):
 def test_override_is_validated_like_the_file_and_changes_nothing():
     scene = registry.find("cam-cutter/minimax")
     before = scene.params()
-    with pytest.raises(SceneError, match=r"--set colour: unknown key; parameters: a_mm, .*; solver settings: count"):
+    with pytest.raises(SceneError, match=r"colour: unknown key; parameters: a_mm, .*; solver settings: count"):
         registry.run(scene, {"colour": 1})
     with pytest.raises(SceneError, match=r"params\.err_width_mm = -1: allowed > 0"):
         registry.run(scene, {"err_width_mm": -1})
@@ -134,9 +134,9 @@ def test_cli_validate_passes_and_reports_every_check(tmp_path, capsys, solved_on
     printed = capsys.readouterr().out
     assert f"{sum(len(r['checks']) for r in runs)} passed, 0 failed" in printed
     checks = [c for r in runs for c in r["checks"]]
-    assert all(c["verdict"] in registry.VERDICTS for c in checks)
+    assert all(c["verdict"] in verdicts.VERDICTS for c in checks)
     summary = next(line for line in printed.splitlines() if line.startswith(f"{len(checks)} checks: "))
-    counts = {v: sum(c["verdict"] == v for c in checks) for v in registry.VERDICTS}
+    counts = {v: sum(c["verdict"] == v for c in checks) for v in verdicts.VERDICTS}
     assert f"{counts['reproduced']} reproduced" in summary and f"{counts['derived']} derived" in summary
     # the README states the same counts: it must not drift from the registry
     readme = " ".join((Path(__file__).parents[1] / "README.md").read_text(encoding="utf-8").split())
@@ -172,7 +172,7 @@ def test_a_calibrated_parameter_names_its_figure_and_that_check_is_marked(tmp_pa
     with pytest.raises(SceneError, match=r"params\.H_min_mm: Value error, 'on' \(the value a parameter was fitted to\)"):
         load(_edited(tmp_path, 'mark = "assumed", why = "LOW_H', 'mark = "calibrated", why = "LOW_H'))
     fitted = load(_edited(tmp_path, 'mark = "assumed", why = "LOW_H', 'mark = "calibrated", on = "H_mm", why = "LOW_H'))
-    checks = {c.name: c for c in registry.check(fitted, registry.run(fitted).result)}
+    checks = {c.name: c for c in verdicts.check(fitted.spec, registry.run(fitted).result)}
     assert checks["H_mm"].calibrated and not checks["L_mm"].calibrated
 
 
@@ -204,7 +204,7 @@ def test_a_number_from_an_unexpected_status_does_not_pass():
     scene = registry.find("cam-cutter/minimax")
     from mechopt.kit.result import Result, Timing
     inaccurate = Result(Status.INACCURATE, {"max_deviation_mm": 0.06, "H_mm": 59.6, "L_mm": 47.4}, Timing(0.0, 0.0))
-    checks = {c.name: c for c in registry.check(scene, inaccurate)}
+    checks = {c.name: c for c in verdicts.check(scene.spec, inaccurate)}
     assert not checks["max_deviation_mm"].ok and not checks["status"].ok
     robust = registry.run(registry.find("cam-cutter/robust"))       # INFEASIBLE is what that scene expects
     assert robust.ok and robust.result.status is Status.INFEASIBLE
@@ -225,7 +225,7 @@ def test_set_reaches_a_structure_entry_by_path_and_changes_nothing_else():
     ("operations[from=3].min_deg=40", r"\[from=3\] matches 2 entries of 'operations', not one"),
     ("operations[from=3,to=7]=40", r"name the entry to change after the selector"),
     ("operations[from=3,to=7].min_deg=-4", r"operations\[3->7\]\.min_deg=-4\.0: a minimum phase angle must be >= 0"),
-    ("oprations.x=1", r"--set oprations\.x: unknown key; .*structure entries as PATH, e\.g\. 'operations\[from=1,to=2\]"),
+    ("oprations.x=1", r"oprations\.x: unknown key; .*structure entries as PATH, e\.g\. 'operations\[from=1,to=2\]"),
 ])
 def test_a_bad_structure_path_is_refused_by_name(pair, match):
     with pytest.raises(SceneError, match=match):

@@ -186,7 +186,7 @@ def test_bad_override_is_refused_by_the_scene_and_changes_nothing():
     before = scene.params()
     with pytest.raises(SceneError, match=r"params\.restitution = 1\.5: allowed 0 \.\.\. 1"):
         registry.run(scene, {"restitution": 1.5})
-    with pytest.raises(SceneError, match=r"--set colour: unknown key"):
+    with pytest.raises(SceneError, match=r"colour: unknown key"):
         registry.run(scene, {"colour": 1})
     assert scene.params() == before
     assert registry.run(scene).ok

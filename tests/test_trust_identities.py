@@ -22,7 +22,7 @@ solver's own 60 n / 420). Eight are removed; group1-stop-model's is labelled `fo
 """
 import re
 
-from mechopt import registry
+from mechopt import registry, verdicts
 
 INDEPENDENT = ("closed form", "scipy", "quadpack", "radau", "cvodes", "dop853", "brute", "scan", "bisection",
                "differential evolution", "central differences", "energy balance", "virtual work", "longest path",
@@ -30,7 +30,7 @@ INDEPENDENT = ("closed form", "scipy", "quadpack", "radau", "cvodes", "dop853", 
 
 
 def _calibrated_on(scene, *names):
-    return all(name in scene.calibrated_on() for name in names)
+    return all(name in verdicts.calibrated_on(scene.spec) for name in names)
 
 
 # (name pattern, when it is an identity, why): each passes whatever the model computes

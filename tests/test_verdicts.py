@@ -4,7 +4,7 @@ from pathlib import Path
 
 import pytest
 
-from mechopt import registry
+from mechopt import registry, verdicts
 from mechopt.cli import main
 from mechopt.kit.errors import SceneError
 
@@ -91,7 +91,7 @@ def test_a_row_that_restates_the_status_follows_and_is_counted_apart(tmp_path, c
     run = registry.run(scene)
     row = next(c for c in run.checks if c.name == "c_free_N_per_mm")
     assert row.verdict == "follows" and row.ok and row.label == "follows"
-    assert "1 follows" in registry.summary_line(run.checks)
+    assert "1 follows" in verdicts.summary_line(run.checks)
     assert main(["validate", str(scene.path)]) == 0 and ", 1 follows" in capsys.readouterr().out
 
 
@@ -100,8 +100,8 @@ def test_a_constraint_the_nlp_holds_follows_though_its_base_calibrated_it():
     omega = 25 as a constraint: the row follows from the status, it is no calibration."""
     scene = registry.find("press/motor-design")
     row = scene.spec.expect["omega_mean_rad_s"]
-    assert "omega_mean_rad_s" in scene.calibrated_on()          # the base's calibration is still inherited
-    assert row.kind == "follows" and registry.verdict_of(row, True, calibrated=True) == "follows"
+    assert "omega_mean_rad_s" in verdicts.calibrated_on(scene.spec)          # the base's calibration is still inherited
+    assert row.kind == "follows" and verdicts.verdict_of(row, True, calibrated=True) == "follows"
 
 
 def test_of_two_readings_that_exclude_each_other_one_counts_and_the_other_is_an_alternative(capsys):
@@ -111,7 +111,7 @@ def test_of_two_readings_that_exclude_each_other_one_counts_and_the_other_is_an_
     alternative = checks[other, "rebound_mm_177"]
     assert alternative.verdict == "alternative" and alternative.ok and alternative.alternative_to == chosen
     assert alternative.label == f"alternative (the reading taken: {chosen})"
-    line = registry.summary_line(checks.values())
+    line = verdicts.summary_line(checks.values())
     assert "1 reproduced (1 with readings chosen after the figure)" in line and "1 alternative" in line
     assert main(["validate", chosen, other]) == 0
     assert "alternative reading, not counted as reproduced: rebound_mm_177" in capsys.readouterr().out

@@ -268,9 +268,9 @@ def design(task: PressDesign, *, tol: Tolerance = 1e-10, samples: Samples = 16,
             f"{result.message} (after the retries {', '.join(a['step'] for a in attempts)})"
         return replace(result, timing=timing, diagnostics=diagnostics, message=message)
     hint = (f"not certified after the retries {', '.join(a['step'] for a in attempts)}; try: a looser or tighter "
-            f"CVODES tolerance (--set tol=1e-8, or 1e-11; now {tol:g}), more IPOPT iterations (--set max_iter="
-            f"{min(5 * max_iter, 3000)}; now {max_iter}), more samples per interval (--set samples={2 * samples}; "
-            f"now {samples}), the other start (--set start={'press' if start == 'rule_of_thumb' else 'rule_of_thumb'}"
+            f"CVODES tolerance (tol=1e-8, or 1e-11; now {tol:g}), more IPOPT iterations (max_iter="
+            f"{min(5 * max_iter, 3000)}; now {max_iter}), more samples per interval (samples={2 * samples}; "
+            f"now {samples}), the other start (start={'press' if start == 'rule_of_thumb' else 'rule_of_thumb'}"
             f") with the press's flywheel_inertia_kgm2 near the answer, or wider bounds")
     return replace(result, timing=timing, diagnostics=diagnostics | {"hint": hint}, message=f"{result.message}; {hint}")
 

@@ -21,7 +21,7 @@ import threading
 import warnings
 from pathlib import Path
 
-from mechopt import __version__, registry
+from mechopt import __version__, registry, verdicts
 from mechopt.benchmarks import studies, study
 from mechopt.drivers import set_mostly_by, steps_of
 from mechopt.files import NotWritten, name_problem, output_problem, write_text_atomic
@@ -434,17 +434,17 @@ def _validate(args) -> int:
         result = registry.run(scene)
         runs.append(result)
         for c in result.checks:
-            rows.append((registry.VERDICTS.index(c.verdict), scene.id, c.name, c.kind, c.expected, _fmt(c.got),
+            rows.append((verdicts.VERDICTS.index(c.verdict), scene.id, c.name, c.kind, c.expected, _fmt(c.got),
                          _verdict(c), f"{result.result.timing.build_s + result.result.timing.solve_s:.3f}"))
     step()
-    rows.sort(key=lambda row: row[0] if row[0] < len(registry.MISSES) else len(registry.MISSES))  # misses first
+    rows.sort(key=lambda row: row[0] if row[0] < len(verdicts.MISSES) else len(verdicts.MISSES))  # misses first
     _print_table(("case", "quantity", "kind", "expected", "got", "verdict", "time [s]"), [r[1:] for r in rows])
     checks = [c for r in runs for c in r.checks]
     failed = [c for c in checks if not c.ok]
     print(f"\n{len(checks) - len(failed)} passed, {len(failed)} failed")
-    print(registry.summary_line(checks))
+    print(verdicts.summary_line(checks))
     for c in checks:
-        if c.verdict in registry.MISSES and c.reason:
+        if c.verdict in verdicts.MISSES and c.reason:
             print(f"  {c.verdict.replace('_', ' ')}: {c.name}: {c.reason}")
         elif c.verdict == "reproduced" and c.readings_after_figure:
             print(f"  reproduced with readings chosen after the figure: {c.name}: {'; '.join(c.readings_after_figure)}")

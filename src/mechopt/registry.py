@@ -15,88 +15,7 @@ from mechopt.kit.result import Result, Status
 from mechopt.models.validity import out_of_range
 from mechopt.scene import Scene, load, scene_files
 from mechopt.units import unit_of
-
-# Every check's verdict, the misses first: the order in which validate lists and counts them.
-VERDICTS = ("failed", "unexpectedly_reproduced", "not_reproduced", "not_reproducible",
-            "reproduced", "alternative", "calibrated", "derived", "follows")
-MISSES = VERDICTS[:4]
-
-
-@dataclass(frozen=True)
-class Check:
-    """One expectation against the result. `verdict` says what it shows:
-    reproduced (a figure of the source, met by a model not fitted to it), alternative (a figure met under
-    a reading that excludes the one the scene `alternative_to` names takes: reported, not counted as a
-    reproduction), calibrated (agreement by construction), derived (an independent computation, a bound
-    or a status), follows (a row that restates what the status certifies: it cannot fail while SOLVED),
-    not_reproduced (a declared miss: computed, outside the tolerance), not_reproducible (the source lacks
-    what is needed), failed, or unexpectedly_reproduced (a declared miss that now passes: the
-    declaration is to be corrected).
-    `ok` is whether validation passes it: a declared miss does, as pytest's xfail."""
-    name: str
-    expected: str            # as the scene states it: "1.5 ± 0.01", "<= 0.2", "INFEASIBLE"
-    got: Any                 # float, status word, or None when the solver did not produce it
-    tol: float | None
-    ok: bool
-    kind: str                # published | experimental | derived
-    where: str
-    calibrated: bool = False  # fitted to this value, or it follows from a fit: agreement by construction
-    verdict: str = "derived"
-    reason: str = ""          # why a declared miss is missed
-    gap: float | None = None  # (got - expected) / |expected|, where both are numbers
-    readings_after_figure: tuple[str, ...] = ()   # readings chosen with the published figure in view
-    alternative_to: str = ""  # the scene whose reading excludes this row's (verdict alternative)
-
-    def as_dict(self):
-        return {"name": self.name, "expected": self.expected, "got": self.got, "tol": self.tol,
-                "ok": self.ok, "verdict": self.verdict, "kind": self.kind, "where": self.where,
-                "calibrated": self.calibrated, "reason": self.reason, "gap": self.gap,
-                "readings_after_figure": list(self.readings_after_figure), "alternative_to": self.alternative_to}
-
-    @property
-    def label(self) -> str:
-        """The verdict as a table shows it."""
-        if self.verdict == "not_reproduced" and self.gap is not None:
-            return f"not reproduced ({self.gap:+.1%})"
-        if self.verdict == "reproduced" and self.readings_after_figure:
-            return "reproduced (readings chosen after the figure)"
-        if self.verdict == "alternative":
-            return f"alternative (the reading taken: {self.alternative_to})"
-        return self.verdict.replace("_", " ")
-
-
-def verdict_of(exp, met: bool, calibrated: bool) -> str:
-    """The verdict of an expectation `exp` whose comparison gave `met`."""
-    if exp.verdict == "not_reproducible":
-        return "not_reproducible"
-    if exp.verdict == "not_reproduced":
-        return "unexpectedly_reproduced" if met else "not_reproduced"
-    if not met:
-        return "failed"
-    if exp.kind == "follows":
-        return "follows"
-    if calibrated:
-        return "calibrated"
-    if exp.alternative_to:
-        return "alternative"
-    return "reproduced" if exp.kind in ("published", "experimental") else "derived"
-
-
-def tally(checks) -> dict[str, int]:
-    """How many checks carry each verdict (see `Check`), in the order of `VERDICTS`."""
-    verdicts = [c.verdict for c in checks]
-    return {v: verdicts.count(v) for v in VERDICTS}
-
-
-def summary_line(checks) -> str:
-    """One line: the counts per verdict, the misses first."""
-    checks = list(checks)
-    counts = tally(checks)
-    after = sum(c.verdict == "reproduced" and bool(c.readings_after_figure) for c in checks)
-    parts = [f"{counts[v]} {v.replace('_', ' ')}" + (f" ({after} with readings chosen after the figure)"
-                                                    if v == "reproduced" and after else "")
-             for v in VERDICTS if counts[v] or v in ("failed", "not_reproduced", "reproduced")]
-    return f"{len(checks)} checks: " + ", ".join(parts)
+from mechopt.verdicts import Check, check
 
 
 @dataclass(frozen=True)
@@ -334,48 +253,40 @@ def select(refs=()) -> tuple[list[Scene], list[str]]:
 
 
 def run(scene: Scene | str, overrides: dict | None = None, *, drivers: bool = False) -> Run:
-    """Solve a scene (a Scene, a registry id or a scene file's path), with `--set` overrides
-    validated like the file, and check its expectations. With `drivers`, a scene's headline values
-    gain their largest elasticities to its assumed and calibrated inputs (`diagnostics["drivers"]`:
-    one re-solve per input and side, so only where asked)."""
+    """Solve a scene (a Scene, a registry id or a scene file's path), with overrides validated like
+    the file, and check its expectations. With `drivers`, a scene's headline values gain their
+    largest elasticities to its assumed and calibrated inputs (`diagnostics["drivers"]`: one
+    re-solve per input and side, so only where asked)."""
     scene = find(scene)
     overrides = dict(overrides or {})
-    task, settings = scene.build(_derived_params(scene) | overrides)
+    what_if = bool(scene.split_overrides(overrides)[0])     # a source's figures hold for its own parameters
+    task, settings = _pose(scene, overrides)
     result = _solve(scene.solver, task, settings)
     result = result.with_warnings(out_of_range(task, result.values))
     if drivers and scene.spec.headline:
         result = _with_drivers(scene, overrides, result)
-    params_changed = bool(scene.split_overrides(overrides)[0])
-    checks = [] if params_changed else check(scene, result)
+    checks = [] if what_if else check(scene.spec, result)
     return Run(scene, result, checks, overrides, task, settings)
 
 
-def _with_drivers(scene: Scene, overrides: dict, result: Result) -> Result:
-    def solve(more):
-        task, settings = scene.build(_derived_params(scene) | overrides | more)
-        return _solve(scene.solver, task, settings)
-    inputs = [replace(i, value=float(overrides[i.key])) if isinstance(overrides.get(i.key), (int, float)) else i
-              for i in uncertain_inputs(scene)]
-    found = elasticities(solve, inputs, scene.spec.headline, result.values)
-    return replace(result, diagnostics={**result.diagnostics, "drivers": found})
-
-
-def _derived_params(scene: Scene, chain: tuple[str, ...] = ()) -> dict:
-    """Values of the parameters a scene takes from other scenes' results (run as their files say)."""
-    out = {}
-    for key, (source_id, name) in scene.derived().items():
+def _pose(scene: Scene, overrides: dict, chain: tuple[str, ...] = ()):
+    """The task and settings a scene poses: its file, the values it derives from other scenes'
+    results (each source solved as its file says), then the overrides."""
+    derived = {}
+    for key, reference in scene.spec.derive.items():
+        source_id, name = reference.split(":", 1)
         if source_id in chain + (scene.id,):
             raise SceneError(f"{scene.path}: derive.{key}: {' -> '.join(chain + (scene.id, source_id))} is a loop")
         try:
             result = _source_result(source_id, chain + (scene.id,))
         except SceneError as exc:        # a source that is not there: say which file and key asked for it
-            raise SceneError(f"{scene.path}: derive.{key} = '{source_id}:{name}': {exc}", key=key) from None
+            raise SceneError(f"{scene.path}: derive.{key} = '{reference}': {exc}", key=key) from None
         if result.status is not Status.SOLVED or name not in result.values:
             raise SceneError(f"{scene.path}: derive.{key}: scene {source_id} gave status {result.status.value}"
                              + ("" if name in result.values else f" and no value {name!r}; it has "
                                 + ", ".join(result.values)), key=key)
-        out[key] = result.values[name]
-    return out
+        derived[key] = result.values[name]
+    return scene.build(derived | overrides)
 
 
 @memoised(maxsize=64)
@@ -383,8 +294,16 @@ def _source_result(source_id: str, chain: tuple[str, ...]) -> Result:
     """A scene's result as its file says: depends on the file alone, so a sweep of a derived
     scene solves its source once per process, not once per variant."""
     source = find(source_id)
-    task, settings = source.build(_derived_params(source, chain))
-    return _solve(source.solver, task, settings)
+    return _solve(source.solver, *_pose(source, {}, chain))
+
+
+def _with_drivers(scene: Scene, overrides: dict, result: Result) -> Result:
+    def solve(more):
+        return _solve(scene.solver, *_pose(scene, overrides | more))
+    inputs = [replace(i, value=float(overrides[i.key])) if isinstance(overrides.get(i.key), (int, float)) else i
+              for i in uncertain_inputs(scene)]
+    found = elasticities(solve, inputs, scene.spec.headline, result.values)
+    return replace(result, diagnostics={**result.diagnostics, "drivers": found})
 
 
 def _solve(solver, task, settings) -> Result:
@@ -395,32 +314,6 @@ def _solve(solver, task, settings) -> Result:
             return solver(task, **settings)
         finally:
             interrupt.check()
-
-
-def check(scene: Scene, result: Result) -> list[Check]:
-    """Each expectation of the scene against the result. A number counts only from a SOLVED
-    result, or from the status the scene itself expects (an INFEASIBLE best-achievable value)."""
-    expected_status = scene.spec.expect.get("status")
-    trusted = result.status is Status.SOLVED or (expected_status is not None
-                                                 and result.status.value == expected_status.value)
-    out = []
-    for name, exp in scene.spec.expect.items():
-        got = None if exp.verdict == "not_reproducible" else (
-            result.status.value if name == "status" else result.values.get(exp.of or name))
-        got = None if got is None else (got if isinstance(got, str) else float(got))
-        numeric = isinstance(exp.value, (int, float)) and not isinstance(exp.value, bool)
-        tol = max(exp.abs or 0.0, (exp.rel or 0.0) * abs(exp.value)) if numeric and exp.verdict != "not_reproducible" else None
-        met = exp.check(got) and (name == "status" or trusted)
-        calibrated = name in scene.calibrated_on() or bool(exp.follows)
-        verdict = verdict_of(exp, met, calibrated)
-        # a declared miss must still be computed: a missing value is a failure, not the declared miss
-        if verdict == "not_reproduced" and (got is None or not (name == "status" or trusted)):
-            verdict = "failed"
-        gap = (got - exp.value) / abs(exp.value) if numeric and isinstance(got, float) and exp.value else None
-        out.append(Check(name, exp.describe(), got, tol, verdict not in ("failed", "unexpectedly_reproduced"),
-                         exp.kind, exp.where, calibrated, verdict, exp.reason, gap, tuple(exp.readings_after_figure),
-                         exp.alternative_to))
-    return out
 
 
 def _plain(value):

@@ -15,7 +15,7 @@ from collections.abc import Callable, Sequence
 from datetime import datetime, timezone
 from pathlib import Path
 
-from mechopt import __version__, registry
+from mechopt import __version__, registry, verdicts
 from mechopt.answers import answers_html
 from mechopt.drivers import set_mostly_by, steps_of
 from mechopt.figures import plot_run
@@ -88,7 +88,7 @@ CSS_OF_VERDICT = {"calibrated": "cal", "alternative": "cal", "reproduced": "ok",
 def _validation(runs):
     """The counts per verdict and the misses first; every check in a table folded below."""
     checks = [c for r in runs for c in r.checks]
-    counts = registry.tally(checks)
+    counts = verdicts.tally(checks)
     rows, misses = [], []
     for run in runs:
         assumed = sum(m == "assumed" for m in run.scene.marks().values())
@@ -96,16 +96,16 @@ def _validation(runs):
             css = "fail" if not c.ok else CSS_OF_VERDICT.get(c.verdict, "miss")
             verdict = f"<span class='{css}'>{_e(c.label if c.ok else 'FAIL (' + c.label + ')')}</span>"
             why = f"<span class='long'>{_e(c.reason or c.where)}</span>"
-            rows.append((registry.VERDICTS.index(c.verdict),
+            rows.append((verdicts.VERDICTS.index(c.verdict),
                          [_e(run.scene.id), _e(c.name), _e(c.kind), _e(c.expected), _e(_fmt(c.got)), verdict, why,
                           str(assumed)]))
-            if c.verdict in registry.MISSES:
-                misses.append((registry.VERDICTS.index(c.verdict),
+            if c.verdict in verdicts.MISSES:
+                misses.append((verdicts.VERDICTS.index(c.verdict),
                                [_e(run.scene.id), _e(c.name), _e(c.expected), _e(_fmt(c.got)), verdict, why]))
-    rows.sort(key=lambda row: min(row[0], len(registry.MISSES)))        # the misses first
+    rows.sort(key=lambda row: min(row[0], len(verdicts.MISSES)))        # the misses first
     misses.sort(key=lambda row: row[0])
     tallies = _table(["verdict", "checks"], [[_e(v.replace("_", " ")), str(n)] for v, n in counts.items() if n])
-    return (f"<p><b>{_e(registry.summary_line(checks))}</b></p>{tallies}"
+    return (f"<p><b>{_e(verdicts.summary_line(checks))}</b></p>{tallies}"
             + (f"<h3>Misses ({len(misses)})</h3>" + _table(["case", "quantity", "expected (source)", "computed",
                                                             "verdict", "why"], [m[1] for m in misses], wide=True)
                if misses else "<p>no misses: every check is reproduced, an alternative reading, calibrated, derived "

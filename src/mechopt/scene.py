@@ -204,16 +204,8 @@ class Scene:
     def marks(self) -> dict[str, str]:
         return {k: v.mark for k, v in self.spec.params.items()}
 
-    def calibrated_on(self) -> set[str]:
-        """Values some parameter was fitted to: their checks are calibrations, not reproductions."""
-        return {v.on for v in self.spec.params.values() if v.mark == "calibrated"}
-
     def settings(self) -> dict[str, Any]:
         return dict(self.spec.solver_settings)
-
-    def derived(self) -> dict[str, tuple[str, str]]:
-        """Parameters taken from another scene's result: {param: (scene id, value name)}."""
-        return {k: tuple(v.split(":", 1)) for k, v in self.spec.derive.items()}
 
     def split_overrides(self, overrides: dict[str, Any]) -> tuple[dict, dict]:
         """Sort `--set` pairs into parameters (structure paths included) and solver settings;
@@ -227,7 +219,7 @@ class Scene:
             elif key in options:
                 settings[key] = value
             else:
-                raise SceneError(f"{self.path}: --set {key}: unknown key; parameters: {', '.join(fields)}; "
+                raise SceneError(f"{self.path}: {key}: unknown key; parameters: {', '.join(fields)}; "
                                  f"solver settings: {', '.join(options) or 'none'}"
                                  + (f"; structure entries as PATH, e.g. {_path_example(self.spec.structure)}"
                                     if self.spec.structure else ""), key=key)
@@ -279,7 +271,7 @@ class Scene:
         params, settings = self.split_overrides(overrides or {})
         long = _long_list(params)
         if long:
-            raise SceneError(f"{self.path}: --set {long[0]}: {long[1]} entries; a list given here holds at most "
+            raise SceneError(f"{self.path}: {long[0]}: {long[1]} entries; a list given here holds at most "
                              f"{MAX_LIST_ITEMS}", key=long[0])
         paths = {k: v for k, v in params.items() if path_head(k) in self.spec.structure}
         fields = task_fields(self.task_class)
@@ -451,18 +443,18 @@ def _set_paths(path, structure, assignments):
             name, _, selector = part.partition("[")
             last = i == len(parts) - 1
             if not isinstance(node, dict) or name not in node:
-                raise SceneError(f"{path}: --set {key}: no entry {name!r} here; there are "
+                raise SceneError(f"{path}: {key}: no entry {name!r} here; there are "
                                  f"{', '.join(node) if isinstance(node, dict) else 'none'}", key=key)
             if selector:
                 if last:
-                    raise SceneError(f"{path}: --set {key}: name the entry to change after the selector", key=key)
+                    raise SceneError(f"{path}: {key}: name the entry to change after the selector", key=key)
                 node[name] = items = list(node[name]) if isinstance(node[name], list) else node[name]
                 pairs = _selector_pairs(path, key, name, selector, items)
                 matches = [j for j, item in enumerate(items) if isinstance(item, dict)
                            and all(str(item.get(k)) == v for k, v in pairs.items())]
                 if len(matches) != 1:
                     hint = "add a key" if matches else "none has those values; the form"
-                    raise SceneError(f"{path}: --set {key}: [{selector} matches {len(matches)} entries of "
+                    raise SceneError(f"{path}: {key}: [{selector} matches {len(matches)} entries of "
                                      f"{name!r}, not one ({hint}: {_selector_form(name, items)})", key=key)
                 items[matches[0]] = node = dict(items[matches[0]])
             elif last:
@@ -476,7 +468,7 @@ def _selector_pairs(path, key, name, selector, items):
     """The key=value pairs of a selector `[k=v,k2=v2]`; SceneError for a part without '=', or
     a key no entry of the list has, naming the allowed forms."""
     if not isinstance(items, list):
-        raise SceneError(f"{path}: --set {key}: {name!r} is not a list of tables; a selector [...] picks "
+        raise SceneError(f"{path}: {key}: {name!r} is not a list of tables; a selector [...] picks "
                          "one table of a list", key=key)
     parts = [p.strip() for p in selector.removesuffix("]").split(",")]
     known = list(dict.fromkeys(k for item in items if isinstance(item, dict) for k in item))
@@ -485,7 +477,7 @@ def _selector_pairs(path, key, name, selector, items):
         if not eq or not k.strip() or not v.strip() or k.strip() not in known:
             why = (f"{k.strip()!r} is no key of its entries (they have {', '.join(known)})" if eq and k.strip()
                    and v.strip() else f"{part!r} is not key=value")
-            raise SceneError(f"{path}: --set {key}: [{selector}: {why}; allowed: {_selector_form(name, items)} "
+            raise SceneError(f"{path}: {key}: [{selector}: {why}; allowed: {_selector_form(name, items)} "
                              f"or any key=value pairs that match one entry", key=key)
     return {k.strip(): v.strip() for k, _, v in (p.partition("=") for p in parts)}
 

@@ -948,12 +948,9 @@ def study(scene, grid: dict | None = None, random: dict | None = None, *, sample
     out : a Parquet file to write (and to resume from); further options as `mechopt.sweep.sweep`
     (workers, scheduler, chunk, max_variants). A variant that fails is a row with its status.
     """
-    from mechopt.api import python_words
-    with python_words():
-        axes = [_python_axis("grid", key, bounds, 3) for key, bounds in (grid or {}).items()]
-        draws = [_python_axis("random", key, bounds, 2) for key, bounds in (random or {}).items()]
-        return sweep(registry.find(scene), axes, draws, samples=samples, seed=seed, out=out, progress=progress,
-                     **options)
+    axes = [_python_axis("grid", key, bounds, 3) for key, bounds in (grid or {}).items()]
+    draws = [_python_axis("random", key, bounds, 2) for key, bounds in (random or {}).items()]
+    return sweep(registry.find(scene), axes, draws, samples=samples, seed=seed, out=out, progress=progress, **options)
 
 
 def _python_axis(kind, key, bounds, size):
