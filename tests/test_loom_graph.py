@@ -316,3 +316,15 @@ def test_a_tie_of_two_bounds_is_a_non_unique_dual_not_a_failed_certificate():
     assert min(below, above) - 1e-9 <= run.result.values["sens_sigma_H_deg_per_MPa"] <= max(below, above) + 1e-9
     at_800 = mechopt.solve("loom/group1", sigma_H_limit_MPa=800.0, check=True).result
     assert at_800.status is Status.SOLVED and "sens_not_unique" not in at_800.diagnostics
+
+
+def test_a_conflict_the_limiting_operation_cannot_reach_is_infeasible_not_unbounded():
+    """limiting_op 1 -> 2 with no cycle_deg: nothing leads from 2 back to 1 (unbounded, were the
+    machine possible); the sync of 3 and 4 with t(3->4) >= 5 is a positive cycle out of 2's reach,
+    so no schedule exists at all, as the LP says."""
+    task = net([(1, 2, 10), (1, 3, 0), (3, 4, 5), (2, 5, 0), (4, 5, 0)], syncs=[{"events": ["3", "4"]}],
+               limiting_op=["1", "2"])
+    for method in ("graph", "lp"):
+        r = plan_cyclogram(task, method=method)
+        assert r.status is Status.INFEASIBLE, (method, r.message)
+    assert "t(3->4)" in plan_cyclogram(task, method="graph").message

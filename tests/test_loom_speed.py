@@ -251,3 +251,28 @@ def test_at_its_highest_speed_the_machine_s_longest_flight_is_the_flight_time(ta
     at_420 = repair_cyclogram(task, stress_form="exact")
     assert at_420.values["limiting_op_deg"] == pytest.approx(360.0 - CHAIN_FIXED_DEG - chain_T
                                                             - 900 * 30 / 800, abs=1e-6)
+
+
+def _flight_machine(windows):
+    """a -> b -> c in 10 ms each (0.06 n deg at n rpm), c -> d 10 deg, a 360 deg cycle."""
+    ops = [{"from": "a", "to": "b", "min_deg": 0.0, "min_ms": 10.0}, {"from": "b", "to": "c", "min_deg": 0.0,
+                                                                      "min_ms": 10.0},
+           {"from": "c", "to": "d", "min_deg": 10.0}]
+    return Cyclogram(events={v: {} for v in "abcd"}, operations=ops, speed_rpm=100.0, cycle_deg=360.0,
+                     windows=windows)
+
+
+@pytest.mark.parametrize("method", ["graph", "lp", "bisection"])
+def test_a_limiting_cycle_closed_by_a_window_gives_no_speed_per_degree_of_cycle(method):
+    """The window p(c) - p(a) <= 70 deg holds the speed at 70 / 0.12 = 583.3 rpm; the cycle
+    (0.12 n + 10 <= 360: 2917 rpm) is far: a longer cycle gives no speed, dn/dcycle = 0 (the slope of
+    the chain, 1 / 0.12 rpm/deg, is dn/dwindow)."""
+    limited = _flight_machine([{"from": "a", "to": "c", "max_deg": 70.0}])
+    r = max_machine_speed(limited, method=method)
+    assert r.values["max_speed_rpm"] == pytest.approx(70.0 / 0.12, rel=1e-6)
+    assert max_machine_speed(dataclasses.replace(limited, cycle_deg=361.0), method=method).values[
+        "max_speed_rpm"] == pytest.approx(r.values["max_speed_rpm"], rel=1e-6)
+    assert r.diagnostics["sens_cycle_rpm_per_deg"] == 0.0
+    free = max_machine_speed(_flight_machine([]), method=method)      # the cycle closes it: 350 / 0.12 rpm
+    assert free.values["max_speed_rpm"] == pytest.approx(350.0 / 0.12, rel=1e-6)
+    assert free.diagnostics["sens_cycle_rpm_per_deg"] == pytest.approx(1.0 / 0.12, rel=1e-6)

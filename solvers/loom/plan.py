@@ -720,6 +720,8 @@ def _longest_schedule(net, levels, back, tol):
     source, target = (net.limiting[1], net.limiting[0]) if net.limiting else (net.first, net.last)
     dist = levels.longest_from(source, lb, back)
     if not np.isfinite(dist[target]):
+        if levels.has_positive_cycle(lb, back):     # a conflict out of the source's reach: no schedule at all
+            raise PositiveCycle
         return None          # a machine's limiting operation with nothing to hold it: unbounded
     objective = float(-dist[target] if net.limiting else dist[target])
     lb_at = lb

@@ -135,8 +135,9 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp",
     Returns max_speed_rpm, cycle_time_ms, span_deg, p_*, t_*, amplitude_*_mm and sigma_*_MPa
     (exact, at max speed), limiting_op_deg (machines with one); diagnostics: limiting_group,
     limiting_constraint, limiting (the speed-bound constraints on the critical chain, each with
-    its group and deg/rpm), critical_chain, sens_cycle_rpm_per_deg. INFEASIBLE when the cycle
-    cannot hold the groups at any speed (the conflicting chain named, as in plan_cyclogram),
+    its group and deg/rpm), critical_chain, sens_cycle_rpm_per_deg (0 where a window, not the cycle,
+    closes the limiting cycle). INFEASIBLE when the cycle cannot hold the groups at any speed (the
+    conflicting chain named, as in plan_cyclogram),
     UNBOUNDED when no limit grows with n on a chain the cycle closes, LIMIT when bisection finds
     every speed up to its search bound feasible or the rebound exceeds its limit on the whole
     stated range. With a rebound: amplitude_holds_from_*_deg and amplitude_holds_to_*_deg, the
@@ -193,6 +194,8 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp",
     lb, why_at = bounds_at(n_max)
     certified = _certify_on_graph(sg, n_max, rtol) if sg else _certify_speed(task, net, bounds_at, n_max, rtol)
     values, more = _speed_report(task, net, lb, why_at, n_max, rtol, sg)
+    if _closed_without_the_cycle(net, bounds_at(n_max * (1 + rtol))[0], sg):
+        more["sens_cycle_rpm_per_deg"] = 0.0
     if sg:
         more["ranging_at_max_speed"] = sg.ranging(cycle, n_max, why)
     if check and not certified and chosen in ("graph", "lp"):
@@ -377,6 +380,15 @@ def _certify_speed(task, net, bounds_at, n_max, tol):
     if np.all(np.isfinite(lb_above)) and not _conflict_at(task, net, lb_above):
         return f"certificate failed: n = {above:.9g} rpm (just over the answer) still fits the cycle"
     return ""
+
+
+def _closed_without_the_cycle(net, lb_above, sg=None) -> bool:
+    """Whether the bounds just above the highest speed hold a positive cycle of operations, windows
+    and syncs alone: then a window, not the machine's cycle, limits the speed, and a longer cycle
+    gives none (dn/dcycle = 0; the critical chain's slope is dn/dwindow)."""
+    levels, back = (sg.levels, sg.back) if sg else (Levels.of(len(net.names), net.tails, net.heads),
+                                                    back_arcs(net, with_cycle=False)[0])
+    return bool(len(back)) and bool(np.all(np.isfinite(lb_above))) and levels.has_positive_cycle(lb_above, back)
 
 
 def _speed_report(task, net, lb, why, n_max, tol, sg=None):
