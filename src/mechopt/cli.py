@@ -33,10 +33,7 @@ from mechopt.scene import parse_overrides
 
 OK, CHECK_FAILED, BAD_INPUT, NOT_SOLVED, INTERRUPTED = 0, 1, 2, 3, 130
 
-# `mechopt new NAME` starts from a scene named by a row of mechopt.mechanisms (`templates()`);
-# cam-table: the other-profile scene with its parsed curve replaced by a point table in a CSV beside the scene
-TABLE_CURVE = {"x_expr": None, "y_expr": None, "constants": None,
-               "points_mm": '{ csv = "%s", columns = ["x_mm", "y_mm"] }'}
+# `mechopt new NAME` starts from a scene named by a row of mechopt.mechanisms (`templates()`)
 
 
 def main(argv=None) -> int:
@@ -236,9 +233,9 @@ def _describe(args) -> int:
 
 
 def _new(args) -> int:
-    """Write a scene (and its CSV table) to start from: every name and content checked first (the
-    scene loads with its table), then all written, none over an existing file; a failure removes
-    what this call wrote."""
+    """Write a scene to start from, and the files it references (its CSV tables, renamed with it):
+    every name and content checked first (the scene loads with its tables), then all written, none
+    over an existing file; a failure removes what this call wrote."""
     from mechopt.scene import id_problem
     template = registry.find(templates()[args.mechanism])
     new_id = f"my/{args.file.stem}"
@@ -246,26 +243,37 @@ def _new(args) -> int:
         raise SceneError(f"{args.file}: the new scene's id would be {new_id!r}: {id_problem(new_id)}; name the file "
                          "with such characters, e.g. my-press.toml (nothing was written)", key="id")
     text = scene_template(template, new_id)
-    suffix = {"cam-table": "points", "cyclogram": "ops"}.get(args.mechanism)
-    table = args.file.with_name(f"{args.file.stem}-{suffix}.csv") if suffix else None
     contents = {}
-    if table is not None:
-        if args.mechanism == "cam-table":
-            text = _with_table(text, table.name)
-            contents[table] = limacon_table()
-        else:               # the timing table beside the template, renamed with the scene
-            text = text.replace(f'csv = "{template.path.stem}-ops.csv"', f'csv = "{table.name}"')
-            contents[table] = (template.path.parent / f"{template.path.stem}-ops.csv").read_text(encoding="utf-8")
+    for name in _tables_of(template):            # each table beside the template, renamed with the new scene
+        mine = args.file.with_name(_renamed(name, template.path.stem, args.file.stem))
+        text = text.replace(f'csv = "{name}"', f'csv = "{mine.name}"')
+        contents[mine] = (template.path.parent / name).read_text(encoding="utf-8")
+    tables = list(contents)
     contents[args.file] = text
     _check_new(contents)
     from mechopt.files import shipped
     from mechopt.scene import loads
     with shipped({str(p.resolve()): c.encode("utf-8") for p, c in contents.items()}):
-        loads(text, args.file)                     # what we write must load (its table read from `contents`)
+        loads(text, args.file)                     # what we write must load (its tables read from `contents`)
     _write_new(contents)
-    print(f"scene: {args.file} (from {template.id})" + (f", {suffix}: {table}" if table else "")
+    print(f"scene: {args.file} (from {template.id})" + "".join(f", table: {t}" for t in tables)
           + f"; try: mechopt run {args.file}")
     return OK
+
+
+_TABLE = re.compile(r'\bcsv = "([^"/\\]+)"')      # a table read from a CSV beside the scene
+
+
+def _tables_of(scene) -> list[str]:
+    """The CSV files a scene's own file reads (`{ csv = "name.csv", ... }`), in order, each once."""
+    return list(dict.fromkeys(_TABLE.findall(scene.path.read_text(encoding="utf-8"))))
+
+
+def _renamed(name: str, old_stem: str, new_stem: str) -> str:
+    """A companion file's name for the new scene: `packaging-ops.csv` beside `packaging.toml`
+    becomes `mine-ops.csv` beside `mine.toml`; another name is prefixed with the new stem."""
+    rest = name.removeprefix(f"{old_stem}-") if name.startswith(f"{old_stem}-") else name
+    return f"{new_stem}-{rest}"
 
 
 def _check_new(contents):
@@ -297,29 +305,6 @@ def _write_new(contents):
 def _remove(paths):
     for path in paths:
         path.unlink(missing_ok=True)
-
-
-def limacon_table() -> str:
-    """37 points of the limaçon r = 50 + 4 cos(theta) [mm] (H = 4, L = 50 by eq. (10)) as a CAD
-    system writes a point table: a cam to replace by one's own."""
-    import math
-    rows = [(50 + 4 * math.cos(t)) * f for k in range(37) for t in [math.radians(10 * k)]
-            for f in (math.cos(t), math.sin(t))]
-    return "x_mm,y_mm\n" + "".join(f"{rows[i]:.4f},{rows[i + 1]:.4f}\n" for i in range(0, len(rows), 2))
-
-
-def _with_table(text, csv_name):
-    """A scene's parsed curve replaced by the point table `csv_name`."""
-    out = []
-    for line in text.splitlines():
-        key = line.split("=", 1)[0].strip()
-        if key in TABLE_CURVE:
-            if TABLE_CURVE[key] is None:
-                continue
-        out.append(line)
-        if line.strip() == "[structure]":
-            out.append(f"points_mm = {TABLE_CURVE['points_mm'] % csv_name}      # your cam: x_mm, y_mm rows")
-    return "\n".join(out) + "\n"
 
 
 _OTHER_SCENE = re.compile(r'scene = "([^"]+)"')      # a reference to another scene, relative to its file

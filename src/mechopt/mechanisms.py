@@ -33,7 +33,7 @@ MECHANISMS = (
     Mechanism("cam-cutter", "Torch-guiding linkage (paper 000)",
               ("mechopt.models.cam_cutter", "mechopt.models.cam_profile"), "mechopt.solvers.cam_cutter",
               ("mechopt.figures.cam_cutter",), "mechopt.benchmarks.cam_cutter",
-              (("cam-cutter", "cam-cutter/minimax"), ("cam-table", "cam-cutter/other-profile"))),
+              (("cam-cutter", "cam-cutter/minimax"), ("cam-table", "cam-cutter/table-profile"))),
     Mechanism("press", "Crank press (paper 001)",
               ("mechopt.models.press",), "mechopt.solvers.press",
               ("mechopt.figures.press",), "mechopt.benchmarks.press",
