@@ -233,30 +233,24 @@ def _describe(args) -> int:
 
 
 def _new(args) -> int:
-    """Write a scene to start from, and the files it references (its CSV tables, renamed with it):
-    every name and content checked first (the scene loads with its tables), then all written, none
-    over an existing file; a failure removes what this call wrote."""
+    """Write a scene to start from, and every file it reads (its CSV tables, base and other
+    scenes), each renamed with it: every name and content checked first (the scene loads with
+    them), then all written, none over an existing file; a failure removes what this call wrote."""
     from mechopt.scene import id_problem
     template = registry.find(templates()[args.mechanism])
     new_id = f"my/{args.file.stem}"
     if id_problem(new_id):
         raise SceneError(f"{args.file}: the new scene's id would be {new_id!r}: {id_problem(new_id)}; name the file "
                          "with such characters, e.g. my-press.toml (nothing was written)", key="id")
-    text = scene_template(template, new_id)
     contents = {}
-    for name in _tables_of(template):            # each table beside the template, renamed with the new scene
-        mine = args.file.with_name(_renamed(name, template.path.stem, args.file.stem))
-        text = text.replace(f'csv = "{name}"', f'csv = "{mine.name}"')
-        contents[mine] = (template.path.parent / name).read_text(encoding="utf-8")
-    tables = list(contents)
-    contents[args.file] = text
+    _starting_files(template, args.file, contents)
     _check_new(contents)
     from mechopt.files import shipped
     from mechopt.scene import loads
     with shipped({str(p.resolve()): c.encode("utf-8") for p, c in contents.items()}):
-        loads(text, args.file)                     # what we write must load (its tables read from `contents`)
+        loads(contents[args.file], args.file)       # what we write must load (what it reads taken from `contents`)
     _write_new(contents)
-    print(f"scene: {args.file} (from {template.id})" + "".join(f", table: {t}" for t in tables)
+    print(f"scene: {args.file} (from {template.id})" + "".join(f", with {p}" for p in contents if p != args.file)
           + f"; try: mechopt run {args.file}")
     return OK
 
@@ -264,16 +258,32 @@ def _new(args) -> int:
 _TABLE = re.compile(r'\bcsv = "([^"/\\]+)"')      # a table read from a CSV beside the scene
 
 
-def _tables_of(scene) -> list[str]:
-    """The CSV files a scene's own file reads (`{ csv = "name.csv", ... }`), in order, each once."""
-    return list(dict.fromkeys(_TABLE.findall(scene.path.read_text(encoding="utf-8"))))
+def _starting_files(scene, path, contents) -> None:
+    """Into `contents` ({path: text}): `scene` as the user's, at `path`, and every file its own
+    file reads, copied beside it and named after it (`packaging-ops.csv` of `packaging.toml`
+    becomes `mine-ops.csv` of `mine.toml`; its base `kd2322.toml` becomes `mine-kd2322.toml`,
+    itself a scene of the user's with what it reads)."""
+    from mechopt.scene import load
+    own = scene.path.read_text(encoding="utf-8")
+    refs = {}
+    for name in dict.fromkeys(_OTHER_SCENE.findall(own)):       # base = { scene = ... }, [structure.x] scene = ...
+        other = load((scene.path.parent / name).resolve())
+        mine = path.with_name(f"{path.stem}-{other.path.stem}.toml")
+        refs[name] = mine.name
+        if mine not in contents:
+            _starting_files(other, mine, contents)
+    text = scene_template(scene, f"my/{path.stem}", refs)
+    for name in dict.fromkeys(_TABLE.findall(own)):             # { csv = "...", columns = [...] }
+        mine = path.with_name(_renamed(name, scene.path.stem, path.stem))
+        text = text.replace(f'csv = "{name}"', f'csv = "{mine.name}"')
+        contents[mine] = (scene.path.parent / name).read_text(encoding="utf-8")
+    contents[path] = text
 
 
 def _renamed(name: str, old_stem: str, new_stem: str) -> str:
-    """A companion file's name for the new scene: `packaging-ops.csv` beside `packaging.toml`
-    becomes `mine-ops.csv` beside `mine.toml`; another name is prefixed with the new stem."""
-    rest = name.removeprefix(f"{old_stem}-") if name.startswith(f"{old_stem}-") else name
-    return f"{new_stem}-{rest}"
+    """A companion file's name for the new scene: `<old stem>-rest` becomes `<new stem>-rest`;
+    another name is prefixed with the new stem."""
+    return f"{new_stem}-{name.removeprefix(f'{old_stem}-')}"
 
 
 def _check_new(contents):
@@ -310,10 +320,10 @@ def _remove(paths):
 _OTHER_SCENE = re.compile(r'scene = "([^"]+)"')      # a reference to another scene, relative to its file
 
 
-def scene_template(scene, new_id: str) -> str:
+def scene_template(scene, new_id: str, refs: dict[str, str] | None = None) -> str:
     """A scene's file as a user's starting point: a new id, its source's expectations dropped
-    (they hold for the source's numbers only), references to other scenes made absolute (the copy
-    lives elsewhere), every parameter (a base scene's too) restated as `assumed` with why = "your
+    (they hold for the source's numbers only), references to other scenes renamed by `refs`
+    (reference as written -> the copy's name) or else made absolute (the copy lives elsewhere), every parameter (a base scene's too) restated as `assumed` with why = "your
     value" (the source's provenance in a comment above it: a figure of the source describes the
     source's machine, not yours), and a header saying what to edit."""
     lines, out, skipping = scene.path.read_text(encoding="utf-8").splitlines(), [], False
@@ -327,7 +337,7 @@ def scene_template(scene, new_id: str) -> str:
             continue
         if stripped.startswith("id ="):
             line = f'id = "{new_id}"'
-        out.append(_OTHER_SCENE.sub(lambda m: f'scene = "{(scene.path.parent / m[1]).resolve().as_posix()}"', line))
+        out.append(_OTHER_SCENE.sub(lambda m: f'scene = "{_reference(scene, m[1], refs)}"', line))
     if "[params]" not in out and scene.spec.params:
         out += ["", "[params]", *_your_params(scene)]
     header = [f"# A scene of your own, started from {scene.id} ({scene.path.name}).",
@@ -336,6 +346,10 @@ def scene_template(scene, new_id: str) -> str:
               "# Add [expect.NAME] tables (value with abs or rel, or max/min, kind, where) for figures you",
               "# know: `mechopt run THIS_FILE` checks them.", ""]
     return "\n".join(header + out).rstrip() + "\n"
+
+
+def _reference(scene, name, refs) -> str:
+    return refs[name] if refs and name in refs else (scene.path.parent / name).resolve().as_posix()
 
 
 def _your_params(scene) -> list[str]:
