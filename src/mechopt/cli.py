@@ -33,9 +33,6 @@ from mechopt.scene import parse_overrides
 
 OK, CHECK_FAILED, BAD_INPUT, NOT_SOLVED, INTERRUPTED = 0, 1, 2, 3, 130
 
-# `mechopt new NAME` starts from a scene named by a row of mechopt.mechanisms (`templates()`)
-
-
 def main(argv=None) -> int:
     as_command = argv is None            # the process is this command (not a test or a caller's script)
     try:
@@ -243,7 +240,7 @@ def _new(args) -> int:
         raise SceneError(f"{args.file}: the new scene's id would be {new_id!r}: {id_problem(new_id)}; name the file "
                          "with such characters, e.g. my-press.toml (nothing was written)", key="id")
     contents = {}
-    _starting_files(template, args.file, contents)
+    _starting_files(template, args.file, contents, {})
     _check_new(contents)
     from mechopt.files import shipped
     from mechopt.scene import loads
@@ -258,20 +255,24 @@ def _new(args) -> int:
 _TABLE = re.compile(r'\bcsv = "([^"/\\]+)"')      # a table read from a CSV beside the scene
 
 
-def _starting_files(scene, path, contents) -> None:
+def _starting_files(scene, path, contents, sources) -> None:
     """Into `contents` ({path: text}): `scene` as the user's, at `path`, and every file its own
     file reads, copied beside it and named after it (`packaging-ops.csv` of `packaging.toml`
     becomes `mine-ops.csv` of `mine.toml`; its base `kd2322.toml` becomes `mine-kd2322.toml`,
-    itself a scene of the user's with what it reads)."""
+    itself a scene of the user's with what it reads). `sources`: each copied scene's original."""
     from mechopt.scene import load
     own = scene.path.read_text(encoding="utf-8")
+    sources[path] = scene.path.resolve()
     refs = {}
     for name in dict.fromkeys(_OTHER_SCENE.findall(own)):       # base = { scene = ... }, [structure.x] scene = ...
         other = load((scene.path.parent / name).resolve())
         mine = path.with_name(f"{path.stem}-{other.path.stem}.toml")
         refs[name] = mine.name
-        if mine not in contents:
-            _starting_files(other, mine, contents)
+        if mine not in sources:
+            _starting_files(other, mine, contents, sources)
+        elif sources[mine] != other.path.resolve():     # two scenes of one name in different folders
+            raise SceneError(f"{scene.path}: reads {sources[mine]} and {other.path}, which would both be copied "
+                             f"as {mine}; name the new scene differently or copy them by hand (nothing was written)")
     text = scene_template(scene, f"my/{path.stem}", refs)
     for name in dict.fromkeys(_TABLE.findall(own)):             # { csv = "...", columns = [...] }
         mine = path.with_name(_renamed(name, scene.path.stem, path.stem))
@@ -323,9 +324,10 @@ _OTHER_SCENE = re.compile(r'scene = "([^"]+)"')      # a reference to another sc
 def scene_template(scene, new_id: str, refs: dict[str, str] | None = None) -> str:
     """A scene's file as a user's starting point: a new id, its source's expectations dropped
     (they hold for the source's numbers only), references to other scenes renamed by `refs`
-    (reference as written -> the copy's name) or else made absolute (the copy lives elsewhere), every parameter (a base scene's too) restated as `assumed` with why = "your
-    value" (the source's provenance in a comment above it: a figure of the source describes the
-    source's machine, not yours), and a header saying what to edit."""
+    (reference as written -> the copy's name) or else made absolute (the copy lives elsewhere),
+    every parameter (a base scene's too) restated as `assumed` with why = "your value" (the
+    source's provenance in a comment above it: a figure of the source describes the source's
+    machine, not yours), and a header saying what to edit."""
     lines, out, skipping = scene.path.read_text(encoding="utf-8").splitlines(), [], False
     for line in lines:
         stripped = line.strip()
