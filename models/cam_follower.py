@@ -30,7 +30,6 @@ harmonic          (1 - cos(pi xi)) / 2                     acceleration jumps (p
 """
 import math
 
-import casadi as ca
 import numpy as np
 
 from mechopt.kit.cache import memoised
@@ -43,6 +42,8 @@ LAWS = ("cycloidal", "modified_sine", "polynomial_345", "harmonic")
 def law_displacement(law: str, xi):
     """S(xi), the normalised displacement of the motion law `law` over the rise xi in [0, 1]
     (a CasADi expression of the CasADi symbol `xi`)."""
+    # CasADi imported here, not at the top: a loom plan reaches this module and needs none
+    import casadi as ca
     if isinstance(law, SplineLaw):
         raise ModelError(f"law={law}: a spline law gives S'' (casadi_ddS) and numbers (values), not S as "
                          "an expression", key="law")
@@ -62,10 +63,11 @@ def law_displacement(law: str, xi):
 
 
 @memoised(maxsize=16)
-def law_function(law: str) -> ca.Function:
+def law_function(law: str) -> "ca.Function":        # noqa: F821  (CasADi imported where used)
     """CasADi function xi -> (S, S', S'') of the law during the rise (derivatives by AD). A
     synthesised `SplineLaw` (models/cam_law.py) gives S'' alone: S and S' come out as 0 (the
     integrators read S'' only; numbers come from `law_values`)."""
+    import casadi as ca
     xi = ca.SX.sym("xi")
     if isinstance(law, SplineLaw):
         zero = ca.SX(0)

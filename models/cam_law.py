@@ -21,7 +21,6 @@ expression CVODES integrates (models/cam_follower.py `law_function`).
 """
 from dataclasses import dataclass
 
-import casadi as ca
 import numpy as np
 from scipy import sparse
 from scipy.interpolate import BSpline
@@ -149,6 +148,7 @@ class SplineLaw:
         """S''(xi) on [0, 1] as a CasADi SX expression: per knot interval a polynomial of degree
         p - 2 in (xi - left knot), its coefficients picked by `pw_const` (CVODES needs SX; CasADi's
         own BSpline node has no SX form)."""
+        import casadi as ca  # here: a law used in a plan or a rebound needs no CasADi (a light `solve`)
         spline = self._spline().derivative(2)
         breaks = np.unique(np.asarray(self.knots))
         left = breaks[:-1]

@@ -177,7 +177,7 @@ class Cyclogram:
     speed_rpm: Annotated[float | None, Gt(0), Le(MAX_RPM)] = None
     stress_speed_rpm: Annotated[float | None, Gt(0), Le(MAX_RPM)] = None
     lever: dict | None = None
-    # the highest speed the lever's law was studied at (models/validity.py)
+    # the highest speed the lever's law was studied at: above it a warning (`warnings`)
     lever_law_max_rpm: Annotated[float | None, Gt(0), Le(MAX_RPM)] = None
 
     EFFECTS: ClassVar[dict[str, Effect]] = {
@@ -297,6 +297,19 @@ class Cyclogram:
     def has_linear_amplitude(self) -> bool:
         """Whether the linear law a = slope t + intercept is given (else only the lever's exact law)."""
         return self.amplitude_slope_mm_per_deg is not None
+
+    def warnings(self, values: dict) -> list[str]:
+        """Where the lever's exact law is applied beyond what it supports: its first mode slower
+        than the cycle, a speed above the highest its source studied. The answer stands."""
+        speed = values.get("max_speed_rpm", self.speed_rpm)
+        if self.lever is None or speed is None:
+            return []
+        out = self.lever_model.slow_mode_warnings([speed])
+        top = self.lever_law_max_rpm
+        if top is not None and speed > top:
+            out.append(f"the lever's rebound law is applied at {speed:.4g} rpm, above lever_law_max_rpm = {top:g} rpm, "
+                       f"the highest speed its source studied: an extrapolation")
+        return out
 
     @cached_property
     def lever_model(self) -> LeverStop:

@@ -148,6 +148,22 @@ def linkage_forces(phi, beta, Q, rod_x, rod_y, r_m, m=np):
     return rod_tool, rod_pin, torque, m.sqrt(Ax**2 + Ay**2), Bx
 
 
+# The paper's X(phi) drops the O(lambda^3) terms of the crank-slider; past this error of the tool's
+# acceleration (relative to its exact peak: about lambda = 0.29) the inertia loads it gives are off.
+PAPER_KINEMATICS_TOLERANCE = 0.01
+
+
+def paper_kinematics_error(rod_ratio: float, samples: int = 2881) -> float:
+    """Largest error of the paper's X''(phi) / r = cos phi + lambda cos 2 phi against the exact
+    crank-slider's, over a turn, relative to the exact peak [-] (0.00017 at lambda = 0.071)."""
+    phi = np.linspace(0.0, 2 * np.pi, samples)
+    s, c = np.sin(phi), np.cos(phi)
+    root = np.sqrt(1 - rod_ratio**2 * s**2)
+    exact = c + rod_ratio * (c**2 - s**2) / root + rod_ratio**3 * s**2 * c**2 / root**3
+    paper = c + rod_ratio * np.cos(2 * phi)
+    return float(np.max(np.abs(paper - exact)) / np.max(np.abs(exact)))
+
+
 def cutting_force_N(penetration_mm, c1, c2, c3, c4):
     """Cutting force, eq. (1) [N], for the tool's penetration into the blank [mm]."""
     x = penetration_mm
@@ -197,7 +213,7 @@ class PressDrive:
     motor_breakdown_slip: Annotated[float | None, Gt(0), Lt(1)] = None
     effects: tuple[str, ...] = field(default=())
     kinematics: str = "paper"
-    # the travel eq. (1) was fitted on, up to: past it a warning (models/validity.py)
+    # the travel eq. (1) was fitted on, up to: past it a warning (`warnings`)
     force_fit_max_mm: Annotated[float | None, Ge(0), Le(1000)] = None
 
     EFFECTS: ClassVar[dict[str, Effect]] = {
@@ -304,6 +320,25 @@ class PressDrive:
     def reduced_motor_inertia_kgm2(self) -> float:
         """J_p = (J_0 + J_shk) i^2, table row 4 [kg m2]."""
         return self.motor_inertia_kgm2 * self.gear_ratio**2
+
+    def warnings(self, values: dict) -> list[str]:
+        """Where this press leaves what its source supports: eq. (1) beyond the travel it was
+        fitted on, the paper's lambda << 1 kinematics at a large rod ratio. The answer stands."""
+        out = []
+        top = self.force_fit_max_mm
+        if self.cutting and top is not None and self.blank_thickness_mm > top:
+            forces = [cutting_force_N(x, *(getattr(self, k) for k in FORCE_KEYS))
+                      for x in (self.blank_thickness_mm, top)]
+            out.append(f"eq. (1) extrapolated beyond X = {top:g} mm, its fitted range: at X = blank_thickness_mm = "
+                       f"{self.blank_thickness_mm:g} mm it gives {forces[0] / 1000:.3g} kN, "
+                       f"{forces[0] / forces[1]:.2g}x its value at {top:g} mm")
+        if self.kinematics == "paper":
+            error = paper_kinematics_error(self.rod_ratio)
+            if error > PAPER_KINEMATICS_TOLERANCE:
+                out.append(f"kinematics = 'paper' (lambda << 1) at rod_ratio = {self.rod_ratio:g}: its tool "
+                           f"acceleration is off by {error:.1%} of the exact crank-slider's peak; use "
+                           f"kinematics = 'exact'")
+        return out
 
 
 def state_names(effects) -> tuple[str, ...]:

@@ -315,6 +315,19 @@ class LeverStop:
                       force_N=self.impact_force_N(v0) if pulse else 0.0,
                       tau_s=self.contact_time_s, preload_N=self.preload_N)
 
+    def warnings(self, values: dict) -> list[str]:
+        """Where the single-mass lever leaves what it supports, at the speeds this task names."""
+        return self.slow_mode_warnings([*self.speeds_rpm, self.speed_nominal_rpm])
+
+    def slow_mode_warnings(self, speeds_rpm) -> list[str]:
+        """A single-mass lever model needs its first mode faster than the cycle it is struck in."""
+        slow = [n for n in speeds_rpm if n is not None and self.f_free_Hz < n / 60]
+        if not slow:
+            return []
+        return [f"the lever's first mode ({self.f_free_Hz:.3g} Hz) is slower than the cycle at {max(slow):g} rpm "
+                f"({max(slow) / 60:.3g} Hz): it does not settle between strikes, which the single-mass rebound "
+                f"assumes"]
+
     # ---------------------------------------------------------------- checks for solvers
 
     def need(self, *keys):

@@ -13,6 +13,7 @@ import pytest
 import mechopt
 from mechopt import dxf
 from mechopt.cli import main
+from mechopt.figures import cam_cutter as cutter_output
 from mechopt.files import take_lock
 from mechopt.kit.errors import MechoptError, SceneError
 from mechopt.models.cam_cutter import limacon_implicit, real_point
@@ -64,9 +65,9 @@ def test_the_torch_path_is_the_solved_limacon_and_the_ideal_path_on_another_laye
     H, L = run.values["H_mm"], run.values["L_mm"]
     xy = read["TORCH_PATH"]
     assert np.abs(limacon_implicit(xy[:, 0], xy[:, 1], H, L)).max() < 1e-6 * (H + L) ** 4
-    table = dxf.point_table(lambda s: np.array(real_point(s, H, L)), dxf.TORCH_TOL_MM)
+    table = cutter_output.point_table(lambda s: np.array(real_point(s, H, L)), cutter_output.TORCH_TOL_MM)
     assert np.allclose(xy, table.xy, atol=1e-9)
-    assert torch.chord_error_mm <= dxf.TORCH_TOL_MM and ideal.chord_error_mm <= dxf.TORCH_TOL_MM
+    assert torch.chord_error_mm <= cutter_output.TORCH_TOL_MM and ideal.chord_error_mm <= cutter_output.TORCH_TOL_MM
     _within_chords(lambda s: np.array(real_point(s, H, L)), table.t, xy, torch.chord_error_mm)
     assert np.abs(read["IDEAL_PATH"][:, 1]).max() > 0 and read["IDEAL_PATH"][0] == pytest.approx([0.0, 0.0], abs=1e-12)
 
@@ -154,9 +155,25 @@ def test_an_ideal_path_its_mirror_does_not_close_is_drawn_open_to_its_end(tmp_pa
     run = mechopt.solve("cam-cutter/other-profile", t1_rad=2.5, err_width_mm=5.0)       # ends off the axis
     curves = {c.layer: c for c in dxf.shop_curves(run)}
     ideal = curves["IDEAL_PATH"]
-    assert curves["TORCH_PATH"].closed and not ideal.closed and ideal.chord_error_mm <= dxf.TORCH_TOL_MM
+    assert curves["TORCH_PATH"].closed and not ideal.closed and ideal.chord_error_mm <= cutter_output.TORCH_TOL_MM
     end = np.array(run.task.path_point(np.array([2.5]))).ravel()
     assert ideal.xy[-1] == pytest.approx(end, abs=1e-12)
     path = dxf.write_dxf(list(curves.values()), tmp_path / "open.dxf")
     [polyline] = [e for e in ezdxf.readfile(str(path)).modelspace() if e.dxf.layer == "IDEAL_PATH"]
     assert not polyline.closed
+
+
+def test_the_dxf_module_knows_no_mechanism_and_writers_are_registered_by_solver():
+    """dxf.py writes drawings; which curves a solver's result has is said beside its figures."""
+    import ast
+    from pathlib import Path
+    tree = ast.parse(Path(dxf.__file__).read_text(encoding="utf-8"))
+    imported = [n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)]
+    assert not [m for m in imported if m.startswith(("mechopt.models", "mechopt.solvers"))]
+    from mechopt.figures import cam_shape
+    from mechopt.solvers.cam_cutter import minimax
+    from mechopt.solvers.stop_impact import cam_profile
+    assert dxf.SHOP_DRAWINGS[cam_profile] is cam_shape.cam_shop_curves
+    assert dxf.SHOP_DRAWINGS[minimax] is cutter_output.torch_shop_curves
+    with pytest.raises(MechoptError, match="registered twice"):
+        dxf.shop_drawing(minimax)(lambda run: [])

@@ -177,13 +177,17 @@ def verified_deviation_on(path, t_start, t_end, H, L, *, samples=2048, peaks=6, 
 
 def deviation_arrays(task, H, L, *, samples=1000):
     """What a linkage (H, L) does along a task's path, one row per sample t [rad]: the path's
-    point, its nearest point on the limaçon and the distance between them [mm] (`--csv`'s columns)."""
+    point, its nearest point on the limaçon and the distance between them [mm] (`--csv`'s columns);
+    and the whole limaçon (10) the linkage traces, as many points evenly over a crank turn
+    (`turn_x_mm`, `turn_y_mm`, closed: the real path a figure draws, its inner loop too)."""
     t = np.linspace(task.t_start_rad, task.t_end_rad, samples)
     px, py = task.path_point(t)
     distance, s = foot_points(px, py, H, L)
     lx, ly = _limacon(np.cos(s), np.sin(s), float(H), float(L))
+    turn = np.linspace(0.0, 2 * np.pi, samples)
+    tx, ty = _limacon(np.cos(turn), np.sin(turn), float(H), float(L))
     return {"t_rad": t, "path_x_mm": px, "path_y_mm": py, "limacon_x_mm": lx, "limacon_y_mm": ly,
-            "deviation_mm": distance}
+            "deviation_mm": distance, "turn_x_mm": tx, "turn_y_mm": ty}
 
 
 def nodes_and_normals(t, a, h):

@@ -1,4 +1,4 @@
-"""Event times of a network cyclogram (paper 004, problem (1)) as a linear program.
+"""Event times of a network cyclogram (paper 004, problem (1)): a linear program, solved on its graph.
 
     minimise p(N) - p(1)   subject to   p(y) - p(x) >= [phi(x, y)]                 every operation
                                         p(y) - p(x) >= sigma-bound(x, y; [sigma_H])  cam pairs
@@ -14,11 +14,22 @@
   (part 5);
 * `event_time`: the LP's matrices, and `HeldLP`, the LP held in HiGHS for many bound changes.
 """
-from mechopt.solvers.loom.codesign import codesign_machine_speed
-from mechopt.solvers.loom.event_time import HeldLP, build_event_time_lp, incidence
-from mechopt.solvers.loom.plan import conflict_chain, plan_cyclogram, positive_cycle
-from mechopt.solvers.loom.repair import exact_amplitude_bound, repair_cyclogram
-from mechopt.solvers.loom.speed import max_machine_speed
+from typing import TYPE_CHECKING
+
+from mechopt.kit.lazy import lazy_names
+
+if TYPE_CHECKING:       # for readers and the docs; at run time each name imports its module when used
+    from mechopt.solvers.loom.codesign import codesign_machine_speed
+    from mechopt.solvers.loom.event_time import HeldLP, build_event_time_lp, incidence
+    from mechopt.solvers.loom.plan import conflict_chain, plan_cyclogram, positive_cycle
+    from mechopt.solvers.loom.repair import exact_amplitude_bound, repair_cyclogram
+    from mechopt.solvers.loom.speed import max_machine_speed
+
+# a plan needs neither the co-design's stop-impact chain nor the speed LP: each imports when used
+__getattr__, __dir__ = lazy_names(__name__, {
+    "codesign": ["codesign_machine_speed"], "event_time": ["HeldLP", "build_event_time_lp", "incidence"],
+    "plan": ["conflict_chain", "plan_cyclogram", "positive_cycle"],
+    "repair": ["exact_amplitude_bound", "repair_cyclogram"], "speed": ["max_machine_speed"]})
 
 __all__ = ["HeldLP", "build_event_time_lp", "codesign_machine_speed", "conflict_chain", "exact_amplitude_bound", "incidence",
            "max_machine_speed", "plan_cyclogram", "positive_cycle", "repair_cyclogram"]

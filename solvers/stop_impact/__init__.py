@@ -15,17 +15,27 @@
 * `cam_shape`     the lift cam for the shop: pitch curve, profile, pressure angle, radius of
                   curvature, undercut, point tables with their chordal error: `cam_profile`.
 """
-from mechopt.solvers.stop_impact.cam_shape import cam_profile
-from mechopt.solvers.stop_impact.entry_points import (
-                                                      cam_dynamics,
-                                                      impact_forces,
-                                                      linearise_amplitude,
-                                                      natural_frequencies,
-                                                      operating_point,
-                                                      rebound,
-)
-from mechopt.solvers.stop_impact.fit import fit_roots
-from mechopt.solvers.stop_impact.synthesis import synthesise_law
+from typing import TYPE_CHECKING
+
+from mechopt.kit.lazy import lazy_names
+
+if TYPE_CHECKING:       # for readers and the docs; at run time each name imports its module when used
+    from mechopt.solvers.stop_impact.cam_shape import cam_profile
+    from mechopt.solvers.stop_impact.entry_points import (
+                                                          cam_dynamics,
+                                                          impact_forces,
+                                                          linearise_amplitude,
+                                                          natural_frequencies,
+                                                          operating_point,
+                                                          rebound,
+    )
+    from mechopt.solvers.stop_impact.fit import fit_roots
+    from mechopt.solvers.stop_impact.synthesis import synthesise_law
+
+__getattr__, __dir__ = lazy_names(__name__, {
+    "cam_shape": ["cam_profile"], "fit": ["fit_roots"], "synthesis": ["synthesise_law"],
+    "entry_points": ["cam_dynamics", "impact_forces", "linearise_amplitude", "natural_frequencies",
+                     "operating_point", "rebound"]})
 
 __all__ = ["cam_dynamics", "cam_profile", "fit_roots", "impact_forces", "linearise_amplitude", "natural_frequencies",
            "operating_point", "rebound", "synthesise_law"]

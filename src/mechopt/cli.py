@@ -33,12 +33,6 @@ from mechopt.scene import parse_overrides
 
 OK, CHECK_FAILED, BAD_INPUT, NOT_SOLVED, INTERRUPTED = 0, 1, 2, 3, 130
 
-# `mechopt new NAME` starts from a scene named by a row of mechopt.mechanisms (`templates()`);
-# cam-table: the other-profile scene with its parsed curve replaced by a point table in a CSV beside the scene
-TABLE_CURVE = {"x_expr": None, "y_expr": None, "constants": None,
-               "points_mm": '{ csv = "%s", columns = ["x_mm", "y_mm"] }'}
-
-
 def main(argv=None) -> int:
     as_command = argv is None            # the process is this command (not a test or a caller's script)
     try:
@@ -236,36 +230,61 @@ def _describe(args) -> int:
 
 
 def _new(args) -> int:
-    """Write a scene (and its CSV table) to start from: every name and content checked first (the
-    scene loads with its table), then all written, none over an existing file; a failure removes
-    what this call wrote."""
+    """Write a scene to start from, and every file it reads (its CSV tables, base and other
+    scenes), each renamed with it: every name and content checked first (the scene loads with
+    them), then all written, none over an existing file; a failure removes what this call wrote."""
     from mechopt.scene import id_problem
     template = registry.find(templates()[args.mechanism])
     new_id = f"my/{args.file.stem}"
     if id_problem(new_id):
         raise SceneError(f"{args.file}: the new scene's id would be {new_id!r}: {id_problem(new_id)}; name the file "
                          "with such characters, e.g. my-press.toml (nothing was written)", key="id")
-    text = scene_template(template, new_id)
-    suffix = {"cam-table": "points", "cyclogram": "ops"}.get(args.mechanism)
-    table = args.file.with_name(f"{args.file.stem}-{suffix}.csv") if suffix else None
     contents = {}
-    if table is not None:
-        if args.mechanism == "cam-table":
-            text = _with_table(text, table.name)
-            contents[table] = limacon_table()
-        else:               # the timing table beside the template, renamed with the scene
-            text = text.replace(f'csv = "{template.path.stem}-ops.csv"', f'csv = "{table.name}"')
-            contents[table] = (template.path.parent / f"{template.path.stem}-ops.csv").read_text(encoding="utf-8")
-    contents[args.file] = text
+    _starting_files(template, args.file, contents, {})
     _check_new(contents)
     from mechopt.files import shipped
     from mechopt.scene import loads
     with shipped({str(p.resolve()): c.encode("utf-8") for p, c in contents.items()}):
-        loads(text, args.file)                     # what we write must load (its table read from `contents`)
+        loads(contents[args.file], args.file)       # what we write must load (what it reads taken from `contents`)
     _write_new(contents)
-    print(f"scene: {args.file} (from {template.id})" + (f", {suffix}: {table}" if table else "")
+    print(f"scene: {args.file} (from {template.id})" + "".join(f", with {p}" for p in contents if p != args.file)
           + f"; try: mechopt run {args.file}")
     return OK
+
+
+_TABLE = re.compile(r'\bcsv = "([^"/\\]+)"')      # a table read from a CSV beside the scene
+
+
+def _starting_files(scene, path, contents, sources) -> None:
+    """Into `contents` ({path: text}): `scene` as the user's, at `path`, and every file its own
+    file reads, copied beside it and named after it (`packaging-ops.csv` of `packaging.toml`
+    becomes `mine-ops.csv` of `mine.toml`; its base `kd2322.toml` becomes `mine-kd2322.toml`,
+    itself a scene of the user's with what it reads). `sources`: each copied scene's original."""
+    from mechopt.scene import load
+    own = scene.path.read_text(encoding="utf-8")
+    sources[path] = scene.path.resolve()
+    refs = {}
+    for name in dict.fromkeys(_OTHER_SCENE.findall(own)):       # base = { scene = ... }, [structure.x] scene = ...
+        other = load((scene.path.parent / name).resolve())
+        mine = path.with_name(f"{path.stem}-{other.path.stem}.toml")
+        refs[name] = mine.name
+        if mine not in sources:
+            _starting_files(other, mine, contents, sources)
+        elif sources[mine] != other.path.resolve():     # two scenes of one name in different folders
+            raise SceneError(f"{scene.path}: reads {sources[mine]} and {other.path}, which would both be copied "
+                             f"as {mine}; name the new scene differently or copy them by hand (nothing was written)")
+    text = scene_template(scene, f"my/{path.stem}", refs)
+    for name in dict.fromkeys(_TABLE.findall(own)):             # { csv = "...", columns = [...] }
+        mine = path.with_name(_renamed(name, scene.path.stem, path.stem))
+        text = text.replace(f'csv = "{name}"', f'csv = "{mine.name}"')
+        contents[mine] = (scene.path.parent / name).read_text(encoding="utf-8")
+    contents[path] = text
+
+
+def _renamed(name: str, old_stem: str, new_stem: str) -> str:
+    """A companion file's name for the new scene: `<old stem>-rest` becomes `<new stem>-rest`;
+    another name is prefixed with the new stem."""
+    return f"{new_stem}-{name.removeprefix(f'{old_stem}-')}"
 
 
 def _check_new(contents):
@@ -299,38 +318,16 @@ def _remove(paths):
         path.unlink(missing_ok=True)
 
 
-def limacon_table() -> str:
-    """37 points of the limaçon r = 50 + 4 cos(theta) [mm] (H = 4, L = 50 by eq. (10)) as a CAD
-    system writes a point table: a cam to replace by one's own."""
-    import math
-    rows = [(50 + 4 * math.cos(t)) * f for k in range(37) for t in [math.radians(10 * k)]
-            for f in (math.cos(t), math.sin(t))]
-    return "x_mm,y_mm\n" + "".join(f"{rows[i]:.4f},{rows[i + 1]:.4f}\n" for i in range(0, len(rows), 2))
-
-
-def _with_table(text, csv_name):
-    """A scene's parsed curve replaced by the point table `csv_name`."""
-    out = []
-    for line in text.splitlines():
-        key = line.split("=", 1)[0].strip()
-        if key in TABLE_CURVE:
-            if TABLE_CURVE[key] is None:
-                continue
-        out.append(line)
-        if line.strip() == "[structure]":
-            out.append(f"points_mm = {TABLE_CURVE['points_mm'] % csv_name}      # your cam: x_mm, y_mm rows")
-    return "\n".join(out) + "\n"
-
-
 _OTHER_SCENE = re.compile(r'scene = "([^"]+)"')      # a reference to another scene, relative to its file
 
 
-def scene_template(scene, new_id: str) -> str:
+def scene_template(scene, new_id: str, refs: dict[str, str] | None = None) -> str:
     """A scene's file as a user's starting point: a new id, its source's expectations dropped
-    (they hold for the source's numbers only), references to other scenes made absolute (the copy
-    lives elsewhere), every parameter (a base scene's too) restated as `assumed` with why = "your
-    value" (the source's provenance in a comment above it: a figure of the source describes the
-    source's machine, not yours), and a header saying what to edit."""
+    (they hold for the source's numbers only), references to other scenes renamed by `refs`
+    (reference as written -> the copy's name) or else made absolute (the copy lives elsewhere),
+    every parameter (a base scene's too) restated as `assumed` with why = "your value" (the
+    source's provenance in a comment above it: a figure of the source describes the source's
+    machine, not yours), and a header saying what to edit."""
     lines, out, skipping = scene.path.read_text(encoding="utf-8").splitlines(), [], False
     for line in lines:
         stripped = line.strip()
@@ -342,7 +339,7 @@ def scene_template(scene, new_id: str) -> str:
             continue
         if stripped.startswith("id ="):
             line = f'id = "{new_id}"'
-        out.append(_OTHER_SCENE.sub(lambda m: f'scene = "{(scene.path.parent / m[1]).resolve().as_posix()}"', line))
+        out.append(_OTHER_SCENE.sub(lambda m: f'scene = "{_reference(scene, m[1], refs)}"', line))
     if "[params]" not in out and scene.spec.params:
         out += ["", "[params]", *_your_params(scene)]
     header = [f"# A scene of your own, started from {scene.id} ({scene.path.name}).",
@@ -351,6 +348,10 @@ def scene_template(scene, new_id: str) -> str:
               "# Add [expect.NAME] tables (value with abs or rel, or max/min, kind, where) for figures you",
               "# know: `mechopt run THIS_FILE` checks them.", ""]
     return "\n".join(header + out).rstrip() + "\n"
+
+
+def _reference(scene, name, refs) -> str:
+    return refs[name] if refs and name in refs else (scene.path.parent / name).resolve().as_posix()
 
 
 def _your_params(scene) -> list[str]:

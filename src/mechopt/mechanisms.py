@@ -1,13 +1,16 @@
 """The one table of mechanisms: each row names a mechanism's files, and the spine reads it.
 
-`mechopt new` offers the rows' templates, `mechopt bench` their benchmarks
-(`mechopt.benchmarks.studies`), and `mechopt.figures` imports their figure modules (which register
-their functions by solver). A fifth mechanism is one row here plus its own files:
+`mechopt new` offers the rows' templates (registry scenes, copied with the files they read),
+`mechopt bench` their benchmarks (`mechopt.benchmarks.studies`), and `mechopt.figures` imports
+their figure modules (which register their functions by solver). A fifth mechanism is one row
+here plus its own files (docs/new-mechanism.md walks one through):
 
     cases/<name>/*.toml            its scenes (found by the registry: no list)
-    models/<module>.py             its physics (a scene's `task = "<module>.<Class>"`)
+    models/<module>.py             its physics (a scene's `task = "<module>.<Class>"`): declared
+                                   ranges on its fields, its own `warnings(values)`
     solvers/<package>/             its solvers (a scene's `solver = "<package>.<function>"`)
-    src/mechopt/figures/<m>.py     its figures, `@figure(solver, ...)`
+    src/mechopt/figures/<m>.py     its figures, `@figure(solver, ...)`, and any DXF writer,
+                                   `@shop_drawing(solver, ...)` (mechopt.dxf)
     benchmarks/<module>.py         its accuracy-against-time study, `cli(repeats, out_dir, progress=None)`
 
 setup.py discovers the packages, so none of them can drop out of a wheel. This module imports
@@ -33,7 +36,7 @@ MECHANISMS = (
     Mechanism("cam-cutter", "Torch-guiding linkage (paper 000)",
               ("mechopt.models.cam_cutter", "mechopt.models.cam_profile"), "mechopt.solvers.cam_cutter",
               ("mechopt.figures.cam_cutter",), "mechopt.benchmarks.cam_cutter",
-              (("cam-cutter", "cam-cutter/minimax"), ("cam-table", "cam-cutter/other-profile"))),
+              (("cam-cutter", "cam-cutter/minimax"), ("cam-table", "cam-cutter/table-profile"))),
     Mechanism("press", "Crank press (paper 001)",
               ("mechopt.models.press",), "mechopt.solvers.press",
               ("mechopt.figures.press",), "mechopt.benchmarks.press",

@@ -18,13 +18,9 @@ error naming the `@figure(...)` to write. The old `@register(TaskClass)` raises 
 
 Every module is imported here: a broken one is an import error, never a silently missing figure.
 """
-import importlib
-
 from mechopt.figures.files import figures, plot_run, save_figure
-from mechopt.figures.registry import FIGURES, figure, figures_of
-from mechopt.mechanisms import mechanisms
+from mechopt.figures.registry import FIGURES, figure, figures_of, import_rows
 
-for _module in (name for m in mechanisms() for name in m.figures):
-    importlib.import_module(_module)          # it registers its functions
+import_rows()           # each row's modules register their functions
 
 __all__ = ["FIGURES", "figure", "figures", "figures_of", "plot_run", "save_figure"]

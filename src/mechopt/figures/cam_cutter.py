@@ -1,11 +1,13 @@
 """Figures for the cam-cutting linkage scenes (models/cam_cutter.py): drawn from the solvers'
-arrays (the path, its deviation), the limaçon traced from the linkage found."""
+arrays (the path, its deviation, the whole limaçon of the linkage found)."""
 import numpy as np
 
+from mechopt.dxf import NothingToExport, ShopCurve, shop_drawing
 from mechopt.figures.registry import figure, new_figure
 from mechopt.figures.text import literal
-from mechopt.models.cam_cutter import real_point
+from mechopt.models.cam_cutter import ideal_point, real_point
 from mechopt.models.cam_profile import ProfileFit
+from mechopt.models.cam_shape import mirrored, point_table
 from mechopt.solvers.cam_cutter import (
     check,
     evolve,
@@ -17,6 +19,10 @@ from mechopt.solvers.cam_cutter import (
     readjustable,
     robust,
 )
+
+TORCH_TOL_MM = 0.001            # the torch path's chordal error in the shop's drawing: a tenth of the paper's H, L precision
+AXIS_REL = 1e-7                 # an end this close to the x axis (relative to the cam) closes by its mirror
+TORCH_COLOUR, IDEAL_COLOUR = 3, 8         # DXF colour indices of the two layers
 
 
 @figure(grid_scan, robust, evolve, check)
@@ -31,7 +37,7 @@ def paths_and_deviation(run):
         return {}             # no linkage found (an infeasible grid scan): nothing to draw
 
     t, ix, iy, dist = a["t_rad"], a["path_x_mm"], a["path_y_mm"], a["deviation_mm"]
-    rx, ry = _limacon(H, L)
+    rx, ry = a["turn_x_mm"], a["turn_y_mm"]      # the real path: the whole limaçon
 
     fig = new_figure(figsize=(12, 5))
     left, right = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1, 1.3]})
@@ -72,11 +78,6 @@ def fitted_paths(run):
     return profile_path_and_band(run) if isinstance(run.task, ProfileFit) else paths_and_deviation(run)
 
 
-def _limacon(H, L):
-    """The whole limaçon (H, L) a linkage traces, closed: the picture's real path."""
-    return real_point(np.linspace(0, 2 * np.pi, 4000), H, L)
-
-
 @figure(joint_loads)
 def reactions_and_torque(run):
     """Reactions in the pairs and the driving torque over the cycle, with the condition number."""
@@ -112,7 +113,7 @@ def profile_path_and_band(run):
         return {}             # the NLP failed: no linkage to draw
     H, L = values["H_mm"], values["L_mm"]
     t, ix, iy, dist = a["t_rad"], a["path_x_mm"], a["path_y_mm"], a["deviation_mm"]
-    rx, ry = _limacon(H, L)
+    rx, ry = a["turn_x_mm"], a["turn_y_mm"]      # the real path: the whole limaçon
     fig = new_figure(figsize=(12, 5))
     left, right = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1, 1.3]})
     left.plot(rx, ry, lw=1.0, color="tab:orange", label=f"limaçon H={H:.3f}, L={L:.3f} mm")
@@ -158,3 +159,34 @@ def family_settings(run):
         ax.legend(fontsize=8)
         ax.grid(alpha=0.3)
     return {"settings": fig}
+
+
+@shop_drawing(grid_scan, robust, evolve, check, minimax, fit_linkage, joint_loads)
+def torch_shop_curves(run) -> list[ShopCurve]:
+    """The limaçon (10) of the solved (or given) links over a whole crank turn (its inner loop
+    too, where H > L: the torch runs it), and the ideal path (its upper half closed by its
+    mirror, corner at t_FINISH) on another layer."""
+    task, values = run.task, run.values
+    H, L = (values.get(k, getattr(task, k, None)) for k in ("H_mm", "L_mm"))
+    if H is None or L is None:
+        raise NothingToExport(f"{run.scene.id}: no linkage (H_mm, L_mm) in this result: no torch path to export")
+    limacon = point_table(lambda s: np.array(real_point(s, H, L)), TORCH_TOL_MM)
+    curves = [ShopCurve("TORCH_PATH", limacon.xy, limacon.chord_error_mm, f"limacon H={H:.6g} L={L:.6g} mm",
+                        colour=TORCH_COLOUR)]
+    if not hasattr(task, "t_end_rad"):          # the loads' task knows its links, not the path they follow
+        return curves
+    if isinstance(task, ProfileFit):
+        upper = lambda t: np.array(task.path_point(t))              # noqa: E731
+    else:
+        upper = lambda t: np.array(ideal_point(t, task.a_mm, task.h_mm))  # noqa: E731
+    t0, t1 = task.t_start_rad, task.t_end_rad
+    ends = upper(np.array([t0, t1]))
+    if np.all(np.abs(ends[1]) <= AXIS_REL * task.size_mm):      # both ends on the axis: the mirror closes it
+        ideal = point_table(mirrored(upper, t0, t1), TORCH_TOL_MM, period=2 * (t1 - t0), breaks=(t1 - t0,))
+        curves.append(ShopCurve("IDEAL_PATH", ideal.xy, ideal.chord_error_mm, "ideal path and its mirror",
+                                colour=IDEAL_COLOUR))
+    else:                                                       # drawn as given, from its start to its end
+        ideal = point_table(lambda t: upper(t0 + t), TORCH_TOL_MM, period=t1 - t0, closed=False)
+        curves.append(ShopCurve("IDEAL_PATH", ideal.xy, ideal.chord_error_mm, "ideal path, open", closed=False,
+                                colour=IDEAL_COLOUR))
+    return curves

@@ -3,10 +3,13 @@ flanks), and the pitch curve's curvature and pressure
 angle against the cam angle. They read the Result's arrays only."""
 import numpy as np
 
+from mechopt.dxf import ShopCurve, shop_drawing
 from mechopt.figures.registry import figure, new_figure
 from mechopt.figures.text import literal
 from mechopt.solvers.stop_impact import cam_profile
 
+# the cam's curves in the shop's drawing: the solver's point tables, each on its layer (DXF colour index)
+CAM_LAYERS = {"profile": ("CAM_PROFILE", 7), "groove_outer": ("CAM_GROOVE_OUTER", 5), "pitch": ("PITCH_CURVE", 1)}
 CURVES = {"pitch": ("pitch curve", "tab:red", "--"), "profile": ("cam profile", "black", "-"),
           "groove_outer": ("groove, outer wall", "tab:blue", "-")}
 
@@ -45,3 +48,12 @@ def cam_shape_figures(run) -> dict:
     bottom.set_xlabel("cam angle [deg]")
     out["curvature"] = fig2
     return out
+
+
+@shop_drawing(cam_profile)
+def cam_shop_curves(run) -> list[ShopCurve]:
+    """The cam for the shop: each point table the solver returned, with its measured chordal error."""
+    arrays, errors = run.arrays, run.result.diagnostics["chord_error_mm"]
+    return [ShopCurve(layer, np.column_stack([arrays[f"{name}_x_mm"], arrays[f"{name}_y_mm"]]), errors[name], name,
+                      colour=colour)
+            for name, (layer, colour) in CAM_LAYERS.items() if f"{name}_x_mm" in arrays]

@@ -10,9 +10,11 @@ notebook shows the figures as they are.
 Which function draws a run is found by the run's solver (the function its scene names), never by
 looking at which values the result happens to hold.
 """
+import importlib
 from collections.abc import Callable
 
 from mechopt.kit.errors import MechoptError
+from mechopt.mechanisms import mechanisms
 
 FIGURES: dict[Callable, Callable] = {}
 
@@ -41,8 +43,17 @@ def register(*task_classes):
                        f"(from mechopt.figures.registry import figure)")
 
 
+def import_rows() -> None:
+    """Import every row's figure (and output) modules of `mechopt.mechanisms`: each registers its
+    functions. Read at each call, so a row added since the last is read too; a broken module is
+    an import error, never a silently missing figure."""
+    for name in (n for m in mechanisms() for n in m.figures):
+        importlib.import_module(name)
+
+
 def figures_of(run) -> dict:
     """The figures of a solved scene, by name; an error when its solver has none registered."""
+    import_rows()
     solver = run.scene.solver
     if solver not in FIGURES:
         raise MechoptError(f"no figures registered for solver {_name(solver)} (scene {run.scene.id}); "
