@@ -30,8 +30,6 @@ def test_a_loom_plan_imports_no_casadi_and_no_numba():
     assert [m for m in _imported_after(code) if m != "cvxpy"] == []
 
 
-@pytest.mark.xfail(strict=True, reason="registry.find reads the whole catalogue: every scene's model and solver "
-                                       "are imported (press, cam-cutter: CasADi) before loom/group1 is solved")
 def test_solving_a_loom_scene_by_its_id_imports_no_casadi_and_no_numba():
     code = "import mechopt\nassert mechopt.solve('loom/group1').success"
     assert [m for m in _imported_after(code) if m != "cvxpy"] == []

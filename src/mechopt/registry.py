@@ -13,7 +13,7 @@ from mechopt.kit.cache import memoised
 from mechopt.kit.errors import MechoptError, SceneError
 from mechopt.kit.result import Result, Status
 from mechopt.models.validity import out_of_range
-from mechopt.scene import Scene, load, scene_files
+from mechopt.scene import Scene, id_problem, load, scene_files
 from mechopt.units import unit_of
 from mechopt.verdicts import Check, check
 
@@ -220,6 +220,9 @@ def find(ref) -> Scene:
             raise SceneError(f"{path}: a folder of scenes; name one file, or use it where several scenes are taken "
                              "(validate, report)")
         return load(path)
+    own = _package_scene(ref)
+    if own is not None:
+        return own
     for scene in all_scenes():
         if scene.id == ref:
             return scene
@@ -227,6 +230,25 @@ def find(ref) -> Scene:
     near = difflib.get_close_matches(ref, ids, n=3)
     raise SceneError(f"unknown case {ref!r}" + (f"; did you mean {', '.join(near)}?" if near else "")
                      + " (`mechopt cases` lists the ids; a scene file is named by its path, e.g. ./my.toml)")
+
+
+def _package_scene(ref: str) -> Scene | None:
+    """The package's scene `ref` read from its own file (cases/<id>.toml), without reading the
+    whole catalogue: solving one scene imports its own model and solver only. The package's ids
+    win over the user's (a clash is refused in the catalogue), and its scenes' cross-references
+    are checked by the catalogue in the tests."""
+    if id_problem(ref):
+        return None
+    path = cases_dir() / f"{ref}.toml"
+    if not path.is_file():
+        return None
+    scene = _package_file(path)
+    return scene if scene.id == ref else None
+
+
+@memoised(maxsize=256)
+def _package_file(path: Path) -> Scene:
+    return load(path)
 
 
 def select(refs=()) -> tuple[list[Scene], list[str]]:
