@@ -3,12 +3,11 @@ U switching on, the jump, every full revolution, and friction sign changes (cran
 sticking, breaking away). CasADi 3.8's own events fire on one crossing direction only and never
 with a single output time, so events are located here by Newton on the piece's duration instead
 (see `locate`)."""
-import time
 
 import numpy as np
 
 from mechopt.kit.errors import MechoptError, ModelError
-from mechopt.kit.result import Result, Status, Timing
+from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Annotated, Interval, Positive, Tolerance
 from mechopt.models.press import PressDrive, stall_check
 from mechopt.solvers.press.problem import (
@@ -77,9 +76,9 @@ def events(task: PressDrive, *, tol: Tolerance = 1e-10, duration_s: Duration = 1
     refuse_work("samples", samples, duration_s * per_s * samples, MAX_SAMPLES, "samples in memory",
                 f"samples <= {max(int(MAX_SAMPLES / (duration_s * per_s)), 1)} over duration_s={duration_s:g}")
     _refuse_a_belt_too_fast(task, duration_s)
-    t_start = time.perf_counter()
+    clock = Clock()
     piece = piece_by_time(task, tol, samples)
-    build = time.perf_counter() - t_start
+    clock.built()
     trace = Trace()
     status, message, violated, failure = Status.SOLVED, "", (), {}
     try:
@@ -95,7 +94,7 @@ def events(task: PressDrive, *, tol: Tolerance = 1e-10, duration_s: Duration = 1
         t_fail = float(trace.t[-1][-1]) if trace.t else 0.0
         status, message, failure = casadi_failure(exc, f"at t = {t_fail:.6g} s of {duration_s} s")
     if not trace.t:
-        return Result(status, {}, Timing(build, time.perf_counter() - t_start - build), message, violated, failure)
+        return clock.result(status, {}, message, violated, failure)
     values, diagnostics, arrays = summarise(task, trace)
     diagnostics |= failure
     if status is Status.SOLVED and values["revolutions"] < 1 and values["final_omega_rad_s"] <= 0:
@@ -114,8 +113,7 @@ def events(task: PressDrive, *, tol: Tolerance = 1e-10, duration_s: Duration = 1
         values |= stall[0]
         message += "; " + stall[1] + ("" if violated else ": this run is slowing down toward a stall")
     status, message, violated = checked(status, message, violated, diagnostics)
-    timing = Timing(build, time.perf_counter() - t_start - build)
-    return Result(status, values, timing, message, violated, diagnostics, arrays)
+    return clock.result(status, values, message, violated, diagnostics, arrays)
 
 
 def _refuse_a_belt_too_fast(task, duration_s):

@@ -7,12 +7,11 @@ on its two segments (Fig. 6); a combination of straight lines and parabolas erre
 segment of the travel. Reading a testing machine's CSV is `mechopt.force_data`'s job (a solver
 never reads a file).
 """
-import time
 
 import numpy as np
 
 from mechopt.kit.errors import ModelError
-from mechopt.kit.result import Result, Status, Timing
+from mechopt.kit.result import Clock, Result, Status
 
 __all__ = ["fit_force"]
 
@@ -55,7 +54,7 @@ def fit_force(travel_mm, load_N, degree: int, *, segments: int = 2, through_orig
     if x.size < powers.size:
         raise ModelError(f"{x.size} points cannot fix {powers.size} coefficients of degree {degree}; "
                          f"give at least {powers.size}", key="travel_mm")
-    start = time.perf_counter()
+    clock = Clock()
     A = x[:, None] ** powers[None, :]
     coeffs, _, rank, _ = np.linalg.lstsq(A, f, rcond=None)
     fitted = A @ coeffs
@@ -74,5 +73,5 @@ def fit_force(travel_mm, load_N, degree: int, *, segments: int = 2, through_orig
     status = Status.SOLVED if rank == powers.size else Status.INACCURATE
     message = (f"least squares, degree {degree}, {x.size} points" if status is Status.SOLVED else
                f"rank {rank} < {powers.size} coefficients: too few distinct travels for degree {degree}")
-    return Result(status, values, Timing(0.0, time.perf_counter() - start), message,
-                  diagnostics={"segment_edges_mm": edges.tolist(), "points": int(x.size)})
+    return clock.result(status, values, message,
+                        diagnostics={"segment_edges_mm": edges.tolist(), "points": int(x.size)})
