@@ -19,7 +19,7 @@ import numpy as np
 from scipy.optimize import differential_evolution
 
 from mechopt.kit.cache import BuildCache
-from mechopt.kit.errors import ModelError
+from mechopt.kit.errors import ModelError, SettingError
 from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Annotated, Ge, Interval, Tolerance, check_settings
 from mechopt.models.cam_cutter import (
@@ -183,10 +183,8 @@ def minimax(task: LinkageFit | ProfileFit, *, count: Nodes = 1000, slots: Annota
     whose answer then says `global_certified` False, "not checked".
     """
     _check_count(count)
-    check_settings(minimax, slots=slots, max_rounds=max_rounds, widen=widen, starts=starts, certify=certify,
+    check_settings(minimax, slots=slots, max_rounds=max_rounds, nlp=nlp, widen=widen, starts=starts, certify=certify,
                    gap_per_size=gap_per_size, max_cells=max_cells)
-    if nlp not in NLP_OPTIONS:
-        raise ModelError(f"nlp={nlp!r} is not an NLP back end; known: {', '.join(NLP_OPTIONS)}", key="nlp")
     clock = Clock()
     t_start, t_end = task.t_start_rad, task.t_end_rad
     scale = _scale(task)
@@ -576,7 +574,7 @@ def _node_times(task, count, nodes):
     the i that the rule `nodes` names (NODE_RULES)."""
     _check_count(count)
     if nodes not in NODE_RULES:
-        raise ModelError(f"nodes={nodes!r} is not a node rule; known: {', '.join(NODE_RULES)}", key="nodes")
+        raise SettingError(f"nodes={nodes!r}: allowed {', '.join(NODE_RULES)}", key="nodes")
     first, extra = NODE_RULES[nodes]
     return np.arange(first, count + extra) * (task.t_finish_read_rad / count)
 
@@ -590,7 +588,7 @@ def _cardioid_only(task, name):
 
 def _check_count(count):
     if not isinstance(count, (int, np.integer)) or count < 1:
-        raise ModelError(f"count={count!r} must be a whole number >= 1 (nodes on the ideal path)", key="count")
+        raise SettingError(f"count={count!r} must be a whole number >= 1 (nodes on the ideal path)", key="count")
 
 
 def _lattice_indices(task):

@@ -18,7 +18,7 @@ t(3,7) >= n / r*: the same linear arc the graph engine already takes for the cyc
 """
 import dataclasses
 
-from mechopt.kit.errors import ModelError
+from mechopt.kit.errors import ModelError, SettingError
 from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Annotated, Interval
 from mechopt.models.loom import Cyclogram
@@ -57,8 +57,8 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
         raise ModelError("codesign: needs the lever's table [structure.lever], amplitude_limit_mm and speed_rpm",
                          key="lever")
     if band_low_rpm >= task.speed_rpm:
-        raise ModelError(f"band_low_rpm={band_low_rpm} must be below speed_rpm={task.speed_rpm} (the band's top)",
-                         key="band_low_rpm")
+        raise SettingError(f"band_low_rpm={band_low_rpm} must be below speed_rpm={task.speed_rpm} (the band's top)",
+                           key="band_low_rpm")
     clock = Clock()
     speed_settings = dict(scan_to_deg=scan_to_deg, scan_step_deg=scan_step_deg)
     baseline = max_machine_speed(task, **speed_settings)

@@ -30,7 +30,7 @@ import numpy as np
 from mechopt.kit.cache import BuildCache
 from mechopt.kit.errors import NAMED, ModelError, some_of
 from mechopt.kit.result import Clock, Result, Status, from_cvxpy
-from mechopt.kit.settings import Tolerance
+from mechopt.kit.settings import Tolerance, check_settings
 from mechopt.models.loom import Cyclogram, amplitude_mm, stress_bound_deg, stress_MPa
 from mechopt.solvers.loom.event_time import EventTimeLP, build_event_time_lp
 from mechopt.solvers.loom.graph import BackArcs, Levels, PositiveCycle, a_path, tight_arcs
@@ -85,8 +85,7 @@ def plan_cyclogram(task: Cyclogram, *, method: Literal["graph", "lp"] = "graph",
     >>> r.status.value, r.diagnostics["critical_chain"][:3]                             # doctest: +SKIP
     ('SOLVED', ['1', '3', '7'])
     """
-    if method not in ("graph", "lp"):
-        raise ModelError(f"method={method!r}: allowed graph, lp", key="method")
+    check_settings(plan_cyclogram, method=method, backend=backend, stress_form=stress_form)
     solve = _plan_graph if method == "graph" else functools.partial(_plan_lp, backend=backend, warm_start=warm_start)
     result = solve(task, stress_form=stress_form, tol_deg=tol_deg)
     if not check:

@@ -11,7 +11,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from mechopt.kit.cache import BuildCache
-from mechopt.kit.errors import ModelError
+from mechopt.kit.errors import ModelError, SettingError
 from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Interval, Tolerance
 from mechopt.models.loom import Cyclogram, stress_bound_deg, stress_MPa
@@ -311,8 +311,8 @@ def check_walk(to_deg: float, step_deg: float) -> None:
     """Refuse a walk of more than MAX_WALK_POINTS rebounds, naming the keys and the limit."""
     points = math.ceil((to_deg - min(WALK_FLOOR_DEG, to_deg)) / step_deg)
     if points > MAX_WALK_POINTS:
-        raise ModelError(f"scan_to_deg={to_deg:g}, scan_step_deg={step_deg:g}: the walk for the rebound's exact "
-                         f"bound would take {points} rebounds (about {points * 0.03:.0f} s), the limit is "
-                         f"{MAX_WALK_POINTS}: raise scan_step_deg to >= "
-                         f"{(to_deg - WALK_FLOOR_DEG) / MAX_WALK_POINTS:.3g} deg or lower scan_to_deg to <= "
-                         f"{WALK_FLOOR_DEG + MAX_WALK_POINTS * step_deg:.3g} deg", key="scan_step_deg")
+        raise SettingError(f"scan_to_deg={to_deg:g}, scan_step_deg={step_deg:g}: the walk for the rebound's exact "
+                           f"bound would take {points} rebounds (about {points * 0.03:.0f} s), the limit is "
+                           f"{MAX_WALK_POINTS}: raise scan_step_deg to >= "
+                           f"{(to_deg - WALK_FLOOR_DEG) / MAX_WALK_POINTS:.3g} deg or lower scan_to_deg to <= "
+                           f"{WALK_FLOOR_DEG + MAX_WALK_POINTS * step_deg:.3g} deg", key="scan_step_deg")

@@ -10,7 +10,7 @@ import numpy as np
 from mechopt.kit.cache import BuildCache
 from mechopt.kit.errors import NAMED, ModelError, some_of
 from mechopt.kit.result import Clock, Result, Status, from_cvxpy
-from mechopt.kit.settings import Interval
+from mechopt.kit.settings import Interval, check_settings
 from mechopt.models.loom import MAX_RPM, Cyclogram
 from mechopt.solvers.loom.event_time import HeldLP, incidence
 from mechopt.solvers.loom.graph import Levels, a_path, tight_arcs
@@ -141,6 +141,7 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp",
     stated range. With a rebound: amplitude_holds_from_*_deg and amplitude_holds_to_*_deg, the
     range of t at the answer on which a <= limit is shown.
     """
+    check_settings(max_machine_speed, method=method, backend=backend)
     if task.cycle_deg is None:
         raise ModelError("cycle_deg: the machine's speed is limited by its cycle; give cycle_deg", key="cycle_deg")
     clock = Clock()

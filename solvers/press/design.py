@@ -40,9 +40,9 @@ import numpy as np
 from scipy.integrate import simpson
 
 from mechopt.kit.cache import memoised
-from mechopt.kit.errors import ModelError, SettingError
+from mechopt.kit.errors import ModelError
 from mechopt.kit.result import Clock, Result, Status, from_ipopt
-from mechopt.kit.settings import Annotated, Interval, Tolerance
+from mechopt.kit.settings import Annotated, Interval, Tolerance, check_settings
 from mechopt.models.press import (
     BOUNDS,
     FORCE_KEYS,
@@ -237,8 +237,7 @@ def design(task: PressDesign, *, tol: Tolerance = 1e-10, samples: Samples = 16,
     """
     if not isinstance(task, PressDesign):
         raise ModelError(f"task={type(task).__name__}: expected a PressDesign", key="task")
-    if start not in ("rule_of_thumb", "press"):
-        raise SettingError(f"start={start!r}: allowed 'rule_of_thumb', 'press'", key="start")
+    check_settings(design, tol=tol, samples=samples, max_iter=max_iter, check_sensitivity=check_sensitivity, start=start)
     clock = Clock()
     first = task.start(rule_of_thumb=start == "rule_of_thumb")
     attempts, result = [], None

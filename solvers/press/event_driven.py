@@ -6,7 +6,7 @@ with a single output time, so events are located here by Newton on the piece's d
 
 import numpy as np
 
-from mechopt.kit.errors import MechoptError, ModelError
+from mechopt.kit.errors import MechoptError
 from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Annotated, Interval, Positive, Tolerance
 from mechopt.models.press import PressDrive, stall_check
@@ -63,12 +63,8 @@ def events(task: PressDrive, *, tol: Tolerance = 1e-10, duration_s: Duration = 1
     torque against the breakdown torque in `values` when the motor cannot carry the cycle);
     LIMIT after `max_events`; FAILED if CVODES fails.
     """
-    check_task(task, duration_s)
-    for key, value in (("tol", tol), ("max_step_s", max_step_s)):
-        if not value > 0:
-            raise ModelError(f"{key}={value} must be > 0", key=key)
-    if samples < 1:
-        raise ModelError(f"samples={samples} must be >= 1", key="samples")
+    check_task(task, events, tol=tol, duration_s=duration_s, start=start, max_step_s=max_step_s, samples=samples,
+               max_events=max_events)
     # pieces: one per max_step_s at least, plus three events per revolution at the top speed
     per_s = 1 / max_step_s + 3 * top_speed_rad_s(task) / TWO_PI
     refuse_work("duration_s", duration_s, duration_s * per_s, MAX_PIECES, "CVODES pieces (~0.5 ms each)",

@@ -6,7 +6,7 @@ import casadi as ca
 import numpy as np
 
 from mechopt.kit.cache import memoised
-from mechopt.kit.errors import ModelError
+from mechopt.kit.errors import SettingError
 from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Annotated, Interval, NonNegative, Positive
 from mechopt.models.press import PressDrive
@@ -43,7 +43,7 @@ def _rk4_steps(task: PressDrive, step_s: float, count: int) -> ca.Function:
 def _rk4_trace(task, step_s, duration_s, start):
     count = int(round(duration_s / step_s))
     if abs(count * step_s - duration_s) > 1e-9 * duration_s or count < 1:
-        raise ModelError(f"step_s={step_s} does not divide duration_s={duration_s} into whole steps", key="step_s")
+        raise SettingError(f"step_s={step_s} does not divide duration_s={duration_s} into whole steps", key="step_s")
     x0 = initial_state(task, start)
     xs = np.asarray(_rk4_steps(task, step_s, count)(x0)).T
     trace = Trace()
@@ -93,11 +93,10 @@ def rk4(task: PressDrive, *, step_s: Positive = 1e-4, duration_s: Duration = 1.0
     Returns a Result: SOLVED, or INACCURATE when refinement did not reach `refine_tol_rad`;
     INFEASIBLE with violated ("stall",) when the crank, having turned, stops (in the cut or not).
     """
-    check_task(task, duration_s)
-    if not step_s > 0:
-        raise ModelError(f"step_s={step_s} must be > 0", key="step_s")
+    check_task(task, rk4, step_s=step_s, duration_s=duration_s, start=start, refine_tol_rad=refine_tol_rad,
+               max_halvings=max_halvings)
     if duration_s / step_s > MAX_STEPS:
-        raise ModelError(f"step_s={step_s} with duration_s={duration_s} means {duration_s / step_s:.3g} RK4 steps; "
+        raise SettingError(f"step_s={step_s} with duration_s={duration_s} means {duration_s / step_s:.3g} RK4 steps; "
                          f"allowed at most {MAX_STEPS} (step_s >= {duration_s / MAX_STEPS:.3g} s)", key="step_s")
     clock = Clock()
     hz, eigenvalue = belt_mode(task)

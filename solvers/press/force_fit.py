@@ -10,7 +10,7 @@ never reads a file).
 
 import numpy as np
 
-from mechopt.kit.errors import ModelError
+from mechopt.kit.errors import ModelError, SettingError
 from mechopt.kit.result import Clock, Result, Status
 
 __all__ = ["fit_force"]
@@ -40,9 +40,9 @@ def fit_force(travel_mm, load_N, degree: int, *, segments: int = 2, through_orig
     x = np.asarray(travel_mm, dtype=float).ravel()
     f = np.asarray(load_N, dtype=float).ravel()
     if isinstance(degree, bool) or not isinstance(degree, (int, np.integer)) or not 1 <= degree <= 6:
-        raise ModelError(f"degree={degree!r}: allowed 1, 2, 3, 4, 5 or 6", key="degree")
+        raise SettingError(f"degree={degree!r}: allowed 1, 2, 3, 4, 5 or 6", key="degree")
     if isinstance(segments, bool) or not isinstance(segments, (int, np.integer)) or segments < 1:
-        raise ModelError(f"segments={segments!r}: must be an integer >= 1", key="segments")
+        raise SettingError(f"segments={segments!r}: must be an integer >= 1", key="segments")
     if x.shape != f.shape:
         raise ModelError(f"travel_mm has {x.size} values but load_N has {f.size}; give one load per travel",
                          key="load_N")

@@ -6,7 +6,7 @@ revolution reproduces; a what-if re-solves on the structure's build from the las
 import numpy as np
 
 from mechopt.kit.cache import BuildCache
-from mechopt.kit.errors import MechoptError, ModelError
+from mechopt.kit.errors import MechoptError
 from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Annotated, Interval, Tolerance
 from mechopt.models.press import (
@@ -68,9 +68,7 @@ def steady_state(task: PressDrive, *, tol: Tolerance = 1e-10, samples: Samples =
     tol : CVODES tolerance (relative and absolute); the periodicity residual is held to 100 tol.
     samples : outputs per piece (peaks, plots).  max_iter : Newton iterations.
     """
-    check_task(task)
-    if not tol > 0:
-        raise ModelError(f"tol={tol} must be > 0", key="tol")
+    check_task(task, steady_state, tol=tol, samples=samples, max_iter=max_iter)
     clock = Clock()
     # Newton's CVODES sensitivities must follow the belt mode: minutes past ~2 kHz
     too_fast = belt_too_fast_per_revolution(task, STEPS_PER_REVOLUTION, "steady_state")

@@ -14,6 +14,7 @@ from annotated_types import Interval
 from mechopt.kit.cache import memoised
 from mechopt.kit.errors import ModelError
 from mechopt.kit.result import Status, from_casadi_integrator
+from mechopt.kit.settings import check_settings
 from mechopt.models.press import (
     FORCE_KEYS,
     PARAMETERS,
@@ -173,12 +174,12 @@ def refuse_work(key: str, value, amount: float, most: float, what: str, bound: s
                          f"({bound})", key=key)
 
 
-def check_task(task, duration_s=None):
-    """Refuse a task that is no PressDrive, or a duration that is not positive."""
+def check_task(task, solver, **settings):
+    """Refuse a task that is no PressDrive, then settings outside the ranges `solver`'s signature
+    declares (SettingError, as a scene's are refused), before any work."""
     if not isinstance(task, PressDrive):
         raise ModelError(f"task={type(task).__name__}: expected a PressDrive", key="task")
-    if duration_s is not None and not duration_s > 0:
-        raise ModelError(f"duration_s={duration_s} must be > 0", key="duration_s")
+    check_settings(solver, **settings)
 
 
 def summarise(task: PressDrive, trace: Trace, *, cut_angles=None) -> tuple[dict, dict, dict]:

@@ -47,7 +47,8 @@ def ivp(task: PressDrive, *, method: Literal["Radau", "LSODA", "DOP853", "RK45",
     more than `MAX_REVOLUTIONS`, or more than `MAX_STEPS` steps (`max_step_s`, or an explicit
     method's stability limit for the belt mode: then LIMIT, saying so).
     """
-    check_task(task, duration_s)
+    check_task(task, ivp, method=method, rtol=rtol, atol=atol, duration_s=duration_s, locate_events=locate_events,
+               max_step_s=max_step_s)
     per_s = top_speed_rad_s(task) / TWO_PI
     refuse_work("duration_s", duration_s, duration_s * per_s, MAX_REVOLUTIONS, "revolutions (~0.25 s each with "
                 "a Python right-hand side)", f"duration_s <= {MAX_REVOLUTIONS / per_s:.4g} s; `events` goes further")

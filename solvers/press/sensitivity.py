@@ -154,7 +154,7 @@ def sensitivity(task: PressDrive, *, tol: Tolerance = 1e-10, max_iter: Annotated
     tol : CVODES tolerance (the orbit's periodicity to 100 tol).  max_iter : Newton iterations.
     verify_step : relative step of the finite-difference check (0: none).
     """
-    check_task(task)
+    check_task(task, sensitivity, tol=tol, max_iter=max_iter, verify_step=verify_step)
     if not task.motor:
         raise ModelError("effects lack 'motor_characteristic': without the motor the crank's mean speed is "
                          "not set by the drive; add the effect", key="effects")

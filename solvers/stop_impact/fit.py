@@ -14,7 +14,7 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
-from mechopt.kit.errors import ModelError
+from mechopt.kit.errors import SettingError
 from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Annotated, Interval, NonNegative, Positive, Tolerance
 from mechopt.models.stop_impact import LeverStop, speed_tag
@@ -45,8 +45,8 @@ def fit_roots(task: LeverStop, *, t_min_deg: Annotated[float, Interval(gt=0, lt=
     task.need("law_slope_mm_per_deg", "law_intercept_mm", "speed_nominal_rpm")
     task.need_effect("cam_drive")
     if not (t_min_deg < t_max_deg and stroke_min_mm < stroke_max_mm):
-        raise ModelError(f"empty box: t_min_deg={t_min_deg:g} must be below t_max_deg={t_max_deg:g} and "
-                         f"stroke_min_mm={stroke_min_mm:g} below stroke_max_mm={stroke_max_mm:g}", key="t_min_deg")
+        raise SettingError(f"empty box: t_min_deg={t_min_deg:g} must be below t_max_deg={t_max_deg:g} and "
+                           f"stroke_min_mm={stroke_min_mm:g} below stroke_max_mm={stroke_max_mm:g}", key="t_min_deg")
     clock = Clock()
     fit = _Fit(task, stroke_min_mm, stroke_max_mm)
     grid = np.arange(t_min_deg, t_max_deg + 0.5 * t_step_deg, t_step_deg)

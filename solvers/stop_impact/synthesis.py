@@ -53,7 +53,7 @@ from scipy import sparse
 from scipy.optimize import brentq
 
 from mechopt.kit.cache import BuildCache
-from mechopt.kit.errors import ModelError
+from mechopt.kit.errors import ModelError, SettingError
 from mechopt.kit.highs import banner_to_stderr, interruptible_everywhere
 from mechopt.kit.result import Clock, Result, Status, from_cvxpy
 from mechopt.kit.settings import Annotated, Interval, NonNegative
@@ -546,11 +546,11 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
     task.need("stroke_mm", "amplitude_limit_mm")
     task.need_effect("cam_drive")
     if band_low_rpm > band_high_rpm:
-        raise ModelError(f"band_low_rpm={band_low_rpm} > band_high_rpm={band_high_rpm}: the band is empty",
-                         key="band_low_rpm")
+        raise SettingError(f"band_low_rpm={band_low_rpm} > band_high_rpm={band_high_rpm}: the band is empty",
+                           key="band_low_rpm")
     if phase_from_deg >= phase_to_deg:
-        raise ModelError(f"phase_from_deg={phase_from_deg} >= phase_to_deg={phase_to_deg}: empty bracket",
-                         key="phase_from_deg")
+        raise SettingError(f"phase_from_deg={phase_from_deg} >= phase_to_deg={phase_to_deg}: empty bracket",
+                           key="phase_from_deg")
     clock = Clock()
     bounds = {"max_velocity_mm_per_rad": max_velocity_mm_per_rad,
               "max_acceleration_mm_per_rad2": max_acceleration_mm_per_rad2, "max_jerk_mm_per_rad3": max_jerk_mm_per_rad3}
