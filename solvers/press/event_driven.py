@@ -6,7 +6,7 @@ with a single output time, so events are located here by Newton on the piece's d
 
 import numpy as np
 
-from mechopt.kit.errors import MechoptError
+from mechopt.kit.errors import MechoptError, ModelError
 from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Annotated, Interval, Positive, Tolerance
 from mechopt.models.press import PressDrive, stall_check
@@ -57,7 +57,7 @@ def events(task: PressDrive, *, tol: Tolerance = 1e-10, duration_s: Duration = 1
     duration_s : simulated time [s].  start : "nominal" or "rest".
     max_step_s : longest piece [s].  samples : outputs per piece (for peaks and plots).
     A request that implies more than `MAX_PIECES` pieces or `MAX_SAMPLES` samples is refused
-    before any work (ModelError naming the key and its allowed range).
+    before any work (SettingError naming the key and its allowed range).
     Returns a Result: SOLVED; INFEASIBLE with violated ("stall",) when the crank stops inside the
     cut, never turns, or coasts to a stop and is held by friction at the end (with the mean load
     torque against the breakdown torque in `values` when the motor cannot carry the cycle);
@@ -124,4 +124,4 @@ def _refuse_a_belt_too_fast(task, duration_s):
         refuse_work("belt_stiffness_Nm_rad", task.belt_stiffness_Nm_rad, steps, MAX_BELT_STEPS,
                     f"CVODES steps following the belt mode at {hz:.4g} Hz for {duration_s:g} s (~1e-4 s each)",
                     f"belt_stiffness_Nm_rad <= {most_stiff:.3g} at duration_s={duration_s:g}, or duration_s <= "
-                    f"{duration_s * MAX_BELT_STEPS / steps:.3g} s; {RIGID_LIMIT}")
+                    f"{duration_s * MAX_BELT_STEPS / steps:.3g} s; {RIGID_LIMIT}", kind=ModelError)

@@ -12,7 +12,7 @@ import numpy as np
 from annotated_types import Interval
 
 from mechopt.kit.cache import memoised
-from mechopt.kit.errors import ModelError
+from mechopt.kit.errors import MechoptError, ModelError, SettingError
 from mechopt.kit.result import Status, from_casadi_integrator
 from mechopt.kit.settings import check_settings
 from mechopt.models.press import (
@@ -166,12 +166,14 @@ def top_speed_rad_s(task: PressDrive) -> float:
     return max(sync, task.nominal_speed_rad_s)
 
 
-def refuse_work(key: str, value, amount: float, most: float, what: str, bound: str):
+def refuse_work(key: str, value, amount: float, most: float, what: str, bound: str, *,
+                kind: type[MechoptError] = SettingError):
     """Refuse before any work a request whose size estimate `amount` exceeds `most`: one line naming
-    the key, what the value implies, and the range that is allowed."""
+    the key, what the value implies, and the range that is allowed. `key` is a solver setting
+    (SettingError) unless `kind` says otherwise (a model parameter: ModelError)."""
     if amount > most:
-        raise ModelError(f"{key}={value} means about {amount:.3g} {what}, more than the {most:g} allowed "
-                         f"({bound})", key=key)
+        raise kind(f"{key}={value} means about {amount:.3g} {what}, more than the {most:g} allowed "
+                   f"({bound})", key=key)
 
 
 def check_task(task, solver, **settings):
