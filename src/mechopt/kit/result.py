@@ -1,4 +1,5 @@
-"""The one result every solver returns, and the only code that knows back ends' status words."""
+"""The one result every solver returns, the clock that times it and builds it (a solver's one exit),
+and the only code that knows back ends' status words."""
 import html
 import math
 import time
@@ -109,17 +110,6 @@ class Result:
                 f"<table><tr><th>value</th><th></th></tr>{rows}</table>")
 
 
-_IPOPT = {
-    "Solve_Succeeded": Status.SOLVED,
-    "Solved_To_Acceptable_Level": Status.INACCURATE,   # CasADi counts this as success; we do not
-    "Infeasible_Problem_Detected": Status.INFEASIBLE,
-    "Diverging_Iterates": Status.UNBOUNDED,
-    "Maximum_Iterations_Exceeded": Status.LIMIT,
-    "Maximum_CpuTime_Exceeded": Status.LIMIT,
-    "Maximum_WallTime_Exceeded": Status.LIMIT,
-}
-
-
 class Clock:
     """The seconds of one solve as a Result reports them, and the Result built with them: the one
     exit of every solver. Started where the solve starts; what it counts as construction is
@@ -150,6 +140,17 @@ class Clock:
     def result(self, status: Status, values: dict[str, float], *args, **kwargs) -> Result:
         """The Result of this solve, timed now; the other arguments are Result's own."""
         return Result(status, values, self.timing(), *args, **kwargs)
+
+
+_IPOPT = {
+    "Solve_Succeeded": Status.SOLVED,
+    "Solved_To_Acceptable_Level": Status.INACCURATE,   # CasADi counts this as success; we do not
+    "Infeasible_Problem_Detected": Status.INFEASIBLE,
+    "Diverging_Iterates": Status.UNBOUNDED,
+    "Maximum_Iterations_Exceeded": Status.LIMIT,
+    "Maximum_CpuTime_Exceeded": Status.LIMIT,
+    "Maximum_WallTime_Exceeded": Status.LIMIT,
+}
 
 
 def from_ipopt(return_status: str) -> Status:
