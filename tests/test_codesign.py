@@ -4,7 +4,7 @@ import dataclasses
 import pytest
 
 from mechopt import registry
-from mechopt.kit.errors import ModelError
+from mechopt.kit.errors import SettingError
 from mechopt.kit.result import Status
 from mechopt.solvers.loom.codesign import codesign_machine_speed
 from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
@@ -38,5 +38,5 @@ def codesign_law(result):
 
 
 def test_a_band_reaching_the_reference_speed_is_refused(machine):
-    with pytest.raises(ModelError, match="band_low_rpm=500.*below speed_rpm"):
+    with pytest.raises(SettingError, match="band_low_rpm=500.*below speed_rpm"):
         codesign_machine_speed(machine, band_low_rpm=500.0)

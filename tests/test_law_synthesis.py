@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from mechopt import registry
-from mechopt.kit.errors import ModelError
+from mechopt.kit.errors import SettingError
 from mechopt.kit.result import Status
 from mechopt.models.cam_follower import law_values
 from mechopt.models.cam_law import SplineBasis, elastic_response
@@ -131,9 +131,9 @@ def test_a_limit_no_law_keeps_gives_the_best_rebound_and_its_speed(lever):
 
 
 def test_bad_band_and_bracket_are_named(lever):
-    with pytest.raises(ModelError, match="band_low_rpm=500.*band is empty"):
+    with pytest.raises(SettingError, match="band_low_rpm=500.*band is empty"):
         synthesise_law(lever, band_low_rpm=500.0)
-    with pytest.raises(ModelError, match="phase_from_deg=40.*empty bracket"):
+    with pytest.raises(SettingError, match="phase_from_deg=40.*empty bracket"):
         synthesise_law(lever, phase_from_deg=40.0, phase_to_deg=30.0)
 
 

@@ -9,7 +9,7 @@ from scipy.optimize import linprog
 
 import mechopt
 from mechopt import registry
-from mechopt.kit.errors import ModelError
+from mechopt.kit.errors import SettingError
 from mechopt.kit.result import Status
 from mechopt.models.loom import Cyclogram
 from mechopt.solvers.loom import plan_cyclogram, repair_cyclogram
@@ -185,7 +185,7 @@ def test_a_time_based_operation_as_the_speed_goes_to_zero():
 def test_a_rebound_walk_too_long_is_refused_before_it_starts(setting):
     # issue 21: scan_step_deg = 0.001 ran for minutes and scan_to_deg = 360 for 46 s
     task = registry.find("loom/group1-repaired").build()[0]
-    with pytest.raises(ModelError, match=r"the limit is 1000: raise scan_step_deg") as err:
+    with pytest.raises(SettingError, match=r"the limit is 1000: raise scan_step_deg") as err:
         repair_cyclogram(task, **setting)
     assert err.value.key == "scan_step_deg"
 

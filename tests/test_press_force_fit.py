@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from mechopt.force_data import read_force_csv
-from mechopt.kit.errors import ModelError
+from mechopt.kit.errors import ModelError, SettingError
 from mechopt.kit.result import Status
 from mechopt.models.press import cutting_force_N
 from mechopt.solvers.press.force_fit import fit_force
@@ -77,10 +77,6 @@ def test_too_few_distinct_travels_is_inaccurate_not_a_fit():
 
 
 @pytest.mark.parametrize("args, kwargs, match", [
-    (([1.0, 2.0], [1.0, 2.0], 0), {}, r"degree=0: allowed 1, 2, 3, 4, 5 or 6"),
-    (([1.0, 2.0], [1.0, 2.0], 7), {}, r"degree=7: allowed 1, 2, 3, 4, 5 or 6"),
-    (([1.0, 2.0], [1.0, 2.0], 2.5), {}, r"degree=2\.5: allowed"),
-    (([1.0, 2.0], [1.0, 2.0], 1), {"segments": 0}, r"segments=0: must be an integer >= 1"),
     (([1.0, 2.0], [1.0], 1), {}, r"travel_mm has 2 values but load_N has 1"),
     (([1.0, 2.0], [1.0, np.nan], 1), {}, r"must be finite numbers"),
     (([1.0, 2.0], [0.0, 0.0], 1), {}, r"load_N is zero everywhere: there is no force law to fit"),
@@ -89,6 +85,17 @@ def test_too_few_distinct_travels_is_inaccurate_not_a_fit():
 def test_bad_fit_input_is_refused(args, kwargs, match):
     with pytest.raises(ModelError, match=match):
         fit_force(*args, **kwargs)
+
+
+@pytest.mark.parametrize("degree, kwargs, match", [
+    (0, {}, r"degree=0: allowed 1, 2, 3, 4, 5 or 6"),
+    (7, {}, r"degree=7: allowed 1, 2, 3, 4, 5 or 6"),
+    (2.5, {}, r"degree=2\.5: allowed"),
+    (1, {"segments": 0}, r"segments=0: must be an integer >= 1"),
+])
+def test_a_bad_fit_setting_is_a_setting_error(degree, kwargs, match):
+    with pytest.raises(SettingError, match=match):
+        fit_force([1.0, 2.0], [1.0, 2.0], degree, **kwargs)
 
 
 @pytest.mark.parametrize("text, match", [

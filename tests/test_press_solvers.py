@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from mechopt import registry
-from mechopt.kit.errors import ModelError
+from mechopt.kit.errors import ModelError, SettingError
 from mechopt.kit.result import Status, from_ivp, from_rootfinder
 from mechopt.models.press import PressDrive, mean_crank_inertia_kgm2
 from mechopt.solvers import press as pd
@@ -203,17 +203,22 @@ def test_blank_thicker_than_the_stroke_allows_is_refused():
 
 @pytest.mark.parametrize("call, match", [
     (lambda: pd.rk4(PAPER, step_s=3e-4, duration_s=0.25), r"step_s=0\.0003 does not divide duration_s=0\.25"),
-    (lambda: pd.rk4(PAPER, step_s=0.0), r"step_s=0\.0 must be > 0"),
-    (lambda: pd.events(PAPER, tol=0.0), r"tol=0\.0 must be > 0"),
-    (lambda: pd.events(PAPER, max_step_s=-1.0), r"max_step_s=-1\.0 must be > 0"),
-    (lambda: pd.events(PAPER, samples=0), r"samples=0 must be >= 1"),
-    (lambda: pd.events(PAPER, duration_s=0.0), r"duration_s=0\.0 must be > 0"),
-    (lambda: pd.steady_state(PAPER, tol=-1.0), r"tol=-1\.0 must be > 0"),
-    (lambda: pd.events("press"), r"task=str: expected a PressDrive"),
+    # the ranges the signatures declare, worded as a scene's setting is refused
+    (lambda: pd.rk4(PAPER, step_s=0.0), r"^step_s=0\.0: allowed > 0$"),
+    (lambda: pd.events(PAPER, tol=0.0), r"^tol=0\.0: allowed > 0 \.\.\. 0\.1$"),
+    (lambda: pd.events(PAPER, max_step_s=-1.0), r"^max_step_s=-1\.0: allowed > 0$"),
+    (lambda: pd.events(PAPER, samples=0), r"^samples=0: allowed 1 \.\.\. 10,000$"),
+    (lambda: pd.events(PAPER, duration_s=0.0), r"^duration_s=0\.0: allowed > 0 \.\.\. 3,600$"),
+    (lambda: pd.steady_state(PAPER, tol=-1.0), r"^tol=-1\.0: allowed > 0 \.\.\. 0\.1$"),
 ])
 def test_bad_settings_are_refused(call, match):
-    with pytest.raises(ModelError, match=match):
+    with pytest.raises(SettingError, match=match):
         call()
+
+
+def test_a_task_that_is_no_press_is_refused():
+    with pytest.raises(ModelError, match=r"task=str: expected a PressDrive"):
+        pd.events("press")
 
 
 def test_too_many_events_is_a_limit_not_a_crash():
@@ -372,13 +377,13 @@ def test_the_paper_belt_passes_the_stiffness_guards_with_room():
 def test_work_past_the_stated_limits_is_refused_before_it_starts(call, match):
     import time
     start = time.perf_counter()
-    with pytest.raises(ModelError, match=match):
+    with pytest.raises(SettingError, match=match):
         call()
     assert time.perf_counter() - start < 1.0
 
 
 def test_a_set_override_past_the_limits_is_refused_naming_the_key():
-    with pytest.raises(ModelError, match=r"duration_s=3600\.0 means about"):
+    with pytest.raises(SettingError, match=r"duration_s=3600\.0 means about"):
         registry.run(registry.find("press/start-up"), {"duration_s": 3600.0})
     from mechopt.kit.errors import SceneError
     with pytest.raises(SceneError, match=r"max_events"):

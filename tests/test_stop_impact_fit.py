@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from mechopt import registry
-from mechopt.kit.errors import ModelError
+from mechopt.kit.errors import SettingError
 from mechopt.kit.result import Status
 from mechopt.solvers.stop_impact import fit_roots
 from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
@@ -54,5 +54,5 @@ def test_a_box_without_a_root_is_infeasible_not_an_answer_on_its_edge(narrow):
 
 def test_an_empty_box_is_refused_naming_its_settings(narrow):
     task, _ = narrow
-    with pytest.raises(ModelError, match=r"t_min_deg=40 must be below t_max_deg=30"):
+    with pytest.raises(SettingError, match=r"t_min_deg=40 must be below t_max_deg=30"):
         fit_roots(task, t_min_deg=40.0, t_max_deg=30.0)

@@ -15,14 +15,13 @@ adds every member's worst node until no member has a node worse than its working
 family) before the best L for some nozzle h leaves the band? Each trial a is a small family NLP
 with H fixed, its deviation verified densely; the ends are bracketed outwards and bisected.
 """
-import time
 from typing import Literal
 
 import casadi as ca
 import numpy as np
 
 from mechopt.kit.cache import BuildCache
-from mechopt.kit.result import Result, Status, Timing
+from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Annotated, Interval, check_settings
 from mechopt.models.cam_cutter import (
     PAPER_A_MM,
@@ -193,13 +192,13 @@ def readjustable(task: ToolFamily, *, count: Annotated[int, Interval(ge=20, le=1
     grows with the members (20 cams x 4 slots: ~1 s a round against IPOPT's ~0.02 s).
     """
     check_settings(readjustable, count=count, slots=slots, max_rounds=max_rounds, widen=widen, nlp=nlp)
-    start = time.perf_counter()
+    clock = Clock()
     members = task.members
     got = _fit_family(members, task.err_width_mm, task.H_min_mm, task.H_max_mm, count, slots, max_rounds, nlp, widen)
-    build_s = got["build_s"]
+    clock.build_s = got["build_s"]
     if got["status"] is Status.FAILED:
-        return Result(Status.FAILED, {}, Timing(build_s, time.perf_counter() - start - build_s),
-                      message=f"{got['back_ends'][-1]} failed ({got['word']}) after {got['rounds']} round(s)")
+        return clock.result(Status.FAILED, {},
+                            message=f"{got['back_ends'][-1]} failed ({got['word']}) after {got['rounds']} round(s)")
     H, L = got["H"], got["L"]
     checks = [verified_deviation(a, h, H, L_i, finish_angle(a, h)) for (a, h), L_i in zip(members, L)]
     deviation = np.array([c[0] for c in checks])
@@ -242,10 +241,9 @@ def readjustable(task: ToolFamily, *, count: Annotated[int, Interval(ge=20, le=1
                        f"a_max x {SEARCH_FACTOR:g})"
         else:
             values |= {"a_served_min_mm": low, "a_served_max_mm": high}
-    return Result(status, values, Timing(build_s, time.perf_counter() - start - build_s), message=message,
-                  violated=violated, diagnostics=diagnostics,
-                  arrays={"a_mm": [m[0] for m in members], "h_mm": [m[1] for m in members], "L_mm": L,
-                          "deviation_mm": deviation})
+    return clock.result(status, values, message=message, violated=violated, diagnostics=diagnostics,
+                        arrays={"a_mm": [m[0] for m in members], "h_mm": [m[1] for m in members], "L_mm": L,
+                                "deviation_mm": deviation})
 
 
 def fixed_H_deviation(a, h_values, H, *, count=400, slots=4, max_rounds=40):
@@ -317,7 +315,7 @@ def evolve_family(task: ToolFamily, *, count: Annotated[int, Interval(ge=20, le=
     from mechopt.models.cam_cutter import ideal_normal
     from mechopt.solvers.cam_cutter.deviation import normal_deviation
 
-    start = time.perf_counter()
+    clock = Clock()
     members = task.members
     box, _, _ = _default_box(members, BOX_PAD_PER_A, task.H_min_mm, task.H_max_mm)
     nodes = []
@@ -344,8 +342,8 @@ def evolve_family(task: ToolFamily, *, count: Annotated[int, Interval(ge=20, le=
     H, L = float(found.x[0]), found.x[1:]
     deviation = max(verified_deviation(a, h, H, L_i, finish_angle(a, h))[0] for (a, h), L_i in zip(members, L))
     hit = target_mm is not None and found.fun <= target_mm
-    return Result(Status.SOLVED if hit or (target_mm is None and found.success) else Status.LIMIT,
-                  {"H_mm": H, "worst_deviation_mm": deviation, "nodes_max_deviation_mm": float(found.fun)},
-                  Timing(0.0, time.perf_counter() - start), message=str(found.message),
-                  diagnostics={"generations": int(found.nit), "evaluations": int(found.nfev)},
-                  arrays={"L_mm": L})
+    return clock.result(Status.SOLVED if hit or (target_mm is None and found.success) else Status.LIMIT,
+                        {"H_mm": H, "worst_deviation_mm": deviation, "nodes_max_deviation_mm": float(found.fun)},
+                        message=str(found.message),
+                        diagnostics={"generations": int(found.nit), "evaluations": int(found.nfev)},
+                        arrays={"L_mm": L})

@@ -12,7 +12,6 @@ INFEASIBLE with the best values kept, on a side of the default box LIMIT naming 
 solved in units of the cam (`_scale`), so one set of tolerances serves a 1 um and a 1 m cam.
 """
 import math
-import time
 from typing import Literal
 
 import casadi as ca
@@ -20,8 +19,8 @@ import numpy as np
 from scipy.optimize import differential_evolution
 
 from mechopt.kit.cache import BuildCache
-from mechopt.kit.errors import ModelError
-from mechopt.kit.result import Result, Status, Timing
+from mechopt.kit.errors import ModelError, SettingError
+from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Annotated, Ge, Interval, Tolerance, check_settings
 from mechopt.models.cam_cutter import (
     PAPER_A_MM,
@@ -85,12 +84,12 @@ def grid_scan(task: LinkageFit, *, count: Nodes = 1000,
     "open_start") then fails everywhere at the paper's width. `diagnostics` reports this.
     """
     _cardioid_only(task, "grid_scan")
-    start = time.perf_counter()
+    clock = Clock()
     H_grid, L_grid = _lattice(task)             # first: a lattice too large is refused before any work
     t_finish = task.t_finish_read_rad
     t = _node_times(task, count, nodes)
     ends = _segment_ends(t, task)
-    build = time.perf_counter() - start
+    clock.built()
 
     # golden-ratio spread from the far end: early nodes pass nearly every point, late ones ~3 %
     order = np.argsort((np.arange(t.size)[::-1] * 0.6180339887498949) % 1.0)
@@ -107,12 +106,12 @@ def grid_scan(task: LinkageFit, *, count: Nodes = 1000,
         if "max_deviation_mm" in best.values:
             values["best_deviation_mm"] = best.values["max_deviation_mm"]
             diagnostics |= {"best_H_mm": best.values["H_mm"], "best_L_mm": best.values["L_mm"]}
-        return Result(Status.INFEASIBLE, values, Timing(build, time.perf_counter() - start - build),
-                      message=f"no grid point keeps every node within err_width_mm={task.err_width_mm}; best "
-                              f"achievable (minimax NLP, {best.status.value}): "
-                              f"{best.values.get('max_deviation_mm', float('nan')):.4g} mm",
-                      violated=("err_width",), diagnostics=diagnostics,
-                      arrays=best.arrays)           # the best achievable linkage along the path
+        return clock.result(Status.INFEASIBLE, values,
+                            message=f"no grid point keeps every node within err_width_mm={task.err_width_mm}; best "
+                                    f"achievable (minimax NLP, {best.status.value}): "
+                                    f"{best.values.get('max_deviation_mm', float('nan')):.4g} mm",
+                            violated=("err_width",), diagnostics=diagnostics,
+                            arrays=best.arrays)           # the best achievable linkage along the path
     H, L = (float(v) for v in passing[0])
     deviation, where = verified_deviation(task.a_mm, task.h_mm, H, L, task.t_finish_rad)
     diagnostics |= {
@@ -122,7 +121,6 @@ def grid_scan(task: LinkageFit, *, count: Nodes = 1000,
         "segments_crossed_twice": _even_crossings(t, task, H, L),
         "max_deviation_at_rad": where,
     }
-    solve = time.perf_counter() - start - build       # the checks above are part of the answer
     values |= {"H_mm": H, "L_mm": L, "max_deviation_mm": deviation}
     status, violated = Status.SOLVED, ()
     message = f"first of {len(passing)} passing grid points, H ascending then L ascending"
@@ -133,8 +131,8 @@ def grid_scan(task: LinkageFit, *, count: Nodes = 1000,
         message += f"; between the {t.size} nodes the path is {deviation:.4g} mm off: raise count"
     # the first passing point on a side of the box: the passing set may go on past it
     status, message = _on_edge(task, status, message, H, L, (H_grid[0], H_grid[-1], L_grid[0], L_grid[-1]))
-    return Result(status, values, Timing(build, solve), message=message, violated=violated,
-                  diagnostics=diagnostics, arrays=deviation_arrays(task, H, L))
+    return clock.result(status, values, message=message, violated=violated,
+                        diagnostics=diagnostics, arrays=deviation_arrays(task, H, L))
 
 
 def minimax(task: LinkageFit | ProfileFit, *, count: Nodes = 1000, slots: Annotated[int, Interval(ge=1, le=4096)] = 8,
@@ -185,25 +183,23 @@ def minimax(task: LinkageFit | ProfileFit, *, count: Nodes = 1000, slots: Annota
     whose answer then says `global_certified` False, "not checked".
     """
     _check_count(count)
-    check_settings(minimax, slots=slots, max_rounds=max_rounds, widen=widen, starts=starts, certify=certify,
+    check_settings(minimax, slots=slots, max_rounds=max_rounds, nlp=nlp, widen=widen, starts=starts, certify=certify,
                    gap_per_size=gap_per_size, max_cells=max_cells)
-    if nlp not in NLP_OPTIONS:
-        raise ModelError(f"nlp={nlp!r} is not an NLP back end; known: {', '.join(NLP_OPTIONS)}", key="nlp")
-    start = time.perf_counter()
+    clock = Clock()
     t_start, t_end = task.t_start_rad, task.t_end_rad
     scale = _scale(task)
     t = np.linspace(t_start, t_end, count)
     px, py = (v / scale for v in task.path_point(t))
     pad, widened = BOX_PAD_PER_A, 0
     H, L = task.matched
-    build_s, back_ends, unsolved, rounds_in_all = 0.0, [], {}, 0
+    back_ends, unsolved, rounds_in_all = [], {}, 0
     general = isinstance(task, ProfileFit)        # a declared box, searched from several starts
     while True:
         box = task.bounds() if general else task.bounds(pad)
         seeds = [(H, L)] + (grid_starts(px[::max(1, count // 64)] * scale, py[::max(1, count // 64)] * scale,
                                         box, count=starts) if general else [])
         got = _best_of(px, py, task, box, seeds, count, slots, max_rounds, nlp)
-        build_s += got["build_s"]
+        clock.build_s += got["build_s"]
         back_ends += got["back_ends"]
         unsolved |= {r + rounds_in_all: w for r, w in got["unsolved"].items()}     # rounds of the kept start
         rounds_in_all += got["rounds"]
@@ -218,15 +214,13 @@ def minimax(task: LinkageFit | ProfileFit, *, count: Nodes = 1000, slots: Annota
         pad, widened = pad * BOX_WIDEN_FACTOR, widened + 1     # the default box cut it short: widen, re-solve
     rounds = rounds_in_all
     if status is Status.FAILED:
-        return Result(Status.FAILED, task.path_values(),
-                      Timing(build_s, time.perf_counter() - start - build_s),
-                      message=f"{back_ends[-1] if back_ends else nlp} failed ({status_word}) after {rounds} round(s)")
+        return clock.result(Status.FAILED, task.path_values(),
+                            message=f"{back_ends[-1] if back_ends else nlp} failed ({status_word}) after {rounds} round(s)")
     deviation, where = got["deviation"], got["where"]
     where_xy = [float(v[0]) for v in task.path_point(np.array([where]))]
     certify = certify == "on" or (certify == "auto" and general)
     certificate = _certify(task, px * scale, py * scale, box, H, L, deviation, gap_per_size, max_cells) \
         if certify else {"global_certified": False, "global_note": "not checked (certify = \"on\" checks it)"}
-    solve_s = time.perf_counter() - start - build_s       # the verification is part of the answer
     nodes_max = got["nodes_max"] * scale
     message = (f"{status_word} after {rounds} exchange round(s) ({', '.join(back_ends)}), "
                f"{got['nlp_nodes']} nodes in the NLP" + (f", default box widened {widened} time(s)" if widened else ""))
@@ -247,17 +241,17 @@ def minimax(task: LinkageFit | ProfileFit, *, count: Nodes = 1000, slots: Annota
                     f"gap {certificate['global_gap_mm']:.3g} mm after {certificate['global_cells']} cells")
     elif certify:
         message += f"; global over the box to {certificate['global_gap_mm']:.2g} mm"
-    return Result(status, {"H_mm": H, "L_mm": L, "max_deviation_mm": deviation, **task.path_values()},
-                  Timing(build_s, solve_s), message=message, violated=violated,
-                  diagnostics={"nodes_max_deviation_mm": nodes_max, "nlp_nodes": got["nlp_nodes"],
-                               "kept_nodes": got["kept_nodes"], "exchange_rounds": rounds,
-                               "nlp_status": status_word, "nlp_back_ends": back_ends,
-                               "nlp_unsolved_rounds": {str(r): w for r, w in unsolved.items()},
-                               "active_bounds": on_bounds, "box_mm": [float(b) for b in box],
-                               "box_widenings": widened,
-                               "max_deviation_at_rad": where, "max_deviation_at_mm": where_xy,
-                               "t_finish_exact_rad": t_end, "starts": got["starts"]} | certificate,
-                  arrays=deviation_arrays(task, H, L))
+    return clock.result(status, {"H_mm": H, "L_mm": L, "max_deviation_mm": deviation, **task.path_values()},
+                        message=message, violated=violated,
+                        diagnostics={"nodes_max_deviation_mm": nodes_max, "nlp_nodes": got["nlp_nodes"],
+                                     "kept_nodes": got["kept_nodes"], "exchange_rounds": rounds,
+                                     "nlp_status": status_word, "nlp_back_ends": back_ends,
+                                     "nlp_unsolved_rounds": {str(r): w for r, w in unsolved.items()},
+                                     "active_bounds": on_bounds, "box_mm": [float(b) for b in box],
+                                     "box_widenings": widened,
+                                     "max_deviation_at_rad": where, "max_deviation_at_mm": where_xy,
+                                     "t_finish_exact_rad": t_end, "starts": got["starts"]} | certificate,
+                        arrays=deviation_arrays(task, H, L))
 
 
 def _best_of(px, py, task, box, seeds, count, slots, max_rounds, nlp):
@@ -418,7 +412,7 @@ def robust(task: LinkageFit, *, count: Nodes = 1000, max_moves: Annotated[int, I
     _check_count(count)
     check_settings(robust, max_moves=max_moves)
     lattice = _lattice_indices(task)            # a box with no lattice point is refused before any work
-    start = time.perf_counter()
+    clock = Clock()
     best = minimax(task, count=count)
     if best.status not in (Status.SOLVED, Status.INFEASIBLE):
         return best
@@ -456,15 +450,15 @@ def robust(task: LinkageFit, *, count: Nodes = 1000, max_moves: Annotated[int, I
         status, violated = Status.INFEASIBLE, ("err_width",)
         message = f"worst case over the manufacturing box {verified:.4g} mm exceeds err_width_mm={task.err_width_mm}"
     status, message = _on_edge(task, status, message, H, L, tuple(k * step for k in lattice))
-    return Result(status, {"H_mm": H, "L_mm": L, "max_deviation_mm": nominal, "worst_deviation_mm": verified,
-                           "t_finish_rad": task.t_finish_read_rad},
-                  Timing(best.timing.build_s, time.perf_counter() - start - best.timing.build_s),
-                  message=message, violated=violated,
-                  diagnostics={"minimax_H_mm": best.values["H_mm"], "minimax_L_mm": best.values["L_mm"],
-                               "minimax_deviation_mm": best.values["max_deviation_mm"],
-                               "lattice_points": len(memo), "global_certified": False,
-                               "global_note": "a lattice descent: a local minimum of the worst case"},
-                  arrays=deviation_arrays(task, H, L))
+    clock.build_s = best.timing.build_s
+    return clock.result(status, {"H_mm": H, "L_mm": L, "max_deviation_mm": nominal, "worst_deviation_mm": verified,
+                                 "t_finish_rad": task.t_finish_read_rad},
+                        message=message, violated=violated,
+                        diagnostics={"minimax_H_mm": best.values["H_mm"], "minimax_L_mm": best.values["L_mm"],
+                                     "minimax_deviation_mm": best.values["max_deviation_mm"],
+                                     "lattice_points": len(memo), "global_certified": False,
+                                     "global_note": "a lattice descent: a local minimum of the worst case"},
+                        arrays=deviation_arrays(task, H, L))
 
 
 def evolve(task: LinkageFit, *, count: Nodes = 1000, popsize: Annotated[int, Interval(ge=5, le=1000)] = 15,
@@ -481,7 +475,7 @@ def evolve(task: LinkageFit, *, count: Nodes = 1000, popsize: Annotated[int, Int
     _cardioid_only(task, "evolve")
     _check_count(count)
     check_settings(evolve, popsize=popsize, tol=tol, maxiter=maxiter, seed=seed)
-    start = time.perf_counter()
+    clock = Clock()
     scale = _scale(task)
     t = np.linspace(0.0, task.t_finish_rad, count)
     px, py, nx, ny = nodes_and_normals(t, task.a_mm, task.h_mm)
@@ -500,17 +494,16 @@ def evolve(task: LinkageFit, *, count: Nodes = 1000, popsize: Annotated[int, Int
     H, L = (float(v) * scale for v in found.x)
     deviation, where = verified_deviation(task.a_mm, task.h_mm, H, L, task.t_finish_rad)
     nodes_max = float(found.fun) * scale        # the along-normal node measure DE minimised
-    solve = time.perf_counter() - start
     status = Status.SOLVED if found.success else Status.LIMIT
     on_bounds = _bounds_hit(task, H, L, box)
     status, violated, message = _verdict(task, status, str(found.message), nodes_max, deviation, count,
                                          H, L, box, on_bounds)
-    return Result(status, {"H_mm": H, "L_mm": L, "max_deviation_mm": deviation,
-                           "t_finish_rad": task.t_finish_read_rad}, Timing(0.0, solve),
-                  message=message, violated=violated,
-                  diagnostics={"generations": int(found.nit), "evaluations": int(found.nfev),
-                               "nodes_max_deviation_mm": nodes_max, "active_bounds": on_bounds,
-                               "max_deviation_at_rad": where}, arrays=deviation_arrays(task, H, L))
+    return clock.result(status, {"H_mm": H, "L_mm": L, "max_deviation_mm": deviation,
+                                 "t_finish_rad": task.t_finish_read_rad},
+                        message=message, violated=violated,
+                        diagnostics={"generations": int(found.nit), "evaluations": int(found.nfev),
+                                     "nodes_max_deviation_mm": nodes_max, "active_bounds": on_bounds,
+                                     "max_deviation_at_rad": where}, arrays=deviation_arrays(task, H, L))
 
 
 def check(task: LinkageCheck, *, count: Nodes = 1000,
@@ -521,7 +514,7 @@ def check(task: LinkageCheck, *, count: Nodes = 1000,
     err_width_mm, INFEASIBLE (violated err_width) otherwise; `margin_mm` is the band left over
     (negative when exceeded). Swept over H_mm x L_mm it maps where a linkage meets the band."""
     t = _node_times(task, count, nodes)
-    start = time.perf_counter()
+    clock = Clock()
     H, L = task.H_mm, task.L_mm
     deviation, where = verified_deviation(task.a_mm, task.h_mm, H, L, task.t_finish_rad)
     ends = _segment_ends(t, task)
@@ -535,13 +528,12 @@ def check(task: LinkageCheck, *, count: Nodes = 1000,
                     else f" (the path leaves the band past the last node, t = {t[-1]:.4f} rad: nodes='{nodes}' "
                          "leaves t_FINISH out)" if where > t[-1]
                     else " (the path leaves the band between the nodes: raise count)")
-    return Result(Status.SOLVED if within else Status.INFEASIBLE,
-                  {"max_deviation_mm": deviation, "margin_mm": task.err_width_mm - deviation,
-                   "nodes_failing": float(failing)},
-                  Timing(0.0, time.perf_counter() - start), message=message,
-                  violated=() if within else ("err_width",),
-                  diagnostics={"max_deviation_at_rad": where, "nodes": int(t.size), "node_rule": nodes},
-                  arrays=deviation_arrays(task, H, L))
+    return clock.result(Status.SOLVED if within else Status.INFEASIBLE,
+                        {"max_deviation_mm": deviation, "margin_mm": task.err_width_mm - deviation,
+                         "nodes_failing": float(failing)},
+                        message=message, violated=() if within else ("err_width",),
+                        diagnostics={"max_deviation_at_rad": where, "nodes": int(t.size), "node_rule": nodes},
+                        arrays=deviation_arrays(task, H, L))
 
 
 _NLP_BUILDS = BuildCache("cam_cutter.minimax_nlp", maxsize=64, per_thread=True)    # CasADi solvers: see BuildCache
@@ -582,7 +574,7 @@ def _node_times(task, count, nodes):
     the i that the rule `nodes` names (NODE_RULES)."""
     _check_count(count)
     if nodes not in NODE_RULES:
-        raise ModelError(f"nodes={nodes!r} is not a node rule; known: {', '.join(NODE_RULES)}", key="nodes")
+        raise SettingError(f"nodes={nodes!r}: allowed {', '.join(NODE_RULES)}", key="nodes")
     first, extra = NODE_RULES[nodes]
     return np.arange(first, count + extra) * (task.t_finish_read_rad / count)
 
@@ -596,7 +588,7 @@ def _cardioid_only(task, name):
 
 def _check_count(count):
     if not isinstance(count, (int, np.integer)) or count < 1:
-        raise ModelError(f"count={count!r} must be a whole number >= 1 (nodes on the ideal path)", key="count")
+        raise SettingError(f"count={count!r} must be a whole number >= 1 (nodes on the ideal path)", key="count")
 
 
 def _lattice_indices(task):

@@ -7,13 +7,12 @@ accelerations are CasADi derivatives of the position equations (5)-(7). The chec
 by virtual work the driving power M omega equals dE/dt minus the torch force's power, with E the
 energy (`linkage_energy`) differentiated by CasADi along the cycle, never from the reactions.
 """
-import time
 
 import casadi as ca
 import numpy as np
 
 from mechopt.kit.cache import BuildCache
-from mechopt.kit.result import Result, Status, Timing
+from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Annotated, Interval, check_settings
 from mechopt.models.cam_cutter import LOAD_UNKNOWNS, LinkageLoads, linkage_energy, linkage_positions
 
@@ -117,10 +116,10 @@ def joint_loads(task: LinkageLoads, *, count: Angles = 721, max_condition: Condi
     without bound there). Otherwise SOLVED.
     """
     check_settings(joint_loads, count=count, max_condition=max_condition)
-    start = time.perf_counter()
+    clock = Clock()
     phi_all = np.linspace(0.0, 4 * np.pi, count, endpoint=False)
-    A, b, force, v_torch, energy_rate, build_s = load_system(task, phi_all)
-    start_solve = time.perf_counter()
+    A, b, force, v_torch, energy_rate, clock.build_s = load_system(task, phi_all)
+    direct = Clock()            # the 9x9 solves alone (diagnostics)
     sv = np.linalg.svd(A, compute_uv=False)
     rank = np.count_nonzero(sv > sv[:, :1] * 9 * np.finfo(float).eps, axis=1)
     with np.errstate(divide="ignore"):
@@ -142,7 +141,7 @@ def joint_loads(task: LinkageLoads, *, count: Angles = 721, max_condition: Condi
 
     reactions = {"O1": np.hypot(x[:, 0], x[:, 1]), "P": np.hypot(x[:, 2], x[:, 3]),
                  "O_slide": np.abs(x[:, 4]), "O": np.hypot(x[:, 6], x[:, 7])}
-    solve_s = time.perf_counter() - start_solve
+    solve_s = direct.elapsed()
     singular = phi_all[~regular]
     worst = {}
     values = {}
@@ -178,11 +177,11 @@ def joint_loads(task: LinkageLoads, *, count: Angles = 721, max_condition: Condi
               **{f"R_{j}_N": r for j, r in reactions.items()},
               "power_balance_W": balance}
     torch_speed = np.hypot(*v_torch.T)
-    return Result(status, values, Timing(build_s, time.perf_counter() - start - build_s), message=message,
-                  diagnostics={**worst, "angles": count, "singular_phi_rad": [float(p) for p in singular],
-                               "solve_residual": solve_residual, "solve_s": solve_s,
-                               "mean_torch_speed_m_min": float(np.mean(torch_speed) * 60)},
-                  arrays=arrays)
+    return clock.result(status, values, message=message,
+                        diagnostics={**worst, "angles": count, "singular_phi_rad": [float(p) for p in singular],
+                                     "solve_residual": solve_residual, "solve_s": solve_s,
+                                     "mean_torch_speed_m_min": float(np.mean(torch_speed) * 60)},
+                        arrays=arrays)
 
 
 def _scaled(x, H):

@@ -17,10 +17,9 @@ t(3,7) >= n / r*: the same linear arc the graph engine already takes for the cyc
    the baseline. The gain is reported whatever it is.
 """
 import dataclasses
-import time
 
-from mechopt.kit.errors import ModelError
-from mechopt.kit.result import Result, Status, Timing
+from mechopt.kit.errors import ModelError, SettingError
+from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Annotated, Interval
 from mechopt.models.loom import Cyclogram
 from mechopt.solvers.loom.speed import max_machine_speed
@@ -58,37 +57,36 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
         raise ModelError("codesign: needs the lever's table [structure.lever], amplitude_limit_mm and speed_rpm",
                          key="lever")
     if band_low_rpm >= task.speed_rpm:
-        raise ModelError(f"band_low_rpm={band_low_rpm} must be below speed_rpm={task.speed_rpm} (the band's top)",
-                         key="band_low_rpm")
-    start = time.perf_counter()
+        raise SettingError(f"band_low_rpm={band_low_rpm} must be below speed_rpm={task.speed_rpm} (the band's top)",
+                           key="band_low_rpm")
+    clock = Clock()
     speed_settings = dict(scan_to_deg=scan_to_deg, scan_step_deg=scan_step_deg)
     baseline = max_machine_speed(task, **speed_settings)
     if baseline.status is not Status.SOLVED:
-        return Result(baseline.status, {}, Timing(0.0, time.perf_counter() - start),
-                      message=f"the baseline machine: {baseline.message}", violated=baseline.violated)
+        return clock.result(baseline.status, {}, message=f"the baseline machine: {baseline.message}",
+                            violated=baseline.violated)
     lever = dataclasses.replace(task.lever_model, amplitude_limit_mm=task.amplitude_limit_mm,
                                 speed_nominal_rpm=task.speed_rpm)
-    synth_start = time.perf_counter()
+    synthesis = Clock()
     law_run = synthesise_law(lever, objective="least_phase", coefficients=coefficients, band_low_rpm=band_low_rpm,
                              band_high_rpm=task.speed_rpm, sample_speeds=sample_speeds,
                              max_acceleration_mm_per_rad2=max_acceleration_mm_per_rad2,
                              phase_from_deg=phase_from_deg, phase_to_deg=phase_to_deg, phase_tol_deg=phase_tol_deg,
                              compare=False)
-    synth_s = time.perf_counter() - synth_start
     values = {"speed_baseline_rpm": baseline.values["max_speed_rpm"]}
-    took = {"synthesis_s": synth_s}                     # timings go to diagnostics: values are results
+    took = {"synthesis_s": synthesis.elapsed()}                     # timings go to diagnostics: values are results
     if law_run.status is not Status.SOLVED:
-        return Result(law_run.status, values, Timing(0.0, time.perf_counter() - start),
-                      message=f"the lift's law: {law_run.message}", violated=law_run.violated)
+        return clock.result(law_run.status, values, message=f"the lift's law: {law_run.message}",
+                            violated=law_run.violated)
     law = law_of(law_run)
     values["t_min_synthesized_deg"] = law_run.values["t_min_synthesized_deg"]
-    plan_start = time.perf_counter()
+    replan = Clock()
     designed = dataclasses.replace(task, lever={**task.lever, "law": law})
     plan = max_machine_speed(designed, **speed_settings)
-    took["replan_s"] = time.perf_counter() - plan_start
+    took["replan_s"] = replan.elapsed()
     if plan.status is not Status.SOLVED:
-        return Result(plan.status, values, Timing(0.0, time.perf_counter() - start),
-                      message=f"the re-planned machine: {plan.message}", violated=plan.violated)
+        return clock.result(plan.status, values, message=f"the re-planned machine: {plan.message}",
+                            violated=plan.violated)
     n, t37 = plan.values["max_speed_rpm"], plan.values["t_3_7_deg"]
     chain = float(rebound_amplitude_mm(designed.lever_model, n, t37))     # the loop closed by the chain
     values |= {"speed_rpm": n, "gain_percent": 100.0 * (n / values["speed_baseline_rpm"] - 1.0), "t_3_7_deg": t37,
@@ -113,8 +111,8 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
                    "limiting": plan.diagnostics.get("limiting"),
                    "law": str(law), "law_knots": list(law.knots), "law_coefficients": list(law.coefficients)}
     arrays = dict(law_run.arrays) | plan.arrays
-    return Result(status, values, Timing(0.0, time.perf_counter() - start), message=message, diagnostics=diagnostics,
-                  arrays=arrays, warnings=plan.warnings)
+    return clock.result(status, values, message=message, diagnostics=diagnostics, arrays=arrays,
+                        warnings=plan.warnings)
 
 
 def _lift_bound(plan):

@@ -20,7 +20,6 @@ critical [phi] lengthens it (+1 deg/deg).
 import dataclasses
 import functools
 import math
-import time
 from collections import deque
 from typing import Literal
 
@@ -30,8 +29,8 @@ import numpy as np
 
 from mechopt.kit.cache import BuildCache
 from mechopt.kit.errors import NAMED, ModelError, some_of
-from mechopt.kit.result import Result, Status, Timing, from_cvxpy
-from mechopt.kit.settings import Tolerance
+from mechopt.kit.result import Clock, Result, Status, from_cvxpy
+from mechopt.kit.settings import Tolerance, check_settings
 from mechopt.models.loom import Cyclogram, amplitude_mm, stress_bound_deg, stress_MPa
 from mechopt.solvers.loom.event_time import EventTimeLP, build_event_time_lp
 from mechopt.solvers.loom.graph import BackArcs, Levels, PositiveCycle, a_path, tight_arcs
@@ -86,8 +85,7 @@ def plan_cyclogram(task: Cyclogram, *, method: Literal["graph", "lp"] = "graph",
     >>> r.status.value, r.diagnostics["critical_chain"][:3]                             # doctest: +SKIP
     ('SOLVED', ['1', '3', '7'])
     """
-    if method not in ("graph", "lp"):
-        raise ModelError(f"method={method!r}: allowed graph, lp", key="method")
+    check_settings(plan_cyclogram, method=method, backend=backend, stress_form=stress_form)
     solve = _plan_graph if method == "graph" else functools.partial(_plan_lp, backend=backend, warm_start=warm_start)
     result = solve(task, stress_form=stress_form, tol_deg=tol_deg)
     if not check:
@@ -124,7 +122,7 @@ def one_sided_sensitivity(task, key, solve, at: Result) -> tuple[float, float] |
 
 def _plan_lp(task, *, stress_form, tol_deg, backend, warm_start) -> Result:
     """The event-time LP in cvxpy, checked against the longest-path certificate."""
-    start = time.perf_counter()
+    clock = Clock()
     net = Net(task, stress_form)
     def build():
         lp = build_event_time_lp(len(net.names), net.tails, net.heads, first=net.first, last=net.last,
@@ -138,49 +136,46 @@ def _plan_lp(task, *, stress_form, tol_deg, backend, warm_start) -> Result:
     key = (backend, *net.signature())
     # its parameters, the solve and the reading of values and duals are one state: one thread at a time
     with LP_BUILDS.held(key, build) as (lp, compiled_s):
-        return _solve_held_lp(task, net, lp, start, compiled_s > 0, stress_form=stress_form, tol_deg=tol_deg,
+        return _solve_held_lp(task, net, lp, clock, compiled_s > 0, stress_form=stress_form, tol_deg=tol_deg,
                               backend=backend, warm_start=warm_start)
 
 
-def _solve_held_lp(task, net, lp, start, fresh, *, stress_form, tol_deg, backend, warm_start) -> Result:
+def _solve_held_lp(task, net, lp, clock, fresh, *, stress_form, tol_deg, backend, warm_start) -> Result:
     """The cached event-time LP `lp` (held by this thread) solved for `task`: parameters set,
     solved, its answer checked and read."""
     set_parameters(lp, task, net)
-    build_s = time.perf_counter() - start
+    clock.built()
     try:
         lp.problem.solve(solver=backend, warm_start=warm_start)
     except cp.error.SolverError as exc:
-        return Result(Status.FAILED, {}, Timing(build_s, time.perf_counter() - start - build_s),
-                      message=f"{backend} failed: {exc}")
+        return clock.result(Status.FAILED, {}, message=f"{backend} failed: {exc}")
     status = from_cvxpy(lp.problem.status)
     diagnostics = {"method": "lp", "backend": backend, "stress_form": stress_form, "compiled_now": fresh,
                    "events": len(net.names), "operations": len(net.tails), "isolated_events": task.isolated_events,
                    "solver_status": lp.problem.status, "solve_time_backend_s": lp.problem.solver_stats.solve_time}
-    timing = lambda: Timing(build_s, time.perf_counter() - start - build_s)      # noqa: E731
     # the certificate: an optimum is only trusted when the difference constraints hold no positive cycle
     chain = conflict_chain(net) if status is Status.INFEASIBLE or _may_conflict(net) else []
     if chain:
         note = "" if status is Status.INFEASIBLE else \
             f"; {backend} reported {lp.problem.status}, the longest-path certificate overrules it"
-        return _infeasible(chain, timing(), diagnostics, note)
+        return _infeasible(chain, clock, diagnostics, note)
     if status is not Status.SOLVED:
         message = f"{backend}: {lp.problem.status}"
         if status is Status.INFEASIBLE:
             message += " (no positive cycle among the difference constraints: a numerical failure?)"
-        return Result(status, {}, timing(), message=message, diagnostics=diagnostics)
+        return clock.result(status, {}, message=message, diagnostics=diagnostics)
     values, more, overstressed, disagreement, (p, floats) = _report(task, net, lp, tol_deg)
     diagnostics |= more
-    solve_s = time.perf_counter() - start - build_s
     if disagreement:
-        return Result(Status.INACCURATE, values, Timing(build_s, solve_s), message=disagreement,
-                      violated=overstressed, diagnostics=diagnostics, arrays=plan_arrays(net, values, diagnostics, p, floats))
+        return clock.result(Status.INACCURATE, values, message=disagreement, violated=overstressed,
+                            diagnostics=diagnostics, arrays=plan_arrays(net, values, diagnostics, p, floats))
     objective = "limiting_op_deg" if net.limiting else "span_deg"
     message = (f"{objective} = {values[objective]:.6g} ({backend}, {stress_form} stress, "
                f"{'compiled' if fresh else 'DPP re-solve'}); {SENSITIVITY_CONVENTION}")
     if overstressed:      # the tangent under-estimates sigma_max: the linearised optimum breaks the true limit
         message += f"; the linearised stress limit lets sigma_max exceed [sigma_H] on {some_of(overstressed, sep=', ')}"
-    return Result(Status.SOLVED, values, Timing(build_s, solve_s), message=message, violated=overstressed,
-                  diagnostics=diagnostics, arrays=plan_arrays(net, values, diagnostics, p, floats))
+    return clock.result(Status.SOLVED, values, message=message, violated=overstressed,
+                        diagnostics=diagnostics, arrays=plan_arrays(net, values, diagnostics, p, floats))
 
 
 PER_NAME_MAX_OPS = 10_000   # above it, per-event and per-operation figures live in Result.arrays only
@@ -209,7 +204,7 @@ def plan_arrays(net, values, diagnostics, p=None, floats=None) -> dict:
     return arrays
 
 
-def _infeasible(chain, timing, diagnostics, note="") -> Result:
+def _infeasible(chain, clock, diagnostics, note="") -> Result:
     """INFEASIBLE, naming the conflicting chain (a positive cycle of the constraints): its first
     NAMED constraints and events, and its length (a chain of 10^6 operations is counted, not listed)."""
     excess = math.fsum(w for _, _, w in chain)
@@ -217,8 +212,8 @@ def _infeasible(chain, timing, diagnostics, note="") -> Result:
                                  "conflict_excess_deg": excess}
     message = "infeasible: conflicting chain " + some_of(label for _, label, _ in chain)
     message += f" (needs {excess:.6g} deg more than its limits allow){note}"
-    return Result(Status.INFEASIBLE, {}, timing, message=message,
-                  violated=tuple(label for _, label, _ in chain[:NAMED]), diagnostics=diagnostics)
+    return clock.result(Status.INFEASIBLE, {}, message=message,
+                        violated=tuple(label for _, label, _ in chain[:NAMED]), diagnostics=diagnostics)
 
 
 def _may_conflict(net) -> bool:
@@ -665,31 +660,30 @@ def back_arcs(net, with_cycle=True):
 
 def _plan_graph(task, *, stress_form, tol_deg) -> Result:
     """Event times, floats, duals and ranging by longest paths (solvers/loom/graph.py)."""
-    start = time.perf_counter()
+    clock = Clock()
     net = Net(task, stress_form)
     levels = Levels.of(len(net.names), net.tails, net.heads)
     back, kinds = back_arcs(net)
-    build_s = time.perf_counter() - start
+    clock.built()
     diagnostics = {"method": "graph", "stress_form": stress_form, "events": len(net.names),
                    "operations": len(net.tails), "isolated_events": task.isolated_events}
     try:
         solved = _longest_schedule(net, levels, back, tol_deg)
     except PositiveCycle:
         chains = conflict_chain(net, MAX_CONFLICTS)
-        timing = Timing(build_s, time.perf_counter() - start - build_s)
         if len(chains) < 2:
-            return _infeasible(chains[0] if chains else [], timing, diagnostics)
-        first = _infeasible(chains[0], timing, diagnostics)
-        more = [_infeasible(chain, timing, {}) for chain in chains[1:]]
+            return _infeasible(chains[0] if chains else [], clock, diagnostics)
+        first = _infeasible(chains[0], clock, diagnostics)
+        more = [_infeasible(chain, clock, {}) for chain in chains[1:]]
         message = first.message + "".join(f"; and, independent of it, {r.message.removeprefix('infeasible: ')}"
                                           for r in more)
         return dataclasses.replace(first, message=message, violated=sum((r.violated for r in [first, *more]), ()),
                                    diagnostics=first.diagnostics | {"conflicts": [r.diagnostics for r in more]})
     if solved is None:
         x, y = (net.names[i] for i in net.limiting)
-        return Result(Status.UNBOUNDED, {}, Timing(build_s, time.perf_counter() - start - build_s), diagnostics=diagnostics,
-                      message=f"unbounded: no chain of limits leads from {y} back to {x} (give cycle_deg), so "
-                              f"t({x}->{y}) can grow without end")
+        return clock.result(Status.UNBOUNDED, {}, diagnostics=diagnostics,
+                            message=f"unbounded: no chain of limits leads from {y} back to {x} (give cycle_deg), so "
+                                    f"t({x}->{y}) can grow without end")
     p, objective, uses, back_uses, lb_at = solved
     values, overstressed = schedule_values(task, net, p)
     sign = -1.0 if net.limiting else 1.0
@@ -706,8 +700,8 @@ def _plan_graph(task, *, stress_form, tol_deg) -> Result:
     message = f"{name} = {values[name]:.6g} (graph, {stress_form} stress); {SENSITIVITY_CONVENTION}"
     if overstressed:
         message += f"; the linearised stress limit lets sigma_max exceed [sigma_H] on {some_of(overstressed, sep=', ')}"
-    return Result(Status.SOLVED, values, Timing(build_s, time.perf_counter() - start - build_s), message=message,
-                  violated=overstressed, diagnostics=diagnostics, arrays=plan_arrays(net, values, diagnostics, p, float_deg))
+    return clock.result(Status.SOLVED, values, message=message, violated=overstressed, diagnostics=diagnostics,
+                        arrays=plan_arrays(net, values, diagnostics, p, float_deg))
 
 
 def _longest_schedule(net, levels, back, tol):

@@ -4,7 +4,6 @@ rebound's tangent cannot be trusted."""
 import dataclasses
 import functools
 import math
-import time
 from dataclasses import dataclass
 from typing import Annotated, Literal
 
@@ -12,8 +11,8 @@ import numpy as np
 from scipy.optimize import brentq
 
 from mechopt.kit.cache import BuildCache
-from mechopt.kit.errors import ModelError
-from mechopt.kit.result import Result, Status, Timing
+from mechopt.kit.errors import ModelError, SettingError
+from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Interval, Tolerance
 from mechopt.models.loom import Cyclogram, stress_bound_deg, stress_MPa
 from mechopt.solvers.loom.plan import plan_cyclogram
@@ -199,7 +198,7 @@ def repair_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] =
     LP that fails in a round returns its status, with the rounds so far. `check`: every round's
     plan solved by both methods (plan_cyclogram's check); the last round's check_rel is kept.
     """
-    start = time.perf_counter()
+    clock = Clock()
     laws = _exact_limits(task, stress_form, scan_to_deg, scan_step_deg)
     unit = {"amplitude": "mm", "contact_stress": "MPa"}
     tol = {"amplitude": tol_mm, "contact_stress": tol_MPa}
@@ -228,7 +227,7 @@ def repair_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] =
         short = [law for r, law in zip(rows, laws) if law.kind == "amplitude" and r["limit"] not in over
                  and (law.range_bound().from_deg is None or r["t_deg"] < law.range_bound().from_deg - tol_deg)]
         if not over and not short:
-            return _repaired(task, result, laws, history, start, Status.SOLVED,
+            return _repaired(task, result, laws, history, clock, Status.SOLVED,
                              f"exact laws hold after {round_} round(s) (tol {tol_mm:g} mm, {tol_MPa:g} MPa); "
                              + "; ".join(law.range_bound().statement() for law in amplitude))
         if round_ == max_rounds:
@@ -243,10 +242,10 @@ def repair_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] =
                 bound, how = law.bound_deg(), "newton"
             if bound is None or bound == math.inf:      # the rebound exceeds its limit on all the range
                 best = law.range_bound()        # the least rebound the range offers: at its top
-                return Result(Status.INFEASIBLE, {}, Timing(result.timing.build_s, time.perf_counter() - start),
-                              message=f"round {round_}: {row['limit']}: {best.statement()}", violated=(row["limit"],),
-                              diagnostics={"rounds": history, "best_t_deg": best.to_deg,
-                                           "best_amplitude_mm": best.amplitude_mm})
+                clock.build_s = result.timing.build_s
+                return clock.result(Status.INFEASIBLE, {}, message=f"round {round_}: {row['limit']}: {best.statement()}",
+                                    violated=(row["limit"],), diagnostics={"rounds": history, "best_t_deg": best.to_deg,
+                                                                           "best_amplitude_mm": best.amplitude_mm})
             cuts[law.k] = max(cuts.get(law.k, -np.inf), bound)
             row["cut_deg"], row["cut"] = cuts[law.k], how
         ops = [dict(op) for op in task.operations]
@@ -255,12 +254,12 @@ def repair_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] =
             op["min_deg"] = max(float(op["min_deg"]), bound)
         current = dataclasses.replace(current, operations=ops)
     worst = max((r for r in history[-1]["limits"]), key=lambda r: r["excess"])
-    return _repaired(task, result, laws, history, start, Status.LIMIT,
+    return _repaired(task, result, laws, history, clock, Status.LIMIT,
                      f"not converged in {max_rounds} round(s): exact {worst['limit']} exceeds its limit by "
                      f"{worst['excess']:.3g} (raise max_rounds or loosen the tolerances)", violated=tuple(over))
 
 
-def _repaired(task, result, laws, history, start, status, message, violated=()):
+def _repaired(task, result, laws, history, clock, status, message, violated=()):
     """The last LP round's values with the linear-law readings replaced by the exact ones."""
     values = {k: v for k, v in result.values.items() if not k.startswith(("amplitude_", "sigma_", "sens_"))}
     values["rounds"] = float(len(history))
@@ -275,8 +274,9 @@ def _repaired(task, result, laws, history, start, status, message, violated=()):
     diagnostics = {k: v for k, v in result.diagnostics.items() if k not in ("binding", "sens_min_deg",
                                                                             "sensitivity_convention")}
     diagnostics["rounds"] = history
-    return Result(status, values, Timing(result.timing.build_s, time.perf_counter() - start - result.timing.build_s),
-                  message=message, violated=violated, diagnostics=diagnostics, arrays=result.arrays)   # the last plan's table
+    clock.build_s = result.timing.build_s           # the last round's LP construction
+    return clock.result(status, values, message=message, violated=violated, diagnostics=diagnostics,
+                        arrays=result.arrays)   # the last plan's table
 
 
 _AMPLITUDE_BOUNDS = BuildCache("loom.amplitude_bound", maxsize=64)
@@ -311,8 +311,8 @@ def check_walk(to_deg: float, step_deg: float) -> None:
     """Refuse a walk of more than MAX_WALK_POINTS rebounds, naming the keys and the limit."""
     points = math.ceil((to_deg - min(WALK_FLOOR_DEG, to_deg)) / step_deg)
     if points > MAX_WALK_POINTS:
-        raise ModelError(f"scan_to_deg={to_deg:g}, scan_step_deg={step_deg:g}: the walk for the rebound's exact "
-                         f"bound would take {points} rebounds (about {points * 0.03:.0f} s), the limit is "
-                         f"{MAX_WALK_POINTS}: raise scan_step_deg to >= "
-                         f"{(to_deg - WALK_FLOOR_DEG) / MAX_WALK_POINTS:.3g} deg or lower scan_to_deg to <= "
-                         f"{WALK_FLOOR_DEG + MAX_WALK_POINTS * step_deg:.3g} deg", key="scan_step_deg")
+        raise SettingError(f"scan_to_deg={to_deg:g}, scan_step_deg={step_deg:g}: the walk for the rebound's exact "
+                           f"bound would take {points} rebounds (about {points * 0.03:.0f} s), the limit is "
+                           f"{MAX_WALK_POINTS}: raise scan_step_deg to >= "
+                           f"{(to_deg - WALK_FLOOR_DEG) / MAX_WALK_POINTS:.3g} deg or lower scan_to_deg to <= "
+                           f"{WALK_FLOOR_DEG + MAX_WALK_POINTS * step_deg:.3g} deg", key="scan_step_deg")

@@ -2,7 +2,6 @@
 function of n / t (a probe checks), bisection on n with LP feasibility otherwise."""
 import functools
 import math
-import time
 from typing import Annotated, Literal
 
 import cvxpy as cp
@@ -10,8 +9,8 @@ import numpy as np
 
 from mechopt.kit.cache import BuildCache
 from mechopt.kit.errors import NAMED, ModelError, some_of
-from mechopt.kit.result import Result, Status, Timing, from_cvxpy
-from mechopt.kit.settings import Interval
+from mechopt.kit.result import Clock, Result, Status, from_cvxpy
+from mechopt.kit.settings import Interval, check_settings
 from mechopt.models.loom import MAX_RPM, Cyclogram
 from mechopt.solvers.loom.event_time import HeldLP, incidence
 from mechopt.solvers.loom.graph import Levels, a_path, tight_arcs
@@ -143,37 +142,33 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp",
     stated range. With a rebound: amplitude_holds_from_*_deg and amplitude_holds_to_*_deg, the
     range of t at the answer on which a <= limit is shown.
     """
+    check_settings(max_machine_speed, method=method, backend=backend)
     if task.cycle_deg is None:
         raise ModelError("cycle_deg: the machine's speed is limited by its cycle; give cycle_deg", key="cycle_deg")
-    start = time.perf_counter()
+    clock = Clock()
     net = Net.structure(task)        # the speed LP has its own bounds
     phi = _angle_floors_deg(task)
     g, why, amp_bounds = speed_coeffs_deg_per_rpm(task, scan_to_deg, scan_step_deg)
     scales, probe = n_over_t_probe(task, scan_to_deg)
     chosen = ("graph" if scales else "bisection") if method == "auto" else method
-    def timing():
-        return Timing(0.0, time.perf_counter() - start)
     diagnostics = {"method": chosen, "method_asked": method, "n_over_t_probe_rel": probe, "backend": backend,
                    "amplitude_bounds_at_reference": {f"{task.arcs[k][0]}->{task.arcs[k][1]}": b.statement()
                                                      for k, b in amp_bounds.items()}}
     unreached = [b for b in amp_bounds.values() if b.from_deg is None]
     if unreached:
-        return Result(Status.LIMIT, {}, timing(), message=f"the rebound's bound is not on the stated range: "
-                      f"{unreached[0].statement()} (raise scan_to_deg)", diagnostics=diagnostics)
+        return clock.result(Status.LIMIT, {}, message=f"the rebound's bound is not on the stated range: "
+                            f"{unreached[0].statement()} (raise scan_to_deg)", diagnostics=diagnostics)
     if chosen == "graph":
-        n_max, status, message, build_s, extra = _speed_graph(task, net, phi, g, why)
+        n_max, status, message, clock.build_s, extra = _speed_graph(task, net, phi, g, why)
         bounds_at = functools.partial(_lp_bounds_at, phi, g, why)
     elif chosen == "lp":
-        n_max, status, message, build_s, extra = _speed_lp(task, net, phi, g, backend)
+        n_max, status, message, clock.build_s, extra = _speed_lp(task, net, phi, g, backend)
         bounds_at = functools.partial(_lp_bounds_at, phi, g, why)
     else:
         bounds_at = functools.partial(_exact_bounds_at, task, phi, scan_to_deg, scan_step_deg)
-        n_max, status, message, build_s, extra = _speed_bisection(task, net, bounds_at, rtol)
+        n_max, status, message, clock.build_s, extra = _speed_bisection(task, net, bounds_at, rtol)
     sg = extra.pop("graph", None)
     cycle = extra.pop("limiting_cycle_arcs", None)
-
-    def timing():
-        return Timing(build_s, time.perf_counter() - start - build_s)
     diagnostics |= {"speed_coeffs_deg_per_rpm":
                     {f"{x}->{y}": float(g[k]) for k, (x, y) in enumerate(task.arcs) if g[k] > 0}} | extra
     if status is Status.SOLVED and n_max * g.max(initial=0.0) <= 1e-6:   # below a micro-degree: at rest
@@ -185,12 +180,12 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp",
         message = ("no speed fits: conflicting chain " + some_of(label for _, label, _ in chain)
                    + f" (needs {math.fsum(w for _, _, w in chain):.6g} deg more than its limits allow as n -> 0;"
                    + f" groups {some_of(groups, sep=', ')})")
-        return Result(Status.INFEASIBLE, {}, timing(), message=message,
-                      violated=tuple(label for _, label, _ in chain[:NAMED]), diagnostics=diagnostics)
+        return clock.result(Status.INFEASIBLE, {}, message=message,
+                            violated=tuple(label for _, label, _ in chain[:NAMED]), diagnostics=diagnostics)
     if status is Status.UNBOUNDED:
         message += ": no limit grows with the speed on a chain the cycle closes (no stress, rebound or min_ms there)"
     if status is not Status.SOLVED:
-        return Result(status, {}, timing(), message=message, diagnostics=diagnostics)
+        return clock.result(status, {}, message=message, diagnostics=diagnostics)
     lb, why_at = bounds_at(n_max)
     certified = _certify_on_graph(sg, n_max, rtol) if sg else _certify_speed(task, net, bounds_at, n_max, rtol)
     values, more = _speed_report(task, net, lb, why_at, n_max, rtol, sg)
@@ -212,14 +207,14 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp",
     diagnostics |= more
     arrays = plan_arrays(net, values, diagnostics)          # the schedule at the highest speed, per operation
     if certified:
-        return Result(Status.INACCURATE, values, timing(), message=certified, diagnostics=diagnostics, arrays=arrays)
+        return clock.result(Status.INACCURATE, values, message=certified, diagnostics=diagnostics, arrays=arrays)
     reason = ("every law a function of n / t" if scales else "the rebound is not a function of n / t") \
         + f" (probe {probe:.2g})"
     message = (f"max_speed_rpm = {n_max:.6g} ({chosen}{': ' + reason if method == 'auto' else ''}); limiting "
                f"group {more['limiting_group']}, constraint {more['limiting_constraint']}")
     if "check" in more:
         message += f"; checked by the {more['check']['method']} ({more['check']['rel']:.1g} relative)"
-    return Result(Status.SOLVED, values, timing(), message=message, diagnostics=diagnostics, arrays=arrays)
+    return clock.result(Status.SOLVED, values, message=message, diagnostics=diagnostics, arrays=arrays)
 
 
 def _speed_lp(task, net, phi, g, backend):
@@ -253,11 +248,11 @@ def _speed_lp(task, net, phi, g, backend):
         prm["min_deg"].value, prm["g"].value, prm["cycle_deg"].value = phi, g[rows], task.cycle_deg
         if "window_deg" in prm:
             prm["window_deg"].value = np.array([w for _, _, w in task.window_arcs()])
-    start = time.perf_counter()
+    clock = Clock()
     # its parameters, the solve and the reading of n are one state: one thread at a time
     with LP_BUILDS.held(key, build) as ((problem, n, prm), _):
         set_values(prm)
-        build_s = time.perf_counter() - start
+        build_s = clock.elapsed()
         try:
             problem.solve(solver=backend, warm_start=False)
         except cp.error.SolverError as exc:
@@ -320,11 +315,11 @@ def _exact_bounds_at(task, phi, scan_to_deg, scan_step_deg, n_rpm):
 def _speed_bisection(task, net, bounds_at, rtol):
     """Bisection on n: feasible when the event-time LP with the exact bounds at n fits the cycle
     (one HiGHS model held through the steps, `HeldLP`; `backend` is the LP method's)."""
-    start = time.perf_counter()
+    clock = Clock()
     lp = HeldLP(len(net.names), net.tails, net.heads, first=net.first, last=net.last,
                 window_arcs=net.window_idx, sync_arcs=net.sync_idx, with_cycle=True)
     windows = [w for _, _, w in task.window_arcs()]
-    build_s = time.perf_counter() - start
+    build_s = clock.elapsed()
     steps = []
 
     def feasible(n_rpm):
@@ -584,9 +579,9 @@ class SpeedGraph:
 
 def _speed_graph(task, net, phi, g, why):
     """maximise n on the graph (SpeedGraph): INFEASIBLE when n = 0 does not fit."""
-    start = time.perf_counter()
+    clock = Clock()
     sg = SpeedGraph(task, net, phi, g)
-    build_s = time.perf_counter() - start
+    build_s = clock.elapsed()
     if sg.positive_cycle_at(0.0) is not None:
         return None, Status.INFEASIBLE, "", build_s, {"graph": sg}
     try:

@@ -49,7 +49,6 @@ def simulate(task, *, method: Method = "events", **options):
     >>> simulate(task, method="steady_state").status.value
     'SOLVED'
     """
-    if method not in METHODS:
-        from mechopt.kit.errors import SceneError
-        raise SceneError(f"method={method!r}: allowed {', '.join(METHODS)}", key="method")
+    from mechopt.kit.settings import check_settings
+    check_settings(simulate, method=method)          # SettingError: method='x': allowed rk4, events, ...
     return METHODS[method](task, **options)

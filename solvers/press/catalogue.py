@@ -7,12 +7,11 @@ ratio is screened before any NLP when the motor's idle speed reduced by it (the 
 can turn) is already below the speed band, when the motor cannot carry the cycle's mean load
 (`models.press.stall_check`), or when the steady motion at the starting flywheel turns the crank clearly
 off the band (one warm-started `steady_state`)."""
-import time
 
 import numpy as np
 
 from mechopt.kit.errors import ModelError
-from mechopt.kit.result import Result, Status, Timing
+from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Annotated, Interval, Tolerance
 from mechopt.models.press import PressCatalogue, stall_check
 from mechopt.solvers.press.design import design
@@ -36,7 +35,7 @@ def catalogue(task: PressCatalogue, *, tol: Tolerance = 1e-10, samples: Samples 
     """
     if not isinstance(task, PressCatalogue):
         raise ModelError(f"task={type(task).__name__}: expected a PressCatalogue", key="task")
-    t_start = time.perf_counter()
+    clock = Clock()
     low, high = (task.nominal_speed_rad_s * (1 + s * task.max_speed_deviation) for s in (-1, 1))
     order = sorted(range(len(task.motors)), key=lambda k: (task.motors[k][1], task.motors[k][2]))
     tried, reasons = [], []
@@ -65,11 +64,10 @@ def catalogue(task: PressCatalogue, *, tol: Tolerance = 1e-10, samples: Samples 
                 found.append((result.values[_objective_key(task)], ratio, result, drive))
         if found:
             _, ratio, result, drive = min(found, key=lambda f: f[0])
-            return _chosen(task, k, ratio, result, drive, tried, reasons, t_start)
+            return _chosen(task, k, ratio, result, drive, tried, reasons, clock)
         reasons.append(f"{row[0]}: " + _why_not(task, k, tried, low, high))
-    return Result(Status.INFEASIBLE, {}, Timing(0.0, time.perf_counter() - t_start),
-                  "no catalogue row has a feasible ratio: " + "; ".join(reasons), ("catalogue",), {},
-                  _table(tried))
+    return clock.result(Status.INFEASIBLE, {}, "no catalogue row has a feasible ratio: " + "; ".join(reasons),
+                        ("catalogue",), {}, _table(tried))
 
 
 def _off_the_band(drive, low, high):
@@ -99,7 +97,7 @@ def _table(tried):
     return {"row": rows[:, 0], "ratio": rows[:, 1], "code": rows[:, 2], "flywheel_inertia_kgm2": rows[:, 3]}
 
 
-def _chosen(task, k, ratio, result, drive, tried, reasons, t_start):
+def _chosen(task, k, ratio, result, drive, tried, reasons, clock):
     row = task.motors[k]
     steady = steady_state(drive.drive({v: result.values[v] for v in task.variables}))
     peak = float(np.max(np.abs(steady.arrays["motor_torque_Nm"]))) / ratio
@@ -113,5 +111,5 @@ def _chosen(task, k, ratio, result, drive, tried, reasons, t_start):
     message = (f"{row[0]} ({row[1]:g} kW) with i = {ratio:g}: {key} {values[key]:.5g}, "
                f"mean speed {values['omega_mean_rad_s']:.4g} rad/s, torque margin {values['motor_torque_margin']:.3g} "
                f"(M_k / peak shaft torque){cheaper}")
-    return Result(Status.SOLVED, values, Timing(0.0, time.perf_counter() - t_start), message, (),
-                  result.diagnostics | {"tried": len(tried)}, result.arrays | _table(tried))
+    return clock.result(Status.SOLVED, values, message, (), result.diagnostics | {"tried": len(tried)},
+                        result.arrays | _table(tried))

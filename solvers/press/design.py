@@ -31,7 +31,6 @@ at once: a retry cannot change them. When no step certifies, the best attempt is
 settings to try (`tol`, `max_iter`, `samples`, `start`; also `diagnostics["hint"]`), and
 `diagnostics["attempts"]` lists each step.
 """
-import time
 from dataclasses import dataclass, replace
 from itertools import pairwise
 from typing import Literal
@@ -41,9 +40,9 @@ import numpy as np
 from scipy.integrate import simpson
 
 from mechopt.kit.cache import memoised
-from mechopt.kit.errors import ModelError, SettingError
-from mechopt.kit.result import Result, Status, Timing, from_ipopt
-from mechopt.kit.settings import Annotated, Interval, Tolerance
+from mechopt.kit.errors import ModelError
+from mechopt.kit.result import Clock, Result, Status, from_ipopt
+from mechopt.kit.settings import Annotated, Interval, Tolerance, check_settings
 from mechopt.models.press import (
     BOUNDS,
     FORCE_KEYS,
@@ -238,9 +237,8 @@ def design(task: PressDesign, *, tol: Tolerance = 1e-10, samples: Samples = 16,
     """
     if not isinstance(task, PressDesign):
         raise ModelError(f"task={type(task).__name__}: expected a PressDesign", key="task")
-    if start not in ("rule_of_thumb", "press"):
-        raise SettingError(f"start={start!r}: allowed 'rule_of_thumb', 'press'", key="start")
-    t_start = time.perf_counter()
+    check_settings(design, tol=tol, samples=samples, max_iter=max_iter, check_sensitivity=check_sensitivity, start=start)
+    clock = Clock()
     first = task.start(rule_of_thumb=start == "rule_of_thumb")
     attempts, result = [], None
     for step in RETRIES:
@@ -261,7 +259,8 @@ def design(task: PressDesign, *, tol: Tolerance = 1e-10, samples: Samples = 16,
         if tried.status in (Status.SOLVED, Status.INFEASIBLE) or "belt_mode" in tried.violated \
                 or "model" in tried.diagnostics:
             break
-    timing = Timing(result.timing.build_s, time.perf_counter() - t_start - result.timing.build_s)
+    clock.build_s = result.timing.build_s          # the chosen try's construction; the other tries are solving
+    timing = clock.timing()
     diagnostics = result.diagnostics | {"attempts": attempts}
     if result.status in (Status.SOLVED, Status.INFEASIBLE):
         message = result.message if len(attempts) == 1 else \
@@ -297,30 +296,25 @@ def _continued(task, tol, samples, max_iter, check_sensitivity, start):
 def _design(task, tol, samples, max_iter, check_sensitivity, warm, start=None):
     """`design`'s one try from `start` (a design; the task's own start when None); `warm` =
     (nodes, design, states at phi = 0) of a nearby optimum to start from instead."""
-    t_start = time.perf_counter()
-
-    def timing(build=0.0):
-        return Timing(build, time.perf_counter() - t_start - build)
-
+    clock = Clock()
     stall = _stall(task)
     if stall is not None:
-        return Result(Status.INFEASIBLE, stall[0], timing(), stall[1], ("stall",))
+        return clock.result(Status.INFEASIBLE, stall[0], stall[1], ("stall",))
     start = task.start() if start is None else start
     too_fast = belt_too_fast_per_revolution(task.drive(start), STEPS_PER_REVOLUTION, "the design NLP")
     if too_fast:
-        return _on_rigid_belt(task, too_fast, tol=tol, samples=samples, max_iter=max_iter, t_start=t_start)
+        return _on_rigid_belt(task, too_fast, tol=tol, samples=samples, max_iter=max_iter, clock=clock)
     scales = _scales(task, start)
     if warm is None:        # the starting orbit only seeds the first pass and places its nodes: coarse
         orbit = steady_state(task.drive(start), tol=max(tol, COARSE_TOL))
         if orbit.status is not Status.SOLVED:
-            return Result(orbit.status, dict(orbit.values), timing(),
-                          f"no periodic motion at the starting design {start}: {orbit.message}", orbit.violated)
+            return clock.result(orbit.status, dict(orbit.values),
+                                f"no periodic motion at the starting design {start}: {orbit.message}", orbit.violated)
         y0 = np.asarray(orbit.diagnostics["initial_state"])         # the states other than phi at phi = 0
         nodes = _nodes(task, _extremes(task, tuple(stage_angles(task)), max(tol, COARSE_TOL), _vector(task, start), y0))
     else:
         nodes, start, y0 = warm[:3]
     origin = (dict(start), y0)
-    build = 0.0
     # the speed extremes move with the design: make them nodes and re-solve from there (passes at a
     # coarse CVODES tolerance place them; the last pass, at `tol`, starts from the coarse optimum)
     coarse, near = warm is None and tol < COARSE_TOL, warm is not None
@@ -330,10 +324,10 @@ def _design(task, tol, samples, max_iter, check_sensitivity, warm, start=None):
         # after a coarse pass's optimum on as many nodes: IPOPT starts from its multipliers too
         refine = (bool(passes) and passes[-1]["tol"] > step_tol and passes[-1]["nodes"] == len(nodes)
                   and from_ipopt(passes[-1]["ipopt"]) is Status.SOLVED)
-        b0 = time.perf_counter()
+        lap = Clock()
         solver, blocks, (lbg, ubg), figures, _ = _nlp(task, nodes, step_tol, samples, scales, False, max_iter,
                                                       near, coarse, refine)
-        build += time.perf_counter() - b0
+        clock.build_s += lap.elapsed()
         lbx, ubx = _box(task, nodes, scales, 0)
         guess = _guess(task, nodes, step_tol, samples, start, y0, scales)
         sol = solver(x0=guess, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, **(multipliers if refine else {}))
@@ -346,7 +340,7 @@ def _design(task, tol, samples, max_iter, check_sensitivity, warm, start=None):
             # design is where the fine pass starts
             phase1 = _phase1(task, nodes, tol, samples, scales, origin, max_iter)
             if from_ipopt(phase1[0]) is not Status.SOLVED or any(v > 1e-6 for v in phase1[-1].values()):
-                return _not_solved(task, from_ipopt(word), word, nodes, tol, samples, scales, origin, timing(build),
+                return _not_solved(task, from_ipopt(word), word, nodes, tol, samples, scales, origin, clock,
                                    max_iter, phase1)
             start, y0 = dict(zip(task.variables, map(float, phase1[1]))), phase1[2][:len(task.state_names) - 1]
             coarse = False
@@ -364,7 +358,7 @@ def _design(task, tol, samples, max_iter, check_sensitivity, warm, start=None):
         coarse, near = coarse and missed > COARSE_MISSED and len(passes) < COARSE_PASSES, True
     status = from_ipopt(word)
     if status is not Status.SOLVED:
-        return _not_solved(task, status, word, nodes, tol, samples, scales, origin, timing(build), max_iter)
+        return _not_solved(task, status, word, nodes, tol, samples, scales, origin, clock, max_iter)
     drive = task.drive(start)
     revolved, _ = revolution(structure(drive), tol, 60).trace(y0, dynamics_of(drive).p)
     values, diagnostics, arrays = summarise(drive, revolved,
@@ -398,7 +392,7 @@ def _design(task, tol, samples, max_iter, check_sensitivity, warm, start=None):
         again = _design(task, tol / 10, samples, max_iter, check_sensitivity, (nodes, start, y0, "retry"))
         return replace(again, message=f"re-solved at tol {tol / 10:g}: at tol {tol:g} the event-located check "
                                       f"missed by {check[0]:.3g}; " + again.message,
-                       timing=Timing(build, time.perf_counter() - t_start - build))
+                       timing=clock.timing())
     if check[0] > VERIFY_REL:
         status = Status.INACCURATE
         message += (f"; the event-located simulation of the optimum differs by {check[0]:.3g} (relative) > "
@@ -407,7 +401,7 @@ def _design(task, tol, samples, max_iter, check_sensitivity, warm, start=None):
         message += f"; verified by the event-located simulation to {check[0]:.2g} relative"
     if check_sensitivity and status is Status.SOLVED:
         values |= _fd_check(task, values, tol, samples, max_iter, (nodes, start, y0))
-    return Result(status, values, timing(build), message, (), diagnostics, arrays)
+    return clock.result(status, values, message, (), diagnostics, arrays)
 
 
 def _is_retry(warm):
@@ -597,12 +591,11 @@ def _stall(task):
                     f"breakdown slip)")
 
 
-def _on_rigid_belt(task, why, *, tol, samples, max_iter, t_start):
+def _on_rigid_belt(task, why, *, tol, samples, max_iter, clock):
     """The design on the rigid-belt model, the stiff belt's limit, said so (no minutes of CVODES)."""
     if "belt_stiffness_Nm_rad" in task.variables:
-        return Result(Status.LIMIT, {}, Timing(0.0, time.perf_counter() - t_start),
-                      why + "; the belt stiffness cannot be a design variable there: bound it below "
-                      "belt_stiffness_max_Nm_rad", ("belt_mode",))
+        return clock.result(Status.LIMIT, {}, why + "; the belt stiffness cannot be a design variable there: bound it "
+                            "below belt_stiffness_max_Nm_rad", ("belt_mode",))
     belt = ("belt_stiffness_Nm_rad", "belt_damping_Nms_rad", "belt_slip_torque_Nm")
     rigid = replace(task, effects=tuple(e for e in task.effects if e != "belt_elasticity"), **dict.fromkeys(belt))
     result = _design(rigid, tol, samples, max_iter, False, None)
@@ -612,9 +605,10 @@ def _on_rigid_belt(task, why, *, tol, samples, max_iter, t_start):
     status, close = result.status, f"the belt mode is {ratio:.3g} times the revolution frequency"
     if ratio < RIGID_RATIO and status is Status.SOLVED:     # stiff, but not so stiff that the limit is exact
         status, close = Status.INACCURATE, close + f", less than {RIGID_RATIO}: the rigid belt only approximates it"
-    return Result(status, result.values | {"belt_mode_Hz": hz}, Timing(0.0, time.perf_counter() - t_start),
-                  f"rigid-belt limit: {why}; {close}; designed on that model{dropped}: {result.message}",
-                  result.violated, result.diagnostics | {"model": "rigid belt (the stiff belt's limit)"}, result.arrays)
+    return clock.result(status, result.values | {"belt_mode_Hz": hz},
+                        f"rigid-belt limit: {why}; {close}; designed on that model{dropped}: {result.message}",
+                        result.violated, result.diagnostics | {"model": "rigid belt (the stiff belt's limit)"},
+                        result.arrays)
 
 
 def _active(task, blocks, bounds, g, lam_g, lam_x, scales, values):
@@ -741,7 +735,7 @@ def _phase1(task, nodes, tol, samples, scales, origin, max_iter):
     return solver.stats()["return_status"], d, Y, period, rms, energy, slack
 
 
-def _not_solved(task, status, word, nodes, tol, samples, scales, origin, timing, max_iter, phase1=None):
+def _not_solved(task, status, word, nodes, tol, samples, scales, origin, clock, max_iter, phase1=None):
     """IPOPT did not succeed: find the least violation of the limits (`_phase1`, unless given). Violated
     limits there conflict with each other, the motion and the bounds: INFEASIBLE with the best
     achievable. When none is violated, a feasible design exists and IPOPT's status stands."""
@@ -754,8 +748,8 @@ def _not_solved(task, status, word, nodes, tol, samples, scales, origin, timing,
     if from_ipopt(phase1_word) is not Status.SOLVED or not broken:
         why = ("phase 1 (least violation) finds every limit can be met, so the design problem is feasible"
                if not broken else f"phase 1 (least violation) did not converge either ({phase1_word})")
-        return Result(status if status is not Status.SOLVED else Status.FAILED, values, timing,
-                      f"IPOPT stopped with {word}: no optimum to trust; {why}", tuple(broken), {"ipopt": word})
+        return clock.result(status if status is not Status.SOLVED else Status.FAILED, values,
+                            f"IPOPT stopped with {word}: no optimum to trust; {why}", tuple(broken), {"ipopt": word})
     # the best achievable as the periodic motion of the least-violation design gives it (dense samples:
     # the NLP's samples were placed for another design's speed extremes)
     orbit = steady_state(task.drive(dict(zip(task.variables, map(float, d)))), tol=tol, samples=1000)
@@ -785,5 +779,5 @@ def _not_solved(task, status, word, nodes, tol, samples, scales, origin, timing,
     message = (f"INFEASIBLE: the limits conflict ({', '.join(conflict)}; IPOPT: {word}); the least violation: "
                + "; ".join(parts) + (" with " + ", ".join(bounds) if bounds else " (no bound active: the motion "
                                      "itself conflicts with them)"))
-    return Result(Status.INFEASIBLE, values, timing, message, tuple(conflict),
-                  {"ipopt": word, "phase1": phase1_word, "least_violation": slack})
+    return clock.result(Status.INFEASIBLE, values, message, tuple(conflict),
+                        {"ipopt": word, "phase1": phase1_word, "least_violation": slack})

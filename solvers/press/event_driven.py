@@ -3,12 +3,11 @@ U switching on, the jump, every full revolution, and friction sign changes (cran
 sticking, breaking away). CasADi 3.8's own events fire on one crossing direction only and never
 with a single output time, so events are located here by Newton on the piece's duration instead
 (see `locate`)."""
-import time
 
 import numpy as np
 
 from mechopt.kit.errors import MechoptError, ModelError
-from mechopt.kit.result import Result, Status, Timing
+from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Annotated, Interval, Positive, Tolerance
 from mechopt.models.press import PressDrive, stall_check
 from mechopt.solvers.press.problem import (
@@ -58,18 +57,14 @@ def events(task: PressDrive, *, tol: Tolerance = 1e-10, duration_s: Duration = 1
     duration_s : simulated time [s].  start : "nominal" or "rest".
     max_step_s : longest piece [s].  samples : outputs per piece (for peaks and plots).
     A request that implies more than `MAX_PIECES` pieces or `MAX_SAMPLES` samples is refused
-    before any work (ModelError naming the key and its allowed range).
+    before any work (SettingError naming the key and its allowed range).
     Returns a Result: SOLVED; INFEASIBLE with violated ("stall",) when the crank stops inside the
     cut, never turns, or coasts to a stop and is held by friction at the end (with the mean load
     torque against the breakdown torque in `values` when the motor cannot carry the cycle);
     LIMIT after `max_events`; FAILED if CVODES fails.
     """
-    check_task(task, duration_s)
-    for key, value in (("tol", tol), ("max_step_s", max_step_s)):
-        if not value > 0:
-            raise ModelError(f"{key}={value} must be > 0", key=key)
-    if samples < 1:
-        raise ModelError(f"samples={samples} must be >= 1", key="samples")
+    check_task(task, events, tol=tol, duration_s=duration_s, start=start, max_step_s=max_step_s, samples=samples,
+               max_events=max_events)
     # pieces: one per max_step_s at least, plus three events per revolution at the top speed
     per_s = 1 / max_step_s + 3 * top_speed_rad_s(task) / TWO_PI
     refuse_work("duration_s", duration_s, duration_s * per_s, MAX_PIECES, "CVODES pieces (~0.5 ms each)",
@@ -77,9 +72,9 @@ def events(task: PressDrive, *, tol: Tolerance = 1e-10, duration_s: Duration = 1
     refuse_work("samples", samples, duration_s * per_s * samples, MAX_SAMPLES, "samples in memory",
                 f"samples <= {max(int(MAX_SAMPLES / (duration_s * per_s)), 1)} over duration_s={duration_s:g}")
     _refuse_a_belt_too_fast(task, duration_s)
-    t_start = time.perf_counter()
+    clock = Clock()
     piece = piece_by_time(task, tol, samples)
-    build = time.perf_counter() - t_start
+    clock.built()
     trace = Trace()
     status, message, violated, failure = Status.SOLVED, "", (), {}
     try:
@@ -95,7 +90,7 @@ def events(task: PressDrive, *, tol: Tolerance = 1e-10, duration_s: Duration = 1
         t_fail = float(trace.t[-1][-1]) if trace.t else 0.0
         status, message, failure = casadi_failure(exc, f"at t = {t_fail:.6g} s of {duration_s} s")
     if not trace.t:
-        return Result(status, {}, Timing(build, time.perf_counter() - t_start - build), message, violated, failure)
+        return clock.result(status, {}, message, violated, failure)
     values, diagnostics, arrays = summarise(task, trace)
     diagnostics |= failure
     if status is Status.SOLVED and values["revolutions"] < 1 and values["final_omega_rad_s"] <= 0:
@@ -114,8 +109,7 @@ def events(task: PressDrive, *, tol: Tolerance = 1e-10, duration_s: Duration = 1
         values |= stall[0]
         message += "; " + stall[1] + ("" if violated else ": this run is slowing down toward a stall")
     status, message, violated = checked(status, message, violated, diagnostics)
-    timing = Timing(build, time.perf_counter() - t_start - build)
-    return Result(status, values, timing, message, violated, diagnostics, arrays)
+    return clock.result(status, values, message, violated, diagnostics, arrays)
 
 
 def _refuse_a_belt_too_fast(task, duration_s):
@@ -130,4 +124,4 @@ def _refuse_a_belt_too_fast(task, duration_s):
         refuse_work("belt_stiffness_Nm_rad", task.belt_stiffness_Nm_rad, steps, MAX_BELT_STEPS,
                     f"CVODES steps following the belt mode at {hz:.4g} Hz for {duration_s:g} s (~1e-4 s each)",
                     f"belt_stiffness_Nm_rad <= {most_stiff:.3g} at duration_s={duration_s:g}, or duration_s <= "
-                    f"{duration_s * MAX_BELT_STEPS / steps:.3g} s; {RIGID_LIMIT}")
+                    f"{duration_s * MAX_BELT_STEPS / steps:.3g} s; {RIGID_LIMIT}", kind=ModelError)

@@ -1,14 +1,13 @@
 """The paper's method for the press: fixed-step classical Runge-Kutta on the switched equations,
 with its step refinement (halve until two runs agree); the baseline. It steps across the jump at
 the end of the cut, so it is first order there."""
-import time
 
 import casadi as ca
 import numpy as np
 
 from mechopt.kit.cache import memoised
-from mechopt.kit.errors import ModelError
-from mechopt.kit.result import Result, Status, Timing
+from mechopt.kit.errors import SettingError
+from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Annotated, Interval, NonNegative, Positive
 from mechopt.models.press import PressDrive
 from mechopt.solvers.press.problem import (
@@ -44,7 +43,7 @@ def _rk4_steps(task: PressDrive, step_s: float, count: int) -> ca.Function:
 def _rk4_trace(task, step_s, duration_s, start):
     count = int(round(duration_s / step_s))
     if abs(count * step_s - duration_s) > 1e-9 * duration_s or count < 1:
-        raise ModelError(f"step_s={step_s} does not divide duration_s={duration_s} into whole steps", key="step_s")
+        raise SettingError(f"step_s={step_s} does not divide duration_s={duration_s} into whole steps", key="step_s")
     x0 = initial_state(task, start)
     xs = np.asarray(_rk4_steps(task, step_s, count)(x0)).T
     trace = Trace()
@@ -94,22 +93,19 @@ def rk4(task: PressDrive, *, step_s: Positive = 1e-4, duration_s: Duration = 1.0
     Returns a Result: SOLVED, or INACCURATE when refinement did not reach `refine_tol_rad`;
     INFEASIBLE with violated ("stall",) when the crank, having turned, stops (in the cut or not).
     """
-    check_task(task, duration_s)
-    if not step_s > 0:
-        raise ModelError(f"step_s={step_s} must be > 0", key="step_s")
+    check_task(task, rk4, step_s=step_s, duration_s=duration_s, start=start, refine_tol_rad=refine_tol_rad,
+               max_halvings=max_halvings)
     if duration_s / step_s > MAX_STEPS:
-        raise ModelError(f"step_s={step_s} with duration_s={duration_s} means {duration_s / step_s:.3g} RK4 steps; "
+        raise SettingError(f"step_s={step_s} with duration_s={duration_s} means {duration_s / step_s:.3g} RK4 steps; "
                          f"allowed at most {MAX_STEPS} (step_s >= {duration_s / MAX_STEPS:.3g} s)", key="step_s")
-    t_start = time.perf_counter()
-    build = 0.0
+    clock = Clock()
     hz, eigenvalue = belt_mode(task)
     stable = stable_step_s(eigenvalue)
     if step_s > stable:         # it would diverge: say why before integrating
-        return Result(Status.FAILED, {"belt_mode_Hz": hz, "step_needed_s": stable, "step_s": step_s},
-                      Timing(build, time.perf_counter() - t_start),
-                      belt_too_fast(task, stable, float("inf"), 0, f"RK4 at step_s={step_s:g}",
-                                    why=" (RK4's stability limit)")
-                      + f"; reduce step_s below {stable:.3g} s or use events")
+        return clock.result(Status.FAILED, {"belt_mode_Hz": hz, "step_needed_s": stable, "step_s": step_s},
+                            belt_too_fast(task, stable, float("inf"), 0, f"RK4 at step_s={step_s:g}",
+                                          why=" (RK4's stability limit)")
+                            + f"; reduce step_s below {stable:.3g} s or use events")
     trace, _ = _rk4_trace(task, step_s, duration_s, start)
     iphi = task.state_names.index("phi_rad")
     change, halvings, h, capped = np.inf, 0, step_s, ""
@@ -123,9 +119,9 @@ def rk4(task: PressDrive, *, step_s: Positive = 1e-4, duration_s: Duration = 1.0
         if change <= refine_tol_rad:
             break
     if not np.all(np.isfinite(trace.x[0])):     # explicit RK4 beyond its stability limit: say so, no NaN
-        return Result(Status.FAILED, {"step_s": h}, Timing(build, time.perf_counter() - t_start - build),
-                      message=f"RK4 diverged at step {h:.3g} s: the step exceeds the stability limit of the "
-                              f"stiffest mode (the belt); reduce step_s or use events")
+        return clock.result(Status.FAILED, {"step_s": h},
+                            message=f"RK4 diverged at step {h:.3g} s: the step exceeds the stability limit of the "
+                                    f"stiffest mode (the belt); reduce step_s or use events")
     values, diagnostics, arrays = summarise(task, trace)
     values["step_s"] = h
     diagnostics |= {"halvings": halvings, "last_change_rad": float(change) if np.isfinite(change) else None}
@@ -138,13 +134,11 @@ def rk4(task: PressDrive, *, step_s: Positive = 1e-4, duration_s: Duration = 1.0
         message = (f"the press stalls in the cut at {where}: the flywheel and motor cannot supply the cutting work"
                    if in_cut else f"the crank stops at {where}: the drive cannot keep it turning")
         status, message, violated = checked(Status.INFEASIBLE, message, ("stall",), diagnostics)
-        return Result(status, values, Timing(build, time.perf_counter() - t_start - build), message, violated,
-                      diagnostics, arrays)
+        return clock.result(status, values, message, violated, diagnostics, arrays)
     status, message, violated = checked(Status.SOLVED if ok else Status.INACCURATE,
                                          f"RK4, step {h:.3g} s after {halvings} halvings; fixed steps cross "
                                          "the jump at the end of the cut and the friction sign change "
                                          "(first order there: the paper's method as published)"
                                          + ("" if ok else f"; last halving still moved phi by {change:.3g} rad > "
                                                           f"{refine_tol_rad:g}{capped}"), (), diagnostics)
-    timing = Timing(build, time.perf_counter() - t_start - build)
-    return Result(status, values, timing, message, violated, diagnostics, arrays)
+    return clock.result(status, values, message, violated, diagnostics, arrays)

@@ -7,12 +7,11 @@ on its two segments (Fig. 6); a combination of straight lines and parabolas erre
 segment of the travel. Reading a testing machine's CSV is `mechopt.force_data`'s job (a solver
 never reads a file).
 """
-import time
 
 import numpy as np
 
-from mechopt.kit.errors import ModelError
-from mechopt.kit.result import Result, Status, Timing
+from mechopt.kit.errors import ModelError, SettingError
+from mechopt.kit.result import Clock, Result, Status
 
 __all__ = ["fit_force"]
 
@@ -41,9 +40,9 @@ def fit_force(travel_mm, load_N, degree: int, *, segments: int = 2, through_orig
     x = np.asarray(travel_mm, dtype=float).ravel()
     f = np.asarray(load_N, dtype=float).ravel()
     if isinstance(degree, bool) or not isinstance(degree, (int, np.integer)) or not 1 <= degree <= 6:
-        raise ModelError(f"degree={degree!r}: allowed 1, 2, 3, 4, 5 or 6", key="degree")
+        raise SettingError(f"degree={degree!r}: allowed 1, 2, 3, 4, 5 or 6", key="degree")
     if isinstance(segments, bool) or not isinstance(segments, (int, np.integer)) or segments < 1:
-        raise ModelError(f"segments={segments!r}: must be an integer >= 1", key="segments")
+        raise SettingError(f"segments={segments!r}: must be an integer >= 1", key="segments")
     if x.shape != f.shape:
         raise ModelError(f"travel_mm has {x.size} values but load_N has {f.size}; give one load per travel",
                          key="load_N")
@@ -55,7 +54,7 @@ def fit_force(travel_mm, load_N, degree: int, *, segments: int = 2, through_orig
     if x.size < powers.size:
         raise ModelError(f"{x.size} points cannot fix {powers.size} coefficients of degree {degree}; "
                          f"give at least {powers.size}", key="travel_mm")
-    start = time.perf_counter()
+    clock = Clock()
     A = x[:, None] ** powers[None, :]
     coeffs, _, rank, _ = np.linalg.lstsq(A, f, rcond=None)
     fitted = A @ coeffs
@@ -74,5 +73,5 @@ def fit_force(travel_mm, load_N, degree: int, *, segments: int = 2, through_orig
     status = Status.SOLVED if rank == powers.size else Status.INACCURATE
     message = (f"least squares, degree {degree}, {x.size} points" if status is Status.SOLVED else
                f"rank {rank} < {powers.size} coefficients: too few distinct travels for degree {degree}")
-    return Result(status, values, Timing(0.0, time.perf_counter() - start), message,
-                  diagnostics={"segment_edges_mm": edges.tolist(), "points": int(x.size)})
+    return clock.result(status, values, message,
+                        diagnostics={"segment_edges_mm": edges.tolist(), "points": int(x.size)})

@@ -12,6 +12,8 @@ tool's equation of motion). The other readings are the technological force F alo
 force along the rod (Q / cos beta, with the rod's own mass); `Q_reading_spread` is the spread of
 their peaks during the cut relative to ours.
 """
+from dataclasses import replace
+
 import numpy as np
 
 from mechopt.kit.result import Result
@@ -55,8 +57,7 @@ def loads(task: PressDrive, *, tol: Tolerance = 1e-10, samples: Samples = 60,
         readings = [float(np.max(np.abs(a[k][cut]))) for k in ("force_N", "Q_N", "rod_force_N")]
         values["peak_Q_cut_N"] = readings[1]
         values["Q_reading_spread"] = (max(readings) - min(readings)) / readings[1]
-    return Result(result.status, values, result.timing, result.message, result.violated, result.diagnostics,
-                  arrays)
+    return replace(result, values=values, arrays=arrays)          # the steady motion's status, timing, words
 
 
 def _peak(phi, y, mode):

@@ -2,13 +2,12 @@
 angle as independent variable the cut starts and ends at fixed angles, so one revolution is three
 CVODES pieces composed symbolically, and Newton's method finds the initial state that the
 revolution reproduces; a what-if re-solves on the structure's build from the last orbit."""
-import time
 
 import numpy as np
 
 from mechopt.kit.cache import BuildCache
-from mechopt.kit.errors import MechoptError, ModelError
-from mechopt.kit.result import Result, Status, Timing
+from mechopt.kit.errors import MechoptError
+from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Annotated, Interval, Tolerance
 from mechopt.models.press import (
     PressDrive,
@@ -69,24 +68,22 @@ def steady_state(task: PressDrive, *, tol: Tolerance = 1e-10, samples: Samples =
     tol : CVODES tolerance (relative and absolute); the periodicity residual is held to 100 tol.
     samples : outputs per piece (peaks, plots).  max_iter : Newton iterations.
     """
-    check_task(task)
-    if not tol > 0:
-        raise ModelError(f"tol={tol} must be > 0", key="tol")
-    t_start = time.perf_counter()
+    check_task(task, steady_state, tol=tol, samples=samples, max_iter=max_iter)
+    clock = Clock()
     # Newton's CVODES sensitivities must follow the belt mode: minutes past ~2 kHz
     too_fast = belt_too_fast_per_revolution(task, STEPS_PER_REVOLUTION, "steady_state")
     if too_fast:
         hz, _ = belt_mode(task)
-        return Result(Status.LIMIT, {"belt_mode_Hz": hz, "step_needed_s": 0.1 / hz},
-                      Timing(0.0, time.perf_counter() - t_start), too_fast + "; `events` integrates it")
+        return clock.result(Status.LIMIT, {"belt_mode_Hz": hz, "step_needed_s": 0.1 / hz},
+                            too_fast + "; `events` integrates it")
     stall = stall_check(task)
     if stall is not None:           # no forward periodic motion can exist: say so before any work
-        return Result(Status.INFEASIBLE, stall[0], Timing(0.0, time.perf_counter() - t_start), stall[1], ("stall",))
-    t_build = time.perf_counter()
+        return clock.result(Status.INFEASIBLE, stall[0], stall[1], ("stall",))
+    build = Clock()
     key = (structure(task), tol, samples)
     rev = revolution(*key)
     p = dynamics_of(task).p
-    build = time.perf_counter() - t_build
+    clock.build_s = build.elapsed()
     guess = np.delete(initial_state(task, "nominal")[:rev.n], task.state_names.index("phi_rad"))
     if task.motor:      # start near the motor's idle speed rather than the nominal one
         guess[[i for i, k in enumerate(np.delete(np.array(task.state_names), task.state_names.index("phi_rad")))
@@ -120,8 +117,7 @@ def steady_state(task: PressDrive, *, tol: Tolerance = 1e-10, samples: Samples =
                        f"motor's idle speed), {stalled}; the motor could carry the mean load torque "
                        f"{values['required_mean_torque_Nm']:.4g} N m (breakdown {values['breakdown_torque_at_crank_Nm']:.4g}"
                        f" N m at the crank), but the flywheel cannot carry the cut ({values['cut_work_J']:.4g} J)")
-        return Result(status, values, Timing(build, time.perf_counter() - t_start - build), message, violated,
-                      diagnostics)
+        return clock.result(status, values, message, violated, diagnostics)
     status = Status.SOLVED if converged else Status.LIMIT
     window = (float(p[CUT_START]), float(p[CUT_END])) if task.cutting else None     # p holds the cut's angles
     values, diagnostics, arrays = summarise(task, trace, cut_angles=window)
@@ -144,8 +140,7 @@ def steady_state(task: PressDrive, *, tol: Tolerance = 1e-10, samples: Samples =
         message = (f"no periodic orbit found: Newton shooting stopped after {iterations} of max_iter={max_iter} "
                    f"iterations with periodicity residual {miss:.3g}")
     status, message, violated = checked(status, message, (), diagnostics)
-    return Result(status, values, Timing(build, time.perf_counter() - t_start - build), message, violated,
-                  diagnostics, arrays)
+    return clock.result(status, values, message, violated, diagnostics, arrays)
 
 
 def _periodicity(rev, trace, y0):

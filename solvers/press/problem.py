@@ -12,8 +12,9 @@ import numpy as np
 from annotated_types import Interval
 
 from mechopt.kit.cache import memoised
-from mechopt.kit.errors import ModelError
+from mechopt.kit.errors import MechoptError, ModelError, SettingError
 from mechopt.kit.result import Status, from_casadi_integrator
+from mechopt.kit.settings import check_settings
 from mechopt.models.press import (
     FORCE_KEYS,
     PARAMETERS,
@@ -165,20 +166,22 @@ def top_speed_rad_s(task: PressDrive) -> float:
     return max(sync, task.nominal_speed_rad_s)
 
 
-def refuse_work(key: str, value, amount: float, most: float, what: str, bound: str):
+def refuse_work(key: str, value, amount: float, most: float, what: str, bound: str, *,
+                kind: type[MechoptError] = SettingError):
     """Refuse before any work a request whose size estimate `amount` exceeds `most`: one line naming
-    the key, what the value implies, and the range that is allowed."""
+    the key, what the value implies, and the range that is allowed. `key` is a solver setting
+    (SettingError) unless `kind` says otherwise (a model parameter: ModelError)."""
     if amount > most:
-        raise ModelError(f"{key}={value} means about {amount:.3g} {what}, more than the {most:g} allowed "
-                         f"({bound})", key=key)
+        raise kind(f"{key}={value} means about {amount:.3g} {what}, more than the {most:g} allowed "
+                   f"({bound})", key=key)
 
 
-def check_task(task, duration_s=None):
-    """Refuse a task that is no PressDrive, or a duration that is not positive."""
+def check_task(task, solver, **settings):
+    """Refuse a task that is no PressDrive, then settings outside the ranges `solver`'s signature
+    declares (SettingError, as a scene's are refused), before any work."""
     if not isinstance(task, PressDrive):
         raise ModelError(f"task={type(task).__name__}: expected a PressDrive", key="task")
-    if duration_s is not None and not duration_s > 0:
-        raise ModelError(f"duration_s={duration_s} must be > 0", key="duration_s")
+    check_settings(solver, **settings)
 
 
 def summarise(task: PressDrive, trace: Trace, *, cut_angles=None) -> tuple[dict, dict, dict]:

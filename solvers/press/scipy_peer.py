@@ -1,13 +1,12 @@
 """The press by scipy's solve_ivp (Radau, LSODA, DOP853, RK45, BDF), with or without event
 location: the peer a user would reach for, and the independent reference."""
-import time
 from typing import Literal
 
 import casadi as ca
 import numpy as np
 from scipy.integrate import DOP853, RK45, solve_ivp
 
-from mechopt.kit.result import Result, Status, Timing, from_ivp
+from mechopt.kit.result import Clock, Result, Status, from_ivp
 from mechopt.kit.settings import NonNegative, Tolerance
 from mechopt.models.press import PressDrive
 from mechopt.solvers.press.problem import (
@@ -48,27 +47,29 @@ def ivp(task: PressDrive, *, method: Literal["Radau", "LSODA", "DOP853", "RK45",
     more than `MAX_REVOLUTIONS`, or more than `MAX_STEPS` steps (`max_step_s`, or an explicit
     method's stability limit for the belt mode: then LIMIT, saying so).
     """
-    check_task(task, duration_s)
+    check_task(task, ivp, method=method, rtol=rtol, atol=atol, duration_s=duration_s, locate_events=locate_events,
+               max_step_s=max_step_s)
     per_s = top_speed_rad_s(task) / TWO_PI
     refuse_work("duration_s", duration_s, duration_s * per_s, MAX_REVOLUTIONS, "revolutions (~0.25 s each with "
                 "a Python right-hand side)", f"duration_s <= {MAX_REVOLUTIONS / per_s:.4g} s; `events` goes further")
     if max_step_s > 0:
         refuse_work("max_step_s", max_step_s, duration_s / max_step_s, MAX_STEPS, "steps",
                     f"max_step_s >= {duration_s / MAX_STEPS:.3g} s over duration_s={duration_s:g}, or 0")
+    clock = Clock()
     if method in EXPLICIT:
         hz, eigenvalue = belt_mode(task)
         stable = stable_step_s(eigenvalue, EXPLICIT[method])
         too_fast = belt_too_fast(task, stable, duration_s / stable, MAX_STEPS, method,
                                  why=f" ({method}'s stability limit)", over=f" over duration_s={duration_s:g}")
         if too_fast:
-            return Result(Status.LIMIT, {"belt_mode_Hz": hz, "step_needed_s": stable}, Timing(0.0, 0.0),
-                          too_fast + "; Radau, LSODA or `events` integrate it")
+            return clock.result(Status.LIMIT, {"belt_mode_Hz": hz, "step_needed_s": stable},
+                                too_fast + "; Radau, LSODA or `events` integrate it")
     dyn = dynamics_of(task)
     iphi, iw = task.state_names.index("phi_rad"), task.state_names.index("omega_rad_s")
-    t_start = time.perf_counter()
     x = initial_state(task, "nominal")
     x_sym, m_sym = ca.SX.sym("x", dyn.rhs.size1_in(0)), ca.SX.sym("m", 3)
     jac = ca.Function("rhs_jacobian", [x_sym, m_sym], [ca.jacobian(dyn.rhs(x_sym, m_sym), x_sym)])
+    clock.built()           # the dynamics and the Jacobian's function
     trace, t, calls = Trace(), 0.0, 0
     options = {"method": method, "rtol": rtol, "atol": atol}
     if max_step_s > 0:
@@ -89,8 +90,7 @@ def ivp(task: PressDrive, *, method: Literal["Radau", "LSODA", "DOP853", "RK45",
         status, message, violated = checked(status, sol.message + (
             "; switched right-hand side integrated without event location: the cut's jump and the "
             "friction sign change were stepped over" if diagnostics["switches_stepped_over"] else ""), (), diagnostics)
-        timing = Timing(0.0, time.perf_counter() - t_start)
-        return Result(status, values, timing, message, violated, diagnostics, arrays)
+        return clock.result(status, values, message, violated, diagnostics, arrays)
     mode = mode_at(task, dyn, x, 1.0)
     trace.add(t, x, mode)
     status, message, violated = Status.SOLVED, "", ()
@@ -124,5 +124,4 @@ def ivp(task: PressDrive, *, method: Literal["Radau", "LSODA", "DOP853", "RK45",
     values, diagnostics, arrays = summarise(task, trace)
     diagnostics["rhs_calls"] = int(calls)
     status, message, violated = checked(status, message or f"solve_ivp {method}", violated, diagnostics)
-    timing = Timing(0.0, time.perf_counter() - t_start)
-    return Result(status, values, timing, message, violated, diagnostics, arrays)
+    return clock.result(status, values, message, violated, diagnostics, arrays)

@@ -8,13 +8,12 @@ at each extreme. The rootfinder's derivatives with respect to the parameters are
 the integration tolerance: the speed fluctuation (omega_max - omega_min) / omega_mean, the angle
 of the slowest speed, the peak belt torque, the mean crank speed and the works of a revolution.
 """
-import time
 
 import casadi as ca
 import numpy as np
 
 from mechopt.kit.errors import MechoptError, ModelError
-from mechopt.kit.result import Result, Status, Timing, from_rootfinder
+from mechopt.kit.result import Clock, Result, Status, from_rootfinder
 from mechopt.kit.settings import Annotated, Interval, Tolerance
 from mechopt.models.press import WORK_NAMES, Equations, PressDrive, equations, parameters, structure
 from mechopt.solvers.press.periodic import steady_state
@@ -155,26 +154,25 @@ def sensitivity(task: PressDrive, *, tol: Tolerance = 1e-10, max_iter: Annotated
     tol : CVODES tolerance (the orbit's periodicity to 100 tol).  max_iter : Newton iterations.
     verify_step : relative step of the finite-difference check (0: none).
     """
-    check_task(task)
+    check_task(task, sensitivity, tol=tol, max_iter=max_iter, verify_step=verify_step)
     if not task.motor:
         raise ModelError("effects lack 'motor_characteristic': without the motor the crank's mean speed is "
                          "not set by the drive; add the effect", key="effects")
-    t_start = time.perf_counter()
+    clock = Clock()
     base = steady_state(task, tol=tol, samples=200)
     if base.status is not Status.SOLVED:
-        return Result(base.status, base.values, base.timing, f"no periodic orbit to differentiate: {base.message}",
-                      base.violated, base.diagnostics)
+        return clock.result(base.status, base.values, f"no periodic orbit to differentiate: {base.message}",
+                            base.violated, base.diagnostics)
     try:
-        return _differentiate(task, base, tol, max_iter, verify_step, t_start)
+        return _differentiate(task, base, tol, max_iter, verify_step, clock)
     except RuntimeError as exc:          # CasADi raises where CVODES stops (too many steps): a status, not a crash
         if isinstance(exc, MechoptError):
             raise
         status, message, failure = casadi_failure(exc, "differentiating the periodic orbit: no derivatives")
-        return Result(status, {}, Timing(0.0, time.perf_counter() - t_start), message, (),
-                      base.diagnostics | failure)
+        return clock.result(status, {}, message, (), base.diagnostics | failure)
 
 
-def _differentiate(task, base, tol, max_iter, verify_step, t_start) -> Result:
+def _differentiate(task, base, tol, max_iter, verify_step, clock) -> Result:
     """`sensitivity`'s answer from the steady orbit `base`: the rootfinder through it and its derivatives."""
     names = assumed_parameters(task)
     orbit = _Orbit(task, names, tol, base.arrays)
@@ -190,7 +188,7 @@ def _differentiate(task, base, tol, max_iter, verify_step, t_start) -> Result:
     derivative = ca.Function("derivative", [z0, p0], [out, ca.jacobian(out, p0)])
     guess = np.r_[base.diagnostics["initial_state"], [e[3] if e[3] is not None else e[4] for e in orbit.extremes]]
     values0 = np.r_[[getattr(task, k) for k in names], 1.0]
-    build = time.perf_counter() - t_start
+    clock.built()
     orbit_z = np.asarray(rf(guess, values0)).ravel()
     status, iterations = from_rootfinder(rf.stats()["return_status"]), rf.stats()["iter_count"]
     periodic = ca.Function("G", [z, p], [residual])
@@ -241,5 +239,4 @@ def _differentiate(task, base, tol, max_iter, verify_step, t_start) -> Result:
                    "their derivatives are not to trust")
     if status is not Status.SOLVED and not strayed:
         message = f"the orbit's rootfinder stopped after {iterations} iterations (residual {miss:.3g}): not to trust"
-    return Result(status, values, Timing(build, time.perf_counter() - t_start - build), message, (), diagnostics,
-                  arrays)
+    return clock.result(status, values, message, (), diagnostics, arrays)

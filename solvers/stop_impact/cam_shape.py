@@ -1,12 +1,11 @@
 """The lift cam for the shop (issue 23, item 4): the cam's shape from its law and follower
 (models/cam_shape.py), its checks (least radius of curvature, largest pressure angle, undercut
 margin) and the point tables a DXF or a CNC takes, each with its measured chordal error."""
-import time
 
 import numpy as np
 
 from mechopt.kit.errors import ModelError
-from mechopt.kit.result import Result, Status, Timing
+from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Annotated, Interval
 from mechopt.models.cam_shape import FLANKS, CamShape, Law, check_undercut, flank, pitch, point_table, summarise
 
@@ -34,7 +33,7 @@ def cam_profile(task: CamShape, *, samples: Annotated[int, Interval(ge=360, le=1
 def shape_cam(task: CamShape, law: Law | None, *, samples: int = 7200) -> Result:
     """`cam_profile` with any law in place of the task's library law (`law` None): a synthesised
     law enters as `models.cam_shape.tabulated_law(xi, S, dS, ddS)`."""
-    start = time.perf_counter()
+    clock = Clock()
     s = summarise(task, law, samples=samples)
     values = {"min_radius_of_curvature_mm": s.min_convex_radius_mm, "min_radius_deg": s.min_convex_deg,
               "max_pressure_angle_deg": s.max_pressure_angle_deg, "max_pressure_at_deg": s.max_pressure_deg,
@@ -66,11 +65,10 @@ def shape_cam(task: CamShape, law: Law | None, *, samples: int = 7200) -> Result
     status = Status.INFEASIBLE if violated else Status.SOLVED
     message = "; ".join(said) if said else (f"{len(tables) - 1} flank(s) and the pitch curve within "
                                             f"{values['chord_error_mm']:.4g} mm of their chords")
-    return Result(status, values, Timing(0.0, time.perf_counter() - start), message=message,
-                  violated=tuple(violated), arrays=arrays,
-                  diagnostics={"undercut_flank": s.undercut_flank, "closure": task.closure, "follower": task.follower,
-                               "roller_radius_mm": task.roller_radius_mm,
-                               "chord_error_mm": {name: t.chord_error_mm for name, t in tables.items()}})
+    return clock.result(status, values, message=message, violated=tuple(violated), arrays=arrays,
+                        diagnostics={"undercut_flank": s.undercut_flank, "closure": task.closure,
+                                     "follower": task.follower, "roller_radius_mm": task.roller_radius_mm,
+                                     "chord_error_mm": {name: t.chord_error_mm for name, t in tables.items()}})
 
 
 def _dense(task, law, samples):

@@ -2,15 +2,14 @@
 three methods with a cross-check, the amplitude law for the LP, and one operating point against
 the limit (for maps)."""
 import math
-import time
 from typing import Literal
 
 import numpy as np
 from scipy.optimize import brentq
 
 from mechopt.kit.errors import ModelError, SolverError
-from mechopt.kit.result import Result, Status, Timing
-from mechopt.kit.settings import Annotated, Interval, Tolerance
+from mechopt.kit.result import Clock, Result, Status
+from mechopt.kit.settings import Annotated, Interval, Tolerance, check_settings
 from mechopt.models.cam_follower import law_values
 from mechopt.models.stop_impact import LeverStop, speed_tag
 from mechopt.solvers.stop_impact.cam_follower import follow_cam, follow_cam_reference, follower_data
@@ -39,12 +38,12 @@ HISTORY_POINTS = 513            # samples of a rebound history q(t) over the fir
 def natural_frequencies(task: LeverStop) -> Result:
     """Reduced stiffness and natural frequencies of the lever moving (Fig. 5) and on the plate
     (Fig. 6), and the contact time tau = half the period on the plate."""
-    start = time.perf_counter()
+    clock = Clock()
     values = {"f_free_Hz": task.f_free_Hz, "f_stop_Hz": task.f_stop_Hz,
               "c_free_N_per_mm": task.c_free_N_per_m * 1e-3, "c_stop_N_per_mm": task.c_stop_N_per_m * 1e-3,
               "contact_time_s": task.contact_time_s}
-    return Result(Status.SOLVED, values, Timing(0.0, time.perf_counter() - start),
-                  message="c = 3 E J_x / ((a + b) b^2), f = sqrt(c / m) / (2 pi)")
+    return clock.result(Status.SOLVED, values,
+                        message="c = 3 E J_x / ((a + b) b^2), f = sqrt(c / m) / (2 pi)")
 
 
 def impact_forces(task: LeverStop) -> Result:
@@ -52,7 +51,7 @@ def impact_forces(task: LeverStop) -> Result:
     impulse S_C = F tau and the approach velocity; `impact_force_N_<rpm>` etc."""
     task.need_effect("impact_pulse")
     _need_speeds(task)
-    start = time.perf_counter()
+    clock = Clock()
     values = {"contact_time_s": task.contact_time_s}
     table = {"speed_rpm": [], "impact_force_N": [], "impulse_Ns": [], "approach_velocity_m_s": []}
     for n in task.speeds_rpm:
@@ -62,8 +61,7 @@ def impact_forces(task: LeverStop) -> Result:
                    f"approach_velocity_m_s_{speed_tag(n)}": v0}
         for name, value in zip(table, (n, F, F * task.contact_time_s, v0)):
             table[name].append(value)            # the same, one row per speed (`--csv`)
-    return Result(Status.SOLVED, values, Timing(0.0, time.perf_counter() - start),
-                  message="tau = half the natural period on the plate", arrays=table)
+    return clock.result(Status.SOLVED, values, message="tau = half the natural period on the plate", arrays=table)
 
 
 def rebound(task: LeverStop, *, method: Literal["closed_form", "quadrature", "ode"] = "closed_form",
@@ -75,28 +73,28 @@ def rebound(task: LeverStop, *, method: Literal["closed_form", "quadrature", "od
     `arrays` hold each speed's history q(t) in closed form over the window of its first rebound
     (`t_s`, `q_mm_<rpm>`; one window: it depends on the plate alone, not on the speed).
     """
+    check_settings(rebound, method=method)
     _need_speeds(task)
     task.need("t_deg")
     methods = {"closed_form": _by_closed_form, "quadrature": _by_quadrature, "ode": _by_ode}
-    start = time.perf_counter()
-    build_s, values, diagnostics, status, notes = 0.0, {}, {}, Status.SOLVED, []
+    clock = Clock()
+    values, diagnostics, status, notes = {}, {}, Status.SOLVED, []
     histories = {}
     for n in task.speeds_rpm:
         try:
             imp = impact_at(task, n)
         except RollerLeftCam as exc:
-            return _without_cam(exc, values, Timing(build_s, time.perf_counter() - start - build_s))
+            return _without_cam(exc, values, clock)
         t_s = histories.setdefault("t_s", np.linspace(0.0, imp.window_s, HISTORY_POINTS))
         histories[f"q_mm_{speed_tag(n)}"] = closed_form_response(imp, t_s)[0] * 1e3
         runs = {name: methods[name](imp) for name in ([method] + [k for k in methods if k != method]
                                                       if cross_check else [method])}
-        build_s += sum(r[2] for r in runs.values())
+        clock.build_s += sum(r[2] for r in runs.values())
         amp, own_status = runs[method][0], runs[method][1]
         if own_status is not Status.SOLVED or not math.isfinite(amp):
-            return Result(Status.FAILED if own_status is Status.SOLVED else own_status, values,
-                          Timing(build_s, time.perf_counter() - start - build_s),
-                          message=f"{method}: {own_status.value} at {n:g} rpm, no amplitude reported",
-                          diagnostics=diagnostics)
+            return clock.result(Status.FAILED if own_status is Status.SOLVED else own_status, values,
+                                message=f"{method}: {own_status.value} at {n:g} rpm, no amplitude reported",
+                                diagnostics=diagnostics)
         values[f"rebound_mm_{speed_tag(n)}"] = amp * 1e3
         if cross_check:
             bad = [k for k, r in runs.items() if r[1] is not Status.SOLVED or not math.isfinite(r[0])]
@@ -115,8 +113,7 @@ def rebound(task: LeverStop, *, method: Literal["closed_form", "quadrature", "od
     values["contact_time_s"] = task.contact_time_s
     agreed = "closed form, quadrature and ODE agree within 1e-8" if cross_check else "no cross-check"
     message = f"{method}; " + ("; ".join(notes) if notes else agreed)
-    return Result(status, values, Timing(build_s, time.perf_counter() - start - build_s), message=message,
-                  diagnostics=diagnostics, arrays=histories)
+    return clock.result(status, values, message=message, diagnostics=diagnostics, arrays=histories)
 
 
 def linearise_amplitude(task: LeverStop) -> Result:
@@ -126,7 +123,7 @@ def linearise_amplitude(task: LeverStop) -> Result:
     way (effect cam_drive) the answer is INFEASIBLE (violated `cam_contact`), the tangent kept.
     `arrays`: the exact a(t) at every t the root search evaluated, beside the tangent there."""
     task.need("amplitude_limit_mm")
-    start = time.perf_counter()
+    clock = Clock()
     limit = task.amplitude_limit_mm
     n = task.speed_nominal_rpm
     values = {}
@@ -141,16 +138,16 @@ def linearise_amplitude(task: LeverStop) -> Result:
             return seen[float(t)] - limit
         lo, hi = _bracket(exact, task.t_deg, limit, n)
     except RollerLeftCam as exc:
-        return _without_cam(exc, values, Timing(0.0, time.perf_counter() - start))
+        return _without_cam(exc, values, clock)
     t_exact = brentq(exact, lo, hi, xtol=1e-12, rtol=1e-14)
     values |= {"t_3_7_min_exact_deg": t_exact, "span_gain_deg": t_exact - t_linear,
                "amplitude_nominal_mm": float(rebound_amplitude_mm(task, n, task.t_deg))}
     t_deg = np.array(sorted(seen))
     exact_mm = np.array([seen[t] for t in t_deg])
     arrays = {"t_deg": t_deg, "amplitude_mm": exact_mm, "tangent_mm": intercept + slope * t_deg}    # t ascending
-    return Result(Status.SOLVED, values, Timing(0.0, time.perf_counter() - start), arrays=arrays,
-                  message=f"tangent at t = {task.t_deg:g} deg, n = {n:g} rpm; a(t) is convex, so the tangent's "
-                          f"bound is looser than the exact one by span_gain_deg")
+    return clock.result(Status.SOLVED, values, arrays=arrays,
+                        message=f"tangent at t = {task.t_deg:g} deg, n = {n:g} rpm; a(t) is convex, so the tangent's "
+                                f"bound is looser than the exact one by span_gain_deg")
 
 
 def operating_point(task: LeverStop) -> Result:
@@ -161,43 +158,42 @@ def operating_point(task: LeverStop) -> Result:
     rebound keeps the limit, INFEASIBLE (violated amplitude) when it does not; `margin_mm` is
     the limit left over (negative when exceeded)."""
     task.need("speed_nominal_rpm", "t_deg", "amplitude_limit_mm")
-    start = time.perf_counter()
+    clock = Clock()
     n, t, limit = task.speed_nominal_rpm, task.t_deg, task.amplitude_limit_mm
     try:
         imp = impact_at(task, n)
     except RollerLeftCam as exc:
-        return _without_cam(exc, {}, Timing(0.0, time.perf_counter() - start))
+        return _without_cam(exc, {}, clock)
     amplitude_mm = float(rebound_amplitude_mm(task, n, t))
-    ode_m, ode_status, build_s = ode_amplitude_m(imp)
+    ode_m, ode_status, clock.build_s = ode_amplitude_m(imp)
     values = {"rebound_mm": amplitude_mm, "margin_mm": limit - amplitude_mm,
               "approach_velocity_m_s": imp.v0_m_s, "contact_time_s": task.contact_time_s}
     if "impact_pulse" in task.effects:
         values["impact_force_N"] = float(task.impact_force_N(values["approach_velocity_m_s"]))
     t_s = np.linspace(0.0, imp.window_s, HISTORY_POINTS)
     history = {"t_s": t_s, "q_mm": closed_form_response(imp, t_s)[0] * 1e3}     # the rebound q(t)
-    timing = Timing(build_s, time.perf_counter() - start - build_s)
     if ode_status is not Status.SOLVED:
-        return Result(Status.INACCURATE, values, timing, arrays=history,
-                      message=f"the ODE cross-check gave {ode_status.value}: the law's "
-                              f"{amplitude_mm:.4g} mm is unconfirmed")
+        return clock.result(Status.INACCURATE, values, arrays=history,
+                            message=f"the ODE cross-check gave {ode_status.value}: the law's "
+                                    f"{amplitude_mm:.4g} mm is unconfirmed")
     spread = abs(ode_m * 1e3 - amplitude_mm) / max(amplitude_mm, 1e-300)
     values["methods_rel_diff"] = spread
     if spread > AGREEMENT_REL:
-        return Result(Status.INACCURATE, values, timing, arrays=history,
-                      message=f"exact law and ODE differ by {spread:.2e} relative at {n:g} rpm, {t:g} deg")
+        return clock.result(Status.INACCURATE, values, arrays=history,
+                            message=f"exact law and ODE differ by {spread:.2e} relative at {n:g} rpm, {t:g} deg")
     within = amplitude_mm <= limit
-    return Result(Status.SOLVED if within else Status.INFEASIBLE, values, timing, arrays=history,
-                  violated=() if within else ("amplitude",),
-                  message=f"{amplitude_mm:.4g} mm at {n:g} rpm, t = {t:g} deg: "
-                          f"{'within' if within else 'above'} amplitude_limit_mm={limit:g}; "
-                          f"the ODE agrees to {spread:.1e}")
+    return clock.result(Status.SOLVED if within else Status.INFEASIBLE, values, arrays=history,
+                        violated=() if within else ("amplitude",),
+                        message=f"{amplitude_mm:.4g} mm at {n:g} rpm, t = {t:g} deg: "
+                                f"{'within' if within else 'above'} amplitude_limit_mm={limit:g}; "
+                                f"the ODE agrees to {spread:.1e}")
 
 
-def _without_cam(exc, values, timing):
+def _without_cam(exc, values, clock: Clock) -> Result:
     """No rebound where the cam's rise fails: INFEASIBLE (violated cam_contact) when the roller
     leaves its cam, else the integrator's status; the values found so far are kept."""
     infeasible = exc.status is Status.INFEASIBLE
-    return Result(exc.status, values, timing, message=str(exc), violated=("cam_contact",) if infeasible else ())
+    return clock.result(exc.status, values, message=str(exc), violated=("cam_contact",) if infeasible else ())
 
 
 def _bracket(excess, t_deg, limit, speed_rpm, factor=1.25, steps=40):
@@ -259,15 +255,14 @@ def cam_dynamics(task: LeverStop, *, reltol: Tolerance = 1e-10,
     """
     task.need("speed_nominal_rpm", "law")
     task.need_effect("cam_drive")
-    start = time.perf_counter()
+    clock = Clock()
     speeds = [task.speed_nominal_rpm] + [n for n in task.speeds_rpm if n != task.speed_nominal_rpm]
-    values, build_s, left, arrays, rises = {}, 0.0, [], {}, {}
+    values, left, arrays, rises = {}, [], {}, {}
     for n in speeds:
         rise = rises[n] = follow_cam(task, n, reltol=reltol, points=points)
-        build_s += rise.build_s
+        clock.build_s += rise.build_s
         if rise.status not in (Status.SOLVED, Status.INFEASIBLE):
-            return Result(rise.status, values, Timing(build_s, time.perf_counter() - start - build_s),
-                          message=f"{n:g} rpm: {rise.message}")
+            return clock.result(rise.status, values, message=f"{n:g} rpm: {rise.message}")
         if rise.status is Status.INFEASIBLE:
             left.append(rise.message)
         suffix = "" if n == task.speed_nominal_rpm else f"_{speed_tag(n)}"
@@ -297,18 +292,17 @@ def cam_dynamics(task: LeverStop, *, reltol: Tolerance = 1e-10,
                                         ("d2x_dphi2_mm_per_rad2", rise.ddX, H_mm / rad**2)):
                 arrays[f"{name}_{speed_tag(n)}"] = np.interp(nominal.xi, rise.xi, series * scale, right=np.nan)
     ref_xi, ref_v0, ref_status = follow_cam_reference(task, task.speed_nominal_rpm)
-    timing = lambda: Timing(build_s, time.perf_counter() - start - build_s)
     spread = abs(ref_v0 - nominal.approach_velocity_m_s) / max(abs(ref_v0), 1e-300)
     values["reference_rel_diff"] = spread
     if left:
-        return Result(Status.INFEASIBLE, values, timing(), violated=("cam_contact",), message="; ".join(left),
-                      arrays=arrays)
+        return clock.result(Status.INFEASIBLE, values, violated=("cam_contact",), message="; ".join(left),
+                            arrays=arrays)
     if ref_status is not Status.SOLVED or (ref_xi is None) != (nominal.contact_xi is None) or spread > CAM_AGREEMENT_REL:
-        return Result(Status.INACCURATE, values, timing(), arrays=arrays,
-                      message=f"CVODES and DOP853 differ on the approach velocity by {spread:.2e} relative")
-    return Result(Status.SOLVED, values, timing(), arrays=arrays,
-                  message=f"{task.law} rise, {nominal.message} at {nominal.contact_xi * task.t_deg:.4f} deg; "
-                          f"DOP853 agrees to {spread:.1e}" if nominal.contact_xi is not None else nominal.message)
+        return clock.result(Status.INACCURATE, values, arrays=arrays,
+                            message=f"CVODES and DOP853 differ on the approach velocity by {spread:.2e} relative")
+    return clock.result(Status.SOLVED, values, arrays=arrays,
+                        message=f"{task.law} rise, {nominal.message} at {nominal.contact_xi * task.t_deg:.4f} deg; "
+                                f"DOP853 agrees to {spread:.1e}" if nominal.contact_xi is not None else nominal.message)
 
 
 def _rigid_approach_m_s(task, speed_rpm):

@@ -10,13 +10,12 @@ where the roller leaves its cam carry no rise and are gaps of the scan (reported
 """
 import dataclasses
 import math
-import time
 
 import numpy as np
 from scipy.optimize import brentq
 
-from mechopt.kit.errors import ModelError
-from mechopt.kit.result import Result, Status, Timing
+from mechopt.kit.errors import SettingError
+from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Annotated, Interval, NonNegative, Positive, Tolerance
 from mechopt.models.stop_impact import LeverStop, speed_tag
 from mechopt.solvers.stop_impact.law import RollerLeftCam, amplitude_law, approach_velocity_m_s, rebound_amplitude_mm
@@ -46,9 +45,9 @@ def fit_roots(task: LeverStop, *, t_min_deg: Annotated[float, Interval(gt=0, lt=
     task.need("law_slope_mm_per_deg", "law_intercept_mm", "speed_nominal_rpm")
     task.need_effect("cam_drive")
     if not (t_min_deg < t_max_deg and stroke_min_mm < stroke_max_mm):
-        raise ModelError(f"empty box: t_min_deg={t_min_deg:g} must be below t_max_deg={t_max_deg:g} and "
-                         f"stroke_min_mm={stroke_min_mm:g} below stroke_max_mm={stroke_max_mm:g}", key="t_min_deg")
-    start = time.perf_counter()
+        raise SettingError(f"empty box: t_min_deg={t_min_deg:g} must be below t_max_deg={t_max_deg:g} and "
+                           f"stroke_min_mm={stroke_min_mm:g} below stroke_max_mm={stroke_max_mm:g}", key="t_min_deg")
+    clock = Clock()
     fit = _Fit(task, stroke_min_mm, stroke_max_mm)
     grid = np.arange(t_min_deg, t_max_deg + 0.5 * t_step_deg, t_step_deg)
     scan = [fit.residual_or_gap(t) for t in grid]
@@ -60,11 +59,10 @@ def fit_roots(task: LeverStop, *, t_min_deg: Annotated[float, Interval(gt=0, lt=
             continue
         t = brentq(fit.residual, grid[i], grid[i + 1], xtol=xtol_deg, rtol=1e-14)
         roots.append((t, fit.stroke_for(t)))
-    timing = lambda: Timing(0.0, time.perf_counter() - start)
     values = {"roots": float(len(roots)), "t0_deg": task.law_intercept_mm / (2 * abs(task.law_slope_mm_per_deg))}
     if not roots:
-        return Result(Status.INFEASIBLE, values, timing(), violated=("law_tangent",),
-                      message=f"no root in the box (gaps where the roller leaves its cam: {_span(gaps)})")
+        return clock.result(Status.INFEASIBLE, values, violated=("law_tangent",),
+                            message=f"no root in the box (gaps where the roller leaves its cam: {_span(gaps)})")
     worst = 0.0
     for k, (t, H) in enumerate(roots, 1):
         slope, intercept = amplitude_law(fit.at(H, t))
@@ -89,7 +87,7 @@ def fit_roots(task: LeverStop, *, t_min_deg: Annotated[float, Interval(gt=0, lt=
     diagnostics = {"roots": [{"t_deg": t, "stroke_mm": H} | row for (t, H), row in zip(roots, table)], "gaps_deg": gaps}
     arrays = {"t_deg": [t for t, _ in roots], "stroke_mm": [H for _, H in roots]}     # one row per root
     arrays |= {name: [row[name] for row in table] for name in table[0]}
-    return Result(status, values, timing(), message=message, diagnostics=diagnostics, arrays=arrays)
+    return clock.result(status, values, message=message, diagnostics=diagnostics, arrays=arrays)
 
 
 class _Fit:

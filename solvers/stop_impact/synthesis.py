@@ -43,7 +43,6 @@ speeds beside it: rebound, dynamic error, peak acceleration.
 """
 import dataclasses
 import math
-import time
 import warnings
 from dataclasses import dataclass
 from typing import Literal
@@ -54,9 +53,9 @@ from scipy import sparse
 from scipy.optimize import brentq
 
 from mechopt.kit.cache import BuildCache
-from mechopt.kit.errors import ModelError
+from mechopt.kit.errors import ModelError, SettingError
 from mechopt.kit.highs import banner_to_stderr, interruptible_everywhere
-from mechopt.kit.result import Result, Status, Timing, from_cvxpy
+from mechopt.kit.result import Clock, Result, Status, from_cvxpy
 from mechopt.kit.settings import Annotated, Interval, NonNegative
 from mechopt.models.cam_follower import LAWS, law_values
 from mechopt.models.cam_law import (
@@ -351,7 +350,7 @@ class WindowLP:
         # the velocity rows start a row early: C may cross between the last row below and the window
         self.after.value = (self.xi < window_xi - 1.01 * ROW_SPACING_XI[1]).astype(float)
         budget = {"time_limit": max(GIVE_UP_FLOOR_S, GIVE_UP_RATIO * self.slowest_s)}
-        start = time.perf_counter()
+        clock = Clock()
         with warnings.catch_warnings():                  # a time limit is a status here, not a warning
             warnings.filterwarnings("ignore", "Solution may be inaccurate", UserWarning)
             try:
@@ -366,7 +365,7 @@ class WindowLP:
             self.given_up += 1
         if status is not Status.SOLVED:
             return status, None, math.inf, {}
-        self.slowest_s = max(self.slowest_s, time.perf_counter() - start)
+        self.slowest_s = max(self.slowest_s, clock.elapsed())
         return (status, np.asarray(self.c.value).ravel(), float(self.problem.value),
                 {k: float(v.value) for k, v in self.slacks.items()})
 
@@ -547,34 +546,34 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
     task.need("stroke_mm", "amplitude_limit_mm")
     task.need_effect("cam_drive")
     if band_low_rpm > band_high_rpm:
-        raise ModelError(f"band_low_rpm={band_low_rpm} > band_high_rpm={band_high_rpm}: the band is empty",
-                         key="band_low_rpm")
+        raise SettingError(f"band_low_rpm={band_low_rpm} > band_high_rpm={band_high_rpm}: the band is empty",
+                           key="band_low_rpm")
     if phase_from_deg >= phase_to_deg:
-        raise ModelError(f"phase_from_deg={phase_from_deg} >= phase_to_deg={phase_to_deg}: empty bracket",
-                         key="phase_from_deg")
-    start = time.perf_counter()
+        raise SettingError(f"phase_from_deg={phase_from_deg} >= phase_to_deg={phase_to_deg}: empty bracket",
+                           key="phase_from_deg")
+    clock = Clock()
     bounds = {"max_velocity_mm_per_rad": max_velocity_mm_per_rad,
               "max_acceleration_mm_per_rad2": max_acceleration_mm_per_rad2, "max_jerk_mm_per_rad3": max_jerk_mm_per_rad3}
     band = (band_low_rpm, band_high_rpm)
     common = dict(coefficients=coefficients, continuity=continuity, sample_speeds=sample_speeds,
                   dense_step_rpm=dense_step_rpm, bounds=bounds)
     limit = task.amplitude_limit_mm
-    build0 = time.perf_counter()
+    build = Clock()
     linear_lever(coefficients, continuity)
-    build_s = time.perf_counter() - build0
+    clock.build_s = build.elapsed()
     values, diagnostics = {}, {}
     if objective == "least_phase":
         design, t_deg, search = _least_phase(task, band, phase_from_deg, phase_to_deg, phase_tol_deg, common)
         diagnostics |= {"bisection_steps": search["steps"], "windows_given_up": search["given_up"]}
         if design.status is not Status.SOLVED:
-            return _unsolved(design, values, diagnostics, start, build_s, t_deg, limit, task, band, dense_step_rpm)
+            return _unsolved(design, values, diagnostics, clock, t_deg, limit, task, band, dense_step_rpm)
     else:
         task.need("t_deg")
         t_deg = task.t_deg
         design = design_law(task, t_deg, band, objective=objective, **common)
         diagnostics["windows_given_up"] = design.given_up
         if design.status is not Status.SOLVED:
-            return _unsolved(design, values, diagnostics, start, build_s, t_deg, limit, task, band, dense_step_rpm)
+            return _unsolved(design, values, diagnostics, clock, t_deg, limit, task, band, dense_step_rpm)
     law = design.law
     lever = linear_lever(coefficients, continuity)
     values |= {"t_deg": t_deg, "lp_value": design.value, "window_xi": design.window_xi, "lps": float(design.lps)}
@@ -612,8 +611,8 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
             try:
                 chain = float(rebound_amplitude_mm(chain_task, n, t_deg))
             except RollerLeftCam as exc:
-                return Result(Status.INACCURATE, values, Timing(build_s, time.perf_counter() - start - build_s),
-                              message=f"the chain at {n:g} rpm: {exc}", arrays=arrays, diagnostics=diagnostics)
+                return clock.result(Status.INACCURATE, values, message=f"the chain at {n:g} rpm: {exc}",
+                                    arrays=arrays, diagnostics=diagnostics)
             own = predicted_rebounds_mm(task, law, t_deg, [n], lever=lever)[0][0]
             gap = abs(chain - own) / max(limit, 1e-300)
             worst_gap = max(worst_gap, gap)
@@ -631,11 +630,11 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
                     f"limit at {len(check_speeds)} speeds (tolerance {agreement_rel:g})")
     if compare:
         _compare(task, law, t_deg, sorted(set(design.speeds)), values)
-    return Result(status, values, Timing(build_s, time.perf_counter() - start - build_s), message=message,
-                  arrays=arrays, diagnostics=diagnostics | {"sampled_speeds_rpm": list(design.speeds),
-                                                            "law_knots": list(law.knots),
-                                                            "law_coefficients": list(law.coefficients)},
-                  warnings=warnings)
+    return clock.result(status, values, message=message,
+                        arrays=arrays, diagnostics=diagnostics | {"sampled_speeds_rpm": list(design.speeds),
+                                                                  "law_knots": list(law.knots),
+                                                                  "law_coefficients": list(law.coefficients)},
+                        warnings=warnings)
 
 
 def _least_phase(task, band, lo, hi, tol, common):
@@ -710,7 +709,7 @@ def _library_least_phase(task, law, band, lo, hi, tol, step):
     return hi
 
 
-def _unsolved(design, values, diagnostics, start, build_s, t_deg, limit, task=None, band=None, step=5.0):
+def _unsolved(design, values, diagnostics, clock, t_deg, limit, task=None, band=None, step=5.0):
     """No law: the status and what binds; with a best law (the limit missed), the best achievable
     rebound over the band and the speed where it is set."""
     values = values | {"t_deg": t_deg}
@@ -719,8 +718,8 @@ def _unsolved(design, values, diagnostics, start, build_s, t_deg, limit, task=No
         pred = [p[0] for p in predicted_rebounds_mm(task, design.law, t_deg, dense)]
         worst = int(np.argmax(pred))
         values |= {"rebound_best_mm": pred[worst], "rebound_best_speed_rpm": float(dense[worst])}
-    return Result(design.status, values, Timing(build_s, time.perf_counter() - start - build_s),
-                  message=design.message, violated=design.violated, diagnostics=diagnostics)
+    return clock.result(design.status, values, message=design.message, violated=design.violated,
+                        diagnostics=diagnostics)
 
 
 def _compare(task, law, t_deg, speeds, values):

@@ -1,6 +1,8 @@
-"""The one result every solver returns, and the only code that knows back ends' status words."""
+"""The one result every solver returns, the clock that times it and builds it (a solver's one exit),
+and the only code that knows back ends' status words."""
 import html
 import math
+import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from enum import Enum
@@ -106,6 +108,38 @@ class Result:
                        for k, v in self.values.items())
         return (f"<p><b>{self.status.value}</b> {html.escape(self.message)}</p>"
                 f"<table><tr><th>value</th><th></th></tr>{rows}</table>")
+
+
+class Clock:
+    """The seconds of one solve as a Result reports them, and the Result built with them: the one
+    exit of every solver. Started where the solve starts; what it counts as construction is
+    `build_s` (marked by `built()`, or added to: a cache's own count, a sub-solve's), the rest solve_s.
+
+        clock = Clock()
+        problem = build(task)
+        clock.built()
+        ...
+        return clock.result(status, values, message=message)
+    """
+
+    def __init__(self):
+        self.start = time.perf_counter()
+        self.build_s = 0.0
+
+    def elapsed(self) -> float:
+        """Seconds since the start (a phase timed on its own: `Clock()` at its start)."""
+        return time.perf_counter() - self.start
+
+    def built(self) -> None:
+        """Construction ends now: the seconds since the start are build_s."""
+        self.build_s = self.elapsed()
+
+    def timing(self) -> Timing:
+        return Timing(self.build_s, self.elapsed() - self.build_s)
+
+    def result(self, status: Status, values: dict[str, float], *args, **kwargs) -> Result:
+        """The Result of this solve, timed now; the other arguments are Result's own."""
+        return Result(status, values, self.timing(), *args, **kwargs)
 
 
 _IPOPT = {
