@@ -97,12 +97,15 @@ WINDOW_REFINE = 1               # halvings of the scan step around the best wind
 ENVELOPE_POINTS = 2049          # time samples of eq. (2)'s window for the envelope's lines
 ROOT_FTOL = 1e-4                # the least phase: r*(t) within this of the limit (relative) ends the search
 MAX_PHASE_STEPS = 40
-HIGHS_OPTIONS = {"solver": "simplex", "simplex_strategy": 1, "presolve": "off",   # dual simplex, cvxpy's warm start
+# HiGHS' interior point, each window from scratch: its work is a count of iterations (17-39 on the
+# scenes' windows, each a factorisation of the same size), where the dual simplex, warm or cold,
+# stalled on a few ill-scaled infeasible windows (coefficients 1e-8 ... 1e3: 300 iterations in
+# 7-41 s against 0.3 s for any other) and could only be stopped by a clock. Crossover gives the vertex.
+IPM_ITERATIONS = 400            # a window not settled in this many IPM iterations is given up (LIMIT)
+SIMPLEX_ITERATIONS = 50_000     # the dual simplex's budget where the IPM gives no status at all
+HIGHS_OPTIONS = {"solver": "ipm", "run_crossover": "on", "ipm_iteration_limit": IPM_ITERATIONS,
                  "output_flag": False}       # options given, cvxpy no longer silences HiGHS' banner
-# the states' LP is presolved: its tie rows fold away (10^3 coefficients, one LP: 0.8 s against 2.1 s without;
-# the dense LP at 24 coefficients is ~15x slower with presolve across the least-phase search)
-STATE_HIGHS_OPTIONS = HIGHS_OPTIONS | {"presolve": "on"}
-GIVE_UP_RATIO, GIVE_UP_FLOOR_S = 10.0, 1.0      # a window slower than this is given up (WindowLP.solve)
+FALLBACK_OPTIONS = {"solver": "simplex", "simplex_iteration_limit": SIMPLEX_ITERATIONS, "output_flag": False}
 BASES = BuildCache("stop_impact.synthesis_bases", maxsize=8)
 
 
@@ -338,26 +341,23 @@ class WindowLP:
         constraints += ties
         goal = sum(self.slacks.values()) if slack else (peak if peak is not None else r)
         self.problem = cp.Problem(cp.Minimize(goal), constraints)
-        self.options = STATE_HIGHS_OPTIONS if ties else HIGHS_OPTIONS
-        self.slowest_s, self.given_up = 0.0, 0
+        self.given_up = 0
 
     def solve(self, window_xi):
-        """(status, c, value, slacks) with the arrival window starting at xi_a = window_xi. A window
-        HiGHS has not settled in GIVE_UP_RATIO times the slowest window solved here (at least
-        GIVE_UP_FLOOR_S) is given up: LIMIT, counted in `given_up`, no proof of infeasibility (on the
-        co-design's lever a few infeasible windows took 2-16 s against 0.3 s for any solved one)."""
+        """(status, c, value, slacks) with the arrival window starting at xi_a = window_xi. Each
+        window is solved from scratch (no warm start: the answer does not depend on the windows
+        solved before it, nor on the machine's speed or load); one that HiGHS does not settle within
+        its iteration limits is given up: LIMIT, counted in `given_up`, no proof of infeasibility."""
         self.before.value = (self.xi >= window_xi).astype(float)
         # the velocity rows start a row early: C may cross between the last row below and the window
         self.after.value = (self.xi < window_xi - 1.01 * ROW_SPACING_XI[1]).astype(float)
-        budget = {"time_limit": max(GIVE_UP_FLOOR_S, GIVE_UP_RATIO * self.slowest_s)}
-        clock = Clock()
-        with warnings.catch_warnings():                  # a time limit is a status here, not a warning
+        with warnings.catch_warnings():                  # an iteration limit is a status here, not a warning
             warnings.filterwarnings("ignore", "Solution may be inaccurate", UserWarning)
             try:
-                self.problem.solve(solver=cp.HIGHS, highs_options=self.options | budget)
+                self.problem.solve(solver=cp.HIGHS, warm_start=False, highs_options=HIGHS_OPTIONS)
             except (cp.error.SolverError, ValueError):      # cvxpy raises ValueError on HiGHS' "unknown"
-                try:                                         # the primal simplex gave up: HiGHS' default once
-                    self.problem.solve(solver=cp.HIGHS, highs_options={"output_flag": False} | budget)
+                try:
+                    self.problem.solve(solver=cp.HIGHS, warm_start=False, highs_options=FALLBACK_OPTIONS)
                 except (cp.error.SolverError, ValueError) as exc:
                     return Status.FAILED, None, math.inf, {"message": str(exc)}
         status = from_cvxpy(self.problem.status)
@@ -365,7 +365,6 @@ class WindowLP:
             self.given_up += 1
         if status is not Status.SOLVED:
             return status, None, math.inf, {}
-        self.slowest_s = max(self.slowest_s, clock.elapsed())
         return (status, np.asarray(self.c.value).ravel(), float(self.problem.value),
                 {k: float(v.value) for k, v in self.slacks.items()})
 
@@ -408,7 +407,7 @@ class _Design:
     lps: int
     message: str = ""
     violated: tuple = ()
-    given_up: int = 0               # windows HiGHS did not settle in time (WindowLP.solve)
+    given_up: int = 0               # windows HiGHS did not settle within its iteration limits (WindowLP.solve)
 
 
 def design_law(task: LeverStop, t_deg: float, band_rpm: tuple, *, objective="least_rebound", coefficients=100,
