@@ -330,14 +330,6 @@ def test_errors_of_the_python_api_name_keywords_not_the_command_lines_flag():
         mechopt.solve("loom/group1", {"operations[from=1,to=9].min_deg": 3.0})
 
 
-def test_the_highs_banner_stays_off_stdout():
-    """HiGHS writes its banner to the C stdout on the first model of a process; stdout is for results."""
-    done = subprocess.run([sys.executable, "-m", "mechopt", "run", "loom/group1"], capture_output=True, text=True,
-                          timeout=300)
-    assert done.returncode == 0 and done.stdout.startswith("loom/group1: ")
-    assert "Running HiGHS" not in done.stdout and "Running HiGHS" in done.stderr
-
-
 def test_plot_of_a_run_with_no_solution_says_why_nothing_was_drawn(tmp_path, capsys):
     assert main(["run", "loom/group1", "--set", "cycle_deg=100", "--plot", str(tmp_path / "figs")]) == 3
     err = capsys.readouterr().err

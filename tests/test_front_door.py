@@ -1,0 +1,29 @@
+"""The package as a new user first meets it: the commands' streams, the numbers as printed, the
+values and fields of a run, the sweep's axes and the pages that say how."""
+import subprocess
+import sys
+
+import pytest
+
+BANNER = ("Running HiGHS", "Copyright (c)", "THIRD_PARTY_NOTICES")
+
+
+def _mechopt(*args, code=None):
+    command = [sys.executable, "-c", code] if code else [sys.executable, "-m", "mechopt", *args]
+    return subprocess.run(command, capture_output=True, text=True, timeout=600)
+
+
+@pytest.mark.parametrize("args", [("cases",), ("describe", "loom/group1")])
+def test_a_command_that_solves_nothing_prints_no_highs_banner(args):
+    done = _mechopt(*args)
+    assert done.returncode == 0 and done.stdout
+    assert not [b for b in BANNER if b in done.stdout or b in done.stderr]
+
+
+def test_a_run_and_a_python_solve_print_no_highs_banner(tmp_path):
+    """HiGHS prints its banner when a process makes its first Highs object: that one is made quietly."""
+    done = _mechopt("run", "loom/group1", "--json", str(tmp_path / "r.json"))
+    assert done.returncode == 0 and done.stdout.startswith("loom/group1: ")
+    assert not [b for b in BANNER if b in done.stdout or b in done.stderr]
+    solved = _mechopt(code="import mechopt; print(mechopt.solve('loom/group1').status.value)")
+    assert solved.stdout == "SOLVED\n" and not [b for b in BANNER if b in solved.stderr]
