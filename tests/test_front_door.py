@@ -27,3 +27,18 @@ def test_a_run_and_a_python_solve_print_no_highs_banner(tmp_path):
     assert not [b for b in BANNER if b in done.stdout or b in done.stderr]
     solved = _mechopt(code="import mechopt; print(mechopt.solve('loom/group1').status.value)")
     assert solved.stdout == "SOLVED\n" and not [b for b in BANNER if b in solved.stderr]
+
+
+def test_a_sweep_into_a_pipe_draws_no_bar(tmp_path):
+    """A bar redraws itself with carriage returns: on a pipe or a log file they stay as garbage."""
+    done = _mechopt("sweep", "loom/group1", "--grid", "amplitude_limit_mm=0.08:0.14:2", "--chunk", "1",
+                    "--out", str(tmp_path / "s.parquet"))
+    assert done.returncode == 0 and "2 variants (2 SOLVED)" in done.stdout
+    assert "\r" not in done.stderr and "variant/s" not in done.stderr
+
+
+def test_a_sweep_draws_its_bar_when_asked(capsys):
+    from mechopt import registry
+    from mechopt.sweep import parse_grid, sweep
+    sweep(registry.find("loom/group1"), [parse_grid("amplitude_limit_mm=0.08:0.14:2")], progress=True)
+    assert "2/2" in capsys.readouterr().err

@@ -502,7 +502,7 @@ def _sweep(args) -> int:
         try:
             table = sweep.sweep(scene, grid, random, samples=args.samples, seed=args.seed, out=out,
                                 scheduler=args.scheduler, workers=args.workers, chunk=args.chunk,
-                                max_variants=args.max_variants)
+                                max_variants=args.max_variants, progress=False if args.quiet else None)
         except sweep.SweepInterrupted as stop:
             print(f"interrupted: {stop}", file=sys.stderr)
             return INTERRUPTED

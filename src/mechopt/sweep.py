@@ -306,7 +306,7 @@ def _solve_rows(scene: Scene, chunk) -> list[dict]:
 
 
 def sweep(scene: Scene, grid=(), random=(), *, samples: int = 0, seed: int = 0, out: Path | None = None,
-          scheduler: str | None = None, workers: int = 1, chunk: int = 100, progress: bool = True,
+          scheduler: str | None = None, workers: int = 1, chunk: int = 100, progress: bool | None = None,
           connect_timeout_s: float = 5.0, on_chunk: Callable[[list[dict]], None] | None = None,
           max_variants: int = MAX_VARIANTS) -> pa.Table:
     """Run every variant of a sweep and return (and write, when `out` is given) its table.
@@ -323,7 +323,9 @@ def sweep(scene: Scene, grid=(), random=(), *, samples: int = 0, seed: int = 0, 
     workers : without a scheduler, 1 runs in this process; more spreads the chunks over as many
         local processes (spawned, each keeping its own solver builds).
     chunk : variants per task (>= 1); each task's worker re-solves its cached build.
-    progress : draw a tqdm bar on stderr (rate and time remaining).
+    progress : draw a tqdm bar on stderr (rate and time remaining): None (the default) when stderr
+        is a terminal, True always, False never (a bar redraws itself with carriage returns, which
+        a log file or a pipe keeps as they are).
     connect_timeout_s : how long to try the scheduler before giving up [s].
     on_chunk : called with each chunk's rows as it arrives (after it is written).
     max_variants : a larger request is refused before anything is allocated.
@@ -835,6 +837,8 @@ def _silent_server(address, timeout_s) -> str | None:
 
 def _bar(total, done, enabled):
     from tqdm import tqdm
+    if enabled is None:
+        enabled = sys.stderr.isatty()
     return tqdm(total=total, initial=done, unit="variant", file=sys.stderr, disable=not enabled,
                 smoothing=0.1, dynamic_ncols=True)
 
