@@ -42,3 +42,17 @@ def test_a_sweep_draws_its_bar_when_asked(capsys):
     from mechopt.sweep import parse_grid, sweep
     sweep(registry.find("loom/group1"), [parse_grid("amplitude_limit_mm=0.08:0.14:2")], progress=True)
     assert "2/2" in capsys.readouterr().err
+
+
+def test_the_reports_values_read_as_the_command_prints_them(capsys):
+    """52.1528 on the command line is 52.1528 in the report and a notebook, not 52.15."""
+    import re
+
+    from mechopt import registry
+    from mechopt.answers import values_html
+    from mechopt.cli import _print_run
+    run = registry.run(registry.find("cam-cutter/other-profile"))
+    _print_run(run)
+    printed = capsys.readouterr().out.split("\nvalue ", 1)[1].split("\n\n", 1)[0].splitlines()[1:]
+    cells = re.findall(r"<tr><td>([^<]+)</td><td title='[^']*'>([^<]+)</td>", values_html(run))
+    assert cells == [tuple(line.split()) for line in printed] and ("L_mm", "52.1528") in cells

@@ -16,7 +16,7 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 from mechopt import __version__, registry
-from mechopt.answers import answers_html
+from mechopt.answers import answers_html, shown
 from mechopt.drivers import set_mostly_by, steps_of
 from mechopt.figures import plot_run
 from mechopt.figures.sweep import plot_sweep
@@ -97,11 +97,11 @@ def _validation(runs):
             verdict = f"<span class='{css}'>{_e(c.label if c.ok else 'FAIL (' + c.label + ')')}</span>"
             why = f"<span class='long'>{_e(c.reason or c.where)}</span>"
             rows.append((registry.VERDICTS.index(c.verdict),
-                         [_e(run.scene.id), _e(c.name), _e(c.kind), _e(c.expected), _e(_fmt(c.got)), verdict, why,
+                         [_e(run.scene.id), _e(c.name), _e(c.kind), _e(c.expected), _e(shown(c.got)), verdict, why,
                           str(assumed)]))
             if c.verdict in registry.MISSES:
                 misses.append((registry.VERDICTS.index(c.verdict),
-                               [_e(run.scene.id), _e(c.name), _e(c.expected), _e(_fmt(c.got)), verdict, why]))
+                               [_e(run.scene.id), _e(c.name), _e(c.expected), _e(shown(c.got)), verdict, why]))
     rows.sort(key=lambda row: min(row[0], len(registry.MISSES)))        # the misses first
     misses.sort(key=lambda row: row[0])
     tallies = _table(["verdict", "checks"], [[_e(v.replace("_", " ")), str(n)] for v, n in counts.items() if n])
@@ -151,7 +151,7 @@ def _scene_section(run, folder):
             + f"<p><i>{_e(scene.spec.source)}</i><br>build {r.timing.build_s:.4f} s, solve {r.timing.solve_s:.4f} s</p>"
             + (f"<details><summary>{len(marked)} assumed / calibrated parameters</summary>"
                + _table(["parameter", "value", "unit", "mark", "why"],
-                        [[_e(k), _e(_fmt(v)), _e(unit_of(k)), _e(m), f"<span class='long'>{_e(w)}</span>"]
+                        [[_e(k), _e(shown(v)), _e(unit_of(k)), _e(m), f"<span class='long'>{_e(w)}</span>"]
                          for k, v, m, w in marked])
                + "</details>" if marked else "<p>every parameter given by the source</p>")
             + (images or "<p>no figures for this model</p>"))
@@ -194,12 +194,6 @@ def _table(header, rows, *, wide=False):
     body = "".join("<tr>" + "".join(f"<td>{x}</td>" for x in row) + "</tr>" for row in rows)
     table = "<table class='wide'>" if wide else "<table>"
     return f"<div class='scroll'>{table}<tr>{head}</tr>{body}</table></div>"
-
-
-def _fmt(value):
-    if value is None:
-        return "-"
-    return f"{value:.6g}" if isinstance(value, float) else str(value)
 
 
 def _e(text):
