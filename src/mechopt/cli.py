@@ -176,7 +176,8 @@ def _parser():
     sweep = sub.add_parser("sweep", parents=[common], help="what-if study: every variant of a scene, one Parquet table")
     sweep.add_argument("case", help="a scene id or a scene file's path")
     sweep.add_argument("--grid", action="append", default=[], metavar="KEY=START:STOP:NUM",
-                       help="NUM evenly spaced values from START to STOP; repeatable (all combinations)")
+                       help="NUM evenly spaced values from START to STOP, or KEY=V1,V2,...: those values; "
+                            "repeatable (all combinations)")
     sweep.add_argument("--random", action="append", default=[], metavar="KEY=LOW:HIGH",
                        help="uniform draws (with --samples); repeatable")
     sweep.add_argument("--samples", type=int, default=0, metavar="N", help="random draws per grid point")

@@ -68,6 +68,9 @@ class Result:
         bad = {k: v for k, v in self.values.items() if not math.isfinite(v)}
         if bad:
             raise SolverError(f"solver produced non-finite values {bad} (status {self.status.value})")
+        # plain Python numbers, whatever the back end handed over: one type to print, compare and store
+        object.__setattr__(self, "values", {k: v.item() if isinstance(v, np.generic) else v
+                                            for k, v in self.values.items()})
         arrays = {}
         for name, array in self.arrays.items():
             labels = np.asarray(array)
