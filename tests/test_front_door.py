@@ -127,3 +127,29 @@ def test_a_result_made_of_numpy_numbers_holds_python_numbers():
     from mechopt.kit.result import Result, Status, Timing
     r = Result(Status.SOLVED, {"a_mm": np.float64(1.5), "n": np.int64(3), "b_mm": 2.0}, Timing(0.0, 0.0))
     assert [(type(v), v) for v in r.values.values()] == [(float, 1.5), (int, 3), (float, 2.0)]
+
+
+HEAVY = ("numpy", "scipy", "cvxpy", "casadi", "highspy", "matplotlib", "pyarrow", "pandas", "dask", "numba",
+         "mechopt.registry", "mechopt.cli")
+
+
+@pytest.mark.parametrize("how", ["module", "entry point"])
+def test_the_version_imports_nothing_heavy(how):
+    """`mechopt --version` answers before the command's modules load (it took seconds under load)."""
+    code = ("import sys; from mechopt.__main__ import main; main(['--version']); "
+            f"print(sorted(m for m in sys.modules if m.startswith({HEAVY!r})))")
+    done = (_mechopt(code=code) if how == "entry point"
+            else subprocess.run([sys.executable, "-X", "importtime", "-m", "mechopt", "--version"],
+                                capture_output=True, text=True, timeout=120))
+    import mechopt
+    assert done.stdout.startswith(f"mechopt {mechopt.__version__}\n")
+    loaded = (eval(done.stdout.splitlines()[1]) if how == "entry point"
+              else [line.rsplit("|", 1)[1].strip() for line in done.stderr.splitlines() if "|" in line])
+    assert not [m for m in loaded if m.startswith(HEAVY)]
+
+
+def test_the_command_is_installed_at_its_light_entry_point():
+    import tomllib
+    from pathlib import Path
+    pyproject = tomllib.loads((Path(__file__).resolve().parents[1] / "pyproject.toml").read_text("utf-8"))
+    assert pyproject["project"]["scripts"]["mechopt"] == "mechopt.__main__:main"
