@@ -114,6 +114,13 @@ def test_site_builds_strictly_outside_the_checkout(tmp_path):
     assert done.returncode == 0, done.stdout + done.stderr
     assert (tmp_path / "site" / "reference" / "scenes" / "index.html").exists()
     assert checkout_files() == before
+    # read offline, the equations are MathML written at build time: no script from a CDN, no raw TeX
+    pages = {p.relative_to(tmp_path / "site").as_posix(): p.read_text("utf-8")
+             for p in (tmp_path / "site").rglob("*.html")}
+    assert not [name for name, text in pages.items() if re.search(r"<(script|link)[^>]+(src|href)=\"https?://", text)]
+    guides = {name: text for name, text in pages.items() if name.startswith("guide/")}
+    assert len(guides) == 4 and all("<math " in text for text in guides.values())
+    assert not [name for name, text in guides.items() if "\\(" in text or "\\[" in text]
 
 
 def test_usage_lists_every_template_of_mechopt_new():

@@ -243,3 +243,31 @@ def test_a_results_warnings_are_shown_before_its_values():
     assert said.index("warning: the optimum is on the bound flywheel_max") < said.index("<td>H_mm</td>")
     quiet = SimpleNamespace(result=Result(Status.SOLVED, {}, Timing(0.0, 0.0)), ok=True, value_rows=list)
     assert "warning" not in answers_html(quiet)
+
+
+@pytest.fixture(scope="module")
+def misses_page(tmp_path_factory):
+    """A page of two scenes that each miss a figure of their source: a misses table, long reasons."""
+    runs = [registry.run(registry.find(s)) for s in ("stop-impact/rebound-177rpm-paper-reading",
+                                                     "cam-cutter/paper-figures")]
+    assert all(any(c.verdict in registry.MISSES for c in r.checks) for r in runs)
+    return write_report(tmp_path_factory.mktemp("misses") / "site", runs=runs)
+
+
+def test_on_a_phone_a_table_scrolls_sideways_instead_of_standing_a_word_a_line(misses_page, browser_tool):
+    """At 390 px the misses table's rows stood ~900 px tall (each cell squeezed to a word a line):
+    a wide table keeps a reading width and scrolls in its own box."""
+    text = misses_page.read_text(encoding="utf-8")
+    assert "<h3>Misses (2)</h3>" in text
+    metrics = browser_tool.measure(misses_page, width=390)
+    assert metrics["window_px"] == 390 and browser_tool.problems(metrics) == []
+    assert 0 < metrics["tallest_row_px"] <= browser_tool.TALLEST_ROW_PX
+
+
+def test_the_page_loads_nothing_from_the_network(misses_page):
+    """Opened offline (from disk, a mail attachment) the page is whole: no script, style or image
+    from elsewhere; every formula is text."""
+    text = misses_page.read_text(encoding="utf-8")
+    assert re.findall(r"<script[^>]*>", text) == ["<script>"]
+    assert not re.findall(r"""(?:src|href)=['"]?(?:https?:)?//""", text)
+    assert "mathjax" not in text.lower()

@@ -28,8 +28,8 @@ __all__ = ["write_report"]
 
 _STYLE = """body{font-family:system-ui,sans-serif;max-width:1180px;margin:1.5em auto;padding:0 1em;color:#222;
 line-height:1.4}h1,h2,h3{overflow-wrap:anywhere}table{border-collapse:collapse;font-size:14px}
-td,th{border:1px solid #ccc;padding:3px 6px;text-align:left;vertical-align:top}table.wide{width:100%}
-.long{overflow-wrap:anywhere;min-width:12em}th{background:#f0f0f0}.values td:nth-child(2){text-align:right}
+td,th{border:1px solid #ccc;padding:3px 6px;text-align:left;vertical-align:top}table.wide{width:100%;min-width:50em}
+.long{display:block;overflow-wrap:anywhere;min-width:min(24em,75vw)}th{background:#f0f0f0}.values td:nth-child(2){text-align:right}
 .ok{color:#176117}.fail{color:#b00020;font-weight:bold}.cal{color:#8a5a00}.miss{color:#8a3a00;font-weight:bold}
 .scroll{overflow-x:auto;max-width:100%}.warnings{color:#8a3a00}
 figure{margin:10px 0;font-size:13px;color:#555}img{width:100%;height:auto;border:1px solid #ddd;cursor:zoom-in}
