@@ -104,8 +104,9 @@ class Result:
                 + (f", message={self.message[:80]!r}" if self.message else "") + ")")
 
     def _repr_html_(self) -> str:
-        """A notebook's view: the status and a table of the values."""
-        rows = "".join(f"<tr><td>{html.escape(k)}</td><td title='{v!r}'>{v:.4g}</td></tr>"
+        """A notebook's view: the status and a table of the values (printed as the command prints them)."""
+        from mechopt.answers import shown
+        rows = "".join(f"<tr><td>{html.escape(k)}</td><td title='{v!r}'>{html.escape(shown(v))}</td></tr>"
                        for k, v in self.values.items())
         return (f"<p><b>{self.status.value}</b> {html.escape(self.message)}</p>"
                 f"<table><tr><th>value</th><th></th></tr>{rows}</table>")
