@@ -306,8 +306,10 @@ def test_run_and_result_show_compactly_in_a_notebook():
     assert repr(run.result).startswith("Result(SOLVED, values={") and "more}" in repr(run.result)
     page = run._repr_html_()
     inertia = run.values["flywheel_inertia_kgm2"]
-    assert f"<td>flywheel_inertia_kgm2</td><td title='{inertia!r}'>5.118</td><td>kg m²</td><td>computed</td>" in page
-    assert f"<td>flywheel_inertia_kgm2</td><td title='{inertia!r}'>5.118</td>" in run.result._repr_html_()
+    shown = f"{inertia:.6g}"                            # as the command prints it
+    assert round(inertia, 3) == 5.118                  # the least flywheel
+    assert f"<td>flywheel_inertia_kgm2</td><td title='{inertia!r}'>{shown}</td><td>kg m²</td><td>computed</td>" in page
+    assert f"<td>flywheel_inertia_kgm2</td><td title='{inertia!r}'>{shown}</td>" in run.result._repr_html_()
     assert "<td>speed_fluctuation</td>" in page and "<td>derived</td>" in page        # a checked value says so
 
 
@@ -329,14 +331,6 @@ def test_errors_of_the_python_api_name_the_key_not_the_command_lines_flag():
     with pytest.raises(mechopt.SceneError, match=r"operations\[from=1,to=9\]\.min_deg: .*matches 0 entries") as caught:
         mechopt.solve("loom/group1", {"operations[from=1,to=9].min_deg": 3.0})
     assert "--set" not in str(caught.value)
-
-
-def test_the_highs_banner_stays_off_stdout():
-    """HiGHS writes its banner to the C stdout on the first model of a process; stdout is for results."""
-    done = subprocess.run([sys.executable, "-m", "mechopt", "run", "loom/group1"], capture_output=True, text=True,
-                          timeout=300)
-    assert done.returncode == 0 and done.stdout.startswith("loom/group1: ")
-    assert "Running HiGHS" not in done.stdout and "Running HiGHS" in done.stderr
 
 
 def test_plot_of_a_run_with_no_solution_says_why_nothing_was_drawn(tmp_path, capsys):

@@ -114,3 +114,32 @@ def test_site_builds_strictly_outside_the_checkout(tmp_path):
     assert done.returncode == 0, done.stdout + done.stderr
     assert (tmp_path / "site" / "reference" / "scenes" / "index.html").exists()
     assert checkout_files() == before
+    # read offline, the equations are MathML written at build time: no script from a CDN, no raw TeX
+    pages = {p.relative_to(tmp_path / "site").as_posix(): p.read_text("utf-8")
+             for p in (tmp_path / "site").rglob("*.html")}
+    assert not [name for name, text in pages.items() if re.search(r"<(script|link)[^>]+(src|href)=\"https?://", text)]
+    guides = {name: text for name, text in pages.items() if name.startswith("guide/")}
+    assert len(guides) == 4 and all("<math " in text for text in guides.values())
+    assert not [name for name, text in guides.items() if "\\(" in text or "\\[" in text]
+
+
+def test_usage_lists_every_template_of_mechopt_new():
+    from mechopt.mechanisms import templates
+    line = next(x for x in (DOCS / "usage.md").read_text("utf-8").splitlines() if x.startswith("mechopt new "))
+    listed = line.split("to start from:", 1)[1].split(",")
+    assert sorted(name.strip() for name in listed) == sorted(templates())
+
+
+def test_every_tutorial_is_linked_from_the_home_page_and_in_the_nav():
+    home, nav = (DOCS / "index.md").read_text("utf-8"), (ROOT / "mkdocs.yml").read_text("utf-8")
+    for page in sorted((DOCS / "tutorials").glob("*.md")):
+        assert f"(tutorials/{page.name})" in home, page.name
+        assert f"- tutorials/{page.name}" in nav, page.name
+
+
+def test_the_cyclogram_tutorial_names_the_template_for_a_machine_of_ones_own():
+    """It once waited for a template that `mechopt new cyclogram` has since written."""
+    from mechopt.mechanisms import templates
+    assert "cyclogram" in templates()
+    text = (DOCS / "tutorials" / "own-cyclogram.md").read_text("utf-8")
+    assert "`mechopt new cyclogram`" in text and "arrives" not in text

@@ -9,6 +9,7 @@ import matplotlib
 import pytest
 
 from mechopt import registry, verdicts
+from mechopt.answers import shown
 from mechopt.cli import main
 from mechopt.figures import save_figure
 from mechopt.kit.errors import SceneError
@@ -196,16 +197,17 @@ def test_each_scene_leads_with_its_status_values_and_warnings_then_its_figures(p
     section = _section(text, "press/flywheel-design")
     run = next(r for r in runs if r.scene.id == "press/flywheel-design")
     inertia = run.values["flywheel_inertia_kgm2"]
-    assert f"{inertia:.4g}" == "5.118"                                  # the least flywheel, as issue 25 read it
-    row = f"<tr><td>flywheel_inertia_kgm2</td><td title='{inertia!r}'>5.118</td><td>kg m²</td><td>computed</td></tr>"
+    assert round(inertia, 3) == 5.118                                    # the least flywheel, as issue 25 read it
+    row = (f"<tr><td>flywheel_inertia_kgm2</td><td title='{inertia!r}'>{shown(inertia)}</td><td>kg m²</td>"
+           "<td>computed</td></tr>")
     assert row in section
     status, values, figure = (section.index(s) for s in ("class='status'", "class='values'", "<img "))
     assert status < values < figure
     for name, value in run.values.items():                               # every value is in the table, with its unit
-        assert f"<tr><td>{name}</td><td title='{value!r}'>{value:.4g}</td><td>{unit_of(name)}</td>" in section
+        assert f"<tr><td>{name}</td><td title='{value!r}'>{shown(value)}</td><td>{unit_of(name)}</td>" in section
     # the minimax bound is text on the page, not only in a figure's title
     minimax = next(r for r in runs if r.scene.id == "cam-cutter/minimax").values["H_mm"]
-    assert f"<tr><td>H_mm</td><td title='{minimax!r}'>{minimax:.4g}</td><td>mm</td>" in _section(text,
+    assert f"<tr><td>H_mm</td><td title='{minimax!r}'>{shown(minimax)}</td><td>mm</td>" in _section(text,
                                                                                                 "cam-cutter/minimax")
 
 
@@ -237,7 +239,35 @@ def test_a_results_warnings_are_shown_before_its_values():
     result = Result(Status.SOLVED, {"H_mm": 59.60184}, Timing(0.0, 0.0),
                     warnings=("the optimum is on the bound flywheel_max",))
     run = SimpleNamespace(result=result, ok=True, value_rows=lambda: [("H_mm", 59.60184, "mm", "computed")])
-    shown = answers_html(run)
-    assert shown.index("warning: the optimum is on the bound flywheel_max") < shown.index("<td>H_mm</td>")
+    said = answers_html(run)
+    assert said.index("warning: the optimum is on the bound flywheel_max") < said.index("<td>H_mm</td>")
     quiet = SimpleNamespace(result=Result(Status.SOLVED, {}, Timing(0.0, 0.0)), ok=True, value_rows=list)
     assert "warning" not in answers_html(quiet)
+
+
+@pytest.fixture(scope="module")
+def misses_page(tmp_path_factory):
+    """A page of two scenes that each miss a figure of their source: a misses table, long reasons."""
+    runs = [registry.run(registry.find(s)) for s in ("stop-impact/rebound-177rpm-paper-reading",
+                                                     "cam-cutter/paper-figures")]
+    assert all(any(c.verdict in registry.MISSES for c in r.checks) for r in runs)
+    return write_report(tmp_path_factory.mktemp("misses") / "site", runs=runs)
+
+
+def test_on_a_phone_a_table_scrolls_sideways_instead_of_standing_a_word_a_line(misses_page, browser_tool):
+    """At 390 px the misses table's rows stood ~900 px tall (each cell squeezed to a word a line):
+    a wide table keeps a reading width and scrolls in its own box."""
+    text = misses_page.read_text(encoding="utf-8")
+    assert "<h3>Misses (2)</h3>" in text
+    metrics = browser_tool.measure(misses_page, width=390)
+    assert metrics["window_px"] == 390 and browser_tool.problems(metrics) == []
+    assert 0 < metrics["tallest_row_px"] <= browser_tool.TALLEST_ROW_PX
+
+
+def test_the_page_loads_nothing_from_the_network(misses_page):
+    """Opened offline (from disk, a mail attachment) the page is whole: no script, style or image
+    from elsewhere; every formula is text."""
+    text = misses_page.read_text(encoding="utf-8")
+    assert re.findall(r"<script[^>]*>", text) == ["<script>"]
+    assert not re.findall(r"""(?:src|href)=['"]?(?:https?:)?//""", text)
+    assert "mathjax" not in text.lower()

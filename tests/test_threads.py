@@ -129,7 +129,7 @@ def test_lp_solves_through_the_api_on_four_threads_match_serial_ones():
 
 def test_threads_making_the_first_highs_object_together_leave_stdout_where_it_was(monkeypatch):
     """Each thread's swap of descriptor 1 staggered after the one before it has begun: unguarded, a
-    later thread saves the earlier one's stderr as its "stdout" and restores that, last."""
+    later thread saves the earlier one's null device as its "stdout" and restores that, last."""
     from mechopt.kit import highs
     arrived = itertools.count()
 
@@ -140,13 +140,13 @@ def test_threads_making_the_first_highs_object_together_leave_stdout_where_it_wa
     class SlowHighs:            # the first Highs object, made while descriptor 1 is swapped
         def __init__(self):
             time.sleep(0.1)
-    monkeypatch.setattr(highs.highspy, "Highs", SlowHighs)
+    monkeypatch.setattr(highs, "RealHighs", SlowHighs)
     monkeypatch.setattr(sys, "stdout", Staggered())
-    highs.banner_to_stderr.cache_clear()
+    highs.quiet_banner.cache_clear()
     before = os.fstat(1)
     try:
-        _at_once(highs.banner_to_stderr)
+        _at_once(highs.quiet_banner)
     finally:
-        highs.banner_to_stderr.cache_clear()
+        highs.quiet_banner.cache_clear()
     after = os.fstat(1)
     assert (after.st_dev, after.st_ino) == (before.st_dev, before.st_ino)

@@ -4,10 +4,11 @@ packages: `apt-get install chromium`) at a laptop's and a phone's width, as a de
     python tools/report_in_browser.py out/report/index.html [--width 1280] [--screenshot shot.png]
 
 Measures, in the rendered page: horizontal overflow (the page wider than the window), images that
-did not load, the smallest text, and how far each figure is shrunk (its axis labels, drawn at
-about 14 px in the PNG, scale with it). Prints them as JSON; exits 1 when the page overflows, an
-image is broken, text is below 11 px or, at a laptop's width, a figure is shown below 60 % of its
-size (on a phone a figure is shrunk to the screen and opened full screen by a tap).
+did not load, the smallest text, how far each figure is shrunk (its axis labels, drawn at about
+14 px in the PNG, scale with it) and the tallest table row. Prints them as JSON; exits 1 when the
+page overflows, an image is broken, text is below 11 px, a table row is taller than 300 px (a
+table squeezed into a phone's width, a word a line) or, at a laptop's width, a figure is shown
+below 60 % of its size (on a phone a figure is shrunk to the screen and opened full screen by a tap).
 
 The page is laid out in an iframe of the width asked for: headless Chromium will not make its
 window narrower than 500 px, and an iframe's document has its own viewport (its media queries,
@@ -30,9 +31,11 @@ window.addEventListener('load', () => {
     .filter(e => e.offsetParent !== null && [...e.childNodes].some(n => n.nodeType === 3 && n.textContent.trim()))
     .map(e => parseFloat(getComputedStyle(e).fontSize));
   const scales = imgs.filter(i => i.naturalWidth > 0).map(i => i.clientWidth / i.naturalWidth);
+  const rows = [...document.querySelectorAll('tr')].filter(r => r.offsetParent !== null).map(r => r.offsetHeight);
   const out = {window_px: window.innerWidth, page_px: document.documentElement.scrollWidth,
                images: imgs.length, broken: imgs.filter(i => !i.complete || i.naturalWidth === 0).length,
-               smallest_text_px: Math.min(...sizes), smallest_figure_scale: Math.min(...scales, 1)};
+               smallest_text_px: Math.min(...sizes), smallest_figure_scale: Math.min(...scales, 1),
+               tallest_row_px: Math.max(0, ...rows)};
   const pre = parent.document.createElement('pre'); pre.id = 'mechopt-metrics';
   pre.textContent = JSON.stringify(out); parent.document.body.appendChild(pre);
 });
@@ -42,6 +45,8 @@ HOST = "<!doctype html><html><body style='margin:0'><iframe style='border:0;widt
        "srcdoc=\"{page}\"></iframe></body></html>"
 
 LIMITS = {"smallest_text_px": 11.0, "smallest_figure_scale": 0.6}
+# a table row taller than this reads as a column of single words: a narrow screen scrolls the table instead
+TALLEST_ROW_PX = 300
 LAPTOP_PX = 1000          # from this width on a figure must be shown near its full size
 
 
@@ -77,6 +82,8 @@ def problems(metrics: dict) -> list[str]:
         out.append(f"the page is {metrics['page_px']} px wide in a {metrics['window_px']} px window")
     if metrics["broken"]:
         out.append(f"{metrics['broken']} of {metrics['images']} images did not load")
+    if metrics["tallest_row_px"] > TALLEST_ROW_PX:
+        out.append(f"a table row is {metrics['tallest_row_px']} px tall (at most {TALLEST_ROW_PX})")
     for key, limit in LIMITS.items():
         if key == "smallest_figure_scale" and metrics["window_px"] < LAPTOP_PX:
             continue

@@ -9,11 +9,10 @@ import scipy.sparse as sp
 from cvxpy.reductions.solvers.conic_solvers.highs_conif import HIGHS as HIGHS_SOLVER
 
 from mechopt.kit.errors import SolverError
-from mechopt.kit.highs import InterruptibleHighs, banner_to_stderr, interruptible_everywhere
+from mechopt.kit.highs import InterruptibleHighs, interruptible_everywhere
 from mechopt.kit.result import Status, from_cvxpy
 
-banner_to_stderr()          # before any HiGHS model, ours or cvxpy's: stdout is for results
-interruptible_everywhere()  # ... and Ctrl-C stops an LP at its next iteration, not at its end
+interruptible_everywhere()  # every HiGHS model, ours or cvxpy's: no banner, and Ctrl-C stops an LP at its next iteration
 
 
 @dataclass

@@ -53,9 +53,15 @@ from scipy import sparse
 from scipy.optimize import brentq
 
 from mechopt.kit.cache import BuildCache
+<<<<<<< HEAD
 from mechopt.kit.errors import ModelError, SettingError
 from mechopt.kit.highs import banner_to_stderr, interruptible_everywhere
 from mechopt.kit.result import Clock, Result, Status, from_cvxpy
+=======
+from mechopt.kit.errors import ModelError
+from mechopt.kit.highs import interruptible_everywhere
+from mechopt.kit.result import Result, Status, Timing, from_cvxpy
+>>>>>>> door
 from mechopt.kit.settings import Annotated, Interval, NonNegative
 from mechopt.models.cam_follower import LAWS, law_values
 from mechopt.models.cam_law import (
@@ -75,8 +81,7 @@ __all__ = ["BASES", "LinearLever", "SpeedResponse", "WindowLP", "band_speeds", "
            "predicted_rebounds_mm", "rebound_envelope", "speed_response", "v0_limit_m_s",
            "rebound_of_v0_mm", "synthesise_law"]
 
-banner_to_stderr()          # stdout is for results, and Ctrl-C stops a window LP at its next iteration
-interruptible_everywhere()
+interruptible_everywhere()  # no HiGHS banner, and Ctrl-C stops a window LP at its next iteration
 
 
 def law_of(result: Result) -> SplineLaw:

@@ -1,8 +1,19 @@
-"""A run's answers as HTML, where the report and a notebook show them: its status, its values
-(name, value, unit, mark) and its warnings, in that order."""
+"""A run's answers as the user reads them: `shown`, a number as every front end prints it (the
+command's tables, the report, a notebook), and the HTML of a run's status, warnings and values
+(name, value, unit, mark), in that order."""
 from html import escape
 
-SIGNIFICANT = 4          # digits shown (the sources print 4); the full value is the cell's tooltip
+SIGNIFICANT = 6          # digits shown; the full value is the report cell's tooltip
+
+
+def shown(value) -> str:
+    """A value as the command line, the report and a notebook print it: a float to SIGNIFICANT
+    digits, None as "-", anything else as its text."""
+    if value is None:
+        return "-"
+    if isinstance(value, float):
+        return f"{value:.{SIGNIFICANT}g}"
+    return str(value)
 
 
 def answers_html(run) -> str:
@@ -22,7 +33,7 @@ def warnings_html(run) -> str:
 
 
 def values_html(run) -> str:
-    rows = "".join(f"<tr><td>{escape(name)}</td><td title='{value!r}'>{value:.{SIGNIFICANT}g}</td>"
+    rows = "".join(f"<tr><td>{escape(name)}</td><td title='{value!r}'>{escape(shown(value))}</td>"
                    f"<td>{escape(unit)}</td><td>{escape(mark)}</td></tr>"
                    for name, value, unit, mark in run.value_rows())
     if not rows:

@@ -21,7 +21,12 @@ import threading
 import warnings
 from pathlib import Path
 
+<<<<<<< HEAD
 from mechopt import __version__, registry, verdicts
+=======
+from mechopt import __version__, registry
+from mechopt.answers import shown
+>>>>>>> door
 from mechopt.benchmarks import studies, study
 from mechopt.drivers import set_mostly_by, steps_of
 from mechopt.files import NotWritten, name_problem, output_problem, write_text_atomic
@@ -169,7 +174,8 @@ def _parser():
     sweep = sub.add_parser("sweep", parents=[common], help="what-if study: every variant of a scene, one Parquet table")
     sweep.add_argument("case", help="a scene id or a scene file's path")
     sweep.add_argument("--grid", action="append", default=[], metavar="KEY=START:STOP:NUM",
-                       help="NUM evenly spaced values from START to STOP; repeatable (all combinations)")
+                       help="NUM evenly spaced values from START to STOP, or KEY=V1,V2,...: those values; "
+                            "repeatable (all combinations)")
     sweep.add_argument("--random", action="append", default=[], metavar="KEY=LOW:HIGH",
                        help="uniform draws (with --samples); repeatable")
     sweep.add_argument("--samples", type=int, default=0, metavar="N", help="random draws per grid point")
@@ -435,7 +441,11 @@ def _validate(args) -> int:
         result = registry.run(scene)
         runs.append(result)
         for c in result.checks:
+<<<<<<< HEAD
             rows.append((verdicts.VERDICTS.index(c.verdict), scene.id, c.name, c.kind, c.expected, _fmt(c.got),
+=======
+            rows.append((registry.VERDICTS.index(c.verdict), scene.id, c.name, c.kind, c.expected, shown(c.got),
+>>>>>>> door
                          _verdict(c), f"{result.result.timing.build_s + result.result.timing.solve_s:.3f}"))
     step()
     rows.sort(key=lambda row: row[0] if row[0] < len(verdicts.MISSES) else len(verdicts.MISSES))  # misses first
@@ -482,7 +492,7 @@ def _fit_force(args) -> int:
     result = fit_force(*read_force_csv(args.csv), args.degree, segments=args.segments,
                        through_origin=not args.with_intercept)
     print(f"{args.csv}: degree {args.degree}, status {result.status.value}" + (f" ({result.message})" if result.message else ""))
-    _print_table(("value", "got"), [(k, _fmt(v)) for k, v in result.values.items()])
+    _print_table(("value", "got"), [(k, shown(v)) for k, v in result.values.items()])
     if args.json:
         _write_json(args.json, {"file": str(args.csv), "degree": args.degree, "status": result.status.value,
                                 "message": result.message, "values": result.values})
@@ -503,7 +513,7 @@ def _sweep(args) -> int:
         try:
             table = sweep.sweep(scene, grid, random, samples=args.samples, seed=args.seed, out=out,
                                 scheduler=args.scheduler, workers=args.workers, chunk=args.chunk,
-                                max_variants=args.max_variants)
+                                max_variants=args.max_variants, progress=False if args.quiet else None)
         except sweep.SweepInterrupted as stop:
             print(f"interrupted: {stop}", file=sys.stderr)
             return INTERRUPTED
@@ -644,10 +654,10 @@ def _print_run(run):
     drivers = r.diagnostics.get("drivers", {})
     for sentence in set_mostly_by(drivers) + steps_of(drivers):
         print(f"drivers: {sentence}")
-    _print_table(("value", "got"), [(k, _fmt(v)) for k, v in r.values.items()])
+    _print_table(("value", "got"), [(k, shown(v)) for k, v in r.values.items()])
     if run.checks:
         _print_table(("check", "expected", "got", "kind", "where", ""),
-                     [(c.name, c.expected, _fmt(c.got), c.kind, c.where, _verdict(c)) for c in run.checks])
+                     [(c.name, c.expected, shown(c.got), c.kind, c.where, _verdict(c)) for c in run.checks])
     elif run.scene.spec.expect:
         print("checks: skipped (parameters overridden; the source's figures hold for its own parameters)")
     print(f"timing: build {r.timing.build_s:.4f} s, solve {r.timing.solve_s:.4f} s")
@@ -662,14 +672,6 @@ def _print_table(header, rows):
     print()
     for row in (header, *rows):
         print("  ".join(str(x).ljust(w) for x, w in zip(row, widths)).rstrip())
-
-
-def _fmt(value):
-    if value is None:
-        return "-"
-    if isinstance(value, float):
-        return f"{value:.6g}"
-    return str(value)
 
 
 def _write_json(path, payload):

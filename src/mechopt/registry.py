@@ -54,8 +54,28 @@ class Run:
 
     @property
     def values(self) -> dict[str, float]:
-        """The solver's values, named with their unit (`H_mm`)."""
+        """The solver's values, named with their unit (`H_mm`): plain Python floats (a count an int)."""
         return self.result.values
+
+    @property
+    def message(self) -> str:
+        """The solver's word on how it ended (the back end's status, rounds, nodes)."""
+        return self.result.message
+
+    @property
+    def warnings(self) -> tuple[str, ...]:
+        """Sentences, one per way this answer leaves what its model's source supports."""
+        return self.result.warnings
+
+    @property
+    def diagnostics(self) -> dict:
+        """What the solver adds about its answer (the drivers' elasticities, a certificate's gap)."""
+        return self.result.diagnostics
+
+    @property
+    def violated(self) -> tuple[str, ...]:
+        """The physical names of the limits the answer breaks (an INFEASIBLE run's best achievable)."""
+        return self.result.violated
 
     @property
     def arrays(self) -> dict:

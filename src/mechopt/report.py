@@ -15,8 +15,13 @@ from collections.abc import Callable, Sequence
 from datetime import datetime, timezone
 from pathlib import Path
 
+<<<<<<< HEAD
 from mechopt import __version__, registry, verdicts
 from mechopt.answers import answers_html
+=======
+from mechopt import __version__, registry
+from mechopt.answers import answers_html, shown
+>>>>>>> door
 from mechopt.drivers import set_mostly_by, steps_of
 from mechopt.figures import plot_run
 from mechopt.figures.sweep import plot_sweep
@@ -28,8 +33,8 @@ __all__ = ["write_report"]
 
 _STYLE = """body{font-family:system-ui,sans-serif;max-width:1180px;margin:1.5em auto;padding:0 1em;color:#222;
 line-height:1.4}h1,h2,h3{overflow-wrap:anywhere}table{border-collapse:collapse;font-size:14px}
-td,th{border:1px solid #ccc;padding:3px 6px;text-align:left;vertical-align:top}table.wide{width:100%}
-.long{overflow-wrap:anywhere;min-width:12em}th{background:#f0f0f0}.values td:nth-child(2){text-align:right}
+td,th{border:1px solid #ccc;padding:3px 6px;text-align:left;vertical-align:top}table.wide{width:100%;min-width:50em}
+.long{display:block;overflow-wrap:anywhere;min-width:min(24em,75vw)}th{background:#f0f0f0}.values td:nth-child(2){text-align:right}
 .ok{color:#176117}.fail{color:#b00020;font-weight:bold}.cal{color:#8a5a00}.miss{color:#8a3a00;font-weight:bold}
 .scroll{overflow-x:auto;max-width:100%}.warnings{color:#8a3a00}
 figure{margin:10px 0;font-size:13px;color:#555}img{width:100%;height:auto;border:1px solid #ddd;cursor:zoom-in}
@@ -96,6 +101,7 @@ def _validation(runs):
             css = "fail" if not c.ok else CSS_OF_VERDICT.get(c.verdict, "miss")
             verdict = f"<span class='{css}'>{_e(c.label if c.ok else 'FAIL (' + c.label + ')')}</span>"
             why = f"<span class='long'>{_e(c.reason or c.where)}</span>"
+<<<<<<< HEAD
             rows.append((verdicts.VERDICTS.index(c.verdict),
                          [_e(run.scene.id), _e(c.name), _e(c.kind), _e(c.expected), _e(_fmt(c.got)), verdict, why,
                           str(assumed)]))
@@ -103,6 +109,15 @@ def _validation(runs):
                 misses.append((verdicts.VERDICTS.index(c.verdict),
                                [_e(run.scene.id), _e(c.name), _e(c.expected), _e(_fmt(c.got)), verdict, why]))
     rows.sort(key=lambda row: min(row[0], len(verdicts.MISSES)))        # the misses first
+=======
+            rows.append((registry.VERDICTS.index(c.verdict),
+                         [_e(run.scene.id), _e(c.name), _e(c.kind), _e(c.expected), _e(shown(c.got)), verdict, why,
+                          str(assumed)]))
+            if c.verdict in registry.MISSES:
+                misses.append((registry.VERDICTS.index(c.verdict),
+                               [_e(run.scene.id), _e(c.name), _e(c.expected), _e(shown(c.got)), verdict, why]))
+    rows.sort(key=lambda row: min(row[0], len(registry.MISSES)))        # the misses first
+>>>>>>> door
     misses.sort(key=lambda row: row[0])
     tallies = _table(["verdict", "checks"], [[_e(v.replace("_", " ")), str(n)] for v, n in counts.items() if n])
     return (f"<p><b>{_e(verdicts.summary_line(checks))}</b></p>{tallies}"
@@ -151,7 +166,7 @@ def _scene_section(run, folder):
             + f"<p><i>{_e(scene.spec.source)}</i><br>build {r.timing.build_s:.4f} s, solve {r.timing.solve_s:.4f} s</p>"
             + (f"<details><summary>{len(marked)} assumed / calibrated parameters</summary>"
                + _table(["parameter", "value", "unit", "mark", "why"],
-                        [[_e(k), _e(_fmt(v)), _e(unit_of(k)), _e(m), f"<span class='long'>{_e(w)}</span>"]
+                        [[_e(k), _e(shown(v)), _e(unit_of(k)), _e(m), f"<span class='long'>{_e(w)}</span>"]
                          for k, v, m, w in marked])
                + "</details>" if marked else "<p>every parameter given by the source</p>")
             + (images or "<p>no figures for this model</p>"))
@@ -194,12 +209,6 @@ def _table(header, rows, *, wide=False):
     body = "".join("<tr>" + "".join(f"<td>{x}</td>" for x in row) + "</tr>" for row in rows)
     table = "<table class='wide'>" if wide else "<table>"
     return f"<div class='scroll'>{table}<tr>{head}</tr>{body}</table></div>"
-
-
-def _fmt(value):
-    if value is None:
-        return "-"
-    return f"{value:.6g}" if isinstance(value, float) else str(value)
 
 
 def _e(text):

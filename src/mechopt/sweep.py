@@ -32,15 +32,18 @@ a setting the scene or model refuses, ERROR for an unexpected exception), ``mess
 """
 import difflib
 import hashlib
+import inspect
 import itertools
 import json
 import math
+import numbers
 import os
 import re
 import stat
 import sys
 import types
 import warnings
+from collections import Counter
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -69,7 +72,7 @@ from mechopt.kit.errors import MechoptError, SceneError, SolverError, quote
 from mechopt.scene import MAX_SCENE_BYTES, Scene, loads, path_head, solver_options, split_assignment, task_fields
 
 __all__ = ["Axis", "SweepSpec", "SceneText", "SweepInterrupted", "SweepWarning", "parse_grid", "parse_random",
-           "grid_values", "count_variants", "plan", "sweep", "run_chunk", "read_table", "check_unique", "scene_hash", "describe_axes", "study"]
+           "grid_values", "count_variants", "plan", "sweep", "run_chunk", "read_table", "check_unique", "scene_hash", "describe_axes", "study", "list_problem"]
 
 META_KEY = b"mechopt.sweep"
 FIXED_COLUMNS = ("variant", "status", "message", "warnings", "build_s", "solve_s")
@@ -129,11 +132,20 @@ class SceneText:
 
 @dataclass(frozen=True)
 class Axis:
-    """One swept key: `num` evenly spaced values from `low` to `high` (grid), or uniform draws (random)."""
+    """One swept key: `num` evenly spaced values from `low` to `high` (grid), the listed `values`
+    (a grid axis given as a list: `low`, `high` and `num` are then their least, greatest and count),
+    or uniform draws (random)."""
     key: str
     low: float
     high: float
     num: int = 0            # grid points; 0 for a random axis
+    values: tuple[float, ...] = ()      # the grid's points as listed (in that order); () for a range
+
+    @classmethod
+    def listed(cls, key: str, values) -> "Axis":
+        """A grid axis of the given values, in their order (checked: `list_problem`)."""
+        values = tuple(float(v) for v in values)
+        return cls(key, min(values), max(values), len(values), values)
 
 
 @dataclass(frozen=True)
@@ -150,12 +162,27 @@ class SweepSpec:
         return [a.key for a in (*self.grid, *self.random)]
 
     def as_json(self) -> str:
-        return json.dumps(asdict(self), sort_keys=True)
+        """The spec as stored in a table's metadata; a range axis without `values` (as tables written
+        before listed axes hold it, so that they still resume)."""
+        spec = asdict(self)
+        for axis in (*spec["grid"], *spec["random"]):
+            if not axis["values"]:
+                del axis["values"]
+        return json.dumps(spec, sort_keys=True)
 
 
 def parse_grid(text: str) -> Axis:
-    """``KEY=START:STOP:NUM`` as an Axis; NUM >= 1 points from START to STOP (START <= STOP)."""
-    key, numbers = _split(text, "--grid", "KEY=START:STOP:NUM", 3)
+    """``KEY=START:STOP:NUM`` as an Axis, NUM >= 1 points from START to STOP (START <= STOP), or
+    ``KEY=V1,V2,...``: those values, in that order (distinct)."""
+    key, sep, rest = split_assignment(text)
+    if sep and key.strip() and ":" not in rest:
+        words = rest.split(",")
+        values = [_number(text, "--grid", w.strip(), f"value {i}") for i, w in enumerate(words, 1)]
+        problem = list_problem(values)
+        if problem:
+            raise SceneError(f"--grid {text!r}: {problem}", key=key.strip())
+        return Axis.listed(key.strip(), values)
+    key, numbers = _split(text, "--grid", "KEY=START:STOP:NUM or KEY=V1,V2,...", 3)
     start, stop = _number(text, "--grid", numbers[0], "START"), _number(text, "--grid", numbers[1], "STOP")
     try:
         num = int(numbers[2])
@@ -180,7 +207,10 @@ def parse_random(text: str) -> Axis:
 def grid_values(axis: Axis) -> list[float]:
     """The grid points of an axis as a user would type them: START + i (STOP - START) / (NUM - 1)
     kept to 12 significant digits (0.075, not linspace's 0.07500000000000001), unless that would
-    move a point by more than 1e-6 of a step (a range far narrower than its magnitude)."""
+    move a point by more than 1e-6 of a step (a range far narrower than its magnitude); a listed
+    axis's values as listed."""
+    if axis.values:
+        return list(axis.values)
     if axis.num == 1:
         return [axis.low]
     step = (axis.high - axis.low) / (axis.num - 1)
@@ -244,7 +274,7 @@ def _require_whole(axis, kind):
     broken = [v for v in grid_values(axis) if abs(v - round(v)) > 1e-9 * max(1.0, abs(v))]
     if broken:
         raise SceneError(f"--grid {axis.key}: {axis.key} is a whole-number solver setting, but the grid holds "
-                         f"{broken[0]:g}; choose START, STOP and NUM whose points are whole numbers", key=axis.key)
+                         f"{broken[0]:g}; choose whole numbers (START, STOP and NUM whose points are whole)", key=axis.key)
 
 
 def _check_size(count, limit):
@@ -306,7 +336,7 @@ def _solve_rows(scene: Scene, chunk) -> list[dict]:
 
 
 def sweep(scene: Scene, grid=(), random=(), *, samples: int = 0, seed: int = 0, out: Path | None = None,
-          scheduler: str | None = None, workers: int = 1, chunk: int = 100, progress: bool = True,
+          scheduler: str | None = None, workers: int = 1, chunk: int = 100, progress: bool | None = None,
           connect_timeout_s: float = 5.0, on_chunk: Callable[[list[dict]], None] | None = None,
           max_variants: int = MAX_VARIANTS) -> pa.Table:
     """Run every variant of a sweep and return (and write, when `out` is given) its table.
@@ -323,7 +353,9 @@ def sweep(scene: Scene, grid=(), random=(), *, samples: int = 0, seed: int = 0, 
     workers : without a scheduler, 1 runs in this process; more spreads the chunks over as many
         local processes (spawned, each keeping its own solver builds).
     chunk : variants per task (>= 1); each task's worker re-solves its cached build.
-    progress : draw a tqdm bar on stderr (rate and time remaining).
+    progress : draw a tqdm bar on stderr (rate and time remaining): None (the default) when stderr
+        is a terminal, True always, False never (a bar redraws itself with carriage returns, which
+        a log file or a pipe keeps as they are).
     connect_timeout_s : how long to try the scheduler before giving up [s].
     on_chunk : called with each chunk's rows as it arrives (after it is written).
     max_variants : a larger request is refused before anything is allocated.
@@ -481,7 +513,7 @@ def _read_parquet(path, read=pq.read_table, **how):
 
 
 MAX_META_BYTES = 100_000
-_AXIS_FIELDS = {"key": str, "low": (int, float), "high": (int, float), "num": int}
+_AXIS_FIELDS = {"key": str, "low": (int, float), "high": (int, float), "num": int}   # and a listed grid's values
 
 
 def _meta_problem(meta) -> str | None:
@@ -499,10 +531,13 @@ def _meta_problem(meta) -> str | None:
     for name in ("grid", "random"):
         axes = spec[name]
         if not isinstance(axes, list) or not all(
-                isinstance(a, dict) and set(a) == set(_AXIS_FIELDS)
+                isinstance(a, dict) and set(a) - {"values"} == set(_AXIS_FIELDS)
                 and all(isinstance(a[k], t) and not isinstance(a[k], bool) for k, t in _AXIS_FIELDS.items())
                 for a in axes):
             return f"spec.{name} must be a list of axes {{key, low, high, num}}"
+        if any("values" in a and (name == "random" or not isinstance(a["values"], list) or len(a["values"]) != a["num"]
+                                  or list_problem(a["values"])) for a in axes):
+            return f"spec.{name}: an axis's values must be a list of num distinct finite numbers (grid axes only)"
     return None
 
 
@@ -835,6 +870,8 @@ def _silent_server(address, timeout_s) -> str | None:
 
 def _bar(total, done, enabled):
     from tqdm import tqdm
+    if enabled is None:
+        enabled = sys.stderr.isatty()
     return tqdm(total=total, initial=done, unit="variant", file=sys.stderr, disable=not enabled,
                 smoothing=0.1, dynamic_ncols=True)
 
@@ -898,8 +935,10 @@ def scene_hash(scene) -> str:
 
 
 def describe_axes(spec: dict) -> list[str]:
-    """A stored sweep spec's axes as they were given: ``KEY=LOW:HIGH:NUM``, ``KEY=LOW:HIGH (random)``."""
-    return ([f"{a['key']}={a['low']:g}:{a['high']:g}:{a['num']}" for a in spec["grid"]]
+    """A stored sweep spec's axes as they were given: ``KEY=LOW:HIGH:NUM``, ``KEY=V1,V2,...`` (listed),
+    ``KEY=LOW:HIGH (random)``."""
+    return ([f"{a['key']}=" + (",".join(f"{v:g}" for v in a["values"]) if a.get("values")
+                               else f"{a['low']:g}:{a['high']:g}:{a['num']}") for a in spec["grid"]]
             + [f"{a['key']}={a['low']:g}:{a['high']:g} (random)" for a in spec["random"]])
 
 
@@ -927,6 +966,22 @@ def axis_value_problem(value: float) -> str:
     return ""
 
 
+def list_problem(values) -> str:
+    """What is wrong with a listed grid axis ('' when nothing): numbers, each finite and within
+    AXIS_LIMIT, at least one, none twice (a variant solved twice would hold one point twice)."""
+    if len(values) == 0:
+        return "an empty list; give at least one value"
+    for value in values:
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+            return f"{value!r} is not a number"
+        if axis_value_problem(float(value)):
+            return f"{value!r} {axis_value_problem(float(value))}"
+    twice = sorted(v for v, n in Counter(float(v) for v in values).items() if n > 1)
+    if twice:
+        return f"{twice[0]:g} is listed twice; give each value once"
+    return ""
+
+
 def _number(text, flag, word, name):
     try:
         value = float(word)
@@ -943,7 +998,8 @@ def study(scene, grid: dict | None = None, random: dict | None = None, *, sample
           out=None, progress: bool = False, **options):
     """Every variant of a scene (a Scene, a registry id or a scene file's path) as one pyarrow Table.
 
-    grid : {key: (start, stop, num)}, num evenly spaced values each, all combinations.
+    grid : {key: (start, stop, num)}, num evenly spaced values from start to stop, or {key: [v1, v2, ...]},
+        those values (a list; distinct); all combinations of the axes.
     random : {key: (low, high)}, `samples` uniform draws (seeded) combined with every grid point.
     out : a Parquet file to write (and to resume from); further options as `mechopt.sweep.sweep`
     (workers, scheduler, chunk, max_variants). A variant that fails is a row with its status.
@@ -954,7 +1010,13 @@ def study(scene, grid: dict | None = None, random: dict | None = None, *, sample
 
 
 def _python_axis(kind, key, bounds, size):
-    form = "(start, stop, num)" if size == 3 else "(low, high)"
+    """An axis of the Python call: a tuple (start, stop, num) or (low, high); a grid's list of values."""
+    if size == 3 and isinstance(bounds, (list, np.ndarray)):
+        problem = list_problem(bounds)
+        if problem:
+            raise SceneError(f"{kind}[{key!r}] = {bounds!r}: {problem}", key=key)
+        return Axis.listed(key, bounds)
+    form = "(start, stop, num) or a list of values" if size == 3 else "(low, high)"
     if not isinstance(bounds, (tuple, list)) or len(bounds) != size:
         raise SceneError(f"{kind}[{key!r}] = {bounds!r}: expected {form}", key=key)
     low, high, *num = bounds
@@ -977,6 +1039,11 @@ class _CallableStudies(types.ModuleType):
         return study(*args, **kwargs)
 
     __call__.__doc__ = study.__doc__
+    # inspect.signature(mechopt.sweep) reads this (less `self`): study's own parameters
+    __call__.__signature__ = inspect.signature(study).replace(parameters=[
+        inspect.Parameter("self", inspect.Parameter.POSITIONAL_ONLY), *inspect.signature(study).parameters.values()])
 
 
 sys.modules[__name__].__class__ = _CallableStudies
+# help(mechopt.sweep) shows a module's page: it opens with the call and its parameters
+__doc__ = f"mechopt.sweep{inspect.signature(study)}\n{inspect.getdoc(study)}\n\n{__doc__}"

@@ -1,8 +1,12 @@
 """HiGHS as the package runs it.
 
-Banner: HiGHS writes "Running HiGHS ..." to the C-level stdout when the first Highs object of a
-process is made, whatever its output_flag; cvxpy's HIGHS interface does the same. Stdout is for
-results (`mechopt run ... | grep`, `--json -`): make that first object with stdout pointed at stderr.
+Banner: HiGHS writes its licence banner ("Running HiGHS ... Copyright ...") to the C-level stdout
+when the first Highs object of a process is made, before any option (output_flag, log_to_console)
+can be set on it. Stdout is for results (`mechopt run ... | grep`, `--json -`) and stderr for what
+the user must read, so the banner is printed nowhere: the first object is made with descriptor 1
+on the null device (`quiet_banner`), when the first InterruptibleHighs is made (cvxpy's too, see
+below), so a command that solves no LP makes no HiGHS object at all. The licence notice is in the
+README's third-party notices.
 
 Ctrl-C: a large LP runs for tens of seconds inside HiGHS' C++, where Python's signal handlers
 cannot run, so Ctrl-C used to be honoured only when the LP returned. `InterruptibleHighs` asks
@@ -49,6 +53,7 @@ class InterruptibleHighs(RealHighs):
     """A Highs whose `run` stops within an iteration of Ctrl-C and then raises KeyboardInterrupt."""
 
     def __init__(self):
+        quiet_banner()
         super().__init__()
         self.abandoned = threading.Event()
         self.worker = None
@@ -94,14 +99,16 @@ def interruptible_everywhere() -> None:
 
 
 @functools.cache
-def banner_to_stderr() -> None:
-    """Make the process's first Highs object with file descriptor 1 on stderr (once)."""
+def quiet_banner() -> None:
+    """Make the process's first Highs object with file descriptor 1 on the null device (once): its
+    banner goes nowhere, and HiGHS prints it for no later object."""
     with _SWAPPING:
         sys.stdout.flush()
-        saved = os.dup(1)
+        saved, null = os.dup(1), os.open(os.devnull, os.O_WRONLY)
         try:
-            os.dup2(2, 1)
-            highspy.Highs()
+            os.dup2(null, 1)
+            RealHighs()
         finally:
             os.dup2(saved, 1)
             os.close(saved)
+            os.close(null)

@@ -70,6 +70,9 @@ class Result:
         bad = {k: v for k, v in self.values.items() if not math.isfinite(v)}
         if bad:
             raise SolverError(f"solver produced non-finite values {bad} (status {self.status.value})")
+        # plain Python numbers, whatever the back end handed over: one type to print, compare and store
+        object.__setattr__(self, "values", {k: v.item() if isinstance(v, np.generic) else v
+                                            for k, v in self.values.items()})
         arrays = {}
         for name, array in self.arrays.items():
             labels = np.asarray(array)
@@ -103,8 +106,9 @@ class Result:
                 + (f", message={self.message[:80]!r}" if self.message else "") + ")")
 
     def _repr_html_(self) -> str:
-        """A notebook's view: the status and a table of the values."""
-        rows = "".join(f"<tr><td>{html.escape(k)}</td><td title='{v!r}'>{v:.4g}</td></tr>"
+        """A notebook's view: the status and a table of the values (printed as the command prints them)."""
+        from mechopt.answers import shown
+        rows = "".join(f"<tr><td>{html.escape(k)}</td><td title='{v!r}'>{html.escape(shown(v))}</td></tr>"
                        for k, v in self.values.items())
         return (f"<p><b>{self.status.value}</b> {html.escape(self.message)}</p>"
                 f"<table><tr><th>value</th><th></th></tr>{rows}</table>")
