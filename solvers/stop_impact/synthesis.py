@@ -53,15 +53,9 @@ from scipy import sparse
 from scipy.optimize import brentq
 
 from mechopt.kit.cache import BuildCache
-<<<<<<< HEAD
 from mechopt.kit.errors import ModelError, SettingError
-from mechopt.kit.highs import banner_to_stderr, interruptible_everywhere
-from mechopt.kit.result import Clock, Result, Status, from_cvxpy
-=======
-from mechopt.kit.errors import ModelError
 from mechopt.kit.highs import interruptible_everywhere
-from mechopt.kit.result import Result, Status, Timing, from_cvxpy
->>>>>>> door
+from mechopt.kit.result import Clock, Result, Status, from_cvxpy
 from mechopt.kit.settings import Annotated, Interval, NonNegative
 from mechopt.models.cam_follower import LAWS, law_values
 from mechopt.models.cam_law import (

@@ -21,12 +21,8 @@ import threading
 import warnings
 from pathlib import Path
 
-<<<<<<< HEAD
 from mechopt import __version__, registry, verdicts
-=======
-from mechopt import __version__, registry
 from mechopt.answers import shown
->>>>>>> door
 from mechopt.benchmarks import studies, study
 from mechopt.drivers import set_mostly_by, steps_of
 from mechopt.files import NotWritten, name_problem, output_problem, write_text_atomic
@@ -441,11 +437,7 @@ def _validate(args) -> int:
         result = registry.run(scene)
         runs.append(result)
         for c in result.checks:
-<<<<<<< HEAD
-            rows.append((verdicts.VERDICTS.index(c.verdict), scene.id, c.name, c.kind, c.expected, _fmt(c.got),
-=======
-            rows.append((registry.VERDICTS.index(c.verdict), scene.id, c.name, c.kind, c.expected, shown(c.got),
->>>>>>> door
+            rows.append((verdicts.VERDICTS.index(c.verdict), scene.id, c.name, c.kind, c.expected, shown(c.got),
                          _verdict(c), f"{result.result.timing.build_s + result.result.timing.solve_s:.3f}"))
     step()
     rows.sort(key=lambda row: row[0] if row[0] < len(verdicts.MISSES) else len(verdicts.MISSES))  # misses first

@@ -15,13 +15,8 @@ from collections.abc import Callable, Sequence
 from datetime import datetime, timezone
 from pathlib import Path
 
-<<<<<<< HEAD
 from mechopt import __version__, registry, verdicts
-from mechopt.answers import answers_html
-=======
-from mechopt import __version__, registry
 from mechopt.answers import answers_html, shown
->>>>>>> door
 from mechopt.drivers import set_mostly_by, steps_of
 from mechopt.figures import plot_run
 from mechopt.figures.sweep import plot_sweep
@@ -101,23 +96,13 @@ def _validation(runs):
             css = "fail" if not c.ok else CSS_OF_VERDICT.get(c.verdict, "miss")
             verdict = f"<span class='{css}'>{_e(c.label if c.ok else 'FAIL (' + c.label + ')')}</span>"
             why = f"<span class='long'>{_e(c.reason or c.where)}</span>"
-<<<<<<< HEAD
             rows.append((verdicts.VERDICTS.index(c.verdict),
-                         [_e(run.scene.id), _e(c.name), _e(c.kind), _e(c.expected), _e(_fmt(c.got)), verdict, why,
+                         [_e(run.scene.id), _e(c.name), _e(c.kind), _e(c.expected), _e(shown(c.got)), verdict, why,
                           str(assumed)]))
             if c.verdict in verdicts.MISSES:
                 misses.append((verdicts.VERDICTS.index(c.verdict),
-                               [_e(run.scene.id), _e(c.name), _e(c.expected), _e(_fmt(c.got)), verdict, why]))
-    rows.sort(key=lambda row: min(row[0], len(verdicts.MISSES)))        # the misses first
-=======
-            rows.append((registry.VERDICTS.index(c.verdict),
-                         [_e(run.scene.id), _e(c.name), _e(c.kind), _e(c.expected), _e(shown(c.got)), verdict, why,
-                          str(assumed)]))
-            if c.verdict in registry.MISSES:
-                misses.append((registry.VERDICTS.index(c.verdict),
                                [_e(run.scene.id), _e(c.name), _e(c.expected), _e(shown(c.got)), verdict, why]))
-    rows.sort(key=lambda row: min(row[0], len(registry.MISSES)))        # the misses first
->>>>>>> door
+    rows.sort(key=lambda row: min(row[0], len(verdicts.MISSES)))        # the misses first
     misses.sort(key=lambda row: row[0])
     tallies = _table(["verdict", "checks"], [[_e(v.replace("_", " ")), str(n)] for v, n in counts.items() if n])
     return (f"<p><b>{_e(verdicts.summary_line(checks))}</b></p>{tallies}"
