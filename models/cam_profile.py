@@ -277,8 +277,7 @@ def _check_range(t0, t1):
     for key, v in (("t0_rad", t0), ("t1_rad", t1)):
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
             raise ModelError(f"{key}={v!r}: expected a finite number", key=key)
-    if not t1 > t0:
-        raise ModelError(f"t1_rad={t1} must be > t0_rad={t0}", key="t1_rad")
+    require(t1 > t0, range_fault("t1_rad", t1, f"allowed > t0_rad={t0}"), key="t1_rad")
 
 
 def unit_normal(curve, t):

@@ -44,8 +44,6 @@ from mechopt.kit.settings import check_fields
 from mechopt.models.cam_follower import LAWS, law_values
 
 Law = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]
-FOLLOWERS = ("translating", "oscillating")
-CLOSURES = ("spring", "groove")
 CHORD_SAMPLES = 64            # points inside a chord where its distance to the curve is measured
 CHORD_SHARE = 0.9             # of the chord a circle of the local radius allows: a margin for the
                               # radius changing along it (the chords that still stray are halved)

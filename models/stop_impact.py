@@ -85,9 +85,11 @@ def reduced_stiffness_N_per_m(E_GPa, J_x_mm4, a_mm, b_mm):
     return 3.0 * E_GPa * 1e9 * J_x_mm4 * 1e-12 / ((a_mm + b_mm) * b_mm**2 * 1e-9)
 
 
-# The range each input of the lever model (and its solvers) is tested over, a hard input rule (past it
-# the beam formulas and eq. (2)'s closed form overflow): declared on its field through `stated`, where
-# the model's check (kit.settings.check_fields), describe, the scene loader and the docs read it.
+# The range each input of the lever model (and its solvers) is tested over: a lever of a machine,
+# generously (a micro-mechanism to a press frame). A hard input rule: past it the beam formulas and
+# eq. (2)'s closed form overflow, divide by zero or lose every digit, so an input outside is refused
+# before any work. Declared on its field through `stated`, where the model's check
+# (kit.settings.check_fields), describe, the scene loader and the docs read it.
 STATED_RANGE = {
     "E_GPa": (1e-3, 1e4), "J_x_mm4": (1e-6, 1e12), "a_mm": (1e-3, 1e5), "b_mm": (1e-3, 1e5),
     "a_stop_mm": (1e-3, 1e5), "b_stop_mm": (1e-3, 1e5), "mass_kg": (1e-6, 1e6), "stroke_mm": (1e-6, 1e5),
@@ -167,7 +169,7 @@ class LeverStop:
     law_slope_mm_per_deg: Annotated[float | None, Interval(lt=0)] = None
     law_intercept_mm: Annotated[float | None, Interval(gt=0)] = None
     law: str | SplineLaw = ""       # a library law's name, or a synthesised law (solvers/stop_impact/synthesis.py)
-    launch: Literal["pulse_plus_v0", "restitution"] = "pulse_plus_v0"   # LAUNCHES
+    launch: Literal["pulse_plus_v0", "restitution"] = "pulse_plus_v0"   # how C leaves the plate (module docstring)
     speeds_rpm: tuple = ()
     effects: tuple = ()
 
@@ -330,13 +332,6 @@ def _names_or_numbers(task, key, *, number):
                              key=key)
     return tuple(float(v) for v in value) if number else tuple(value)
 
-
-# Stated ranges of the inputs: a lever of a machine, generously (a micro-mechanism to a press
-# frame). Past them the beam formulas and eq. (2)'s closed form overflow, divide by zero or
-# lose every digit, so an input outside is refused before any work.
-
-
-LAUNCHES = ("pulse_plus_v0", "restitution")     # how C leaves the plate (module docstring)
 
 MAX_FREQUENCY_HZ = 1e5      # a lever's natural frequency: past it the solvers' steps run into the millions
 
