@@ -402,7 +402,6 @@ class ProfileFit:
     EFFECTS: ClassVar[dict] = LinkageFit.EFFECTS        # torch_offset: the same kerf h, eq. (2) generalised
 
     def __post_init__(self):
-        check_fields(self)
         if bool(self.points_mm) == bool(self.x_expr or self.y_expr):
             raise ModelError("give either x_expr and y_expr (a parametric curve) or points_mm (a table), not "
                              f"{'both' if self.points_mm else 'neither'}", key="x_expr" if not self.points_mm else "points_mm")
@@ -413,6 +412,7 @@ class ProfileFit:
             curve = TableCurve(tuple(rows[:, 0]), tuple(rows[:, 1]), name="points_mm")
         else:
             curve = ExpressionCurve(self.x_expr, self.y_expr, self.t0_rad, self.t1_rad, dict(self.constants))
+        check_fields(self)      # after the curve: its parser says what an expression is better than "expected text"
         try:
             with np.errstate(all="raise"):
                 sample = curve.point(np.linspace(curve.t0, curve.t1, 257))
