@@ -7,7 +7,7 @@ Interval) and read from there by every check and by `mechopt describe`:
       def events(task, *, tol: Tolerance = 1e-10, samples: Annotated[int, Interval(ge=1, le=10_000)] = 8)
 
 * a model's inputs, on its dataclass fields, checked when the model is built, from a scene or
-  from Python alike (`check_fields`, called first in the model's `__post_init__`):
+  from Python alike (`check_fields`, called early in the model's `__post_init__`):
 
       crank_radius_mm: Annotated[float, Gt(0), Le(1000)]
 
@@ -76,7 +76,7 @@ def range_fault(key: str, value, problem: str) -> str:
 
 def check_fields(task) -> None:
     """Every field of the dataclass `task` against its declared type and range: a ModelError
-    `range_fault` naming the first field at fault. Called first in a model's `__post_init__`, so a
+    `range_fault` naming the first field at fault. Called early in a model's `__post_init__`, so a
     model built from Python is held to the same rules as one read from a scene. Fields typed as
     something else (a table, a list, a law) are the model's own to check."""
     for name, annotation in _field_types(type(task)):
@@ -98,10 +98,10 @@ def field_problem(annotation, value) -> str:
     if choices and not any(k is str and isinstance(value, str) for k in kinds):
         return "" if value in choices else f"allowed {', '.join(map(str, choices))}"
     if float in kinds or int in kinds:
+        if any(isinstance(k, type) and k not in (float, int) and isinstance(value, k) for k in kinds):
+            return ""           # another kind the field takes (`float | SomeLaw`): the model checks it
         if isinstance(value, bool) or not isinstance(value, numbers.Real):
-            if not any(isinstance(k, type) and k not in (float, int) and isinstance(value, k) for k in kinds):
-                return "expected a number"
-            return ""
+            return "expected a number"
         if not abs(value) <= sys.float_info.max:     # inf, nan, or an integer no float holds
             return "expected a finite number"
         if float not in kinds and value != int(value):      # a scene's 5.0 is a whole number
