@@ -18,7 +18,7 @@ torch_offset  kerf offset h: the path is the parallel curve at distance   eqs. (
 """
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Annotated, ClassVar
+from typing import Annotated, ClassVar, Literal
 
 import numpy as np
 from annotated_types import Ge, Gt, Interval, Le, doc
@@ -284,7 +284,6 @@ def _fill_scaled_default(task, key):
 # so that the matrix is dimensionless and its condition number says something about the mechanism.
 
 LOAD_UNKNOWNS = ("R01x_N", "R01y_N", "R12x_N", "R12y_N", "N_N", "Mp_N_m", "R03x_N", "R03y_N", "M_N_m")
-FORCE_DIRECTIONS = ("against_velocity", "normal_to_link")
 
 
 @dataclass(frozen=True)
@@ -311,7 +310,7 @@ class LinkageLoads:
     block_mass_kg: Annotated[float, Ge(0), Le(1e6)] = 0.0
     block_inertia_kgm2: Annotated[float, Ge(0), Le(1e6)] = 0.0
     gravity_m_s2: Annotated[float, Ge(0), Le(1e6)] = 0.0
-    force_direction: str = "against_velocity"
+    force_direction: Literal["against_velocity", "normal_to_link"] = "against_velocity"
 
     def __post_init__(self):
         check_fields(self)
@@ -320,9 +319,6 @@ class LinkageLoads:
             value = getattr(self, key)
             require(-span <= value <= span, range_fault(key, value, f"allowed {CENTRE_RANGE} = -{span:g} ... {span:g}"),
                     key=key)
-        if self.force_direction not in FORCE_DIRECTIONS:
-            raise ModelError(f"force_direction={self.force_direction!r}: allowed {', '.join(FORCE_DIRECTIONS)}",
-                             key="force_direction")
 
 
 def linkage_positions(phi, H, L, c1, c2, m=np):

@@ -61,7 +61,7 @@ motor_characteristic  Kloss torque of the motor, reduced by i; without it the   
 ====================  ========================================================  ==============
 """
 from dataclasses import dataclass, field, fields
-from typing import Annotated, ClassVar
+from typing import Annotated, ClassVar, Literal
 
 import casadi as ca
 import numpy as np
@@ -73,7 +73,6 @@ from mechopt.kit.errors import ModelError, require
 from mechopt.kit.settings import check_fields, field_problem, range_fault
 from mechopt.models.effects import Effect, check_effects
 
-KINEMATICS = ("paper", "exact")
 FORCE_KEYS = ("force_c1_N_mm", "force_c2_N_mm2", "force_c3_N_mm3", "force_c4_N_mm4")
 WORK_NAMES = ("motor_work_J", "cut_work_J", "friction_work_J", "damping_work_J")
 
@@ -201,7 +200,7 @@ class PressDrive:
     motor_breakdown_torque_Nm: Annotated[float | None, Gt(0), Le(1e6)] = None
     motor_breakdown_slip: Annotated[float | None, Gt(0), Lt(1)] = None
     effects: tuple[str, ...] = field(default=())
-    kinematics: str = "paper"
+    kinematics: Literal["paper", "exact"] = "paper"
     # the travel eq. (1) was fitted on, up to: past it a warning (models/validity.py)
     force_fit_max_mm: Annotated[float | None, Ge(0), Le(1000)] = None
 
@@ -233,8 +232,6 @@ class PressDrive:
             object.__setattr__(self, name, effect in self.effects)
         object.__setattr__(self, "state_names", state_names(self.effects))
         check_effects(self)
-        if self.kinematics not in KINEMATICS:
-            raise ModelError(f"kinematics={self.kinematics!r}; allowed: {', '.join(KINEMATICS)}", key="kinematics")
         # relational rules only: each input's own range is on its field (check_fields, above)
         require(self.flywheel_inertia_kgm2 > 0 or self.crank_mass_kg > 0,
                 f"flywheel_inertia_kgm2={self.flywheel_inertia_kgm2} and crank_mass_kg are both 0: the crank shaft "
