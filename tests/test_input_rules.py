@@ -61,11 +61,11 @@ def _ranged_fields(cls):
             yield f.name, low, high
 
 
-def _outside(low, high) -> float:
-    """A value just past the declared range (above it when it has an upper end)."""
-    if high:
-        return float(high[0] + abs(high[0]) + 1 if high[2] == "le" else high[0])
-    return float(low[0] - abs(low[0]) - 1 if low[2] == "ge" else low[0])
+def _outside(low, high) -> list[float]:
+    """Values past the declared range: below its lower end, above its upper end (those it has)."""
+    below = [float(low[0] - abs(low[0]) - 1 if low[2] == "ge" else low[0])] if low else []
+    above = [float(high[0] + abs(high[0]) + 1 if high[2] == "le" else high[0])] if high else []
+    return below + above
 
 
 def test_every_numeric_input_of_a_model_declares_its_range():
@@ -91,18 +91,18 @@ def test_a_field_out_of_its_range_from_python_is_refused_naming_key_and_range(ta
     fields = list(_ranged_fields(type(task)))
     assert fields, f"{name} declares no range"
     for key, low, high in fields:
-        bad = _outside(low, high)
-        with pytest.raises(ModelError) as err:
-            dataclasses.replace(task, **{key: bad})
-        assert str(err.value) == f"{key}={bad!r}: allowed {describe_range(low, high)}"
-        assert err.value.key == key
+        for bad in _outside(low, high):
+            with pytest.raises(ModelError) as err:
+                dataclasses.replace(task, **{key: bad})
+            assert str(err.value) == f"{key}={bad!r}: allowed {describe_range(low, high)}"
+            assert err.value.key == key
 
 
 @pytest.mark.parametrize("name", sorted(SCENES))
 def test_a_scene_and_a_python_call_give_the_same_sentence(tasks, name):
     scene = registry.find(SCENES[name])
     key, low, high = next(f for f in _ranged_fields(scene.task_class) if f[0] in scene.spec.params)
-    bad = _outside(low, high)
+    bad = _outside(low, high)[0]
     with pytest.raises(ModelError) as python:
         dataclasses.replace(tasks[name], **{key: bad})
     with pytest.raises(SceneError) as from_file:
