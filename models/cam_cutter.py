@@ -18,14 +18,15 @@ torch_offset  kerf offset h: the path is the parallel curve at distance   eqs. (
 """
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Annotated, ClassVar
+from typing import Annotated, ClassVar, Literal
 
 import numpy as np
 from annotated_types import Ge, Gt, Interval, Le, doc
 from scipy.optimize import brentq
 
 from mechopt.kit.cache import memoised
-from mechopt.kit.errors import ModelError
+from mechopt.kit.errors import ModelError, require
+from mechopt.kit.settings import check_fields, range_fault
 from mechopt.models.effects import Effect
 
 
@@ -179,8 +180,8 @@ class LinkageFit(_OnIdealPath):
     def __post_init__(self):
         _check_path(self)
         _fill_scaled_default(self, "step_mm")
-        _require(self, "step_mm", self.step_mm > 0, "must be > 0")
-        _require(self, "step_mm", self.step_mm <= self.a_mm, f"must be <= a_mm={self.a_mm} (the lattice must be finer than the cam)")
+        require(self.step_mm <= self.a_mm, range_fault("step_mm", self.step_mm, f"allowed <= a_mm={self.a_mm} (the "
+                                                       "lattice must be finer than the cam)"), key="step_mm")
         for key in ("H_min_mm", "H_max_mm", "L_min_mm", "L_max_mm"):
             if getattr(self, key) is not None:
                 _check_link(self, key)
@@ -235,27 +236,24 @@ class LinkageCheck(_OnIdealPath):
 
 
 def _check_path(task):
-    """The ideal path's inputs, shared by every task on it: each in a physical range, so no
-    solver meets an infinite or absurd number (ranges relative to a keep every size usable)."""
-    a_lo, a_hi = A_RANGE_MM
-    _require(task, "a_mm", task.a_mm > 0, "must be > 0")
-    _require(task, "a_mm", a_lo <= task.a_mm <= a_hi, f"must be within {a_lo:g} .. {a_hi:g} mm (a cam of 1 nm to 1 km)")
+    """The ideal path's inputs, shared by every task on it: each in its declared range (on the
+    field), then the ranges relative to the cam's size a, so no solver meets an absurd number."""
+    check_fields(task)
     _fill_scaled_default(task, "y_tol_mm")
-    for key in ("err_width_mm", "y_tol_mm"):
-        _require(task, key, getattr(task, key) > 0, "must be > 0")
-    _require(task, "err_width_mm", task.err_width_mm <= LINK_MAX_PER_A * task.a_mm,
-             f"must be <= {LINK_MAX_PER_A:g} a_mm = {LINK_MAX_PER_A * task.a_mm:g} (a band a hundred cams wide)")
-    _require(task, "y_tol_mm", task.y_tol_mm <= task.a_mm, f"must be <= a_mm={task.a_mm} (a reading must be finer than the cam)")
-    _require(task, "h_mm", task.h_mm >= 0, "must be >= 0 (the torch runs outside the cam)")
-    _require(task, "h_mm", task.h_mm < task.a_mm,
-             f"must be < a_mm={task.a_mm} (a wider kerf than the cardioid has no cam left)")
+    a = task.a_mm
+    for key, ok, allowed in (
+            ("err_width_mm", task.err_width_mm <= LINK_MAX_PER_A * a,
+             f"<= {LINK_MAX_PER_A:g} a_mm = {LINK_MAX_PER_A * a:g} (a band a hundred cams wide)"),
+            ("y_tol_mm", task.y_tol_mm <= a, f"<= a_mm={a} (a reading must be finer than the cam)"),
+            ("h_mm", task.h_mm < a, f"< a_mm={a} (a wider kerf than the cardioid has no cam left)")):
+        require(ok, range_fault(key, getattr(task, key), f"allowed {allowed}"), key=key)
 
 
 def _check_link(task, key):
     """A link length (or a bound on one): positive, and at most LINK_MAX_PER_A cam sizes."""
-    _require(task, key, getattr(task, key) > 0, "must be > 0 (a link length)")
-    _require(task, key, getattr(task, key) <= LINK_MAX_PER_A * task.a_mm,
-             f"must be <= {LINK_MAX_PER_A:g} a_mm = {LINK_MAX_PER_A * task.a_mm:g} (the matched links are 1.7 a .. 4.6 a)")
+    value, top = getattr(task, key), LINK_MAX_PER_A * task.a_mm
+    require(0 < value <= top, range_fault(key, value, f"allowed > 0 ... {LINK_MAX_PER_A:g} a_mm = {top:g} (the "
+                                          "matched links are 1.7 a .. 4.6 a)"), key=key)
 
 
 def scaled_default(key, a):
@@ -267,11 +265,6 @@ def scaled_default(key, a):
 def _fill_scaled_default(task, key):
     if getattr(task, key) is None:
         object.__setattr__(task, key, scaled_default(key, task.a_mm))     # frozen: set once, here
-
-
-def _require(task, key, ok, what):
-    if not ok:
-        raise ModelError(f"{key}={getattr(task, key)} {what}", key=key)
 
 
 # --- Kinetostatics of the linkage (paper 000, Sec. V, re-derived; issue 13) -------------------
@@ -291,7 +284,6 @@ def _require(task, key, ok, what):
 # so that the matrix is dimensionless and its condition number says something about the mechanism.
 
 LOAD_UNKNOWNS = ("R01x_N", "R01y_N", "R12x_N", "R12y_N", "N_N", "Mp_N_m", "R03x_N", "R03y_N", "M_N_m")
-FORCE_DIRECTIONS = ("against_velocity", "normal_to_link")
 
 
 @dataclass(frozen=True)
@@ -318,28 +310,15 @@ class LinkageLoads:
     block_mass_kg: Annotated[float, Ge(0), Le(1e6)] = 0.0
     block_inertia_kgm2: Annotated[float, Ge(0), Le(1e6)] = 0.0
     gravity_m_s2: Annotated[float, Ge(0), Le(1e6)] = 0.0
-    force_direction: str = "against_velocity"
+    force_direction: Literal["against_velocity", "normal_to_link"] = "against_velocity"
 
     def __post_init__(self):
-        for key in ("H_mm", "L_mm", "crank_speed_rad_s"):
-            _require_range(self, key, 0.0, 1e6, low_open=True)
-        for key in ("force_N", "crank_mass_kg", "crank_inertia_kgm2", "link_mass_kg", "link_inertia_kgm2",
-                    "block_mass_kg", "block_inertia_kgm2", "gravity_m_s2"):
-            _require_range(self, key, 0.0, 1e6)
+        check_fields(self)
         span = 10 * (self.H_mm + self.L_mm)
         for key in ("crank_centre_mm", "link_centre_mm"):
-            _require_range(self, key, -span, span)
-        if self.force_direction not in FORCE_DIRECTIONS:
-            raise ModelError(f"force_direction={self.force_direction!r}: allowed {', '.join(FORCE_DIRECTIONS)}",
-                             key="force_direction")
-
-
-def _require_range(task, key, low, high, low_open=False):
-    value = getattr(task, key)
-    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and np.isfinite(value) and (
-        (low < value if low_open else low <= value) and value <= high)
-    if not ok:
-        raise ModelError(f"{key}={value!r} must be within {'(' if low_open else '['}{low:g}, {high:g}]", key=key)
+            value = getattr(self, key)
+            require(-span <= value <= span, range_fault(key, value, f"allowed {CENTRE_RANGE} = -{span:g} ... {span:g}"),
+                    key=key)
 
 
 def linkage_positions(phi, H, L, c1, c2, m=np):
@@ -385,7 +364,7 @@ class ToolFamily:
     a_min_mm: Annotated[float, Interval(ge=A_RANGE_MM[0], le=A_RANGE_MM[1])]
     a_max_mm: Annotated[float, Interval(ge=A_RANGE_MM[0], le=A_RANGE_MM[1])]
     err_width_mm: Annotated[float, Gt(0)]
-    a_count: Annotated[float, Ge(1), Le(200)] = 5
+    a_count: Annotated[int, Ge(1), Le(200)] = 5
     h_values_mm: tuple = (2.0,)
     H_min_mm: Annotated[float | None, doc(f"> 0 ... {LINK_MAX_PER_A:g} a_max_mm")] = None
     H_max_mm: Annotated[float | None, doc(f"> 0 ... {LINK_MAX_PER_A:g} a_max_mm")] = None
@@ -393,31 +372,36 @@ class ToolFamily:
     EFFECTS: ClassVar[dict[str, Effect]] = {}
 
     def __post_init__(self):
-        a_lo, a_hi = A_RANGE_MM
-        for key in ("a_min_mm", "a_max_mm"):
-            _require_range(self, key, a_lo, a_hi)
-        _require(self, "a_max_mm", self.a_max_mm >= self.a_min_mm, f"must be >= a_min_mm={self.a_min_mm}")
-        count = self.a_count
-        _require(self, "a_count", float(count).is_integer() and 1 <= count <= 200, "must be a whole number 1 .. 200")
-        object.__setattr__(self, "a_count", int(count))
-        _require(self, "a_count", self.a_count == 1 or self.a_max_mm > self.a_min_mm,
-                 "must be 1 when a_min_mm = a_max_mm")
+        check_fields(self)
+        object.__setattr__(self, "a_count", int(self.a_count))
+        require(self.a_max_mm >= self.a_min_mm, range_fault("a_max_mm", self.a_max_mm, f"allowed >= a_min_mm="
+                                                            f"{self.a_min_mm}"), key="a_max_mm")
+        require(self.a_count == 1 or self.a_max_mm > self.a_min_mm,
+                range_fault("a_count", self.a_count, "allowed 1 when a_min_mm = a_max_mm"), key="a_count")
         h = self.h_values_mm
         ok = isinstance(h, (list, tuple)) and len(h) >= 1 and all(
             isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v) for v in h)
-        _require(self, "h_values_mm", ok, "must be a list of one or more numbers [mm]")
+        require(ok, f"h_values_mm={h!r}: expected a list of one or more numbers [mm]", key="h_values_mm")
         object.__setattr__(self, "h_values_mm", tuple(float(v) for v in h))
-        _require(self, "h_values_mm", len(set(self.h_values_mm)) == len(self.h_values_mm), "must not repeat a value")
-        _require(self, "h_values_mm", min(self.h_values_mm) >= 0 and max(self.h_values_mm) < self.a_min_mm,
-                 f"every h must be >= 0 and < a_min_mm={self.a_min_mm} (the torch runs outside the cam)")
-        _require(self, "a_count", self.a_count * len(self.h_values_mm) <= FAMILY_MAX_MEMBERS,
-                 f"a_count x len(h_values_mm) = {self.a_count * len(self.h_values_mm)} members; at most {FAMILY_MAX_MEMBERS}")
-        _require_range(self, "err_width_mm", 0.0, LINK_MAX_PER_A * self.a_min_mm, low_open=True)
+        require(len(set(self.h_values_mm)) == len(self.h_values_mm),
+                f"h_values_mm={list(self.h_values_mm)}: must not repeat a value", key="h_values_mm")
+        require(min(self.h_values_mm) >= 0 and max(self.h_values_mm) < self.a_min_mm,
+                range_fault("h_values_mm", list(self.h_values_mm), f"allowed each >= 0 and < a_min_mm={self.a_min_mm} "
+                            "(the torch runs outside the cam)"), key="h_values_mm")
+        members = self.a_count * len(self.h_values_mm)
+        require(members <= FAMILY_MAX_MEMBERS, f"a_count x len(h_values_mm) = {members} members; at most "
+                f"{FAMILY_MAX_MEMBERS}", key="a_count")
+        top = LINK_MAX_PER_A * self.a_min_mm
+        require(self.err_width_mm <= top, range_fault("err_width_mm", self.err_width_mm, f"allowed <= "
+                                                      f"{LINK_MAX_PER_A:g} a_min_mm = {top:g}"), key="err_width_mm")
+        top = LINK_MAX_PER_A * self.a_max_mm
         for key in ("H_min_mm", "H_max_mm"):
-            if getattr(self, key) is not None:
-                _require_range(self, key, 0.0, LINK_MAX_PER_A * self.a_max_mm, low_open=True)
+            value = getattr(self, key)
+            require(value is None or 0 < value <= top, range_fault(key, value, f"allowed > 0 ... "
+                                                                   f"{LINK_MAX_PER_A:g} a_max_mm = {top:g}"), key=key)
         if self.H_min_mm is not None and self.H_max_mm is not None:
-            _require(self, "H_min_mm", self.H_min_mm <= self.H_max_mm, f"must be <= H_max_mm={self.H_max_mm}")
+            require(self.H_min_mm <= self.H_max_mm, range_fault("H_min_mm", self.H_min_mm, f"allowed <= H_max_mm="
+                                                                f"{self.H_max_mm}"), key="H_min_mm")
 
     @cached_property
     def members(self) -> tuple[tuple[float, float], ...]:

@@ -30,7 +30,8 @@ import numpy as np
 from annotated_types import Ge, Gt, Interval, doc
 from scipy.interpolate import CubicSpline
 
-from mechopt.kit.errors import ModelError, quote
+from mechopt.kit.errors import ModelError, quote, require
+from mechopt.kit.settings import check_fields, range_fault
 from mechopt.models.cam_cutter import LinkageFit, real_point
 
 FUNCTIONS = ("sin", "cos", "tan", "exp", "log", "sqrt", "abs")
@@ -276,8 +277,7 @@ def _check_range(t0, t1):
     for key, v in (("t0_rad", t0), ("t1_rad", t1)):
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
             raise ModelError(f"{key}={v!r}: expected a finite number", key=key)
-    if not t1 > t0:
-        raise ModelError(f"t1_rad={t1} must be > t0_rad={t0}", key="t1_rad")
+    require(t1 > t0, range_fault("t1_rad", t1, f"allowed > t0_rad={t0}"), key="t1_rad")
 
 
 def unit_normal(curve, t):
@@ -412,10 +412,7 @@ class ProfileFit:
             curve = TableCurve(tuple(rows[:, 0]), tuple(rows[:, 1]), name="points_mm")
         else:
             curve = ExpressionCurve(self.x_expr, self.y_expr, self.t0_rad, self.t1_rad, dict(self.constants))
-        for key in ("err_width_mm", "h_mm"):
-            v = getattr(self, key)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0 and (v > 0 or key == "h_mm")):
-                raise ModelError(f"{key}={v!r} must be {'>= 0' if key == 'h_mm' else '> 0'}", key=key)
+        check_fields(self)      # after the curve: its parser says what an expression is better than "expected text"
         try:
             with np.errstate(all="raise"):
                 sample = curve.point(np.linspace(curve.t0, curve.t1, 257))
@@ -432,17 +429,15 @@ class ProfileFit:
             raise ModelError("the placed path has no extent along x: the limaçon's axis is x; rotate the curve",
                              key="x_expr")
         object.__setattr__(self, "size_mm", reach / 4)
-        if self.h_mm > self.size_mm:
-            raise ModelError(f"h_mm={self.h_mm} must be <= {self.size_mm:.6g} (a quarter of the path's reach)", key="h_mm")
-        if self.err_width_mm > LINK_MAX_PER_SIZE * self.size_mm:
-            raise ModelError(f"err_width_mm={self.err_width_mm} must be <= {LINK_MAX_PER_SIZE * self.size_mm:.6g}",
-                             key="err_width_mm")
+        require(self.h_mm <= self.size_mm, range_fault("h_mm", self.h_mm, f"allowed <= {self.size_mm:.6g} (a quarter "
+                                                       "of the path's reach)"), key="h_mm")
         top = LINK_MAX_PER_SIZE * self.size_mm
-        for key in ("H_min_mm", "H_max_mm", "L_min_mm", "L_max_mm"):
-            v = getattr(self, key)
+        require(self.err_width_mm <= top, range_fault("err_width_mm", self.err_width_mm, f"allowed <= {top:.6g}"),
+                key="err_width_mm")
+        for key, v in zip(("H_min_mm", "H_max_mm", "L_min_mm", "L_max_mm"), self.given_bounds()):
             crank = key.startswith("H")             # H < 0: the mirrored crank (the class docstring)
-            if v is not None and not ((-top <= v if crank else 0 < v) and v <= top):
-                raise ModelError(f"{key}={v} must be within {f'[{-top:.6g}' if crank else '(0'}, {top:.6g}]", key=key)
+            require(v is None or ((-top <= v if crank else 0 < v) and v <= top),
+                    range_fault(key, v, f"allowed {f'{-top:.6g}' if crank else '> 0'} ... {top:.6g}"), key=key)
         box = self.bounds()
         for lo, hi, k in (("H_min_mm", "H_max_mm", 0), ("L_min_mm", "L_max_mm", 2)):
             if box[k] > box[k + 1]:
@@ -474,8 +469,11 @@ class ProfileFit:
         (4 sizes) either side for H (both cranks), MIN_LINK_PER_SIZE sizes .. the reach for L."""
         reach, floor = 4 * self.size_mm, MIN_LINK_PER_SIZE * self.size_mm
         derived = (-reach, reach, floor, reach)
-        given = (self.H_min_mm, self.H_max_mm, self.L_min_mm, self.L_max_mm)
-        return tuple(float(g) if g is not None else d for g, d in zip(given, derived))
+        return tuple(float(g) if g is not None else d for g, d in zip(self.given_bounds(), derived))
+
+    def given_bounds(self) -> tuple[float | None, ...]:
+        """(H_min_mm, H_max_mm, L_min_mm, L_max_mm) as given, None where the task derives it."""
+        return (self.H_min_mm, self.H_max_mm, self.L_min_mm, self.L_max_mm)
 
 
 def _is_table(rows):

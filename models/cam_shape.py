@@ -40,11 +40,10 @@ import numpy as np
 from annotated_types import Ge, Gt, Interval, doc
 
 from mechopt.kit.errors import ModelError, require
+from mechopt.kit.settings import check_fields
 from mechopt.models.cam_follower import LAWS, law_values
 
 Law = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]
-FOLLOWERS = ("translating", "oscillating")
-CLOSURES = ("spring", "groove")
 CHORD_SAMPLES = 64            # points inside a chord where its distance to the curve is measured
 CHORD_SHARE = 0.9             # of the chord a circle of the local radius allows: a margin for the
                               # radius changing along it (the chords that still stray are halved)
@@ -123,10 +122,8 @@ class CamShape:
     closure: Literal["spring", "groove"] = "spring"
 
     def __post_init__(self):
+        check_fields(self)      # each input's range and kind (follower, closure: their Literal) on its field
         require(self.law in LAWS, f"law={self.law!r}: unknown motion law; allowed: {', '.join(LAWS)}", key="law")
-        require(self.follower in FOLLOWERS, f"follower={self.follower!r}: allowed {', '.join(FOLLOWERS)}",
-                key="follower")
-        require(self.closure in CLOSURES, f"closure={self.closure!r}: allowed {', '.join(CLOSURES)}", key="closure")
         total = self.rise_deg + self.dwell_deg + self.return_deg
         require(total <= 360.0, f"rise_deg + dwell_deg + return_deg = {total:g} deg: more than a turn (<= 360)",
                 key="rise_deg")

@@ -51,6 +51,7 @@ import numpy as np
 from annotated_types import Gt, Le, Lt
 
 from mechopt.kit.errors import MechoptError, ModelError, some_of
+from mechopt.kit.settings import check_fields
 from mechopt.models.effects import Effect
 from mechopt.models.provenance import provenance_problem
 from mechopt.models.stop_impact import LeverStop
@@ -171,8 +172,10 @@ class Cyclogram:
     limiting_op: list | None = None
     cycle_deg: Annotated[float | None, Gt(0), Le(MAX_DEG)] = None
     sigma_H_limit_MPa: Annotated[float | None, Gt(0), Le(MAX_MPA)] = None
+    # the rebound amplitude falls as the approach to the stop slows (a larger phase angle): slope < 0; the
+    # intercept is the amplitude at t = 0, > 0, else the falling law is negative at every angle
     amplitude_slope_mm_per_deg: Annotated[float | None, Lt(0)] = None
-    amplitude_intercept_mm: Annotated[float | None, Gt(0)] = None   # the amplitude at t = 0: > 0 (the law falls)
+    amplitude_intercept_mm: Annotated[float | None, Gt(0)] = None
     amplitude_limit_mm: Annotated[float | None, Gt(0)] = None
     speed_rpm: Annotated[float | None, Gt(0), Le(MAX_RPM)] = None
     stress_speed_rpm: Annotated[float | None, Gt(0), Le(MAX_RPM)] = None
@@ -193,7 +196,7 @@ class Cyclogram:
     CSV_TABLES: ClassVar[dict] = {"operations": (("from", "to"), OPERATION_COLUMNS)}
 
     def __post_init__(self):
-        _check_numbers(self)
+        check_fields(self)
         _table(self.operations, "operations", list)
         _table(self.events, "events", dict)
         if not self.events:             # events named by the operations need no table of their own
@@ -573,24 +576,6 @@ def _split_windows(operations) -> tuple[list, list]:
             windows.append(window)
         ops.append(op)
     return ops, windows
-
-
-def _check_numbers(task):
-    for key, top in (("cycle_deg", MAX_DEG), ("sigma_H_limit_MPa", MAX_MPA), ("amplitude_limit_mm", math.inf),
-                     ("speed_rpm", MAX_RPM), ("stress_speed_rpm", MAX_RPM), ("lever_law_max_rpm", MAX_RPM)):
-        value = getattr(task, key)
-        if value is not None and not (math.isfinite(value) and 0 < value <= top):
-            raise ModelError(f"{key}={value} must be a finite number > 0" + (f" and <= {top:g}" if top < math.inf
-                                                                               else ""), key=key)
-    slope = task.amplitude_slope_mm_per_deg
-    if slope is not None and not (math.isfinite(slope) and slope < 0):
-        raise ModelError(f"amplitude_slope_mm_per_deg={slope} must be < 0: the rebound amplitude falls as "
-                         f"the approach to the stop slows (a larger phase angle)", key="amplitude_slope_mm_per_deg")
-    intercept = task.amplitude_intercept_mm
-    if intercept is not None and not (math.isfinite(intercept) and intercept > 0):
-        raise ModelError(f"amplitude_intercept_mm={intercept} must be a finite number > 0: it is the rebound "
-                         f"amplitude at t = 0, and with the falling slope a law starting at or below 0 gives a "
-                         f"negative amplitude at every angle", key="amplitude_intercept_mm")
 
 
 def _table(value, key, kind):

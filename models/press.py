@@ -61,7 +61,7 @@ motor_characteristic  Kloss torque of the motor, reduced by i; without it the   
 ====================  ========================================================  ==============
 """
 from dataclasses import dataclass, field, fields
-from typing import Annotated, ClassVar
+from typing import Annotated, ClassVar, Literal
 
 import casadi as ca
 import numpy as np
@@ -69,10 +69,10 @@ from annotated_types import Ge, Gt, Le, Lt
 from scipy.optimize import brentq
 
 from mechopt.kit.cache import memoised
-from mechopt.kit.errors import ModelError
+from mechopt.kit.errors import ModelError, require
+from mechopt.kit.settings import check_fields, field_problem, range_fault
 from mechopt.models.effects import Effect, check_effects
 
-KINEMATICS = ("paper", "exact")
 FORCE_KEYS = ("force_c1_N_mm", "force_c2_N_mm2", "force_c3_N_mm3", "force_c4_N_mm4")
 WORK_NAMES = ("motor_work_J", "cut_work_J", "friction_work_J", "damping_work_J")
 
@@ -189,6 +189,10 @@ class PressDrive:
     speed). Effects' own parameters: see `EFFECTS`. `effects` lists the effects the scene calls for; `kinematics`
     picks X(phi) (see `travel_m`).
     """
+    # Upper ends: each far past any crank press (a 2 m stroke, about 10000 rpm, a 10 t 4 m flywheel, 100 t
+    # parts, a 1 MW motor, 1e8 times a V-belt drive's stiffness, 10 g), there to refuse inf and values that
+    # overflow the dynamics, not to judge a design. rod_ratio lambda = r/l < 1: else the crank-slider cannot
+    # pass its dead centres.
     crank_radius_mm: Annotated[float, Gt(0), Le(1000)]
     rod_ratio: Annotated[float, Gt(0), Lt(1)]
     nominal_speed_rad_s: Annotated[float, Gt(0), Le(1000)]
@@ -212,7 +216,7 @@ class PressDrive:
     motor_breakdown_torque_Nm: Annotated[float | None, Gt(0), Le(1e6)] = None
     motor_breakdown_slip: Annotated[float | None, Gt(0), Lt(1)] = None
     effects: tuple[str, ...] = field(default=())
-    kinematics: str = "paper"
+    kinematics: Literal["paper", "exact"] = "paper"
     # the travel eq. (1) was fitted on, up to: past it a warning (`warnings`)
     force_fit_max_mm: Annotated[float | None, Ge(0), Le(1000)] = None
 
@@ -232,21 +236,9 @@ class PressDrive:
                                                "motor_breakdown_slip")),
     }
 
-    # upper ends of the physical ranges (lower ends: the signs below); each far past any crank press,
-    # there to refuse inf and values that overflow the dynamics, not to judge a design
-    RANGES: ClassVar[dict[str, tuple[float, str]]] = {
-        "crank_radius_mm": (1000.0, "a 2 m stroke"), "nominal_speed_rad_s": (1000.0, "about 10000 rpm"),
-        "flywheel_inertia_kgm2": (1e5, "a 10 t, 4 m flywheel"), "crank_mass_kg": (1e5, "100 t"),
-        "tool_mass_kg": (1e5, "100 t"), "rod_mass_kg": (1e5, "100 t"), "motor_inertia_kgm2": (1e3, "a 1 MW motor"),
-        "gear_ratio": (1e3, "motor speed / crank speed"), "belt_stiffness_Nm_rad": (1e12, "1e8 times a V-belt drive"),
-        "belt_damping_Nms_rad": (1e6, "N m s/rad"), "gravity_m_s2": (100.0, "10 g"),
-        "friction_torque_Nm": (1e6, "N m"), "blank_thickness_mm": (1000.0, "mm"), "shortfall_mm": (1000.0, "mm"),
-        "motor_sync_speed_rad_s": (1e4, "about 100000 rpm"), "motor_breakdown_torque_Nm": (1e6, "N m"),
-        **{key: (1e9, f"N/mm^{i + 1} in eq. (1)") for i, key in enumerate(FORCE_KEYS)},
-    }
-
     def __post_init__(self):
         object.__setattr__(self, "effects", tuple(self.effects))
+        check_fields(self)
         # which effects are on (`belt`, `motor`, `cutting`, `friction`) and the physical states in order
         # (`state_names`: only those the effects call for), set once: the solvers' loops read them
         # as attributes, not as calls into this module
@@ -256,44 +248,25 @@ class PressDrive:
             object.__setattr__(self, name, effect in self.effects)
         object.__setattr__(self, "state_names", state_names(self.effects))
         check_effects(self)
-        if self.kinematics not in KINEMATICS:
-            raise ModelError(f"kinematics={self.kinematics!r}; allowed: {', '.join(KINEMATICS)}", key="kinematics")
-        for key in ("rod_ratio", *self.RANGES):
-            value = getattr(self, key)
-            _require(self, key, value is None or value == value, "is not a number")     # NaN fails every range
-        for key in ("crank_radius_mm", "nominal_speed_rad_s", "gear_ratio"):
-            _require(self, key, getattr(self, key) > 0, "must be > 0")
-        for key in ("flywheel_inertia_kgm2", "crank_mass_kg", "tool_mass_kg", "rod_mass_kg", "motor_inertia_kgm2",
-                    "belt_stiffness_Nm_rad", "belt_damping_Nms_rad", "gravity_m_s2", "friction_torque_Nm",
-                    "blank_thickness_mm", "shortfall_mm", "force_fit_max_mm"):
-            value = getattr(self, key)
-            _require(self, key, value is None or value >= 0, "must be >= 0")
-        for key, (most, why) in self.RANGES.items():      # also refuses inf and NaN
-            value = getattr(self, key)
-            low = -most if key in FORCE_KEYS else 0
-            _require(self, key, value is None or abs(value) <= most,
-                     f"is outside the physical range [{low:g}, {most:g}] ({why})")
-        _require(self, "rod_ratio", 0 < self.rod_ratio < 1,
-                 "must be in (0, 1): with lambda = r/l >= 1 the crank-slider cannot pass its dead centres")
-        _require(self, "flywheel_inertia_kgm2", self.flywheel_inertia_kgm2 > 0 or self.crank_mass_kg > 0,
-                 "and crank_mass_kg are both 0: the crank shaft would have no inertia")
+        # relational rules only: each input's own range is on its field (check_fields, above)
+        require(self.flywheel_inertia_kgm2 > 0 or self.crank_mass_kg > 0,
+                f"flywheel_inertia_kgm2={self.flywheel_inertia_kgm2} and crank_mass_kg are both 0: the crank shaft "
+                "would have no inertia", key="flywheel_inertia_kgm2")
         if self.belt:
-            _require(self, "belt_stiffness_Nm_rad", self.belt_stiffness_Nm_rad > 0, "must be > 0 (an elastic belt)")
+            require(self.belt_stiffness_Nm_rad > 0, f"belt_stiffness_Nm_rad={self.belt_stiffness_Nm_rad}: allowed > 0 "
+                    "with effect 'belt_elasticity' (an elastic belt)", key="belt_stiffness_Nm_rad")
             if self.motor:
-                _require(self, "motor_inertia_kgm2", self.motor_inertia_kgm2 > 0,
-                         "must be > 0 with an elastic belt (the pulley side needs inertia)")
+                require(self.motor_inertia_kgm2 > 0, f"motor_inertia_kgm2={self.motor_inertia_kgm2}: allowed > 0 with "
+                        "an elastic belt (the pulley side needs inertia)", key="motor_inertia_kgm2")
         elif not self.motor:
             raise ModelError("effects lack both 'belt_elasticity' and 'motor_characteristic': a rigid ideal drive "
                              "leaves no motion to compute; add one of them", key="effects")
-        if self.motor:
-            _require(self, "motor_sync_speed_rad_s", self.motor_sync_speed_rad_s > 0, "must be > 0")
-            _require(self, "motor_breakdown_torque_Nm", self.motor_breakdown_torque_Nm > 0, "must be > 0")
-            _require(self, "motor_breakdown_slip", 0 < self.motor_breakdown_slip < 1, "must be in (0, 1)")
         if self.cutting:
             need = self.blank_thickness_mm + self.shortfall_mm
-            _require(self, "blank_thickness_mm", need <= 2 * self.crank_radius_mm,
-                     f"plus shortfall_mm={self.shortfall_mm} is {need} mm, more than the stroke "
-                     f"H = 2 crank_radius_mm = {2 * self.crank_radius_mm} mm: the tool never reaches the blank")
+            require(need <= 2 * self.crank_radius_mm,
+                    f"blank_thickness_mm={self.blank_thickness_mm} plus shortfall_mm={self.shortfall_mm} is {need} mm, "
+                    f"more than the stroke H = 2 crank_radius_mm = {2 * self.crank_radius_mm} mm: the tool never "
+                    "reaches the blank", key="blank_thickness_mm")
 
     @property
     def r_m(self) -> float:
@@ -356,11 +329,6 @@ def _angle_at_travel(task, x_m):
     if x_m >= task.stroke_mm / 1000:
         return float(np.pi)
     return float(brentq(lambda p: task.travel(p) - x_m, 0.0, np.pi, xtol=1e-15, rtol=1e-15))
-
-
-def _require(task, key, ok, what):
-    if not ok:
-        raise ModelError(f"{key}={getattr(task, key)} {what}", key=key)
 
 
 # --- what one revolution costs ------------------------------------------------------------------
@@ -794,18 +762,9 @@ class PressDesign(PressDrive):
             need = self.NEEDS.get(key)
             if need and need[0] not in self.effects:
                 raise ModelError(f"{key} needs effect '{need[0]}': {need[1]}", key=key)
-        limits = {"max_speed_fluctuation": (0, 2, "a fraction of the mean speed"),
-                  "belt_slip_torque_Nm": (0, 1e6, "N m"), "motor_safety_factor": (1, 100, "M_k / the torque allowed"),
-                  "single_stroke_speed_drop": (0, 1, "a fraction of the speed at the cut's start")}
-        for key, (low, high, what) in limits.items():
-            value = getattr(self, key)
-            _require(self, key, value is None or (low <= value <= high and value != 0),     # NaN fails <=
-                     f"is outside ({low:g}, {high:g}] ({what})")
-        for name, (low_key, high_key) in BOUNDS.items():
+        for low_key, high_key in BOUNDS.values():
             low, high = getattr(self, low_key), getattr(self, high_key)
-            most = self.RANGES.get(name, (1e3, "times the motor's size"))[0]
-            _require(self, low_key, 0 < low <= most, f"is outside (0, {most:g}]")
-            _require(self, high_key, low < high <= most, f"is outside ({low_key}={low:g}, {most:g}]")
+            require(low < high, range_fault(high_key, high, f"allowed > {low_key}={low:g}"), key=high_key)
 
     def bounds(self, name: str) -> tuple[float, float]:
         """(lowest, highest) allowed value of a design variable."""
@@ -885,9 +844,8 @@ class PressCatalogue(PressDesign):
                 raise ModelError(f"motors[{k}]={list(row)}: expected [name, rated power kW, breakdown torque N m, "
                                  f"inertia kg m2], the numbers in (0, 1e6)", key="motors")
         for k, ratio in enumerate(self.ratios):
-            if not 0 < ratio <= self.RANGES["gear_ratio"][0]:
-                raise ModelError(f"ratios[{k}]={ratio} is outside (0, {self.RANGES['gear_ratio'][0]:g}]", key="ratios")
-        _require(self, "max_speed_deviation", 0 < self.max_speed_deviation <= 0.5, "is outside (0, 0.5]")
+            problem = field_problem(PressDrive.__dataclass_fields__["gear_ratio"].type, ratio)    # gear_ratio's own range
+            require(not problem, range_fault(f"ratios[{k}]", ratio, problem), key="ratios")
 
     def candidate(self, row: tuple, ratio: float) -> PressDesign:
         """The design question for one catalogue row and ratio (a plain `PressDesign`)."""

@@ -62,6 +62,7 @@ from typing import Annotated, ClassVar, Literal
 from annotated_types import Interval
 
 from mechopt.kit.errors import ModelError, require
+from mechopt.kit.settings import check_fields, range_fault
 from mechopt.models.cam_follower import LAWS
 from mechopt.models.cam_law import SplineLaw
 from mechopt.models.effects import Effect, check_effects
@@ -84,12 +85,15 @@ def reduced_stiffness_N_per_m(E_GPa, J_x_mm4, a_mm, b_mm):
     return 3.0 * E_GPa * 1e9 * J_x_mm4 * 1e-12 / ((a_mm + b_mm) * b_mm**2 * 1e-9)
 
 
-# The range each input of the lever model (and its solvers) is tested over: declared on its field
-# (describe, the scene loader and the docs read it there), and checked again when a task is made.
+# The range each input of the lever model (and its solvers) is tested over: a lever of a machine,
+# generously (a micro-mechanism to a press frame). A hard input rule: past it the beam formulas and
+# eq. (2)'s closed form overflow, divide by zero or lose every digit, so an input outside is refused
+# before any work. Declared on its field through `stated`, where the model's check
+# (kit.settings.check_fields), describe, the scene loader and the docs read it.
 STATED_RANGE = {
     "E_GPa": (1e-3, 1e4), "J_x_mm4": (1e-6, 1e12), "a_mm": (1e-3, 1e5), "b_mm": (1e-3, 1e5),
     "a_stop_mm": (1e-3, 1e5), "b_stop_mm": (1e-3, 1e5), "mass_kg": (1e-6, 1e6), "stroke_mm": (1e-6, 1e5),
-    "velocity_factor": (1e-6, 1e3), "t_deg": (1e-3, 360.0), "speed_nominal_rpm": (1e-3, 1e6),
+    "velocity_factor": (1e-6, 1e3), "speed_nominal_rpm": (1e-3, 1e6),
     "amplitude_limit_mm": (1e-9, 1e5), "inertia_A_kgm2": (1e-12, 1e6), "damping_ratio": (0.0, 1e3),
     "preload_mm": (0.0, 1e5), "closure_force_N": (0.0, 1e7),
 }
@@ -154,7 +158,7 @@ class LeverStop:
     mass_kg: Annotated[float, stated("mass_kg")]
     stroke_mm: Annotated[float | None, stated("stroke_mm")] = None
     velocity_factor: Annotated[float | None, stated("velocity_factor")] = None
-    t_deg: Annotated[float | None, stated("t_deg")] = None
+    t_deg: Annotated[float | None, Interval(ge=1e-3, lt=360)] = None      # a phase angle of one cycle
     speed_nominal_rpm: Annotated[float | None, stated("speed_nominal_rpm")] = None
     amplitude_limit_mm: Annotated[float | None, stated("amplitude_limit_mm")] = None
     inertia_A_kgm2: Annotated[float | None, stated("inertia_A_kgm2")] = None
@@ -165,7 +169,7 @@ class LeverStop:
     law_slope_mm_per_deg: Annotated[float | None, Interval(lt=0)] = None
     law_intercept_mm: Annotated[float | None, Interval(gt=0)] = None
     law: str | SplineLaw = ""       # a library law's name, or a synthesised law (solvers/stop_impact/synthesis.py)
-    launch: Literal["pulse_plus_v0", "restitution"] = "pulse_plus_v0"   # LAUNCHES
+    launch: Literal["pulse_plus_v0", "restitution"] = "pulse_plus_v0"   # how C leaves the plate (module docstring)
     speeds_rpm: tuple = ()
     effects: tuple = ()
 
@@ -184,40 +188,27 @@ class LeverStop:
     def __post_init__(self):
         object.__setattr__(self, "speeds_rpm", _names_or_numbers(self, "speeds_rpm", number=True))
         object.__setattr__(self, "effects", _names_or_numbers(self, "effects", number=False))
+        check_fields(self)
         check_effects(self)
-        for key in ("E_GPa", "J_x_mm4", "a_mm", "b_mm", "a_stop_mm", "b_stop_mm", "mass_kg"):
-            _require(self, key, getattr(self, key) > 0, "must be > 0")
-        for key in ("stroke_mm", "velocity_factor", "t_deg", "speed_nominal_rpm", "amplitude_limit_mm",
-                    "inertia_A_kgm2"):
-            _require(self, key, getattr(self, key) is None or getattr(self, key) > 0, "must be > 0 when given")
-        _require(self, "t_deg", self.t_deg is None or self.t_deg < 360, "must be < 360 (a phase angle of one cycle)")
-        _require(self, "restitution", self.restitution is None or 0 <= self.restitution <= 1,
-                 "must be in [0, 1] (a coefficient of restitution)")
-        _require(self, "damping_ratio", self.damping_ratio is None or self.damping_ratio >= 0, "must be >= 0")
-        _require(self, "preload_mm", self.preload_mm is None or self.preload_mm >= 0, "must be >= 0")
-        _require(self, "closure_force_N", self.closure_force_N is None or self.closure_force_N >= 0, "must be >= 0")
-        _require(self, "law_slope_mm_per_deg", self.law_slope_mm_per_deg is None or self.law_slope_mm_per_deg < 0,
-                 "must be < 0 (the rebound falls as the lift gets more phase)")
-        _require(self, "law_intercept_mm", self.law_intercept_mm is None or self.law_intercept_mm > 0, "must be > 0")
-        _require(self, "law", isinstance(self.law, SplineLaw) or self.law in ("", *LAWS), f"is not a motion law; allowed: {', '.join(LAWS)}")
-        _require(self, "launch", self.launch in LAUNCHES, f"is not a launch reading; allowed: {', '.join(LAUNCHES)}")
+        require(isinstance(self.law, SplineLaw) or self.law in ("", *LAWS),
+                f"law={self.law!r}: allowed {', '.join(LAWS)} (or a synthesised law)", key="law")
         if self.launch == "restitution":     # C leaves at k v0: needs k and the approach it reverses
             for effect in ("initial_velocity", "impact_pulse"):
-                _require(self, "launch", effect in self.effects, f"needs the effect '{effect}' (C leaves at k v0)")
+                require(effect in self.effects, f"launch={self.launch!r} needs the effect '{effect}' (C leaves at k v0)",
+                        key="launch")
         if "cam_drive" in self.effects:      # one source of the approach velocity: the cam, not a fitted factor
-            _require(self, "velocity_factor", self.velocity_factor is None,
-                     "is not used with the effect 'cam_drive' (the cam computes the approach velocity); drop it")
+            require(self.velocity_factor is None, f"velocity_factor={self.velocity_factor} is not used with the "
+                    "effect 'cam_drive' (the cam computes the approach velocity); drop it", key="velocity_factor")
             for key in ("law", "stroke_mm", "t_deg"):
-                _require(self, key, bool(getattr(self, key)), "is needed by the effect 'cam_drive'")
+                require(bool(getattr(self, key)), f"{key}={getattr(self, key)!r} is needed by the effect 'cam_drive'",
+                        key=key)
             if "preload" in self.effects and self.preload_mm is not None:    # else C starts on its plate
-                _require(self, "preload_mm", self.preload_mm < self.stroke_mm,
-                         f"must be below stroke_mm={self.stroke_mm:g} (the plate would stand at or below the "
-                         "rise's start: the cam could not lift C onto it)")
-        _require(self, "inertia_A_kgm2", self.inertia_A_kgm2 is None or "impact_pulse" in self.effects,
-                 "belongs to effect 'impact_pulse', which is not listed in effects; add it or drop the parameter")
-        for key, (lo, hi) in STATED_RANGE.items():      # the range the model and its solvers are tested over
-            value = getattr(self, key)
-            _require(self, key, value is None or lo <= value <= hi, f"is outside the stated range [{lo:g}, {hi:g}]")
+                require(self.preload_mm < self.stroke_mm, range_fault(
+                    "preload_mm", self.preload_mm, f"allowed < stroke_mm={self.stroke_mm:g} (the plate would stand "
+                    "at or below the rise's start: the cam could not lift C onto it)"), key="preload_mm")
+        require(self.inertia_A_kgm2 is None or "impact_pulse" in self.effects,
+                f"inertia_A_kgm2={self.inertia_A_kgm2} belongs to effect 'impact_pulse', which is not listed in "
+                "effects; add it or drop the parameter", key="inertia_A_kgm2")
         top = STATED_RANGE["speed_nominal_rpm"][1]
         bad = [s for s in self.speeds_rpm if not 0 < s <= top]
         if bad:
@@ -355,15 +346,5 @@ def _names_or_numbers(task, key, *, number):
     return tuple(float(v) for v in value) if number else tuple(value)
 
 
-# Stated ranges of the inputs: a lever of a machine, generously (a micro-mechanism to a press
-# frame). Past them the beam formulas and eq. (2)'s closed form overflow, divide by zero or
-# lose every digit, so an input outside is refused before any work.
-
-
-LAUNCHES = ("pulse_plus_v0", "restitution")     # how C leaves the plate (module docstring)
-
 MAX_FREQUENCY_HZ = 1e5      # a lever's natural frequency: past it the solvers' steps run into the millions
 
-
-def _require(task, key, ok, what):
-    require(ok, f"{key}={getattr(task, key)} {what}", key=key)

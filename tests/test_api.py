@@ -406,7 +406,7 @@ def test_describe_prints_structure_paths_whole_and_each_values_why(capsys):
     assert "operations[from=1,to=2].min_deg " in out
     sigma = next(line for line in out.splitlines() if line.startswith("sigma_H_limit_MPa "))
     assert "> 0 ... 1e+06" in sigma and "a usual allowable Hertz stress" in sigma
-    with pytest.raises(mechopt.SceneError, match=r"params.sigma_H_limit_MPa = -1.0: allowed > 0 ... 1e\+06"):
+    with pytest.raises(mechopt.SceneError, match=r"params.sigma_H_limit_MPa=-1.0: allowed > 0 ... 1e\+06"):
         mechopt.solve("loom/group1", sigma_H_limit_MPa=-1.0)
 
 

@@ -139,9 +139,9 @@ def test_papers_9x9_has_rank_8(phi):
 
 
 def test_bad_input_is_refused_by_name():
-    with pytest.raises(ModelError, match=r"H_mm=-1\.0 must be within \(0, 1e\+06\]"):
+    with pytest.raises(ModelError, match=r"H_mm=-1\.0: allowed > 0 \.\.\. 1e\+06"):
         loads(H_mm=-1.0)
-    with pytest.raises(ModelError, match=r"link_mass_kg=nan must be within \[0, 1e\+06\]"):
+    with pytest.raises(ModelError, match=r"link_mass_kg=nan: expected a finite number"):
         loads(link_mass_kg=float("nan"))
     with pytest.raises(ModelError, match=r"force_direction='up': allowed against_velocity, normal_to_link"):
         loads(force_direction="up")

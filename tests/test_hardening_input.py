@@ -141,7 +141,7 @@ def test_hostile_set_values_are_one_clear_line(value, match):
 
 
 def test_an_integer_no_float_holds_is_refused_naming_the_key():
-    with pytest.raises(SceneError, match=r"params.amplitude_limit_mm = 1000.*\(401 characters\): expected a finite"):
+    with pytest.raises(SceneError, match=r"params.amplitude_limit_mm=1000.*\(401 characters\): expected a finite"):
         registry.find("loom/group1").build({"amplitude_limit_mm": 10**400})
 
 

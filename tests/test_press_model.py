@@ -160,24 +160,24 @@ def test_gravity_moment_is_minus_the_derivative_of_the_weights_potential():
 # --- bad input: refused with the key, the value and what is allowed -----------------------------
 
 @pytest.mark.parametrize("changes, match", [
-    ({"rod_ratio": 1.0}, r"rod_ratio=1\.0 must be in \(0, 1\): with lambda = r/l >= 1 the crank-slider cannot"),
-    ({"rod_ratio": -0.1}, r"rod_ratio=-0\.1 must be in \(0, 1\)"),
-    ({"tool_mass_kg": -1.0}, r"tool_mass_kg=-1\.0 must be >= 0"),
-    ({"rod_mass_kg": -6.0}, r"rod_mass_kg=-6\.0 must be >= 0"),
-    ({"belt_stiffness_Nm_rad": -2e4}, r"belt_stiffness_Nm_rad=-20000\.0 must be >= 0"),
-    ({"belt_stiffness_Nm_rad": 0.0}, r"belt_stiffness_Nm_rad=0\.0 must be > 0 \(an elastic belt\)"),
-    ({"belt_damping_Nms_rad": -1.0}, r"belt_damping_Nms_rad=-1\.0 must be >= 0"),
+    ({"rod_ratio": 1.0}, r"^rod_ratio=1\.0: allowed > 0 \.\.\. 1 \(excl\.\)$"),
+    ({"rod_ratio": -0.1}, r"rod_ratio=-0\.1: allowed > 0 \.\.\. 1 \(excl\.\)"),
+    ({"tool_mass_kg": -1.0}, r"tool_mass_kg=-1\.0: allowed 0 \.\.\. 100000"),
+    ({"rod_mass_kg": -6.0}, r"rod_mass_kg=-6\.0: allowed 0 \.\.\. 100000"),
+    ({"belt_stiffness_Nm_rad": -2e4}, r"belt_stiffness_Nm_rad=-20000\.0: allowed 0 \.\.\. 1e\+12"),
+    ({"belt_stiffness_Nm_rad": 0.0}, r"belt_stiffness_Nm_rad=0\.0: allowed > 0 with effect 'belt_elasticity' \(an elastic belt\)"),
+    ({"belt_damping_Nms_rad": -1.0}, r"belt_damping_Nms_rad=-1\.0: allowed 0 \.\.\. 1e\+06"),
     ({"blank_thickness_mm": 49.5}, r"blank_thickness_mm=49\.5 plus shortfall_mm=1\.0 is 50\.5 mm, more than the "
                                    r"stroke H = 2 crank_radius_mm = 50\.0 mm"),
-    ({"crank_radius_mm": 0.0}, r"crank_radius_mm=0\.0 must be > 0"),
-    ({"gear_ratio": 0.0}, r"gear_ratio=0\.0 must be > 0"),
-    ({"motor_breakdown_slip": 1.5}, r"motor_breakdown_slip=1\.5 must be in \(0, 1\)"),
-    ({"motor_breakdown_torque_Nm": 0.0}, r"motor_breakdown_torque_Nm=0\.0 must be > 0"),
-    ({"motor_inertia_kgm2": 0.0}, r"motor_inertia_kgm2=0\.0 must be > 0 with an elastic belt"),
+    ({"crank_radius_mm": 0.0}, r"crank_radius_mm=0\.0: allowed > 0 \.\.\. 1,000"),
+    ({"gear_ratio": 0.0}, r"gear_ratio=0\.0: allowed > 0 \.\.\. 1,000"),
+    ({"motor_breakdown_slip": 1.5}, r"motor_breakdown_slip=1\.5: allowed > 0 \.\.\. 1 \(excl\.\)"),
+    ({"motor_breakdown_torque_Nm": 0.0}, r"motor_breakdown_torque_Nm=0\.0: allowed > 0 \.\.\. 1e\+06"),
+    ({"motor_inertia_kgm2": 0.0}, r"motor_inertia_kgm2=0\.0: allowed > 0 with an elastic belt"),
     ({"flywheel_inertia_kgm2": 0.0, "crank_mass_kg": 0.0}, r"flywheel_inertia_kgm2=0\.0 and crank_mass_kg are both 0"),
     ({"effects": ("belt_elasticity", "wind")},
      r"effects=\['belt_elasticity', 'wind'\]: unknown \['wind'\]; known: belt_elast"),
-    ({"kinematics": "approx"}, r"kinematics='approx'; allowed: paper, exact"),
+    ({"kinematics": "approx"}, r"kinematics='approx': allowed paper, exact"),
 ])
 def test_bad_input_is_refused_naming_the_key(changes, match):
     with pytest.raises(ModelError, match=match):
@@ -199,7 +199,7 @@ def test_a_refused_scene_override_names_the_key_and_changes_nothing():
     from mechopt.kit.errors import SceneError
     scene = registry.find("press/kd2322")
     before = scene.params()
-    with pytest.raises(SceneError, match=r"params\.rod_ratio = 1\.2: allowed > 0 \.\.\. 1 \(excl\.\)"):
+    with pytest.raises(SceneError, match=r"params\.rod_ratio=1\.2: allowed > 0 \.\.\. 1 \(excl\.\)"):
         scene.build({"rod_ratio": 1.2})
     assert scene.params() == before
 
@@ -218,12 +218,12 @@ def test_scene_hands_its_effects_to_the_task(scene_id):
 
 
 @pytest.mark.parametrize("changes, match", [
-    ({"crank_radius_mm": float("inf")}, r"crank_radius_mm=inf is outside the physical range \[0, 1000\] \(a 2 m stroke\)"),
-    ({"belt_stiffness_Nm_rad": 1e13}, r"belt_stiffness_Nm_rad=10000000000000\.0 is outside the physical range \[0, 1e\+12\]"),
-    ({"force_c4_N_mm4": -float("inf")}, r"force_c4_N_mm4=-inf is outside the physical range \[-1e\+09, 1e\+09\]"),
-    ({"motor_breakdown_torque_Nm": 1e300}, r"motor_breakdown_torque_Nm=1e\+300 is outside the physical range"),
-    ({"flywheel_inertia_kgm2": float("nan")}, r"flywheel_inertia_kgm2=nan is not a number"),
-    ({"nominal_speed_rad_s": 1e6}, r"nominal_speed_rad_s=1000000\.0 is outside the physical range \[0, 1000\]"),
+    ({"crank_radius_mm": float("inf")}, r"crank_radius_mm=inf: expected a finite number"),
+    ({"belt_stiffness_Nm_rad": 1e13}, r"belt_stiffness_Nm_rad=10000000000000\.0: allowed 0 \.\.\. 1e\+12"),
+    ({"force_c4_N_mm4": -float("inf")}, r"force_c4_N_mm4=-inf: expected a finite number"),
+    ({"motor_breakdown_torque_Nm": 1e300}, r"motor_breakdown_torque_Nm=1e\+300: allowed > 0 \.\.\. 1e\+06"),
+    ({"flywheel_inertia_kgm2": float("nan")}, r"flywheel_inertia_kgm2=nan: expected a finite number"),
+    ({"nominal_speed_rad_s": 1e6}, r"nominal_speed_rad_s=1000000\.0: allowed > 0 \.\.\. 1,000"),
 ])
 def test_infinite_or_huge_parameters_are_refused_naming_the_range(changes, match):
     with pytest.raises(ModelError, match=match):

@@ -229,12 +229,12 @@ def test_tangent_is_the_slope_of_the_exact_chain(chain):
 # ---------------------------------------------------------------- refused inputs
 
 @pytest.mark.parametrize("change, match", [
-    ({"law": "parabolic"}, r"law=parabolic is not a motion law; allowed: cycloidal, modified_sine"),
-    ({"closure_force_N": -1.0}, r"closure_force_N=-1\.0 must be >= 0"),
-    ({"closure_force_N": 1e9}, r"closure_force_N=1000000000\.0 is outside the stated range \[0, 1e\+07\]"),
-    ({"stroke_mm": 0.0}, r"stroke_mm=0\.0 must be > 0 when given"),
+    ({"law": "parabolic"}, r"law='parabolic': allowed cycloidal, modified_sine"),
+    ({"closure_force_N": -1.0}, r"closure_force_N=-1\.0: allowed 0 \.\.\. 1e\+07"),
+    ({"closure_force_N": 1e9}, r"closure_force_N=1000000000\.0: allowed 0 \.\.\. 1e\+07"),
+    ({"stroke_mm": 0.0}, r"stroke_mm=0\.0: allowed 1e-06 \.\.\. 100000"),
     ({"velocity_factor": 0.4}, r"velocity_factor=0\.4 is not used with the effect 'cam_drive'"),
-    ({"law": ""}, r"law= is needed by the effect 'cam_drive'"),
+    ({"law": ""}, r"law='' is needed by the effect 'cam_drive'"),
 ])
 def test_bad_cam_inputs_are_one_line_errors(cam, change, match):
     with pytest.raises(ModelError, match=match):
@@ -247,7 +247,7 @@ def test_bad_settings_and_overrides_are_refused_by_the_scene_before_anything_run
         registry.run(scene, {"reltol": 0.0})
     with pytest.raises(SceneError, match=r"solver_settings\.points.*allowed 11 \.\.\. 100,000"):
         registry.run(scene, {"points": 5})
-    with pytest.raises(SceneError, match=r"params\.closure_force_N = 1000000000000\.0: allowed 0 \.\.\. 1e\+07"):
+    with pytest.raises(SceneError, match=r"params\.closure_force_N=1000000000000\.0: allowed 0 \.\.\. 1e\+07"):
         registry.run(scene, {"closure_force_N": 1e12})
     with pytest.raises(ModelError, match=r"the approach velocity comes from the cam's rise"):
         scene.build()[0].approach_velocity_m_s(280.0)

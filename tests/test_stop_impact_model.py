@@ -152,19 +152,19 @@ def test_an_effect_not_listed_is_not_computed(effects, expect):
     ({"speeds_rpm": (280, "fast")}, r"speeds_rpm=\[280, 'fast'\]: 'fast' is not a number"),
     ({"speeds_rpm": (280, -5)}, r"speeds_rpm=\[280\.0, -5\.0\]: every speed must be > 0 and <= 1e\+06 \(got \[-5\.0\]\)"),
     ({"speeds_rpm": (280, 1e300)}, r"every speed must be > 0 and <= 1e\+06 \(got \[1e\+300\]\)"),
-    ({"E_GPa": 1e308}, r"E_GPa=1e\+308 is outside the stated range \[0\.001, 10000\]"),
-    ({"b_mm": 1e-300}, r"b_mm=1e-300 is outside the stated range \[0\.001, 100000\]"),
-    ({"mass_kg": float("inf")}, r"mass_kg=inf is outside the stated range \[1e-06, 1e\+06\]"),
+    ({"E_GPa": 1e308}, r"E_GPa=1e\+308: allowed 0\.001 \.\.\. 10000"),
+    ({"b_mm": 1e-300}, r"b_mm=1e-300: allowed 0\.001 \.\.\. 100000"),
+    ({"mass_kg": float("inf")}, r"mass_kg=inf: expected a finite number"),
     ({"damping_ratio": None}, r"damping_ratio missing: effect 'damping' needs it"),
     ({"effects": ("initial_velocity", "impact_pulse", "damping")},
      r"preload_mm=0\.25 belongs to effect 'preload', which is not listed in effects; add it to effects or drop"),
-    ({"E_GPa": -210.0}, r"E_GPa=-210\.0 must be > 0"),
-    ({"b_stop_mm": 0.0}, r"b_stop_mm=0\.0 must be > 0"),
-    ({"velocity_factor": -1.0}, r"velocity_factor=-1\.0 must be > 0 when given"),
-    ({"t_deg": 400.0}, r"t_deg=400\.0 must be < 360 \(a phase angle of one cycle\)"),
-    ({"restitution": 1.5}, r"restitution=1\.5 must be in \[0, 1\] \(a coefficient of restitution\)"),
-    ({"damping_ratio": -0.1}, r"damping_ratio=-0\.1 must be >= 0"),
-    ({"preload_mm": -0.25}, r"preload_mm=-0\.25 must be >= 0"),
+    ({"E_GPa": -210.0}, r"E_GPa=-210\.0: allowed 0\.001 \.\.\. 10000"),
+    ({"b_stop_mm": 0.0}, r"b_stop_mm=0\.0: allowed 0\.001 \.\.\. 100000"),
+    ({"velocity_factor": -1.0}, r"velocity_factor=-1\.0: allowed 1e-06 \.\.\. 1000"),
+    ({"t_deg": 400.0}, r"t_deg=400\.0: allowed 0\.001 \.\.\. 360 \(excl\.\)"),
+    ({"restitution": 1.5}, r"restitution=1\.5: allowed 0 \.\.\. 1"),
+    ({"damping_ratio": -0.1}, r"damping_ratio=-0\.1: allowed 0 \.\.\. 1000"),
+    ({"preload_mm": -0.25}, r"preload_mm=-0\.25: allowed 0 \.\.\. 100000"),
 ])
 def test_bad_lever_is_refused_naming_key_value_and_what_is_allowed(change, match):
     with pytest.raises(ModelError, match=match) as caught:
@@ -184,7 +184,7 @@ def test_a_computation_names_the_parameter_or_effect_it_lacks():
 def test_bad_override_is_refused_by_the_scene_and_changes_nothing():
     scene = registry.find("stop-impact/rebound-177rpm")
     before = scene.params()
-    with pytest.raises(SceneError, match=r"params\.restitution = 1\.5: allowed 0 \.\.\. 1"):
+    with pytest.raises(SceneError, match=r"params\.restitution=1\.5: allowed 0 \.\.\. 1"):
         registry.run(scene, {"restitution": 1.5})
     with pytest.raises(SceneError, match=r"colour: unknown key"):
         registry.run(scene, {"colour": 1})

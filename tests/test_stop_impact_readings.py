@@ -44,9 +44,9 @@ def test_without_preload_either_launch_gives_a_rebound_proportional_to_n_over_t(
 
 
 def test_an_unknown_launch_or_one_without_its_effects_is_refused_by_name():
-    with pytest.raises(ModelError, match=r"launch=bounce is not a launch reading; allowed: pulse_plus_v0, restitution"):
+    with pytest.raises(ModelError, match=r"launch='bounce': allowed pulse_plus_v0, restitution"):
         LeverStop(**LEVER, launch="bounce")
-    with pytest.raises(ModelError, match=r"launch=restitution needs the effect 'initial_velocity'"):
+    with pytest.raises(ModelError, match=r"launch='restitution' needs the effect 'initial_velocity'"):
         LeverStop(**(LEVER | {"effects": ("impact_pulse", "damping")}), launch="restitution")
 
 

@@ -110,7 +110,7 @@ def test_failed_variants_are_rows_and_the_sweep_goes_on():
     scene = registry.find(CAM)
     table = sw.sweep(scene, _grid("a_mm=30:30:1", "h_mm=-1:4:2"), progress=False)
     bad, infeasible = table.to_pylist()
-    assert bad["status"] == "INVALID" and "h_mm = -1.0: allowed >= 0" in bad["message"]
+    assert bad["status"] == "INVALID" and "params.h_mm=-1.0: allowed >= 0" in bad["message"]
     assert bad["max_deviation_mm"] is None and bad["solve_s"] is None
     assert infeasible["status"] == "INFEASIBLE"
     width = scene.params()["err_width_mm"]

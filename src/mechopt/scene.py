@@ -24,7 +24,7 @@ from mechopt.files import read_regular, real_path
 from mechopt.kit.cache import memoised
 from mechopt.kit.errors import MechoptError, ModelError, SceneError, SettingError, quote
 from mechopt.kit.result import Status
-from mechopt.kit.settings import declared_range, describe_range, setting_problem
+from mechopt.kit.settings import declared_range, describe_range, field_problem, range_fault, setting_problem
 from mechopt.models.provenance import provenance_problem
 from mechopt.tables import check_header, number, read_records, read_rows
 from mechopt.units import unit_of
@@ -673,13 +673,11 @@ def _build_task(path, task_class, effects, params, structure=None):
         if owner is not None and owner not in effects:
             raise SceneError(f"{path}: params.{key} belongs to effect '{owner}', which this scene does "
                              f"not call for; add it to effects or drop the parameter", key=key)
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise SceneError(f"{path}: params.{key} = {value!r}: expected a number", key=key)
-        if not abs(value) <= 1e308:         # inf, nan, or an integer of hundreds of digits (no float holds it)
-            raise SceneError(f"{path}: params.{key} = {quote(value)}: expected a finite number", key=key)
-        low, high = declared_range(fields[key].type)
-        if (low and not low[1](value, low[0])) or (high and not high[1](value, high[0])):
-            raise SceneError(f"{path}: params.{key} = {value!r}: allowed {describe_range(low, high)}", key=key)
+        # the model's own rule (kit.settings.field_problem), checked here to name the file: the same sentence
+        problem = ("expected a number" if isinstance(value, bool) or not isinstance(value, (int, float))
+                   else field_problem(fields[key].type, value))
+        if problem:
+            raise SceneError(f"{path}: params.{range_fault(key, value, problem)}", key=key)
     structure = dict(structure or {})
     if "effects" in fields:             # a task assembled from its effects is told which ones
         structure["effects"] = tuple(effects)

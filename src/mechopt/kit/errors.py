@@ -43,7 +43,8 @@ def some_of(items, limit: int = NAMED, sep: str = "; ") -> str:
 
 
 def require(ok: bool, message: str, *, key: str | None = None, kind: type[MechoptError] = ModelError) -> None:
-    """Raise `kind(message, key=key)` unless `ok`: the one way a rule on an input is written."""
+    """Raise `kind(message, key=key)` unless `ok`: a rule relating inputs (a < b, the stroke against
+    the blank); one input's own range is declared on its field instead (kit.settings.check_fields)."""
     if not ok:
         raise kind(message, key=key)
 

@@ -1,19 +1,31 @@
-"""Allowed ranges of solver settings, declared in the solver's own signature and checked when a
-scene is loaded or a `--set` is given, before anything runs:
+"""Allowed ranges of inputs, declared once as `annotated_types` constraints (Gt, Ge, Lt, Le,
+Interval) and read from there by every check and by `mechopt describe`:
 
-    def events(task, *, tol: Tolerance = 1e-10, samples: Annotated[int, Interval(ge=1, le=10_000)] = 8)
+* a solver's settings, in its own signature, checked when a scene is loaded, a `--set` is given
+  or the solver is called directly (`check_settings`):
 
-The scene loader reads the `annotated_types` constraints (Gt, Ge, Lt, Le, Interval) and names
-the range in its error; `mechopt describe` lists it.
+      def events(task, *, tol: Tolerance = 1e-10, samples: Annotated[int, Interval(ge=1, le=10_000)] = 8)
+
+* a model's inputs, on its dataclass fields, checked when the model is built, from a scene or
+  from Python alike (`check_fields`, called early in the model's `__post_init__`):
+
+      crank_radius_mm: Annotated[float, Gt(0), Le(1000)]
+
+A value out of its range is one sentence wherever it is caught (`range_fault`): "key=value:
+allowed range"; the scene layer puts the file name in front.
 """
+import dataclasses
 import inspect
 import math
+import numbers
 import operator
-from typing import Annotated, Literal, get_args, get_origin
+import sys
+import types
+from typing import Annotated, Literal, Union, get_args, get_origin
 
 from annotated_types import Ge, Gt, Interval, Le
 
-from mechopt.kit.errors import SettingError
+from mechopt.kit.errors import ModelError, SettingError, quote
 
 Positive = Annotated[float, Gt(0)]
 NonNegative = Annotated[float, Ge(0)]
@@ -21,7 +33,8 @@ Tolerance = Annotated[float, Interval(gt=0, le=0.1)]        # relative or absolu
 Count = Annotated[int, Interval(ge=1, le=10_000_000)]
 
 __all__ = ["Positive", "NonNegative", "Tolerance", "Count", "Ge", "Gt", "Interval", "Le", "Annotated",
-           "check_settings", "setting_problem", "declared_range", "describe_range"]
+           "check_settings", "setting_problem", "check_fields", "field_problem", "range_fault", "declared_range",
+           "describe_range"]
 
 
 def check_settings(solver, **values) -> None:
@@ -52,6 +65,71 @@ def setting_problem(option: inspect.Parameter, value) -> str:
     if (low and not low[1](value, low[0])) or (high and not high[1](value, high[0])):
         return f"allowed {describe_range(low, high)}"
     return ""
+
+
+def range_fault(key: str, value, problem: str) -> str:
+    """The one sentence for an input out of its range or of the wrong kind: `key=value: problem`
+    (`problem` from `field_problem`, or "allowed <= 100 a_mm = 2500" for a range relative to another
+    input). The scene layer puts its file and table in front; a Python caller sees it as is."""
+    return f"{key}={quote(value)}: {problem}"
+
+
+def check_fields(task) -> None:
+    """Every field of the dataclass `task` against its declared type and range: a ModelError
+    `range_fault` naming the first field at fault. Called early in a model's `__post_init__`, so a
+    model built from Python is held to the same rules as one read from a scene. Fields typed as
+    something else (a table, a list, a law) are the model's own to check."""
+    for name, annotation in _field_types(type(task)):
+        value = getattr(task, name)
+        problem = field_problem(annotation, value)
+        if problem:
+            raise ModelError(range_fault(name, value, problem), key=name)
+
+
+def field_problem(annotation, value) -> str:
+    """What is wrong with a value for a model's field ('' when nothing): its kind as declared (a
+    finite number for a float, a whole number for an int, bool, str, one of a Literal's choices;
+    None only where the type allows it) and its range (annotated_types constraints)."""
+    base = get_args(annotation)[0] if get_origin(annotation) is Annotated else annotation
+    kinds = get_args(base) if get_origin(base) in (Union, types.UnionType) else (base,)
+    if value is None:
+        return "" if type(None) in kinds or None in _choices(kinds) else "expected a value, not None"
+    choices = _choices(kinds)
+    if choices and not any(k is str and isinstance(value, str) for k in kinds):
+        return "" if value in choices else f"allowed {', '.join(map(str, choices))}"
+    if float in kinds or int in kinds:
+        if any(isinstance(k, type) and k not in (float, int) and isinstance(value, k) for k in kinds):
+            return ""           # another kind the field takes (`float | SomeLaw`): the model checks it
+        if isinstance(value, bool) or not isinstance(value, numbers.Real):
+            return "expected a number"
+        if not abs(value) <= sys.float_info.max:     # inf, nan, or an integer no float holds
+            return "expected a finite number"
+        if float not in kinds and value != int(value):      # a scene's 5.0 is a whole number
+            return "expected a whole number"
+    elif bool in kinds and not isinstance(value, bool):
+        return "expected true or false"
+    elif kinds == (str,) and not isinstance(value, str):
+        return "expected text"
+    low, high = declared_range(annotation)
+    if (low and not low[1](value, low[0])) or (high and not high[1](value, high[0])):
+        return f"allowed {describe_range(low, high)}"
+    return ""
+
+
+def _choices(kinds) -> tuple:
+    return tuple(c for k in kinds if get_origin(k) is Literal for c in get_args(k))
+
+
+_FIELD_TYPES: dict = {}
+
+
+def _field_types(cls) -> tuple:
+    """(name, annotation) of the fields a caller gives (init fields), looked up once per class: a
+    model built in a solver's loop pays a dictionary look-up, not a walk of its class."""
+    found = _FIELD_TYPES.get(cls)
+    if found is None:
+        found = _FIELD_TYPES[cls] = tuple((f.name, f.type) for f in dataclasses.fields(cls) if f.init)
+    return found
 
 
 def declared_range(annotation):
