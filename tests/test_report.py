@@ -250,7 +250,7 @@ def misses_page(tmp_path_factory):
     """A page of two scenes that each miss a figure of their source: a misses table, long reasons."""
     runs = [registry.run(registry.find(s)) for s in ("stop-impact/rebound-177rpm-paper-reading",
                                                      "cam-cutter/paper-figures")]
-    assert all(any(c.verdict in registry.MISSES for c in r.checks) for r in runs)
+    assert all(any(c.verdict in verdicts.MISSES for c in r.checks) for r in runs)
     return write_report(tmp_path_factory.mktemp("misses") / "site", runs=runs)
 
 
