@@ -247,6 +247,19 @@ def test_other_profile_scene_is_the_global_minimax_of_a_brute_force_search():
     assert d["global_lower_bound_mm"] <= value <= run.values["max_deviation_mm"] + 1e-5
 
 
+def test_table_profile_scene_is_the_minimax_of_a_brute_force_search():
+    """The template `mechopt new cam-table` copies: eq. (10)'s limaçon (H = 4, L = 50 mm) as 37
+    rows, offset by the 2 mm kerf; its expectations are this search's answer."""
+    scene = registry.find("cam-cutter/table-profile")
+    task, _ = scene.build()
+    px, py = task.path_point(np.linspace(task.t_start_rad, task.t_end_rad, 1500))
+    value, H, L = brute_force_minimax(px, py, task.bounds())[0]
+    exp = scene.spec.expect
+    assert H == pytest.approx(exp["H_mm"].value, abs=exp["H_mm"].abs)
+    assert L == pytest.approx(exp["L_mm"].value, abs=exp["L_mm"].abs)
+    assert value == pytest.approx(exp["max_deviation_mm"].value, abs=exp["max_deviation_mm"].abs)
+
+
 def test_the_placement_reading_matters_and_start_at_origin_is_taken():
     # "as_given": the centred ellipse is 50 mm from the origin, where every limaçon starts
     scene = registry.find("cam-cutter/other-profile")

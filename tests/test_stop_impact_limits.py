@@ -8,7 +8,7 @@ from mechopt.kit.result import Status
 
 
 def test_a_preload_past_the_stroke_is_refused_before_any_work():
-    with pytest.raises(SceneError, match=r"params\.preload_mm: preload_mm=100\.0: allowed < stroke_mm=35\.0295"):
+    with pytest.raises(SceneError, match=r"params\.preload_mm=100\.0: allowed < stroke_mm=35\.0295"):
         registry.run("stop-impact/rebound-177rpm", {"preload_mm": 100.0})
 
 

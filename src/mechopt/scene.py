@@ -694,7 +694,8 @@ def _build_task(path, task_class, effects, params, structure=None):
         return task_class(**{k: float(v) for k, v in params.items()}, **structure)
     except MechoptError as exc:
         table = "structure" if exc.key and path_head(exc.key) in structure else "params"
-        raise SceneError(f"{path}: {table}.{exc.key}: {exc}" if exc.key else f"{path}: {exc}", key=exc.key) from None
+        said = str(exc) if exc.key and str(exc).startswith(f"{exc.key}=") else f"{exc.key}: {exc}"   # the key once
+        raise SceneError(f"{path}: {table}.{said}" if exc.key else f"{path}: {exc}", key=exc.key) from None
     except OverflowError:                # an integer of hundreds of digits in a table: no float holds it
         where = _beyond_float(structure) or "structure"
         raise SceneError(f"{path}: {where}: a number beyond a float's range (at most 1.8e308)",
@@ -732,7 +733,7 @@ def _check_settings(path, solver, settings):
                              f"allowed: {', '.join(options) or 'none'}", key=key)
         problem = setting_problem(options[key], value)
         if problem:
-            raise SettingError(f"{path}: solver_settings.{key} = {value!r}: {problem}", key=key)
+            raise SettingError(f"{path}: solver_settings.{range_fault(key, value, problem)}", key=key)
     return {k: (float(v) if type(options[k].default) is float else v) for k, v in settings.items()}
 
 

@@ -44,7 +44,7 @@ def check_settings(solver, **values) -> None:
     for key, value in values.items():
         problem = setting_problem(options[key], value)
         if problem:
-            raise SettingError(f"{key}={value!r}: {problem}", key=key)
+            raise SettingError(range_fault(key, value, problem), key=key)
 
 
 def setting_problem(option: inspect.Parameter, value) -> str:
