@@ -9,10 +9,10 @@ import matplotlib
 import pytest
 
 from mechopt import registry, verdicts
-from mechopt.answers import shown
 from mechopt.cli import main
 from mechopt.figures import save_figure
 from mechopt.kit.errors import SceneError
+from mechopt.kit.result import shown
 from mechopt.report import write_report
 from mechopt.sweep import parse_grid, sweep
 from mechopt.units import unit_of

@@ -1,19 +1,8 @@
-"""A run's answers as the user reads them: `shown`, a number as every front end prints it (the
-command's tables, the report, a notebook), and the HTML of a run's status, warnings and values
-(name, value, unit, mark), in that order."""
+"""A run's answers as the user reads them: the HTML of a run's status, warnings and values (name,
+value, unit, mark), in that order, each number `shown` as every front end prints it."""
 from html import escape
 
-SIGNIFICANT = 6          # digits shown; the full value is the report cell's tooltip
-
-
-def shown(value) -> str:
-    """A value as the command line, the report and a notebook print it: a float to SIGNIFICANT
-    digits, None as "-", anything else as its text."""
-    if value is None:
-        return "-"
-    if isinstance(value, float):
-        return f"{value:.{SIGNIFICANT}g}"
-    return str(value)
+from mechopt.kit.result import shown
 
 
 def answers_html(run) -> str:

@@ -22,13 +22,12 @@ import warnings
 from pathlib import Path
 
 from mechopt import __version__, registry, verdicts
-from mechopt.answers import shown
 from mechopt.benchmarks import studies, study
 from mechopt.drivers import set_mostly_by, steps_of
 from mechopt.files import NotWritten, name_problem, output_problem, write_text_atomic
 from mechopt.kit import interrupt
 from mechopt.kit.errors import MechoptError, SceneError, SolverError
-from mechopt.kit.result import Status
+from mechopt.kit.result import Status, shown
 from mechopt.mechanisms import templates
 from mechopt.scene import parse_overrides
 

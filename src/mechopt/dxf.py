@@ -20,6 +20,7 @@ import numpy as np
 
 from mechopt.files import holds, make_folder, take_lock, write_bytes_atomic
 from mechopt.kit.errors import MechoptError, SceneError
+from mechopt.kit.registrar import by_solver
 
 INSUNITS_MM = 4                 # DXF $INSUNITS code of millimetres
 WHITE = 7                       # DXF colour index of a layer that names none (white on black, black on white)
@@ -45,20 +46,9 @@ class ShopCurve:
 SHOP_DRAWINGS: dict[Callable, Callable] = {}
 
 
-def shop_drawing(*solvers: Callable) -> Callable:
-    """Register a DXF writer, `writer(run) -> list[ShopCurve]`, for these solver functions (one
-    writer per solver), beside the mechanism's figures."""
-    if not solvers or not all(callable(s) for s in solvers):
-        raise MechoptError(f"@shop_drawing takes the solver functions whose results it draws, got {solvers!r}")
-
-    def wrap(writer):
-        for solver in solvers:
-            if solver in SHOP_DRAWINGS:
-                raise MechoptError(f"DXF writers for solver {solver.__module__}.{solver.__qualname__} registered "
-                                   f"twice: {SHOP_DRAWINGS[solver].__name__} and {writer.__name__}")
-            SHOP_DRAWINGS[solver] = writer
-        return writer
-    return wrap
+# `@shop_drawing(solver, ...)` registers a DXF writer, `writer(run) -> list[ShopCurve]`, for these
+# solver functions (one writer per solver), beside the mechanism's figures
+shop_drawing = by_solver(SHOP_DRAWINGS, "shop_drawing", "draws for the shop")
 
 
 def shop_curves(run) -> list[ShopCurve]:

@@ -16,11 +16,12 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 from mechopt import __version__, registry, verdicts
-from mechopt.answers import answers_html, shown
+from mechopt.answers import answers_html
 from mechopt.drivers import set_mostly_by, steps_of
 from mechopt.figures import plot_run
 from mechopt.figures.sweep import plot_sweep
 from mechopt.files import write_text_atomic
+from mechopt.kit.result import shown
 from mechopt.sweep import describe_axes, read_table, scene_hash
 from mechopt.units import unit_of
 

@@ -14,24 +14,14 @@ import importlib
 from collections.abc import Callable
 
 from mechopt.kit.errors import MechoptError
+from mechopt.kit.registrar import by_solver
 from mechopt.mechanisms import mechanisms
 
 FIGURES: dict[Callable, Callable] = {}
 
 
-def figure(*solvers: Callable) -> Callable:
-    """Register a figure function for these solver functions (one figure function per solver)."""
-    if not solvers or not all(callable(s) for s in solvers):
-        raise MechoptError(f"@figure takes the solver functions it draws, got {solvers!r}")
-
-    def wrap(draw):
-        for solver in solvers:
-            if solver in FIGURES:
-                raise MechoptError(f"figures for solver {_name(solver)} registered twice: "
-                                   f"{FIGURES[solver].__name__} and {draw.__name__}")
-            FIGURES[solver] = draw
-        return draw
-    return wrap
+figure = by_solver(FIGURES, "figure", "draws")
+figure.__doc__ = "Register a figure function for these solver functions (one figure function per solver)."
 
 
 def register(*task_classes):

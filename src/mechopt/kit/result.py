@@ -107,7 +107,6 @@ class Result:
 
     def _repr_html_(self) -> str:
         """A notebook's view: the status and a table of the values (printed as the command prints them)."""
-        from mechopt.answers import shown
         rows = "".join(f"<tr><td>{html.escape(k)}</td><td title='{v!r}'>{html.escape(shown(v))}</td></tr>"
                        for k, v in self.values.items())
         return (f"<p><b>{self.status.value}</b> {html.escape(self.message)}</p>"
@@ -144,6 +143,19 @@ class Clock:
     def result(self, status: Status, values: dict[str, float], *args, **kwargs) -> Result:
         """The Result of this solve, timed now; the other arguments are Result's own."""
         return Result(status, values, self.timing(), *args, **kwargs)
+
+
+SIGNIFICANT = 6          # digits shown; the full value is the report cell's tooltip
+
+
+def shown(value) -> str:
+    """A value as the command line, the report and a notebook print it: a float to SIGNIFICANT
+    digits, None as "-", anything else as its text."""
+    if value is None:
+        return "-"
+    if isinstance(value, float):
+        return f"{value:.{SIGNIFICANT}g}"
+    return str(value)
 
 
 _IPOPT = {
