@@ -73,6 +73,8 @@ _OP_KEYS = {"from", "to", "min_deg", "min_ms", "max_deg", "stress", "amplitude",
 # [...] }`): its columns and their kinds; event names are text ("3", "10.1", "feed.start")
 OPERATION_COLUMNS = {"from": str, "to": str, "name": str, "group": str, "mechanism": str, "min_deg": float,
                      "min_ms": float, "max_deg": float, "stress": str, "amplitude": str, "mark": str, "why": str}
+WINDOW_COLUMNS = {"from": str, "to": str, "max_deg": float} | {k: str for k in sorted(_NOTE_KEYS)}
+SYNC_COLUMNS = {"events": str} | {k: str for k in sorted(_NOTE_KEYS)}   # events "a;b;c": one sync per row
 _STRESS_KEYS = {"sigma_ref_MPa", "t_ref_deg"} | _NOTE_KEYS
 _WINDOW_KEYS = {"from", "to", "max_deg"} | _NOTE_KEYS
 _SYNC_KEYS = {"events"} | _NOTE_KEYS
@@ -151,7 +153,8 @@ class Cyclogram:
     `windows`), as a list or a CSV timing table (`CSV_TABLES`); `events` {name: {mechanism, group}},
     by default the events the operations name, grouped as the operations ending at them agree;
     `stress_models` {name: {sigma_ref_MPa, t_ref_deg}}; `windows` [{from, to, max_deg}]:
-    p(to) - p(from) <= max_deg; `syncs` [{events = [a, b, ...]}]: equal times;
+    p(to) - p(from) <= max_deg; `syncs` [{events = [a, b, ...]}]: equal times. Windows and syncs
+    too may come from a CSV of any length (columns from, to, max_deg; a sync's events "a;b;c").
     `limiting_op` [x, y]: maximise t(x, y) inside `cycle_deg` instead of minimising the span.
     Every entry may carry provenance notes: mark (given / assumed / calibrated), why, where, what.
 
@@ -193,7 +196,10 @@ class Cyclogram:
     }
 
     # structure tables a scene may read from a CSV file as rows of named, typed columns
-    CSV_TABLES: ClassVar[dict] = {"operations": (("from", "to"), OPERATION_COLUMNS)}
+    # tables a scene may read from a CSV beside it, any length (an inline list holds at most 100 rows)
+    CSV_TABLES: ClassVar[dict] = {"operations": (("from", "to"), OPERATION_COLUMNS),
+                                  "windows": (("from", "to", "max_deg"), WINDOW_COLUMNS),
+                                  "syncs": (("events",), SYNC_COLUMNS)}
 
     def __post_init__(self):
         check_fields(self)
@@ -201,6 +207,11 @@ class Cyclogram:
         _table(self.events, "events", dict)
         if not self.events:             # events named by the operations need no table of their own
             object.__setattr__(self, "events", _events_of(self.operations))
+        if isinstance(self.syncs, list) and any(isinstance(s, dict) and isinstance(s.get("events"), str)
+                                                for s in self.syncs):      # a CSV row names its events "a;b"
+            object.__setattr__(self, "syncs", [s | {"events": [e.strip() for e in s["events"].split(";")]}
+                                               if isinstance(s, dict) and isinstance(s.get("events"), str) else s
+                                               for s in self.syncs])
         if any(isinstance(op, dict) and "max_deg" in op for op in self.operations):
             operations, windows = _split_windows(self.operations)
             object.__setattr__(self, "operations", operations)

@@ -135,3 +135,49 @@ def test_graph_and_lp_agree_on_a_1000_event_table_read_from_csv(tmp_path):
     assert graph.status is Status.SOLVED and lp.status is Status.SOLVED
     assert graph.values["span_deg"] == pytest.approx(lp.values["span_deg"], rel=1e-9)
     assert graph.values["span_deg"] == pytest.approx(graph.values["longest_path_deg"], rel=1e-12)
+
+
+def _chain_scene(tmp_path, n, windows, syncs=None):
+    """A chain s.0 -> s.1 -> ... of 10 deg steps (text names), its windows (and syncs) in their own CSVs."""
+    ops = "from,to,min_deg\n" + "".join(f"s.{k},s.{k + 1},10\n" for k in range(n))
+    (tmp_path / "ops.csv").write_text(ops, encoding="utf-8")
+    (tmp_path / "win.csv").write_text("from,to,max_deg,why\n" + "".join(f"{a},{b},{w},spacing\n" for a, b, w in windows),
+                                      encoding="utf-8")
+    more = ""
+    if syncs is not None:
+        (tmp_path / "sync.csv").write_text("events\n" + "".join(f"{e}\n" for e in syncs), encoding="utf-8")
+        more = 'syncs = { csv = "sync.csv", columns = ["events"] }\n'
+    path = tmp_path / "m.toml"
+    path.write_text('id = "t/m"\ntitle = "t"\nsource = "test"\ntask = "loom.Cyclogram"\nsolver = "loom.plan_cyclogram"\n'
+                    '[params]\n[structure]\noperations = { csv = "ops.csv", columns = ["from", "to", "min_deg"] }\n'
+                    'windows = { csv = "win.csv", columns = ["from", "to", "max_deg"] }\n' + more, encoding="utf-8")
+    return path
+
+
+def test_windows_and_syncs_from_csv_take_text_names_past_the_inline_limit(tmp_path):
+    """150 windows (past the 100 of an inline list) of 25 deg over every two steps, none binding but one of
+    15 deg over s.3 -> s.5, which the steps cannot meet: INFEASIBLE, naming it; widened, the span is the
+    chain's 10 n. A sync row 's.2;s.3' (events separated by ';') ties two events 10 deg apart: INFEASIBLE too."""
+    n = 152
+    windows = [(f"s.{k}", f"s.{k + 2}", 25.0) for k in range(n - 1) if k != 3] + [("s.3", "s.5", 15.0)]
+    assert len(windows) > 100
+    task = load(_chain_scene(tmp_path, n, windows)).build()[0]
+    assert len(task.windows) == len(windows)
+    assert task.windows[-1] == {"from": "s.3", "to": "s.5", "max_deg": 15.0, "why": "spacing"}
+    r = plan_cyclogram(task)
+    assert r.status is Status.INFEASIBLE and "s.3" in r.message and "s.5" in r.message
+    windows[-1] = ("s.3", "s.5", 20.0)
+    r = plan_cyclogram(load(_chain_scene(tmp_path, n, windows)).build()[0])
+    assert r.status is Status.SOLVED and r.values["span_deg"] == pytest.approx(10.0 * n)
+    tied = load(_chain_scene(tmp_path, n, windows, syncs=["s.2;s.3"])).build()[0]
+    assert tied.syncs == [{"events": ["s.2", "s.3"]}]
+    assert plan_cyclogram(tied).status is Status.INFEASIBLE
+
+
+def test_ten_thousand_windows_from_csv(tmp_path):
+    n = 10_001
+    windows = [(f"s.{k}", f"s.{k + 2}", 20.0 + (k == 5000) * 5.0) for k in range(n - 1)]
+    task = load(_chain_scene(tmp_path, n, windows)).build()[0]
+    assert len(task.windows) == 10_000
+    r = plan_cyclogram(task, method="graph")
+    assert r.status is Status.SOLVED and r.values["span_deg"] == pytest.approx(10.0 * n)
