@@ -45,3 +45,13 @@ def test_the_lazy_solver_doors_give_the_same_functions_as_their_modules():
         assert all(callable(getattr(door, name)) for name in door.__all__)
     with pytest.raises(AttributeError, match="has no attribute 'no_such_solver'"):
         loom.no_such_solver                     # noqa: B018
+
+
+def test_a_graph_only_plan_imports_no_lp_modeller():
+    """`method = "graph"` with no LP certificate asked for (`check = False`) needs no cvxpy (seconds to
+    import, the cost a CLI run from a CSV waited for ahead of a 0.2 s solve)."""
+    code = ("from mechopt.registry import cases_dir\nfrom mechopt.scene import load\n"
+            "from mechopt.solvers.loom import plan_cyclogram\n"
+            "task = load(cases_dir() / 'loom' / 'group1.toml').build()[0]\n"
+            "assert plan_cyclogram(task, method='graph', check=False).success")
+    assert _imported_after(code) == []

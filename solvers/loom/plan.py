@@ -21,9 +21,8 @@ import dataclasses
 import functools
 import math
 from collections import deque
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
-import cvxpy as cp
 import networkx as nx
 import numpy as np
 
@@ -32,8 +31,10 @@ from mechopt.kit.errors import NAMED, ModelError, some_of
 from mechopt.kit.result import Clock, Result, Status, from_cvxpy
 from mechopt.kit.settings import Tolerance, check_settings
 from mechopt.models.loom import Cyclogram, amplitude_mm, stress_bound_deg, stress_MPa
-from mechopt.solvers.loom.event_time import EventTimeLP, build_event_time_lp
 from mechopt.solvers.loom.graph import BackArcs, Levels, PositiveCycle, a_path, tight_arcs
+
+if TYPE_CHECKING:      # the LP's modules (cvxpy: seconds to import) load only when the LP is asked for
+    from mechopt.solvers.loom.event_time import EventTimeLP
 
 SENSITIVITY_CONVENTION = ("sens_* = d(objective)/d(limit): change of the objective [deg] per unit increase "
                           "of the limit; negative means a looser limit shortens the span")
@@ -122,6 +123,7 @@ def one_sided_sensitivity(task, key, solve, at: Result) -> tuple[float, float] |
 
 def _plan_lp(task, *, stress_form, tol_deg, backend, warm_start) -> Result:
     """The event-time LP in cvxpy, checked against the longest-path certificate."""
+    from mechopt.solvers.loom.event_time import build_event_time_lp
     clock = Clock()
     net = Net(task, stress_form)
     def build():
@@ -143,6 +145,7 @@ def _plan_lp(task, *, stress_form, tol_deg, backend, warm_start) -> Result:
 def _solve_held_lp(task, net, lp, clock, fresh, *, stress_form, tol_deg, backend, warm_start) -> Result:
     """The cached event-time LP `lp` (held by this thread) solved for `task`: parameters set,
     solved, its answer checked and read."""
+    import cvxpy as cp
     set_parameters(lp, task, net)
     clock.built()
     try:
@@ -228,7 +231,7 @@ def _may_conflict(net) -> bool:
     return early[net.last] > task.cycle_deg
 
 
-def set_parameters(lp: EventTimeLP, task: Cyclogram, net) -> None:
+def set_parameters(lp: "EventTimeLP", task: Cyclogram, net) -> None:
     """Write the task's limits into the LP's Parameters (no recompilation)."""
     prm = lp.params
     prm["min_deg"].value = task.min_angles_deg()
