@@ -22,9 +22,6 @@ expression CVODES integrates (models/cam_follower.py `law_function`).
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import sparse
-from scipy.interpolate import BSpline
-from scipy.linalg import expm
 
 from mechopt.kit.errors import ModelError
 
@@ -83,6 +80,8 @@ class SplineBasis:
         (CSR: a row holds degree + 1 basis functions). The k-th derivative's basis is the degree
         p - k design matrix on the inner knots times the coefficients' scaled differences
         (de Boor), so no dense (points x coefficients) table is ever formed."""
+        from scipy import sparse
+        from scipy.interpolate import BSpline  # scipy's modules load where a spline law is used
         xi = np.clip(np.asarray(xi, float), 0.0, 1.0)
         t, p, fixed = self.knots, self.degree, self.continuity + 1
         count = t.size - p - 1
@@ -122,6 +121,7 @@ class SplineLaw:
         return f"{self.label} spline law (degree {self.degree}, {len(self.coefficients)} coefficients)"
 
     def _spline(self):
+        from scipy.interpolate import BSpline
         return BSpline(np.asarray(self.knots), np.asarray(self.coefficients), self.degree, extrapolate=False)
 
     def values(self, xi):
@@ -171,6 +171,7 @@ def step_matrices(lam, zeta: float, h: float):
     """(Phi, Ga, Gb) of the first-order hold: y_{k+1} = Phi y_k + Ga u_k + Gb (u_{k+1} - u_k) / h
     for y = (e, e'), y' = [[0, 1], [-lam^2, -2 zeta lam]] y + [0, -1] u, u linear over the step.
     `lam` may be an array: one stacked matrix exponential for all (shapes (..., 2, 2), (..., 2))."""
+    from scipy.linalg import expm
     lam = np.asarray(lam, float)
     M = np.zeros(lam.shape + (4, 4))
     M[..., 0, 1], M[..., 1, 0], M[..., 1, 1], M[..., 1, 2], M[..., 2, 3] = 1.0, -lam * lam, -2.0 * zeta * lam, -1.0, 1.0
