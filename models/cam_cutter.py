@@ -274,7 +274,7 @@ def _require(task, key, ok, what):
         raise ModelError(f"{key}={getattr(task, key)} {what}", key=key)
 
 
-# --- Kinetostatics of the linkage (paper 000, Sec. V, re-derived; issue 13) -------------------
+# --- Kinetostatics of the linkage (paper 000, Sec. V, re-derived) --------------------------
 #
 # Reading of Fig. 2 taken here (the figure is not in the text): a slotted-link ("wings" =
 # kulisa) mechanism. Frame pivots O = (0, 0) and O1 = (H/2, 0) (frame of eq. (7)); the crank O1P,
@@ -367,7 +367,7 @@ def linkage_energy(positions, velocities, task: LinkageLoads):
                                           + task.link_mass_kg * positions["C2"][1])
 
 
-# --- Readjustable tool (issue 13, Sec. 2): one frame distance H for a family of cams ---------
+# --- Readjustable tool: one frame distance H for a family of cams ---------
 
 FAMILY_MAX_MEMBERS = 400
 

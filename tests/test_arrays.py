@@ -1,4 +1,4 @@
-"""Every scene returns its arrays (issue 25, §3): what `--csv`, `figures()` and a notebook read,
+"""Every scene returns its arrays: what `--csv`, `figures()` and a notebook read,
 named with units, read-only, and consistent with the values they come with."""
 import numpy as np
 import pytest

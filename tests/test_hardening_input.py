@@ -1,4 +1,4 @@
-"""Issue 21, sections 2, 3 and 5 (the spine's part): a hostile or careless file cannot leak,
+"""Hostile or careless input, the spine's part: a hostile or careless file cannot leak,
 execute or exhaust, no request hangs, and legal input is read as meant. Each a clear exit-2 line
 naming the file and key, or the right answer."""
 import json
@@ -330,7 +330,7 @@ def test_threads_loading_scenes_at_once_see_no_false_loop(tmp_path, monkeypatch)
     assert errors == []
 
 
-# --- issue 35: no traceback from a link loop, a long chain of scenes, a deep expression, a solver's limit -----
+# --- no traceback from a link loop, a long chain of scenes, a deep expression, a solver's limit -----
 
 def test_a_scene_that_is_a_symlink_loop_is_one_clear_line(tmp_path, capsys):
     loop = tmp_path / "loop.toml"
@@ -376,7 +376,7 @@ def test_the_press_sensitivity_at_its_step_limit_is_a_status_not_a_traceback(mon
     assert "Traceback" not in r.message and "\n" not in r.message
 
 
-# --- issue 35: bounded messages and checks, tables read as meant, nothing of a foreign file echoed ------------
+# --- bounded messages and checks, tables read as meant, nothing of a foreign file echoed ------------
 
 def _chain(n, cycle_deg=10.0):
     from mechopt.models.loom import Cyclogram

@@ -1,4 +1,4 @@
-"""The press drive designed by optimisation (issue 16, Sec. 3): each optimum against another solver
+"""The press drive designed by optimisation: each optimum against another solver
 (steady_state's Newton shooting, press.events), closed forms written here, or re-solves; and the hard
 cases (stall, a rigid-belt limit, an empty constraint set, no cut)."""
 import dataclasses
@@ -188,7 +188,7 @@ def test_the_motor_designs_multipliers_are_the_slopes_of_re_solves():
 
 
 def test_a_designers_own_press_is_designed_at_the_default_settings():
-    """Issue 24: a designer's own press (press/own-press: crank radius 40 mm, a 5 mm blank, a 4 kW
+    """A designer's own press (press/own-press: crank radius 40 mm, a 5 mm blank, a 4 kW
     four-pole motor as the motor-catalogue row) is SOLVED at the default settings,
     and its least flywheel holds the limit exactly (steady_state, no NLP)."""
     task = load("press/own-press").build()[0]

@@ -411,7 +411,7 @@ def test_rk4_and_ivp_name_the_same_stall_in_the_cut():
 
 
 def test_events_refuses_a_belt_it_would_follow_for_minutes_before_any_work():
-    """Issue 21: belt_stiffness 1e12 under `events` took 94 s; the estimate (10 steps a period of the
+    """Formerly belt_stiffness 1e12 under `events` took 94 s; the estimate (10 steps a period of the
     264 kHz belt mode over 3 s: 7.9e6) refuses it at once, naming the key and the stiffest belt that fits."""
     task = dataclasses.replace(registry.find("press/start-up").build()[0], belt_stiffness_Nm_rad=1e12)
     start = time.perf_counter()
@@ -424,7 +424,7 @@ def test_events_refuses_a_belt_it_would_follow_for_minutes_before_any_work():
 
 @pytest.mark.parametrize("turns", [224, 257, 5000])
 def test_events_far_from_phi_zero_are_located_relative_to_the_angle(monkeypatch, turns):
-    """Issue 21: a minute of start-up reaches 1445 rad, where doubles are 2.3e-13 apart and an absolute
+    """A minute of start-up reaches 1445 rad, where doubles are 2.3e-13 apart and an absolute
     1e-12 rad was at times out of Newton's reach (LIMIT). From these turns (each a LIMIT under the old
     absolute rule, the first check below) the events are located relative to the angle."""
     iphi = PAPER.state_names.index("phi_rad")
@@ -452,7 +452,7 @@ def test_the_nominal_speed_under_a_motor_is_said_to_be_a_start_guess_only():
 
 
 def test_a_what_if_re_solves_on_the_structures_build_from_the_last_orbit():
-    """Issue 24: other numbers, same structure: no new build (equations, revolution), the orbit
+    """Other numbers, same structure: no new build (equations, revolution), the orbit
     warm-started from the last one by chord steps, and the same orbit as a cold solve."""
     from mechopt.kit.cache import clear
     from mechopt.models.press import equations

@@ -196,7 +196,7 @@ def test_each_scene_leads_with_its_status_values_and_warnings_then_its_figures(p
     section = _section(text, "press/flywheel-design")
     run = next(r for r in runs if r.scene.id == "press/flywheel-design")
     inertia = run.values["flywheel_inertia_kgm2"]
-    assert f"{inertia:.4g}" == "5.118"                                  # the least flywheel, as issue 25 read it
+    assert f"{inertia:.4g}" == "5.118"                                  # the least flywheel, to 4 figures
     row = f"<tr><td>flywheel_inertia_kgm2</td><td title='{inertia!r}'>5.118</td><td>kg m²</td><td>computed</td></tr>"
     assert row in section
     status, values, figure = (section.index(s) for s in ("class='status'", "class='values'", "<img "))

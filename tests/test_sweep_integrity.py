@@ -1,4 +1,4 @@
-"""Sweep output integrity (issue 12) and grid values as typed (issue 15): one writer per --out,
+"""Sweep output integrity and grid values as typed: one writer per --out,
 an atomic and repeatable merge, damaged parts named and recomputed, duplicated tables refused,
 requests counted before anything is allocated, Ctrl-C keeping the finished parts, and a scene from
 any file run the same in-process, on local processes and on a Dask cluster."""
@@ -310,7 +310,7 @@ def test_a_scene_from_any_file_runs_alike_everywhere(own_scene, tmp_path):
     assert sw.read_table(tmp_path / "d.parquet")[1]["scene_sha256"] == sw.scene_hash(own_scene)
 
 
-# --- 7. grid values as typed (issue 15) --------------------------------------------------------
+# --- 7. grid values as typed ---------------------------------------------------------------
 
 def test_grid_values_are_stored_as_typed():
     assert np.linspace(0.05, 0.1, 3)[1] == 0.07500000000000001       # what used to be stored

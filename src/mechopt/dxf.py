@@ -1,4 +1,4 @@
-"""Curves for the shop as DXF (issue 23, item 4): a solved scene's cam profile, pitch curve or
+"""Curves for the shop as DXF: a solved scene's cam profile, pitch curve or
 torch path as closed LWPOLYLINEs (open where a curve ends) on named layers, units mm, each from a point table whose
 chordal error is measured (`models/cam_shape.point_table`) and written into the drawing.
 
