@@ -122,7 +122,7 @@ def family_peer(cams=4, repeats=3, progress=None, *, de_count=200, de_repeats=1)
 
 
 def family_table(loads, family, peer):
-    """The issue-13 studies as fixed-width text: kinetostatics, family NLP, the DE peer."""
+    """The kinetostatics and family studies as fixed-width text: kinetostatics, family NLP, the DE peer."""
     lines = ["", "kinetostatics (scene joint-reactions) against the number of crank angles",
              f"{'angles':>8}{'wall med s':>12}{'max torque N m':>16}{'vs finest N m':>15}{'max reaction N':>16}  status",
              "  (the torque peaks at phi = 0, on every grid; the reaction grows as the grid nears the singular phi = pi)"]

@@ -197,7 +197,7 @@ def _cvxpy_windows(n, tails, heads, w, windows):
 
 
 def graph_targets(repeats=3, progress=None, big=1_000_000):
-    """The issue-22 rows: a random DAG of 10^5 events with windows, graph against cvxpy + HiGHS
+    """The graph method's rows: a random DAG of 10^5 events with windows, graph against cvxpy + HiGHS
     (the same run), and the graph alone on a layered network of `big` events."""
     rows = []
     tails, heads, w, windows = random_dag(100_000)
@@ -219,7 +219,7 @@ def graph_targets(repeats=3, progress=None, big=1_000_000):
 
 
 def graph_table(scale_rows, rows):
-    """The graph rows and the issue-22 verdicts: solve time (with floats, chain, duals) and its
+    """The graph rows and their verdicts against the targets: solve time (with floats, chain, duals) and its
     ratio to cvxpy + HiGHS (build + solve) in the same run."""
     lines = ["", f"{'graph method (issue 22)':<24}{'case':>12}{'events':>9}{'build s':>10}{'solve s':>10}"
              f"{'span deg':>16}"]

@@ -431,7 +431,7 @@ def test_minimax_for_plain_cardioid_is_2a_2a_at_every_size(a):
 
 
 def test_pure_cardioid_scene_at_one_micrometre_is_2a_not_the_step():
-    # the issue: --set a_mm=1e-3 came back SOLVED at H = L = 0.01 (the box clamped to step_mm)
+    # formerly --set a_mm=1e-3 came back SOLVED at H = L = 0.01 (the box clamped to step_mm)
     run = registry.run(registry.find("cam-cutter/pure-cardioid"), {"a_mm": 1e-3})
     assert run.result.status is Status.SOLVED
     assert (run.result.values["H_mm"], run.result.values["L_mm"]) == pytest.approx((2e-3, 2e-3), rel=1e-9)

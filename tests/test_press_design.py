@@ -192,7 +192,7 @@ def test_a_designers_own_press_is_designed_at_the_default_settings():
     result = design(task)
     assert result.status is Status.SOLVED, result.message
     # the first try can end at IPOPT's Acceptable_Level after other designs warmed the orbit caches
-    # (the INACCURATE); then the ladder's next step certifies it
+    # (an INACCURATE once reported as the answer); then the ladder's next step certifies it
     assert result.diagnostics["attempts"][0]["step"] == "rule_of_thumb"
     J = result.values["flywheel_inertia_kgm2"]
     assert _fluctuation(task.drive({"flywheel_inertia_kgm2": J})) == pytest.approx(task.max_speed_fluctuation, rel=1e-6)

@@ -130,7 +130,8 @@ def _run(argv, done):
 def test_a_readme_command_runs(argv, walk, monkeypatch, solved_once):
     folder, done = walk
     monkeypatch.chdir(folder)
-    _run(argv, done)
+    if argv not in done:            # else it ran, and passed, as an earlier test's need
+        _run(argv, done)
     if argv[0] == "bench":
         assert (folder / "out" / "bench" / "cam_cutter_work_precision.png").is_file()
 

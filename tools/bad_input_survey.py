@@ -67,7 +67,7 @@ points_mm = {points}
 
 @dataclass
 class Probe:
-    klass: str                      # the issue's section
+    klass: str                      # the hardening round's section
     name: str
     setup: object                   # f(folder) -> argv (after python), or (argv, check(folder) -> problem)
     codes: tuple = (2,)             # exit codes a user was promised
@@ -545,7 +545,7 @@ def sidecar_dev_zero(folder):
 
 def infeasible_chain(folder, operations=200_000):
     """A chain of 200,000 1-degree operations in a 10-degree cycle: INFEASIBLE, its conflict as
-    long (the issue's million printed 87 MB; 20,000 print 1.5 MB and write a 2 MB --json on main):
+    long (a million once printed 87 MB; 20,000 print 1.5 MB and write a 2 MB --json on main):
     what is printed and written must stay bounded."""
     with open(Path(folder) / "ops.csv", "w", encoding="utf-8") as f:
         f.write("from,to,min_deg\n")
