@@ -146,15 +146,18 @@ def solved_once(monkeypatch, solve_once_patches):
 
 
 # -- with pytest-xdist (`-n auto --dist loadgroup`, the README's test command) ---------------------
-# each file's tests stay on one worker (its module fixtures are built once); a test that names its own
-# group keeps it (the README's commands: each its own, or with the commands whose files it reads), and
-# the scenes' own checks (one test a scene, nothing built per file) go wherever a worker is free. The
-# scenes they solve are shared by all workers (`solved_once` above).
-SPREAD = {"test_scene_reproduces_its_expectations"}
+# the tests of a file that builds a module fixture stay on one worker (the fixture is built once);
+# a test that names its own group keeps it (the README's commands: each with the commands whose files
+# it reads); any other test goes wherever a worker is free. The package's scenes are solved once for
+# all workers (`solved_once` above), so no group needs to hold every test that solves them.
+def _builds_a_module_fixture(item):
+    defs = getattr(item, "_fixtureinfo", None)
+    return defs is None or any(d.scope in ("module", "class", "package")
+                               for chain in defs.name2fixturedefs.values() for d in chain)
 
 
 @pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(items):
     for item in items:
-        if item.get_closest_marker("xdist_group") is None and item.originalname not in SPREAD:
+        if item.get_closest_marker("xdist_group") is None and _builds_a_module_fixture(item):
             item.add_marker(pytest.mark.xdist_group(item.path.name))
