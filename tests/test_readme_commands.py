@@ -142,8 +142,8 @@ def test_the_walk_covers_every_command_and_keeps_its_needs():
     assert all(new in needs(a, COMMANDS) for a in COMMANDS if a != new and any("my-scenes" in p for p in a))
     report = next(a for a in COMMANDS if a[0] == "report" and "--bench" in a)
     assert [c[0] for c in needs(report, COMMANDS)] == ["bench", "sweep"]
-    assert _group(report, COMMANDS) == _group(needs(report, COMMANDS)[1], COMMANDS)
-    assert len({_group(a, COMMANDS) for a in COMMANDS}) == len(COMMANDS) - 6     # 4 after new, 2 before a report
+    assert all(_group(n, COMMANDS) == _group(a, COMMANDS) for a in COMMANDS for n in needs(a, COMMANDS))
+    assert len({_group(a, COMMANDS) for a in COMMANDS}) > len(COMMANDS) / 2      # the rest spread
 
 
 def test_the_validation_counts_are_stated_once_over():
