@@ -60,6 +60,13 @@ class _Shared:
             return value
 
 
+def _read_only(run):
+    """A Run as the solver gave it: its arrays read-only again (pickle gives them back writable)."""
+    for array in run.result.arrays.values():
+        array.flags.writeable = False
+    return run
+
+
 def _without_drivers(run):
     diagnostics = {k: v for k, v in run.result.diagnostics.items() if k != "drivers"}
     return dataclasses.replace(run, result=dataclasses.replace(run.result, diagnostics=diagnostics))
@@ -86,7 +93,7 @@ def _remembered_run(real, shared):
             if kept is None and not drivers and (key[0], key[1], True) in _SOLVED:
                 kept = _without_drivers(_SOLVED[key[0], key[1], True])
             elif kept is None:      # (a lock a key: the drivers' run takes the plain one's inside its own)
-                kept = shared.get(("run", *key), lambda: solve(scene, drivers))
+                kept = _read_only(shared.get(("run", *key), lambda: solve(scene, drivers)))
             else:
                 kept = real(scene, overrides, drivers=drivers)
             _SOLVED[key] = kept
