@@ -16,13 +16,13 @@ compares methods fairly. The methods, all on the paper's task (`PAPER_TASK`):
 Timings are measured here and only here; tests never assert them (they depend on the machine
 and its load). `grid_box_timing` measures the headline numbers against their targets.
 
-Issue 13 adds two studies: `kinetostatics_rows` (joint loads of the paper's linkage against the
+Two more studies: `kinetostatics_rows` (joint loads of the paper's linkage against the
 number of crank angles; the largest driving torque beside the finest grid's) and `family_rows`
 (the readjustable tool's family NLP against the number of cams, the target 20 cams < 1 s), with
 its peer `family_peer`: scipy's differential evolution on the same family objective, stopped
 when its node objective reaches the NLP's worst deviation, both answers verified densely.
 
-Issue 20 adds `global_rows`: what the global minimax costs against the local NLP in the same
+And `global_rows`: what the global minimax costs against the local NLP in the same
 run, on the paper's cardioid and on the ellipse of `other-profile`: local = one start, no
 certificate (``starts=0, certify="off"``); global = the multistart (a cam of any shape) and the
 Lipschitz certificate (``certify="on"``); the ratio of their medians, the bands and the gap.
@@ -122,7 +122,7 @@ def family_peer(cams=4, repeats=3, progress=None, *, de_count=200, de_repeats=1)
 
 
 def family_table(loads, family, peer):
-    """The issue-13 studies as fixed-width text: kinetostatics, family NLP, the DE peer."""
+    """The kinetostatics and family studies as fixed-width text: kinetostatics, family NLP, the DE peer."""
     lines = ["", "kinetostatics (scene joint-reactions) against the number of crank angles",
              f"{'angles':>8}{'wall med s':>12}{'max torque N m':>16}{'vs finest N m':>15}{'max reaction N':>16}  status",
              "  (the torque peaks at phi = 0, on every grid; the reaction grows as the grid nears the singular phi = pi)"]

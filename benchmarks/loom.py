@@ -15,7 +15,7 @@ with the networkx floor (agreement to 1e-6 deg is required).
 The machine-speed study (`machine_speed`) times `max_machine_speed` on a machine of 10 groups of
 100 events (random layered networks run side by side inside one cycle, contact-stress laws on a
 tenth of their arcs, the lever's rebound on one arc each, a timed flight), the graph method
-(issue 22: Newton on the positive cycles) against the LP in (p, n) in the same run. With the
+(Newton on the positive cycles) against the LP in (p, n) in the same run. With the
 scenes' chain lever (loom/machine-speed's): fresh (caches cleared: the chain's walk for its exact
 bound included, the same for both methods) and re-solved (walk, levels and compiled LP kept).
 With the earlier fitted lever (a proportional to n / t, closed form; tests/stop_impact_fitted.py):
@@ -53,10 +53,10 @@ WARM_MAX_EVENTS = 10_000          # at 10^5 one warm-started HiGHS re-solve took
 TARGETS = {"cvxpy_highs_1e5_s": 1.5, "cvxpy_over_networkx_1e5": 2.0,
            "group1_fresh_over_resolve": 5.0,     # LP only: build + compile + solve against a DPP re-solve
            "machine_speed_10x100_s": 1.0,        # max_machine_speed, fresh (LP built, compiled and solved)
-           # issue 22 item 4: the graph's speed, walk held (chain) or no walk (fitted), its speed the LP's
-           "what_if_graph_s": 2e-4,               # issue 22 item 5: one limit moved on loom/group1, graph pass + certificate
+           # the graph's speed, walk held (chain) or no walk (fitted), its speed the LP's
+           "what_if_graph_s": 2e-4,               # a what-if: one limit moved on loom/group1, graph pass + certificate
            "machine_speed_graph_s": 0.05, "lp_over_graph_speed": 1.0, "graph_lp_speed_rel": 1e-9,
-           # issue 22: the graph solve with floats, critical chain and duals; against cvxpy + HiGHS in the same run
+           # the graph solve with floats, critical chain and duals; against cvxpy + HiGHS in the same run
            "graph_solve_1e5_s": 0.02, "cvxpy_over_graph": 50.0, "graph_solve_1e6_s": 0.3}
 QUICK_SIZES = (1_000, 10_000)
 
@@ -197,7 +197,7 @@ def _cvxpy_windows(n, tails, heads, w, windows):
 
 
 def graph_targets(repeats=3, progress=None, big=1_000_000):
-    """The issue-22 rows: a random DAG of 10^5 events with windows, graph against cvxpy + HiGHS
+    """The graph method's rows: a random DAG of 10^5 events with windows, graph against cvxpy + HiGHS
     (the same run), and the graph alone on a layered network of `big` events."""
     rows = []
     tails, heads, w, windows = random_dag(100_000)
@@ -219,7 +219,7 @@ def graph_targets(repeats=3, progress=None, big=1_000_000):
 
 
 def graph_table(scale_rows, rows):
-    """The graph rows and the issue-22 verdicts: solve time (with floats, chain, duals) and its
+    """The graph rows and their verdicts against the targets: solve time (with floats, chain, duals) and its
     ratio to cvxpy + HiGHS (build + solve) in the same run."""
     lines = ["", f"{'graph method (issue 22)':<24}{'case':>12}{'events':>9}{'build s':>10}{'solve s':>10}"
              f"{'span deg':>16}"]
@@ -334,7 +334,7 @@ def what_if(repeats=5, progress=None, warm_max=WARM_MAX_EVENTS):
 
 
 def sigma_what_if(task, fresh_lp_s, repeats):
-    """Issue 22, item 5 on loom/group1: [sigma_H] moved, the stress rows' bounds recomputed as a
+    """A what-if on loom/group1: [sigma_H] moved, the stress rows' bounds recomputed as a
     vector and the span re-solved by a fresh graph pass certified by LP duality (`HeldSpan.solve`:
     the times feasible, a tight chain of the same value), and the held HiGHS model re-solved and
     certified by a pass; against the fresh LP build + solve (`fresh_lp_s`)."""
@@ -535,11 +535,11 @@ def plot(rows, out_dir):
     return [str(save_figure(fig, out / "loom_scale.png"))]
 
 
-CSV_MACHINE_RATIO = 30.0        # issue 22, done-when: graph >= 30x faster than the LP on a 10^5-event CSV scene
+CSV_MACHINE_RATIO = 30.0        # the target: graph >= 30x faster than the LP on a 10^5-event CSV scene
 
 
 def csv_machine(n=100_000, repeats=3, progress=None):
-    """Issue 22's done-when: a generated scene of `n` events (`layered`, four groups) read from a
+    """The large-scene target: a generated scene of `n` events (`layered`, four groups) read from a
     CSV timing table beside it, solved by plan_cyclogram with method "graph" and "lp" (each its
     problem's build and solve from the same task; medians, the LP once at 10^5: ~15 s) to the
     same span. The scene's read (CSV and network checks), common to both, is timed apart."""

@@ -16,7 +16,7 @@ build cached (a first warm-up call builds it). Methods:
 extrapolates along its measured first-order line (said so in the table). Timings live here
 only; tests never assert them.
 
-The design problem (issue 16, Sec. 3; `design_rows`): `press.design` (the shooting NLP, IPOPT with
+The design problem (`design_rows`): `press.design` (the shooting NLP, IPOPT with
 exact first derivatives) against a derivative-free peer, scipy's Nelder-Mead over the same
 simulation (a `steady_state` periodic solve per evaluation, the limits as an exact penalty), each
 to its own tolerance; the peer's objective is compared with the NLP's. Targets: the NLP >= 20x
@@ -268,7 +268,7 @@ def design_table(rows):
 def cli(repeats, out_dir, progress=None) -> str:
     """What `mechopt bench press` prints: the work-precision table, the targets, the plot, the
     design problem against its derivative-free peer (NLP: median of max(repeats, 3); peer: one run),
-    and issue 24's what-if, sweep, walk and catalogue figures (alone, about two minutes:
+    and the what-if, sweep, walk and catalogue figures (alone, about two minutes:
     `whatif_table(whatif_rows(), sweep_rows(), walk(), catalogue_rows())`)."""
     whatif = whatif_table(whatif_rows(max(repeats, 7)), sweep_rows(), walk(), catalogue_rows())
     rows = run(repeats=repeats, progress=progress)
@@ -278,7 +278,7 @@ def cli(repeats, out_dir, progress=None) -> str:
                       *(f"plot: {p}" for p in paths)])
 
 
-# --- issue 24: what-ifs that re-solve on the structure's build ------------------------------------
+# --- what-ifs that re-solve on the structure's build ------------------------------------
 
 WHATIF = {"belt_stiffness_Nm_rad": 6e4}
 WHATIF_FAR = {"flywheel_inertia_kgm2": 7.5}     # 50 % off the last orbit: the Broyden steps' case
@@ -319,7 +319,7 @@ def whatif_rows(repeats=7):
 
 def sweep_rows(variants=1000, baseline_variants=40):
     """Throughput of a sweep of `variants` of one structure (flywheel inertia x belt stiffness, the
-    order a grid takes) against the same variants solved the way every variant was before issue 24:
+    order a grid takes) against the same variants solved the way every variant was before builds were held:
     every build made afresh and the orbit found from the cold guess (caches cleared per variant; a
     `baseline_variants` prefix of the grid). Variants per second, and the statuses seen."""
     side = int(round(np.sqrt(variants)))

@@ -179,7 +179,7 @@ def cli(repeats, out_dir, progress=None, quick=False) -> str:
                       *(f"plot: {p}" for p in plot(rows, cam, out_dir))])
 
 
-# ---------------------------------------------------------------- issue 23: law synthesis
+# ---------------------------------------------------------------- law synthesis
 
 SYNTH_COEFFICIENTS = (100, 300, 1000)
 DE_SECONDS = 60.0                       # differential evolution's budget (it does not reach the LP's optimum)
@@ -232,11 +232,11 @@ def synthesis_rows(repeats=3, progress=None, quick=False):
     return rows
 
 
-DE_OVER_LP_TARGET = 50.0                # issue 23: the LP at least 50x faster than the derivative-free peer
+DE_OVER_LP_TARGET = 50.0                # the target: the LP at least 50x faster than the derivative-free peer
 
 
 def synthesis_table(rows):
-    """The rows, and issue 23's verdict: differential evolution's time over the LP's at the same
+    """The rows, and the target's verdict: differential evolution's time over the LP's at the same
     coefficients, in the same run (a peer stopped by its budget before the LP's optimum makes the
     ratio a lower bound: said)."""
     base = rows[0]

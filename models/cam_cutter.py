@@ -267,7 +267,7 @@ def _fill_scaled_default(task, key):
         object.__setattr__(task, key, scaled_default(key, task.a_mm))     # frozen: set once, here
 
 
-# --- Kinetostatics of the linkage (paper 000, Sec. V, re-derived; issue 13) -------------------
+# --- Kinetostatics of the linkage (paper 000, Sec. V, re-derived) --------------------------
 #
 # Reading of Fig. 2 taken here (the figure is not in the text): a slotted-link ("wings" =
 # kulisa) mechanism. Frame pivots O = (0, 0) and O1 = (H/2, 0) (frame of eq. (7)); the crank O1P,
@@ -346,7 +346,7 @@ def linkage_energy(positions, velocities, task: LinkageLoads):
                                           + task.link_mass_kg * positions["C2"][1])
 
 
-# --- Readjustable tool (issue 13, Sec. 2): one frame distance H for a family of cams ---------
+# --- Readjustable tool: one frame distance H for a family of cams ---------
 
 FAMILY_MAX_MEMBERS = 400
 

@@ -1,5 +1,5 @@
 """A cam motion law as a spline in the rise's fraction xi, and the elastic follower's response to
-it as a linear map of the spline's coefficients (issue 23; Demeulenaere et al., ASME J. Mech.
+it as a linear map of the spline's coefficients (Demeulenaere et al., ASME J. Mech.
 Des. 131(10) 101004, 2009: a law linear in its coefficients makes the follower's response at a
 fixed speed linear in them too).
 

@@ -1,4 +1,4 @@
-"""Ideal torch paths of any shape (issue 13, Sec. 2): a parametric curve or a table of points,
+"""Ideal torch paths of any shape: a parametric curve or a table of points,
 offset by the kerf h, placed in the linkage's frame.
 
 * `parse_expression`: x(t), y(t) as text, parsed SAFELY by walking Python's `ast` with a

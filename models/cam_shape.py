@@ -1,4 +1,4 @@
-"""The cam itself, for the shop (issue 23, item 4): pitch curve, profile flanks, pressure angle,
+"""The cam itself, for the shop: pitch curve, profile flanks, pressure angle,
 radius of curvature and undercut of a disc cam with a roller follower, from ANY motion law.
 
 A law is a callable ``law(xi) -> (S, S', S'')`` over the rise's fraction xi in [0, 1] (S(0) = 0,

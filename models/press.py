@@ -30,7 +30,7 @@ Readings the paper leaves open (each pinned by a test):
   s = 1 - omega_motor / omega_sync: it holds from standstill (s = 1, start-up) to idle (s = 0),
   where a linear characteristic overstates the starting torque several times.
 
-The design question (issue 16, Sec. 3) is its own task, `PressDesign`: the same press with some of
+The design question is its own task, `PressDesign`: the same press with some of
 its drive (`DESIGN_VARIABLES`: flywheel inertia, gear ratio, belt stiffness, a motor scale) left to
 an optimiser within bounds, an objective (`OBJECTIVES`) and limits.
 
@@ -688,7 +688,7 @@ def equations(key: tuple[tuple[str, ...], str]) -> Equations:
     return Equations(rhs, switched, out, names)
 
 
-# --- the design question: which drive, by optimisation (issue 16, Sec. 3) ------------------------
+# --- the design question: which drive, by optimisation ----------------------------------------
 
 OBJECTIVES = {
     "least_flywheel_inertia": "the smallest flywheel inertia J [kg m2]",
@@ -773,7 +773,7 @@ class PressDesign(PressDrive):
     def start(self, rule_of_thumb: bool = True) -> dict[str, float]:
         """The starting design, clipped into the bounds: the press's own values (motor_scale 1), but
         with a speed-fluctuation limit and the flywheel free (and `rule_of_thumb`), the flywheel of
-        `rule_of_thumb_flywheel_kgm2` for that limit (issue 24: a press far from the scene's flywheel
+        `rule_of_thumb_flywheel_kgm2` for that limit (so that a press far from the scene's flywheel
         starts near its answer)."""
         flywheel = self.flywheel_inertia_kgm2
         free = "flywheel_inertia_kgm2" in self.variables
@@ -790,7 +790,7 @@ class PressDesign(PressDrive):
 
 
 def single_stroke_margin_J(task: PressDrive, flywheel_inertia_kgm2, omega_start_rad_s, speed_drop, m=np):
-    """Single-stroke reading (issue 16): the motor at rest gives no torque (and the slack belt none),
+    """Single-stroke reading: the motor at rest gives no torque (and the slack belt none),
     so the crank shaft alone, entering the cut at omega_start, must carry the cut's work, the friction
     and the weights to the cut's end and still turn at (1 - speed_drop) omega_start there. Energy
     balance from cut start a to cut end b (exact: no integration):

@@ -1,4 +1,4 @@
-"""Every scene returns its arrays (issue 25, §3): what `--csv`, `figures()` and a notebook read,
+"""Every scene returns its arrays: what `--csv`, `figures()` and a notebook read,
 named with units, read-only, and consistent with the values they come with."""
 import numpy as np
 import pytest
@@ -24,7 +24,7 @@ def _ids():
 
 
 @pytest.mark.parametrize("scene_id", _ids())
-def test_every_scene_returns_named_read_only_arrays_or_says_why_not(scene_id):
+def test_every_scene_returns_named_read_only_arrays_or_says_why_not(scene_id, solved_once):
     arrays = mechopt.solve(scene_id).arrays
     if scene_id in WITHOUT_ARRAYS:
         assert not arrays, f"{scene_id} now returns arrays: strike it from WITHOUT_ARRAYS"

@@ -1,4 +1,4 @@
-"""The readjustable tool (issue 13, Sec. 2): one H for a family of cams, L per cam, against a
+"""The readjustable tool: one H for a family of cams, L per cam, against a
 nested scalar minimisation that shares nothing with the family NLP but the dense distance."""
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""Are the cam-cutter answers global (issue 20, Sec. 3)? The certificate's bound against brute
+"""Are the cam-cutter answers global? The certificate's bound against brute
 force, and each solver's answer against a brute-force search of its own question."""
 import numpy as np
 import pytest

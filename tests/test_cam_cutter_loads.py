@@ -1,4 +1,4 @@
-"""Kinetostatics of the torch-guiding linkage (paper 000, Sec. V re-derived, issue 13 part 1)."""
+"""Kinetostatics of the torch-guiding linkage (paper 000, Sec. V re-derived)."""
 import dataclasses
 
 import numpy as np

@@ -1,4 +1,4 @@
-"""Cams of any shape (issue 13, Sec. 2): the safe curve parser, the point table, the kerf offset,
+"""Cams of any shape: the safe curve parser, the point table, the kerf offset,
 the cusp, and the minimax on a general curve against independent computations."""
 import dataclasses
 import shutil

@@ -431,7 +431,7 @@ def test_minimax_for_plain_cardioid_is_2a_2a_at_every_size(a):
 
 
 def test_pure_cardioid_scene_at_one_micrometre_is_2a_not_the_step():
-    # the issue: --set a_mm=1e-3 came back SOLVED at H = L = 0.01 (the box clamped to step_mm)
+    # formerly --set a_mm=1e-3 came back SOLVED at H = L = 0.01 (the box clamped to step_mm)
     run = registry.run(registry.find("cam-cutter/pure-cardioid"), {"a_mm": 1e-3})
     assert run.result.status is Status.SOLVED
     assert (run.result.values["H_mm"], run.result.values["L_mm"]) == pytest.approx((2e-3, 2e-3), rel=1e-9)
@@ -753,7 +753,7 @@ def test_no_cam_cutter_solver_imports_another_modules_private_name():
 
 @pytest.mark.parametrize("width", [75.0, 100.0])
 def test_a_band_wider_than_the_limacon_passes_every_linkage_it_holds(width):
-    # issue 21: at 100 mm every segment spans the limaçon, crossed twice; the one-end-in test
+    # formerly, at 100 mm every segment spans the limaçon, crossed twice; the one-end-in test
     # alone failed every point (INFEASIBLE "best achievable 0.06084 mm") where 75 mm passed all
     run = registry.run("cam-cutter/paper-grid", {"err_width_mm": width, "H_max_mm": 56.0, "L_max_mm": 46.0, "count": 50})
     assert run.status is Status.SOLVED and run.values["n_passing"] == 101 * 101

@@ -1,4 +1,4 @@
-"""The cam for the shop (issue 23, item 4; models/cam_shape.py): the pitch curve's radius of
+"""The cam for the shop (models/cam_shape.py): the pitch curve's radius of
 curvature and pressure angle against hand formulas and an independent polygon computation, the
 undercut named with its angle, the point table's chordal error, a tabulated law plugging in."""
 import math
@@ -234,7 +234,7 @@ def test_the_cam_is_drawn_with_its_curvature_and_an_undercut_one_without_a_profi
 
 
 def test_a_synthesised_laws_cam_is_checked_like_a_library_laws():
-    """The shop's path for a synthesised law (issue 23): the spline law of `synthesise_law` shapes
+    """The shop's path for a synthesised law: the spline law of `synthesise_law` shapes
     the lift cam through `shape_cam`, and its least radii and largest pressure angle agree with the
     independent polygon computation on the same law's S alone. The radii to 1e-3: a cubic's S'''
     jumps at its knots, so the radius has a corner there (the least convex one sits on a knot at

@@ -1,4 +1,4 @@
-"""Issue 23, item 3: the machine's speed co-designed with the lift cam's synthesised law."""
+"""The machine's speed co-designed with the lift cam's synthesised law."""
 import dataclasses
 
 import pytest

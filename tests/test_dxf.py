@@ -1,4 +1,4 @@
-"""The cam and the torch path to the shop (issue 23, item 4): `mechopt run SCENE --dxf DIR`
+"""The cam and the torch path to the shop: `mechopt run SCENE --dxf DIR`
 writes closed polylines on named layers in mm that, re-read by ezdxf, match the model's curve
 within the stated chordal error; one writer at a time, never a partial file, and a scene with
 nothing to export says so."""

@@ -1,4 +1,4 @@
-"""Issue 21, section 1: a sweep touches no file outside the outputs named (a symbolic link at its
+"""A sweep touches no file outside the outputs named (a symbolic link at its
 lock or parts folder is refused, never followed; it removes only what it wrote), its lock holds
 when deleted under it, figures are written atomically, a full disk or a read-only target is one
 clear line, and the package imports where `fcntl` does not exist."""
@@ -137,7 +137,7 @@ def test_a_read_only_output_folder_is_refused_before_the_work(tmp_path, monkeypa
     assert "is not writable" in capsys.readouterr().err
 
 
-# --- Issue 35: temporary names, foreign files, bounded reads, output paths, `new`, ids ----------
+# --- Temporary names, foreign files, bounded reads, output paths, `new`, ids ----------
 
 CARDIOID = "cam-cutter/pure-cardioid"          # solves in well under a second; draws, exports DXF
 

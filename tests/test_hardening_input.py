@@ -1,4 +1,4 @@
-"""Issue 21, sections 2, 3 and 5 (the spine's part): a hostile or careless file cannot leak,
+"""Hostile or careless input, the spine's part: a hostile or careless file cannot leak,
 execute or exhaust, no request hangs, and legal input is read as meant. Each a clear exit-2 line
 naming the file and key, or the right answer."""
 import json
@@ -75,15 +75,21 @@ def test_a_device_as_a_reference_is_refused_at_once(tmp_path, reference):
         load(path)
 
 
-def test_a_fifo_as_a_scene_or_table_is_refused_without_blocking(tmp_path):
+def test_a_fifo_as_a_scene_or_table_is_refused_without_blocking(tmp_path, monkeypatch):
     fifo = tmp_path / "p.csv"
     os.mkfifo(fifo)
-    start = time.monotonic()
+    opened, real_open = [], os.open
+
+    def spy(path, flags, *args, **kwargs):       # a FIFO opened without O_NONBLOCK waits for a writer for ever
+        if Path(path) == fifo:
+            opened.append(flags)
+        return real_open(path, flags, *args, **kwargs)
+    monkeypatch.setattr(os, "open", spy)
     with pytest.raises(SceneError, match=r"p.csv: a FIFO, not a scene file"):
         load(fifo)
     with pytest.raises(SceneError, match=r"p.csv: a FIFO, not a point table"):
         load(_scene(tmp_path, CSV.format(fifo)))
-    assert time.monotonic() - start < 5
+    assert opened and all(flags & os.O_NONBLOCK for flags in opened)
 
 
 def test_a_file_growing_past_its_limit_is_refused_by_the_bytes_read(tmp_path, monkeypatch):
@@ -225,13 +231,17 @@ def test_a_list_of_500_speeds_is_refused_before_any_work():
         registry.run("stop-impact/rebound-177rpm", {"speeds_rpm": [177] * 500})
 
 
-def test_a_scheduler_address_where_a_silent_server_answers_is_refused_within_the_timeout():
+def test_a_scheduler_address_where_a_silent_server_answers_is_refused_within_the_timeout(monkeypatch):
+    import distributed
+
+    def client(*args, **kwargs):                 # its handshake with a silent server is what would hang
+        raise AssertionError("a Dask client was made for a silent server")
+    monkeypatch.setattr(distributed, "Client", client)
     server = socket.socket()
     server.bind(("127.0.0.1", 0))
     server.listen(4)
     held = []
     threading.Thread(target=lambda: held.append(server.accept()), daemon=True).start()
-    start = time.monotonic()
     try:
         with pytest.raises(SceneError, match=r"a server answers there but said nothing within 0.5 s: not a Dask"):
             sw._connect(f"tcp://127.0.0.1:{server.getsockname()[1]}", 0.5)
@@ -239,7 +249,6 @@ def test_a_scheduler_address_where_a_silent_server_answers_is_refused_within_the
         server.close()
         for conn, _ in held:
             conn.close()
-    assert time.monotonic() - start < 3
 
 
 # --- section 5: legal input read as meant ---------------------------------------------------------
@@ -330,7 +339,7 @@ def test_threads_loading_scenes_at_once_see_no_false_loop(tmp_path, monkeypatch)
     assert errors == []
 
 
-# --- issue 35: no traceback from a link loop, a long chain of scenes, a deep expression, a solver's limit -----
+# --- no traceback from a link loop, a long chain of scenes, a deep expression, a solver's limit -----
 
 def test_a_scene_that_is_a_symlink_loop_is_one_clear_line(tmp_path, capsys):
     loop = tmp_path / "loop.toml"
@@ -376,7 +385,7 @@ def test_the_press_sensitivity_at_its_step_limit_is_a_status_not_a_traceback(mon
     assert "Traceback" not in r.message and "\n" not in r.message
 
 
-# --- issue 35: bounded messages and checks, tables read as meant, nothing of a foreign file echoed ------------
+# --- bounded messages and checks, tables read as meant, nothing of a foreign file echoed ------------
 
 def _chain(n, cycle_deg=10.0):
     from mechopt.models.loom import Cyclogram

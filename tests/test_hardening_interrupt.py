@@ -1,4 +1,4 @@
-"""Issue 21, section 4: Ctrl-C is honoured everywhere, also when a back end (CasADi's IPOPT,
+"""Ctrl-C is honoured everywhere, also when a back end (CasADi's IPOPT,
 CVODES, rootfinder) swallows the KeyboardInterrupt and returns a failed or inaccurate solve; the
 interrupted variant is never stored; the command exits 130, also during interpreter exit."""
 import dataclasses

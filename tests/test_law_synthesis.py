@@ -1,4 +1,4 @@
-"""Issue 23, items 1-2: the lift cam's law synthesised as a spline under the rebound limit, and
+"""The lift cam's law synthesised as a spline under the rebound limit, and
 checked by the chain (CVODES rise, eq. (2)) that did not design it."""
 import dataclasses
 

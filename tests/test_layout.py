@@ -140,7 +140,7 @@ def test_no_figure_calls_a_solver():
     assert bad == []
 
 
-# One table of mechanisms (issue 24, item 4): a fifth mechanism is one row plus its own files.
+# One table of mechanisms: a fifth mechanism is one row plus its own files.
 
 SHARED_MODELS = {"__init__", "effects", "provenance", "validity"}          # of every mechanism
 SPINE_FIGURES = {"__init__", "registry", "files", "sweep", "text"}    # the registry, saving, sweep maps, user text

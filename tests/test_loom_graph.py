@@ -1,4 +1,4 @@
-"""The graph method of plan_cyclogram (issue 22) certified by the LP: 10^4 random networks with
+"""The graph method of plan_cyclogram certified by the LP: 10^4 random networks with
 windows and syncs solved at once (block-diagonal), hard cases, and the two methods side by side."""
 import dataclasses
 
@@ -146,7 +146,7 @@ def test_a_timing_table_past_ten_thousand_operations_reports_arrays_and_agrees_w
     assert all(a["float_deg"][k] <= 1e-6 for k, op in enumerate(a["operation"]) if op in crit)
 
 
-# ---------------------------------------------------------------- hard cases (issue 22)
+# ---------------------------------------------------------------- hard cases
 
 def test_zero_length_operations_and_a_sync_ring():
     task = net([(1, 2, 0), (2, 3, 0), (1, 3, 0), (3, 4, 5)], syncs=[{"events": ["1", "2", "3"]}])
@@ -183,7 +183,7 @@ def test_a_time_based_operation_as_the_speed_goes_to_zero():
 
 @pytest.mark.parametrize("setting", [{"scan_step_deg": 0.001}, {"scan_to_deg": 360.0}])
 def test_a_rebound_walk_too_long_is_refused_before_it_starts(setting):
-    # issue 21: scan_step_deg = 0.001 ran for minutes and scan_to_deg = 360 for 46 s
+    # formerly scan_step_deg = 0.001 ran for minutes and scan_to_deg = 360 for 46 s
     task = registry.find("loom/group1-repaired").build()[0]
     with pytest.raises(SettingError, match=r"the limit is 1000: raise scan_step_deg") as err:
         repair_cyclogram(task, **setting)
@@ -228,7 +228,7 @@ def test_the_compiled_passes_give_the_numpy_passes_answers_with_windows_and_sync
 
 
 def test_a_one_limit_what_if_is_solved_and_certified_by_the_held_graph():
-    """HeldSpan.solve (issue 22, item 5): [sigma_H] moved on loom/group1, the span is plan_cyclogram's
+    """HeldSpan.solve, a what-if: [sigma_H] moved on loom/group1, the span is plan_cyclogram's
     for the changed task, certified (times feasible, a tight chain of the same value); a window
     the changed bounds cannot meet is INFEASIBLE; a wrong bound vector is not certified as another's."""
     from mechopt.solvers.loom.graph import HeldSpan

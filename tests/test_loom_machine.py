@@ -1,4 +1,4 @@
-"""A user's own machine from a CSV timing table (issue 22, build item 3): operations read from a
+"""A user's own machine from a CSV timing table: operations read from a
 CSV beside the scene, events named by the operations, per-operation windows and times, and the
 reader's errors naming file, line and column."""
 from pathlib import Path

@@ -140,7 +140,7 @@ OPS = [{"from": "1", "to": "2", "min_deg": 10.0}, {"from": "2", "to": "3", "min_
     (dict(operations=OPS, cycle_deg=-360.0), r"cycle_deg=-360\.0: allowed > 0 \.\.\. 1e\+06"),
     (dict(operations=OPS, amplitude_slope_mm_per_deg=0.003), r"amplitude_slope_mm_per_deg=0\.003: allowed < 0"),
     (dict(operations=OPS, amplitude_intercept_mm=float("nan")), r"amplitude_intercept_mm=nan: expected a finite number"),
-    # issue 21: -1 mm gave a -1.09 mm amplitude reported as SOLVED
+    # formerly -1 mm gave a -1.09 mm amplitude reported as SOLVED
     (dict(operations=OPS, amplitude_intercept_mm=-1.0), r"amplitude_intercept_mm=-1\.0: allowed > 0"),
     (dict(events=[1, 2], operations=OPS), r"events: expected a table, got \[1, 2\]"),
     (dict(operations={"a": 1}), r"operations: expected a list of tables"),

@@ -1,4 +1,4 @@
-"""Check and repair after the LP (issue 14, part 4): the linearised optimum of group 1 against the
+"""Check and repair after the LP: the linearised optimum of group 1 against the
 exact rebound (the lever's chain: cam -> approach velocity -> impact -> eq. (2)) and the exact
 contact stress, repaired by sequential LP with a safeguard for the wavy law.
 

@@ -341,7 +341,7 @@ def test_infeasible_without_a_positive_cycle_says_it_may_be_numerical(monkeypatc
     assert r.message == "HIGHS: infeasible (no positive cycle among the difference constraints: a numerical failure?)"
 
 
-# ---------------------------------------------------------------- certificates (issue 12)
+# ---------------------------------------------------------------- certificates
 
 def _chain_excess_deg(task, events):
     """Sum round the cycle `events` of the bounds p(v) - p(u) >= w it follows, from the scene's own
@@ -372,7 +372,7 @@ def test_machine_made_infeasible_by_an_override_names_a_real_positive_cycle():
 
 def test_networkx_negative_cycle_extraction_is_not_relied_on():
     # the machine's cycle made infeasible: networkx's find_negative_cycle detects but cannot extract it
-    # from a root joined to every event (issue #5916); our search must name it
+    # from a root joined to every event (networkx issue #5916); our search must name it
     task = registry.find("loom/machine").build({"operations[from=12,to=13].min_deg": 300.0})[0]
     chain = cyclogram_lp.conflict_chain(cyclogram_lp.Net(task, "exact"))
     assert chain and _chain_excess_deg(task, [v for v, _, _ in chain]) > 0

@@ -1,4 +1,4 @@
-"""The whole machine at its highest speed (issue 14, part 5): the graph (the default; its own tests in
+"""The whole machine at its highest speed: the graph (the default; its own tests in
 test_loom_speed_graph.py) and the LP in (p, n) against bisection on n with LP feasibility, against the closed form along the critical chain, and the hard cases.
 
 The scene's lever is the chain (cam -> approach velocity -> impact -> eq. (2)): a(t, n) = h(n / t),

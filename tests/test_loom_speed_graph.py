@@ -1,4 +1,4 @@
-"""The machine's highest speed on the graph (issue 22, item 4): Newton on the positive cycles
+"""The machine's highest speed on the graph: Newton on the positive cycles
 against the LP in (p, n) (same speed to 1e-9 relative) and bisection, on the scenes, on the
 benchmark's machine and on random networks with windows and syncs; the limiting cycle named, the
 ranging at the highest speed against the closed form along the chain."""
@@ -155,7 +155,7 @@ def test_a_check_that_disagrees_is_inaccurate(task, monkeypatch):
 
 
 def test_one_limit_changed_on_group1_the_graph_re_solves_and_certifies_the_held_lp():
-    """Issue 22, item 5: [sigma_H] moved; the held HiGHS model re-solved and certified by a fresh
+    """A what-if: [sigma_H] moved; the held HiGHS model re-solved and certified by a fresh
     graph pass, both against a fresh LP of the changed scene; a held answer off by 1e-6 deg is
     INACCURATE, and a network that cannot be held agrees only with an infeasible LP."""
     from mechopt.solvers.loom import HeldLP

@@ -1,4 +1,4 @@
-"""press.catalogue (issue 24, item 8): a motor row and a belt ratio from a catalogue, by enumeration
+"""press.catalogue: a motor row and a belt ratio from a catalogue, by enumeration
 with the continuous design NLP inside; the cheapest feasible row and its margin."""
 import dataclasses
 

@@ -1,8 +1,7 @@
-"""The press drive designed by optimisation (issue 16, Sec. 3): each optimum against another solver
+"""The press drive designed by optimisation: each optimum against another solver
 (steady_state's Newton shooting, press.events), closed forms written here, or re-solves; and the hard
 cases (stall, a rigid-belt limit, an empty constraint set, no cut)."""
 import dataclasses
-import time
 
 import casadi as ca
 import numpy as np
@@ -101,11 +100,9 @@ def test_stall_is_infeasible_and_names_the_least_motor(flywheel_task):
         assert steady_state(press).status is status
 
 
-def test_a_belt_a_million_times_stiffer_is_designed_on_the_rigid_belt_limit_fast(flywheel_task):
+def test_a_belt_a_million_times_stiffer_is_designed_on_the_rigid_belt_limit(flywheel_task):
     stiff = dataclasses.replace(flywheel_task, belt_stiffness_Nm_rad=2e10)
-    start = time.perf_counter()
     result = design(stiff)
-    assert time.perf_counter() - start < 20
     assert result.status is Status.SOLVED and result.message.startswith("rigid-belt limit")
     assert result.diagnostics["model"].startswith("rigid belt") and result.values["belt_mode_Hz"] > 1e4
     rigid = dataclasses.replace(stiff, effects=tuple(e for e in stiff.effects if e != "belt_elasticity"),
@@ -188,14 +185,14 @@ def test_the_motor_designs_multipliers_are_the_slopes_of_re_solves():
 
 
 def test_a_designers_own_press_is_designed_at_the_default_settings():
-    """Issue 24: a designer's own press (press/own-press: crank radius 40 mm, a 5 mm blank, a 4 kW
+    """A designer's own press (press/own-press: crank radius 40 mm, a 5 mm blank, a 4 kW
     four-pole motor as the motor-catalogue row) is SOLVED at the default settings,
     and its least flywheel holds the limit exactly (steady_state, no NLP)."""
     task = load("press/own-press").build()[0]
     result = design(task)
     assert result.status is Status.SOLVED, result.message
     # the first try can end at IPOPT's Acceptable_Level after other designs warmed the orbit caches
-    # (the issue's INACCURATE); then the ladder's next step certifies it
+    # (an INACCURATE once reported as the answer); then the ladder's next step certifies it
     assert result.diagnostics["attempts"][0]["step"] == "rule_of_thumb"
     J = result.values["flywheel_inertia_kgm2"]
     assert _fluctuation(task.drive({"flywheel_inertia_kgm2": J})) == pytest.approx(task.max_speed_fluctuation, rel=1e-6)

@@ -1,4 +1,4 @@
-"""The press wing's layout (issue 24): one public problem module the methods stand on, no private
+"""The press wing's layout: one public problem module the methods stand on, no private
 name imported across modules, and one door (`METHODS`) whose method names are a Literal."""
 import ast
 from pathlib import Path

@@ -1,4 +1,4 @@
-"""Loads over the steady revolution (issue 16 section 2): each against a computation written here
+"""Loads over the steady revolution: each against a computation written here
 from the crank-slider's geometry, not from the model's code."""
 import dataclasses
 

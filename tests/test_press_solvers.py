@@ -1,6 +1,5 @@
 """Press dynamics solvers: cross-checks against an independent reference, energy, events, hard cases."""
 import dataclasses
-import time
 
 import numpy as np
 import pytest
@@ -270,11 +269,18 @@ def _no_stack(message):
     assert not any(word in message.lower() for word in ("solved", "success", "converged to the", "periodic orbit by"))
 
 
-def _timed(call):
-    import time
-    start = time.perf_counter()
-    result = call()
-    return result, time.perf_counter() - start
+@pytest.fixture
+def integrates_nothing(monkeypatch):
+    """Every way the press's solvers integrate or build a revolution fails the test: what is refused
+    "at once" is refused before any of them runs (a count of work, where a clock would measure load)."""
+    from mechopt.solvers.press import event_driven, fixed_step, periodic, scipy_peer
+
+    def integrated(*args, **kwargs):
+        raise AssertionError("integrated before refusing")
+    for module, name in ((fixed_step, "_rk4_trace"), (scipy_peer, "solve_ivp"), (scipy_peer, "dynamics_of"),
+                         (event_driven, "piece_by_time"), (event_driven, "march"),
+                         (periodic, "revolution"), (periodic, "dynamics_of")):
+        monkeypatch.setattr(module, name, integrated)
 
 
 @pytest.mark.parametrize("override, cut_work", [
@@ -282,13 +288,14 @@ def _timed(call):
     ({"blank_thickness_mm": 20.0},
      (90.93 * 20**5 / 5 - 4 * 20**4 / 4 - 406.8 * 20**3 / 3 + 1075.68 * 20**2 / 2) / 1000),
 ])
-def test_a_motor_that_cannot_deliver_the_cycles_work_is_an_infeasible_stall_at_once(override, cut_work):
-    run, seconds = _timed(lambda: registry.run(registry.find("press/kd2322"), override))
+def test_a_motor_that_cannot_deliver_the_cycles_work_is_an_infeasible_stall_at_once(override, cut_work,
+                                                                                      integrates_nothing):
+    run = registry.run(registry.find("press/kd2322"), override)
     r = run.result
     need = cut_work / (2 * np.pi) + 5.0                          # cut work per turn over 2 pi, plus friction
     most = 6.2608 * override.get("motor_breakdown_torque_Nm", 33.0)    # breakdown torque times i
     assert need > most
-    assert r.status is Status.INFEASIBLE and r.violated == ("stall",) and seconds < 1.0
+    assert r.status is Status.INFEASIBLE and r.violated == ("stall",)
     assert r.values["required_mean_torque_Nm"] == pytest.approx(need, rel=1e-12)
     assert r.values["breakdown_torque_at_crank_Nm"] == pytest.approx(most, rel=1e-12)
     assert r.message.startswith(f"the motor cannot deliver the cycle's work: mean load torque {need:.4g} N m at the "
@@ -334,24 +341,24 @@ def _belt_hz(task):
     return float(np.sqrt(eigh(K, M, eigvals_only=True).max()) / (2 * np.pi))
 
 
-def test_a_belt_a_million_times_stiffer_fails_fast_naming_the_mode_and_the_rigid_limit():
+def test_a_belt_a_million_times_stiffer_fails_fast_naming_the_mode_and_the_rigid_limit(integrates_nothing):
     stiff = _task(belt_stiffness_Nm_rad=PAPER.belt_stiffness_Nm_rad * 1e6)
     hz = _belt_hz(stiff)
     assert hz == pytest.approx(59017, rel=1e-3)
-    run, seconds = _timed(lambda: registry.run(registry.find("press/kd2322"), {"belt_stiffness_Nm_rad": 5e10}))
+    run = registry.run(registry.find("press/kd2322"), {"belt_stiffness_Nm_rad": 5e10})
     r = run.result
-    assert r.status is Status.LIMIT and seconds < 1.0
+    assert r.status is Status.LIMIT
     assert r.values["belt_mode_Hz"] == pytest.approx(hz, rel=1e-9)
     assert r.values["step_needed_s"] == pytest.approx(0.1 / hz, rel=1e-9)       # a tenth of the mode's period
     assert r.message.startswith(f"the belt mode at {hz:.4g} Hz needs steps below {0.1 / hz:.3g} s")
     assert "the rigid-belt model (drop effect `belt_elasticity`) is its limit" in r.message
     _no_stack(r.message)
     # RK4 diverges past h |lambda| = 2.83 (undamped; 2.85 with this 5 % damping): refused before the run
-    r, seconds = _timed(lambda: pd.rk4(stiff, step_s=1e-4, duration_s=0.25))
-    assert r.status is Status.FAILED and seconds < 1.0 and "would diverge (beyond its stability limit)" in r.message
+    r = pd.rk4(stiff, step_s=1e-4, duration_s=0.25)
+    assert r.status is Status.FAILED and "would diverge (beyond its stability limit)" in r.message
     assert 2.8 / (2 * np.pi * hz) < r.values["step_needed_s"] < 2.9 / (2 * np.pi * hz)
-    r, seconds = _timed(lambda: pd.ivp(stiff, method="DOP853", duration_s=1.0))
-    assert r.status is Status.LIMIT and seconds < 1.0 and "more than the 20000 DOP853 can afford" in r.message
+    r = pd.ivp(stiff, method="DOP853", duration_s=1.0)
+    assert r.status is Status.LIMIT and "more than the 20000 DOP853 can afford" in r.message
     _no_stack(r.message)
 
 
@@ -374,12 +381,9 @@ def test_the_paper_belt_passes_the_stiffness_guards_with_room():
                                                r"\(duration_s <= 25\.04 s; `events` goes further\)"),
     (lambda: pd.ivp(PAPER, max_step_s=1e-9), r"max_step_s=1e-09 means about 1e\+09 steps, more than the 20000 allowed \(max_step_s >= 5e-05 s"),
 ])
-def test_work_past_the_stated_limits_is_refused_before_it_starts(call, match):
-    import time
-    start = time.perf_counter()
+def test_work_past_the_stated_limits_is_refused_before_it_starts(call, match, integrates_nothing):
     with pytest.raises(SettingError, match=match):
         call()
-    assert time.perf_counter() - start < 1.0
 
 
 def test_a_set_override_past_the_limits_is_refused_naming_the_key():
@@ -415,21 +419,20 @@ def test_rk4_and_ivp_name_the_same_stall_in_the_cut():
     assert start < angles[1] < end and angles[0] == pytest.approx(angles[1], abs=0.01)
 
 
-def test_events_refuses_a_belt_it_would_follow_for_minutes_before_any_work():
-    """Issue 21: belt_stiffness 1e12 under `events` took 94 s; the estimate (10 steps a period of the
+def test_events_refuses_a_belt_it_would_follow_for_minutes_before_any_work(integrates_nothing):
+    """Formerly belt_stiffness 1e12 under `events` took 94 s; the estimate (10 steps a period of the
     264 kHz belt mode over 3 s: 7.9e6) refuses it at once, naming the key and the stiffest belt that fits."""
     task = dataclasses.replace(registry.find("press/start-up").build()[0], belt_stiffness_Nm_rad=1e12)
-    start = time.perf_counter()
     with pytest.raises(ModelError, match=r"belt_stiffness_Nm_rad <= 3.99e\+09 at duration_s=3") as refused:
         pd.events(task, duration_s=3.0, start="rest")
-    assert refused.value.key == "belt_stiffness_Nm_rad" and time.perf_counter() - start < 1.0
+    assert refused.value.key == "belt_stiffness_Nm_rad"
     hz = np.sqrt(1e12 * (1 / mean_crank_inertia_kgm2(task) + 1 / (task.motor_inertia_kgm2 * task.gear_ratio**2)))
     assert f"{hz / (2 * np.pi):.4g} Hz" in str(refused.value)       # undamped; damping 15 moves it < 1e-6
 
 
 @pytest.mark.parametrize("turns", [224, 257, 5000])
 def test_events_far_from_phi_zero_are_located_relative_to_the_angle(monkeypatch, turns):
-    """Issue 21: a minute of start-up reaches 1445 rad, where doubles are 2.3e-13 apart and an absolute
+    """A minute of start-up reaches 1445 rad, where doubles are 2.3e-13 apart and an absolute
     1e-12 rad was at times out of Newton's reach (LIMIT). From these turns (each a LIMIT under the old
     absolute rule, the first check below) the events are located relative to the angle."""
     iphi = PAPER.state_names.index("phi_rad")
@@ -457,7 +460,7 @@ def test_the_nominal_speed_under_a_motor_is_said_to_be_a_start_guess_only():
 
 
 def test_a_what_if_re_solves_on_the_structures_build_from_the_last_orbit():
-    """Issue 24: other numbers, same structure: no new build (equations, revolution), the orbit
+    """Other numbers, same structure: no new build (equations, revolution), the orbit
     warm-started from the last one by chord steps, and the same orbit as a cold solve."""
     from mechopt.kit.cache import clear
     from mechopt.models.press import equations

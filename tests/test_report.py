@@ -197,7 +197,7 @@ def test_each_scene_leads_with_its_status_values_and_warnings_then_its_figures(p
     section = _section(text, "press/flywheel-design")
     run = next(r for r in runs if r.scene.id == "press/flywheel-design")
     inertia = run.values["flywheel_inertia_kgm2"]
-    assert round(inertia, 3) == 5.118                                    # the least flywheel, as issue 25 read it
+    assert round(inertia, 3) == 5.118                                    # the least flywheel, to 3 decimals
     row = (f"<tr><td>flywheel_inertia_kgm2</td><td title='{inertia!r}'>{shown(inertia)}</td><td>kg m²</td>"
            "<td>computed</td></tr>")
     assert row in section

@@ -1,4 +1,4 @@
-"""The chain's calibration has several roots (issue 20 §2): `fit_roots` finds them; each found root
+"""The chain's calibration has several roots: `fit_roots` finds them; each found root
 is checked here by differences of the rebound law taken apart from the solver's own tangent."""
 import dataclasses
 

@@ -1,4 +1,4 @@
-"""Where the stop-impact model ends (issue 21): each edge a status or a refusal naming its key,
+"""Where the stop-impact model ends: each edge a status or a refusal naming its key,
 never a long run or an input error for a physical outcome."""
 import pytest
 

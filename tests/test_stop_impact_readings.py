@@ -1,4 +1,4 @@
-"""Readings of paper 004's stop impact (issues 20 §2, 26 §1-2): how C leaves the plate (the scene
+"""Readings of paper 004's stop impact: how C leaves the plate (the scene
 key `launch`), the paper's own reading (a rebound proportional to n / t), and no stop-impact
 check that passes by construction."""
 import math
@@ -73,8 +73,8 @@ STOP_SCENES = [s for s in registry.all_scenes() if s.id.startswith("stop-impact/
 
 
 @pytest.mark.parametrize("scene", STOP_SCENES, ids=lambda s: s.id)
-def test_no_derived_stop_impact_check_holds_whatever_the_lever(scene):
-    """A derived number that no input moves cannot fail (issue 26 §1: S / (m v0) = 1 + k was one):
+def test_no_derived_stop_impact_check_holds_whatever_the_lever(scene, solved_once):
+    """A derived number that no input moves cannot fail (S / (m v0) = 1 + k was one):
     with the lever 2 % stiffer every derived numeric check's value must move."""
     derived = [name for name, e in scene.spec.expect.items()     # (a count moves by whole steps only: left out)
                if e.kind == "derived" and isinstance(e.value, float) and e.max is None and e.min is None]

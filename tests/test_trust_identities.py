@@ -1,4 +1,4 @@
-"""Every derived check can fail (issue 26, part 1): a scan of all scenes.
+"""Every derived check can fail: a scan of all scenes.
 
 A `derived` check must be an independent computation, a bound the model could violate, or a
 status. Two rules, lasting:
@@ -12,7 +12,7 @@ status. Two rules, lasting:
    checks written before this rule and read one by one (each can fail: see `UNNAMED`) are
    grandfathered; a new one must name it.
 
-The count of the first scan (issue 26's note): 9 identities or restatements among 115 derived
+The count of the first scan: 9 identities or restatements among 115 derived
 checks: the two impulse_over_momentum (J_A = m l^2 makes S / (m v0) = 1 + k), contact_time_s
 (1 / (2 f_stop) with f_stop calibrated to 768 Hz: a `follows`, so counted calibrated),
 amplitude-law's t_3_7_min_deg and group1-stop-model's t_3_7_deg (36 deg from the tangent whose two

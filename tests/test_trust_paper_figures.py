@@ -1,4 +1,4 @@
-"""Papers 000 and 001 figure by figure (issue 20, part 1): the printed numbers that are claims about
+"""Papers 000 and 001 figure by figure: the printed numbers that are claims about
 a computation, checked here where no scene row holds them, and the rows of the new scenes."""
 import pytest
 

@@ -1,5 +1,5 @@
 """Result.warnings: a model used outside what its source or derivation supports says so, in the
-Result, the run's JSON, the CLI and sweep tables (issue 20, part 4)."""
+Result, the run's JSON, the CLI and sweep tables."""
 import json
 from dataclasses import replace
 

@@ -1,4 +1,4 @@
-"""Issue 21's and issue 35's hostile and careless inputs, each run as a user would, its outcome classified.
+"""Hostile and careless inputs (two rounds of hardening), each run as a user would, its outcome classified.
 
     python tools/bad_input_survey.py [--only NAME ...] [--json FILE]
 
@@ -17,17 +17,17 @@ capped at 6 GB, with a wall-clock limit, and is classified:
 
 A probe's `echo_of` names a file (/etc/passwd) whose lines must not show in what the command says.
 
-A survey, not a test (tests/test_hardening_*.py pin each item). Issue 21's counts, 42 probes:
+A survey, not a test (tests/test_hardening_*.py pin each item). The first round's counts, 42 probes:
 before (main at 6bfc3fa) 8 clear, 3 unclear, 20 traceback, 4 hang, 7 wrong; after (branch harden)
 41 clear, 1 wrong (damping_one: stop-impact's solver turns a roller leaving its cam into bad input;
 its owner's fix). The deleted_lock probe was rewritten after the first run to a second writer that
 holds the new lock (before, with the second run to completion: a traceback).
 
-Issue 35's probes (classes "35.1 tmp" to "35.11 nonsense", one or more per defect it lists), 45:
+The second round's probes (classes "35.1 tmp" to "35.11 nonsense", one or more per defect it lists), 45:
 before (main at ebb99eb, the probes as they are now) 3 clear, 3 unclear, 18 traceback, 1 hang, 20 wrong;
 after (the merged branches files35, input35, signals35 and the follow-ups) 42 clear, 2 unclear, 0 traceback,
-0 hang, 0 wrong (one full run, then the four probes mended after it re-run). The two unclear are issue 36's
-front door: press_too_much_work exits 3 with the right status but CasADi prints its inputs' dump (2 kB) on
+0 hang, 0 wrong (one full run, then the four probes mended after it re-run). The two unclear are the
+front door's: press_too_much_work exits 3 with the right status but CasADi prints its inputs' dump (2 kB) on
 stderr; workers_1000 says the cap in one line, after the HiGHS banner twice and a progress bar (606 characters).
 Planting a link at `<output>.<pid>.tmp` needs the writer's pid: the probes guess the next 400 pids
 (/proc/sys/kernel/ns_last_pid), or run the sweep in-process where its pid is its own.
@@ -67,7 +67,7 @@ points_mm = {points}
 
 @dataclass
 class Probe:
-    klass: str                      # the issue's section
+    klass: str                      # the hardening round's section
     name: str
     setup: object                   # f(folder) -> argv (after python), or (argv, check(folder) -> problem)
     codes: tuple = (2,)             # exit codes a user was promised
@@ -399,7 +399,7 @@ def damping_one(folder):
     return mechopt("run", "stop-impact/amplitude-law", "--set", "damping_ratio=1")
 
 
-# --- issue 35: temporary names, foreign files, bounded everything, no traceback ----------------------
+# --- the second round: temporary names, foreign files, bounded everything, no traceback ----------------------
 
 PACKAGING = ROOT / "cases" / "loom" / "packaging.toml"
 LIFT_CAM = ROOT / "cases" / "stop-impact" / "lift-cam-profile.toml"
@@ -545,7 +545,7 @@ def sidecar_dev_zero(folder):
 
 def infeasible_chain(folder, operations=200_000):
     """A chain of 200,000 1-degree operations in a 10-degree cycle: INFEASIBLE, its conflict as
-    long (the issue's million printed 87 MB; 20,000 print 1.5 MB and write a 2 MB --json on main):
+    long (a million once printed 87 MB; 20,000 print 1.5 MB and write a 2 MB --json on main):
     what is printed and written must stay bounded."""
     with open(Path(folder) / "ops.csv", "w", encoding="utf-8") as f:
         f.write("from,to,min_deg\n")
@@ -876,7 +876,7 @@ PROBES = [
     Probe("5 legal", "bom_scene", bom_scene, codes=(0,)),
     Probe("5 legal", "derive_missing", derive_missing, must_say="derive.t0_rad"),
     Probe("5 legal", "damping_one", damping_one, codes=(3,)),
-    # issue 35 (its items 1-11)
+    # the second round (its items 1-11)
     Probe("35.1 tmp", "tmp_link_json", tmp_link_json, codes=(0,)),
     Probe("35.1 tmp", "tmp_link_dxf", tmp_link_dxf, codes=(0,)),
     Probe("35.1 tmp", "tmp_link_new", tmp_link_new, codes=(0,)),

@@ -1,4 +1,4 @@
-"""The walk a reader takes through the press's periodic orbit (issue 24, Targets: "the task
+"""The walk a reader takes through the press's periodic orbit (the target: "the task
 through steady_state visits fewer files with fewer returns").
 
     python tools/walk.py [--what-if] [--files]
@@ -16,7 +16,7 @@ leave it where it was). The walk is that sequence of files with repeats in a row
 after a first solve (the orbit warm-started on the structure's build). Deterministic: one process,
 one call chain, no timing. `--files` prints the walk itself.
 
-Issue 24's counts (this definition): before (main at 11dcd09) 99 stops, 94 returns (cold) and 95 / 90
+The counts (this definition): before (main at 11dcd09) 99 stops, 94 returns (cold) and 95 / 90
 (what-if), 5 files; after (branch press) 55 / 50 and 45 / 40, the same 5 files. What went: the task's
 effect flags and state names, `Dynamics`' bound Functions and `Revolution.n` became attributes set
 once (they were properties, each read a call into models/press.py and back); summarise reads the

@@ -1,4 +1,4 @@
-"""A readjustable torch-guiding linkage (issue 13, Sec. 2): one frame distance H for a family of
+"""A readjustable torch-guiding linkage: one frame distance H for a family of
 cardioid cams, the wing length L set per cam.
 
 `readjustable` solves

@@ -9,7 +9,7 @@
 * `plan.plan_cyclogram`: this LP solved on the graph (its dual, longest paths: `graph`, the
   default) or in cvxpy (method "lp"), each checked against the other on demand (check=True);
 * `repair.repair_cyclogram`: its optimum checked on the exact rebound and contact stress, re-cut
-  and re-solved until they hold (issue 14, part 4);
+  and re-solved until they hold;
 * `speed.max_machine_speed`: the whole machine's largest speed, an LP in (p, n) or bisection on n
   (part 5);
 * `event_time`: the LP's matrices, and `HeldLP`, the LP held in HiGHS for many bound changes.

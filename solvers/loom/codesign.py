@@ -1,4 +1,4 @@
-"""The machine's speed co-designed with the lift cam's law (issue 23, item 3).
+"""The machine's speed co-designed with the lift cam's law.
 
 The lift's operation (3,7) is limited by the lever's rebound, and the rebound by the law. A law
 of fixed shape S(xi) makes the rebound a function of n / t alone (the rise in its own time

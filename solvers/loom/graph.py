@@ -1,4 +1,4 @@
-"""Difference constraints p(v) - p(u) >= w solved on the graph (issue 22): the event-time LP's
+"""Difference constraints p(v) - p(u) >= w solved on the graph: the event-time LP's
 dual, a longest-path problem.
 
 The operations form a DAG; windows, syncs and the machine cycle add arcs of the other sign
@@ -12,7 +12,7 @@ then named by `plan.positive_cycle` on the labelled constraints).
 Why numpy over levels, and a compiled pass for large networks: on the layered 10^5-event
 network (3 x 10^5 arcs, 1000 levels) a numpy pass costs ~10 us of Python per level and call,
 ~9 ms per pass, so one forward and one backward pass with the floats, the critical chain and
-the duals took ~30 ms (issue 22's target: 20 ms). A compiled loop over the arcs in level order
+the duals took ~30 ms (the target: 20 ms). A compiled loop over the arcs in level order
 (kernel.py, numba) takes ~2 ms per pass: with it the whole solve measured ~9 ms (best of 15 on
 the shared 2-core machine; medians under load are in `mechopt bench loom`). numba stays
 optional (extra `fast`): it is imported only for networks of COMPILED_MIN_ARCS arcs and more
@@ -252,7 +252,7 @@ def _walk_back(n, tails, heads, source, target) -> list[int] | None:
 
 
 class HeldSpan:
-    """One network's span held for what-ifs (issue 22, item 5): a limit changed, the bounds
+    """One network's span held for what-ifs: a limit changed, the bounds
     re-solved by a fresh pass over the held levels with its own certificate (`solve`), and an
     LP's re-solve certified by it (`certify`).
 

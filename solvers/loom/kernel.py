@@ -1,4 +1,4 @@
-"""Compiled longest-path passes for large networks (issue 22): numba, optional.
+"""Compiled longest-path passes for large networks: numba, optional.
 
 A pass over a DAG's arcs in topological order of their heads is one loop of a few instructions
 per arc; numpy does it level by level (graph.Levels), paying ~10 us of Python per level and

@@ -187,7 +187,7 @@ PER_NAME_MAX_OPS = 10_000   # above it, per-event and per-operation figures live
 def per_name(net) -> bool:
     """Whether the values and diagnostics name every event and operation (p_*, t_*, float_deg, ...):
     up to PER_NAME_MAX_OPS operations. A timing table of 10^5 rows gets its figures as arrays: a
-    dict entry per operation costs more than the solve (issue 22: 0.4 s of dicts against 10 ms)."""
+    dict entry per operation costs more than the solve (measured: 0.4 s of dicts against 10 ms)."""
     return len(net.tails) <= PER_NAME_MAX_OPS
 
 

@@ -1,4 +1,4 @@
-"""Check and repair after the LP (issue 14, part 4): the optimum evaluated on the exact rebound and
+"""Check and repair after the LP: the optimum evaluated on the exact rebound and
 contact stress, re-cut and re-solved until they hold; `exact_amplitude_bound` where the wavy
 rebound's tangent cannot be trusted."""
 import dataclasses
@@ -170,7 +170,7 @@ def repair_cyclogram(task: Cyclogram, *, backend: Literal["HIGHS", "CLARABEL"] =
                      tol_mm: Tolerance = 1e-9, tol_MPa: Tolerance = 1e-6, tol_deg: Tolerance = 1e-6,
                      check: bool = False) -> Result:
     """The LP of `plan_cyclogram`, checked against the exact laws at its optimum and repaired by
-    sequential LP (issue 14, part 4).
+    sequential LP.
 
     Round 1 solves the LP with the linear laws the task gives (the amplitude tangent; the stress
     tangent at t_ref when stress_form = "linear"; with the lever alone, the rebound's tangent at

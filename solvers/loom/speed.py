@@ -1,4 +1,4 @@
-"""The whole machine at its highest speed (issue 14, part 5): an LP in (p, n) when every law is a
+"""The whole machine at its highest speed: an LP in (p, n) when every law is a
 function of n / t (a probe checks), bisection on n with LP feasibility otherwise."""
 import functools
 import math
@@ -100,8 +100,8 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp",
                       scan_to_deg: Annotated[float, Interval(gt=0.0, le=360.0)] = 60.0,
                       scan_step_deg: Annotated[float, Interval(ge=1e-3, le=10.0)] = 0.25,
                       check: bool = False) -> Result:
-    """The largest main-shaft speed n at which every group fits the machine's cycle (issue 14,
-    part 5), with the event times there.
+    """The largest main-shaft speed n at which every group fits the machine's cycle, with
+    the event times there.
 
     Every limit is a lower bound on a phase angle. [phi] does not depend on n; a time `min_ms`
     (the microshuttle's flight) asks for 0.006 n T deg; the contact stress, sigma_ref (t_ref / t)
@@ -434,7 +434,7 @@ def _speed_report(task, net, lb, why, n_max, tol, sg=None):
     return values, more
 
 
-# ---------------------------------------------------------------- the graph method (issue 22, item 4)
+# ---------------------------------------------------------------- the graph method
 
 GRAPH_TOL = 1e-10            # relative to the cycle [deg/deg]: a chain closing the cycle within it fits
 UNBOUNDED_RPM = 1e12         # the parametric search starts here; a machine that still fits has no speed limit

@@ -1,4 +1,4 @@
-"""A motor and a belt ratio from a catalogue (issue 24, item 8): enumeration over the rows, ratios
+"""A motor and a belt ratio from a catalogue: enumeration over the rows, ratios
 tried in each, with the continuous design NLP (`design`) inside; the cheapest feasible row wins.
 
 Rows go cheapest first (least rated power, then least breakdown torque), so the search stops at the

@@ -1,4 +1,4 @@
-"""The press drive designed by optimisation (issue 16, Sec. 3): an NLP whose constraints contain
+"""The press drive designed by optimisation: an NLP whose constraints contain
 the periodic steady motion itself.
 
 Multiple shooting over one revolution in the crank angle (shooting.py): the cut's start and end
@@ -13,7 +13,7 @@ torque and energy per stroke must agree with the NLP's to `VERIFY_REL` or the an
 INACCURATE. Active limits are reported with their multipliers in the user's terms (what a unit
 more of the limit is worth in the objective), and a variable on its bound is named.
 
-Start and retries (issue 24: a designer's own press must come out SOLVED at the default settings).
+Start and retries (a designer's own press must come out SOLVED at the default settings).
 Every number the NLP sees is of order 1 (`_scales`: variables by the start, states by the nominal
 speed and the belt's twist under the mean torque, limits by their value). With a speed-fluctuation
 limit and the flywheel free, the start is the textbook flywheel I = Delta E / (C_s omega^2) from the

@@ -1,5 +1,5 @@
 """The loads a designer sizes the press's parts with, over one revolution of the periodic steady
-motion (issue 16, Figs. 9-10): connecting-rod force, crank torque, main-bearing load, belt and motor
+motion (paper 001, Figs. 9-10): connecting-rod force, crank torque, main-bearing load, belt and motor
 torque, each with its peak and where it occurs (crank angle, tool travel).
 
 The loads themselves are outputs of the model (`models.press.linkage_forces`, evaluated along the

@@ -1,4 +1,4 @@
-"""The lift cam for the shop (issue 23, item 4): the cam's shape from its law and follower
+"""The lift cam for the shop: the cam's shape from its law and follower
 (models/cam_shape.py), its checks (least radius of curvature, largest pressure angle, undercut
 margin) and the point tables a DXF or a CNC takes, each with its measured chordal error."""
 

@@ -1,4 +1,4 @@
-"""Every root of the chain's calibration (issue 20 §2): the stroke H and phase angle t at which
+"""Every root of the chain's calibration: the stroke H and phase angle t at which
 the chain's a(t) at the nominal speed has the published law a = slope t + intercept as its
 tangent; what each root predicts, the spread over the roots and over the assumed damping, and
 the root that a rule looking at the law alone picks.

@@ -1,5 +1,5 @@
-"""The lift cam's motion law synthesised under the lever's dynamic limits (issue 23, item 1), and
-checked by the chain that did not design it (item 2).
+"""The lift cam's motion law synthesised under the lever's dynamic limits, and
+checked by the chain that did not design it.
 
 The law is a spline in xi (models/cam_law.py): S = s0 + B c. At a fixed speed n and phase angle t
 the elastic lever's relative error e is linear in c (superposition), so are X = S + e, its

@@ -1,4 +1,4 @@
-"""Figures of a synthesised cam law (issue 23): the law's travel and analogues beside the library
+"""Figures of a synthesised cam law: the law's travel and analogues beside the library
 laws at the same phase angle, its predicted rebound against speed with the limit, and for the
 co-designed machine the re-planned timing diagram. They read the Result's arrays only."""
 import numpy as np

@@ -2,7 +2,7 @@
 
 CasADi runs IPOPT, CVODES and its rootfinders in C++ and polls Python's signal handlers from
 there: the KeyboardInterrupt the default handler raises is caught inside and comes back as a
-failed or "inaccurate" solve (issue 21: an interrupted sweep stored such a variant, and a re-run
+failed or "inaccurate" solve (an interrupted sweep once stored such a variant, and a re-run
 skipped it). While `honoured()` is active, SIGINT also sets a flag that no back end can clear;
 `check()` turns it back into a KeyboardInterrupt. The spine (run, validate, sweep, report) calls
 `check()` after every solver call, so an interrupted solve is never stored or reported; a solver
