@@ -221,7 +221,7 @@ def graph_targets(repeats=3, progress=None, big=1_000_000):
 def graph_table(scale_rows, rows):
     """The graph rows and their verdicts against the targets: solve time (with floats, chain, duals) and its
     ratio to cvxpy + HiGHS (build + solve) in the same run."""
-    lines = ["", f"{'graph method (issue 22)':<24}{'case':>12}{'events':>9}{'build s':>10}{'solve s':>10}"
+    lines = ["", f"{'graph method':<24}{'case':>12}{'events':>9}{'build s':>10}{'solve s':>10}"
              f"{'span deg':>16}"]
     lines += [f"{r['method']:<24}{r['case']:>12}{r['events']:>9}{r['build_s']:>10.4f}{r['solve_s']:>10.4f}"
               f"{r['span_deg']:>16.6f}" for r in rows]
