@@ -1,5 +1,5 @@
 """The package list is discovered, not written by hand: a folder added under one of the mapped roots
-cannot silently drop out of the wheel (tests/test_wheel.py builds the wheel and imports every module)."""
+cannot silently drop out of the wheel (tests/spine/test_wheel.py builds the wheel and imports every module)."""
 from setuptools import find_packages, setup
 
 # import name -> folder; pyproject.toml holds everything else

@@ -23,7 +23,7 @@ Readings the paper leaves open (each pinned by a test):
   the stroke: Q = F U + m_tool (X'' - g) (the tool's own equation of motion). The paper plots Q
   "against tool travel and crank angle during the cut" without an equation; the other readings
   (F alone, the force along the rod) differ: at the jump of press/kd2322's 160 kN data F alone
-  exceeds Q by 24.0 %, the force along the rod is Q's within 0.03 % (tests/test_trust_paper_figures.py).
+  exceeds Q by 24.0 %, the force along the rod is Q's within 0.03 % (tests/spine/test_trust_paper_figures.py).
 * Loads for sizing parts (`linkage_forces`): rod force at both ends, crank torque, main-bearing
   load, from the rod's Newton-Euler equations along the rod direction the task's X implies.
 * Motor: the Kloss static characteristic of an induction motor, M = 2 M_k s s_k / (s^2 + s_k^2),

@@ -1,5 +1,5 @@
 """Joint reactions and driving torque of the torch-guiding linkage over a cycle (paper 000, Sec. V,
-re-derived: the printed 9x9 has rank 8, see tests/test_cam_cutter_loads.py).
+re-derived: the printed 9x9 has rank 8, see tests/cam_cutter/test_cam_cutter_loads.py).
 
 At each crank angle the nine d'Alembert equations of crank, wing link and swivel block are one
 linear system A(phi) x = b(phi) in the nine unknowns `LOAD_UNKNOWNS`; velocities and

@@ -61,7 +61,7 @@ def exact_amplitude_bound(task: Cyclogram, speed_rpm: float, lo_deg: float, to_d
     limit (or where the roller leaves its cam), the crossing in that last step by brentq
     (bisection where the roller leaves: no rebound there to take a root of). a(t) is wavy (the
     lever rings during the rise), so no tangent can give this bound; wiggles narrower than the
-    step are not resolved (tests/test_loom_repair.py checks the step against a dense scan)."""
+    step are not resolved (tests/loom/test_loom_repair.py checks the step against a dense scan)."""
     limit, count = task.amplitude_limit_mm, [0]
 
     def excess(t):

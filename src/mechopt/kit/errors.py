@@ -3,7 +3,7 @@ input (`key`) when there is one, and each is also the builtin it is a kind of (a
 ValueError, a crashed back end a RuntimeError), so a caller may catch either.
 
 Part of the kit (`mechopt.kit`): importable from models, solvers and the spine alike,
-and importing nothing from mechopt themselves (tests/test_layout.py).
+and importing nothing from mechopt themselves (tests/spine/test_layout.py).
 """
 
 

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 ROOTS = {"mechopt": ROOT / "src" / "mechopt", "mechopt.models": ROOT / "models", "mechopt.solvers": ROOT / "solvers",
          "mechopt.cases": ROOT / "cases", "mechopt.benchmarks": ROOT / "benchmarks"}
 

@@ -17,7 +17,7 @@ from mechopt.report import write_report
 from mechopt.sweep import parse_grid, sweep
 from mechopt.units import unit_of
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 matplotlib.use("Agg")
 SCENES = ("loom/group1", "stop-impact/frequencies")

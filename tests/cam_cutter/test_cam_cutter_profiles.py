@@ -24,7 +24,7 @@ from mechopt.models.cam_profile import (
 )
 from mechopt.solvers.cam_cutter import minimax
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 CARDIOID = ("a*(2*cos(t)+cos(2*t))", "a*(2*sin(t)+sin(2*t))")     # eq. (1)
 
 

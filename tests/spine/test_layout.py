@@ -14,7 +14,7 @@ from mechopt.benchmarks import STUDIES, study
 from mechopt.figures import FIGURES
 from mechopt.mechanisms import mechanisms
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 KIT = ROOT / "src" / "mechopt" / "kit"     # importable from every layer; imports nothing of mechopt outside itself
 SPINE = {"mechopt." + p.stem for p in (ROOT / "src" / "mechopt").glob("*.py")} | {"mechopt.figures", "mechopt.benchmarks"}
 IO = {"tomllib", "json", "pyarrow", "pickle", "shelve", "csv", "sqlite3", "shutil", "tempfile", "dask", "distributed"}

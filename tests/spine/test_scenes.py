@@ -156,7 +156,7 @@ def test_infeasible_grid_scan_reports_the_best_achievable_not_a_grid_point():
 
 
 def test_ci_runs_exactly_the_readme_test_command():
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[2]
     readme_test_line = (root / "README.md").read_text().split("```bash\n", 1)[1].splitlines()[1]
     assert readme_test_line in (root / ".ci" / "run").read_text().splitlines()
 

@@ -3,7 +3,7 @@ name imported across modules, and one door (`METHODS`) whose method names are a 
 import ast
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 PRESS = [ROOT / "models" / "press.py", *sorted((ROOT / "solvers" / "press").glob("*.py")),
          ROOT / "benchmarks" / "press.py", ROOT / "src" / "mechopt" / "figures" / "press.py",
          *sorted((ROOT / "tests").glob("test_press_*.py"))]

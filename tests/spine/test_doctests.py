@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 # import name -> folder, as setup.py maps them
 FOLDERS = {"mechopt": ROOT / "src" / "mechopt", "mechopt.models": ROOT / "models", "mechopt.solvers": ROOT / "solvers"}
 

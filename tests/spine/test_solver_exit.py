@@ -11,7 +11,7 @@ import mechopt
 from mechopt.kit.errors import SettingError
 from mechopt.kit.result import Clock, Status, Timing
 
-SOLVERS = Path(__file__).resolve().parents[1] / "solvers"
+SOLVERS = Path(__file__).resolve().parents[2] / "solvers"
 
 
 def _calls_and_names(path: Path):

@@ -15,7 +15,7 @@ import mechopt
 from mechopt import registry
 from mechopt.cli import main, scene_template
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 SIX_EVENTS = '''id = "my/loom-six"
 title = "A loom group of my own: six events"

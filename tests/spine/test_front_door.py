@@ -151,5 +151,5 @@ def test_the_version_imports_nothing_heavy(how):
 def test_the_command_is_installed_at_its_light_entry_point():
     import tomllib
     from pathlib import Path
-    pyproject = tomllib.loads((Path(__file__).resolve().parents[1] / "pyproject.toml").read_text("utf-8"))
+    pyproject = tomllib.loads((Path(__file__).resolve().parents[2] / "pyproject.toml").read_text("utf-8"))
     assert pyproject["project"]["scripts"]["mechopt"] == "mechopt.__main__:main"

@@ -19,7 +19,7 @@ import pytest
 
 from mechopt.cli import main
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 LEFT_OUT = ("dask scheduler", "dask worker")
 # the front door, then the manual it links to: the README's commands before the move, in their order
 PAGES = ("README.md", "docs/commands.md", "docs/results.md")
@@ -147,7 +147,7 @@ def test_the_walk_covers_every_command_and_keeps_its_needs():
 
 
 def test_the_validation_counts_are_stated_once_over():
-    """README.md holds `mechopt validate`'s summary line (tests/test_scenes.py checks it against a
+    """README.md holds `mechopt validate`'s summary line (tests/spine/test_scenes.py checks it against a
     run); a page that quotes it quotes the same line."""
     today = re.findall(r"Today: `[^`]+`", (ROOT / "README.md").read_text(encoding="utf-8"))
     assert len(today) == 1

@@ -38,7 +38,7 @@ REBOUND_SCENES = ("stop-impact/rebound-280-420", "stop-impact/rebound-177rpm")
 
 def task_of(scene_id, **change):
     """The earlier fitted reading of what the scene held (tests/stop_impact_fitted.py): eq. (2)'s
-    methods are pinned on it; the chain's scenes have tests/test_stop_impact_chain.py."""
+    methods are pinned on it; the chain's scenes have tests/stop_impact/test_stop_impact_chain.py."""
     return fitted_task(scene_id, **change)
 
 
