@@ -295,7 +295,7 @@ def test_a_solver_error_is_not_solved_not_bad_input(monkeypatch, capsys):
 def test_a_sweep_sends_the_csv_table_its_scene_references_to_the_workers(tmp_path):
     table = tmp_path / "tables" / "cam.csv"
     table.parent.mkdir()
-    table.write_text((Path(__file__).parents[1] / "examples" / "cam-profile-table.csv").read_text())
+    table.write_text((Path(__file__).parents[2] / "examples" / "cam-profile-table.csv").read_text())
     path = _scene(tmp_path, CSV.format("tables/cam.csv"))
     source = sw.SceneText.of(load(path))
     assert [p for p, _ in source.files] == [str(table.resolve())]

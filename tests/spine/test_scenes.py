@@ -139,7 +139,7 @@ def test_cli_validate_passes_and_reports_every_check(tmp_path, capsys, solved_on
     counts = {v: sum(c["verdict"] == v for c in checks) for v in verdicts.VERDICTS}
     assert f"{counts['reproduced']} reproduced" in summary and f"{counts['derived']} derived" in summary
     # the README states the same counts: it must not drift from the registry
-    readme = " ".join((Path(__file__).parents[1] / "README.md").read_text(encoding="utf-8").split())
+    readme = " ".join((Path(__file__).parents[2] / "README.md").read_text(encoding="utf-8").split())
     assert f"Today: `{summary}`" in readme
 
 

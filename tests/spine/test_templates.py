@@ -33,5 +33,5 @@ def test_every_template_is_written_with_the_files_it_reads_and_loads(name, tmp_p
 
 
 def test_the_command_line_names_no_template():
-    text = (Path(__file__).parents[1] / "src" / "mechopt" / "cli.py").read_text(encoding="utf-8")
+    text = (Path(__file__).parents[2] / "src" / "mechopt" / "cli.py").read_text(encoding="utf-8")
     assert not [n for n in templates() if f'"{n}"' in text]
