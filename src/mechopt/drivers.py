@@ -91,6 +91,9 @@ def elasticities(solve, inputs, headline, values, *, max_resolves: int = MAX_RES
         if spent + 2 > max_resolves:
             skipped[item.key] = f"beyond the count budget of {max_resolves} re-solves"
             continue
+        if item.value == 0:             # an input set to 0: +-1 % of it is no step, and (x / y) dy/dx is 0 there
+            skipped[item.key] = f"at 0: a step of +-{REL_STEP:.0%} of it is no step (its elasticity is 0 there)"
+            continue
         step = REL_STEP * item.value
         spent += 2
         try:

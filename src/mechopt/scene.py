@@ -164,7 +164,7 @@ class SceneFile(BaseModel):
     task: str
     solver: str
     effects: list[str] = []
-    params: dict[str, Param]
+    params: dict[str, Param] = {}            # a scene whose inputs are all in structure (or defaults) needs none
     structure: dict[str, Any] = {}           # non-numeric inputs (a network's events, a list of speeds),
                                              # handed to the task as they are; it validates them
     derive: dict[str, str] = {}              # param = "other-scene-id:value_name": a chain of models

@@ -33,6 +33,22 @@ def test_elasticity_of_a_power_law_and_the_ranking():
     assert set_mostly_by(found) == ["y: set mostly by b (assumed, elasticity -1); of the calibrated inputs, a (+2)"]
 
 
+def test_an_input_at_zero_is_skipped_with_why_not_divided_by():
+    """An override of 0 (friction_torque_Nm = 0) made its +-1 % step 0 and the drivers divided by it."""
+    from mechopt.drivers import Input
+    found = elasticities(lambda more: _fake({"y": 1.0 + (more.get("a") or 0.0)}), [Input("a", 0.0, "assumed")], ["y"],
+                         {"y": 1.0})
+    assert found["skipped"]["a"].startswith("at 0: a step of +-1% of it is no step")
+    assert found["values"]["y"]["assumed"] == [] and found["resolves"] == 0
+
+
+def test_a_press_run_with_an_input_at_zero_writes_its_json_with_drivers(tmp_path):
+    out = tmp_path / "r.json"
+    assert main(["run", "press/kd2322", "--set", "friction_torque_Nm=0", "--json", str(out)]) == 0
+    drivers = json.loads(out.read_text())["diagnostics"]["drivers"]
+    assert drivers["skipped"]["friction_torque_Nm"].startswith("at 0:")
+
+
 def _with_a_step(at=10.04, jump=5.0):
     """y = 2 x + 1, and `jump` more above x = `at` (a bound that starts crossing its limit)."""
     from mechopt.drivers import Input

@@ -246,3 +246,13 @@ def test_what_if_scenes_draw_their_operating_point(case, name, tmp_path):
     paths = plot_run(registry.run(registry.find(case)), tmp_path)
     assert [p.name for p in paths] == [name]
     assert paths[0].stat().st_size > 10_000
+
+
+def test_a_scene_with_no_params_table_runs(tmp_path):
+    """Every input in structure: no empty [params] table is needed (it was refused: "params: missing")."""
+    (tmp_path / "ops.csv").write_text("from,to,min_deg\na,b,10\nb,c,5\n", encoding="utf-8")
+    (tmp_path / "m.toml").write_text('id = "t/m"\ntitle = "t"\nsource = "test"\ntask = "loom.Cyclogram"\n'
+                                     'solver = "loom.plan_cyclogram"\n[structure]\n'
+                                     'operations = { csv = "ops.csv", columns = ["from", "to", "min_deg"] }\n',
+                                     encoding="utf-8")
+    assert registry.run(str(tmp_path / "m.toml")).values["span_deg"] == 15.0
