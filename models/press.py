@@ -305,6 +305,9 @@ class PressDrive:
             out.append(f"eq. (1) extrapolated beyond X = {top:g} mm, its fitted range: at X = blank_thickness_mm = "
                        f"{self.blank_thickness_mm:g} mm it gives {forces[0] / 1000:.3g} kN, "
                        f"{forces[0] / forces[1]:.2g}x its value at {top:g} mm")
+        elif self.cutting and top is None:          # a law's range belongs to it: unstated, it cannot be checked
+            out.append(f"eq. (1)'s fitted range is not stated (force_fit_max_mm): whether X = blank_thickness_mm = "
+                       f"{self.blank_thickness_mm:g} mm lies inside it is not checked")
         if self.kinematics == "paper":
             error = paper_kinematics_error(self.rod_ratio)
             if error > PAPER_KINEMATICS_TOLERANCE:

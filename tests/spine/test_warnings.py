@@ -39,6 +39,15 @@ def test_the_published_setting_has_no_warning():
     assert registry.run("press/kd2322").result.warnings == ()
 
 
+def test_a_force_law_without_its_fitted_range_warns_that_it_is_unchecked():
+    """A scene (an older template's) that gives eq. (1)'s coefficients but not the range they were
+    fitted on: its 5 mm blank was run with no word; now the unchecked range is said."""
+    task = registry.find("press/kd2322").build()[0]
+    loose = replace(task, force_fit_max_mm=None, blank_thickness_mm=5.0)
+    assert loose.warnings({}) == ["eq. (1)'s fitted range is not stated (force_fit_max_mm): whether X = "
+                                  "blank_thickness_mm = 5 mm lies inside it is not checked"]
+
+
 def test_paper_kinematics_error_against_finite_differences():
     """The closed-form error of the paper's X'' against second differences of both X(phi)."""
     for lam in (0.071, 0.3):
