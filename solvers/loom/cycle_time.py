@@ -300,7 +300,7 @@ def _floats(u, T) -> dict:
 
 def cycle_time_lp(u: Uniform, backend: str = "HIGHS"):
     """(status, least T or None): minimise T over (p, T) s.t. D p >= d - k T, T >= 0, p(0) = 0."""
-    import cvxpy as cp                  # the certificate alone needs it: the graph does not wait for it
+    import cvxpy as cp  # the certificate alone needs it: the graph does not wait for it
 
     from mechopt.solvers.loom.event_time import incidence
     n = len(u.names)
