@@ -191,3 +191,14 @@ def test_angles_and_durations_do_not_mix_in_one_cycle_time():
     ops = [op("a", "b", 3.0), op("b", "a", 10.0, 1, "min_deg")]
     with pytest.raises(ModelError, match=r"operations\[b->a\]\.min_deg: the least cycle time of a time-based"):
         least_cycle_time(Cyclogram(operations=ops))
+
+
+def test_a_recurrent_machine_from_its_timing_table():
+    """loom/recurrent-indexer: a CSV with a cycles column; the glue's cure two indexes on sets T."""
+    run = registry.run(registry.find("loom/recurrent-indexer"))
+    assert run.ok and run.values["cycle_time_ms"] == pytest.approx(1390.0 / 3.0, rel=1e-12)
+    circuit = run.diagnostics["critical_circuit"]
+    assert circuit["cycles"] == 3 and "feed.down->press.down[+2]" in circuit["operations"]
+    assert brute_force_ratio(run.task) == pytest.approx(1390.0 / 3.0, rel=1e-12)
+    # the feeder's retract lies on its own circuit (120 + 150 + 60 + 20 = 350 ms over one cycle)
+    assert run.diagnostics["float_ms"]["feed.down->feed.up"] == pytest.approx(1390.0 / 3.0 - 350.0)
