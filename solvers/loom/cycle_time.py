@@ -31,7 +31,7 @@ from mechopt.kit.errors import NAMED, ModelError, some_of
 from mechopt.kit.result import Clock, Result, Status, from_cvxpy
 from mechopt.kit.settings import check_settings
 from mechopt.models.loom import Cyclogram
-from mechopt.solvers.loom.graph import ROUND_OFF, a_path
+from mechopt.solvers.loom.graph import ROUND_OFF, _segments, a_path, topological_levels
 
 MAX_STEPS = 10_000           # Dinkelbach steps (each one Bellman-Ford pass): LIMIT past it
 FLOAT_MAX_EVENTS = 500       # floats by a max-plus Floyd-Warshall (n^3) for networks up to this many events
@@ -47,7 +47,7 @@ class Uniform:
     heads: np.ndarray
     d: np.ndarray
     k: np.ndarray
-    labels: list             # how the designer names each arc ("a->b", "a->b[+1]", "window ...", "sync ...")
+    labels: np.ndarray       # how the designer names each arc ("a->b", "a->b[+1]", "window ...", "sync ...")
     operations: int          # arcs [0, operations) are operations (ordinary, then recurrent); windows and syncs follow
     unit: str                # "ms" (time-based operations) or "deg"
 
@@ -59,28 +59,29 @@ def uniform_constraints(task: Cyclogram) -> Uniform:
     """The task's operations, recurrent operations, windows and syncs as uniform constraints. Time-
     based when any operation gives min_ms (every floor then in ms: no min_deg, stress, amplitude or
     window, which are angles); else angle-based, each operation at its bound of every limit."""
-    names = list(task.graph.nodes)
-    index = {v: i for i, v in enumerate(names)}
+    dag_names, dag_tails, dag_heads = task.index_arrays     # cached on the task: the one cycle's operations
+    names = list(dag_names) + task.isolated_events             # events of recurrent operations alone come last
+    index = task.event_index | {v: len(dag_names) + i for i, v in enumerate(task.isolated_events)}
     rec = task.recurrences
     timed = bool(task.time_arcs()) or any(op["min_ms"] is not None for op in rec)
     if timed:
         _check_time_based(task)
-        d_ops = [0.0 if ms is None else ms for _, _, ms in task.graph.edges(data="min_ms")]
+        d_ops = np.array([0.0 if ms is None else ms for _, _, ms in task.graph.edges(data="min_ms")], dtype=float)
         d_rec = [0.0 if op["min_ms"] is None else op["min_ms"] for op in rec]
     else:
-        d_ops = task.lower_bounds_deg("exact")[0].tolist()
+        d_ops = task.lower_bounds_deg("exact")[0]
         d_rec = [op["min_deg"] for op in rec]
-    arcs = [(x, y, d, 0, f"{x}->{y}") for (x, y), d in zip(task.arcs, d_ops)]
-    arcs += [(op["from"], op["to"], d, op["cycles"], f"{op['from']}->{op['to']}[+{op['cycles']}]")
-             for op, d in zip(rec, d_rec)]
-    operations = len(arcs)
-    arcs += [(b, a, -w, 0, f"window p({b}) - p({a}) <= {w:.6g} deg") for a, b, w in task.window_arcs()]
-    arcs += [(u, v, 0.0, 0, f"sync p({a}) = p({b})") for a, b in task.sync_pairs() for u, v in ((a, b), (b, a))]
-    tails = np.array([index[a[0]] for a in arcs], dtype=np.int64)
-    heads = np.array([index[a[1]] for a in arcs], dtype=np.int64)
-    return Uniform(names, tails, heads, np.array([a[2] for a in arcs], dtype=float),
-                   np.array([a[3] for a in arcs], dtype=float), [a[4] for a in arcs], operations,
-                   "ms" if timed else "deg")
+    more = [(op["from"], op["to"], d, op["cycles"], f"{op['from']}->{op['to']}[+{op['cycles']}]")
+            for op, d in zip(rec, d_rec)]
+    operations = len(dag_tails) + len(more)
+    more += [(b, a, -w, 0, f"window p({b}) - p({a}) <= {w:.6g} deg") for a, b, w in task.window_arcs()]
+    more += [(u, v, 0.0, 0, f"sync p({a}) = p({b})") for a, b in task.sync_pairs() for u, v in ((a, b), (b, a))]
+    tails = np.r_[dag_tails, np.array([index[m[0]] for m in more], dtype=np.int64)]
+    heads = np.r_[dag_heads, np.array([index[m[1]] for m in more], dtype=np.int64)]
+    d = np.r_[d_ops, np.array([m[2] for m in more], dtype=float)]
+    k = np.r_[np.zeros(len(dag_tails)), np.array([m[3] for m in more], dtype=float)]
+    labels = np.concatenate([task.operation_labels, np.array([m[4] for m in more], dtype=str)])
+    return Uniform(names, tails, heads, d, k, labels, operations, "ms" if timed else "deg")
 
 
 def _check_time_based(task):
@@ -97,47 +98,76 @@ def _check_time_based(task):
 
 
 class Circuits:
-    """Bellman-Ford for longest paths on the uniform constraints at a given T, from a virtual
-    root (every time starts at 0), one vectorised round over every arc at a time, the
-    predecessor arcs watched for a circuit: with strict improvements (by more than ROUND_OFF of
-    the largest |weight|) a circuit of predecessors has a positive sum (Cormen et al., lemma 24.16,
-    which holds for a round's simultaneous updates too: the arc into the last-updated event of
-    the circuit was set from an older, smaller time)."""
+    """Longest paths on the uniform constraints at a given T from a virtual root (every time
+    starts at 0), the predecessor arcs watched for a circuit. A round is one pass over the
+    operations of one cycle (a DAG) in topological order, a level at a time (`graph.Levels`'s
+    grouping), then the other arcs (recurrent operations, windows, syncs) relaxed together: a
+    DAG settles in one pass, so the rounds number about the back arcs on a longest path, not the
+    events. Every update must gain more than ROUND_OFF of the largest |weight|; with such strict
+    updates a circuit of predecessor arcs has a positive sum (Cormen et al., Introduction to
+    Algorithms, lemma 24.16: the arc into the circuit's last-updated event was set from an
+    older, smaller time of its tail), so the first one seen is returned."""
 
-    def __init__(self, u: Uniform):
-        self.u, self.n = u, len(u.names)
-        self.by_head = np.argsort(u.heads, kind="stable")
-        heads = u.heads[self.by_head]
-        self.starts = np.flatnonzero(np.r_[True, heads[1:] != heads[:-1]]) if len(heads) else np.array([], np.int64)
-        self.targets = heads[self.starts]
+    def __init__(self, u: Uniform, dag: int):
+        self.u, self.n, self.dag = u, len(u.names), dag
+        tails, heads = u.tails[:dag], u.heads[:dag]
+        self.order, segments = _segments(topological_levels(self.n, tails, heads), heads, self.n, reverse=False)
+        self.t_fwd = tails[self.order]
+        # per level: its slice, reduce starts, targets and each arc's group (its target's place)
+        self.segments = [(a, b, starts, targets, np.repeat(np.arange(len(starts)), np.diff(np.r_[starts, b - a])))
+                         for a, b, starts, targets in segments]
+        self.back = np.arange(dag, len(u.tails))
         self.passes = 0
 
     def longest(self, T: float):
         """(times p, None) when no circuit is positive at T; else (None, a positive circuit's arcs in order)."""
         self.passes += 1
-        w = self.u.weights(T)
-        n = self.n
+        u, n = self.u, self.n
+        w = u.weights(T)
         dist, pred = np.zeros(n), np.full(n, -1, dtype=np.int64)
         if not len(w):
             return dist, None
         eps = ROUND_OFF * max(1.0, float(np.abs(w).max()))
-        w_sorted, tails_sorted = w[self.by_head], self.u.tails[self.by_head]
-        group = np.repeat(np.arange(len(self.starts)), np.diff(np.r_[self.starts, len(w)]))
-        for _ in range(2 * n + 2):
-            cand = dist[tails_sorted] + w_sorted
-            best = np.maximum.reduceat(cand, self.starts)
-            gain = best > dist[self.targets] + eps
-            if not gain.any():
+        w_fwd = w[:self.dag][self.order]
+        back, bt, bh = self.back, u.tails[self.back], u.heads[self.back]
+        for _ in range(len(back) + n + 2):
+            gained = False
+            for a, b, starts, targets, group in self.segments:
+                gained |= _relax(dist, pred, self.t_fwd[a:b], w_fwd[a:b], starts, targets, group,
+                                 self.order[a:b], eps)
+            if len(back):
+                cand = dist[bt] + w[back]
+                gain = cand > dist[bh] + eps
+                if gain.any():
+                    # the best gaining arc into each event: sorted by (event, value), the last of each event
+                    idx = np.flatnonzero(gain)
+                    idx = idx[np.lexsort((cand[idx], bh[idx]))]
+                    last = np.r_[bh[idx][1:] != bh[idx][:-1], True]
+                    dist[bh[idx[last]]] = cand[idx[last]]
+                    pred[bh[idx[last]]] = back[idx[last]]
+                    gained = True
+            if not gained:
                 return dist, None
-            # the first arc reaching each gaining event's best
-            at_best = np.flatnonzero((cand == best[group]) & gain[group])
-            first = at_best[np.r_[True, group[at_best][1:] != group[at_best][:-1]]]
-            dist[self.targets[gain]] = best[gain]
-            pred[self.u.heads[self.by_head[first]]] = self.by_head[first]
-            circuit = _predecessor_circuit(n, self.u.tails, pred)
+            circuit = _predecessor_circuit(n, u.tails, pred)
             if circuit is not None:
                 return None, circuit
-        raise _Undecided(f"Bellman-Ford still improving after {2 * n + 2} rounds without a circuit of predecessors")
+        raise _Undecided(f"longest paths still improving after {len(back) + n + 2} rounds without a circuit "
+                         f"of predecessors")
+
+
+def _relax(dist, pred, ends, w, starts, targets, group, arcs, eps) -> bool:
+    """One level: each target takes the best of its arcs' tail time + weight when that gains more
+    than eps, its predecessor the first arc reaching it; whether any did."""
+    cand = dist[ends] + w
+    best = np.maximum.reduceat(cand, starts)
+    gain = best > dist[targets] + eps
+    if not gain.any():
+        return False
+    at_best = np.flatnonzero((cand == best[group]) & gain[group])
+    first = at_best[np.r_[True, group[at_best][1:] != group[at_best][:-1]]]
+    dist[targets[gain]] = best[gain]
+    pred[targets[gain]] = arcs[first]
+    return True
 
 
 class _Undecided(Exception):
@@ -186,7 +216,7 @@ def least_cycle_time(task: Cyclogram, *, check: bool = False,
     check_settings(least_cycle_time, backend=backend)
     clock = Clock()
     u = uniform_constraints(task)
-    bf = Circuits(u)
+    bf = Circuits(u, len(task.arcs))
     clock.built()
     name = f"cycle_time_{u.unit}" if u.unit == "ms" else "cycle_deg"
     diagnostics = {"method": "graph (Dinkelbach on positive circuits)", "unit": u.unit, "events": len(u.names),
@@ -199,7 +229,7 @@ def least_cycle_time(task: Cyclogram, *, check: bool = False,
     if T is None:
         diagnostics |= {"conflict_circuit": _describe(u, circuit)}
         result = clock.result(Status.INFEASIBLE, {}, diagnostics=diagnostics,
-                              violated=tuple(u.labels[a] for a in circuit[:NAMED]),
+                              violated=tuple(str(u.labels[a]) for a in circuit[:NAMED]),
                               message="infeasible at every cycle time: circuit " + _circuit_text(u, circuit)
                               + f" of height 0 needs {math.fsum(u.d[circuit]):.6g} {u.unit} more than nothing")
         return _checked(result, u, name, backend) if check else result
@@ -244,7 +274,7 @@ def _dinkelbach(u, bf):
 
 def _describe(u, circuit) -> dict:
     events = [u.names[u.tails[a]] for a in circuit]
-    ops = [u.labels[a] for a in circuit]
+    ops = [str(u.labels[a]) for a in circuit]
     return {"events": events[:NAMED], "operations": ops[:NAMED], "arcs": len(circuit),
             "cycles": int(u.k[circuit].sum()), f"length_{u.unit}": math.fsum(u.d[circuit])}
 
@@ -277,7 +307,7 @@ def _critical(u, p, T, circuit) -> dict:
         closing = int(arcs[u.k[arcs] > 0][0])
         back = a_path(n, u.tails[arcs], u.heads[arcs], int(u.heads[closing]), int(u.tails[closing]))
         circuits.append(_describe(u, [closing] + [int(arcs[j]) for j in back]))
-    ops = [u.labels[a] for a in inside if a < u.operations and label[u.tails[a]] in components]
+    ops = [str(u.labels[a]) for a in inside if a < u.operations and label[u.tails[a]] in components]
     return {"critical_circuit": circuits[0], "critical_circuits": circuits, "critical_ops": ops}
 
 
@@ -294,7 +324,7 @@ def _floats(u, T) -> dict:
     out = {}
     for a in range(u.operations):
         back = L[u.heads[a], u.tails[a]]
-        out[u.labels[a]] = None if not np.isfinite(back) else max(0.0, -(w[a] + back)) + 0.0
+        out[str(u.labels[a])] = None if not np.isfinite(back) else max(0.0, -(w[a] + back)) + 0.0
     return out
 
 
