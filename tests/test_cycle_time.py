@@ -202,3 +202,10 @@ def test_a_recurrent_machine_from_its_timing_table():
     assert brute_force_ratio(run.task) == pytest.approx(1390.0 / 3.0, rel=1e-12)
     # the feeder's retract lies on its own circuit (120 + 150 + 60 + 20 = 350 ms over one cycle)
     assert run.diagnostics["float_ms"]["feed.down->feed.up"] == pytest.approx(1390.0 / 3.0 - 350.0)
+
+
+def test_a_duration_at_the_machine_s_speed_is_an_angle():
+    # at 60 rpm the shaft turns 36 deg in 100 ms: with speed_rpm the network is angle-based
+    ops = [op("a", "b", 10.0, unit="min_deg"), op("b", "c", 100.0), op("c", "a", 50.0, 1)]
+    r = least_cycle_time(Cyclogram(operations=ops, speed_rpm=60.0), check=True)
+    assert r.values["cycle_deg"] == pytest.approx(10.0 + 36.0 + 18.0, rel=1e-12) and r.values["check_rel"] <= 1e-9

@@ -30,7 +30,7 @@ from scipy.sparse.csgraph import connected_components
 from mechopt.kit.errors import NAMED, ModelError, some_of
 from mechopt.kit.result import Clock, Result, Status, from_cvxpy
 from mechopt.kit.settings import check_settings
-from mechopt.models.loom import Cyclogram
+from mechopt.models.loom import Cyclogram, time_floor_deg
 from mechopt.solvers.loom.graph import ROUND_OFF, _segments, a_path, topological_levels
 
 MAX_STEPS = 10_000           # Dinkelbach steps (each one Bellman-Ford pass): LIMIT past it
@@ -57,20 +57,22 @@ class Uniform:
 
 def uniform_constraints(task: Cyclogram) -> Uniform:
     """The task's operations, recurrent operations, windows and syncs as uniform constraints. Time-
-    based when any operation gives min_ms (every floor then in ms: no min_deg, stress, amplitude or
-    window, which are angles); else angle-based, each operation at its bound of every limit."""
+    based when an operation gives min_ms and the task no speed_rpm (every floor then in ms: no
+    min_deg, stress, amplitude or window, which are angles); else angle-based, each operation at
+    its bound of every limit (a min_ms as the angle the shaft turns in it at speed_rpm)."""
     dag_names, dag_tails, dag_heads = task.index_arrays     # cached on the task: the one cycle's operations
     names = list(dag_names) + task.isolated_events             # events of recurrent operations alone come last
     index = task.event_index | {v: len(dag_names) + i for i, v in enumerate(task.isolated_events)}
     rec = task.recurrences
-    timed = bool(task.time_arcs()) or any(op["min_ms"] is not None for op in rec)
+    timed = (bool(task.time_arcs()) or any(op["min_ms"] is not None for op in rec)) and task.speed_rpm is None
     if timed:
         _check_time_based(task)
         d_ops = np.array([0.0 if ms is None else ms for _, _, ms in task.graph.edges(data="min_ms")], dtype=float)
         d_rec = [0.0 if op["min_ms"] is None else op["min_ms"] for op in rec]
     else:
         d_ops = task.lower_bounds_deg("exact")[0]
-        d_rec = [op["min_deg"] for op in rec]
+        d_rec = [op["min_deg"] if op["min_ms"] is None else max(op["min_deg"], time_floor_deg(op["min_ms"], task.speed_rpm))
+                 for op in rec]
     more = [(op["from"], op["to"], d, op["cycles"], f"{op['from']}->{op['to']}[+{op['cycles']}]")
             for op, d in zip(rec, d_rec)]
     operations = len(dag_tails) + len(more)
@@ -201,8 +203,8 @@ def least_cycle_time(task: Cyclogram, *, check: bool = False,
                      backend: Literal["HIGHS", "CLARABEL"] = "HIGHS") -> Result:
     """The least cycle time T of a recurrent machine and the circuit that sets it (module docstring).
 
-    Returns cycle_time_ms (time-based operations, min_ms) or cycle_deg (angle-based, min_deg and
-    every limit's bound) and p_<event>_ms / _deg, the earliest times of a schedule repeating
+    Returns cycle_time_ms (time-based operations: min_ms and no speed_rpm) or cycle_deg (angle-
+    based: min_deg and every limit's bound, a min_ms at speed_rpm) and p_<event>_ms / _deg, the earliest times of a schedule repeating
     every T (networks up to PER_NAME_MAX_EVENTS events); diagnostics: critical_circuit {events
     in order, operations ("a->b", a recurrent one "a->b[+k]"), cycles, length}, critical_circuits
     (one per group of critical circuits sharing events: a tie names each), critical_ops (every
