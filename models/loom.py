@@ -80,6 +80,11 @@ SYNC_COLUMNS = {"events": str} | {k: str for k in sorted(_NOTE_KEYS)}   # events
 _STRESS_KEYS = {"sigma_ref_MPa", "t_ref_deg"} | _NOTE_KEYS
 _WINDOW_KEYS = {"from", "to", "max_deg"} | _NOTE_KEYS
 _SYNC_KEYS = {"events"} | _NOTE_KEYS
+# a task table (activity on node): each task a duration and the tasks it waits for, "a;b", one k
+# cycles before written "b@k"; turned into the event network by `task_operations`
+TASK_COLUMNS = {"task": str, "min_ms": float, "min_deg": float, "after": str, "name": str, "group": str,
+                "mechanism": str, "mark": str, "why": str}
+_TASK_KEYS = set(TASK_COLUMNS) | _NOTE_KEYS
 
 
 def stress_MPa(sigma_ref_MPa, t_ref_deg, t_deg):
@@ -171,7 +176,8 @@ class Cyclogram:
     `lever` (structure): the lift lever's table (see `lever_stop`), the exact law a(t, n) behind
     the linear one; a task may give it instead of the linear law's slope and intercept.
     """
-    operations: list
+    operations: list = field(default_factory=list)
+    tasks: list = field(default_factory=list)
     events: dict = field(default_factory=dict)
     stress_models: dict = field(default_factory=dict)
     windows: list = field(default_factory=list)
@@ -203,10 +209,17 @@ class Cyclogram:
     # tables a scene may read from a CSV beside it, any length (an inline list holds at most 100 rows)
     CSV_TABLES: ClassVar[dict] = {"operations": (("from", "to"), OPERATION_COLUMNS),
                                   "windows": (("from", "to", "max_deg"), WINDOW_COLUMNS),
-                                  "syncs": (("events",), SYNC_COLUMNS)}
+                                  "syncs": (("events",), SYNC_COLUMNS), "tasks": (("task",), TASK_COLUMNS)}
 
     def __post_init__(self):
         check_fields(self)
+        if self.tasks:                  # a task table becomes the operations it stands for
+            ops = task_operations(self.tasks)
+            if self.operations and self.operations != ops:
+                raise ModelError("tasks: a network is given by its operations or by its tasks, not both", key="tasks")
+            object.__setattr__(self, "operations", ops)
+        elif not self.operations:
+            raise ModelError("operations: missing (give the operations, or a task table `tasks`)", key="operations")
         _table(self.operations, "operations", list)
         _table(self.events, "events", dict)
         if not self.events:             # events named by the operations need no table of their own
@@ -622,6 +635,57 @@ def _events_of(operations) -> dict:
     names = dict.fromkeys(name for op in operations if isinstance(op, dict) and "from" in op and "to" in op
                           for name in (str(op["from"]), str(op["to"])))
     return {name: {k: v for k, v in zip(("group", "mechanism"), into.get(name) or out[name]) if v} for name in names}
+
+
+def task_operations(tasks) -> list[dict]:
+    """A task table (activity on node: rows {task, min_ms or min_deg, after}) as the operations of
+    its event network: each task t an operation t.start -> t.end of its duration; each task b it
+    waits for an operation b.end -> t.start of 0 (cycles = k for "b@k", b of k cycles before);
+    a task waiting for none of this cycle starts after the event `start`, one none waits for ends
+    before `end`. Errors name the task's row."""
+    _table(tasks, "tasks", list)
+    rows = {}
+    for j, row in enumerate(tasks):
+        _entry(row, f"tasks[{j}]", _TASK_KEYS, required=("task",))
+        name = str(row["task"]).strip()
+        if not name or name in rows or name in ("start", "end"):
+            why = "given twice" if name in rows else "a task needs a name other than start and end"
+            raise ModelError(f"tasks[{j}].task={row['task']!r}: {why}", key=f"tasks[{j}].task")
+        if "min_ms" not in row and "min_deg" not in row:
+            raise ModelError(f"tasks[{name}]: give its duration, min_ms or min_deg", key=f"tasks[{name}]")
+        rows[name] = row
+    ops, waits, awaited = [], set(), set()
+    for name, row in rows.items():
+        ops.append({"from": f"{name}.start", "to": f"{name}.end", "name": str(row.get("name", name))}
+                   | {k: row[k] for k in ("min_ms", "min_deg", "group", "mechanism", "mark", "why") if k in row})
+        for before, k in _predecessors(row.get("after", ""), f"tasks[{name}].after", rows):
+            ops.append({"from": f"{before}.end", "to": f"{name}.start", "min_deg": 0.0} | ({"cycles": k} if k else {}))
+            if not k:
+                waits.add(name)
+                awaited.add(before)
+    ops += [{"from": "start", "to": f"{t}.start", "min_deg": 0.0} for t in rows if t not in waits]
+    ops += [{"from": f"{t}.end", "to": "end", "min_deg": 0.0} for t in rows if t not in awaited]
+    return ops
+
+
+def _predecessors(after, key, rows) -> list[tuple[str, int]]:
+    """(task, cycles) of an `after` cell "a;b@1" (a list of such names too), each a task of the table."""
+    if not isinstance(after, (str, list)) or (isinstance(after, list) and not all(isinstance(a, str) for a in after)):
+        raise ModelError(f"{key}={after!r}: expected the tasks waited for, as 'a;b' (or 'b@k': k cycles before)",
+                         key=key)
+    out = []
+    for item in (after.split(";") if isinstance(after, str) else after):
+        name, _, k = item.strip().partition("@")
+        name = name.strip()
+        if not name:
+            continue
+        if name not in rows:
+            raise ModelError(f"{key}: unknown task {name!r}; tasks: {some_of(rows, sep=', ')}", key=key)
+        if k and not (k.strip().isdigit() and int(k) <= MAX_CYCLES):
+            raise ModelError(f"{key}: {item.strip()!r}: the cycles after '@' must be a whole number in "
+                             f"[0, {MAX_CYCLES}]", key=key)
+        out.append((name, int(k) if k else 0))
+    return out
 
 
 def _split_windows(operations) -> tuple[list, list]:

@@ -209,3 +209,43 @@ def test_a_duration_at_the_machine_s_speed_is_an_angle():
     ops = [op("a", "b", 10.0, unit="min_deg"), op("b", "c", 100.0), op("c", "a", 50.0, 1)]
     r = least_cycle_time(Cyclogram(operations=ops, speed_rpm=60.0), check=True)
     assert r.values["cycle_deg"] == pytest.approx(10.0 + 36.0 + 18.0, rel=1e-12) and r.values["check_rel"] <= 1e-9
+
+
+def test_a_task_table_gives_the_cycle_time_and_each_task_s_float():
+    """loom/recurrent-tasks: tasks with durations and the tasks they wait for ("b@k": k cycles before)."""
+    run = registry.run(registry.find("loom/recurrent-tasks"))
+    assert run.ok and run.values["cycle_time_ms"] == pytest.approx(1450.0 / 3.0, rel=1e-12)
+    tasks = run.diagnostics["tasks"]
+    assert [t for t, row in tasks.items() if row["critical"]] == ["index", "feed", "cure", "press"]
+    assert tasks["feed.back"]["float_ms"] == pytest.approx(1450.0 / 3.0 - (120.0 + 150.0 + 60.0))
+    assert tasks["eject"]["float_ms"] == pytest.approx(1450.0 / 3.0 - (120.0 + 90.0))
+    assert tasks["feed"]["start_ms"] == pytest.approx(120.0)
+
+
+def test_a_task_table_becomes_its_event_network():
+    task = Cyclogram(tasks=[{"task": "a", "min_ms": 3.0}, {"task": "b", "min_ms": 2.0, "after": "a; b@1"}])
+    assert sorted(task.arcs) == [("a.end", "b.start"), ("a.start", "a.end"), ("b.end", "end"), ("b.start", "b.end"),
+                                 ("start", "a.start")]
+    assert [(r["from"], r["to"], r["cycles"]) for r in task.recurrences] == [("b.end", "b.start", 1)]
+    assert least_cycle_time(task).values["cycle_time_ms"] == 2.0          # b waits for its own last run
+
+
+@pytest.mark.parametrize("tasks, match", [
+    ([{"task": "a", "min_ms": 1.0}, {"task": "b", "min_ms": 1.0, "after": "a;c"}],
+     r"tasks\[b\]\.after: unknown task 'c'; tasks: a, b"),
+    ([{"task": "a", "min_ms": 1.0}, {"task": "b", "min_ms": 1.0, "after": "a@x"}],
+     r"tasks\[b\]\.after: 'a@x': the cycles after '@' must be a whole number"),
+    ([{"task": "a", "min_ms": 1.0}, {"task": "a", "min_ms": 2.0}], r"tasks\[1\]\.task='a': given twice"),
+    ([{"task": "a"}], r"tasks\[a\]: give its duration, min_ms or min_deg"),
+    ([{"task": "a", "min_ms": 1.0, "colour": "red"}], r"tasks\[0\]: unknown colour"),
+])
+def test_a_bad_task_table_is_refused_naming_the_row(tasks, match):
+    with pytest.raises(ModelError, match=match):
+        Cyclogram(tasks=tasks)
+
+
+def test_a_network_is_given_by_operations_or_by_tasks():
+    with pytest.raises(ModelError, match="operations or by its tasks, not both"):
+        Cyclogram(operations=[op("x", "y", 1.0)], tasks=[{"task": "a", "min_ms": 1.0}])
+    with pytest.raises(ModelError, match=r"operations: missing \(give the operations, or a task table"):
+        Cyclogram()

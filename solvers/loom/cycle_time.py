@@ -242,6 +242,8 @@ def least_cycle_time(task: Cyclogram, *, check: bool = False,
     diagnostics |= critical
     if len(u.names) <= FLOAT_MAX_EVENTS:
         diagnostics[f"float_{u.unit}"] = _floats(u, T)
+    if task.tasks and len(u.names) <= PER_NAME_MAX_EVENTS:
+        diagnostics["tasks"] = _per_task(task, u, p, diagnostics.get(f"float_{u.unit}"), set(critical["critical_ops"]))
     if circuit is None:
         message = f"{name} = 0: no recurrent circuit needs time (any cycle time fits)"
     else:
@@ -327,6 +329,20 @@ def _floats(u, T) -> dict:
     for a in range(u.operations):
         back = L[u.heads[a], u.tails[a]]
         out[str(u.labels[a])] = None if not np.isfinite(back) else max(0.0, -(w[a] + back)) + 0.0
+    return out
+
+
+def _per_task(task, u, p, floats, critical) -> dict:
+    """Per task of a task table (`task_operations`): its start in the earliest schedule repeating
+    every T*, its float (how far its duration may grow with T* unchanged; None: on no circuit, or
+    not computed past FLOAT_MAX_EVENTS) and whether it lies on a critical circuit."""
+    at = {v: i for i, v in enumerate(u.names)}
+    out = {}
+    for row in task.tasks:
+        name = str(row["task"]).strip()
+        op = f"{name}.start->{name}.end"
+        out[name] = {f"start_{u.unit}": float(p[at[f"{name}.start"]]),
+                     f"float_{u.unit}": None if floats is None else floats.get(op), "critical": op in critical}
     return out
 
 
