@@ -19,6 +19,7 @@ practice a handful; counted, never timed). The last circuit is critical; at T* t
 the pass's times hold every critical circuit (each is a zero circuit there), so ties are named.
 The LP in (p, T), minimise T, is the certificate (check = true), solved by cvxpy and HiGHS.
 """
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Literal
@@ -176,6 +177,10 @@ class _Undecided(Exception):
     """Round-off stopped the iteration: no answer to trust."""
 
 
+class _StepLimit(_Undecided):
+    """The iteration's count of steps ran out (LIMIT)."""
+
+
 def _predecessor_circuit(n, tails, pred) -> list[int] | None:
     """The arcs of a circuit of predecessor arcs (pred[v]: the arc into v), in order; None when none."""
     has = np.flatnonzero(pred >= 0)
@@ -204,13 +209,15 @@ def least_cycle_time(task: Cyclogram, *, check: bool = False,
     """The least cycle time T of a recurrent machine and the circuit that sets it (module docstring).
 
     Returns cycle_time_ms (time-based operations: min_ms and no speed_rpm) or cycle_deg (angle-
-    based: min_deg and every limit's bound, a min_ms at speed_rpm) and p_<event>_ms / _deg, the earliest times of a schedule repeating
-    every T (networks up to PER_NAME_MAX_EVENTS events); diagnostics: critical_circuit {events
+    based: min_deg and every limit's bound, a min_ms at speed_rpm) and p_<event>_ms / _deg, the
+    earliest times of a schedule repeating every T (networks up to PER_NAME_MAX_EVENTS events);
+    diagnostics: critical_circuit {events
     in order, operations ("a->b", a recurrent one "a->b[+k]"), cycles, length}, critical_circuits
     (one per group of critical circuits sharing events: a tie names each), critical_ops (every
     operation on a critical circuit), float_ms / float_deg per operation (how far its duration may
     grow with T unchanged; None: it lies on no circuit, any growth leaves T; networks up to
-    FLOAT_MAX_EVENTS events), dinkelbach_steps. INFEASIBLE when a circuit of height 0 has a
+    FLOAT_MAX_EVENTS events), tasks (a task table's: per task its start, float, critical),
+    dinkelbach_steps. LIMIT past MAX_STEPS steps. INFEASIBLE when a circuit of height 0 has a
     positive length (no cycle time fits), that circuit named. check = true solves the LP in
     (p, T) (minimise T; cvxpy and `backend`) beside it: a least T differing by more than 1e-9
     relative makes the answer INACCURATE (values check_rel, diagnostics check).
@@ -225,6 +232,8 @@ def least_cycle_time(task: Cyclogram, *, check: bool = False,
                    "operations": u.operations, "recurrent_operations": len(task.recurrences)}
     try:
         T, circuit, steps, p = _dinkelbach(u, bf)
+    except _StepLimit as exc:
+        return clock.result(Status.LIMIT, {}, message=f"graph: {exc}", diagnostics=diagnostics)
     except _Undecided as exc:
         return clock.result(Status.FAILED, {}, message=f"graph: {exc} (round-off)", diagnostics=diagnostics)
     diagnostics |= {"dinkelbach_steps": steps, "passes": bf.passes}
@@ -232,8 +241,8 @@ def least_cycle_time(task: Cyclogram, *, check: bool = False,
         diagnostics |= {"conflict_circuit": _describe(u, circuit)}
         result = clock.result(Status.INFEASIBLE, {}, diagnostics=diagnostics,
                               violated=tuple(str(u.labels[a]) for a in circuit[:NAMED]),
-                              message="infeasible at every cycle time: circuit " + _circuit_text(u, circuit)
-                              + f" of height 0 needs {math.fsum(u.d[circuit]):.6g} {u.unit} more than nothing")
+                              message="infeasible at every cycle time: the circuit " + _circuit_text(u, circuit)
+                              + f" spans no cycle (height 0) yet needs {math.fsum(u.d[circuit]):.6g} {u.unit}")
         return _checked(result, u, name, backend) if check else result
     values = {name: T}
     if len(u.names) <= PER_NAME_MAX_EVENTS:
@@ -273,7 +282,7 @@ def _dinkelbach(u, bf):
         if K <= 0 or not D / K > T:
             raise _Undecided(f"a positive circuit at T = {T!r} whose ratio does not rise above it")
         T, critical = D / K, circuit
-    raise _Undecided(f"no answer after {MAX_STEPS} steps")
+    raise _StepLimit(f"no answer after {MAX_STEPS} Dinkelbach steps")
 
 
 def _describe(u, circuit) -> dict:
@@ -367,7 +376,6 @@ def cycle_time_lp(u: Uniform, backend: str = "HIGHS"):
 
 def _checked(result: Result, u: Uniform, name: str, backend: str) -> Result:
     """`result` with the LP's answer beside it: the same status and T to CHECK_RTOL (per unit above 1)."""
-    import dataclasses
     status, T, said = cycle_time_lp(u, backend)
     diagnostics = result.diagnostics | {"check": {"method": f"lp ({backend})", "status": status.value,
                                                   "solver_status": said}}
