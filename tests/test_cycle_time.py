@@ -249,3 +249,10 @@ def test_a_network_is_given_by_operations_or_by_tasks():
         Cyclogram(operations=[op("x", "y", 1.0)], tasks=[{"task": "a", "min_ms": 1.0}])
     with pytest.raises(ModelError, match=r"operations: missing \(give the operations, or a task table"):
         Cyclogram()
+
+
+def test_the_iteration_is_count_limited(monkeypatch):
+    from mechopt.solvers.loom import cycle_time
+    monkeypatch.setattr(cycle_time, "MAX_STEPS", 0)
+    r = least_cycle_time(Cyclogram(operations=[op("a", "b", 3.0), op("b", "a", 3.0, 1)]))
+    assert r.status is Status.LIMIT and "no answer after 0 Dinkelbach steps" in r.message
