@@ -64,20 +64,27 @@ MAX_DEG = 1e6
 MAX_MPA = 1e6
 MAX_RPM = 1e6           # the lever model's stated range (models/stop_impact.py)
 MAX_MS = 1e6
+MAX_CYCLES = 1_000_000  # cycles a recurrent operation may span (a whole number)
 AMPLITUDE_LAWS = ("linear",)
 _NOTE_KEYS = {"mark", "why", "where", "what"}         # provenance and description, not physics
 _EVENT_KEYS = {"mechanism", "group"} | _NOTE_KEYS
 _OP_KEYS = {"from", "to", "min_deg", "min_ms", "max_deg", "stress", "amplitude", "name", "group",
-            "mechanism"} | _NOTE_KEYS
+            "mechanism", "cycles"} | _NOTE_KEYS
 # an operations table read from a designer's CSV (scene: `operations = { csv = "ops.csv", columns =
 # [...] }`): its columns and their kinds; event names are text ("3", "10.1", "feed.start")
 OPERATION_COLUMNS = {"from": str, "to": str, "name": str, "group": str, "mechanism": str, "min_deg": float,
-                     "min_ms": float, "max_deg": float, "stress": str, "amplitude": str, "mark": str, "why": str}
+                     "min_ms": float, "max_deg": float, "stress": str, "amplitude": str, "mark": str, "why": str,
+                     "cycles": float}
 WINDOW_COLUMNS = {"from": str, "to": str, "max_deg": float} | {k: str for k in sorted(_NOTE_KEYS)}
 SYNC_COLUMNS = {"events": str} | {k: str for k in sorted(_NOTE_KEYS)}   # events "a;b;c": one sync per row
 _STRESS_KEYS = {"sigma_ref_MPa", "t_ref_deg"} | _NOTE_KEYS
 _WINDOW_KEYS = {"from", "to", "max_deg"} | _NOTE_KEYS
 _SYNC_KEYS = {"events"} | _NOTE_KEYS
+# a task table (activity on node): each task a duration and the tasks it waits for, "a;b", one k
+# cycles before written "b@k"; turned into the event network by `task_operations`
+TASK_COLUMNS = {"task": str, "min_ms": float, "min_deg": float, "after": str, "name": str, "group": str,
+                "mechanism": str, "mark": str, "why": str}
+_TASK_KEYS = set(TASK_COLUMNS) | _NOTE_KEYS
 
 
 def stress_MPa(sigma_ref_MPa, t_ref_deg, t_deg):
@@ -155,6 +162,8 @@ class Cyclogram:
     `stress_models` {name: {sigma_ref_MPa, t_ref_deg}}; `windows` [{from, to, max_deg}]:
     p(to) - p(from) <= max_deg; `syncs` [{events = [a, b, ...]}]: equal times. Windows and syncs
     too may come from a CSV of any length (columns from, to, max_deg; a sync's events "a;b;c").
+    An operation with `cycles` = k > 0 is recurrent: it ends at its `to` of k cycles later
+    (`recurrences`; the least cycle time, `loom.least_cycle_time`).
     `limiting_op` [x, y]: maximise t(x, y) inside `cycle_deg` instead of minimising the span.
     Every entry may carry provenance notes: mark (given / assumed / calibrated), why, where, what.
 
@@ -167,7 +176,8 @@ class Cyclogram:
     `lever` (structure): the lift lever's table (see `lever_stop`), the exact law a(t, n) behind
     the linear one; a task may give it instead of the linear law's slope and intercept.
     """
-    operations: list
+    operations: list = field(default_factory=list)
+    tasks: list = field(default_factory=list)
     events: dict = field(default_factory=dict)
     stress_models: dict = field(default_factory=dict)
     windows: list = field(default_factory=list)
@@ -199,10 +209,17 @@ class Cyclogram:
     # tables a scene may read from a CSV beside it, any length (an inline list holds at most 100 rows)
     CSV_TABLES: ClassVar[dict] = {"operations": (("from", "to"), OPERATION_COLUMNS),
                                   "windows": (("from", "to", "max_deg"), WINDOW_COLUMNS),
-                                  "syncs": (("events",), SYNC_COLUMNS)}
+                                  "syncs": (("events",), SYNC_COLUMNS), "tasks": (("task",), TASK_COLUMNS)}
 
     def __post_init__(self):
         check_fields(self)
+        if self.tasks:                  # a task table becomes the operations it stands for
+            ops = task_operations(self.tasks)
+            if self.operations and self.operations != ops:
+                raise ModelError("tasks: a network is given by its operations or by its tasks, not both", key="tasks")
+            object.__setattr__(self, "operations", ops)
+        elif not self.operations:
+            raise ModelError("operations: missing (give the operations, or a task table `tasks`)", key="operations")
         _table(self.operations, "operations", list)
         _table(self.events, "events", dict)
         if not self.events:             # events named by the operations need no table of their own
@@ -212,6 +229,7 @@ class Cyclogram:
             object.__setattr__(self, "syncs", [s | {"events": [e.strip() for e in s["events"].split(";")]}
                                                if isinstance(s, dict) and isinstance(s.get("events"), str) else s
                                                for s in self.syncs])
+        _ = self.recurrences    # checked before a window is split off an operation (none on a recurrent one)
         if any(isinstance(op, dict) and "max_deg" in op for op in self.operations):
             operations, windows = _split_windows(self.operations)
             object.__setattr__(self, "operations", operations)
@@ -223,6 +241,8 @@ class Cyclogram:
 
     def _check_bounds(self):
         """Every derived lower bound inside the stated range, named by the inputs that set it."""
+        if self.speed_rpm is None and self.time_arcs():
+            return      # durations without a speed have no angle yet: an angle solver asks for speed_rpm
         for form in STRESS_FORMS:
             lb, why = self.lower_bounds_deg(form)
             for k in np.flatnonzero(~(np.abs(lb) <= MAX_DEG)):
@@ -249,28 +269,21 @@ class Cyclogram:
             _entry(op, key, _OP_KEYS, required=("from", "to") if "min_ms" in op else ("from", "to", "min_deg"))
             x, y = str(op["from"]), str(op["to"])
             key = f"operations[{x}->{y}]"
+            if _cycles(op, key):
+                continue        # a recurrent operation: not an arc of the cycle's network (`recurrences`)
             for end in (x, y):
                 _known_event(g, end, key)
             if x == y:
                 raise ModelError(f"{key}: an operation must join two different events", key=key)
             if g.has_edge(x, y):
                 raise ModelError(f"{key}: given twice; one operation per pair of events", key=key)
-            phi = _number(op.get("min_deg", 0.0), f"{key}.min_deg")   # a timed operation: its time alone
-            if phi < 0:
-                raise ModelError(f"{key}.min_deg={phi}: a minimum phase angle must be >= 0", key=f"{key}.min_deg")
-            if phi > MAX_DEG:
-                raise ModelError(f"{key}.min_deg={phi}: a minimum phase angle must be <= {MAX_DEG:g} deg",
-                                 key=f"{key}.min_deg")
-            min_ms = op.get("min_ms")
-            if min_ms is not None and not 0 <= _number(min_ms, f"{key}.min_ms") <= MAX_MS:
-                raise ModelError(f"{key}.min_ms={min_ms}: a minimum duration must be in [0, {MAX_MS:g}] ms",
-                                 key=f"{key}.min_ms")
+            phi, min_ms = _floors(op, key)
             stress, amplitude = op.get("stress"), op.get("amplitude")
             if stress is not None:
                 self._check_stress_ref(stress, key)
             if amplitude is not None:
                 self._check_amplitude_ref(amplitude, key)
-            g.add_edge(x, y, min_deg=phi, min_ms=None if min_ms is None else float(min_ms), stress=stress,
+            g.add_edge(x, y, min_deg=phi, min_ms=min_ms, stress=stress,
                        amplitude=amplitude, name=str(op.get("name", "")), group=str(op.get("group", "")))
         if not nx.is_directed_acyclic_graph(g):
             cycle = nx.find_cycle(g)
@@ -337,7 +350,8 @@ class Cyclogram:
         linked = [v for v in g if g.degree(v) > 0]
         starts = [v for v in linked if g.in_degree(v) == 0]
         ends = [v for v in linked if g.out_degree(v) == 0]
-        if len(starts) != 1 or len(ends) != 1:
+        # a recurrent network is a circuit of cycles, not one cycle's chain from a first to a last event
+        if (len(starts) != 1 or len(ends) != 1) and not self.recurrences:
             listed = [f"[{some_of(map(repr, events), sep=', ')}]" for events in (starts, ends)]
             raise ModelError(f"operations: a cyclogram needs one first and one last event; found first {listed[0]} "
                              f"and last {listed[1]} (join them with zero-angle operations)", key="operations")
@@ -346,7 +360,7 @@ class Cyclogram:
             key = f"windows[{k}]"
             _entry(w, key, _WINDOW_KEYS, required=("from", "to", "max_deg"))
             for end in (w["from"], w["to"]):
-                _linked_event(g, str(end), key)
+                _linked_event(g, str(end), key, self._recurrent_events)
             if not abs(_number(w["max_deg"], f"{key}.max_deg")) <= MAX_DEG:
                 raise ModelError(f"{key}.max_deg={w['max_deg']}: must be within +-{MAX_DEG:g} deg", key=f"{key}.max_deg")
         _table(self.syncs, "syncs", list)
@@ -356,12 +370,61 @@ class Cyclogram:
             if not isinstance(s["events"], list) or len(s["events"]) < 2:
                 raise ModelError(f"{key}.events={s['events']!r}: give a list of two or more events", key=key)
             for end in s["events"]:
-                _linked_event(g, str(end), key)
+                _linked_event(g, str(end), key, self._recurrent_events)
         if self.limiting_op is not None:
             if not isinstance(self.limiting_op, list) or len(self.limiting_op) != 2 \
                     or not g.has_edge(str(self.limiting_op[0]), str(self.limiting_op[1])):
                 raise ModelError(f"limiting_op={self.limiting_op!r}: must name an operation [from, to]",
                                  key="limiting_op")
+
+    @cached_property
+    def recurrences(self) -> tuple[dict, ...]:
+        """The recurrent operations, rows with `cycles` = k > 0: p(to) + k T >= p(from) + d, the
+        event `to` of k cycles later after `from` of this one (T the cycle; d its min_deg, or min_ms
+        in a time-based network). `from` may equal `to` (a station busy for d before it starts
+        again). They carry a floor only (min_deg or min_ms): no window, stress or amplitude. The
+        least cycle time over them is `loom.least_cycle_time`; a one-cycle solver refuses them
+        (`check_one_cycle`). Rows with cycles = 0 are ordinary operations."""
+        _table(self.operations, "operations", list)
+        out, seen = [], set()
+        for op in self.operations:
+            if not isinstance(op, dict) or "cycles" not in op or "from" not in op or "to" not in op:
+                continue                # an ordinary row, or one the network's checks report
+            x, y = str(op["from"]), str(op["to"])
+            key = f"operations[{x}->{y}]"
+            k = _cycles(op, key)
+            if not k:
+                continue
+            _entry(op, key, _OP_KEYS, required=("from", "to") if "min_ms" in op else ("from", "to", "min_deg"))
+            for end in (x, y):
+                if end not in self.events:
+                    raise ModelError(f"{key}: unknown event {end!r}; events: {some_of(self.events, sep=', ')}",
+                                     key=key)
+            extra = sorted({"max_deg", "stress", "amplitude"} & op.keys())
+            if extra:
+                raise ModelError(f"{key}.cycles={k}: a recurrent operation carries min_deg or min_ms only, not "
+                                 f"{', '.join(extra)}", key=f"{key}.{extra[0]}")
+            if (x, y, k) in seen:
+                raise ModelError(f"{key}.cycles={k}: given twice; one operation per pair of events and cycles",
+                                 key=key)
+            seen.add((x, y, k))
+            phi, min_ms = _floors(op, key)
+            out.append({"from": x, "to": y, "cycles": k, "min_deg": phi, "min_ms": min_ms,
+                        "name": str(op.get("name", ""))})
+        return tuple(out)
+
+    @cached_property
+    def _recurrent_events(self) -> frozenset:
+        return frozenset(e for op in self.recurrences for e in (op["from"], op["to"]))
+
+    def check_one_cycle(self, solver: str) -> None:
+        """ModelError when the network has recurrent operations: `solver` schedules one cycle."""
+        if self.recurrences:
+            op = self.recurrences[0]
+            key = f"operations[{op['from']}->{op['to']}].cycles"
+            raise ModelError(f"{key}={op['cycles']}: {solver} schedules one cycle and takes no recurrent "
+                             f"operation; the least cycle time of a recurrent network is loom.least_cycle_time",
+                             key=key)
 
     # ------------------------------------------------------------------ views
 
@@ -574,6 +637,57 @@ def _events_of(operations) -> dict:
     return {name: {k: v for k, v in zip(("group", "mechanism"), into.get(name) or out[name]) if v} for name in names}
 
 
+def task_operations(tasks) -> list[dict]:
+    """A task table (activity on node: rows {task, min_ms or min_deg, after}) as the operations of
+    its event network: each task t an operation t.start -> t.end of its duration; each task b it
+    waits for an operation b.end -> t.start of 0 (cycles = k for "b@k", b of k cycles before);
+    a task waiting for none of this cycle starts after the event `start`, one none waits for ends
+    before `end`. Errors name the task's row."""
+    _table(tasks, "tasks", list)
+    rows = {}
+    for j, row in enumerate(tasks):
+        _entry(row, f"tasks[{j}]", _TASK_KEYS, required=("task",))
+        name = str(row["task"]).strip()
+        if not name or name in rows or name in ("start", "end"):
+            why = "given twice" if name in rows else "a task needs a name other than start and end"
+            raise ModelError(f"tasks[{j}].task={row['task']!r}: {why}", key=f"tasks[{j}].task")
+        if "min_ms" not in row and "min_deg" not in row:
+            raise ModelError(f"tasks[{name}]: give its duration, min_ms or min_deg", key=f"tasks[{name}]")
+        rows[name] = row
+    ops, waits, awaited = [], set(), set()
+    for name, row in rows.items():
+        ops.append({"from": f"{name}.start", "to": f"{name}.end", "name": str(row.get("name", name))}
+                   | {k: row[k] for k in ("min_ms", "min_deg", "group", "mechanism", "mark", "why") if k in row})
+        for before, k in _predecessors(row.get("after", ""), f"tasks[{name}].after", rows):
+            ops.append({"from": f"{before}.end", "to": f"{name}.start", "min_deg": 0.0} | ({"cycles": k} if k else {}))
+            if not k:
+                waits.add(name)
+                awaited.add(before)
+    ops += [{"from": "start", "to": f"{t}.start", "min_deg": 0.0} for t in rows if t not in waits]
+    ops += [{"from": f"{t}.end", "to": "end", "min_deg": 0.0} for t in rows if t not in awaited]
+    return ops
+
+
+def _predecessors(after, key, rows) -> list[tuple[str, int]]:
+    """(task, cycles) of an `after` cell "a;b@1" (a list of such names too), each a task of the table."""
+    if not isinstance(after, (str, list)) or (isinstance(after, list) and not all(isinstance(a, str) for a in after)):
+        raise ModelError(f"{key}={after!r}: expected the tasks waited for, as 'a;b' (or 'b@k': k cycles before)",
+                         key=key)
+    out = []
+    for item in (after.split(";") if isinstance(after, str) else after):
+        name, _, k = item.strip().partition("@")
+        name = name.strip()
+        if not name:
+            continue
+        if name not in rows:
+            raise ModelError(f"{key}: unknown task {name!r}; tasks: {some_of(rows, sep=', ')}", key=key)
+        if k and not (k.strip().isdigit() and int(k) <= MAX_CYCLES):
+            raise ModelError(f"{key}: {item.strip()!r}: the cycles after '@' must be a whole number in "
+                             f"[0, {MAX_CYCLES}]", key=key)
+        out.append((name, int(k) if k else 0))
+    return out
+
+
 def _split_windows(operations) -> tuple[list, list]:
     """(operations, windows): an operation's `max_deg` (its window, p(to) - p(from) <= max_deg)
     taken out as a window of its own, so the solvers see one kind of window."""
@@ -587,6 +701,31 @@ def _split_windows(operations) -> tuple[list, list]:
             windows.append(window)
         ops.append(op)
     return ops, windows
+
+
+def _cycles(op, key) -> int:
+    """An operation's `cycles` (0 when not given), checked: a whole number in [0, MAX_CYCLES]."""
+    k = op.get("cycles", 0)
+    if isinstance(k, bool) or not isinstance(k, (int, float)) or not float(k).is_integer() \
+            or not 0 <= k <= MAX_CYCLES:
+        raise ModelError(f"{key}.cycles={k!r}: a count of cycles must be a whole number in [0, {MAX_CYCLES}]",
+                         key=f"{key}.cycles")
+    return int(k)
+
+
+def _floors(op, key) -> tuple[float, float | None]:
+    """(min_deg, min_ms or None) of an operation row, checked (a timed operation may leave out min_deg)."""
+    phi = _number(op.get("min_deg", 0.0), f"{key}.min_deg")
+    if phi < 0:
+        raise ModelError(f"{key}.min_deg={phi}: a minimum phase angle must be >= 0", key=f"{key}.min_deg")
+    if phi > MAX_DEG:
+        raise ModelError(f"{key}.min_deg={phi}: a minimum phase angle must be <= {MAX_DEG:g} deg",
+                         key=f"{key}.min_deg")
+    min_ms = op.get("min_ms")
+    if min_ms is not None and not 0 <= _number(min_ms, f"{key}.min_ms") <= MAX_MS:
+        raise ModelError(f"{key}.min_ms={min_ms}: a minimum duration must be in [0, {MAX_MS:g}] ms",
+                         key=f"{key}.min_ms")
+    return phi, None if min_ms is None else float(min_ms)
 
 
 def _table(value, key, kind):
@@ -615,9 +754,9 @@ def _known_event(g, name, key):
         raise ModelError(f"{key}: unknown event {name!r}; events: {some_of(g.nodes, sep=', ')}", key=key)
 
 
-def _linked_event(g, name, key):
+def _linked_event(g, name, key, also=frozenset()):
     _known_event(g, name, key)
-    if g.degree(name) == 0:
+    if g.degree(name) == 0 and name not in also:
         raise ModelError(f"{key}: event {name!r} has no operation; a window or sync needs events of the network",
                          key=key)
 

@@ -273,6 +273,7 @@ class Net:
         return net
 
     def _index_arrays(self, task):
+        task.check_one_cycle("plan_cyclogram, max_machine_speed and repair_cyclogram")
         self.task = task
         names, self.tails, self.heads = task.index_arrays       # cached on the task: built once per network
         self.names = list(names)

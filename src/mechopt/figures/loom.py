@@ -2,7 +2,7 @@
 for a repaired LP (loom.repair_cyclogram) each exact limit's excess over the rounds."""
 from mechopt.figures.registry import figure, new_figure
 from mechopt.figures.text import literal
-from mechopt.solvers.loom import max_machine_speed, plan_cyclogram, repair_cyclogram
+from mechopt.solvers.loom import least_cycle_time, max_machine_speed, plan_cyclogram, repair_cyclogram
 
 ROW_IN = 0.35              # inches per operation row on a small network ...
 DENSE_ROWS = 40           # ... past which rows narrow to DENSE_ROW_IN and bars lose their own labels
@@ -84,6 +84,36 @@ def gantt_at_speed(run):
     """The cyclogram at the machine's largest speed, headed by that speed."""
     speed = run.result.values.get("max_speed_rpm")
     return gantt(run, headline=None if speed is None else f"max speed {speed:.2f} rpm")
+
+
+@figure(least_cycle_time)
+def periodic_schedule(run):
+    """Every operation of a recurrent machine as a bar from p(from) to p(to) + k T (its end k cycles
+    on) in a schedule repeating every least cycle time T (dotted lines at its multiples); the
+    critical circuits' operations in red."""
+    values, diag = run.result.values, run.result.diagnostics
+    unit = diag.get("unit", "ms")
+    T = values.get("cycle_time_ms", values.get("cycle_deg"))
+    if T is None or not all(f"p_{v}_{unit}" in values for v in run.task.graph.nodes):
+        return {}             # infeasible, or too large to name every event
+    task, critical = run.task, set(diag.get("critical_ops", []))
+    rows = [(x, y, 0, f"{x}->{y}") for x, y in task.arcs]
+    rows += [(r["from"], r["to"], r["cycles"], f"{r['from']}->{r['to']}[+{r['cycles']}]") for r in task.recurrences]
+    fig = new_figure(figsize=(10, ROW_IN * len(rows) + 1.8))
+    ax = fig.subplots()
+    for row, (x, y, k, label) in enumerate(rows):
+        start = values[f"p_{x}_{unit}"]
+        ax.barh(row, values[f"p_{y}_{unit}"] + k * T - start, left=start, height=0.6, edgecolor="black", linewidth=0.5,
+                color="tab:red" if label in critical else "tab:blue")
+    ax.set_yticks(range(len(rows)))
+    ax.set_yticklabels([literal(label) for *_, label in rows], fontsize=7)
+    ax.set_ylim(len(rows) - 0.5, -0.5)
+    for m in range(1, 1 + max((k for _, _, k, _ in rows), default=0)):
+        ax.axvline(m * T, color="0.4", linestyle=":", linewidth=1)
+    ax.set_xlabel(f"time [{unit}]" if unit == "ms" else "main shaft angle [deg]")
+    ax.set_title(f"{literal(run.scene.id)}: least cycle time {T:.4g} {unit}; critical circuits in red", fontsize=9)
+    ax.grid(True, axis="x", alpha=0.3)
+    return {"periodic_schedule": fig}
 
 
 @figure(repair_cyclogram)
