@@ -32,7 +32,7 @@ from mechopt.kit.errors import NAMED, ModelError, some_of
 from mechopt.kit.result import Clock, Result, Status, from_cvxpy
 from mechopt.kit.settings import check_settings
 from mechopt.models.loom import Cyclogram, time_floor_deg
-from mechopt.solvers.loom.graph import ROUND_OFF, _segments, a_path, topological_levels
+from mechopt.solvers.loom.graph import ROUND_OFF, a_path, level_segments, topological_levels
 
 MAX_STEPS = 10_000           # Dinkelbach steps (each one Bellman-Ford pass): LIMIT past it
 FLOAT_MAX_EVENTS = 500       # floats by a max-plus Floyd-Warshall (n^3) for networks up to this many events
@@ -114,7 +114,7 @@ class Circuits:
     def __init__(self, u: Uniform, dag: int):
         self.u, self.n, self.dag = u, len(u.names), dag
         tails, heads = u.tails[:dag], u.heads[:dag]
-        self.order, segments = _segments(topological_levels(self.n, tails, heads), heads, self.n, reverse=False)
+        self.order, segments = level_segments(topological_levels(self.n, tails, heads), heads, self.n, reverse=False)
         self.t_fwd = tails[self.order]
         # per level: its slice, reduce starts, targets and each arc's group (its target's place)
         self.segments = [(a, b, starts, targets, np.repeat(np.arange(len(starts)), np.diff(np.r_[starts, b - a])))

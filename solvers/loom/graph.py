@@ -75,8 +75,8 @@ class Levels:
     def __init__(self, n: int, tails: np.ndarray, heads: np.ndarray):
         self.n, self.tails, self.heads = n, np.asarray(tails, np.int64), np.asarray(heads, np.int64)
         level = topological_levels(n, self.tails, self.heads)
-        self.forward_order, self.forward_segments = _segments(level, self.heads, n, reverse=False)
-        self.backward_order, self.backward_segments = _segments(level, self.tails, n, reverse=True)
+        self.forward_order, self.forward_segments = level_segments(level, self.heads, n, reverse=False)
+        self.backward_order, self.backward_segments = level_segments(level, self.tails, n, reverse=True)
         self._t_fwd, self._h_bwd = self.tails[self.forward_order], self.heads[self.backward_order]
         # large networks: the compiled passes (kernel.py), each arc in order, when numba imports
         self._compiled = kernels() if len(self.tails) >= COMPILED_MIN_ARCS else None
@@ -185,7 +185,7 @@ def topological_levels(n: int, tails: np.ndarray, heads: np.ndarray) -> np.ndarr
     return level
 
 
-def _segments(level, ends, n, reverse):
+def level_segments(level, ends, n, reverse):
     """Arcs sorted by (level of `ends`, end) and, per level, the slice, the reduce starts and the ends."""
     order = np.argsort(level[ends] * n + ends, kind="stable")
     sorted_ends = ends[order]

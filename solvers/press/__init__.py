@@ -14,6 +14,7 @@ Every result reports the energy balance over the run (motor work = cutting + fri
 damping work + change of kinetic and potential energy; `energy_residual`, relative), the events
 located, the speed fluctuation coefficient and the peaks of force, Q and belt torque, and carries
 the run's samples in `Result.arrays` (`t_s`, the states, `cutting`, the outputs).
+`kinematics` (kinematics.py): the crank-slider at constant crank speed, no dynamics.
 `loads` (loads.py) adds the peaks of the loads a designer sizes parts with (Figs. 9-10).
 `force_fit.fit_force` fits the force law (1) to load-travel data.
 `sensitivity` (sensitivity.py): d(output)/d(assumed parameter) through the periodic orbit by AD.
@@ -26,12 +27,13 @@ from mechopt.solvers.press.catalogue import catalogue
 from mechopt.solvers.press.design import design
 from mechopt.solvers.press.event_driven import events
 from mechopt.solvers.press.fixed_step import rk4
+from mechopt.solvers.press.kinematics import kinematics
 from mechopt.solvers.press.loads import loads
 from mechopt.solvers.press.periodic import steady_state
 from mechopt.solvers.press.scipy_peer import ivp
 from mechopt.solvers.press.sensitivity import sensitivity
 
-__all__ = ["METHODS", "Method", "catalogue", "design", "events", "ivp", "loads", "rk4", "sensitivity", "simulate",
+__all__ = ["METHODS", "Method", "catalogue", "design", "events", "ivp", "kinematics", "loads", "rk4", "sensitivity", "simulate",
            "steady_state"]
 
 METHODS = {"rk4": rk4, "events": events, "steady_state": steady_state, "ivp": ivp}

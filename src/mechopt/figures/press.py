@@ -3,7 +3,18 @@ import numpy as np
 
 from mechopt.figures.registry import figure, new_figure
 from mechopt.figures.text import literal
-from mechopt.solvers.press import catalogue, design, events, ivp, loads, rk4, sensitivity, simulate, steady_state
+from mechopt.solvers.press import (
+    catalogue,
+    design,
+    events,
+    ivp,
+    kinematics,
+    loads,
+    rk4,
+    sensitivity,
+    simulate,
+    steady_state,
+)
 
 
 @figure(events, steady_state, rk4, ivp, simulate)
@@ -43,6 +54,26 @@ def cycle(run):
         a.grid(alpha=0.3)
     fig.suptitle(f"{literal(run.scene.id)}: {run.result.status.value}", fontsize=10)
     return {"cycle": fig}
+
+
+@figure(kinematics)
+def rates(run):
+    """The slider's travel, velocity and acceleration and the rod's angle and rates over a turn."""
+    a = run.result.arrays
+    fig = new_figure(figsize=(12, 7))
+    ax = fig.subplots(2, 3, sharex=True)
+    for axis, (name, label) in zip(ax.ravel(), [
+            ("travel_mm", "slider travel X [mm]"), ("slider_velocity_m_s", "slider velocity [m/s]"),
+            ("slider_acceleration_m_s2", "slider acceleration [m/s²]"), ("rod_angle_deg", "rod angle β [deg]"),
+            ("rod_angular_velocity_rad_s", "rod angular velocity [rad/s]"),
+            ("rod_angular_acceleration_rad_s2", "rod angular acceleration [rad/s²]")]):
+        axis.plot(a["crank_angle_deg"], a[name], lw=1.2)
+        axis.set_ylabel(label)
+        axis.grid(alpha=0.3)
+    for axis in ax[1]:
+        axis.set_xlabel("crank angle from top dead centre [deg]")
+    fig.suptitle(f"{literal(run.scene.id)}: {literal(run.result.message)}", fontsize=9)
+    return {"rates": fig}
 
 
 @figure(loads)
