@@ -23,7 +23,9 @@ from mechopt.models.press import (
     PressDrive,
     belt_mode_rad_s,
     dynamics,
+    energy_swing_J,
     equations,
+    rule_of_thumb_flywheel_kgm2,
     structure,
 )
 
@@ -218,6 +220,9 @@ def summarise(task: PressDrive, trace: Trace, *, cut_angles=None) -> tuple[dict,
                    "speed_fluctuation": float((_extreme(t[inside], w[inside], max, mode[inside, 0])
                                                - _extreme(t[inside], w[inside], min, mode[inside, 0])) / mean),
                    "period_s": float(t1 - t0)}
+        if values["speed_fluctuation"] > 0:     # the textbook flywheel for the fluctuation this run shows
+            values |= {"energy_swing_J": energy_swing_J(task),
+                       "flywheel_rule_of_thumb_kgm2": rule_of_thumb_flywheel_kgm2(task, values["speed_fluctuation"])}
     cuts_on = [e for e in trace.events if e[0] == "cut_start"]
     cuts_off = [e for e in trace.events if e[0] == "cut_end"]
     if cut_angles is not None:
