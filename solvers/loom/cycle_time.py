@@ -19,7 +19,6 @@ practice a handful; counted, never timed). The last circuit is critical; at T* t
 the pass's times hold every critical circuit (each is a zero circuit there), so ties are named.
 The LP in (p, T), minimise T, is the certificate (check = true), solved by cvxpy and HiGHS.
 """
-import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Literal
@@ -33,6 +32,7 @@ from mechopt.kit.result import Clock, Result, Status, from_cvxpy
 from mechopt.kit.settings import check_settings
 from mechopt.models.loom import Cyclogram, time_floor_deg
 from mechopt.solvers.loom.graph import ROUND_OFF, a_path, level_segments, topological_levels
+from mechopt.solvers.loom.plan import certified
 
 MAX_STEPS = 10_000           # Dinkelbach steps (each one Bellman-Ford pass): LIMIT past it
 FLOAT_MAX_EVENTS = 500       # floats by a max-plus Floyd-Warshall (n^3) for networks up to this many events
@@ -388,9 +388,4 @@ def _checked(result: Result, u: Uniform, name: str, backend: str) -> Result:
         diagnostics["check"] |= {name: T, "rel": rel}
         if not rel <= CHECK_RTOL:
             problems.append(f"{name} {result.values[name]!r} against the LP's {T!r}")
-    if not problems:
-        return dataclasses.replace(result, values=values, diagnostics=diagnostics,
-                                   message=result.message + f"; checked by the LP ({backend})")
-    status = Status.INACCURATE if result.status in (Status.SOLVED, Status.INFEASIBLE) else result.status
-    return dataclasses.replace(result, status=status, values=values, diagnostics=diagnostics,
-                               message=result.message + "; check failed: " + ", ".join(problems))
+    return certified(result, values, diagnostics, problems, by=f"the LP ({backend})")

@@ -890,10 +890,16 @@ def certify(result: Result, other: Result, tol_deg: float, one_sided=None) -> Re
                     continue
                 problems.append(f"{key} {mine_s!r} against {theirs_s!r}")
         diagnostics["check_abs_deg"] = abs(mine - theirs)
+    return certified(result, values, diagnostics, problems, by=diagnostics["check"])
+
+
+def certified(result, values, diagnostics, problems, *, by) -> Result:
+    """`result` with its certificate's outcome: checked `by` the other method when `problems` is
+    empty; else INACCURATE, whichever said what (the methods disagree: an INFEASIBLE the LP solves
+    too is not certified either), the disagreements named."""
     if not problems:
         return dataclasses.replace(result, values=values, diagnostics=diagnostics,
-                                   message=result.message + f"; checked by {diagnostics['check']}")
-    # the methods disagree: not certified, whichever said what (an INFEASIBLE the LP solves too)
+                                   message=result.message + f"; checked by {by}")
     status = Status.INACCURATE if result.status in (Status.SOLVED, Status.INFEASIBLE) else result.status
     return dataclasses.replace(result, status=status, values=values, diagnostics=diagnostics,
                                message=result.message + "; check failed: " + ", ".join(problems))
