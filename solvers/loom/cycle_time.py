@@ -260,7 +260,8 @@ def least_cycle_time(task: Cyclogram, *, check: bool = False,
         message = (f"{name} = {T:.9g}: critical circuit {_circuit_text(u, circuit)}"
                    + (f"; {ties} circuits tie for critical" if ties > 1 else "")
                    + f" (graph, {steps} Dinkelbach steps)")
-    result = clock.result(Status.SOLVED, values, message=message, diagnostics=diagnostics)
+    result = clock.result(Status.SOLVED, values, message=message, diagnostics=diagnostics,
+                          arrays={f"start_{u.unit}": np.asarray(p, dtype=float)})   # by event, in `names` order
     return _checked(result, u, name, backend) if check else result
 
 
