@@ -97,7 +97,8 @@ WINDOW_REFINE = 1               # halvings of the scan step around the best wind
 ENVELOPE_POINTS = 2049          # time samples of eq. (2)'s window for the envelope's lines
 ROOT_FTOL = 1e-4                # the least phase: r*(t) within this of the limit (relative) ends the search
 MAX_PHASE_STEPS = 40
-ROBUST_ROUNDS = 12              # points of the box's grid the dense check may add to one LP (a count)
+ROBUST_ROUNDS = 8               # rounds of the dense check over the box's grid for one LP (each adds every
+                                # lever's worst point that fails: a count)
 # HiGHS' interior point, each window from scratch: its work is a count of iterations (17-39 on the
 # scenes' windows, each a factorisation of the same size), where the dual simplex, warm or cold,
 # stalled on a few ill-scaled infeasible windows (coefficients 1e-8 ... 1e3: 300 iterations in
@@ -427,7 +428,7 @@ def design_law(task: LeverStop, t_deg: float, band_rpm: tuple, *, objective="lea
     `box` (solvers/stop_impact/lever_box.py): the LP holds the box's nominal and corner levers at
     the sampled speeds of the band raised by its margin, the dense check runs over its grid of
     levers, and a failing (lever, speed) is added as a failing speed is. The samples are points
-    (frequency factor, zeta, rpm); `rounds` counts additions, as for the speeds."""
+    (frequency factor, zeta, rpm); `rounds` counts the rounds of additions (each adds every lever's failing worst)."""
     bounds = bounds or {}
     box = box or LeverBox()
     lever = linear_lever(coefficients, continuity)
@@ -471,11 +472,14 @@ def design_law(task: LeverStop, t_deg: float, band_rpm: tuple, *, objective="lea
             return _Design(status, None, math.inf, xa, samples, lps, f"HiGHS: {status.value} at xi_a = {xa:g}",
                            given_up=given_up)
         law = lever.basis.law(c)
-        worst_mm, worst = _dense_worst(levers, box.grid_keys(task), law, t_deg, dense, lever)
         bar = dense_bar_mm if dense_bar_mm is not None else value if objective == "least_rebound" else limit
-        if worst_mm <= bar * (1 + 1e-3) + 1e-4 * limit or worst in samples:
+        failing = [(mm, point) for key in box.grid_keys(task)
+                   for mm, point in [_dense_worst(levers, [key], law, t_deg, dense, lever)]
+                   if mm > bar * (1 + 1e-3) + 1e-4 * limit and point not in samples]
+        if not failing:
             return _Design(Status.SOLVED, law, value, xa, samples, lps, given_up=given_up)
-        samples = sorted(samples + [worst])       # broken between samples: sample it too
+        worst = max(failing)[1]
+        samples = sorted(samples + [point for _, point in failing])   # broken between samples: sample them too
     return _Design(Status.LIMIT, law, value, xa, samples, lps,
                    f"the dense check still fails at {_points_text([worst])} after {rounds} rounds", given_up=given_up)
 
