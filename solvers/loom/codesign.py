@@ -15,6 +15,10 @@ t(3,7) >= n / r*: the same linear arc the graph engine already takes for the cyc
 3. The loop closed: the chain (CVODES rise, eq. (2)) at the re-planned t(3,7) and speed must keep
    the limit; and the same machine with the cycloid (`max_machine_speed` on the task as given) is
    the baseline. The gain is reported whatever it is.
+4. Robust (`robust`): the law synthesised on a box of the lever's uncertain inputs (frequency
+   factor, damping, a speed margin: solvers/stop_impact/lever_box.py); the re-planned machine's
+   worst rebound over that box is reported. The engine re-plans on the nominal lever's exact
+   bound, so it may take back at t(3,7) the margin the law bought: the value says how much.
 """
 import dataclasses
 
@@ -24,9 +28,11 @@ from mechopt.kit.settings import Annotated, Interval
 from mechopt.models.loom import Cyclogram
 from mechopt.solvers.loom.speed import max_machine_speed
 from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
-from mechopt.solvers.stop_impact.synthesis import law_of, synthesise_law
+from mechopt.solvers.stop_impact.synthesis import box_values, law_of, lever_box, linear_lever, synthesise_law
 
 __all__ = ["codesign_machine_speed"]
+
+BOX_STEP_RPM = 5.0          # the box's speeds at the re-planned t(3,7): every 5 rpm, as the synthesis' dense check
 
 
 def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Interval(ge=2, le=2000)] = 40,
@@ -37,7 +43,14 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
                            phase_to_deg: Annotated[float, Interval(gt=0, lt=360)] = 45.0,
                            phase_tol_deg: Annotated[float, Interval(gt=0, le=1)] = 0.05,
                            scan_to_deg: Annotated[float, Interval(gt=0.0, le=360.0)] = 60.0,
-                           scan_step_deg: Annotated[float, Interval(ge=1e-3, le=10.0)] = 0.25) -> Result:
+                           scan_step_deg: Annotated[float, Interval(ge=1e-3, le=10.0)] = 0.25,
+                           box_frequency_low: Annotated[float, Interval(gt=0, le=10)] = 1.0,
+                           box_frequency_high: Annotated[float, Interval(gt=0, le=10)] = 1.0,
+                           box_zeta_low: Annotated[float, Interval(ge=0, le=1)] = 0.0,
+                           box_zeta_high: Annotated[float, Interval(ge=0, le=1)] = 0.0,
+                           box_speed_margin: Annotated[float, Interval(ge=0, le=1)] = 0.0,
+                           box_grid: Annotated[int, Interval(ge=2, le=50)] = 3,
+                           robust: bool = False) -> Result:
     """The machine's highest speed with the lift's law synthesised (module docstring), against the
     same machine with its lever's own law (`speed_baseline_rpm`).
 
@@ -48,6 +61,9 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
     coefficients, sample_speeds, max_acceleration_mm_per_rad2, phase_from_deg, phase_to_deg,
         phase_tol_deg : the synthesis' (`synthesise_law`); the band is [band_low_rpm, speed_rpm].
     scan_to_deg, scan_step_deg : the engine's exact-bound scan (`max_machine_speed`).
+    box_frequency_low ... box_grid, robust : the lever's box (`synthesise_law`): with robust the law
+        is synthesised on the whole box; given, the chain's worst rebound over the box at the
+        re-planned t(3,7) over [band_low_rpm, speed] (the margin added) is `rebound_worst_box_mm`.
 
     Values: speed_rpm, speed_baseline_rpm, gain_percent, t_min_synthesized_deg (at n_ref),
     t_3_7_deg and the chain's rebound there (rebound_chain_mm); diagnostics: the limiting cycle
@@ -59,6 +75,10 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
     if band_low_rpm >= task.speed_rpm:
         raise SettingError(f"band_low_rpm={band_low_rpm} must be below speed_rpm={task.speed_rpm} (the band's top)",
                            key="band_low_rpm")
+    box_settings = dict(box_frequency_low=box_frequency_low, box_frequency_high=box_frequency_high,
+                        box_zeta_low=box_zeta_low, box_zeta_high=box_zeta_high, box_speed_margin=box_speed_margin,
+                        box_grid=box_grid)
+    box = lever_box(**box_settings)         # bad input refused before any work
     clock = Clock()
     speed_settings = dict(scan_to_deg=scan_to_deg, scan_step_deg=scan_step_deg)
     baseline = max_machine_speed(task, **speed_settings)
@@ -72,7 +92,7 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
                              band_high_rpm=task.speed_rpm, sample_speeds=sample_speeds,
                              max_acceleration_mm_per_rad2=max_acceleration_mm_per_rad2,
                              phase_from_deg=phase_from_deg, phase_to_deg=phase_to_deg, phase_tol_deg=phase_tol_deg,
-                             compare=False)
+                             compare=False, robust=robust, **box_settings)
     values = {"speed_baseline_rpm": baseline.values["max_speed_rpm"]}
     took = {"synthesis_s": synthesis.elapsed()}                     # timings go to diagnostics: values are results
     if law_run.status is not Status.SOLVED:
@@ -93,6 +113,10 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
                "t_3_7_baseline_deg": baseline.values["t_3_7_deg"], "rebound_chain_mm": chain}
     values |= {k: v for k, v in plan.values.items()
                if (k.startswith(("p_", "t_", "sigma_", "amplitude_")) or k == "span_deg") and k not in values}
+    diagnostics = {}
+    if not box.trivial:     # the machine as re-planned, on every lever of the box's grid
+        diagnostics = box_values(designed.lever_model, law, t37, (band_low_rpm, n), box, BOX_STEP_RPM,
+                                 linear_lever(coefficients, 2), values, "")
     status = Status.SOLVED if chain <= task.amplitude_limit_mm * (1 + 1e-6) else Status.INACCURATE
     limiting = plan.diagnostics.get("limiting_constraint", "-")
     lift = _lift_bound(plan) or "no speed bound (its angle floor)"
@@ -101,7 +125,7 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
                f"(baseline: {_lift_bound(baseline) or '-'}); limiting: {limiting} "
                f"(baseline {baseline.diagnostics.get('limiting_constraint', '-')}); the chain at t(3,7) = {t37:.4g} deg: "
                f"{chain:.4g} mm")
-    diagnostics = {"limiting_constraint": limiting, "limiting_group": plan.diagnostics.get("limiting_group"),
+    diagnostics |= {"limiting_constraint": limiting, "limiting_group": plan.diagnostics.get("limiting_group"),
                    "critical_chain": plan.diagnostics.get("critical_chain"),
                    "critical_ops": plan.diagnostics.get("critical_ops", []),
                    "float_deg": plan.diagnostics.get("float_deg", {}),

@@ -69,9 +69,10 @@ from mechopt.models.cam_law import (
 from mechopt.models.stop_impact import LeverStop, speed_tag
 from mechopt.solvers.stop_impact.cam_follower import follow_cam, follower_data
 from mechopt.solvers.stop_impact.law import RollerLeftCam, rebound_amplitude_mm
+from mechopt.solvers.stop_impact.lever_box import LeverBox
 from mechopt.solvers.stop_impact.response import closed_form_amplitude_m, response_parts
 
-__all__ = ["BASES", "LinearLever", "SpeedResponse", "WindowLP", "band_speeds", "design_law", "law_of", "linear_lever",
+__all__ = ["BASES", "LinearLever", "box_values", "lever_box", "SpeedResponse", "WindowLP", "band_speeds", "design_law", "law_of", "linear_lever",
            "predicted_rebounds_mm", "rebound_envelope", "speed_response", "v0_limit_m_s",
            "rebound_of_v0_mm", "synthesise_law"]
 
@@ -96,6 +97,8 @@ WINDOW_REFINE = 1               # halvings of the scan step around the best wind
 ENVELOPE_POINTS = 2049          # time samples of eq. (2)'s window for the envelope's lines
 ROOT_FTOL = 1e-4                # the least phase: r*(t) within this of the limit (relative) ends the search
 MAX_PHASE_STEPS = 40
+ROBUST_ROUNDS = 8               # rounds of the dense check over the box's grid for one LP (each adds every
+                                # lever's worst point that fails: a count)
 # HiGHS' interior point, each window from scratch: its work is a count of iterations (17-39 on the
 # scenes' windows, each a factorisation of the same size), where the dual simplex, warm or cold,
 # stalled on a few ill-scaled infeasible windows (coefficients 1e-8 ... 1e3: 300 iterations in
@@ -205,14 +208,16 @@ class SpeedResponse:
     zeta: float
     T: float
     resp: tuple | None = None
+    lines: tuple | None = None          # its lever's rebound envelope (`rebound_envelope`) when not the LP's
 
 
-def speed_response(task, lever, rpm, t_deg):
+def speed_response(task, lever, rpm, t_deg, lines=None):
     """The lever at `rpm`; its dense response computed here, once, below STATE_FORM_FROM coefficients
-    (the form `elastic_states` then takes)."""
+    (the form `elastic_states` then takes). `lines`: the envelope of this lever's rebound (a lever
+    of the box, whose plate rings at its own frequency and damping)."""
     lam, zeta, H, target, T = follower_data(task, rpm, t_deg)
     dense = lever.basis.size < STATE_FORM_FROM
-    return SpeedResponse(rpm, lam, zeta, T, lever.response(lam, zeta) if dense else None)
+    return SpeedResponse(rpm, lam, zeta, T, lever.response(lam, zeta) if dense else None, lines)
 
 
 def elastic_states(lever, speed, c, rows):
@@ -331,7 +336,8 @@ class WindowLP:
                 X - self.target - BIG_X * self.before,                  # below the plate before xi_a
                 self.target - X_end])                                   # on it by the grid's end
             families.setdefault("approach", []).append(dX - u - BIG_V * self.after)
-            rebound = lines[0] * scale * u + lines[1]
+            g, p = lines if sp.lines is None else sp.lines
+            rebound = g * scale * u + p
             families.setdefault("rebound", []).append(rebound - (limit_mm if r is None else r))
             if closure is not None:      # the roller stays on its cam: N = F + m H X'' / T^2 >= 0
                 families.setdefault("cam_contact", []).append(-ddX - (1 - CONTACT_MARGIN) * closure * sp.T**2
@@ -411,31 +417,43 @@ class _Design:
 
 def design_law(task: LeverStop, t_deg: float, band_rpm: tuple, *, objective="least_rebound", coefficients=100,
                continuity=2, sample_speeds=5, dense_step_rpm=5.0, bounds=None, rounds=4, samples=None,
-               around=None, dense_bar_mm=None, explain=True) -> _Design:
+               around=None, dense_bar_mm=None, explain=True, box: LeverBox | None = None) -> _Design:
     """The best law at phase angle `t_deg` over the speed band: the LP over the arrival window
     (`_scan`), the dense check between the sampled speeds, a failing speed added and the LP solved
     again (at most `rounds` times). The dense check holds the law to the LP's own value (least
     rebound) or to the limit (`dense_bar_mm`, the least phase's question: is the limit kept?).
     `explain`: when no window is feasible, a slack LP names the limits that bind (the least
-    phase's search skips it)."""
+    phase's search skips it).
+
+    `box` (solvers/stop_impact/lever_box.py): the LP holds the box's nominal and corner levers at
+    the sampled speeds of the band raised by its margin, the dense check runs over its grid of
+    levers, and a failing (lever, speed) is added as a failing speed is. The samples are points
+    (frequency factor, zeta, rpm); `rounds` counts the rounds of additions (each adds every lever's failing worst)."""
     bounds = bounds or {}
+    box = box or LeverBox()
     lever = linear_lever(coefficients, continuity)
     limit = task.amplitude_limit_mm
-    lo, hi = band_rpm
+    lo, hi = box.band(band_rpm)
     if samples is None:
-        samples = list(np.linspace(lo, hi, sample_speeds)) if sample_speeds > 1 else [hi]
-    samples = [float(n) for n in samples]
-    dense = band_speeds(band_rpm, dense_step_rpm)
+        speeds0 = list(np.linspace(lo, hi, sample_speeds)) if sample_speeds > 1 else [hi]
+        samples = [key + (float(n),) for key in box.corners(task) for n in speeds0]
+    samples = sorted(tuple(map(float, point)) for point in samples)
+    dense = band_speeds((lo, hi), dense_step_rpm)
     conflict = kinematic_conflict(lever, t_deg, task.stroke_mm, bounds)
     if conflict:
         return _Design(Status.INFEASIBLE, None, math.inf, math.nan, samples, 1,
                        f"no law at t = {t_deg:.6g} deg keeps the kinematic bounds: binding: {', '.join(conflict)}",
                        conflict)
-    lines = rebound_envelope(task, 4 * max(v0_limit_m_s(task, limit), 1e-3))
+    levers = {key: LeverBox.lever(task, key) for key in box.grid_keys(task) + box.corners(task)}
+    lines = {key: rebound_envelope(each, 4 * max(v0_limit_m_s(each, limit), 1e-3)) for key, each in levers.items()}
     lps = given_up = 0
     for _ in range(rounds):
-        speeds = [speed_response(task, lever, n, t_deg) for n in samples]
-        lp = WindowLP(task, lever, speeds, t_deg, objective=objective, limit_mm=limit, bounds=bounds, lines=lines)
+        levers |= {p[:2]: LeverBox.lever(task, p[:2]) for p in samples if p[:2] not in levers}
+        lines |= {key: rebound_envelope(each, 4 * max(v0_limit_m_s(each, limit), 1e-3))
+                  for key, each in levers.items() if key not in lines}
+        speeds = [speed_response(levers[p[:2]], lever, p[2], t_deg, lines[p[:2]]) for p in samples]
+        nominal = lines[box.nominal(task)]
+        lp = WindowLP(task, lever, speeds, t_deg, objective=objective, limit_mm=limit, bounds=bounds, lines=nominal)
         (status, c, value, xa), count = _scan(lp, around)
         lps, given_up = lps + count, given_up + lp.given_up
         if status is Status.INFEASIBLE and not explain:
@@ -443,25 +461,46 @@ def design_law(task: LeverStop, t_deg: float, band_rpm: tuple, *, objective="lea
                            f"no law at t = {t_deg:.6g} deg keeps every limit", given_up=given_up)
         if status is Status.INFEASIBLE:
             slack = WindowLP(task, lever, speeds, t_deg, objective=objective, limit_mm=limit, bounds=bounds,
-                              lines=lines, slack=True)
+                              lines=nominal, slack=True)
             (_, _, _, xa), count = _scan(slack)
             sl = slack.solve(xa)[3]
             binding = tuple(k for k, v in sl.items() if v > 1e-9)
             return _Design(Status.INFEASIBLE, None, math.inf, xa, samples, lps + count,
-                           f"no law at t = {t_deg:.6g} deg keeps every limit at {', '.join(f'{n:g}' for n in samples)} "
-                           f"rpm; binding: {', '.join(binding) or 'none found'}", binding, given_up)
+                           f"no law at t = {t_deg:.6g} deg keeps every limit at {_points_text(samples)}; "
+                           f"binding: {', '.join(binding) or 'none found'}", binding, given_up)
         if status is not Status.SOLVED:
             return _Design(status, None, math.inf, xa, samples, lps, f"HiGHS: {status.value} at xi_a = {xa:g}",
                            given_up=given_up)
         law = lever.basis.law(c)
-        pred = predicted_rebounds_mm(task, law, t_deg, dense, lever=lever)
-        worst = int(np.argmax([p[0] for p in pred]))
         bar = dense_bar_mm if dense_bar_mm is not None else value if objective == "least_rebound" else limit
-        if pred[worst][0] <= bar * (1 + 1e-3) + 1e-4 * limit or float(dense[worst]) in samples:
+        failing = [(mm, point) for key in box.grid_keys(task)
+                   for mm, point in [_dense_worst(levers, [key], law, t_deg, dense, lever)]
+                   if mm > bar * (1 + 1e-3) + 1e-4 * limit and point not in samples]
+        if not failing:
             return _Design(Status.SOLVED, law, value, xa, samples, lps, given_up=given_up)
-        samples = sorted(samples + [float(dense[worst])])       # broken between samples: sample it too
+        worst = max(failing)[1]
+        samples = sorted(samples + [point for _, point in failing])   # broken between samples: sample them too
     return _Design(Status.LIMIT, law, value, xa, samples, lps,
-                   f"the dense check still fails at {dense[worst]:g} rpm after {rounds} rounds", given_up=given_up)
+                   f"the dense check still fails at {_points_text([worst])} after {rounds} rounds", given_up=given_up)
+
+
+def _dense_worst(levers, keys, law, t_deg, dense, lever):
+    """(the linear model's largest rebound [mm], its point (frequency factor, zeta, rpm)) over the
+    levers `keys` at every speed of `dense`."""
+    best = (-math.inf, None)
+    for key in keys:
+        pred = [p[0] for p in predicted_rebounds_mm(levers[key], law, t_deg, dense, lever=lever)]
+        j = int(np.argmax(pred))
+        if pred[j] > best[0]:
+            best = (pred[j], key + (float(dense[j]),))
+    return best
+
+
+def _points_text(points):
+    """Sampled points for a message: the speeds alone when every point is one lever."""
+    if len({p[:2] for p in points}) == 1:
+        return f"{', '.join(f'{p[2]:g}' for p in points)} rpm"
+    return ", ".join(f"(f x{p[0]:g}, zeta {p[1]:g}, {p[2]:g} rpm)" for p in points)
 
 
 def band_speeds(band_rpm, step_rpm):
@@ -523,7 +562,14 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
                    phase_tol_deg: Annotated[float, Interval(gt=0, le=1)] = 0.01,
                    verify: bool = True,
                    agreement_rel: Annotated[float, Interval(gt=0, le=0.5)] = 2e-3,
-                   compare: bool = True) -> Result:
+                   compare: bool = True,
+                   box_frequency_low: Annotated[float, Interval(gt=0, le=10)] = 1.0,
+                   box_frequency_high: Annotated[float, Interval(gt=0, le=10)] = 1.0,
+                   box_zeta_low: Annotated[float, Interval(ge=0, le=1)] = 0.0,
+                   box_zeta_high: Annotated[float, Interval(ge=0, le=1)] = 0.0,
+                   box_speed_margin: Annotated[float, Interval(ge=0, le=1)] = 0.0,
+                   box_grid: Annotated[int, Interval(ge=2, le=50)] = 3,
+                   robust: bool = False) -> Result:
     """Synthesise the lift cam's law (module docstring) and check it by the chain.
 
     Parameters
@@ -540,6 +586,14 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
     verify, agreement_rel : run the law through follow_cam (CVODES) and eq. (2) and require the
         linear prediction to agree within agreement_rel (else INACCURATE).
     compare : the four library laws at the same t and speeds (values `<law>_rebound_mm_<rpm>` ...).
+    box_frequency_low, box_frequency_high, box_zeta_low, box_zeta_high, box_speed_margin, box_grid :
+        the lever's uncertain inputs on a box (solvers/stop_impact/lever_box.py): a factor on both
+        natural frequencies, the damping ratio (both 0: the task's own), the band's top raised by a
+        fraction, the dense check's points per axis. Given, the result reports the chain's worst
+        rebound over the box (`rebound_worst_box_mm`, its lever and speed in diagnostics).
+    robust : the law must keep the limit on the whole box: its corners and nominal are LP rows, its
+        grid the dense check, a failing point added (`design_law`); with compare, the nominal law's
+        and the cycloid's (at its least angle) worst over the same box beside it.
     """
     task.need("stroke_mm", "amplitude_limit_mm")
     task.need_effect("cam_drive")
@@ -549,12 +603,15 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
     if phase_from_deg >= phase_to_deg:
         raise SettingError(f"phase_from_deg={phase_from_deg} >= phase_to_deg={phase_to_deg}: empty bracket",
                            key="phase_from_deg")
+    box = lever_box(box_frequency_low, box_frequency_high, box_zeta_low, box_zeta_high, box_speed_margin, box_grid)
     clock = Clock()
     bounds = {"max_velocity_mm_per_rad": max_velocity_mm_per_rad,
               "max_acceleration_mm_per_rad2": max_acceleration_mm_per_rad2, "max_jerk_mm_per_rad3": max_jerk_mm_per_rad3}
     band = (band_low_rpm, band_high_rpm)
     common = dict(coefficients=coefficients, continuity=continuity, sample_speeds=sample_speeds,
                   dense_step_rpm=dense_step_rpm, bounds=bounds)
+    if robust and not box.trivial:
+        common |= {"box": box, "rounds": ROBUST_ROUNDS}
     limit = task.amplitude_limit_mm
     build = Clock()
     linear_lever(coefficients, continuity)
@@ -577,6 +634,8 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
     values |= {"t_deg": t_deg, "lp_value": design.value, "window_xi": design.window_xi, "lps": float(design.lps)}
     if objective == "least_phase":
         values["t_min_synthesized_deg"] = t_deg
+        if robust and not box.trivial:
+            values["t_min_robust_deg"] = t_deg
         t_cyc = _library_least_phase(task, "cycloidal", band, phase_from_deg, phase_to_deg, phase_tol_deg,
                                      dense_step_rpm)
         if t_cyc is not None:
@@ -602,22 +661,28 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
             [p[0] for p in predicted_rebounds_mm(task, "cycloidal", t_deg, dense, lever=lever)])
     status, message, warnings = Status.SOLVED, f"{objective}: {law} at t = {t_deg:.6g} deg", ()
     if verify:
-        check_speeds = sorted(set(design.speeds) | {float(dense[worst])})
-        chain_task = dataclasses.replace(task, law=law)
-        worst_gap = 0.0
-        for n in check_speeds:
+        nominal = box.nominal(task)
+        check_points = sorted(set(design.speeds) | {nominal + (float(dense[worst]),)})
+        if robust and not box.trivial:      # and the box's worst (the robust LP's dense check was over it)
+            check_points = sorted(set(check_points) | {box_worst_point(task, law, t_deg, band, box, dense_step_rpm,
+                                                                       lever)[1]})
+        worst_gap, chains = 0.0, []
+        for point in check_points:
+            n, each = point[2], dataclasses.replace(LeverBox.lever(task, point[:2]), law=law)
             try:
-                chain = float(rebound_amplitude_mm(chain_task, n, t_deg))
+                chain = float(rebound_amplitude_mm(each, n, t_deg))
             except RollerLeftCam as exc:
-                return clock.result(Status.INACCURATE, values, message=f"the chain at {n:g} rpm: {exc}",
+                return clock.result(Status.INACCURATE, values, message=f"the chain at {_points_text([point])}: {exc}",
                                     arrays=arrays, diagnostics=diagnostics)
-            own = predicted_rebounds_mm(task, law, t_deg, [n], lever=lever)[0][0]
-            gap = abs(chain - own) / max(limit, 1e-300)
-            worst_gap = max(worst_gap, gap)
-            values[f"rebound_chain_mm_{speed_tag(n)}"] = chain
-            values[f"rebound_predicted_mm_{speed_tag(n)}"] = own
+            own = predicted_rebounds_mm(LeverBox.lever(task, point[:2]), law, t_deg, [n], lever=lever)[0][0]
+            worst_gap = max(worst_gap, abs(chain - own) / max(limit, 1e-300))
+            chains.append(chain)
+            if point[:2] == nominal:
+                values[f"rebound_chain_mm_{speed_tag(n)}"] = chain
+                values[f"rebound_predicted_mm_{speed_tag(n)}"] = own
         values["chain_rel_diff"] = worst_gap
-        values["rebound_max_chain_mm"] = max(values[f"rebound_chain_mm_{speed_tag(n)}"] for n in check_speeds)
+        values["rebound_max_chain_mm"] = max(chains)
+        diagnostics["chain_points"] = [list(p) + [c] for p, c in zip(check_points, chains)]
         if worst_gap > agreement_rel:
             status = Status.INACCURATE
         over = values["rebound_max_chain_mm"] - limit
@@ -625,11 +690,16 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
             status = Status.INACCURATE
             message += f"; the chain's rebound exceeds amplitude_limit_mm by {over:.3g} mm"
         message += (f"; the chain (CVODES + eq. (2)) agrees with the linear prediction to {worst_gap:.1e} of the "
-                    f"limit at {len(check_speeds)} speeds (tolerance {agreement_rel:g})")
+                    f"limit at {len(check_points)} points (tolerance {agreement_rel:g})")
+    if not box.trivial:
+        diagnostics |= box_values(task, law, t_deg, band, box, dense_step_rpm, lever, values, "")
+        if robust and compare and objective == "least_phase":
+            _beside(task, band, phase_from_deg, phase_to_deg, phase_tol_deg, common, box, values, diagnostics)
     if compare:
-        _compare(task, law, t_deg, sorted(set(design.speeds)), values)
+        _compare(task, law, t_deg, sorted({p[2] for p in design.speeds if p[:2] == box.nominal(task)}), values)
+    sampled = [p[2] if box.trivial else list(p) for p in design.speeds]
     return clock.result(status, values, message=message,
-                        arrays=arrays, diagnostics=diagnostics | {"sampled_speeds_rpm": list(design.speeds),
+                        arrays=arrays, diagnostics=diagnostics | {"sampled_speeds_rpm": sampled,
                                                                   "law_knots": list(law.knots),
                                                                   "law_coefficients": list(law.coefficients)},
                         warnings=warnings)
@@ -689,6 +759,63 @@ def _least_phase(task, band, lo, hi, tol, common):
         if -f_hi <= ROOT_FTOL * limit or state["steps"] >= MAX_PHASE_STEPS:   # r*(hi) is the limit to the LP's digits
             break
     return best, hi, state
+
+
+def lever_box(box_frequency_low=1.0, box_frequency_high=1.0, box_zeta_low=0.0, box_zeta_high=0.0,
+              box_speed_margin=0.0, box_grid=3) -> LeverBox:
+    """The LeverBox of a solver's flat settings (both zeta bounds 0: the task's own damping ratio);
+    out-of-range or reversed bounds are a SettingError naming the key."""
+    zeta = None if box_zeta_low == box_zeta_high == 0.0 else (box_zeta_low, box_zeta_high)
+    return LeverBox((box_frequency_low, box_frequency_high), zeta, box_speed_margin, box_grid)
+
+
+def box_worst_point(task, law, t_deg, band, box, step, lever):
+    """(the linear model's largest rebound [mm], its point (frequency factor, zeta, rpm)) of `law`
+    at `t_deg` over the box's grid of levers and its band (the margin added), every `step` rpm."""
+    keys = box.grid_keys(task)
+    levers = {key: LeverBox.lever(task, key) for key in keys}
+    return _dense_worst(levers, keys, law, t_deg, band_speeds(box.band(band), step), lever)
+
+
+def box_values(task, law, t_deg, band, box, step, lever, values, suffix):
+    """The chain's worst rebound of `law` at `t_deg` over the box: at every lever of its grid, the
+    chain (CVODES rise, eq. (2)) at the speed where the linear model's rebound is largest (the two
+    agree within the synthesis' agreement_rel: the status criterion). Sets
+    `rebound_worst_box<suffix>_mm` and `box_roller_left<suffix>` (levers of the grid on which the
+    roller leaves its cam there: no rebound, a failure of its own, counted, not in the worst);
+    returns the diagnostics naming where they are."""
+    dense = band_speeds(box.band(band), step)
+    worst, where, left = -math.inf, None, []
+    for key in box.grid_keys(task):
+        each = LeverBox.lever(task, key)
+        pred = [p[0] for p in predicted_rebounds_mm(each, law, t_deg, dense, lever=lever)]
+        n = float(dense[int(np.argmax(pred))])
+        chain = float(rebound_amplitude_mm(dataclasses.replace(each, law=law), n, t_deg, lost=math.nan))
+        if math.isnan(chain):
+            left.append(list(key) + [n])
+        elif chain > worst:
+            worst, where = chain, key + (n,)
+    values |= {f"rebound_worst_box{suffix}_mm": worst, f"box_roller_left{suffix}": float(len(left))}
+    return {f"rebound_worst_box{suffix}_at": where and {"frequency_factor": where[0], "zeta": where[1],
+                                                        "speed_rpm": where[2]},
+            f"box_roller_left{suffix}_at": left,
+            "box": {"frequency_factor": list(box.frequency), "zeta": list(box.zeta or box._zetas(task)),
+                    "band_rpm": list(box.band(band)), "grid": box.grid}}
+
+
+def _beside(task, band, lo, hi, tol, common, box, values, diagnostics):
+    """The nominal law (synthesised without the box) and the cycloid at its least angle, each with
+    its worst rebound over the same box (`rebound_worst_box_nominal_mm`, `..._cycloidal_mm`)."""
+    lever = linear_lever(common["coefficients"], common["continuity"])
+    nominal = {k: v for k, v in common.items() if k not in ("box", "rounds")}
+    design, t_nom, _ = _least_phase(task, band, lo, hi, tol, nominal)
+    if design.status is Status.SOLVED:
+        values["t_min_nominal_deg"] = t_nom
+        diagnostics |= box_values(task, design.law, t_nom, band, box, common["dense_step_rpm"], lever, values,
+                                   "_nominal")
+    if "t_min_cycloidal_deg" in values:
+        diagnostics |= box_values(task, "cycloidal", values["t_min_cycloidal_deg"], band, box,
+                                   common["dense_step_rpm"], lever, values, "_cycloidal")
 
 
 def _library_least_phase(task, law, band, lo, hi, tol, step):
