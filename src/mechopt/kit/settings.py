@@ -15,6 +15,7 @@ A value out of its range is one sentence wherever it is caught (`range_fault`): 
 allowed range"; the scene layer puts the file name in front.
 """
 import dataclasses
+import functools
 import inspect
 import math
 import numbers
@@ -49,7 +50,7 @@ def check_settings(solver, **values) -> None:
 
 def setting_problem(option: inspect.Parameter, value) -> str:
     """What is wrong with a value for a solver setting ('' when nothing): its type, its choices
-    (a Literal) or its range (annotated_types constraints in the signature, see src/mechopt/kit/settings.py)."""
+    (a Literal) or its range (annotated_types constraints in the signature)."""
     annotation, default = option.annotation, option.default
     if get_origin(annotation) is Literal:
         choices = get_args(annotation)
@@ -61,10 +62,7 @@ def setting_problem(option: inspect.Parameter, value) -> str:
         return f"expected {expected.__name__} (default {default!r})"
     if isinstance(value, float) and not math.isfinite(value):
         return "expected a finite number"
-    low, high = declared_range(annotation)
-    if (low and not low[1](value, low[0])) or (high and not high[1](value, high[0])):
-        return f"allowed {describe_range(low, high)}"
-    return ""
+    return _range_problem(annotation, value)
 
 
 def range_fault(key: str, value, problem: str) -> str:
@@ -110,6 +108,11 @@ def field_problem(annotation, value) -> str:
         return "expected true or false"
     elif kinds == (str,) and not isinstance(value, str):
         return "expected text"
+    return _range_problem(annotation, value)
+
+
+def _range_problem(annotation, value) -> str:
+    """'allowed <range>' when `value` is outside the range `annotation` declares, else ''."""
     low, high = declared_range(annotation)
     if (low and not low[1](value, low[0])) or (high and not high[1](value, high[0])):
         return f"allowed {describe_range(low, high)}"
@@ -120,16 +123,11 @@ def _choices(kinds) -> tuple:
     return tuple(c for k in kinds if get_origin(k) is Literal for c in get_args(k))
 
 
-_FIELD_TYPES: dict = {}
-
-
+@functools.cache
 def _field_types(cls) -> tuple:
     """(name, annotation) of the fields a caller gives (init fields), looked up once per class: a
-    model built in a solver's loop pays a dictionary look-up, not a walk of its class."""
-    found = _FIELD_TYPES.get(cls)
-    if found is None:
-        found = _FIELD_TYPES[cls] = tuple((f.name, f.type) for f in dataclasses.fields(cls) if f.init)
-    return found
+    model built in a solver's loop pays a look-up, not a walk of its class."""
+    return tuple((f.name, f.type) for f in dataclasses.fields(cls) if f.init)
 
 
 def declared_range(annotation):
