@@ -59,7 +59,7 @@ class Uniform:
 def uniform_constraints(task: Cyclogram) -> Uniform:
     """The task's operations, recurrent operations, windows and syncs as uniform constraints. Time-
     based when an operation gives min_ms and the task no speed_rpm (every floor then in ms: no
-    min_deg, stress, amplitude or window, which are angles); else angle-based, each operation at
+    min_deg, stress, amplitude or max_deg window, which are angles); else angle-based, each operation at
     its bound of every limit (a min_ms as the angle the shaft turns in it at speed_rpm)."""
     dag_names, dag_tails, dag_heads = task.index_arrays     # cached on the task: the one cycle's operations
     names = list(dag_names) + task.isolated_events             # events of recurrent operations alone come last
@@ -77,14 +77,17 @@ def uniform_constraints(task: Cyclogram) -> Uniform:
     more = [(op["from"], op["to"], d, op["cycles"], f"{op['from']}->{op['to']}[+{op['cycles']}]")
             for op, d in zip(rec, d_rec)]
     operations = len(dag_tails) + len(more)
-    more += [(b, a, -w, 0, f"window p({b}) - p({a}) <= {w:.6g} deg") for a, b, w in task.window_arcs()]
+    windows = ([(str(w["from"]), str(w["to"]), float(w["max_ms"])) for w in task.windows] if timed
+               else task.window_arcs())
+    unit = "ms" if timed else "deg"
+    more += [(b, a, -w, 0, f"window p({b}) - p({a}) <= {w:.6g} {unit}") for a, b, w in windows]
     more += [(u, v, 0.0, 0, f"sync p({a}) = p({b})") for a, b in task.sync_pairs() for u, v in ((a, b), (b, a))]
     tails = np.r_[dag_tails, np.array([index[m[0]] for m in more], dtype=np.int64)]
     heads = np.r_[dag_heads, np.array([index[m[1]] for m in more], dtype=np.int64)]
     d = np.r_[d_ops, np.array([m[2] for m in more], dtype=float)]
     k = np.r_[np.zeros(len(dag_tails)), np.array([m[3] for m in more], dtype=float)]
     labels = np.concatenate([task.operation_labels, np.array([m[4] for m in more], dtype=str)])
-    return Uniform(names, tails, heads, d, k, labels, operations, "ms" if timed else "deg")
+    return Uniform(names, tails, heads, d, k, labels, operations, unit)
 
 
 def _check_time_based(task):
@@ -93,7 +96,7 @@ def _check_time_based(task):
     mixed += [f"operations[{op['from']}->{op['to']}].min_deg" for op in task.recurrences if op["min_deg"] > 0]
     mixed += [f"operations[{x}->{y}].stress" for x, y in (task.arcs[k] for k in task.stress_arcs())]
     mixed += [f"operations[{x}->{y}].amplitude" for x, y in (task.arcs[k] for k in task.amplitude_arcs())]
-    mixed += [f"windows[{j}].max_deg" for j in range(len(task.windows))]
+    mixed += [f"windows[{j}].max_deg" for j, w in enumerate(task.windows) if "max_deg" in w]
     if mixed:
         raise ModelError(f"{mixed[0]}: the least cycle time of a time-based network (min_ms) takes durations "
                          f"only, no angle (also {some_of(mixed[1:], sep=', ') or 'nothing else'}); angle- and "

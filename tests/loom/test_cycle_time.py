@@ -256,3 +256,48 @@ def test_the_iteration_is_count_limited(monkeypatch):
     monkeypatch.setattr(cycle_time, "MAX_STEPS", 0)
     r = least_cycle_time(Cyclogram(operations=[op("a", "b", 3.0), op("b", "a", 3.0, 1)]))
     assert r.status is Status.LIMIT and "no answer after 0 Dinkelbach steps" in r.message
+
+
+def test_a_window_in_time_bounds_a_time_based_cycle():
+    """a -> b 100 ms, b -> a of the next cycle 50 ms: T = 150 ms; a window p(b) - p(a) <= 80 ms cannot
+    hold the 100 ms step (INFEASIBLE, the window named), and at 120 ms it holds without moving T."""
+    ops = [op("a", "b", 100.0), op("b", "a", 50.0, 1)]
+    held = least_cycle_time(Cyclogram(operations=ops, windows=[{"from": "a", "to": "b", "max_ms": 120.0}]), check=True)
+    assert held.status is Status.SOLVED and held.values["cycle_time_ms"] == pytest.approx(150.0, rel=1e-12)
+    short = least_cycle_time(Cyclogram(operations=ops, windows=[{"from": "a", "to": "b", "max_ms": 80.0}]))
+    assert short.status is Status.INFEASIBLE and "window p(b) - p(a) <= 80 ms spans no cycle" in short.message
+
+
+def test_a_window_in_degrees_does_not_enter_a_time_based_cycle():
+    ops = [op("a", "b", 100.0), op("b", "a", 50.0, 1)]
+    with pytest.raises(ModelError, match=r"windows\[0\]\.max_deg: the least cycle time of a time-based"):
+        least_cycle_time(Cyclogram(operations=ops, windows=[{"from": "a", "to": "b", "max_deg": 30.0}]))
+
+
+def test_a_window_in_time_is_its_angle_at_the_machine_s_speed():
+    """At 60 rpm the shaft turns 36 deg in 100 ms: a 100 ms window on a 40 deg step is 4 deg short."""
+    ops = [op("a", "b", 40.0, unit="min_deg")]
+    task = Cyclogram(operations=ops, speed_rpm=60.0, windows=[{"from": "a", "to": "b", "max_ms": 100.0}])
+    assert task.window_arcs() == [("a", "b", pytest.approx(36.0, rel=1e-12))]
+    assert plan_cyclogram(task).status is Status.INFEASIBLE
+    wide = Cyclogram(operations=ops, speed_rpm=60.0, windows=[{"from": "a", "to": "b", "max_ms": 120.0}])
+    assert plan_cyclogram(wide).values["span_deg"] == pytest.approx(40.0)
+    with pytest.raises(ModelError, match=r"windows\[0\]\.max_ms needs speed_rpm"):
+        plan_cyclogram(Cyclogram(operations=ops, windows=[{"from": "a", "to": "b", "max_ms": 100.0}]))
+
+
+@pytest.mark.parametrize("window, match", [({"from": "a", "to": "b"}, r"windows\[0\]: give max_deg .* got neither"),
+                                           ({"from": "a", "to": "b", "max_deg": 1.0, "max_ms": 1.0},
+                                            r"got max_deg and max_ms"),
+                                           ({"from": "a", "to": "b", "max_ms": 2e6}, r"windows\[0\]\.max_ms=2000000")])
+def test_a_window_gives_one_limit_in_range(window, match):
+    with pytest.raises(ModelError, match=match):
+        Cyclogram(operations=[op("a", "b", 40.0, unit="min_deg")], windows=[window])
+
+
+def test_the_highest_speed_refuses_a_window_in_time_by_name():
+    from mechopt.solvers.loom import max_machine_speed
+    task = Cyclogram(operations=[op("a", "b", 40.0, unit="min_deg"), op("b", "c", 100.0)], cycle_deg=360.0,
+                     windows=[{"from": "a", "to": "c", "max_ms": 300.0}])
+    with pytest.raises(ModelError, match=r"windows\[0\]\.max_ms: the highest speed takes windows as angles"):
+        max_machine_speed(task)
