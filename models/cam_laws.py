@@ -216,7 +216,7 @@ def _integrated(accelerations):
 
 
 def _piecewise(pieces):
-    breaks = tuple(p.x0 for p in pieces[1:])
+    breaks = tuple(float(p.x0) for p in pieces[1:])
 
     def forms(x, m):
         each = [p.forms(x, m) for p in pieces]
@@ -224,36 +224,45 @@ def _piecewise(pieces):
     return forms, breaks
 
 
-def scca(b: float, c: float, name: str | None = None) -> Law:
-    """The sine-constant-cosine-acceleration law with sine fraction b and cosine fraction c
-    (the constant's d = 1 - b - c), 0 <= b, c and b + c <= 1 (module docstring)."""
-    require(0 <= b <= 1 and 0 <= c <= 1 and b + c <= 1 + 1e-15,
-            f"scca: b={b!r}, c={c!r}: allowed 0 <= b, 0 <= c, b + c <= 1", key="law")
-    d = max(1.0 - b - c, 0.0)
-    half = math.pi / 2
-    acc = []                                        # (x0, x1, A, w, phi, k0, k1)
-    if b > 0:
-        acc.append((0.0, b / 2, 1.0, math.pi / b, 0.0, 0.0, 0.0))
-    if d > 0:
-        acc.append((b / 2, (b + d) / 2, 0.0, 0.0, 0.0, 1.0, 0.0))
-    if c > 0:                                       # one cosine half-wave through the mid-point
-        acc.append(((b + d) / 2, 1 - (b + d) / 2, 1.0, math.pi / c, half, 0.0, 0.0))
-    if d > 0:
-        acc.append((1 - (b + d) / 2, 1 - b / 2, 0.0, 0.0, 0.0, -1.0, 0.0))
-    if b > 0:
-        acc.append((1 - b / 2, 1.0, -1.0, math.pi / b, half, 0.0, 0.0))
-    forms, breaks = _piecewise(_integrated(acc))
-    return Law(name or f"scca_b{b:g}_c{c:g}", forms, breaks, end_order=3 if b > 0 else 2,
-               source="Norton, Cam Design and Manufacturing Handbook, 2nd ed., sec. 3.x (SCCA family)")
+def _mirrored(first_half):
+    """Acceleration pieces over 0..1 from those over 0..1/2: S''(x) = -S''(1 - x) (a symmetric
+    rise). A piece A sin(w u + phi) + k0 + k1 u on [x0, x1] (length L) mirrors to [1 - x1, 1 - x0]
+    as A sin(w u - w L - phi) - k0 - k1 L + k1 u."""
+    back = [(1 - x1, 1 - x0, A, w, -w * (x1 - x0) - phi, -k0 - k1 * (x1 - x0), k1)
+            for x0, x1, A, w, phi, k0, k1 in reversed(first_half)]
+    return list(first_half) + back
+
+
+def scca(b: float, c: float, cv: float = 0.0, name: str | None = None) -> Law:
+    """The sine-constant-cosine-acceleration law: over the first half, a quarter sine rising
+    over b/2, a constant over d/2, a quarter cosine falling over c/2 and zero acceleration
+    (constant velocity) over cv/2, d = 1 - b - c - cv; the second half mirrors it negatively.
+    b, c, cv >= 0, b + c + cv <= 1 (module docstring; cv = 0 is Norton's three-parameter family)."""
+    parts = {"b": b, "c": c, "cv": cv}
+    require(all(isinstance(v, (int, float)) and math.isfinite(v) and 0 <= v <= 1 for v in parts.values())
+            and b + c + cv <= 1 + 1e-12 and b + c + cv > 0 or (b, c, cv) == (0, 0, 0),
+            f"scca: b={b!r}, c={c!r}, cv={cv!r}: allowed 0 <= b, c, cv and b + c + cv <= 1", key="law")
+    d = max(1.0 - b - c - cv, 0.0)
+    edges = np.cumsum([0.0, b / 2, d / 2, c / 2, cv / 2])
+    shapes = ((1.0, math.pi / b if b else 0.0, 0.0, 0.0),            # (A, w, phi, k0): a quarter sine up
+              (0.0, 0.0, 0.0, 1.0),                                  # the constant
+              (1.0, math.pi / c if c else 0.0, math.pi / 2, 0.0),    # a quarter cosine down
+              (0.0, 0.0, 0.0, 0.0))                                  # constant velocity
+    half = [(x0, x1, A, w, phi, k0, 0.0) for x0, x1, (A, w, phi, k0) in zip(edges[:-1], edges[1:], shapes)
+            if x1 - x0 > 0]
+    forms, breaks = _piecewise(_integrated(_mirrored(half)))
+    label = f"scca_b{b:g}_c{c:g}" + (f"_cv{cv:g}" if cv else "")
+    return Law(name or label, forms, breaks, end_order=3 if b > 0 else 2,
+               source="Norton, Design of Machinery, ch. 8 (the SCCA family); a constant-velocity part as in "
+                      "the MechDesigner manual's SCCA law")
 
 
 def _trapezoid() -> Law:
     """Trapezoidal acceleration: linear ramps over 1/8 (a square-wave jerk)."""
     e = 1 / 8
-    acc = [(0.0, e, 0.0, 0.0, 0.0, 0.0, 1 / e), (e, 3 * e, 0.0, 0.0, 0.0, 1.0, 0.0),
-           (3 * e, 5 * e, 0.0, 0.0, 0.0, 1.0, -1 / e), (5 * e, 7 * e, 0.0, 0.0, 0.0, -1.0, 0.0),
-           (7 * e, 1.0, 0.0, 0.0, 0.0, -1.0, 1 / e)]
-    forms, breaks = _piecewise(_integrated(acc))
+    half = [(0.0, e, 0.0, 0.0, 0.0, 0.0, 1 / e), (e, 3 * e, 0.0, 0.0, 0.0, 1.0, 0.0),
+            (3 * e, 4 * e, 0.0, 0.0, 0.0, 1.0, -1 / e)]
+    forms, breaks = _piecewise(_integrated(_mirrored(half)))
     return Law("trapezoid", forms, breaks, end_order=3, source="Norton, Cam Design and Manufacturing Handbook, "
                "2nd ed., ch. 3 (trapezoidal acceleration)")
 
@@ -319,11 +328,11 @@ def _add(law: Law):
 _add(Law("cycloidal", _cycloidal, end_order=3, source=_BOOK))
 _add(Law("harmonic", _harmonic, end_order=2, source=_BOOK))
 _add(Law("modified_sine", _modified_sine, (0.125, 0.875), end_order=3, source=_BOOK))
-_add(scca(0.25, 0.25, "modified_trapezoid"))
+_add(scca(0.25, 0.25, name="modified_trapezoid"))
 _add(Law("polynomial_345", _polynomial_345, end_order=3, source=_BOOK))
 _add(Law("polynomial_4567", _polynomial_4567, end_order=4, source=_BOOK))
 _add(Law("double_harmonic", _double_harmonic, end_order=2, source=_BOOK))
-_add(scca(0.0, 0.0, "constant_acceleration"))
+_add(scca(0.0, 0.0, name="constant_acceleration"))
 _add(_trapezoid())
 _add(Law("cubic", _cubic, end_order=2, source=_BOOK))
 

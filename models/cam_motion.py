@@ -28,11 +28,10 @@ from typing import ClassVar, Literal
 
 import numpy as np
 
-from mechopt.kit.errors import ModelError, require
+from mechopt.kit.errors import ModelError, quote, require, some_of
 from mechopt.kit.settings import check_fields
 from mechopt.models.cam_laws import Law
 from mechopt.models.cam_laws import law as library_law
-from mechopt.models.cam_laws import names as law_names
 
 KINDS = ("rise", "dwell", "return")
 SEGMENT_COLUMNS = {"segment": str, "law": str, "angle_deg": float, "lift_mm": float,
@@ -115,8 +114,8 @@ class CamMotion:
         object.__setattr__(self, "segments", _segments(self.segments))
         steps = self.steps()
         if self.joins == "refuse" and steps:
-            raise ModelError("; ".join(map(str, steps)) + " (joins = 'refuse'; 'warn' reports them instead)",
-                             key="segments")
+            raise ModelError(f"joins='refuse': {'; '.join(map(str, steps))} ('warn' reports them instead)",
+                             key="joins")
 
     @property
     def starts_rad(self) -> np.ndarray:
@@ -179,52 +178,51 @@ class CamMotion:
 def _segments(rows) -> tuple[Segment, ...]:
     """The segments of `rows` (tables or `Segment`s), each checked, placed end to end from 0 deg
     and s = 0; the angles must add to a turn and the lifts to 0."""
-    require(isinstance(rows, (list, tuple)) and 0 < len(rows) <= MAX_SEGMENTS,
-            f"segments: expected a list of 1 to {MAX_SEGMENTS} tables {{segment, law, angle_deg, lift_mm}}; "
-            f"got {type(rows).__name__}" + (f" of {len(rows)}" if isinstance(rows, (list, tuple)) else ""),
-            key="segments")
+    count = len(rows) if isinstance(rows, (list, tuple)) else None
+    require(count is not None and 0 < count <= MAX_SEGMENTS,
+            f"segments={quote(rows)}: expected a list of 1 to {MAX_SEGMENTS} tables {{segment, law, angle_deg, "
+            "lift_mm}", key="segments")
     out, theta, s = [], 0.0, 0.0
     for k, row in enumerate(rows):
         seg = row if isinstance(row, Segment) else _segment(row, f"segments[{k}]")
-        seg = Segment(seg.kind, seg.law, seg.angle_deg, seg.lift_mm, theta, s)
-        out.append(seg)
+        out.append(Segment(seg.kind, seg.law, seg.angle_deg, seg.lift_mm, theta, s))
         theta, s = theta + seg.angle_deg, s + seg.lift_mm
+    angles = " + ".join(f"{seg.angle_deg:g}" for seg in out)
     require(abs(theta - FULL_TURN_DEG) <= ANGLE_TOL_DEG,
-            f"segments: the angles add to {theta:.10g} deg; a cam's segments must add to {FULL_TURN_DEG:g} deg "
-            f"({' + '.join(f'{seg.angle_deg:g}' for seg in out)})", key="segments")
+            f"segments={some_of(angles.split(' + '), sep=' + ')} deg: the angles add to {theta:.10g} deg; "
+            f"allowed: a full turn, {FULL_TURN_DEG:g} deg", key="segments")
     require(abs(s) <= LIFT_TOL_MM,
-            f"segments: the lifts add to {s:.10g} mm; the follower must return to its start (rises and "
-            f"returns adding to 0: {' + '.join(f'({seg.lift_mm:g})' for seg in out)})", key="segments")
+            f"segments={some_of([f'({seg.lift_mm:+g})' for seg in out], sep=' + ')} mm: the lifts add to "
+            f"{s:.10g} mm; allowed: 0 (the follower returns to its start)", key="segments")
     return tuple(out)
 
 
 def _segment(row, where: str) -> Segment:
     """One table {segment, law, angle_deg, lift_mm} checked: its kind, its law, a finite angle in
-    (0, 360] deg and a lift whose sign is its kind's."""
-    require(isinstance(row, dict), f"{where}: expected a table {{segment, law, angle_deg, lift_mm}}, got "
-            f"{type(row).__name__}", key="segments")
-    unknown = sorted(set(row) - set(SEGMENT_COLUMNS))
-    require(not unknown, f"{where}: unknown key(s) {', '.join(unknown)}; allowed: {', '.join(SEGMENT_COLUMNS)}",
-            key="segments")
+    (0, 360] deg and a lift whose sign is its kind's. Errors name the row's key (segments[2].lift_mm)."""
+    require(isinstance(row, dict), f"{where}={quote(row)}: expected a table {{segment, law, angle_deg, lift_mm}}",
+            key=where)
+    unknown = sorted(map(str, set(row) - set(SEGMENT_COLUMNS)))
+    require(not unknown, f"{where}={quote(row)}: unknown key(s) {', '.join(unknown)}; allowed: "
+            f"{', '.join(SEGMENT_COLUMNS)}", key=where)
     missing = [key for key in SEGMENT_REQUIRED if key not in row]
-    require(not missing, f"{where}: missing {', '.join(missing)}", key="segments")
-    kind = row["segment"]
-    require(kind in KINDS, f"{where}.segment={kind!r}: allowed {', '.join(KINDS)}", key="segments")
-    angle, lift = row["angle_deg"], row["lift_mm"]
+    require(not missing, f"{where}={quote(row)}: missing {', '.join(missing)}", key=where)
+    kind, angle, lift = row["segment"], row["angle_deg"], row["lift_mm"]
+    require(kind in KINDS, f"{where}.segment={quote(kind)}: allowed {', '.join(KINDS)}", key=f"{where}.segment")
     for key, value in (("angle_deg", angle), ("lift_mm", lift)):
         require(isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value),
-                f"{where}.{key}={value!r}: expected a finite number", key="segments")
-    require(0 < angle <= FULL_TURN_DEG, f"{where}.angle_deg={angle!r}: allowed 0 < angle_deg <= 360", key="segments")
-    sign = {"rise": lift > 0, "return": lift < 0, "dwell": lift == 0}[kind]
-    require(sign, f"{where}.lift_mm={lift!r}: a {kind} needs lift_mm " +
-            {"rise": "> 0", "return": "< 0 (a return falls)", "dwell": "= 0"}[kind], key="segments")
+                f"{where}.{key}={quote(value)}: expected a finite number", key=f"{where}.{key}")
+    require(0 < angle <= FULL_TURN_DEG, f"{where}.angle_deg={angle!r}: allowed > 0 and <= {FULL_TURN_DEG:g}",
+            key=f"{where}.angle_deg")
+    rule = {"rise": ("> 0", lift > 0), "return": ("< 0 (a return falls)", lift < 0), "dwell": ("= 0", lift == 0)}
+    require(rule[kind][1], f"{where}.lift_mm={lift!r}: allowed {rule[kind][0]} for a {kind}", key=f"{where}.lift_mm")
     name = row.get("law", "")
     if kind == "dwell":
-        require(name in ("", "dwell"), f"{where}.law={name!r}: a dwell has no law (leave it out)", key="segments")
+        require(name in ("", "dwell"), f"{where}.law={quote(name)}: a dwell has no law (leave it out)",
+                key=f"{where}.law")
         return Segment(kind, None, float(angle), 0.0)
-    require(name != "", f"{where}.law: missing; allowed: {', '.join(law_names())}", key="segments")
     try:
         found = library_law(name)
     except ModelError as exc:
-        raise ModelError(f"{where}.{exc}", key="segments") from None
+        raise ModelError(f"{where}.{exc}", key=f"{where}.law") from None
     return Segment(kind, found, float(angle), float(lift))
