@@ -158,7 +158,7 @@ def _polynomial_4567(x, m):
 
 
 def _cubic(x, m):
-    return x**2 * (3 - 2 * x), 6 * x * (1 - x), 6 - 12 * x, 6 + 0 * x
+    return x**2 * (3 - 2 * x), 6 * x * (1 - x), 6 - 12 * x, -12 + 0 * x
 
 
 def _modified_sine(x, m):
@@ -240,7 +240,7 @@ def scca(b: float, c: float, cv: float = 0.0, name: str | None = None) -> Law:
     b, c, cv >= 0, b + c + cv <= 1 (module docstring; cv = 0 is Norton's three-parameter family)."""
     parts = {"b": b, "c": c, "cv": cv}
     require(all(isinstance(v, (int, float)) and math.isfinite(v) and 0 <= v <= 1 for v in parts.values())
-            and b + c + cv <= 1 + 1e-12 and b + c + cv > 0 or (b, c, cv) == (0, 0, 0),
+            and b + c + cv <= 1 + 1e-12,
             f"scca: b={b!r}, c={c!r}, cv={cv!r}: allowed 0 <= b, c, cv and b + c + cv <= 1", key="law")
     d = max(1.0 - b - c - cv, 0.0)
     edges = np.cumsum([0.0, b / 2, d / 2, c / 2, cv / 2])
