@@ -63,7 +63,8 @@ def law_function(law: str) -> "ca.Function":        # noqa: F821  (CasADi import
         return ca.Function("law_spline", [xi], [zero, zero, law.casadi_ddS(xi)], ["xi"], ["S", "dS", "ddS"])
     s = law_displacement(law, xi)
     ds = ca.gradient(s, xi)
-    return ca.Function(f"law_{law}", [xi], [s, ds, ca.gradient(ds, xi)], ["xi"], ["S", "dS", "ddS"])
+    name = f"law_{law}" if isinstance(law, str) and law.isidentifier() else "law_member"   # "scca(0.2, 0.6)"
+    return ca.Function(name, [xi], [s, ds, ca.gradient(ds, xi)], ["xi"], ["S", "dS", "ddS"])
 
 
 def law_values(law: str, xi):

@@ -33,14 +33,16 @@ Cj is the largest |S'''| inside 0 <= xi <= 1, infinite where S'' steps at a join
 constant-acceleration law at 1/2); a law whose acceleration jumps at an end against a dwell has
 an infinite jerk THERE as well, which `end_order` states.
 """
+import functools
 import math
+import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
 
-from mechopt.kit.errors import ModelError, require
+from mechopt.kit.errors import ModelError, quote, require
 
 PEAK_GRID = 20_001          # samples of 0..1 where the peaks are looked for before polishing
 PEAK_XTOL = 1e-12           # the polishing search's tolerance in xi
@@ -241,7 +243,7 @@ def scca(b: float, c: float, cv: float = 0.0, name: str | None = None) -> Law:
     parts = {"b": b, "c": c, "cv": cv}
     require(all(isinstance(v, (int, float)) and math.isfinite(v) and 0 <= v <= 1 for v in parts.values())
             and b + c + cv <= 1 + 1e-12,
-            f"scca: b={b!r}, c={c!r}, cv={cv!r}: allowed 0 <= b, c, cv and b + c + cv <= 1", key="law")
+            f"law=scca(b={b!r}, c={c!r}, cv={cv!r}): allowed 0 <= b, c, cv and b + c + cv <= 1", key="law")
     d = max(1.0 - b - c - cv, 0.0)
     edges = np.cumsum([0.0, b / 2, d / 2, c / 2, cv / 2])
     shapes = ((1.0, math.pi / b if b else 0.0, 0.0, 0.0),            # (A, w, phi, k0): a quarter sine up
@@ -342,10 +344,25 @@ def names() -> tuple[str, ...]:
     return tuple(_LAWS)
 
 
+_NUMBER = r"\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*"
+_SCCA_NAME = re.compile(rf"scca\({_NUMBER},{_NUMBER}(?:,{_NUMBER})?\)")
+SCCA_FORM = "scca(b, c[, cv])"          # a family member by name, as a scene's law
+
+
 def law(name) -> Law:
-    """The library law `name` (a `Law` passes through); an unknown name: ModelError listing them."""
+    """The library law `name`, or a member of the SCCA family named "scca(b, c)" or
+    "scca(b, c, cv)" (a `Law` passes through); an unknown name: ModelError listing them."""
     if isinstance(name, Law):
         return name
-    if name not in _LAWS:
-        raise ModelError(f"law={name!r}: unknown motion law; allowed: {', '.join(_LAWS)}", key="law")
-    return _LAWS[name]
+    if isinstance(name, str) and name in _LAWS:
+        return _LAWS[name]
+    member = _SCCA_NAME.fullmatch(name.strip()) if isinstance(name, str) else None
+    if member is None:
+        raise ModelError(f"law={quote(name)}: unknown motion law; allowed: {', '.join(_LAWS)}, or {SCCA_FORM} "
+                         "(fractions of the rise)", key="law")
+    return _scca_named(*(float(g) for g in member.groups() if g is not None))
+
+
+@functools.lru_cache(maxsize=64)
+def _scca_named(b: float, c: float, cv: float = 0.0) -> Law:
+    return scca(b, c, cv, name=f"scca({b:g}, {c:g}" + (f", {cv:g})" if cv else ")"))

@@ -263,3 +263,23 @@ def test_bad_polynomial_conditions_are_refused(conditions, match):
 def test_bad_scca_fractions_are_refused(b, c, cv):
     with pytest.raises(ModelError, match="allowed 0 <= b, c, cv and b \\+ c \\+ cv <= 1"):
         laws.scca(b, c, cv)
+
+
+def test_an_scca_member_is_a_law_by_name_in_the_integrators_and_the_cam():
+    """"scca(b, c[, cv])" names a family member wherever a law name goes: the library, the lift's
+    integrators (CasADi's AD of its S) and a cam's segments."""
+    from mechopt.models.cam_follower import law_values
+    from mechopt.models.cam_motion import CamMotion
+    named = laws.law("scca(0.2, 0.6, 0.2)")
+    assert named.name == "scca(0.2, 0.6, 0.2)" and named is laws.law("scca(0.2,0.6,0.2)")
+    assert named.peaks == pytest.approx(laws.scca(0.2, 0.6, cv=0.2).peaks)
+    np.testing.assert_allclose(np.c_[law_values("scca(0.25, 0.25)", XI)],
+                               np.c_[laws.law("modified_trapezoid").values(XI)[:3]], atol=1e-11)
+    cam = CamMotion([dict(segment="rise", law="scca(0.25, 0.75)", angle_deg=180, lift_mm=1.0),
+                     dict(segment="return", law="modified_sine", angle_deg=180, lift_mm=-1.0)])
+    assert cam.steps() == []
+    with pytest.raises(ModelError, match=r"law=scca\(b=0.7, c=0.7, cv=0.0\): allowed"):
+        laws.law("scca(0.7, 0.7)")
+    with pytest.raises(ModelError, match=r"law='scca\(a, b\)': unknown motion law; allowed: cycloidal, .* or "
+                                         r"scca\(b, c\[, cv\]\)"):
+        laws.law("scca(a, b)")
