@@ -170,6 +170,14 @@ class CamMotion:
             out["jerk_mm_per_rad3"] = math.inf
         return out
 
+    def in_time(self, theta_rad, speed_rpm: float):
+        """(s [mm], v [mm/s], a [mm/s^2], j [mm/s^3]) at the cam angles `theta_rad` for a cam
+        turning steadily at `speed_rpm`: the angle derivatives times omega^k, omega = 2 pi n / 60."""
+        require(isinstance(speed_rpm, (int, float)) and math.isfinite(speed_rpm) and speed_rpm > 0,
+                f"speed_rpm={quote(speed_rpm)}: allowed > 0", key="speed_rpm")
+        omega = 2 * math.pi * speed_rpm / 60.0
+        return tuple(v * omega**k for k, v in enumerate(self.at(theta_rad)))
+
     def warnings(self, values: dict) -> list[str]:
         """The steps at joins (an infinite acceleration or jerk), one line each."""
         return [str(j) for j in self.steps()]

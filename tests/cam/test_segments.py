@@ -222,3 +222,33 @@ def test_a_scene_whose_angles_miss_a_turn_names_its_file_and_key(tmp_path):
         _load(tmp_path, body, csv)
     with pytest.raises(SceneError, match=r"structure\.segments\[1\]\.lift_mm=10.0: allowed < 0"):
         _load(tmp_path, body, csv.replace("return,cycloidal,120,-10", "return,cycloidal,120,10"))
+
+
+def test_partial_rises_and_returns_stack_their_lifts():
+    """Rise 4 mm, hold, rise 6 mm more, hold, return 10 mm in two parts: each segment starts where
+    the one before left the follower, and the motion is each law scaled to its part."""
+    cam = CamMotion([dict(segment="rise", law="polynomial_345", angle_deg=60, lift_mm=4),
+                     dict(segment="dwell", angle_deg=30, lift_mm=0),
+                     dict(segment="rise", law="cycloidal", angle_deg=60, lift_mm=6),
+                     dict(segment="dwell", angle_deg=60, lift_mm=0),
+                     dict(segment="return", law="modified_sine", angle_deg=90, lift_mm=-7),
+                     dict(segment="return", law="polynomial_4567", angle_deg=60, lift_mm=-3)])
+    assert [seg.start_mm for seg in cam.segments] == [0, 4, 4, 10, 10, 3]
+    assert [seg.start_deg for seg in cam.segments] == [0, 60, 90, 150, 210, 300]
+    x = 0.3                                                 # 30 % into the second rise
+    s, ds, dds, _ = (v[0] for v in cam.at(math.radians(90 + 0.3 * 60)))
+    beta = math.radians(60)
+    assert s == pytest.approx(4 + 6 * (x - math.sin(2 * math.pi * x) / (2 * math.pi)), abs=1e-12)
+    assert ds == pytest.approx(6 * (1 - math.cos(2 * math.pi * x)) / beta, abs=1e-12)
+    assert dds == pytest.approx(6 * 2 * math.pi * math.sin(2 * math.pi * x) / beta**2, abs=1e-11)
+    assert cam.steps() == []
+
+
+def test_the_motion_in_time_is_the_angle_derivatives_times_omega_powers():
+    cam = CamMotion(rows())
+    theta = np.linspace(0, 2 * math.pi, 73)
+    omega = 2 * math.pi * 300 / 60
+    for k, (timed, angular) in enumerate(zip(cam.in_time(theta, 300.0), cam.at(theta))):
+        np.testing.assert_allclose(timed, angular * omega**k, rtol=1e-15)
+    with pytest.raises(ModelError, match=r"speed_rpm=0: allowed > 0"):
+        cam.in_time(theta, 0)
