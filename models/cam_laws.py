@@ -9,20 +9,21 @@ module: numpy for numbers (`Law.values`), casadi for the expressions the package
 take (`Law.expression`, as models/cam_profile.py's `parse_expression` serves both). Piecewise
 laws select their piece with `m.where` (numpy) or `m.if_else` (casadi).
 
-Laws (Norton, *Cam Design and Manufacturing Handbook*, 2nd ed., Industrial Press 2009, ch. 3;
-Rothbart (ed.), *Cam Design Handbook*, McGraw-Hill 2004, ch. 3; Chen, *Mechanics and Design of
-Cam Mechanisms*, Pergamon 1982, ch. 4):
+Laws (Rothbart (ed.), *Cam Design Handbook*, McGraw-Hill 2004, ch. 2 "Basic curves" and ch. 3;
+Norton, *Cam Design and Manufacturing Handbook*, 2nd ed., Industrial Press 2009, ch. 3; Chen,
+*Mechanics and Design of Cam Mechanisms*, Pergamon 1982):
 
 * cycloidal, harmonic (simple harmonic), double_harmonic, polynomial_345, polynomial_4567,
-  cubic (the 3-2 polynomial): one closed form each;
+  cubic (Rothbart's "cubic no. 2", 3 xi^2 - 2 xi^3): one closed form each;
 * modified_sine (Kloomok and Muffley's, pieces at 1/8 and 7/8);
-* the sine-constant-cosine-acceleration (SCCA) family, `scca(b, c)` (Norton, Cam Design and
-  Manufacturing Handbook, sec. 3.x "the SCCA family"; the same in his *Design of Machinery*, ch. 8):
-  the acceleration's positive half is a quarter sine rising over b/2, a constant over d/2 =
-  (1 - b - c)/2 and a quarter cosine falling over c/2; the second half mirrors it negatively.
-  Named members: modified_trapezoid (b = c = 1/4), constant_acceleration (b = c = 0); the family
-  also holds cycloidal (b = c = 1/2), harmonic (b = 0, c = 1) and modified_sine (b = 1/4, c = 3/4),
-  which the tests use as independent checks of those laws' own forms;
+* the sine-constant-cosine-acceleration (SCCA) family, `scca(b, c, cv)` (Norton, *Design of
+  Machinery*, ch. 8, "the SCCA family", with b + c + d = 1; a constant-velocity part cv as the
+  MechDesigner manual's SCCA law has): over the first half, a quarter sine rising over b/2, a
+  constant over d/2, a quarter cosine falling over c/2 and zero over cv/2; the second half
+  mirrors it negatively. Named members: modified_trapezoid (b = c = 1/4), constant_acceleration
+  (b = c = 0); the family also holds cycloidal (b = c = 1/2), harmonic (b = 0, c = 1) and
+  modified_sine (b = 1/4, c = 3/4), which the tests use as independent checks of those laws' own
+  forms. `law("scca(b, c[, cv])")` names a member;
 * trapezoid: trapezoidal acceleration, linear ramps over 1/8 (the jerk a square wave);
 * `polynomial(conditions)`: the polynomial of least degree meeting given values of S and its
   derivatives at given xi (both ends, for a rise: S, S', S'' (, S''')), from the linear system.
@@ -319,7 +320,7 @@ def _first_jump(rows) -> int:
 
 # ---------------------------------------------------------------- the library
 
-_BOOK = "Norton, Cam Design and Manufacturing Handbook, 2nd ed., ch. 3"
+_BOOK = "Rothbart (ed.), Cam Design Handbook, 2004, ch. 2-3; Norton, Cam Design and Manufacturing Handbook, 2nd ed., ch. 3"
 _LAWS: dict[str, Law] = {}
 
 

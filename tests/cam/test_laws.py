@@ -31,15 +31,31 @@ def test_an_unknown_name_is_refused_with_the_names():
 
 
 # -- published peak coefficients --------------------------------------------------------------------
-# MechDesigner (PSMotion Ltd) user manual, "Modified-Sinusoid Motion-Law" (mechdesigner.support,
+# H.A. Rothbart (ed.), *Cam Design Handbook*, McGraw-Hill 2004, ch. 2 "Basic curves", prints each
+# basic curve's y and its derivatives for a rise h over beta; at a unit rise their peaks are:
+#   constant acceleration, eqs. (2.17)-(2.19), p. 35: velocity 4 h q / b^2 (2 at the mid-point),
+#     acceleration 4 h / b^2, "jerk = inf at dwell ends and the midpoint";
+#   cubic no. 2, eqs. (2.46)-(2.49), p. 40: velocity 6 h q / b^2 (1 - q / b) (3/2), acceleration
+#     6 h / b^2 (1 - 2 q / b) (6 at the ends), jerk 12 h / b^3, constant;
+#   cycloidal, eqs. (2.57)-(2.60), p. 45: velocity h / b (1 - cos 2 pi q / b) (2), acceleration
+#     2 pi h / b^2 sin(.), jerk 4 pi^2 h / b^3 cos(.).
+# The MechDesigner (PSMotion Ltd) user manual, "Modified-Sinusoid Motion-Law" (mechdesigner.support,
 # motion-cam-law-modified-sinusoid.htm): Cv = 1.76, Ca = 5.53, Cj = 69.47; and "Sine-Constant-Cosine
 # (SCCA) Motion-Law" (mt-motion-cam-law-sine-constant-cosine-cv.htm), its table of SCCA parameters
 # (sine a, constant b, cosine c, zero-acceleration d) giving the traditional laws: modified
 # trapezoidal (0.25, 0.5, 0.25) Cv 2, Ca 4.89; modified sine (0.25, 0, 0.75) Cv 1.760; modified sine
 # CV 20% (0.2, 0, 0.6) Cv 1.528, Ca 5.999; modified sine CV 33% (0.1667, 0, 0.5) Cv 1.404, Ca 6.616.
-# Each printed value is matched to its last printed digit (half a unit of it, or one for a truncation).
+# A printed number is matched to its last printed digit (half a unit of it, or one for a
+# truncation); a printed formula to rounding (rel 1e-9).
 
-PUBLISHED = [  # (law, key, printed value, tolerance)
+FORMULA = None              # the tolerance of a printed formula: relative 1e-9
+PUBLISHED = [  # (law, key, printed value, absolute tolerance or FORMULA)
+    (laws.law("constant_acceleration"), "Cv", 2.0, FORMULA), (laws.law("constant_acceleration"), "Ca", 4.0, FORMULA),
+    (laws.law("constant_acceleration"), "Cj", math.inf, FORMULA),
+    (laws.law("cubic"), "Cv", 1.5, FORMULA), (laws.law("cubic"), "Ca", 6.0, FORMULA),
+    (laws.law("cubic"), "Cj", 12.0, FORMULA),
+    (laws.law("cycloidal"), "Cv", 2.0, FORMULA), (laws.law("cycloidal"), "Ca", 2 * math.pi, FORMULA),
+    (laws.law("cycloidal"), "Cj", 4 * math.pi**2, FORMULA),
     (laws.law("modified_sine"), "Cv", 1.76, 0.005), (laws.law("modified_sine"), "Ca", 5.53, 0.005),
     (laws.law("modified_sine"), "Cj", 69.47, 0.005), (laws.scca(0.25, 0.75), "Cv", 1.760, 0.0005),
     (laws.law("modified_trapezoid"), "Cv", 2.0, 1e-12), (laws.law("modified_trapezoid"), "Ca", 4.89, 0.005),
@@ -51,7 +67,11 @@ PUBLISHED = [  # (law, key, printed value, tolerance)
 @pytest.mark.parametrize(("law", "key", "printed", "tol"), PUBLISHED,
                          ids=[f"{law.name}-{key}" for law, key, _, _ in PUBLISHED])
 def test_peak_coefficients_match_the_published_tables(law, key, printed, tol):
-    assert law.peaks[key] == pytest.approx(printed, abs=tol)
+    if math.isinf(printed):
+        assert law.peaks[key] == printed
+    else:
+        assert law.peaks[key] == (pytest.approx(printed, rel=1e-9) if tol is FORMULA
+                                  else pytest.approx(printed, abs=tol))
 
 
 # -- exact peak coefficients from independent closed forms ---------------------------------------
