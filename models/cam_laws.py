@@ -318,6 +318,22 @@ def _first_jump(rows) -> int:
     return 4
 
 
+# ---------------------------------------------------------------- a law known by its numbers
+
+def numeric_law(source, name: str | None = None) -> Law:
+    """A law known by numbers only: `source.values(xi)` -> (S, S', S'', S''') on 0 <= xi <= 1 (a
+    synthesised spline law, models/cam_law.py `SplineLaw`). Its numpy form is those numbers (its
+    knots inside the rise are the breaks the peaks' search keeps); it has no CasADi form."""
+    def forms(x, m):
+        if m is not np:
+            raise ModelError(f"law={source}: known by its numbers only, it has no CasADi form", key="law")
+        return tuple(source.values(x))
+    breaks = tuple(float(k) for k in np.unique(getattr(source, "knots", ())) if 0 < k < 1)
+    ends = [np.abs(np.asarray(v, dtype=float)).max() for v in source.values(np.array([0.0, 1.0]))[1:]]
+    order = next((k for k, size in enumerate(ends, start=1) if size > JUMP_TOL), 4)
+    return Law(name or str(source), forms, breaks, end_order=order, source="its numbers (a synthesised law)")
+
+
 # ---------------------------------------------------------------- the library
 
 _BOOK = "Rothbart (ed.), Cam Design Handbook, 2004, ch. 2-3; Norton, Cam Design and Manufacturing Handbook, 2nd ed., ch. 3"
@@ -352,9 +368,12 @@ SCCA_FORM = "scca(b, c[, cv])"          # a family member by name, as a scene's 
 
 def law(name) -> Law:
     """The library law `name`, or a member of the SCCA family named "scca(b, c)" or
-    "scca(b, c, cv)" (a `Law` passes through); an unknown name: ModelError listing them."""
+    "scca(b, c, cv)"; a `Law` passes through, a synthesised law (anything with `values(xi)`
+    giving S, S', S'', S''') becomes a `numeric_law`. An unknown name: ModelError listing them."""
     if isinstance(name, Law):
         return name
+    if not isinstance(name, str) and callable(getattr(name, "values", None)):
+        return _numeric_cached(name)                # a synthesised law: its numbers
     if isinstance(name, str) and name in _LAWS:
         return _LAWS[name]
     member = _SCCA_NAME.fullmatch(name.strip()) if isinstance(name, str) else None
@@ -362,6 +381,11 @@ def law(name) -> Law:
         raise ModelError(f"law={quote(name)}: unknown motion law; allowed: {', '.join(_LAWS)}, or {SCCA_FORM} "
                          "(fractions of the rise)", key="law")
     return _scca_named(*(float(g) for g in member.groups() if g is not None))
+
+
+@functools.lru_cache(maxsize=16)
+def _numeric_cached(source) -> Law:
+    return numeric_law(source)
 
 
 @functools.lru_cache(maxsize=64)

@@ -10,6 +10,6 @@
 
 An unknown name is a ModelError listing the names.
 """
-from mechopt.models.cam_laws import Law, law, names, polynomial, scca
+from mechopt.models.cam_laws import Law, law, names, numeric_law, polynomial, scca
 
-__all__ = ["Law", "law", "names", "polynomial", "scca"]
+__all__ = ["Law", "law", "names", "numeric_law", "polynomial", "scca"]

@@ -252,3 +252,23 @@ def test_the_motion_in_time_is_the_angle_derivatives_times_omega_powers():
         np.testing.assert_allclose(timed, angular * omega**k, rtol=1e-15)
     with pytest.raises(ModelError, match=r"speed_rpm=0: allowed > 0"):
         cam.in_time(theta, 0)
+
+
+def test_a_synthesised_law_is_a_segments_law_by_its_numbers():
+    """A synthesised spline law (models/cam_law.py) drives a rise as a library law does: the
+    motion is its own values scaled, its knots are where the peaks' search looks."""
+    from mechopt.models.cam_law import SplineBasis
+    spline = SplineBasis(8).law(np.linspace(0.1, 0.9, 5))
+    cam = CamMotion([dict(segment="rise", law=spline, angle_deg=120, lift_mm=5.0),
+                     dict(segment="dwell", angle_deg=60, lift_mm=0),
+                     dict(segment="return", law="cycloidal", angle_deg=120, lift_mm=-5.0),
+                     dict(segment="dwell", angle_deg=60, lift_mm=0)])
+    x = np.linspace(0, 1, 101, endpoint=False)
+    beta = math.radians(120)
+    for k, (got, want) in enumerate(zip(cam.at(x * beta), spline.values(x))):
+        np.testing.assert_allclose(got, 5.0 * want / beta**k, atol=1e-12)
+    assert cam.segments[0].law.breaks == (0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875)
+    assert cam.steps() == []                               # a C2 spline from rest to rest
+    import casadi as ca
+    with pytest.raises(ModelError, match="known by its numbers only, it has no CasADi form"):
+        cam.segments[0].law.expression(ca.SX.sym("x"))
