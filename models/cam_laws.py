@@ -125,6 +125,8 @@ class Law:
 
 
 # ---------------------------------------------------------------- one closed form each
+# The four laws the lift's integrators used before the library (cycloidal, harmonic, modified_sine,
+# polynomial_345) keep S in the arithmetic of their old copies: CasADi's AD of it is the same to the bit.
 
 TWO_PI = 2 * math.pi
 

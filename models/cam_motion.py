@@ -24,6 +24,7 @@ lift_mm} (TOML ``[[structure.segments]]``) or a CSV beside the scene with those 
 """
 import math
 from dataclasses import dataclass
+from functools import cached_property
 from typing import ClassVar, Literal
 
 import numpy as np
@@ -138,6 +139,10 @@ class CamMotion:
 
     def steps(self) -> list[Join]:
         """Every step of s' or s'' at a join (the last segment's end joins the first's start)."""
+        return list(self._steps)
+
+    @cached_property
+    def _steps(self) -> tuple[Join, ...]:
         each = [seg.peaks() for seg in self.segments]
         scale = {1: max(p["velocity_mm_per_rad"] for p in each), 2: max(p["acceleration_mm_per_rad2"] for p in each)}
         out, n = [], len(self.segments)
@@ -151,7 +156,7 @@ class CamMotion:
                     text = (f"{what} jump of {jump:+.6g} {unit} at cam angle {after.start_deg:g} deg between "
                             f"{before.label((k - 1) % n + 1)} and {after.label(k + 1)}: {meaning} there")
                     out.append(Join((k - 1) % n + 1, k + 1, after.start_deg, order, jump, text))
-        return out
+        return tuple(out)
 
     def segment_peaks(self) -> list[dict]:
         """Per segment: its number, kind, law and largest |s'|, |s''|, |s'''| (`Segment.peaks`)."""
@@ -164,9 +169,9 @@ class CamMotion:
         each = self.segment_peaks()
         out = {key: max(p[key] for p in each) for key in ("velocity_mm_per_rad", "acceleration_mm_per_rad2",
                                                            "jerk_mm_per_rad3")}
-        if any(j.order == 1 for j in self.steps()):
+        if any(j.order == 1 for j in self._steps):
             out["acceleration_mm_per_rad2"] = math.inf
-        if self.steps():
+        if self._steps:
             out["jerk_mm_per_rad3"] = math.inf
         return out
 
