@@ -114,7 +114,8 @@ shop_drawing = by_solver(SHOP_DRAWINGS, "shop_drawing", "draws for the shop")
 def writer_of(scene) -> Callable:
     """The DXF writer of a scene's solver, looked up from the scene alone (before any solve);
     NothingToExport naming the solvers that have one when it has none."""
-    import mechopt.figures  # noqa: F401  (each mechanism's output modules register their writers)
+    from mechopt.figures.registry import import_rows
+    import_rows()           # each mechanism's output modules register their writers (a row added late too)
     writer = SHOP_DRAWINGS.get(scene.solver)
     if writer is None:
         solvers = sorted({s.__name__ for s in SHOP_DRAWINGS})
