@@ -155,8 +155,10 @@ def test_the_lift_cams_drawing_read_back_is_the_cycloid(lift, tmp_path):
     assert xi.size > 20 and S == pytest.approx(xi - np.sin(2 * np.pi * xi) / (2 * np.pi), abs=1e-9)
 
 
-def test_law_synthesis_has_a_shop_drawing():
+def test_the_synthesised_laws_have_shop_drawings():
+    from mechopt.solvers.loom import codesign_machine_speed
     assert dxf.SHOP_DRAWINGS[synthesise_law].__name__ == "synthesised_cam"
+    assert dxf.SHOP_DRAWINGS[codesign_machine_speed].__name__ == "codesigned_cam"
 
 
 def test_a_scene_whose_solver_has_no_drawing_is_refused_before_the_solve(tmp_path, capsys, monkeypatch):
@@ -173,3 +175,21 @@ def test_a_cam_without_a_stated_bore_is_not_drawn(tmp_path):
     with pytest.raises(dxf.NothingToExport, match=r"bore_diameter_mm not stated \(0\)"):
         dxf.export_run(run, tmp_path)
     assert not list(tmp_path.iterdir())
+
+
+def test_the_codesigned_machines_lift_cam_is_placed_by_its_own_re_planned_cyclogram(tmp_path):
+    """A coarse co-design (tests/loom/test_codesign.py's settings): the shaft-zero mark is turned
+    back from the rise-start mark by the re-planned event 3, and the rise read back is its law."""
+    run = mechopt.solve("loom/machine-speed-codesign", coefficients=8, sample_speeds=2, phase_from_deg=30.0,
+                        phase_to_deg=42.0, phase_tol_deg=1.0)
+    assert run.status.value == "SOLVED"
+    [(path, _), *_] = dxf.export_run(run, tmp_path)
+    _, entities = _read(path)
+    lever, t_deg = run.task.lever_model, run.values["t_3_7_deg"]
+    task = dataclasses.replace(mechopt.solve(LIFT).task, stroke_mm=lever.stroke_mm, a_mm=lever.a_mm, b_mm=lever.b_mm)
+    [zero] = [e for e in entities if e.dxftype() == "LINE" and e.dxf.layer == "REFERENCE" and e.dxf.color == 5]
+    assert _angle_deg(zero) == pytest.approx(_rest_direction_deg(task) + run.values["p_3_deg"], abs=1e-6)
+    texts = [e.dxf.text for e in entities if e.dxftype() == "TEXT"]
+    assert any("re-planned cyclogram, event 3: lift leaves the lower stop" in t for t in texts)
+    xi, S = _law_read_back(dxf.read_polylines(path)["PITCH_CURVE"], task, t_deg)
+    assert xi.size > 20 and S == pytest.approx(law_of(run.result).values(xi)[0], abs=1e-9)
