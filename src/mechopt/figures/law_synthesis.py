@@ -107,7 +107,7 @@ def _lift_cam(run, lift, lever, t_deg, phase) -> list:
     law = law_of(run.result)
     shape = dataclasses.replace(lift.task, stroke_mm=lever.stroke_mm, a_mm=lever.a_mm, b_mm=lever.b_mm,
                                 rise_deg=t_deg, return_deg=t_deg)
-    cam = shape_cam(shape, lambda xi: tuple(law.values(xi)[:3]), samples=lift.settings.get("samples", 7200))
+    cam = shape_cam(shape, lambda xi: tuple(law.values(xi)[:3]), **lift.settings)      # its samples
     if cam.status is not Status.SOLVED:
         raise NothingToExport(f"{run.scene.id}: the lift cam cut to the synthesised law is {cam.status.value}, "
                               f"nothing exported as DXF ({cam.message})")
