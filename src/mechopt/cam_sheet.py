@@ -31,7 +31,7 @@ from mechopt.kit.errors import require
 SENSES = {"ccw": 1.0, "cw": -1.0}       # the sign of the cam's turn (counter-clockwise positive)
 SENSE_WORDS = {"ccw": "COUNTER-CLOCKWISE (ccw)", "cw": "CLOCKWISE (cw)"}
 RISE_COLOUR, SHAFT_ZERO_COLOUR, SENSE_COLOUR = 1, 5, 3      # DXF colour indices on REFERENCE (red, blue, green)
-LAYER_COLOURS = {"PITCH_CURVE": 1, "CAM_PROFILE": 7, "CAM_GROOVE_OUTER": 5, "CENTRE": 7, "REFERENCE": 7}
+LAYER_COLOURS = {"PITCH_CURVE": 1, "CAM_PROFILE": 7, "CAM_GROOVE_OUTER": 5}     # the curves' layers
 MARK_REACH = 1.10           # the radial marks run out to this many times the cam's largest radius
 ARC_RADIUS, ARC_SPAN_DEG = 1.05, 40.0      # the sense arc: radius (of the largest), span, opposite the rise mark
 ARROW, TEXT = 0.05, 0.035   # arrowhead length, text height: shares of the largest radius
@@ -101,9 +101,9 @@ def _centre(centre, bore):
     """The centre mark (crossing lines a quarter past the bore) and the bore."""
     reach = 1.25 * bore
     x, y = map(float, centre)
-    return [ShopLine("CENTRE", (x - reach, y), (x + reach, y), "centre mark", colour=LAYER_COLOURS["CENTRE"]),
-            ShopLine("CENTRE", (x, y - reach), (x, y + reach), "centre mark", colour=LAYER_COLOURS["CENTRE"]),
-            ShopCircle("CENTRE", (x, y), bore, f"bore d = {2 * bore:g} mm", colour=LAYER_COLOURS["CENTRE"])]
+    return [ShopLine("CENTRE", (x - reach, y), (x + reach, y), "centre mark"),
+            ShopLine("CENTRE", (x, y - reach), (x, y + reach), "centre mark"),
+            ShopCircle("CENTRE", (x, y), bore, f"bore d = {2 * bore:g} mm")]
 
 
 def shaft_zero_deg(rise_start_deg: float, sense: str, phase: Phase) -> float:

@@ -13,8 +13,8 @@ from mechopt.figures.text import literal
 from mechopt.models.cam_shape import ORIENTATION
 from mechopt.solvers.stop_impact import cam_profile, shape_cam
 
-# the solver's point tables by the drawing's arguments (mechopt.cam_sheet names their layers)
-SHEET_TABLES = {"pitch": "pitch", "profile": "profile", "groove_outer": "groove_outer"}
+# the solver's point tables, named as cam_sheet's arguments (it names their layers)
+SHEET_TABLES = ("pitch", "profile", "groove_outer")
 # the model's convention: its pitch curve runs clockwise as the cam angle grows, the cam turns ccw
 SENSE = "ccw" if ORIENTATION == -1 else "cw"
 PHASE_KEY = "rise_start_shaft_deg"
@@ -72,8 +72,8 @@ def cam_drawing(task, result, phase: Phase | None, notes=()) -> list:
         raise NothingToExport("bore_diameter_mm not stated (0): the drawing's bore needs it "
                               "(e.g. --set bore_diameter_mm=30)")
     arrays, errors = result.arrays, result.diagnostics["chord_error_mm"]
-    tables = {arg: Table(np.column_stack([arrays[f"{name}_x_mm"], arrays[f"{name}_y_mm"]]), errors[name])
-              for arg, name in SHEET_TABLES.items() if f"{name}_x_mm" in arrays}
+    tables = {name: Table(np.column_stack([arrays[f"{name}_x_mm"], arrays[f"{name}_y_mm"]]), errors[name])
+              for name in SHEET_TABLES if f"{name}_x_mm" in arrays}
     start = math.degrees(math.atan2(arrays["pitch_y_mm"][0], arrays["pitch_x_mm"][0]))
     return cam_sheet(**tables, bore_diameter_mm=task.bore_diameter_mm, rise_start_deg=start, sense=SENSE,
                      phase=phase, notes=notes)
