@@ -181,7 +181,7 @@ def test_the_exact_law_needs_a_speed(task):
     ({"lever.E_GPa.value": -1.0}, r"structure\.lever\.E_GPa=-1\.0: allowed 0\.001 \.\.\. 10000"),
     ({"lever.colour": 1.0}, r"lever\.colour: no entry 'colour' here; there are effects, law, E_GPa"),
     ({"lever.mass_kg": {"value": 1.0, "mark": "assumed"}}, r"lever\.mass_kg: marked 'assumed' needs a 'why'"),
-    ({"lever.law": "square"}, r"lever\.law=.*square.*: allowed cycloidal"),
+    ({"lever.law": "square"}, r"lever\.law=.*square.*: unknown motion law; allowed: cycloidal"),
     ({"speed_rpm": 0.0}, r"params\.speed_rpm=0\.0: allowed > 0 \.\.\. 1e\+06"),
 ])
 def test_a_bad_lever_or_speed_is_one_error_naming_the_key(override, match):
