@@ -16,12 +16,12 @@ from mechopt.kit.errors import MechoptError, ModelError, SettingError
 from mechopt.kit.result import Status, from_casadi_integrator
 from mechopt.kit.settings import check_settings
 from mechopt.models.press import (
-    FORCE_KEYS,
     PARAMETERS,
     WORK_NAMES,
     Dynamics,
     PressDrive,
     belt_mode_rad_s,
+    cut_work_J,
     dynamics,
     energy_swing_J,
     equations,
@@ -45,7 +45,9 @@ Samples = Annotated[int, Interval(ge=1, le=10_000)]           # outputs per inte
 
 @memoised(maxsize=32)
 def dynamics_of(task: PressDrive) -> Dynamics:
-    """The task's equations (its structure's, built once) with its numbers bound."""
+    """The task's equations (its structure's, built once) with its numbers bound; refused for a press
+    without a drive (`PressDrive.require_drive`)."""
+    task.require_drive()
     return dynamics(task)
 
 
@@ -186,6 +188,16 @@ def check_task(task, solver, **settings):
     check_settings(solver, **settings)
 
 
+def refuse_neutral_speed(task: PressDrive, method: str):
+    """A constant-torque motor fixes no speed level: with its torque equal to the mean load every
+    speed repeats (the periodic motions form a family, Newton's Jacobian is singular), with any other
+    torque none repeats. Refuse a method that needs one periodic motion, naming the ones that work."""
+    if task.torque_motor:
+        raise ModelError(f"effect 'constant_torque_motor' with {method}: a constant torque sets no speed level, so "
+                         "there is no single periodic motion (with the mean load's torque every speed repeats); "
+                         "run press.simulate with method events, rk4 or ivp from nominal_speed_rad_s", key="effects")
+
+
 def summarise(task: PressDrive, trace: Trace, *, cut_angles=None) -> tuple[dict, dict, dict]:
     """`values`, `diagnostics` and `arrays` of a run from its samples and events (see the package doc).
 
@@ -232,10 +244,7 @@ def summarise(task: PressDrive, trace: Trace, *, cut_angles=None) -> tuple[dict,
                    "cut_end_deg": float(np.degrees(cuts_off[-1][2] % TWO_PI))}
     diagnostics_cut = None
     if task.cutting:
-        coeffs = [getattr(task, k) for k in FORCE_KEYS]
-        Z = task.blank_thickness_mm
-        antiderivative = [0, 0, *[c / (i + 2) for i, c in enumerate(coeffs)]]      # of eq. (1), N mm
-        per_cut_J = float(np.polynomial.polynomial.polyval(Z, antiderivative)) / 1000
+        per_cut_J = cut_work_J(task)
         values["cuts"] = float(cut / per_cut_J) if per_cut_J > 0 else 0.0
         window = cut_angles if cut_angles is not None else task.cut_window_rad()
         turns = np.arange(np.floor(phi[0] / TWO_PI) - 1, np.floor(phi[-1] / TWO_PI) + 2) * TWO_PI
@@ -281,6 +290,10 @@ def paper_U(task, xs):
         return np.zeros(len(xs))
     phi = xs[:, task.state_names.index("phi_rad")]
     w = xs[:, task.state_names.index("omega_rad_s")]
+    if task.load is not None:           # a constant load: its crank-angle window, turning forward
+        a, b = task.cut_window_rad()
+        turn = np.mod(phi, TWO_PI)
+        return ((turn >= a) & (turn <= b) & (w > 0)).astype(float)
     pen = task.travel(phi) * 1000 - (task.stroke_mm - task.blank_thickness_mm - task.shortfall_mm)
     down = w * np.sin(phi) > 0          # dX/dphi = r sin(phi) (1 + lambda cos(phi) ...) has the sign of sin(phi)
     return ((pen >= 0) & (pen <= task.blank_thickness_mm) & down).astype(float)
