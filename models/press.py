@@ -220,11 +220,11 @@ class PressDrive:
     kinematics: Literal["paper", "exact"] = "paper"
     # the travel eq. (1) was fitted on, up to: past it a warning (`warnings`)
     force_fit_max_mm: Annotated[float | None, Ge(0), Le(1000)] = None
-    # effect constant_load (models.press_loads): an interval in travel [mm] or crank angle [deg] (its start
-    # > 0: the revolution's own event sits at 0), and a force, a torque or an energy with its shape
-    load_from_mm: Annotated[float | None, Gt(0), Le(2000)] = None
+    # effect constant_load (models.press_loads): an interval in travel [mm] or crank angle [deg], and a
+    # force, a torque or an energy with its shape
+    load_from_mm: Annotated[float | None, Ge(0), Le(2000)] = None
     load_to_mm: Annotated[float | None, Gt(0), Le(2000)] = None
-    load_from_deg: Annotated[float | None, Gt(0), Lt(360)] = None
+    load_from_deg: Annotated[float | None, Ge(0), Lt(360)] = None
     load_to_deg: Annotated[float | None, Gt(0), Lt(360)] = None
     load_force_N: Annotated[float | None, Ge(0), Le(1e9)] = None
     load_torque_Nm: Annotated[float | None, Ge(0), Le(1e9)] = None
@@ -279,9 +279,9 @@ class PressDrive:
         check_effects(self)
         # relational rules only: each input's own range is on its field (check_fields, above)
         self._check_drive_and_load()
-        require(self.flywheel_inertia_kgm2 > 0 or self.crank_mass_kg > 0,
-                f"flywheel_inertia_kgm2={self.flywheel_inertia_kgm2} and crank_mass_kg are both 0: the crank shaft "
-                "would have no inertia", key="flywheel_inertia_kgm2")
+        require(self.crank_flywheel_kgm2() > 0 or self.crank_mass_kg > 0,
+                f"flywheel_inertia_kgm2={self.flywheel_inertia_kgm2}, intermediate_inertia_kgm2 and crank_mass_kg are "
+                "all 0: the crank shaft would have no inertia", key="flywheel_inertia_kgm2")
         if self.belt:
             require(self.belt_stiffness_Nm_rad > 0, f"belt_stiffness_Nm_rad={self.belt_stiffness_Nm_rad}: allowed > 0 "
                     "with effect 'belt_elasticity' (an elastic belt)", key="belt_stiffness_Nm_rad")
@@ -482,6 +482,14 @@ def rule_of_thumb_flywheel_kgm2(task: PressDrive, speed_fluctuation: float) -> f
     out the motor's slip, the belt and J_k(phi)."""
     needed = energy_swing_J(task) / (speed_fluctuation * task.nominal_speed_rad_s**2)
     return max(needed - (mean_crank_inertia_kgm2(task) - task.flywheel_inertia_kgm2), 0.0)
+
+
+def inertia_at_crank_kgm2(task: PressDrive) -> float:
+    """Everything that turns with the crank, reduced to it [kg m2]: the mean J_k (its flywheel, an
+    intermediate shaft's by ratio^2, the linkage) plus, with a rigid drive (no belt), the motor side's
+    (rotor and motor-shaft flywheel by i^2). The inertia the textbook's I = Delta E / (C_s omega^2) sizes."""
+    motor_side = task.reduced_motor_inertia_kgm2() if (task.motor or task.torque_motor) and not task.belt else 0.0
+    return mean_crank_inertia_kgm2(task) + motor_side
 
 
 def breakdown_torque_at_crank_Nm(task: PressDrive) -> float:

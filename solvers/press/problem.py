@@ -25,6 +25,7 @@ from mechopt.models.press import (
     dynamics,
     energy_swing_J,
     equations,
+    inertia_at_crank_kgm2,
     rule_of_thumb_flywheel_kgm2,
     structure,
 )
@@ -228,13 +229,17 @@ def summarise(task: PressDrive, trace: Trace, *, cut_angles=None) -> tuple[dict,
         t0, t1 = (np.interp(m, phi, t) for m in marks[-2:])
         inside = (t >= t0 - 1e-12) & (t <= t1 + 1e-12)
         mean = TWO_PI / (t1 - t0)
-        values |= {"omega_mean_rad_s": float(mean),
-                   "speed_fluctuation": float((_extreme(t[inside], w[inside], max, mode[inside, 0])
-                                               - _extreme(t[inside], w[inside], min, mode[inside, 0])) / mean),
+        top, low = (_extreme(t[inside], w[inside], pick, mode[inside, 0]) for pick in (max, min))
+        values |= {"omega_mean_rad_s": float(mean), "speed_fluctuation": float((top - low) / mean),
                    "period_s": float(t1 - t0)}
+        values |= revolution_extras(task, t, x[:, n + WORK_NAMES.index("motor_work_J")], (t0, t1), top, low)
         if values["speed_fluctuation"] > 0:     # the textbook flywheel for the fluctuation this run shows
             values |= {"energy_swing_J": energy_swing_J(task),
-                       "flywheel_rule_of_thumb_kgm2": rule_of_thumb_flywheel_kgm2(task, values["speed_fluctuation"])}
+                       "flywheel_rule_of_thumb_kgm2": rule_of_thumb_flywheel_kgm2(task, values["speed_fluctuation"]),
+                       # the same rule over everything turning with the crank, at the run's own mean speed
+                       "inertia_rule_of_thumb_at_crank_kgm2": energy_swing_J(task) / (
+                           values["speed_fluctuation"] * values["omega_mean_rad_s"] ** 2),
+                       "inertia_at_crank_kgm2": inertia_at_crank_kgm2(task)}
     cuts_on = [e for e in trace.events if e[0] == "cut_start"]
     cuts_off = [e for e in trace.events if e[0] == "cut_end"]
     if cut_angles is not None:
@@ -261,6 +266,19 @@ def summarise(task: PressDrive, trace: Trace, *, cut_angles=None) -> tuple[dict,
     arrays = {"t_s": t, **{k: x[:, i] for i, k in enumerate(task.state_names)}, "cutting": mode[:, 0],
               **{k: x[:, n + i] - x[0, n + i] for i, k in enumerate(WORK_NAMES)}, **names}
     return values, diagnostics, arrays
+
+
+def revolution_extras(task: PressDrive, t, motor_work, span, top, low) -> dict:
+    """What the last full revolution (times `span`) adds for a drive's designer: the crank's extreme
+    speeds (`top`, `low`) [rad/s], the motor's mean power over it [W], and with a flywheel on an
+    intermediate shaft that shaft's extreme speeds (the crank's times `intermediate_ratio`) [rad/s]."""
+    t0, t1 = span
+    work = float(np.interp(t1, t, motor_work) - np.interp(t0, t, motor_work))
+    out = {"omega_max_rad_s": float(top), "omega_min_rad_s": float(low), "motor_mean_power_W": work / (t1 - t0)}
+    if task.intermediate_inertia_kgm2 > 0:
+        out |= {"intermediate_omega_max_rad_s": float(top * task.intermediate_ratio),
+                "intermediate_omega_min_rad_s": float(low * task.intermediate_ratio)}
+    return out
 
 
 def _extreme(t, w, pick, cutting):
@@ -580,4 +598,4 @@ def revolution(key: tuple, tol: float, samples: int) -> Revolution:
                                 {"x": ca.vertcat(y, ca.vec(Y)), "t": s, "p": q,
                                  "ode": ca.vertcat(ode, ca.vec(ca.jacobian(ode, y) @ Y))}, 0.0, 1.0,
                                 {"abstol": tol, "reltol": tol, "max_num_steps": 100000})
-    return Revolution(names, "cutting_force" in key[0], piece, variational, grid)
+    return Revolution(names, bool({"cutting_force", "constant_load"} & set(key[0])), piece, variational, grid)

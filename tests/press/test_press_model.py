@@ -174,7 +174,7 @@ def test_gravity_moment_is_minus_the_derivative_of_the_weights_potential():
     ({"motor_breakdown_slip": 1.5}, r"motor_breakdown_slip=1\.5: allowed > 0 \.\.\. 1 \(excl\.\)"),
     ({"motor_breakdown_torque_Nm": 0.0}, r"motor_breakdown_torque_Nm=0\.0: allowed > 0 \.\.\. 1e\+06"),
     ({"motor_inertia_kgm2": 0.0}, r"motor_inertia_kgm2=0\.0: allowed > 0 with an elastic belt"),
-    ({"flywheel_inertia_kgm2": 0.0, "crank_mass_kg": 0.0}, r"flywheel_inertia_kgm2=0\.0 and crank_mass_kg are both 0"),
+    ({"flywheel_inertia_kgm2": 0.0, "crank_mass_kg": 0.0}, r"flywheel_inertia_kgm2=0\.0, intermediate_inertia_kgm2 and crank_mass_kg are all 0"),
     ({"effects": ("belt_elasticity", "wind")},
      r"effects=\['belt_elasticity', 'wind'\]: unknown \['wind'\]; known: belt_elast"),
     ({"kinematics": "approx"}, r"kinematics='approx': allowed paper, exact"),

@@ -1,0 +1,187 @@
+"""Textbook presses posed from scene files: the loads (`constant_load`), the drives (a constant-torque
+motor, flywheels on the motor and an intermediate shaft, the rigid ideal drive for kinetostatics) and
+the values at chosen crank angles, each against an independent computation."""
+import dataclasses
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+from scipy.optimize import brentq
+
+from mechopt import registry
+from mechopt.kit.errors import ModelError
+from mechopt.kit.result import Status
+from mechopt.models.press import PressDrive, crank_inertia, energy_swing_J, potential_J
+from mechopt.solvers import press as pd
+from mechopt.solvers.press.kinematics import kinetostatics
+
+PAPER, _ = registry.find("press/kd2322").build()
+
+
+def _exact_dX(phi, r, lam):
+    """dX/dphi of the exact crank-slider, written out here (not the package's)."""
+    s, c = np.sin(phi), np.cos(phi)
+    return r * s + r * lam * s * c / np.sqrt(1 - (lam * s) ** 2)
+
+
+def test_force_reading_energy_swing_by_independent_integration():
+    """press/textbook-punch-force: a constant force F = E / 30 mm over the last 30 mm of a 100 mm stroke
+    against the motor's mean torque M = E / 2 pi. The surplus M phi - W(phi) peaks where the punch
+    starts (a) and bottoms where F X'(phi) falls back to M (inside the window, before bottom dead
+    centre): Delta E = integral over [a, phi*] of (F X' - M), by quadrature of the written-out X'."""
+    task, _ = registry.find("press/textbook-punch-force").build()
+    E, r, lam = 22608.0, 0.05, 0.2
+    F, M = E / 0.030, E / (2 * np.pi)
+    a = np.radians(107.98064201085721)
+    bottom = brentq(lambda p: F * _exact_dX(p, r, lam) - M, np.pi / 2 + 0.3, np.pi - 1e-9, xtol=1e-14)
+    swing, _ = quad(lambda p: F * _exact_dX(p, r, lam) - M, a, bottom, epsabs=1e-10, epsrel=1e-12)
+    assert task.load.force_N == pytest.approx(F, rel=1e-9)
+    assert energy_swing_J(task) == pytest.approx(swing, rel=1e-6)
+    run = pd.events(task, duration_s=10.5, max_step_s=0.05, samples=16)
+    assert run.status is Status.SOLVED
+    assert run.values["energy_swing_J"] == pytest.approx(swing, rel=1e-6)
+    assert run.values["cut_work_J"] == pytest.approx(E, rel=1e-7)            # one punch: F x 30 mm
+    # the book's reading (constant torque over 0.15 of the turn) gives up 19216.8 J: 5 % more
+    assert swing == pytest.approx(18300.0, abs=1.0)
+
+
+@pytest.mark.parametrize("scene", ["press/sarkar-punch", "press/textbook-punch"])
+def test_rule_of_thumb_flywheel_against_the_simulated_one(scene):
+    """Where the rule holds (a constant-torque motor, a constant inertia: no slide or rod mass), the
+    flywheel I = Delta E / (C_s omega^2) is the simulated one exactly when omega is the mean of the
+    extremes, (omega_max + omega_min) / 2: 1/2 I (w1^2 - w2^2) = I (w1 - w2) (w1 + w2) / 2. The
+    reported rule takes the crank's time-mean speed instead (2 pi / period), which the punch's slow
+    stretch pulls below the mean of the extremes: a gap of order C_s^2."""
+    task, settings = registry.find(scene).build()
+    run = pd.events(task, **settings)
+    v = run.values
+    middle = (v["omega_max_rad_s"] + v["omega_min_rad_s"]) / 2
+    exact = v["energy_swing_J"] / ((v["omega_max_rad_s"] - v["omega_min_rad_s"]) * middle)
+    assert exact == pytest.approx(v["inertia_at_crank_kgm2"], rel=1e-7)
+    gap = v["inertia_rule_of_thumb_at_crank_kgm2"] / v["inertia_at_crank_kgm2"] - 1
+    assert abs(gap) < (v["speed_fluctuation"] ** 2)
+    assert gap == pytest.approx((middle / v["omega_mean_rad_s"]) ** 2 - 1, abs=1e-7)
+
+
+def test_published_figures_of_the_textbook_scenes():
+    """The books' figures (scene expectations, restated): power, energy swing, the least flywheel speed."""
+    task, settings = registry.find("press/sarkar-punch").build()
+    v = pd.events(task, **settings).values
+    assert v["motor_mean_power_W"] == pytest.approx(3000.0, rel=1e-4)
+    assert v["energy_swing_J"] == pytest.approx(9000.0, rel=1e-9)
+    assert v["intermediate_omega_min_rad_s"] * 30 / np.pi == pytest.approx(200.0, rel=1e-4)
+    task, settings = registry.find("press/textbook-punch").build()
+    v = pd.events(task, **settings).values
+    assert v["motor_mean_power_W"] == pytest.approx(2260.8, rel=1e-4)
+    assert v["energy_swing_J"] == pytest.approx(19216.8, rel=1e-9)
+    assert v["intermediate_omega_min_rad_s"] * 0.5 == pytest.approx(26.0, rel=1e-6)     # m/s at k = 0.5 m
+
+
+RIGID = dataclasses.replace(PAPER, effects=tuple(e for e in PAPER.effects if e != "belt_elasticity"),
+                            belt_stiffness_Nm_rad=None, belt_damping_Nms_rad=None)
+
+
+def test_flywheel_on_the_motor_or_an_intermediate_shaft_equals_it_reduced_to_the_crank():
+    """The KD2322's 5 kg m2 flywheel on the crank, then on the motor shaft as 5 / i^2, then on an
+    intermediate shaft at 3 times the crank's speed as 5 / 9: the same periodic motion."""
+    i = RIGID.gear_ratio
+    runs = [pd.steady_state(task) for task in (
+        RIGID,
+        dataclasses.replace(RIGID, flywheel_inertia_kgm2=0.0, motor_flywheel_inertia_kgm2=5.0 / i**2),
+        dataclasses.replace(RIGID, flywheel_inertia_kgm2=0.0, intermediate_inertia_kgm2=5.0 / 9, intermediate_ratio=3.0))]
+    for run in runs:
+        assert run.status is Status.SOLVED, run.message
+    for key in ("omega_mean_rad_s", "speed_fluctuation", "period_s", "motor_work_J"):
+        assert runs[1].values[key] == pytest.approx(runs[0].values[key], rel=1e-8)
+        assert runs[2].values[key] == pytest.approx(runs[0].values[key], rel=1e-8)
+
+
+# KD2322's cut as a constant force of the same work over the same travel (46 to 49 mm)
+CONSTANT = dataclasses.replace(
+    PAPER, effects=tuple(e for e in PAPER.effects if e != "cutting_force") + ("constant_load",),
+    **{k: None for k in PressDrive.EFFECTS["cutting_force"].params}, force_fit_max_mm=None,
+    load_from_mm=46.0, load_to_mm=49.0, load_energy_J=5.517558)
+
+
+def test_a_constant_load_runs_in_every_method_with_its_work_per_stroke():
+    assert CONSTANT.load.force_N == pytest.approx(5.517558 / 0.003, rel=1e-12)
+    assert np.degrees(CONSTANT.cut_window_rad()) == pytest.approx([145.98495, 163.13946], abs=1e-4)
+    steady = pd.steady_state(CONSTANT)
+    assert steady.status is Status.SOLVED, steady.message
+    assert steady.values["cut_work_J"] == pytest.approx(5.517558, rel=1e-9)
+    period = steady.values["period_s"]
+    events = pd.events(CONSTANT, duration_s=period * 1.001)
+    assert events.status is Status.SOLVED
+    assert events.values["cut_work_J"] == pytest.approx(5.517558, rel=1e-9)
+    assert events.values["energy_residual"] < 1e-6
+    for other in (pd.rk4(CONSTANT, duration_s=0.252, step_s=1e-4),
+                  pd.ivp(CONSTANT, duration_s=period * 1.001)):
+        assert other.status in (Status.SOLVED, Status.INACCURATE), other.message
+        assert other.values["cut_work_J"] == pytest.approx(5.517558, rel=1e-3)
+
+
+def test_a_constant_torque_motor_is_refused_where_one_periodic_motion_is_needed():
+    task, _ = registry.find("press/sarkar-punch").build()
+    for solver in (pd.steady_state, pd.sensitivity):
+        with pytest.raises(ModelError, match=r"constant_torque_motor.*sets no speed level.*events, rk4 or ivp"):
+            solver(task)
+
+
+@pytest.mark.parametrize("changes, match", [
+    ({"load_from_mm": 1.0}, r"give the load's interval once"),
+    ({"load_from_deg": 100.0, "load_to_deg": 50.0}, r"load_to_deg=50: allowed > load_from_deg=100"),
+    ({"load_torque_Nm": 5.0}, r"give one of load_force_N, load_torque_Nm, load_energy_J"),
+    ({"load_shape": "constant_force", "load_to_deg": 200.0}, r"load_to_deg=200: allowed <= 180 for a force"),
+    ({"motor_torque_Nm": None, "effects": ("constant_load",)}, None),
+])
+def test_bad_loads_are_refused_naming_the_key(changes, match):
+    task, _ = registry.find("press/sarkar-punch").build()
+    if match is None:            # no motor: built (a rigid ideal drive), but no dynamic run
+        rigid = dataclasses.replace(task, **changes)
+        with pytest.raises(ModelError, match=r"use solver press\.kinematics"):
+            pd.events(rigid, duration_s=1.0)
+        return
+    with pytest.raises(ModelError, match=match):
+        dataclasses.replace(task, **changes)
+
+
+def test_energy_per_stroke_shapes():
+    task, _ = registry.find("press/sarkar-punch").build()
+    assert task.load.torque_Nm == pytest.approx(15000 / np.radians(144), rel=1e-12)
+    assert task.motor_torque_at_shaft_Nm() == pytest.approx(15000 / (2 * np.pi), rel=1e-12)
+
+
+def test_kinetostatics_crank_torque_by_the_power_balance():
+    """At a constant crank speed the torque the shaft gives the linkage is, by the power balance,
+    1/2 dJ_k/dphi omega^2 (the linkage's kinetic energy) + F X' (the load) + dV/dphi (the weights):
+    J_k by AD of the kinetic energy (models.press.crank_inertia), V the potential, not the
+    Newton-Euler joint forces the solver uses."""
+    task = dataclasses.replace(PAPER, kinematics="exact", at_deg=(30.0, 150.0, 160.0, 300.0))
+    result = pd.kinematics(task)
+    _, dJ = crank_inertia(task)
+    w = task.nominal_speed_rad_s
+    for deg in task.at_deg:
+        phi = np.radians(deg)
+        h = 1e-6
+        dV = (float(potential_J(task, phi + h)) - float(potential_J(task, phi - h))) / (2 * h)
+        a = kinetostatics(task, np.array([phi]))
+        load = a["load_force_N"][0] * (a["slider_velocity_m_s"][0] / w)
+        expected = 0.5 * float(dJ(phi)) * w**2 + load + dV
+        assert result.values[f"crank_torque_Nm_at_{deg:g}deg"] == pytest.approx(expected, rel=1e-6, abs=1e-6)
+    # over a turn the drive gives the cut's work and the friction's, no more (trapezoid on 3601 samples)
+    expected_work = 5.517558 + 2 * np.pi * task.friction_torque_Nm
+    assert result.values["input_work_per_turn_J"] == pytest.approx(expected_work, rel=2e-3)
+
+
+def test_values_at_crank_angles_against_the_closed_form():
+    """Slider speed and acceleration, rod rates at 90 deg: omega r, -omega^2 r lambda / sqrt(1 - lambda^2)
+    (exact crank-slider; u = lambda), beta' = 0, beta'' = -omega^2 lambda / sqrt(1 - lambda^2)."""
+    task = dataclasses.replace(PAPER, kinematics="exact", at_deg=(90.0,))
+    v = pd.kinematics(task).values
+    w, r, lam = task.nominal_speed_rad_s, task.r_m, task.rod_ratio
+    assert v["slider_velocity_m_s_at_90deg"] == pytest.approx(w * r, rel=1e-12)
+    assert v["slider_acceleration_m_s2_at_90deg"] == pytest.approx(-w**2 * r * lam / np.sqrt(1 - lam**2), rel=1e-12)
+    assert v["rod_angular_velocity_rad_s_at_90deg"] == pytest.approx(0.0, abs=1e-12)
+    assert v["rod_angular_acceleration_rad_s2_at_90deg"] == pytest.approx(-w**2 * lam / np.sqrt(1 - lam**2), rel=1e-12)
+    with pytest.raises(ModelError, match=r"at_deg=\[400\.0\]: allowed crank angles in \[0, 360\]"):
+        dataclasses.replace(PAPER, at_deg=(400.0,))
