@@ -156,6 +156,7 @@ def sensitivity(task: PressDrive, *, tol: Tolerance = 1e-10, max_iter: Annotated
     """
     check_task(task, sensitivity, tol=tol, max_iter=max_iter, verify_step=verify_step)
     refuse_neutral_speed(task, "press.sensitivity")
+    refuse_neutral_speed(task, "press.sensitivity")
     if not task.motor:
         raise ModelError("effects lack 'motor_characteristic': without the motor the crank's mean speed is "
                          "not set by the drive; add the effect", key="effects")
