@@ -109,8 +109,9 @@ def kinematics(task: PressDrive, *, samples: Annotated[int, Interval(ge=3, le=1_
     omega = task.nominal_speed_rad_s
     phi = np.linspace(0.0, 2 * np.pi, samples)
     window = task.cut_window_rad()
-    if window is not None:          # the load's switching angles are samples (its jumps are exact)
-        phi = np.union1d(phi, window)
+    if window is not None:          # the load's switching angles are samples, its jumps 1e-9 rad wide
+        edges = np.asarray(window)
+        phi = np.union1d(phi, np.r_[edges, edges - 1e-9, edges + 1e-9].clip(0.0, 2 * np.pi))
     arrays = kinetostatics(task, phi)
     X = arrays["travel_mm"]
     values = {"stroke_mm": float(X.max() - X.min())}

@@ -185,3 +185,17 @@ def test_values_at_crank_angles_against_the_closed_form():
     assert v["rod_angular_acceleration_rad_s2_at_90deg"] == pytest.approx(-w**2 * lam / np.sqrt(1 - lam**2), rel=1e-12)
     with pytest.raises(ModelError, match=r"at_deg=\[400\.0\]: allowed crank angles in \[0, 360\]"):
         dataclasses.replace(PAPER, at_deg=(400.0,))
+
+
+def test_textbook_kinetostatics_at_chosen_angles():
+    """press/textbook-punch-kinetostatics: no masses, so the crank torque is F X'(phi) and the rod
+    force F / cos(beta) inside the punch's window, zero outside; the drive gives F x 30 mm a turn."""
+    task, settings = registry.find("press/textbook-punch-kinetostatics").build()
+    v = pd.kinematics(task, **settings).values
+    F, r, lam = 22608.0 / 0.030, 0.05, 0.2
+    for deg in (120.0, 150.0, 175.0):
+        phi = np.radians(deg)
+        assert v[f"crank_torque_Nm_at_{deg:g}deg"] == pytest.approx(F * _exact_dX(phi, r, lam), rel=1e-12)
+        assert v[f"rod_force_N_at_{deg:g}deg"] == pytest.approx(F / np.sqrt(1 - (lam * np.sin(phi)) ** 2), rel=1e-12)
+    assert v["crank_torque_Nm_at_90deg"] == 0.0                  # before the punch
+    assert v["input_work_per_turn_J"] == pytest.approx(22608.0, rel=1e-6)
