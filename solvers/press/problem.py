@@ -233,6 +233,8 @@ def summarise(task: PressDrive, trace: Trace, *, cut_angles=None) -> tuple[dict,
         values |= {"omega_mean_rad_s": float(mean), "speed_fluctuation": float((top - low) / mean),
                    "period_s": float(t1 - t0)}
         values |= revolution_extras(task, t, x[:, n + WORK_NAMES.index("motor_work_J")], (t0, t1), top, low)
+        if task.at_deg:
+            values |= values_at_deg(task, phi[inside] - marks[-2], w[inside], names, inside)
         if values["speed_fluctuation"] > 0:     # the textbook flywheel for the fluctuation this run shows
             values |= {"energy_swing_J": energy_swing_J(task),
                        "flywheel_rule_of_thumb_kgm2": rule_of_thumb_flywheel_kgm2(task, values["speed_fluctuation"]),
@@ -279,6 +281,29 @@ def revolution_extras(task: PressDrive, t, motor_work, span, top, low) -> dict:
         out |= {"intermediate_omega_max_rad_s": float(top * task.intermediate_ratio),
                 "intermediate_omega_min_rad_s": float(low * task.intermediate_ratio)}
     return out
+
+
+AT_OUTPUTS = ("travel_mm", "force_N", "Q_N", "rod_force_N", "crank_torque_Nm", "motor_torque_Nm", "belt_torque_Nm",
+              "main_bearing_load_N", "guide_force_N")
+
+
+def values_at_deg(task: PressDrive, turn, w, outputs, inside) -> dict:
+    """`<name>_at_<deg>deg` at the task's `at_deg` over the last revolution (`turn`: its crank angles from
+    0 [rad], `w` the crank speed there): the crank speed and acceleration and the outputs `AT_OUTPUTS`
+    interpolated linearly between the run's samples (at a switching angle: the value on one side), the
+    slider's and rod's rates from the crank-slider's closed forms at that angle with that speed and
+    acceleration (X' omega, X'' omega^2 + X' alpha; beta likewise)."""
+    from mechopt.solvers.press.kinematics import slider_crank_rates
+    angles = np.radians(task.at_deg)
+    omega = np.interp(angles, turn, w)
+    alpha = np.interp(angles, turn, outputs["alpha_rad_s2"][inside])
+    _, dX, ddX, beta, db, ddb = slider_crank_rates(angles, task.r_m, task.rod_ratio, task.kinematics)
+    found = {"omega_rad_s": omega, "alpha_rad_s2": alpha, "slider_velocity_m_s": dX * omega,
+             "slider_acceleration_m_s2": ddX * omega**2 + dX * alpha, "rod_angle_deg": np.degrees(beta),
+             "rod_angular_velocity_rad_s": db * omega, "rod_angular_acceleration_rad_s2": ddb * omega**2 + db * alpha,
+             **{k: np.interp(angles, turn, outputs[k][inside]) for k in AT_OUTPUTS}}
+    return {f"{name}_at_{deg:g}deg": float(series[k]) for k, deg in enumerate(task.at_deg)
+            for name, series in found.items()}
 
 
 def _extreme(t, w, pick, cutting):

@@ -199,3 +199,17 @@ def test_textbook_kinetostatics_at_chosen_angles():
         assert v[f"rod_force_N_at_{deg:g}deg"] == pytest.approx(F / np.sqrt(1 - (lam * np.sin(phi)) ** 2), rel=1e-12)
     assert v["crank_torque_Nm_at_90deg"] == 0.0                  # before the punch
     assert v["input_work_per_turn_J"] == pytest.approx(22608.0, rel=1e-6)
+
+
+def test_values_at_crank_angles_of_a_dynamic_run_against_the_energy_balance():
+    """press/sarkar-punch asked at 72 and 200 deg: with a constant inertia I, 1/2 I (w0^2 - w^2) is the
+    load's work minus the motor's from 0 to phi (no masses, so no kinetic energy elsewhere)."""
+    task, settings = registry.find("press/sarkar-punch").build()
+    task = dataclasses.replace(task, at_deg=(72.0, 200.0))
+    v = pd.events(task, **(settings | {"samples": 400})).values
+    I, w0 = task.intermediate_inertia_kgm2 * task.intermediate_ratio**2, task.nominal_speed_rad_s
+    M_load, M_motor = task.load.torque_Nm, task.motor_torque_at_shaft_Nm()
+    for deg, loaded in ((72.0, np.radians(72.0)), (200.0, np.radians(144.0))):
+        w = np.sqrt(w0**2 - 2 * (M_load * loaded - M_motor * np.radians(deg)) / I)
+        assert v[f"omega_rad_s_at_{deg:g}deg"] == pytest.approx(w, rel=1e-7)
+    assert v["alpha_rad_s2_at_72deg"] == pytest.approx((M_motor - M_load) / I, rel=1e-9)
