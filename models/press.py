@@ -237,7 +237,7 @@ class PressDrive:
     motor_flywheel_inertia_kgm2: Annotated[float, Ge(0), Le(1e5)] = 0.0
     intermediate_inertia_kgm2: Annotated[float, Ge(0), Le(1e5)] = 0.0
     intermediate_ratio: Annotated[float, Gt(0), Le(1e3)] = 1.0
-    # crank angles [deg] a run reports its values at (`*_at_<deg>deg`): the kinematics' rates, forces, torques
+    # crank angles [deg] a run reports its values at (`<name>_<deg>`, e.g. crank_torque_Nm_150): rates, forces, torques
     at_deg: tuple[float, ...] = ()
 
     EFFECTS: ClassVar[dict[str, Effect]] = {

@@ -63,7 +63,7 @@ def flywheel(task: PressDesign, *, tol: Tolerance = 1e-10,
 
     Returns a Result: SOLVED (the root to `ROOT_REL`, or a bound); values `flywheel_inertia_kgm2`,
     `speed_fluctuation`, `periodic_solves`, `secant_steps`, `single_stroke_margin_J`, and the
-    answer's `omega_mean_rad_s` and `energy_residual`; INFEASIBLE when the largest flywheel allowed
+    answer's `omega_mean_rad_s` and `energy_residual`, and its revolution's `arrays` (steady_state's); INFEASIBLE when the largest flywheel allowed
     cannot keep the limit; LIMIT after `max_solves`.
     """
     _check(task)
@@ -146,7 +146,8 @@ def flywheel(task: PressDesign, *, tol: Tolerance = 1e-10,
         values["single_stroke_margin_J"] = margin
     return clock.result(Status.SOLVED, values,
                         f"least flywheel {J:.8g} kg m2 ({active} active) by {steps} safeguarded secant steps, "
-                        f"{solves} periodic solves (steady_state) in all", diagnostics={"active": active})
+                        f"{solves} periodic solves (steady_state) in all", diagnostics={"active": active},
+                        arrays=run.arrays)
 
 
 class _Stop(Exception):

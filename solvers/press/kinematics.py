@@ -86,12 +86,18 @@ def kinetostatics(task: PressDrive, phi) -> dict:
             "main_bearing_load_N": bearing, "guide_force_N": guide}
 
 
+def at_name(name: str, deg: float) -> str:
+    """The value of `name` at the crank angle `deg`: `<name>_<deg>`, the angle in deg as the name's case
+    number after its unit (`crank_torque_Nm_150`; a fraction's point as p: `..._22p5`)."""
+    return f"{name}_{deg:g}".replace(".", "p")
+
+
 def at_angles(arrays_at, at_deg) -> dict:
-    """Values `<name>_at_<deg>deg` of `AT_NAMES` from `arrays_at(phi)` evaluated at the crank angles asked for."""
+    """Values `at_name(name, deg)` of `AT_NAMES` from `arrays_at(phi)` evaluated at the crank angles asked for."""
     if not at_deg:
         return {}
     found = arrays_at(np.radians(np.asarray(at_deg, dtype=float)))
-    return {f"{name}_at_{deg:g}deg": float(found[name][k]) for k, deg in enumerate(at_deg) for name in AT_NAMES
+    return {at_name(name, deg): float(found[name][k]) for k, deg in enumerate(at_deg) for name in AT_NAMES
             if name in found}
 
 
@@ -104,7 +110,7 @@ def kinematics(task: PressDrive, *, samples: Annotated[int, Interval(ge=3, le=1_
     input_torque_Nm, main_bearing_load_N, guide_force_N. Values: the stroke, the largest slider speed
     and acceleration and the largest rod rates (magnitudes) with the crank angles where they occur (on
     the samples), the largest input torque, the work per turn, and every array's value at each crank
-    angle of the task's `at_deg` (`<name>_at_<deg>deg`, exact: computed there, not interpolated)."""
+    angle of the task's `at_deg` (`<name>_<deg>`, `at_name`; exact: computed there, not interpolated)."""
     clock = Clock()
     omega = task.nominal_speed_rad_s
     phi = np.linspace(0.0, 2 * np.pi, samples)

@@ -288,12 +288,12 @@ AT_OUTPUTS = ("travel_mm", "force_N", "Q_N", "rod_force_N", "crank_torque_Nm", "
 
 
 def values_at_deg(task: PressDrive, turn, w, outputs, inside) -> dict:
-    """`<name>_at_<deg>deg` at the task's `at_deg` over the last revolution (`turn`: its crank angles from
+    """`<name>_<deg>` (`kinematics.at_name`) at the task's `at_deg` over the last revolution (`turn`: its crank angles from
     0 [rad], `w` the crank speed there): the crank speed and acceleration and the outputs `AT_OUTPUTS`
     interpolated linearly between the run's samples (at a switching angle: the value on one side), the
     slider's and rod's rates from the crank-slider's closed forms at that angle with that speed and
     acceleration (X' omega, X'' omega^2 + X' alpha; beta likewise)."""
-    from mechopt.solvers.press.kinematics import slider_crank_rates
+    from mechopt.solvers.press.kinematics import at_name, slider_crank_rates
     angles = np.radians(task.at_deg)
     omega = np.interp(angles, turn, w)
     alpha = np.interp(angles, turn, outputs["alpha_rad_s2"][inside])
@@ -302,7 +302,7 @@ def values_at_deg(task: PressDrive, turn, w, outputs, inside) -> dict:
              "slider_acceleration_m_s2": ddX * omega**2 + dX * alpha, "rod_angle_deg": np.degrees(beta),
              "rod_angular_velocity_rad_s": db * omega, "rod_angular_acceleration_rad_s2": ddb * omega**2 + db * alpha,
              **{k: np.interp(angles, turn, outputs[k][inside]) for k in AT_OUTPUTS}}
-    return {f"{name}_at_{deg:g}deg": float(series[k]) for k, deg in enumerate(task.at_deg)
+    return {at_name(name, deg): float(series[k]) for k, deg in enumerate(task.at_deg)
             for name, series in found.items()}
 
 
