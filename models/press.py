@@ -72,7 +72,7 @@ from mechopt.kit.cache import memoised
 from mechopt.kit.errors import ModelError, require
 from mechopt.kit.settings import check_fields, field_problem, range_fault
 from mechopt.models.effects import Effect, check_effects
-from mechopt.models.press_loads import LOAD_KEYS, resolve_load
+from mechopt.models.press_loads import LOAD_KEYS, Load, resolve_load
 
 FORCE_KEYS = ("force_c1_N_mm", "force_c2_N_mm2", "force_c3_N_mm3", "force_c4_N_mm4")
 WORK_NAMES = ("motor_work_J", "cut_work_J", "friction_work_J", "damping_work_J")
@@ -230,6 +230,9 @@ class PressDrive:
     load_torque_Nm: Annotated[float | None, Ge(0), Le(1e9)] = None
     load_energy_J: Annotated[float | None, Ge(0), Le(1e9)] = None
     load_shape: Literal["constant_force", "constant_torque"] = "constant_force"
+    # a measured load: rows [x, F_N], x the crank angle [deg] or the travel [mm] (`load_table_axis`)
+    load_table: tuple = ()
+    load_table_axis: Literal["crank_deg", "travel_mm"] = "crank_deg"
     # effect constant_torque_motor: its torque at the motor shaft; None: the cycle's mean load reduced by i
     motor_torque_Nm: Annotated[float | None, Ge(0), Le(1e6)] = None
     # flywheels on the other shafts: on the motor's (reduced by i^2, with the rotor) and on an intermediate
@@ -264,6 +267,8 @@ class PressDrive:
     def __post_init__(self):
         object.__setattr__(self, "effects", tuple(self.effects))
         object.__setattr__(self, "at_deg", tuple(float(a) for a in self.at_deg))
+        object.__setattr__(self, "load_table", tuple(tuple(r) if isinstance(r, list | tuple) else r
+                                                     for r in self.load_table))
         check_fields(self)
         # which effects are on (`belt`, `motor`, `cutting`, `friction`) and the physical states in order
         # (`state_names`: only those the effects call for), set once: the solvers' loops read them
@@ -323,7 +328,7 @@ class PressDrive:
         if "constant_load" in self.effects:
             object.__setattr__(self, "load", resolve_load(self, lambda x: _angle_at_travel(self, x)))
         else:
-            stray = [k for k in LOAD_KEYS if getattr(self, k) is not None]
+            stray = [k for k in LOAD_KEYS if getattr(self, k) is not None] + (["load_table"] if self.load_table else [])
             require(not stray, f"{stray[0] if stray else ''}: belongs to effect 'constant_load', which is not listed "
                     "in effects", key=stray[0] if stray else "effects")
             object.__setattr__(self, "load", None)
@@ -590,9 +595,11 @@ weight helps on the way down, the model's; -1: the table's sign), and what follo
 (the cut window's angles, `cut_window_rad`; the mean-inertia shares, `mean_inertia_ratios`)."""
 
 
-def structure(task: PressDrive) -> tuple[tuple[str, ...], str]:
-    """What a build depends on besides numbers: the effects (as a sorted tuple) and the kinematics."""
-    return tuple(sorted(task.effects)), task.kinematics
+def structure(task: PressDrive) -> tuple:
+    """What a build depends on besides numbers: the effects (as a sorted tuple) and the kinematics, and
+    a measured load's table (`press_loads.Load.key`: its rows are not numbers in p)."""
+    table = task.load.key() if task.load is not None else ()
+    return (tuple(sorted(task.effects)), task.kinematics) + ((table,) if table else ())
 
 
 def parameters(task: PressDrive, *, rod_weight_sign=1.0, **given) -> list:
@@ -704,10 +711,11 @@ def dynamics(task: PressDrive) -> Dynamics:
 
 
 @memoised(maxsize=32)
-def equations(key: tuple[tuple[str, ...], str]) -> Equations:
+def equations(key: tuple) -> Equations:
     """Build eqs. (2) for a structure (`structure`: effects, kinematics) from its listed effects only
     (see the module's effect table), every number a symbol of p (`PARAMETERS`)."""
-    effects, kin = key
+    effects, kin = key[0], key[1]
+    table = Load(0.0, 0.0, 0.0, 0.0, key[2][2], key[2][1]) if len(key) > 2 else None
     names = state_names(effects)
     n = len(names)
     x = ca.SX.sym("x", n + len(WORK_NAMES))
@@ -761,7 +769,7 @@ def equations(key: tuple[tuple[str, ...], str]) -> Equations:
         a, b = q["cut_start_rad"], q["cut_end_rad"]
         turn = phi - 2 * np.pi * ca.floor(phi / (2 * np.pi))
         penetration_mm = X * 1000 - travel_m(a, r, lam, kin, ca) * 1000
-        force = U * q["applied_force_N"]
+        force = U * (table.table_force_N(turn, X * 1000, ca) if table is not None else q["applied_force_N"])
         load_torque = U * q["applied_torque_Nm"]
         U_paper = ca.logic_and(ca.logic_and(turn >= a, turn <= b), w > 0)
     friction = q["friction_torque_Nm"] if friction_on else 0.0
@@ -890,7 +898,7 @@ class PressDesign(PressDrive):
                                                                  "single_stroke_speed_drop") if getattr(self, k))]
         for key in used:
             need = self.NEEDS.get(key)
-            if need and need[0] not in self.effects:
+            if need and need[0] not in self.effects and not (need[0] == "cutting_force" and self.cutting):
                 raise ModelError(f"{key} needs effect '{need[0]}': {need[1]}", key=key)
         for low_key, high_key in BOUNDS.values():
             low, high = getattr(self, low_key), getattr(self, high_key)

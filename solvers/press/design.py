@@ -65,6 +65,7 @@ from mechopt.solvers.press.problem import (
     locate,
     march,
     piece_by_time,
+    refuse_jumps,
     refuse_neutral_speed,
     revolution,
     summarise,
@@ -241,6 +242,8 @@ def design(task: PressDesign, *, tol: Tolerance = 1e-10, samples: Samples = 16,
     check_settings(design, tol=tol, samples=samples, max_iter=max_iter, check_sensitivity=check_sensitivity, start=start)
     task.require_drive("a design on the periodic motion")
     refuse_neutral_speed(task, "press.design")
+    refuse_jumps(task, "press.design", "integrates each shooting stage across them (its stages end at the window's "
+                 "ends and the speed's extremes only)")
     clock = Clock()
     first = task.start(rule_of_thumb=start == "rule_of_thumb")
     attempts, result = [], None

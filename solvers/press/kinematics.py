@@ -54,6 +54,8 @@ def working_load(task: PressDrive, phi, X_m):
     if window is None:
         return zero, zero
     inside = (phi >= window[0]) & (phi <= window[1])
+    if task.load is not None and task.load.table:
+        return np.where(inside, task.load.table_force_N(phi, X_m * 1000), 0.0), zero
     if task.load is not None:
         return np.where(inside, task.load.force_N, 0.0), np.where(inside, task.load.torque_Nm, 0.0)
     depth = X_m * 1000 - (task.stroke_mm - task.blank_thickness_mm - task.shortfall_mm)

@@ -29,6 +29,7 @@ from mechopt.models.press import (
     rule_of_thumb_flywheel_kgm2,
     structure,
 )
+from mechopt.models.press_loads import Load
 
 TWO_PI = 2 * np.pi
 ANGLE_TOL_RAD = 1e-12          # events are located to this in crank angle (omega ~ 25: 4e-14 s) near phi = 0
@@ -187,6 +188,15 @@ def check_task(task, solver, **settings):
     if not isinstance(task, PressDrive):
         raise ModelError(f"task={type(task).__name__}: expected a PressDrive", key="task")
     check_settings(solver, **settings)
+
+
+def refuse_jumps(task: PressDrive, method: str, why: str):
+    """Refuse `method` for a measured load with jumps inside its window (`why`: what it cannot do),
+    naming the methods that stop at them."""
+    if task.load is not None and task.load.jumps_rad:
+        raise ModelError(f"load_table jumps at {', '.join(f'{a:.6g}' for a in np.degrees(task.load.jumps_rad))} deg "
+                         f"and {method} {why}; events, ivp (locate_events), rk4 (the paper's fixed steps) and steady_state stop "
+                         "at each jump", key="load_table")
 
 
 def refuse_neutral_speed(task: PressDrive, method: str):
@@ -349,6 +359,7 @@ def angle_events(task, phi):
     window = task.cut_window_rad()
     if window is not None and window[0] < window[1]:
         marks += [(window[0], "cut_start"), (window[1], "cut_end")]
+        marks += [(a, "load_jump") for a in (task.load.jumps_rad if task.load is not None else ())]
     for turn in (0, 1):
         for angle, kind in sorted(marks):
             a = base + turn * TWO_PI + angle
@@ -559,6 +570,7 @@ class Revolution:
     piece: ca.Function
     variational: ca.Function
     grid: np.ndarray
+    jumps: tuple = ()               # a measured load's jumps inside the window [rad]: piece boundaries too
 
     def __post_init__(self):
         object.__setattr__(self, "n", len(self.state_names))     # states, set once (read per Newton step)
@@ -567,7 +579,9 @@ class Revolution:
         """(a, b, U) of each piece for p (numbers or symbols; with numbers, an empty cut is no piece)."""
         if not self.cutting or (numbers and not p[CUT_START] < p[CUT_END]):
             return [(0.0, TWO_PI, 0.0)]
-        return [(0.0, p[CUT_START], 0.0), (p[CUT_START], p[CUT_END], 1.0), (p[CUT_END], TWO_PI, 0.0)]
+        inside = [p[CUT_START], *self.jumps, p[CUT_END]]
+        return [(0.0, p[CUT_START], 0.0), *((a, b, 1.0) for a, b in zip(inside[:-1], inside[1:])),
+                (p[CUT_END], TWO_PI, 0.0)]
 
     def residual(self, y0, p) -> tuple[np.ndarray, np.ndarray]:
         """(y(2 pi) - y0 over the states other than phi, the monodromy minus the identity): the
@@ -594,7 +608,8 @@ class Revolution:
             ys = np.asarray(self.piece(x0=y, p=np.r_[a, b, u, p])["xf"]).T
             x, t = full(ys, a + (b - a) * self.grid)
             trace.add(t, x, np.array([u, 1.0, 0.0]))
-            kind = "cut_start" if u == 0 and b < TWO_PI else ("cut_end" if u == 1 else "revolution")
+            kind = ("load_jump" if b in self.jumps else "cut_start" if u == 0 and b < TWO_PI
+                    else "cut_end" if u == 1 else "revolution")
             trace.events.append((kind, float(t[-1]), float(b)))
             y = ys[-1]
         return trace, y[:n - 1]
@@ -623,4 +638,6 @@ def revolution(key: tuple, tol: float, samples: int) -> Revolution:
                                 {"x": ca.vertcat(y, ca.vec(Y)), "t": s, "p": q,
                                  "ode": ca.vertcat(ode, ca.vec(ca.jacobian(ode, y) @ Y))}, 0.0, 1.0,
                                 {"abstol": tol, "reltol": tol, "max_num_steps": 100000})
-    return Revolution(names, bool({"cutting_force", "constant_load"} & set(key[0])), piece, variational, grid)
+    jumps = Load(0.0, 0.0, 0.0, 0.0, key[2][2], key[2][1]).jumps_rad if len(key) > 2 else ()
+    return Revolution(names, bool({"cutting_force", "constant_load"} & set(key[0])), piece, variational, grid,
+                      tuple(jumps))

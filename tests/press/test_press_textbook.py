@@ -213,3 +213,49 @@ def test_values_at_crank_angles_of_a_dynamic_run_against_the_energy_balance():
         w = np.sqrt(w0**2 - 2 * (M_load * loaded - M_motor * np.radians(deg)) / I)
         assert v[f"omega_rad_s_{deg:g}"] == pytest.approx(w, rel=1e-7)
     assert v["alpha_rad_s2_72"] == pytest.approx((M_motor - M_load) / I, rel=1e-9)
+
+
+def test_a_force_table_from_a_csv_against_eq_1():
+    """press/kd2322-force-table: eq. (1) every 0.25 mm as a CSV; the cut's work is the table's
+    trapezoid (numpy's, on the file's rows), and the motion is press/kd2322's but for that work."""
+    from pathlib import Path
+    rows = np.loadtxt(Path(registry.find("press/kd2322-force-table").path).parent / "kd2322-force-table.csv",
+                      delimiter=",", skiprows=1)
+    task, settings = registry.find("press/kd2322-force-table").build()
+    run = pd.steady_state(task, **settings)
+    assert run.status is Status.SOLVED
+    assert run.values["cut_work_J"] == pytest.approx(np.trapezoid(rows[:, 1], rows[:, 0]) / 1000, rel=1e-8)
+    assert run.values["peak_force_N"] == pytest.approx(6823.17, rel=1e-9)          # the last row, eq. (1) at 3 mm
+    paper = pd.steady_state(PAPER)
+    assert run.values["speed_fluctuation"] == pytest.approx(paper.values["speed_fluctuation"], rel=2e-3)
+
+
+def test_a_table_with_a_jump_stops_every_method_at_it():
+    """A crank-angle table with a drop at 155 deg: the jump is an event of its own in events, ivp and
+    steady_state (the cut's work to the integration's tolerance, against the by-parts closed form);
+    rk4 crosses it (first order); the design's NLP and the sensitivity refuse it."""
+    from mechopt.models.press import cut_work_J
+    table = ((146.0, 0.0), (155.0, 2000.0), (155.0, 500.0), (163.0, 800.0))
+    task = dataclasses.replace(CONSTANT, load_from_mm=None, load_to_mm=None, load_energy_J=None, load_table=table)
+    assert np.degrees(task.load.jumps_rad) == pytest.approx([155.0])
+    # the work by quadrature of F(phi) X'(phi) on each side of the jump, X' written out here
+    r, lam = task.r_m, task.rod_ratio
+    dX = lambda p: r * (np.sin(p) + lam / 2 * np.sin(2 * p))             # noqa: E731  (the paper's X)
+    force = lambda p, a0, a1, f0, f1: f0 + (f1 - f0) * (p - a0) / (a1 - a0)    # noqa: E731
+    a, j, b = np.radians([146.0, 155.0, 163.0])
+    work = quad(lambda p: force(p, a, j, 0.0, 2000.0) * dX(p), a, j, epsrel=1e-13)[0] \
+        + quad(lambda p: force(p, j, b, 500.0, 800.0) * dX(p), j, b, epsrel=1e-13)[0]
+    assert cut_work_J(task) == pytest.approx(work, rel=1e-10)
+    steady = pd.steady_state(task)
+    period = steady.values["period_s"] * 1.001
+    for run in (steady, pd.events(task, duration_s=period), pd.ivp(task, duration_s=period)):
+        assert run.status is Status.SOLVED, run.message
+        assert run.values["cut_work_J"] == pytest.approx(work, rel=1e-7)
+    assert any(e[0] == "load_jump" for e in pd.events(task, duration_s=period).diagnostics["events"])
+    design_task, _ = registry.find("press/flywheel-design").build()
+    jumpy = dataclasses.replace(design_task, effects=CONSTANT.effects, **{k: None for k in
+                                PressDrive.EFFECTS["cutting_force"].params}, force_fit_max_mm=None, load_table=table)
+    with pytest.raises(ModelError, match=r"load_table jumps at 155 deg and press\.design"):
+        pd.design(jumpy)
+    with pytest.raises(ModelError, match=r"load_table jumps at 155 deg and press\.sensitivity"):
+        pd.sensitivity(task)
