@@ -22,7 +22,13 @@ import numpy as np
 from mechopt.kit.errors import ModelError
 from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Annotated, Interval, Tolerance, check_settings
-from mechopt.models.press import PressDesign, inertia_at_crank_kgm2, single_stroke_margin_J
+from mechopt.models.press import (
+    PressDesign,
+    energy_swing_J,
+    inertia_at_crank_kgm2,
+    rule_of_thumb_flywheel_kgm2,
+    single_stroke_margin_J,
+)
 from mechopt.solvers.press.periodic import steady_state
 from mechopt.solvers.press.problem import refuse_neutral_speed
 
@@ -62,7 +68,8 @@ def flywheel(task: PressDesign, *, tol: Tolerance = 1e-10,
     max_solves : periodic solves allowed in all (LIMIT when reached, with the bracket).
 
     Returns a Result: SOLVED (the root to `ROOT_REL`, or a bound); values `flywheel_inertia_kgm2`,
-    `speed_fluctuation`, `periodic_solves`, `secant_steps`, `single_stroke_margin_J`, and the
+    `speed_fluctuation`, `periodic_solves`, `secant_steps`, `single_stroke_margin_J`, the textbook's
+    `flywheel_rule_of_thumb_kgm2` for the same limit (with the load diagram's `energy_swing_J`), and the
     answer's `omega_mean_rad_s` and `energy_residual`, and its revolution's `arrays` (steady_state's); INFEASIBLE when the largest flywheel allowed
     cannot keep the limit; LIMIT after `max_solves`.
     """
@@ -144,6 +151,9 @@ def flywheel(task: PressDesign, *, tol: Tolerance = 1e-10,
               "energy_residual": run.values["energy_residual"]}
     if margin is not None:
         values["single_stroke_margin_J"] = margin
+    # the textbook's flywheel for the same limit beside the designed one (the load diagram's Delta E)
+    values |= {"energy_swing_J": energy_swing_J(task), "flywheel_rule_of_thumb_kgm2":
+               rule_of_thumb_flywheel_kgm2(task, limit)}
     return clock.result(Status.SOLVED, values,
                         f"least flywheel {J:.8g} kg m2 ({active} active) by {steps} safeguarded secant steps, "
                         f"{solves} periodic solves (steady_state) in all", diagnostics={"active": active},
