@@ -259,3 +259,20 @@ def test_a_table_with_a_jump_stops_every_method_at_it():
         pd.design(jumpy)
     with pytest.raises(ModelError, match=r"load_table jumps at 155 deg and press\.sensitivity"):
         pd.sensitivity(task)
+
+
+def test_a_constant_load_in_the_design_the_secant_and_the_sensitivity():
+    """The constant force over the KD2322's cut travel in the methods above the simulators: the NLP and
+    the secant find the same least flywheel (their extremes exact and sampled: to 1e-6), the
+    sensitivity's orbit has steady_state's fluctuation."""
+    design_task, _ = registry.find("press/flywheel-design").build()
+    task = dataclasses.replace(design_task, effects=CONSTANT.effects, force_fit_max_mm=None,
+                               **{k: None for k in PressDrive.EFFECTS["cutting_force"].params},
+                               load_from_mm=46.0, load_to_mm=49.0, load_energy_J=5.517558)
+    nlp, secant = pd.design(task), pd.flywheel(task)
+    assert nlp.status is Status.SOLVED and secant.status is Status.SOLVED
+    assert secant.values["flywheel_inertia_kgm2"] == pytest.approx(nlp.values["flywheel_inertia_kgm2"], rel=1e-6)
+    sens = pd.sensitivity(CONSTANT)
+    assert sens.status is Status.SOLVED
+    assert sens.values["speed_fluctuation"] == pytest.approx(pd.steady_state(CONSTANT).values["speed_fluctuation"],
+                                                             rel=1e-6)
