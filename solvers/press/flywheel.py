@@ -69,9 +69,9 @@ def flywheel(task: PressDesign, *, tol: Tolerance = 1e-10,
 
     Returns a Result: SOLVED (the root to `ROOT_REL`, or a bound); values `flywheel_inertia_kgm2`,
     `speed_fluctuation`, `periodic_solves`, `secant_steps`, `single_stroke_margin_J`, the textbook's
-    `flywheel_rule_of_thumb_kgm2` for the same limit (with the load diagram's `energy_swing_J`), and the
-    answer's `omega_mean_rad_s` and `energy_residual`, and its revolution's `arrays` (steady_state's); INFEASIBLE when the largest flywheel allowed
-    cannot keep the limit; LIMIT after `max_solves`.
+    `flywheel_rule_of_thumb_kgm2` for the same limit (with the load diagram's `energy_swing_J`), the
+    answer's `omega_mean_rad_s` and `energy_residual`, and its revolution's `arrays` (steady_state's);
+    INFEASIBLE when the largest flywheel allowed cannot keep the limit; LIMIT after `max_solves`.
     """
     _check(task)
     check_settings(flywheel, tol=tol, max_solves=max_solves)
