@@ -36,8 +36,8 @@ from mechopt.kit import cache
 from mechopt.solvers import press as pd
 
 __all__ = ["DESIGN_SCENES", "DURATION_S", "PAPER_TASK", "at_accuracy", "catalogue_rows", "cli", "cycle_timing",
-           "design_rows", "design_table", "observed_order", "peer_design", "plot", "run", "sweep_rows", "table", "walk",
-           "whatif_rows", "whatif_table"]
+           "design_rows", "design_table", "observed_order", "peer_design", "plot", "run", "secant_rows", "secant_table",
+           "sweep_rows", "table", "walk", "whatif_rows", "whatif_table"]
 
 PAPER_TASK, _ = registry.find("press/kd2322").build()
 DURATION_S = 0.25           # about one revolution at 25 rad/s, with one cut
@@ -265,6 +265,43 @@ def design_table(rows):
     return "\n".join(lines)
 
 
+SECANT_SCENE, SECANT_TARGET = "press/flywheel-design-newton", 10.0
+
+
+def secant_rows(repeats=5, scene=SECANT_SCENE):
+    """The one-variable flywheel design by CPU time in this process (`time.process_time`, medians,
+    builds cached by a first call of each): `press.flywheel` (safeguarded secant, a handful of
+    periodic solves) against Nelder-Mead over the same periodic simulation (`peer_design`) and the
+    NLP (`press.design`); the ratio Nelder-Mead / secant is the claim (target >= `SECANT_TARGET`)."""
+    task = registry.find(scene).build()[0]
+    calls = {"secant": lambda: pd.flywheel(task), "nlp": lambda: pd.design(task),
+             "nelder_mead": lambda: peer_design(task)}
+    out = {}
+    for name, call in calls.items():
+        found = call()                                 # warm-up: builds cached
+        cpu = []
+        for _ in range(repeats if name != "nelder_mead" else max(1, repeats // 2)):
+            start = time.process_time()
+            found = call()
+            cpu.append(time.process_time() - start)
+        out[name] = (statistics.median(cpu), found)
+    secant = out["secant"][1]
+    design, objective, evaluations = out["nelder_mead"][1]
+    return {"secant_cpu_s": out["secant"][0], "nlp_cpu_s": out["nlp"][0], "nelder_mead_cpu_s": out["nelder_mead"][0],
+            "secant_J": secant.values["flywheel_inertia_kgm2"], "secant_solves": secant.values["periodic_solves"],
+            "nlp_J": out["nlp"][1].values["flywheel_inertia_kgm2"], "nelder_mead_J": objective,
+            "nelder_mead_solves": evaluations, "ratio": out["nelder_mead"][0] / out["secant"][0]}
+
+
+def secant_table(r):
+    met = {True: "met", False: "MISSED"}
+    return (f"\none-variable flywheel design ({SECANT_SCENE}), CPU seconds in one process (medians):\n"
+            f"  secant {r['secant_cpu_s']:.3g} s ({r['secant_solves']} periodic solves, J = {r['secant_J']:.8g}); "
+            f"NLP {r['nlp_cpu_s']:.3g} s (J = {r['nlp_J']:.8g}); Nelder-Mead {r['nelder_mead_cpu_s']:.3g} s "
+            f"({r['nelder_mead_solves']} periodic solves, J = {r['nelder_mead_J']:.8g})\n"
+            f"  target: Nelder-Mead / secant {r['ratio']:.3g} (>= {SECANT_TARGET:g}: {met[r['ratio'] >= SECANT_TARGET]})")
+
+
 def cli(repeats, out_dir, progress=None) -> str:
     """What `mechopt bench press` prints: the work-precision table, the targets, the plot, the
     design problem against its derivative-free peer (NLP: median of max(repeats, 3); peer: one run),
@@ -273,7 +310,7 @@ def cli(repeats, out_dir, progress=None) -> str:
     whatif = whatif_table(whatif_rows(max(repeats, 7)), sweep_rows(), walk(), catalogue_rows())
     rows = run(repeats=repeats, progress=progress)
     paths = plot(rows, out_dir)
-    design = design_table(design_rows(repeats=max(repeats, 3), progress=progress))
+    design = design_table(design_rows(repeats=max(repeats, 3), progress=progress)) + secant_table(secant_rows())
     return "\n".join([table(rows, at_accuracy(rows), cycle_timing()), design, whatif,
                       *(f"plot: {p}" for p in paths)])
 

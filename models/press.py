@@ -72,6 +72,7 @@ from mechopt.kit.cache import memoised
 from mechopt.kit.errors import ModelError, require
 from mechopt.kit.settings import check_fields, field_problem, range_fault
 from mechopt.models.effects import Effect, check_effects
+from mechopt.models.press_loads import LOAD_KEYS, Load, resolve_load
 
 FORCE_KEYS = ("force_c1_N_mm", "force_c2_N_mm2", "force_c3_N_mm3", "force_c4_N_mm4")
 WORK_NAMES = ("motor_work_J", "cut_work_J", "friction_work_J", "damping_work_J")
@@ -219,6 +220,28 @@ class PressDrive:
     kinematics: Literal["paper", "exact"] = "paper"
     # the travel eq. (1) was fitted on, up to: past it a warning (`warnings`)
     force_fit_max_mm: Annotated[float | None, Ge(0), Le(1000)] = None
+    # effect constant_load (models.press_loads): an interval in travel [mm] or crank angle [deg], and a
+    # force, a torque or an energy with its shape
+    load_from_mm: Annotated[float | None, Ge(0), Le(2000)] = None
+    load_to_mm: Annotated[float | None, Gt(0), Le(2000)] = None
+    load_from_deg: Annotated[float | None, Ge(0), Lt(360)] = None
+    load_to_deg: Annotated[float | None, Gt(0), Lt(360)] = None
+    load_force_N: Annotated[float | None, Ge(0), Le(1e9)] = None
+    load_torque_Nm: Annotated[float | None, Ge(0), Le(1e9)] = None
+    load_energy_J: Annotated[float | None, Ge(0), Le(1e9)] = None
+    load_shape: Literal["constant_force", "constant_torque"] = "constant_force"
+    # a measured load: rows [x, F_N], x the crank angle [deg] or the travel [mm] (`load_table_axis`)
+    load_table: tuple = ()
+    load_table_axis: Literal["crank_deg", "travel_mm"] = "crank_deg"
+    # effect constant_torque_motor: its torque at the motor shaft; None: the cycle's mean load reduced by i
+    motor_torque_Nm: Annotated[float | None, Ge(0), Le(1e6)] = None
+    # flywheels on the other shafts: on the motor's (reduced by i^2, with the rotor) and on an intermediate
+    # shaft turning `intermediate_ratio` times the crank's speed, rigidly geared to it (reduced by ratio^2)
+    motor_flywheel_inertia_kgm2: Annotated[float, Ge(0), Le(1e5)] = 0.0
+    intermediate_inertia_kgm2: Annotated[float, Ge(0), Le(1e5)] = 0.0
+    intermediate_ratio: Annotated[float, Gt(0), Le(1e3)] = 1.0
+    # crank angles [deg] a run reports its values at (`<name>_<deg>`, e.g. crank_torque_Nm_150): rates, forces, torques
+    at_deg: tuple[float, ...] = ()
 
     EFFECTS: ClassVar[dict[str, Effect]] = {
         "belt_elasticity": Effect(adds="elastic belt between pulley and crank shaft: twist and pulley speed states",
@@ -234,10 +257,18 @@ class PressDrive:
                                        equation="table rows 3-4",
                                        params=("motor_sync_speed_rad_s", "motor_breakdown_torque_Nm",
                                                "motor_breakdown_slip")),
+        "constant_load": Effect(adds="a constant force or torque over a stated interval, or an energy per stroke "
+                                     "with a stated shape (models.press_loads)", equation="textbook punching press"),
+        "constant_torque_motor": Effect(adds="a motor giving a constant torque at its shaft (the textbook's motor "
+                                             "that supplies energy at a uniform rate)", equation="textbook flywheel",
+                                        params=()),
     }
 
     def __post_init__(self):
         object.__setattr__(self, "effects", tuple(self.effects))
+        object.__setattr__(self, "at_deg", tuple(float(a) for a in self.at_deg))
+        object.__setattr__(self, "load_table", tuple(tuple(r) if isinstance(r, list | tuple) else r
+                                                     for r in self.load_table))
         check_fields(self)
         # which effects are on (`belt`, `motor`, `cutting`, `friction`) and the physical states in order
         # (`state_names`: only those the effects call for), set once: the solvers' loops read them
@@ -246,22 +277,24 @@ class PressDrive:
               "friction": "friction"}
         for name, effect in on.items():
             object.__setattr__(self, name, effect in self.effects)
+        # a window-switched load of either kind (eq. (1) or `constant_load`); a motor of either kind
+        object.__setattr__(self, "cutting", self.cutting or "constant_load" in self.effects)
+        object.__setattr__(self, "torque_motor", "constant_torque_motor" in self.effects)
         object.__setattr__(self, "state_names", state_names(self.effects))
         check_effects(self)
         # relational rules only: each input's own range is on its field (check_fields, above)
-        require(self.flywheel_inertia_kgm2 > 0 or self.crank_mass_kg > 0,
-                f"flywheel_inertia_kgm2={self.flywheel_inertia_kgm2} and crank_mass_kg are both 0: the crank shaft "
-                "would have no inertia", key="flywheel_inertia_kgm2")
+        self._check_drive_and_load()
+        require(self.crank_flywheel_kgm2() > 0 or self.crank_mass_kg > 0,
+                f"flywheel_inertia_kgm2={self.flywheel_inertia_kgm2}, intermediate_inertia_kgm2 and crank_mass_kg are "
+                "all 0: the crank shaft would have no inertia", key="flywheel_inertia_kgm2")
         if self.belt:
             require(self.belt_stiffness_Nm_rad > 0, f"belt_stiffness_Nm_rad={self.belt_stiffness_Nm_rad}: allowed > 0 "
                     "with effect 'belt_elasticity' (an elastic belt)", key="belt_stiffness_Nm_rad")
-            if self.motor:
-                require(self.motor_inertia_kgm2 > 0, f"motor_inertia_kgm2={self.motor_inertia_kgm2}: allowed > 0 with "
+            if self.motor or self.torque_motor:
+                require(self.motor_inertia_kgm2 + self.motor_flywheel_inertia_kgm2 > 0,
+                        f"motor_inertia_kgm2={self.motor_inertia_kgm2}: allowed > 0 with "
                         "an elastic belt (the pulley side needs inertia)", key="motor_inertia_kgm2")
-        elif not self.motor:
-            raise ModelError("effects lack both 'belt_elasticity' and 'motor_characteristic': a rigid ideal drive "
-                             "leaves no motion to compute; add one of them", key="effects")
-        if self.cutting:
+        if "cutting_force" in self.effects:
             need = self.blank_thickness_mm + self.shortfall_mm
             require(need <= 2 * self.crank_radius_mm,
                     f"blank_thickness_mm={self.blank_thickness_mm} plus shortfall_mm={self.shortfall_mm} is {need} mm, "
@@ -281,31 +314,97 @@ class PressDrive:
         """Tool travel X [m] (see `travel_m`)."""
         return travel_m(phi, self.r_m, self.rod_ratio, self.kinematics, m)
 
+    def _check_drive_and_load(self):
+        """The rules between the new drives and loads and the paper's: one load law, one motor."""
+        both = [e for e in ("cutting_force", "constant_load") if e in self.effects]
+        require(len(both) < 2, "effects list both 'cutting_force' and 'constant_load': one working load per stroke",
+                key="effects")
+        motors = [e for e in ("motor_characteristic", "constant_torque_motor") if e in self.effects]
+        require(len(motors) < 2, "effects list both 'motor_characteristic' and 'constant_torque_motor': one motor",
+                key="effects")
+        if not self.torque_motor and self.motor_torque_Nm is not None:
+            raise ModelError(f"motor_torque_Nm={self.motor_torque_Nm} belongs to effect 'constant_torque_motor', "
+                             "which is not listed in effects", key="motor_torque_Nm")
+        if "constant_load" in self.effects:
+            object.__setattr__(self, "load", resolve_load(self, lambda x: _angle_at_travel(self, x)))
+        else:
+            stray = [k for k in LOAD_KEYS if getattr(self, k) is not None] + (["load_table"] if self.load_table else [])
+            require(not stray, f"{stray[0] if stray else ''}: belongs to effect 'constant_load', which is not listed "
+                    "in effects", key=stray[0] if stray else "effects")
+            object.__setattr__(self, "load", None)
+        bad = [a for a in self.at_deg if not 0 <= a <= 360]
+        require(not bad, f"at_deg={list(self.at_deg)}: allowed crank angles in [0, 360] deg", key="at_deg")
+
+    @property
+    def motor_shaft_torque_Nm(self) -> float:
+        """The constant-torque motor's torque at its shaft (`motor_torque_at_shaft_Nm`) [N m]."""
+        return self.motor_torque_at_shaft_Nm()
+
+    @property
+    def applied_force_N(self) -> float:
+        """The constant load's force along the stroke inside its window [N] (0 without one)."""
+        return self.load.force_N if self.load is not None else 0.0
+
+    @property
+    def applied_torque_Nm(self) -> float:
+        """The constant load's torque at the crank inside its window [N m] (0 without one)."""
+        return self.load.torque_Nm if self.load is not None else 0.0
+
+    def has_drive(self) -> bool:
+        """Whether anything drives the crank's motion (a motor or a belt from an ideal drive); without,
+        the crank turns at `nominal_speed_rad_s` by a rigid ideal drive: kinematics and kinetostatics only."""
+        return self.belt or self.motor or self.torque_motor
+
+    def require_drive(self, what: str = "a dynamic run"):
+        """Refuse `what` for a press without a drive (`has_drive`): nothing sets its motion."""
+        require(self.has_drive(), f"effects lack 'belt_elasticity', 'motor_characteristic' and "
+                f"'constant_torque_motor': a rigid ideal drive leaves no motion to compute for {what}; add one of "
+                "them, or use solver press.kinematics (the crank at constant speed: kinematics and kinetostatics)",
+                key="effects")
+
+    def motor_torque_at_shaft_Nm(self) -> float:
+        """The constant-torque motor's torque at its shaft [N m]: `motor_torque_Nm`, or the cycle's mean
+        load at the crank (`required_mean_torque_Nm`) over i; 0 without that motor."""
+        if not self.torque_motor:
+            return 0.0
+        if self.motor_torque_Nm is not None:
+            return self.motor_torque_Nm
+        return required_mean_torque_Nm(self) / self.gear_ratio
+
+    def crank_flywheel_kgm2(self) -> float:
+        """Every flywheel on the crank's side of the belt reduced to the crank [kg m2]: the crank's own J
+        plus the intermediate shaft's, times its speed ratio squared (kinetic energy alike)."""
+        return self.flywheel_inertia_kgm2 + self.intermediate_inertia_kgm2 * self.intermediate_ratio**2
+
     def cut_window_rad(self) -> tuple[float, float] | None:
         """Crank angles (in (0, pi)) where U switches on and where the cut ends (the jump) [rad]:
-        X = H - Z - delta and X = H - delta on the way down. None without a cutting force."""
+        X = H - Z - delta and X = H - delta on the way down (with `constant_load`, its interval's
+        angles). None without a cutting force or load."""
         if not self.cutting:
             return None
+        if self.load is not None:
+            return self.load.start_rad, self.load.end_rad
         H = self.stroke_mm / 1000
         top, bottom = H - (self.blank_thickness_mm + self.shortfall_mm) / 1000, H - self.shortfall_mm / 1000
         return tuple(_angle_at_travel(self, x) for x in (top, bottom))
 
     def reduced_motor_inertia_kgm2(self) -> float:
-        """J_p = (J_0 + J_shk) i^2, table row 4 [kg m2]."""
-        return self.motor_inertia_kgm2 * self.gear_ratio**2
+        """J_p = (J_0 + J_shk) i^2, table row 4, with a flywheel on the motor shaft beside the rotor [kg m2]."""
+        return (self.motor_inertia_kgm2 + self.motor_flywheel_inertia_kgm2) * self.gear_ratio**2
 
     def warnings(self, values: dict) -> list[str]:
         """Where this press leaves what its source supports: eq. (1) beyond the travel it was
         fitted on, the paper's lambda << 1 kinematics at a large rod ratio. The answer stands."""
         out = []
         top = self.force_fit_max_mm
-        if self.cutting and top is not None and self.blank_thickness_mm > top:
+        eq1 = "cutting_force" in self.effects
+        if eq1 and top is not None and self.blank_thickness_mm > top:
             forces = [cutting_force_N(x, *(getattr(self, k) for k in FORCE_KEYS))
                       for x in (self.blank_thickness_mm, top)]
             out.append(f"eq. (1) extrapolated beyond X = {top:g} mm, its fitted range: at X = blank_thickness_mm = "
                        f"{self.blank_thickness_mm:g} mm it gives {forces[0] / 1000:.3g} kN, "
                        f"{forces[0] / forces[1]:.2g}x its value at {top:g} mm")
-        elif self.cutting and top is None:          # a law's range belongs to it: unstated, it cannot be checked
+        elif eq1 and top is None:          # a law's range belongs to it: unstated, it cannot be checked
             out.append(f"eq. (1)'s fitted range is not stated (force_fit_max_mm): whether X = blank_thickness_mm = "
                        f"{self.blank_thickness_mm:g} mm lies inside it is not checked")
         if self.kinematics == "paper":
@@ -320,7 +419,8 @@ class PressDrive:
 def state_names(effects) -> tuple[str, ...]:
     """The physical states of a press with these effects, in order."""
     if "belt_elasticity" in effects:
-        return ("twist_rad", "omega_p_rad_s", "phi_rad", "omega_rad_s") if "motor_characteristic" in effects \
+        motor = "motor_characteristic" in effects or "constant_torque_motor" in effects
+        return ("twist_rad", "omega_p_rad_s", "phi_rad", "omega_rad_s") if motor \
             else ("twist_rad", "phi_rad", "omega_rad_s")
     return ("phi_rad", "omega_rad_s")
 
@@ -340,6 +440,8 @@ def cut_work_J(task: PressDrive) -> float:
     """The work of one cut, the integral of eq. (1) over the penetration [0, Z] [J]; 0 without a cut."""
     if not task.cutting:
         return 0.0
+    if task.load is not None:
+        return task.load.work_J(task.travel)
     coeffs = [getattr(task, k) for k in FORCE_KEYS]
     antiderivative = [0, 0, *[c / (i + 2) for i, c in enumerate(coeffs)]]      # of eq. (1), N mm
     return float(np.polynomial.polynomial.polyval(task.blank_thickness_mm, antiderivative)) / 1000
@@ -361,7 +463,10 @@ def energy_swing_J(task: PressDrive, samples: int = 3600) -> float:
     E(phi) = M_mean phi - W_cut(phi) - M_tr phi - (V(phi) - V(0)) swings by max E - min E."""
     phi = np.linspace(0.0, 2 * np.pi, samples + 1)
     work = np.zeros_like(phi)
-    if task.cutting:
+    if task.load is not None:
+        phi = np.union1d(phi, task.cut_window_rad())
+        work = task.load.work_so_far_J(phi, task.travel)
+    elif task.cutting:
         a, b = task.cut_window_rad()
         phi = np.union1d(phi, [a, b])       # the cut's end is the surplus's kink: a sample there
         Z = task.blank_thickness_mm
@@ -382,6 +487,14 @@ def rule_of_thumb_flywheel_kgm2(task: PressDrive, speed_fluctuation: float) -> f
     out the motor's slip, the belt and J_k(phi)."""
     needed = energy_swing_J(task) / (speed_fluctuation * task.nominal_speed_rad_s**2)
     return max(needed - (mean_crank_inertia_kgm2(task) - task.flywheel_inertia_kgm2), 0.0)
+
+
+def inertia_at_crank_kgm2(task: PressDrive) -> float:
+    """Everything that turns with the crank, reduced to it [kg m2]: the mean J_k (its flywheel, an
+    intermediate shaft's by ratio^2, the linkage) plus, with a rigid drive (no belt), the motor side's
+    (rotor and motor-shaft flywheel by i^2). The inertia the textbook's I = Delta E / (C_s omega^2) sizes."""
+    motor_side = task.reduced_motor_inertia_kgm2() if (task.motor or task.torque_motor) and not task.belt else 0.0
+    return mean_crank_inertia_kgm2(task) + motor_side
 
 
 def breakdown_torque_at_crank_Nm(task: PressDrive) -> float:
@@ -432,7 +545,7 @@ def crank_inertia(task: PressDrive):
     """J_k(phi) and dJ_k/dphi as CasADi Functions [kg m2], table row 1, from the kinetic energy:
     J_k = J + r^2 m_k + m_tool X'^2 + m_rod (x_mid'^2 + y_mid'^2); derivative by AD."""
     phi = ca.SX.sym("phi")
-    J = _crank_inertia(phi, task.kinematics, task.r_m, task.rod_ratio, task.flywheel_inertia_kgm2,
+    J = _crank_inertia(phi, task.kinematics, task.r_m, task.rod_ratio, task.crank_flywheel_kgm2(),
                        task.crank_mass_kg, task.tool_mass_kg, task.rod_mass_kg)
     return ca.Function("J_k", [phi], [J]), ca.Function("dJ_k", [phi], [ca.jacobian(J, phi)])
 
@@ -464,7 +577,7 @@ def _mean_shares(kinematics: str, lam: float) -> tuple[float, float]:
 def mean_crank_inertia_kgm2(task: PressDrive) -> float:
     """The mean of J_k over a revolution [kg m2] (J_k without the effect variable_inertia)."""
     tool, rod = mean_inertia_ratios(task)
-    return task.flywheel_inertia_kgm2 + task.r_m**2 * (task.crank_mass_kg + tool * task.tool_mass_kg
+    return task.crank_flywheel_kgm2() + task.r_m**2 * (task.crank_mass_kg + tool * task.tool_mass_kg
                                                        + rod * task.rod_mass_kg)
 
 
@@ -473,16 +586,20 @@ def mean_crank_inertia_kgm2(task: PressDrive) -> float:
 GIVEN = ("crank_radius_mm", "rod_ratio", "nominal_speed_rad_s", "flywheel_inertia_kgm2", "crank_mass_kg",
          "tool_mass_kg", "rod_mass_kg", "motor_inertia_kgm2", "gear_ratio", "belt_stiffness_Nm_rad",
          "belt_damping_Nms_rad", "gravity_m_s2", "friction_torque_Nm", *FORCE_KEYS, "blank_thickness_mm",
-         "shortfall_mm", "motor_sync_speed_rad_s", "motor_breakdown_torque_Nm", "motor_breakdown_slip")
+         "shortfall_mm", "motor_sync_speed_rad_s", "motor_breakdown_torque_Nm", "motor_breakdown_slip",
+         "motor_flywheel_inertia_kgm2", "intermediate_inertia_kgm2", "intermediate_ratio", "applied_force_N",
+         "applied_torque_Nm", "motor_shaft_torque_Nm")
 PARAMETERS = (*GIVEN, "rod_weight_sign", "cut_start_rad", "cut_end_rad", "mean_tool_share", "mean_rod_share")
 """The order of p: the task's numbers (`GIVEN`; None reads 0), the rod-weight reading (+1: the rod's
 weight helps on the way down, the model's; -1: the table's sign), and what follows from the geometry
 (the cut window's angles, `cut_window_rad`; the mean-inertia shares, `mean_inertia_ratios`)."""
 
 
-def structure(task: PressDrive) -> tuple[tuple[str, ...], str]:
-    """What a build depends on besides numbers: the effects (as a sorted tuple) and the kinematics."""
-    return tuple(sorted(task.effects)), task.kinematics
+def structure(task: PressDrive) -> tuple:
+    """What a build depends on besides numbers: the effects (as a sorted tuple) and the kinematics, and
+    a measured load's table (`press_loads.Load.key`: its rows are not numbers in p)."""
+    table = task.load.key() if task.load is not None else ()
+    return (tuple(sorted(task.effects)), task.kinematics) + ((table,) if table else ())
 
 
 def parameters(task: PressDrive, *, rod_weight_sign=1.0, **given) -> list:
@@ -594,25 +711,32 @@ def dynamics(task: PressDrive) -> Dynamics:
 
 
 @memoised(maxsize=32)
-def equations(key: tuple[tuple[str, ...], str]) -> Equations:
+def equations(key: tuple) -> Equations:
     """Build eqs. (2) for a structure (`structure`: effects, kinematics) from its listed effects only
     (see the module's effect table), every number a symbol of p (`PARAMETERS`)."""
-    effects, kin = key
+    effects, kin = key[0], key[1]
+    table = Load(0.0, 0.0, 0.0, 0.0, key[2][2], key[2][1]) if len(key) > 2 else None
     names = state_names(effects)
     n = len(names)
     x = ca.SX.sym("x", n + len(WORK_NAMES))
     mode = ca.SX.sym("mode", 3)
     p = ca.SX.sym("p", len(PARAMETERS))
     q = dict(zip(PARAMETERS, ca.vertsplit(p)))
-    belt, motor = "belt_elasticity" in effects, "motor_characteristic" in effects
+    belt, kloss, torque_motor = ("belt_elasticity" in effects, "motor_characteristic" in effects,
+                                 "constant_torque_motor" in effects)
+    motor = kloss or torque_motor
     cutting, friction_on = "cutting_force" in effects, "friction" in effects
+    constant_load = "constant_load" in effects
     gear, stiffness, damping = q["gear_ratio"], q["belt_stiffness_Nm_rad"], q["belt_damping_Nms_rad"]
-    reduced_motor_inertia = q["motor_inertia_kgm2"] * gear**2       # table row 4
+    # table row 4, with a flywheel on the motor shaft beside the rotor: kinetic energy 1/2 J (i omega)^2
+    reduced_motor_inertia = (q["motor_inertia_kgm2"] + q["motor_flywheel_inertia_kgm2"]) * gear**2
     U, sgn, stuck = mode[0], mode[1], mode[2]
     s = dict(zip(names, ca.vertsplit(x[:n])))
     phi, w = s["phi_rad"], s["omega_rad_s"]
     r, lam = q["crank_radius_mm"] / 1000, q["rod_ratio"]
-    masses = (q["flywheel_inertia_kgm2"], q["crank_mass_kg"], q["tool_mass_kg"], q["rod_mass_kg"])
+    # the crank's flywheel and an intermediate shaft's, reduced by its speed ratio squared
+    flywheel = q["flywheel_inertia_kgm2"] + q["intermediate_inertia_kgm2"] * q["intermediate_ratio"] ** 2
+    masses = (flywheel, q["crank_mass_kg"], q["tool_mass_kg"], q["rod_mass_kg"])
 
     if "variable_inertia" in effects:
         J = _crank_inertia(phi, kin, r, lam, *masses)
@@ -640,13 +764,24 @@ def equations(key: tuple[tuple[str, ...], str]) -> Equations:
         force = U * cutting_force_N(penetration_mm, *(q[k] for k in FORCE_KEYS))
         # the paper's U: on while the tool is inside the blank and moving down
         U_paper = ca.logic_and(ca.logic_and(penetration_mm >= 0, penetration_mm <= Z), w * dX > 0)
+    load_torque = 0.0 * phi
+    if constant_load:           # models.press_loads: constant force and torque inside the window, turning forward
+        a, b = q["cut_start_rad"], q["cut_end_rad"]
+        turn = phi - 2 * np.pi * ca.floor(phi / (2 * np.pi))
+        penetration_mm = X * 1000 - travel_m(a, r, lam, kin, ca) * 1000
+        force = U * (table.table_force_N(turn, X * 1000, ca) if table is not None else q["applied_force_N"])
+        load_torque = U * q["applied_torque_Nm"]
+        U_paper = ca.logic_and(ca.logic_and(turn >= a, turn <= b), w > 0)
     friction = q["friction_torque_Nm"] if friction_on else 0.0
 
     # motor side
     if motor:
         w_p = s["omega_p_rad_s"] if belt else w
-        slip = 1 - gear * w_p / q["motor_sync_speed_rad_s"]
-        motor_torque = gear * kloss_torque_Nm(slip, q["motor_breakdown_torque_Nm"], q["motor_breakdown_slip"])
+        if kloss:
+            slip = 1 - gear * w_p / q["motor_sync_speed_rad_s"]
+            motor_torque = gear * kloss_torque_Nm(slip, q["motor_breakdown_torque_Nm"], q["motor_breakdown_slip"])
+        else:
+            motor_torque = gear * q["motor_shaft_torque_Nm"] + 0.0 * phi
     else:
         w_p, motor_torque = q["nominal_speed_rad_s"], 0.0 * phi
     if belt:
@@ -661,7 +796,7 @@ def equations(key: tuple[tuple[str, ...], str]) -> Equations:
         J_total = J + reduced_motor_inertia
         belt_energy = 0.0
 
-    load = gravity_moment - force * dX          # M_pc without friction, table row 2
+    load = gravity_moment - force * dX - load_torque          # M_pc without friction, table row 2
     drive_torque = drive + load                 # what static friction must hold when stuck
     free_acc = (drive_torque - sgn * friction - 0.5 * dJ * w**2) / J_total
     acc = (1 - stuck) * free_acc
@@ -673,7 +808,7 @@ def equations(key: tuple[tuple[str, ...], str]) -> Equations:
         if motor:
             derivs["omega_p_rad_s"] = (motor_torque - belt_torque) / reduced_motor_inertia
     motor_power = motor_torque * w_p if motor else belt_torque * w_p
-    works = [motor_power, force * dX * dphi, sgn * friction * dphi, damping_power]
+    works = [motor_power, (force * dX + load_torque) * dphi, sgn * friction * dphi, damping_power]
     xdot = ca.vertcat(*[derivs[k] for k in names], *works)
 
     kinetic = 0.5 * J * w**2 + (0.5 * reduced_motor_inertia * w_p**2 if motor else 0.0)
@@ -763,7 +898,7 @@ class PressDesign(PressDrive):
                                                                  "single_stroke_speed_drop") if getattr(self, k))]
         for key in used:
             need = self.NEEDS.get(key)
-            if need and need[0] not in self.effects:
+            if need and need[0] not in self.effects and not (need[0] == "cutting_force" and self.cutting):
                 raise ModelError(f"{key} needs effect '{need[0]}': {need[1]}", key=key)
         for low_key, high_key in BOUNDS.values():
             low, high = getattr(self, low_key), getattr(self, high_key)

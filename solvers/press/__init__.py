@@ -19,6 +19,7 @@ the run's samples in `Result.arrays` (`t_s`, the states, `cutting`, the outputs)
 `force_fit.fit_force` fits the force law (1) to load-travel data.
 `sensitivity` (sensitivity.py): d(output)/d(assumed parameter) through the periodic orbit by AD.
 `design` (design.py) chooses the drive by optimisation over the periodic steady motion;
+`flywheel` (flywheel.py): the least flywheel alone by a safeguarded Newton on the orbit's sensitivity;
 `catalogue` (catalogue.py) picks a motor row and a belt ratio from a catalogue with `design` inside.
 """
 from typing import Literal
@@ -27,13 +28,14 @@ from mechopt.solvers.press.catalogue import catalogue
 from mechopt.solvers.press.design import design
 from mechopt.solvers.press.event_driven import events
 from mechopt.solvers.press.fixed_step import rk4
+from mechopt.solvers.press.flywheel import flywheel
 from mechopt.solvers.press.kinematics import kinematics
 from mechopt.solvers.press.loads import loads
 from mechopt.solvers.press.periodic import steady_state
 from mechopt.solvers.press.scipy_peer import ivp
 from mechopt.solvers.press.sensitivity import sensitivity
 
-__all__ = ["METHODS", "Method", "catalogue", "design", "events", "ivp", "kinematics", "loads", "rk4", "sensitivity", "simulate",
+__all__ = ["METHODS", "Method", "catalogue", "design", "events", "flywheel", "ivp", "kinematics", "loads", "rk4", "sensitivity", "simulate",
            "steady_state"]
 
 METHODS = {"rk4": rk4, "events": events, "steady_state": steady_state, "ivp": ivp}

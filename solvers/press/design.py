@@ -65,6 +65,8 @@ from mechopt.solvers.press.problem import (
     locate,
     march,
     piece_by_time,
+    refuse_jumps,
+    refuse_neutral_speed,
     revolution,
     summarise,
     top_speed_rad_s,
@@ -238,6 +240,10 @@ def design(task: PressDesign, *, tol: Tolerance = 1e-10, samples: Samples = 16,
     if not isinstance(task, PressDesign):
         raise ModelError(f"task={type(task).__name__}: expected a PressDesign", key="task")
     check_settings(design, tol=tol, samples=samples, max_iter=max_iter, check_sensitivity=check_sensitivity, start=start)
+    task.require_drive("a design on the periodic motion")
+    refuse_neutral_speed(task, "press.design")
+    refuse_jumps(task, "press.design", "integrates each shooting stage across them (its stages end at the window's "
+                 "ends and the speed's extremes only)")
     clock = Clock()
     first = task.start(rule_of_thumb=start == "rule_of_thumb")
     attempts, result = [], None
@@ -283,7 +289,8 @@ def _rank(result):
 def _continued(task, tol, samples, max_iter, check_sensitivity, start):
     """Retry `cut_continuation`: the design with the cut force at `CONTINUATION` of itself from
     `start`, then at the full force from its optimum (its nodes, design and orbit at phi = 0)."""
-    softer = replace(task, **{k: CONTINUATION * getattr(task, k) for k in FORCE_KEYS})
+    keys = [k for k in (*FORCE_KEYS, "load_force_N", "load_torque_Nm", "load_energy_J") if getattr(task, k) is not None]
+    softer = replace(task, **{k: CONTINUATION * getattr(task, k) for k in keys})
     first = _design(softer, tol, samples, max_iter, False, None, start)
     if first.status is not Status.SOLVED:
         return first

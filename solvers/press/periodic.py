@@ -35,6 +35,7 @@ from mechopt.solvers.press.problem import (
     march,
     nominal_speed_note,
     piece_by_time,
+    refuse_neutral_speed,
     revolution,
     summarise,
 )
@@ -69,6 +70,7 @@ def steady_state(task: PressDrive, *, tol: Tolerance = 1e-10, samples: Samples =
     samples : outputs per piece (peaks, plots).  max_iter : Newton iterations.
     """
     check_task(task, steady_state, tol=tol, samples=samples, max_iter=max_iter)
+    refuse_neutral_speed(task, "press.steady_state")
     clock = Clock()
     # Newton's CVODES sensitivities must follow the belt mode: minutes past ~2 kHz
     too_fast = belt_too_fast_per_revolution(task, STEPS_PER_REVOLUTION, "steady_state")

@@ -16,18 +16,20 @@ from mechopt.kit.errors import MechoptError, ModelError, SettingError
 from mechopt.kit.result import Status, from_casadi_integrator
 from mechopt.kit.settings import check_settings
 from mechopt.models.press import (
-    FORCE_KEYS,
     PARAMETERS,
     WORK_NAMES,
     Dynamics,
     PressDrive,
     belt_mode_rad_s,
+    cut_work_J,
     dynamics,
     energy_swing_J,
     equations,
+    inertia_at_crank_kgm2,
     rule_of_thumb_flywheel_kgm2,
     structure,
 )
+from mechopt.models.press_loads import Load
 
 TWO_PI = 2 * np.pi
 ANGLE_TOL_RAD = 1e-12          # events are located to this in crank angle (omega ~ 25: 4e-14 s) near phi = 0
@@ -45,7 +47,9 @@ Samples = Annotated[int, Interval(ge=1, le=10_000)]           # outputs per inte
 
 @memoised(maxsize=32)
 def dynamics_of(task: PressDrive) -> Dynamics:
-    """The task's equations (its structure's, built once) with its numbers bound."""
+    """The task's equations (its structure's, built once) with its numbers bound; refused for a press
+    without a drive (`PressDrive.require_drive`)."""
+    task.require_drive()
     return dynamics(task)
 
 
@@ -186,6 +190,25 @@ def check_task(task, solver, **settings):
     check_settings(solver, **settings)
 
 
+def refuse_jumps(task: PressDrive, method: str, why: str):
+    """Refuse `method` for a measured load with jumps inside its window (`why`: what it cannot do),
+    naming the methods that stop at them."""
+    if task.load is not None and task.load.jumps_rad:
+        raise ModelError(f"load_table jumps at {', '.join(f'{a:.6g}' for a in np.degrees(task.load.jumps_rad))} deg "
+                         f"and {method} {why}; events, ivp (locate_events), rk4 (the paper's fixed steps) and steady_state stop "
+                         "at each jump", key="load_table")
+
+
+def refuse_neutral_speed(task: PressDrive, method: str):
+    """A constant-torque motor fixes no speed level: with its torque equal to the mean load every
+    speed repeats (the periodic motions form a family, Newton's Jacobian is singular), with any other
+    torque none repeats. Refuse a method that needs one periodic motion, naming the ones that work."""
+    if task.torque_motor:
+        raise ModelError(f"effect 'constant_torque_motor' with {method}: a constant torque sets no speed level, so "
+                         "there is no single periodic motion (with the mean load's torque every speed repeats); "
+                         "run press.simulate with method events, rk4 or ivp from nominal_speed_rad_s", key="effects")
+
+
 def summarise(task: PressDrive, trace: Trace, *, cut_angles=None) -> tuple[dict, dict, dict]:
     """`values`, `diagnostics` and `arrays` of a run from its samples and events (see the package doc).
 
@@ -216,13 +239,19 @@ def summarise(task: PressDrive, trace: Trace, *, cut_angles=None) -> tuple[dict,
         t0, t1 = (np.interp(m, phi, t) for m in marks[-2:])
         inside = (t >= t0 - 1e-12) & (t <= t1 + 1e-12)
         mean = TWO_PI / (t1 - t0)
-        values |= {"omega_mean_rad_s": float(mean),
-                   "speed_fluctuation": float((_extreme(t[inside], w[inside], max, mode[inside, 0])
-                                               - _extreme(t[inside], w[inside], min, mode[inside, 0])) / mean),
+        top, low = (_extreme(t[inside], w[inside], pick, mode[inside, 0]) for pick in (max, min))
+        values |= {"omega_mean_rad_s": float(mean), "speed_fluctuation": float((top - low) / mean),
                    "period_s": float(t1 - t0)}
+        values |= revolution_extras(task, t, x[:, n + WORK_NAMES.index("motor_work_J")], (t0, t1), top, low)
+        if task.at_deg:
+            values |= values_at_deg(task, phi[inside] - marks[-2], w[inside], names, inside)
         if values["speed_fluctuation"] > 0:     # the textbook flywheel for the fluctuation this run shows
             values |= {"energy_swing_J": energy_swing_J(task),
-                       "flywheel_rule_of_thumb_kgm2": rule_of_thumb_flywheel_kgm2(task, values["speed_fluctuation"])}
+                       "flywheel_rule_of_thumb_kgm2": rule_of_thumb_flywheel_kgm2(task, values["speed_fluctuation"]),
+                       # the same rule over everything turning with the crank, at the run's own mean speed
+                       "inertia_rule_of_thumb_at_crank_kgm2": energy_swing_J(task) / (
+                           values["speed_fluctuation"] * values["omega_mean_rad_s"] ** 2),
+                       "inertia_at_crank_kgm2": inertia_at_crank_kgm2(task)}
     cuts_on = [e for e in trace.events if e[0] == "cut_start"]
     cuts_off = [e for e in trace.events if e[0] == "cut_end"]
     if cut_angles is not None:
@@ -232,10 +261,7 @@ def summarise(task: PressDrive, trace: Trace, *, cut_angles=None) -> tuple[dict,
                    "cut_end_deg": float(np.degrees(cuts_off[-1][2] % TWO_PI))}
     diagnostics_cut = None
     if task.cutting:
-        coeffs = [getattr(task, k) for k in FORCE_KEYS]
-        Z = task.blank_thickness_mm
-        antiderivative = [0, 0, *[c / (i + 2) for i, c in enumerate(coeffs)]]      # of eq. (1), N mm
-        per_cut_J = float(np.polynomial.polynomial.polyval(Z, antiderivative)) / 1000
+        per_cut_J = cut_work_J(task)
         values["cuts"] = float(cut / per_cut_J) if per_cut_J > 0 else 0.0
         window = cut_angles if cut_angles is not None else task.cut_window_rad()
         turns = np.arange(np.floor(phi[0] / TWO_PI) - 1, np.floor(phi[-1] / TWO_PI) + 2) * TWO_PI
@@ -252,6 +278,42 @@ def summarise(task: PressDrive, trace: Trace, *, cut_angles=None) -> tuple[dict,
     arrays = {"t_s": t, **{k: x[:, i] for i, k in enumerate(task.state_names)}, "cutting": mode[:, 0],
               **{k: x[:, n + i] - x[0, n + i] for i, k in enumerate(WORK_NAMES)}, **names}
     return values, diagnostics, arrays
+
+
+def revolution_extras(task: PressDrive, t, motor_work, span, top, low) -> dict:
+    """What the last full revolution (times `span`) adds for a drive's designer: the crank's extreme
+    speeds (`top`, `low`) [rad/s], the motor's mean power over it [W], and with a flywheel on an
+    intermediate shaft that shaft's extreme speeds (the crank's times `intermediate_ratio`) [rad/s]."""
+    t0, t1 = span
+    work = float(np.interp(t1, t, motor_work) - np.interp(t0, t, motor_work))
+    out = {"omega_max_rad_s": float(top), "omega_min_rad_s": float(low), "motor_mean_power_W": work / (t1 - t0)}
+    if task.intermediate_inertia_kgm2 > 0:
+        out |= {"intermediate_omega_max_rad_s": float(top * task.intermediate_ratio),
+                "intermediate_omega_min_rad_s": float(low * task.intermediate_ratio)}
+    return out
+
+
+AT_OUTPUTS = ("travel_mm", "force_N", "Q_N", "rod_force_N", "crank_torque_Nm", "motor_torque_Nm", "belt_torque_Nm",
+              "main_bearing_load_N", "guide_force_N")
+
+
+def values_at_deg(task: PressDrive, turn, w, outputs, inside) -> dict:
+    """`<name>_<deg>` (`kinematics.at_name`) at the task's `at_deg` over the last revolution (`turn`: its crank angles from
+    0 [rad], `w` the crank speed there): the crank speed and acceleration and the outputs `AT_OUTPUTS`
+    interpolated linearly between the run's samples (at a switching angle: the value on one side), the
+    slider's and rod's rates from the crank-slider's closed forms at that angle with that speed and
+    acceleration (X' omega, X'' omega^2 + X' alpha; beta likewise)."""
+    from mechopt.solvers.press.kinematics import at_name, slider_crank_rates
+    angles = np.radians(task.at_deg)
+    omega = np.interp(angles, turn, w)
+    alpha = np.interp(angles, turn, outputs["alpha_rad_s2"][inside])
+    _, dX, ddX, beta, db, ddb = slider_crank_rates(angles, task.r_m, task.rod_ratio, task.kinematics)
+    found = {"omega_rad_s": omega, "alpha_rad_s2": alpha, "slider_velocity_m_s": dX * omega,
+             "slider_acceleration_m_s2": ddX * omega**2 + dX * alpha, "rod_angle_deg": np.degrees(beta),
+             "rod_angular_velocity_rad_s": db * omega, "rod_angular_acceleration_rad_s2": ddb * omega**2 + db * alpha,
+             **{k: np.interp(angles, turn, outputs[k][inside]) for k in AT_OUTPUTS}}
+    return {at_name(name, deg): float(series[k]) for k, deg in enumerate(task.at_deg)
+            for name, series in found.items()}
 
 
 def _extreme(t, w, pick, cutting):
@@ -281,6 +343,10 @@ def paper_U(task, xs):
         return np.zeros(len(xs))
     phi = xs[:, task.state_names.index("phi_rad")]
     w = xs[:, task.state_names.index("omega_rad_s")]
+    if task.load is not None:           # a constant load: its crank-angle window, turning forward
+        a, b = task.cut_window_rad()
+        turn = np.mod(phi, TWO_PI)
+        return ((turn >= a) & (turn <= b) & (w > 0)).astype(float)
     pen = task.travel(phi) * 1000 - (task.stroke_mm - task.blank_thickness_mm - task.shortfall_mm)
     down = w * np.sin(phi) > 0          # dX/dphi = r sin(phi) (1 + lambda cos(phi) ...) has the sign of sin(phi)
     return ((pen >= 0) & (pen <= task.blank_thickness_mm) & down).astype(float)
@@ -293,6 +359,7 @@ def angle_events(task, phi):
     window = task.cut_window_rad()
     if window is not None and window[0] < window[1]:
         marks += [(window[0], "cut_start"), (window[1], "cut_end")]
+        marks += [(a, "load_jump") for a in (task.load.jumps_rad if task.load is not None else ())]
     for turn in (0, 1):
         for angle, kind in sorted(marks):
             a = base + turn * TWO_PI + angle
@@ -503,6 +570,7 @@ class Revolution:
     piece: ca.Function
     variational: ca.Function
     grid: np.ndarray
+    jumps: tuple = ()               # a measured load's jumps inside the window [rad]: piece boundaries too
 
     def __post_init__(self):
         object.__setattr__(self, "n", len(self.state_names))     # states, set once (read per Newton step)
@@ -511,7 +579,9 @@ class Revolution:
         """(a, b, U) of each piece for p (numbers or symbols; with numbers, an empty cut is no piece)."""
         if not self.cutting or (numbers and not p[CUT_START] < p[CUT_END]):
             return [(0.0, TWO_PI, 0.0)]
-        return [(0.0, p[CUT_START], 0.0), (p[CUT_START], p[CUT_END], 1.0), (p[CUT_END], TWO_PI, 0.0)]
+        inside = [p[CUT_START], *self.jumps, p[CUT_END]]
+        return [(0.0, p[CUT_START], 0.0), *((a, b, 1.0) for a, b in zip(inside[:-1], inside[1:])),
+                (p[CUT_END], TWO_PI, 0.0)]
 
     def residual(self, y0, p) -> tuple[np.ndarray, np.ndarray]:
         """(y(2 pi) - y0 over the states other than phi, the monodromy minus the identity): the
@@ -538,7 +608,8 @@ class Revolution:
             ys = np.asarray(self.piece(x0=y, p=np.r_[a, b, u, p])["xf"]).T
             x, t = full(ys, a + (b - a) * self.grid)
             trace.add(t, x, np.array([u, 1.0, 0.0]))
-            kind = "cut_start" if u == 0 and b < TWO_PI else ("cut_end" if u == 1 else "revolution")
+            kind = ("load_jump" if b in self.jumps else "cut_start" if u == 0 and b < TWO_PI
+                    else "cut_end" if u == 1 else "revolution")
             trace.events.append((kind, float(t[-1]), float(b)))
             y = ys[-1]
         return trace, y[:n - 1]
@@ -567,4 +638,6 @@ def revolution(key: tuple, tol: float, samples: int) -> Revolution:
                                 {"x": ca.vertcat(y, ca.vec(Y)), "t": s, "p": q,
                                  "ode": ca.vertcat(ode, ca.vec(ca.jacobian(ode, y) @ Y))}, 0.0, 1.0,
                                 {"abstol": tol, "reltol": tol, "max_num_steps": 100000})
-    return Revolution(names, "cutting_force" in key[0], piece, variational, grid)
+    jumps = Load(0.0, 0.0, 0.0, 0.0, key[2][2], key[2][1]).jumps_rad if len(key) > 2 else ()
+    return Revolution(names, bool({"cutting_force", "constant_load"} & set(key[0])), piece, variational, grid,
+                      tuple(jumps))

@@ -17,7 +17,7 @@ from mechopt.kit.result import Clock, Result, Status, from_rootfinder
 from mechopt.kit.settings import Annotated, Interval, Tolerance
 from mechopt.models.press import WORK_NAMES, Equations, PressDrive, equations, parameters, structure
 from mechopt.solvers.press.periodic import steady_state
-from mechopt.solvers.press.problem import TWO_PI, casadi_failure, check_task
+from mechopt.solvers.press.problem import TWO_PI, casadi_failure, check_task, refuse_jumps, refuse_neutral_speed
 
 MAX_STEPS = 100_000                 # CVODES steps per piece of the revolution (its max_num_steps)
 ROD_SIGN = "rod_weight_sign"        # +1: the rod's weight helps on the way down (the model's reading); -1: the table's
@@ -155,6 +155,8 @@ def sensitivity(task: PressDrive, *, tol: Tolerance = 1e-10, max_iter: Annotated
     verify_step : relative step of the finite-difference check (0: none).
     """
     check_task(task, sensitivity, tol=tol, max_iter=max_iter, verify_step=verify_step)
+    refuse_neutral_speed(task, "press.sensitivity")
+    refuse_jumps(task, "press.sensitivity", "integrates the window as one piece")
     if not task.motor:
         raise ModelError("effects lack 'motor_characteristic': without the motor the crank's mean speed is "
                          "not set by the drive; add the effect", key="effects")

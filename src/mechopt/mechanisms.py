@@ -38,7 +38,7 @@ MECHANISMS = (
               ("mechopt.figures.cam_cutter",), "mechopt.benchmarks.cam_cutter",
               (("cam-cutter", "cam-cutter/minimax"), ("cam-table", "cam-cutter/table-profile"))),
     Mechanism("press", "Crank press (paper 001)",
-              ("mechopt.models.press",), "mechopt.solvers.press",
+              ("mechopt.models.press", "mechopt.models.press_loads"), "mechopt.solvers.press",
               ("mechopt.figures.press",), "mechopt.benchmarks.press",
               (("press", "press/kd2322"), ("press-design", "press/flywheel-design"))),
     Mechanism("loom", "Loom cyclogram (paper 004)",

@@ -7,6 +7,7 @@ from mechopt.solvers.press import (
     catalogue,
     design,
     events,
+    flywheel,
     ivp,
     kinematics,
     loads,
@@ -17,7 +18,7 @@ from mechopt.solvers.press import (
 )
 
 
-@figure(events, steady_state, rk4, ivp, simulate)
+@figure(events, steady_state, rk4, ivp, simulate, flywheel)
 def cycle(run):
     """Force F and load Q against tool travel and crank angle (Figs. 8-10), crank speed and belt
     torque against time; one PNG per scene."""
