@@ -53,7 +53,8 @@ class CamFollower:
     `max_pressure_angle_deg`, `min_profile_radius_mm` (the profile's least convex radius allowed;
     0: only > 0, no cusp or undercut), `base_radius_min_mm`/`base_radius_max_mm` (the least base
     radius search's bounds), `on_jump` (the status when the spring cannot hold the follower at
-    `speed_rpm`: INFEASIBLE or LIMIT, as the scene asks). Motion: `segments` (the cam's segments,
+    `speed_rpm`: INFEASIBLE or LIMIT, as the scene asks), `report_angle_deg` (a cam angle whose
+    follower and contact forces are reported, as a textbook problem asks them). Motion: `segments` (the cam's segments,
     read by `models/cam_motion.py`) or `motion` (an object with `at`).
     """
     base_radius_mm: Annotated[float, Gt(0), Le(100_000)]
@@ -85,6 +86,7 @@ class CamFollower:
     base_radius_min_mm: Length = 0.0
     base_radius_max_mm: Length = 0.0
     on_jump: Literal["INFEASIBLE", "LIMIT"] = "INFEASIBLE"
+    report_angle_deg: Annotated[float | None, Interval(ge=0, lt=360)] = None
     segments: object | None = None
     motion: object | None = None
 

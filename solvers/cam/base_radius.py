@@ -67,6 +67,8 @@ def least_base_radius(task: CamFollower, *, samples: Samples = 3600,
 
     bases = np.linspace(lo, hi, grid)
     found = [measure(b) for b in bases]
+    arrays = {"grid_base_radius_mm": bases, ("grid_profile_radius_mm" if flat else "grid_pressure_angle_deg"):
+              np.array(found)}     # nan: a layout the follower cannot reach
     feasible = [i for i, v in enumerate(found) if math.isfinite(v) and ok(v)]
     if not feasible:
         reached = [(v, b) for v, b in zip(found, bases) if math.isfinite(v)]
@@ -78,7 +80,7 @@ def least_base_radius(task: CamFollower, *, samples: Samples = 3600,
         values = {"evaluations": float(count[0])} | (
             {"least_achievable_" + ("profile_radius_mm" if flat else "pressure_angle_deg"): best[0],
              "at_base_radius_mm": float(best[1])} if math.isfinite(best[0]) else {})
-        return clock.result(Status.INFEASIBLE, values, violated=("base_radius",),
+        return clock.result(Status.INFEASIBLE, values, violated=("base_radius",), arrays=arrays,
                             message=f"within base_radius_min_mm={lo:g} ... base_radius_max_mm={hi:g}: {what}")
     first = feasible[0]
     good = float(bases[first])
@@ -95,15 +97,15 @@ def least_base_radius(task: CamFollower, *, samples: Samples = 3600,
     dense = np.linspace(0.0, 2 * math.pi, CERTIFY * samples, endpoint=False)     # other samples than the search's
     certified = measure(good, dense, task.lift(dense))
     if not ok(certified):
-        return clock.result(Status.INACCURATE, values_of(good, certified, bad, steps, count[0]),
+        return clock.result(Status.INACCURATE, values_of(good, certified, bad, steps, count[0]), arrays=arrays,
                             message=f"base radius {good:.6g} mm met the limit on {samples} samples but not on "
                             f"{CERTIFY * samples} ({certified:.6g}): more samples")
     values = values_of(good, certified, bad, steps, count[0])
     if bad is None:
-        return clock.result(Status.SOLVED, values, message=f"the least bound base_radius_min_mm={lo:g} already meets "
+        return clock.result(Status.SOLVED, values, arrays=arrays, message=f"the least bound base_radius_min_mm={lo:g} already meets "
                             f"the limit ({certified:.4f}); the least base radius may be smaller")
     if good - bad > tol_mm:
-        return clock.result(Status.LIMIT, values, message=f"{iterations} bisection steps left the bracket "
+        return clock.result(Status.LIMIT, values, arrays=arrays, message=f"{iterations} bisection steps left the bracket "
                             f"{good - bad:.3g} mm > tol_mm={tol_mm:g}; the feasible end is returned")
-    return clock.result(Status.SOLVED, values, message=f"least base radius {good:.4f} mm (within {good - bad:.2g} "
+    return clock.result(Status.SOLVED, values, arrays=arrays, message=f"least base radius {good:.4f} mm (within {good - bad:.2g} "
                         f"mm), {count[0]} evaluations")

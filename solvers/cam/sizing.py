@@ -73,11 +73,14 @@ def size_cam(task: CamFollower, *, samples: Samples = 7200) -> Result:
       force N over the cycle, `min_follower_force_N`; spring-closed: `jump_speed_rpm` and its cam
       angle (Q < 0 at the task's speed: violated `jump`, status `on_jump`); groove: the
       crossovers (sign changes of N, each an impact across `backlash_mm`) and their angles;
+    * at `report_angle_deg` (if given): s and the follower and contact forces;
     * Hertz stress (`roller_width_mm` > 0): `max_contact_stress_MPa` and its cam angle;
     * `pressure_angle` violated when above `max_pressure_angle_deg`.
 
     Arrays: the cam angle, s, the pressure angle, radii, forces, stress, and the pitch curve and
     profile as x/y [mm] in the cam frame (the cam at angle 0; a groove's other wall too).
+    Diagnostics: `rise_start_deg`, the direction (cam frame, from +x) of the contact at cam angle
+    0, where the motion starts (the rise start when the first segment is a rise); `sense`.
     """
     clock = Clock()
     theta = np.linspace(0.0, 2 * math.pi, samples, endpoint=False)
@@ -115,7 +118,8 @@ def size_cam(task: CamFollower, *, samples: Samples = 7200) -> Result:
                                             f"pressure angle {values['max_pressure_angle_deg']:.3f} deg at most")
     return clock.result(status, values, message=message, violated=tuple(violated), arrays=arrays,
                         diagnostics={"follower": task.follower, "face": task.face, "sense": task.sense,
-                                     "closure": task.closure, "samples": samples})
+                                     "closure": task.closure, "samples": samples,
+                                     "rise_start_deg": math.degrees(math.atan2(c.contact[1][0], c.contact[0][0]))})
 
 
 def _curvature(task, theta, c, values, violated, said):
@@ -182,6 +186,12 @@ def _forces(task, theta, s, dds, c, values, violated, said, arrays):
             said.append(f"groove: the contact force changes sign {cross.size} times per turn (cam angles {shown}"
                         f"{' ...' if cross.size > SHOWN_ANGLES else ''} deg): the roller crosses to the other wall "
                         f"across backlash_mm={task.backlash_mm:g}, an impact each time (not lift-off)")
+    if task.report_angle_deg is not None:
+        at = np.array([math.radians(task.report_angle_deg)])
+        s1, _, dds1 = task.lift(at)
+        q = follower_force_N(task, s1, dds1, omega)
+        values |= {"s_at_report_mm": float(s1[0]), "follower_force_at_report_N": float(q[0]),
+                   "contact_force_at_report_N": float(q[0] / task.curves(at).lever[0])}
     if task.roller_width_mm > 0:
         R = contact_radius_mm(task, c, N)
         p = hertz_MPa(N, task.roller_width_mm, effective_modulus_MPa(task), R)
