@@ -174,17 +174,19 @@ def _forces(task, theta, s, dds, c, values, violated, said, arrays):
             values |= {"jump_speed_rpm": rpm, "jump_at_deg": math.degrees(at)}
         if Q[i] < 0:
             violated.append("jump")
+            off = np.degrees(sign_changes(theta, Q))      # the force falls through 0 (leaves) and rises (lands)
+            arrays["lift_off_deg"] = off
             said.append(f"the spring cannot hold the follower at speed_rpm={task.speed_rpm:g}: the follower force "
-                        f"falls to {Q[i]:.4g} N at cam angle {math.degrees(theta[i]):.2f} deg (the follower leaves "
-                        f"the cam); jump speed {rpm:.4g} rpm; a stiffer spring or a larger preload_N")
+                        f"falls to {Q[i]:.4g} N at cam angle {math.degrees(theta[i]):.2f} deg; it leaves the cam "
+                        f"and lands again at cam angles {_angles(off)} deg; jump speed {rpm:.4g} rpm; a stiffer "
+                        "spring or a larger preload_N")
     else:
         cross = np.degrees(sign_changes(theta, N))
         values["crossovers"] = float(cross.size)
         arrays["crossover_deg"] = cross
         if cross.size:
-            shown = ", ".join(f"{a:.2f}" for a in cross[:SHOWN_ANGLES])
-            said.append(f"groove: the contact force changes sign {cross.size} times per turn (cam angles {shown}"
-                        f"{' ...' if cross.size > SHOWN_ANGLES else ''} deg): the roller crosses to the other wall "
+            said.append(f"groove: the contact force changes sign {cross.size} times per turn (cam angles "
+                        f"{_angles(cross)} deg): the roller crosses to the other wall "
                         f"across backlash_mm={task.backlash_mm:g}, an impact each time (not lift-off)")
     if task.report_angle_deg is not None:
         at = np.array([math.radians(task.report_angle_deg)])
@@ -200,3 +202,8 @@ def _forces(task, theta, s, dds, c, values, violated, said, arrays):
         j = int(np.argmax(p))
         values |= {"max_contact_stress_MPa": float(p[j]), "max_contact_stress_at_deg": math.degrees(theta[j])}
         arrays["contact_stress_MPa"] = p
+
+
+def _angles(degrees) -> str:
+    """The first SHOWN_ANGLES cam angles, '...' for more."""
+    return ", ".join(f"{a:.2f}" for a in degrees[:SHOWN_ANGLES]) + (" ..." if len(degrees) > SHOWN_ANGLES else "")

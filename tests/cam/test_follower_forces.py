@@ -74,3 +74,21 @@ def test_hertz_stress_against_the_half_width_route():
     m = (1 - 0.29**2) / 206_000.0 + (1 - 0.3**2) / 200_000.0
     b = math.sqrt(2 * F / (math.pi * 12.0) * m / (0.5 * (1 / R1 + 1 / R2)))   # contact half-width [mm]
     assert r.values["max_contact_stress_MPa"] == pytest.approx(2 * F / (math.pi * b * 12.0), rel=1e-9)
+
+
+def test_an_eccentric_cams_jump_speed_and_lift_off_angles_against_the_closed_form():
+    # an eccentric (e = 15 mm) under a flat face: s = e (1 - cos theta), s'' = e cos theta; the force
+    # P + k e + (m w^2 - k) e cos theta (SI) first reaches 0 at theta = 180 deg, at w^2 = (P + 2 k e) / (m e),
+    # and beyond that speed is < 0 between the two roots of cos theta = -(P + k e) / ((m w^2 - k) e)
+    from cam_closed_forms import HarmonicOutAndBack
+
+    P, k, e, m, rpm = 2.5, 1000.0, 0.015, 0.9, 500.0
+    task = CamFollower(base_radius_mm=25.0, face="flat", motion=HarmonicOutAndBack(2 * e * 1000), mass_kg=m,
+                       spring_rate_N_per_mm=k / 1000, preload_N=P, speed_rpm=rpm, on_jump="LIMIT")
+    r = size_cam(task, samples=36_000)
+    assert r.values["jump_speed_rpm"] == pytest.approx(math.sqrt((P + 2 * k * e) / (m * e)) * 30 / math.pi, rel=1e-9)
+    assert r.values["jump_at_deg"] == pytest.approx(180.0, abs=1e-9)
+    w = rpm * math.pi / 30
+    root = math.degrees(math.acos(-(P + k * e) / ((m * w**2 - k) * e)))
+    assert np.allclose(np.sort(r.arrays["lift_off_deg"]), [root, 360.0 - root], atol=1e-4)
+    assert r.status is Status.LIMIT and f"{root:.2f}" in r.message
