@@ -24,14 +24,15 @@ positive towards the cam's side of the pivot along the arm). Lengths in mm, angl
 """
 import math
 from dataclasses import dataclass
-from typing import Annotated, Literal
+from typing import Annotated, ClassVar, Literal
 
 import numpy as np
 from annotated_types import Ge, Gt, Interval, Le, doc
 
-from mechopt.kit.errors import ModelError, require
+from mechopt.kit.errors import require
 from mechopt.kit.settings import check_fields
 from mechopt.models.cam_geometry import CamCurves, flat_cam, quarter, roller_cam
+from mechopt.models.cam_motion import CamMotion
 
 SENSE = {"ccw": 1, "cw": -1}
 Length = Annotated[float, Ge(0), Le(100_000)]
@@ -55,7 +56,8 @@ class CamFollower:
     radius search's bounds), `on_jump` (the status when the spring cannot hold the follower at
     `speed_rpm`: INFEASIBLE or LIMIT, as the scene asks), `report_angle_deg` (a cam angle whose
     follower and contact forces are reported, as a textbook problem asks them). Motion: `segments` (the cam's segments,
-    read by `models/cam_motion.py`) or `motion` (an object with `at`).
+    read by `models/cam_motion.py`, with its `joins`: "warn" or "refuse" a step of s' or s''
+    where segments meet) or `motion` (an object with `at`).
     """
     base_radius_mm: Annotated[float, Gt(0), Le(100_000)]
     follower: Literal["translating", "oscillating"] = "translating"
@@ -87,15 +89,19 @@ class CamFollower:
     base_radius_max_mm: Length = 0.0
     on_jump: Literal["INFEASIBLE", "LIMIT"] = "INFEASIBLE"
     report_angle_deg: Annotated[float | None, Interval(ge=0, lt=360)] = None
+    joins: Literal["warn", "refuse"] = "warn"
     segments: object | None = None
     motion: object | None = None
+
+    # the segments may come from a CSV beside the scene (columns segment, law, angle_deg, lift_mm)
+    CSV_TABLES: ClassVar[dict] = CamMotion.CSV_TABLES
 
     def __post_init__(self):
         check_fields(self)
         if self.motion is None:
             require(self.segments is not None, "no motion: give the cam's `segments` (rise, dwell, return ...)",
                     key="segments")
-            object.__setattr__(self, "motion", motion_of_segments(self.segments))
+            object.__setattr__(self, "motion", motion_of_segments(self.segments, self.joins))
         require(callable(getattr(self.motion, "at", None)), "motion: expected an object with at(theta_rad) -> "
                 "(s, s', s'', s''')", key="motion")
         self.check_layout(self.base_radius_mm)
@@ -201,18 +207,14 @@ class CamFollower:
         return np.sum((curves.contact - np.array([[self.pivot_distance_mm], [0.0]])) * along, axis=0)
 
     def warnings(self, values: dict) -> list[str]:
-        out = []
+        """The motion's (steps of s' or s'' at joins) and the oscillating follower's reading of s."""
+        out = list(getattr(self.motion, "warnings", lambda v: [])(values))
         if self.follower == "oscillating":
             out.append(f"oscillating follower: the motion's s is read as the arc run at arm_mm={self.arm_mm:g} "
                        "from the pivot (a segment's lift_mm is that arc)")
         return out
 
 
-def motion_of_segments(segments):
-    """The follower's motion from the cam's segments, by `models/cam_motion.py`."""
-    try:
-        from mechopt.models import cam_motion
-    except ImportError:      # the segment reader is another module's; without it a motion is given from Python
-        raise ModelError("segments: the cam's segment reader (models/cam_motion.py) is not installed; "
-                         "give `motion` (an object with at(theta_rad))", key="segments") from None
-    return cam_motion.from_segments(segments)
+def motion_of_segments(segments, joins: str = "warn"):
+    """The follower's motion from the cam's segments (`models/cam_motion.CamMotion`)."""
+    return CamMotion(segments=segments, joins=joins)

@@ -41,3 +41,27 @@ class HarmonicOutAndBack:
         th = np.atleast_1d(np.asarray(theta, dtype=float))
         a = self.h / 2
         return a * (1 - np.cos(th)), a * np.sin(th), a * np.cos(th), -a * np.sin(th)
+
+
+def poly345(x, b):
+    """Unit 3-4-5 polynomial rise over b [rad] at the fraction x: S, S', S'' per rad^k."""
+    return (10 * x**3 - 15 * x**4 + 6 * x**5, (30 * x**2 - 60 * x**3 + 30 * x**4) / b,
+            (60 * x - 180 * x**2 + 120 * x**3) / b**2)
+
+
+def piecewise(theta, pieces):
+    """s, s', s'' [mm, mm/rad, mm/rad^2] of a cam given as (law, angle_deg, lift_mm) pieces from
+    theta = 0 (law None: a dwell); `law(x, b)` -> S, S', S'' of a unit rise."""
+    th = np.mod(np.asarray(theta, dtype=float), 2 * math.pi)
+    out = [np.zeros_like(th) for _ in range(3)]
+    start, level = 0.0, 0.0
+    for law, angle, lift in pieces:
+        b = math.radians(angle)
+        here = (th >= start) & (th < start + b)
+        if law is None:
+            out[0][here] = level
+        else:
+            for k, v in enumerate(law((th[here] - start) / b, b)[:3]):
+                out[k][here] = (level if k == 0 else 0.0) + lift * v
+        start, level = start + b, level + lift
+    return tuple(out)

@@ -125,6 +125,8 @@ def test_harmonic_out_and_back_under_a_flat_face_is_an_eccentric_circle():
     assert np.max(np.abs(np.hypot(*(c.profile - centre)) - 50.0)) < 1e-9
     r = size_cam(task)
     assert r.values["face_travel_mm"] == pytest.approx(50.0, abs=1e-6)
+    assert r.values["face_width_needed_mm"] == pytest.approx(50.0, abs=1e-6)       # centred on the stem
+    assert r.values["max_pressure_angle_deg"] == pytest.approx(0.0, abs=1e-12)
     assert r.values["min_profile_radius_mm"] == pytest.approx(50.0, abs=1e-9)
 
 
