@@ -19,7 +19,8 @@ def polished_min(fun, theta, values, where=None) -> tuple[float, float]:
         return math.inf, math.nan
     i = int(np.argmin(masked))
     lo, hi = theta[max(i - 1, 0)], theta[min(i + 1, theta.size - 1)] if i + 1 < theta.size else 2 * math.pi
-    best = minimize_scalar(lambda t: float(fun(np.array([t]))[0]), bounds=(lo, hi), method="bounded",
+    cap = masked[i] + abs(masked[i]) + 1.0      # a finite stand-in where `fun` is masked (inf): Brent's fit stays finite
+    best = minimize_scalar(lambda t: min(float(fun(np.array([t]))[0]), cap), bounds=(lo, hi), method="bounded",
                            options={"xatol": POLISH_XTOL_RAD})
     if best.success and best.fun < masked[i]:
         return float(best.fun), float(best.x) % (2 * math.pi)

@@ -23,6 +23,7 @@ __all__ = ["size_cam", "pressure_peaks", "convex_min"]
 MOVING = 1e-9       # |s'| [mm/rad] above which the follower rises or returns (a dwell below)
 Samples = Annotated[int, Interval(ge=360, le=1_000_000)]
 SHOWN_ANGLES = 8    # crossover angles a message names
+LOCKED = 1e-9       # n . g at or below this: the pressure angle is 90 deg, the follower cannot be driven
 
 
 def pressure_peaks(task: CamFollower, theta, curves, ds, base_mm=None) -> dict[str, float]:
@@ -163,11 +164,18 @@ def _forces(task, theta, s, dds, c, values, violated, said, arrays):
     """Follower and contact forces, the jump speed or the groove's crossovers, Hertz stress."""
     omega = omega_rad_s(task.speed_rpm)
     Q = follower_force_N(task, s, dds, omega)
-    N = Q / c.lever
     i = int(np.argmin(Q))
-    values |= {"min_follower_force_N": float(Q[i]), "min_follower_force_at_deg": math.degrees(theta[i]),
-               "max_contact_force_N": float(np.abs(N).max())}
-    arrays |= {"follower_force_N": Q, "contact_force_N": N}
+    values |= {"min_follower_force_N": float(Q[i]), "min_follower_force_at_deg": math.degrees(theta[i])}
+    arrays["follower_force_N"] = Q
+    locked = c.lever <= LOCKED
+    if locked.any():                # the normal stands across the follower's motion: no force moves it
+        j = int(np.argmax(locked))
+        said.append(f"the pressure angle reaches 90 deg at cam angle {math.degrees(theta[j]):.2f} deg: the follower "
+                    "locks there; no contact force or stress is computed")
+        return
+    N = Q / c.lever
+    values["max_contact_force_N"] = float(np.abs(N).max())
+    arrays["contact_force_N"] = N
     if task.closure == "spring":
         rpm, at = jump_speed(task, theta, s, dds)
         if math.isfinite(rpm):
