@@ -1,6 +1,7 @@
 """The cam wing's accuracy against time: `size_cam`'s largest pressure angle on a translating
 offset roller (cycloidal rise-dwell-return-dwell) against the hand formula on 10^6 angles, and
-its time as a ratio to the coarsest sampling's, measured in the same process."""
+its time as a ratio to the coarsest sampling's, measured in the same process. The extremes are
+polished between samples, so even 360 samples meet the reference (itself on a 10^6 grid)."""
 import math
 import time
 
@@ -31,6 +32,7 @@ def cli(repeats, out_dir, progress=None, quick=False) -> str:
     theta = np.linspace(0, 2 * math.pi, 1_000_000, endpoint=False)
     s, ds, _, _ = task.motion.at(theta)
     exact = float(np.degrees(np.abs(np.arctan((ds - 8.0) / (math.sqrt(50.0**2 - 64.0) + s)))).max())
+    size_cam(task, samples=SAMPLES[0])            # imports (scipy) outside the timing
     rows, base = [], None
     for n in SAMPLES[:2] if quick else SAMPLES:
         start = time.process_time()

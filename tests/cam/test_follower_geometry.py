@@ -164,3 +164,27 @@ def test_least_base_radius_for_a_pressure_angle_limit_meets_it_at_the_answer():
     at = size_cam(roller(offset_mm=5.0, base_radius_mm=rb)).values["max_pressure_angle_deg"]
     below = size_cam(roller(offset_mm=5.0, base_radius_mm=rb - 1e-3)).values["max_pressure_angle_deg"]
     assert at <= 30.0 < below
+
+
+def test_oscillating_flat_face_envelope_against_intersections_of_its_lines():
+    # the face's lines seen from the cam, m . X = p, intersected pairwise (no support-function
+    # derivatives): the envelope's points; the pressure angle from the arm's motion at that point
+    d, L, f = 120.0, 80.0, 5.0
+    task = flat(follower="oscillating", pivot_distance_mm=d, arm_mm=L, face_offset_mm=f)
+    s = task.motion.at(THETA)[0]
+    psi = math.asin((40.0 + f) / d) + s / L
+    p = d * np.sin(psi) - f
+    alpha = math.pi / 2 - psi - THETA                      # m's angle seen from the ccw cam
+    m = np.array([np.cos(alpha), np.sin(alpha)])
+    m2, p2 = np.roll(m, -1, axis=1), np.roll(p, -1)
+    det = m[0] * m2[1] - m[1] * m2[0]
+    X = np.array([(p * m2[1] - p2 * m[1]) / det, (m[0] * p2 - m2[0] * p) / det])   # between theta_k and theta_k+1
+    c = task.curves(THETA + 0.5 * (THETA[1] - THETA[0]))
+    assert np.max(np.hypot(*(X - c.profile))) < 1e-6
+    C = np.array([np.cos(THETA) * X[0] - np.sin(THETA) * X[1], np.sin(THETA) * X[0] + np.cos(THETA) * X[1]])
+    r = C - np.array([[d], [0.0]])
+    v = np.array([r[1], -r[0]])                            # the arm's point moving as psi grows: -J (C - A)
+    fixed = np.array([np.sin(psi), np.cos(psi)])
+    hand = np.degrees(np.arccos(np.abs(np.sum(v * fixed, axis=0)) / np.hypot(*v)))
+    got = np.abs(np.degrees(task.curves(THETA).pressure_rad))
+    assert np.max(np.abs(got - hand)) < 1e-3

@@ -122,3 +122,10 @@ def test_the_lift_cam_in_the_cam_wing_agrees_with_models_cam_shape():
     assert run.values["min_pitch_radius_mm"] == pytest.approx(float(p.radius_mm[convex].min()), rel=1e-6)
     # the crossovers: where the cycloid's s'' changes sign, the middle of the rise and of the return
     assert np.allclose(np.sort(run.arrays["crossover_deg"]), [35.59355 / 2, 95.59355 + 35.59355 / 2], atol=0.05)
+
+
+def test_turning_the_lift_cam_clockwise_swaps_its_rise_and_return_pressure_angles():
+    ccw = registry.run("cam/lift-cam-groove").values
+    cw = registry.run("cam/lift-cam-groove", {"sense": "cw"}).values
+    assert cw["max_pressure_angle_rise_deg"] == pytest.approx(ccw["max_pressure_angle_return_deg"], rel=1e-9)
+    assert cw["max_pressure_angle_return_deg"] == pytest.approx(ccw["max_pressure_angle_rise_deg"], rel=1e-9)
