@@ -17,7 +17,9 @@ After the rise the cam dwells (S = 1). The plate stands `preload_mm` below the c
 position: C meets it where X = 1 - preload / H. The roller stays on its cam while the contact
 force N = F_closure + m x'' stays >= 0 (the closing spring's force, reacted by the cam).
 
-Laws (S over xi in [0, 1]; each written once, as CasADi expressions, derivatives by AD):
+Laws: the library's (models/cam_laws.py, `mechopt.laws`), each S(xi) written there once; here
+its S as a CasADi expression, derivatives by CasADi's AD (the integrators' path, unchanged since
+the four laws below lived here). `LAWS` are the four the lift's scenes compare:
 
 ================  =======================================  ===========================
 law               S(xi)                                    continuity at the ends
@@ -35,31 +37,18 @@ import numpy as np
 from mechopt.kit.cache import memoised
 from mechopt.kit.errors import ModelError
 from mechopt.models.cam_law import SplineLaw
+from mechopt.models.cam_laws import law as library_law
 
-LAWS = ("cycloidal", "modified_sine", "polynomial_345", "harmonic")
+LAWS = ("cycloidal", "modified_sine", "polynomial_345", "harmonic")      # the lift's scenes compare these
 
 
 def law_displacement(law: str, xi):
-    """S(xi), the normalised displacement of the motion law `law` over the rise xi in [0, 1]
-    (a CasADi expression of the CasADi symbol `xi`)."""
-    # CasADi imported here, not at the top: a loom plan reaches this module and needs none
-    import casadi as ca
+    """S(xi), the normalised displacement of the library's motion law `law` over the rise xi in
+    [0, 1] (a CasADi expression of the CasADi symbol `xi`)."""
     if isinstance(law, SplineLaw):
         raise ModelError(f"law={law}: a spline law gives S'' (casadi_ddS) and numbers (values), not S as "
                          "an expression", key="law")
-    if law == "cycloidal":
-        return xi - ca.sin(2 * math.pi * xi) / (2 * math.pi)
-    if law == "polynomial_345":
-        return xi**3 * (10 - 15 * xi + 6 * xi**2)
-    if law == "harmonic":
-        return (1 - ca.cos(math.pi * xi)) / 2
-    if law == "modified_sine":
-        k = 4 + math.pi
-        first = (math.pi * xi - ca.sin(4 * math.pi * xi) / 4) / k
-        middle = (2 + math.pi * xi - 9 * ca.sin(math.pi * (4 * xi + 1) / 3) / 4) / k
-        last = (4 + math.pi * xi - ca.sin(4 * math.pi * xi) / 4) / k
-        return ca.if_else(xi < 0.125, first, ca.if_else(xi < 0.875, middle, last))
-    raise ModelError(f"law={law!r}: unknown motion law; allowed: {', '.join(LAWS)}", key="law")
+    return library_law(law).expression(xi)[0]
 
 
 @memoised(maxsize=16)
@@ -74,7 +63,8 @@ def law_function(law: str) -> "ca.Function":        # noqa: F821  (CasADi import
         return ca.Function("law_spline", [xi], [zero, zero, law.casadi_ddS(xi)], ["xi"], ["S", "dS", "ddS"])
     s = law_displacement(law, xi)
     ds = ca.gradient(s, xi)
-    return ca.Function(f"law_{law}", [xi], [s, ds, ca.gradient(ds, xi)], ["xi"], ["S", "dS", "ddS"])
+    name = f"law_{law}" if isinstance(law, str) and law.isidentifier() else "law_member"   # "scca(0.2, 0.6)"
+    return ca.Function(name, [xi], [s, ds, ca.gradient(ds, xi)], ["xi"], ["S", "dS", "ddS"])
 
 
 def law_values(law: str, xi):

@@ -2,7 +2,8 @@
 radius of curvature and undercut of a disc cam with a roller follower, from ANY motion law.
 
 A law is a callable ``law(xi) -> (S, S', S'')`` over the rise's fraction xi in [0, 1] (S(0) = 0,
-S(1) = 1): `library_law` wraps the four laws of `models/cam_follower.py`; `tabulated_law` takes
+S(1) = 1): `library_law` wraps a law of the library (models/cam_laws.py, `mechopt.laws`) as
+`models/cam_follower.py` evaluates it; `tabulated_law` takes
 S, S', S'' on a grid (a synthesised law) and interpolates them by quintic Hermite pieces, exact at
 the nodes and C2 between them. The cam turns through rise, upper dwell, return (1 - S), lower
 dwell over 360 deg (`CamShape`'s angles), giving the normalised lift u(theta) in [0, 1].
@@ -41,7 +42,8 @@ from annotated_types import Ge, Gt, Interval, doc
 
 from mechopt.kit.errors import ModelError, require
 from mechopt.kit.settings import check_fields
-from mechopt.models.cam_follower import LAWS, law_values
+from mechopt.models.cam_follower import law_values
+from mechopt.models.cam_laws import law as find_law
 
 Law = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]
 CHORD_SAMPLES = 64            # points inside a chord where its distance to the curve is measured
@@ -52,8 +54,9 @@ ORIENTATION = -1              # the pitch curve runs clockwise as the cam angle 
 
 
 def library_law(name: str) -> Law:
-    """One of the four library laws (`models/cam_follower.LAWS`) as a vectorised callable."""
-    require(name in LAWS, f"law={name!r}: unknown motion law; allowed: {', '.join(LAWS)}", key="law")
+    """A law of the library (`mechopt.laws.names()`) as a vectorised callable xi -> (S, S', S'')
+    (`models/cam_follower.law_values`: the law's S, derivatives by CasADi's AD)."""
+    find_law(name)                      # an unknown name: the library's ModelError, listing its laws
     return lambda xi: law_values(name, xi)
 
 
@@ -123,7 +126,7 @@ class CamShape:
 
     def __post_init__(self):
         check_fields(self)      # each input's range and kind (follower, closure: their Literal) on its field
-        require(self.law in LAWS, f"law={self.law!r}: unknown motion law; allowed: {', '.join(LAWS)}", key="law")
+        find_law(self.law)              # an unknown name: the library's ModelError, listing its laws
         total = self.rise_deg + self.dwell_deg + self.return_deg
         require(total <= 360.0, f"rise_deg + dwell_deg + return_deg = {total:g} deg: more than a turn (<= 360)",
                 key="rise_deg")

@@ -75,10 +75,10 @@ _OP_KEYS = {"from", "to", "min_deg", "min_ms", "max_deg", "stress", "amplitude",
 OPERATION_COLUMNS = {"from": str, "to": str, "name": str, "group": str, "mechanism": str, "min_deg": float,
                      "min_ms": float, "max_deg": float, "stress": str, "amplitude": str, "mark": str, "why": str,
                      "cycles": float}
-WINDOW_COLUMNS = {"from": str, "to": str, "max_deg": float} | {k: str for k in sorted(_NOTE_KEYS)}
+WINDOW_COLUMNS = {"from": str, "to": str, "max_deg": float, "max_ms": float} | {k: str for k in sorted(_NOTE_KEYS)}
 SYNC_COLUMNS = {"events": str} | {k: str for k in sorted(_NOTE_KEYS)}   # events "a;b;c": one sync per row
 _STRESS_KEYS = {"sigma_ref_MPa", "t_ref_deg"} | _NOTE_KEYS
-_WINDOW_KEYS = {"from", "to", "max_deg"} | _NOTE_KEYS
+_WINDOW_KEYS = {"from", "to", "max_deg", "max_ms"} | _NOTE_KEYS
 _SYNC_KEYS = {"events"} | _NOTE_KEYS
 # a task table (activity on node): each task a duration and the tasks it waits for, "a;b", one k
 # cycles before written "b@k"; turned into the event network by `task_operations`
@@ -160,8 +160,9 @@ class Cyclogram:
     `windows`), as a list or a CSV timing table (`CSV_TABLES`); `events` {name: {mechanism, group}},
     by default the events the operations name, grouped as the operations ending at them agree;
     `stress_models` {name: {sigma_ref_MPa, t_ref_deg}}; `windows` [{from, to, max_deg}]:
-    p(to) - p(from) <= max_deg; `syncs` [{events = [a, b, ...]}]: equal times. Windows and syncs
-    too may come from a CSV of any length (columns from, to, max_deg; a sync's events "a;b;c").
+    p(to) - p(from) <= max_deg (or max_ms, a time: its angle at speed_rpm, or a duration in a
+    time-based network); `syncs` [{events = [a, b, ...]}]: equal times. Windows and syncs too may
+    come from a CSV of any length (columns from, to, max_deg or max_ms; a sync's events "a;b;c").
     An operation with `cycles` = k > 0 is recurrent: it ends at its `to` of k cycles later
     (`recurrences`; the least cycle time, `loom.least_cycle_time`).
     `limiting_op` [x, y]: maximise t(x, y) inside `cycle_deg` instead of minimising the span.
@@ -208,7 +209,7 @@ class Cyclogram:
     # structure tables a scene may read from a CSV file as rows of named, typed columns
     # tables a scene may read from a CSV beside it, any length (an inline list holds at most 100 rows)
     CSV_TABLES: ClassVar[dict] = {"operations": (("from", "to"), OPERATION_COLUMNS),
-                                  "windows": (("from", "to", "max_deg"), WINDOW_COLUMNS),
+                                  "windows": (("from", "to"), WINDOW_COLUMNS),
                                   "syncs": (("events",), SYNC_COLUMNS), "tasks": (("task",), TASK_COLUMNS)}
 
     def __post_init__(self):
@@ -358,11 +359,17 @@ class Cyclogram:
         _table(self.windows, "windows", list)
         for k, w in enumerate(self.windows):
             key = f"windows[{k}]"
-            _entry(w, key, _WINDOW_KEYS, required=("from", "to", "max_deg"))
+            _entry(w, key, _WINDOW_KEYS, required=("from", "to"))
             for end in (w["from"], w["to"]):
                 _linked_event(g, str(end), key, self._recurrent_events)
-            if not abs(_number(w["max_deg"], f"{key}.max_deg")) <= MAX_DEG:
-                raise ModelError(f"{key}.max_deg={w['max_deg']}: must be within +-{MAX_DEG:g} deg", key=f"{key}.max_deg")
+            given = [unit for unit in ("max_deg", "max_ms") if unit in w]
+            if len(given) != 1:
+                raise ModelError(f"{key}: give max_deg (an angle) or max_ms (a time), one of them; got "
+                                 f"{' and '.join(given) or 'neither'}", key=key)
+            limit, top = (MAX_DEG, "deg") if given[0] == "max_deg" else (MAX_MS, "ms")
+            if not abs(_number(w[given[0]], f"{key}.{given[0]}")) <= limit:
+                raise ModelError(f"{key}.{given[0]}={w[given[0]]}: allowed within +-{limit:g} {top}",
+                                 key=f"{key}.{given[0]}")
         _table(self.syncs, "syncs", list)
         for k, s in enumerate(self.syncs):
             key = f"syncs[{k}]"
@@ -510,8 +517,22 @@ class Cyclogram:
         return [(str(s["events"][i]), str(s["events"][i + 1])) for s in self.syncs for i in range(len(s["events"]) - 1)]
 
     def window_arcs(self) -> list[tuple[str, str, float]]:
-        """(from, to, max_deg) of every window: p(to) - p(from) <= max_deg."""
-        return [(str(w["from"]), str(w["to"]), float(w["max_deg"])) for w in self.windows]
+        """(from, to, max_deg) of every window: p(to) - p(from) <= max_deg; a window in time (max_ms)
+        as the angle the shaft turns in it at speed_rpm (a time becomes an angle at a speed)."""
+        out = []
+        for k, w in enumerate(self.windows):
+            if "max_deg" in w:
+                out.append((str(w["from"]), str(w["to"]), float(w["max_deg"])))
+                continue
+            if self.speed_rpm is None:
+                raise ModelError(f"windows[{k}].max_ms needs speed_rpm (a time becomes an angle at a speed)",
+                                 key="speed_rpm")
+            out.append((str(w["from"]), str(w["to"]), time_floor_deg(float(w["max_ms"]), self.speed_rpm)))
+        return out
+
+    def time_windows(self) -> list[int]:
+        """Indices of the windows given in time (max_ms): their angle grows with the speed."""
+        return [k for k, w in enumerate(self.windows) if "max_ms" in w]
 
     def min_angles_deg(self) -> np.ndarray:
         """[phi] of every arc, in `arcs` order [deg] (a copy)."""

@@ -7,15 +7,21 @@ section 2.3, the cycle time of a timed event graph):
     p(v) - p(u) >= d - k T        an operation (k = 0), a recurrent one (cycles = k > 0),
                                   a window (v <- u, d = -w, k = 0), a sync (both ways, 0, 0)
 
+In a time-based network (T in ms) an angle is a fraction of the cycle: an operation of at least
+phi deg is d = 0, k = cycles - phi / 360 (its duration phi T / 360 grows with T), a window of at
+most w deg is d = 0, k = w / 360 (Hanen & Munier's uniform constraints take real heights).
+
 A cycle T fits when no circuit C of these arcs has a positive sum D(C) - K(C) T. The least T is
 therefore the maximum cycle ratio D(C) / K(C) over the circuits with K(C) > 0 (at least 0: T >= 0),
-and no T fits when a circuit of height K(C) = 0 has D(C) > 0 (INFEASIBLE, that circuit named).
+and no T fits when a circuit with K(C) <= 0 is positive at a T the other circuits ask for (a
+height 0 with D(C) > 0, or angles that fill more than their cycles: INFEASIBLE, that circuit named).
 
 Solved exactly on the graph by Dinkelbach's (Lawler's) iteration, as `speed.SpeedGraph` solves the
 highest speed: from T = 0, a Bellman-Ford pass at T either finds no positive circuit (T is the
 answer) or a positive circuit C, whose ratio D(C) / K(C) > T is the next T. T rises strictly and
 takes a circuit's ratio each time, so it ends at the maximum ratio after finitely many passes (in
-practice a handful; counted, never timed). The last circuit is critical; at T* the arcs tight for
+practice a handful; counted, never timed). A positive circuit with K(C) <= 0 stays positive at
+every larger T: no cycle fits (INFEASIBLE). The last circuit is critical; at T* the arcs tight for
 the pass's times hold every critical circuit (each is a zero circuit there), so ties are named.
 The LP in (p, T), minimise T, is the certificate (check = true), solved by cvxpy and HiGHS.
 """
@@ -58,9 +64,10 @@ class Uniform:
 
 def uniform_constraints(task: Cyclogram) -> Uniform:
     """The task's operations, recurrent operations, windows and syncs as uniform constraints. Time-
-    based when an operation gives min_ms and the task no speed_rpm (every floor then in ms: no
-    min_deg, stress, amplitude or window, which are angles); else angle-based, each operation at
-    its bound of every limit (a min_ms as the angle the shaft turns in it at speed_rpm)."""
+    based when an operation gives min_ms and the task no speed_rpm (T in ms; an angle a fraction
+    phi / 360 of the cycle, module docstring; no stress or amplitude, whose angles are not
+    fractions of T); else angle-based, each operation at its bound of every limit (a min_ms as the
+    angle the shaft turns in it at speed_rpm)."""
     dag_names, dag_tails, dag_heads = task.index_arrays     # cached on the task: the one cycle's operations
     names = list(dag_names) + task.isolated_events             # events of recurrent operations alone come last
     index = task.event_index | {v: len(dag_names) + i for i, v in enumerate(task.isolated_events)}
@@ -68,36 +75,62 @@ def uniform_constraints(task: Cyclogram) -> Uniform:
     timed = (bool(task.time_arcs()) or any(op["min_ms"] is not None for op in rec)) and task.speed_rpm is None
     if timed:
         _check_time_based(task)
-        d_ops = np.array([0.0 if ms is None else ms for _, _, ms in task.graph.edges(data="min_ms")], dtype=float)
-        d_rec = [0.0 if op["min_ms"] is None else op["min_ms"] for op in rec]
+        d_ops, k_ops, more = _time_based_operations(task)
+        windows = [(str(w["from"]), str(w["to"]), *((-float(w["max_ms"]), 0.0) if "max_ms" in w
+                                                     else (0.0, float(w["max_deg"]) / 360.0)),
+                    f"{w.get('max_ms', w.get('max_deg')):.6g} {'ms' if 'max_ms' in w else 'deg'}")
+                   for w in task.windows]
     else:
-        d_ops = task.lower_bounds_deg("exact")[0]
+        d_ops, k_ops = task.lower_bounds_deg("exact")[0], np.zeros(len(dag_tails))
         d_rec = [op["min_deg"] if op["min_ms"] is None else max(op["min_deg"], time_floor_deg(op["min_ms"], task.speed_rpm))
                  for op in rec]
-    more = [(op["from"], op["to"], d, op["cycles"], f"{op['from']}->{op['to']}[+{op['cycles']}]")
-            for op, d in zip(rec, d_rec)]
+        more = [(op["from"], op["to"], d, op["cycles"], _recurrent_label(op)) for op, d in zip(rec, d_rec)]
+        windows = [(a, b, -w, 0.0, f"{w:.6g} deg") for a, b, w in task.window_arcs()]
     operations = len(dag_tails) + len(more)
-    more += [(b, a, -w, 0, f"window p({b}) - p({a}) <= {w:.6g} deg") for a, b, w in task.window_arcs()]
+    more += [(b, a, d, k, f"window p({b}) - p({a}) <= {text}") for a, b, d, k, text in windows]
     more += [(u, v, 0.0, 0, f"sync p({a}) = p({b})") for a, b in task.sync_pairs() for u, v in ((a, b), (b, a))]
     tails = np.r_[dag_tails, np.array([index[m[0]] for m in more], dtype=np.int64)]
     heads = np.r_[dag_heads, np.array([index[m[1]] for m in more], dtype=np.int64)]
     d = np.r_[d_ops, np.array([m[2] for m in more], dtype=float)]
-    k = np.r_[np.zeros(len(dag_tails)), np.array([m[3] for m in more], dtype=float)]
+    k = np.r_[k_ops, np.array([m[3] for m in more], dtype=float)]
     labels = np.concatenate([task.operation_labels, np.array([m[4] for m in more], dtype=str)])
     return Uniform(names, tails, heads, d, k, labels, operations, "ms" if timed else "deg")
 
 
+def _recurrent_label(op) -> str:
+    return f"{op['from']}->{op['to']}[+{op['cycles']}]"
+
+
+def _time_based_operations(task):
+    """(d, k of the one cycle's operations, [recurrent and extra arcs]) in ms: a duration is d = min_ms,
+    an angle phi is d = 0, k = cycles - phi / 360; an operation with both gets a second arc (its floor
+    is the larger of the two at every T)."""
+    d_ops, k_ops, more = [], [], []
+    for x, y, data in task.graph.edges(data=True):      # `arcs` order
+        phi, ms = data["min_deg"], data["min_ms"]
+        d_ops.append(0.0 if ms is None else ms)
+        k_ops.append(-phi / 360.0 if ms is None else 0.0)
+        if ms is not None and phi > 0:
+            more.append((x, y, 0.0, -phi / 360.0, f"{x}->{y}"))
+    for op in task.recurrences:
+        label, k = _recurrent_label(op), float(op["cycles"])
+        if op["min_ms"] is not None:
+            more.append((op["from"], op["to"], op["min_ms"], k, label))
+        if op["min_ms"] is None or op["min_deg"] > 0:
+            more.append((op["from"], op["to"], 0.0, k - op["min_deg"] / 360.0, label))
+    return np.array(d_ops, dtype=float), np.array(k_ops, dtype=float), more
+
+
 def _check_time_based(task):
-    """A time-based network's floors are all durations: an angle among them is refused, named."""
-    mixed = [f"operations[{x}->{y}].min_deg" for x, y, phi in task.graph.edges(data="min_deg") if phi > 0]
-    mixed += [f"operations[{op['from']}->{op['to']}].min_deg" for op in task.recurrences if op["min_deg"] > 0]
-    mixed += [f"operations[{x}->{y}].stress" for x, y in (task.arcs[k] for k in task.stress_arcs())]
+    """A time-based network's angles are fractions of its cycle; a stress or rebound bound is an angle
+    at a speed, not a fraction of T: refused, named."""
+    mixed = [f"operations[{x}->{y}].stress" for x, y in (task.arcs[k] for k in task.stress_arcs())]
     mixed += [f"operations[{x}->{y}].amplitude" for x, y in (task.arcs[k] for k in task.amplitude_arcs())]
-    mixed += [f"windows[{j}].max_deg" for j in range(len(task.windows))]
     if mixed:
         raise ModelError(f"{mixed[0]}: the least cycle time of a time-based network (min_ms) takes durations "
-                         f"only, no angle (also {some_of(mixed[1:], sep=', ') or 'nothing else'}); angle- and "
-                         f"time-based operations meet on loom.max_machine_speed", key=mixed[0].split(".")[0])
+                         f"and angles (fractions of the cycle), not a bound set at a speed (also "
+                         f"{some_of(mixed[1:], sep=', ') or 'nothing else'}); give speed_rpm, or use "
+                         f"loom.max_machine_speed", key=mixed[0].split(".")[0])
 
 
 class Circuits:
@@ -242,7 +275,7 @@ def least_cycle_time(task: Cyclogram, *, check: bool = False,
         result = clock.result(Status.INFEASIBLE, {}, diagnostics=diagnostics,
                               violated=tuple(str(u.labels[a]) for a in circuit[:NAMED]),
                               message="infeasible at every cycle time: the circuit " + _circuit_text(u, circuit)
-                              + f" spans no cycle (height 0) yet needs {math.fsum(u.d[circuit]):.6g} {u.unit}")
+                              + _why_no_cycle(u, circuit))
         return _checked(result, u, name, backend) if check else result
     values = {name: T}
     if len(u.names) <= PER_NAME_MAX_EVENTS:
@@ -267,30 +300,50 @@ def least_cycle_time(task: Cyclogram, *, check: bool = False,
 
 def _dinkelbach(u, bf):
     """(T*, the critical circuit (None at T* = 0), steps, times at T*); T* None when a circuit of
-    height 0 is positive (the circuit then returned)."""
-    big = math.fsum(np.maximum(u.d, 0.0)) + 1.0          # above every ratio: a circuit of K >= 1 is negative there
-    _, zero = bf.longest(big)
-    if zero is not None:
-        if u.k[zero].any() or not math.fsum(u.d[zero]) > 0:
-            raise _Undecided(f"a circuit taken as positive at T = {big!r} that is not one of height 0")
-        return None, zero, 0, None
+    height K <= 0 is positive at a T every circuit before it asks for (the circuit then returned)."""
+    if np.array_equal(u.k, np.round(u.k)):       # whole heights: a zero-height conflict found in one pass
+        big = math.fsum(np.maximum(u.d, 0.0)) + 1.0      # above every ratio: a circuit of K >= 1 is negative there
+        _, zero = bf.longest(big)
+        if zero is not None:
+            if u.k[zero].any() or not math.fsum(u.d[zero]) > 0:
+                raise _Undecided(f"a circuit taken as positive at T = {big!r} that is not one of height 0")
+            return None, zero, 0, None
     T, critical = 0.0, None
     for step in range(MAX_STEPS + 1):
         p, circuit = bf.longest(T)
         if circuit is None:
             return T, critical, step, p
-        D, K = math.fsum(u.d[circuit]), float(u.k[circuit].sum())
-        if K <= 0 or not D / K > T:
+        D, K = math.fsum(u.d[circuit]), math.fsum(u.k[circuit])
+        if K <= 0:          # D - K T > 0 here stays so at every larger T, and T may not fall: no cycle fits
+            return None, circuit, step, None
+        if not D / K > T:
             raise _Undecided(f"a positive circuit at T = {T!r} whose ratio does not rise above it")
         T, critical = D / K, circuit
     raise _StepLimit(f"no answer after {MAX_STEPS} Dinkelbach steps")
+
+
+def _why_no_cycle(u, circuit) -> str:
+    D, K = math.fsum(u.d[circuit]), math.fsum(u.k[circuit])
+    if K == 0:
+        return f" spans no cycle (height 0) yet needs {D:.6g} {u.unit}"
+    if D < 0:               # D - K T <= 0 holds for T <= D / K only
+        return (f" holds at a cycle time of at most {D / K:.6g} {u.unit} (its angles grow with the cycle), less "
+                f"than the machine's other circuits ask for")
+    return (f" asks for {-K * 360:.6g} deg more than its cycles hold (height {K:.6g})"
+            + (f" and {D:.6g} {u.unit} besides" if D > 0 else "") + ": a longer cycle only lengthens its angles")
 
 
 def _describe(u, circuit) -> dict:
     events = [u.names[u.tails[a]] for a in circuit]
     ops = [str(u.labels[a]) for a in circuit]
     return {"events": events[:NAMED], "operations": ops[:NAMED], "arcs": len(circuit),
-            "cycles": int(u.k[circuit].sum()), f"length_{u.unit}": math.fsum(u.d[circuit])}
+            "cycles": _height(u, circuit), f"length_{u.unit}": math.fsum(u.d[circuit])}
+
+
+def _height(u, circuit) -> int | float:
+    """K(C): whole cycles, or (angles in a time-based network) a real number of them."""
+    K = math.fsum(u.k[circuit])
+    return int(round(K)) if abs(K - round(K)) <= 1e-12 else K
 
 
 def _circuit_text(u, circuit) -> str:

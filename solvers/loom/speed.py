@@ -145,6 +145,11 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp",
     check_settings(max_machine_speed, method=method, backend=backend)
     if task.cycle_deg is None:
         raise ModelError("cycle_deg: the machine's speed is limited by its cycle; give cycle_deg", key="cycle_deg")
+    if task.time_windows():         # its angle 0.006 n max_ms would move with the speed sought: not modelled
+        k = task.time_windows()[0]
+        raise ModelError(f"windows[{k}].max_ms: the highest speed takes windows as angles (max_deg); a window in "
+                         f"time holds at a given speed (loom.plan_cyclogram with speed_rpm, or the least cycle "
+                         f"time of a time-based network)", key=f"windows[{k}].max_ms")
     clock = Clock()
     net = Net.structure(task)        # the speed LP has its own bounds
     phi = _angle_floors_deg(task)

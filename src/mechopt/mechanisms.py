@@ -47,7 +47,7 @@ MECHANISMS = (
               (("loom", "loom/group1"), ("cyclogram", "loom/packaging"))),
     Mechanism("stop-impact", "Lift lever at its stop (paper 004)",
               ("mechopt.models.stop_impact", "mechopt.models.cam_follower", "mechopt.models.cam_shape",
-               "mechopt.models.cam_law"),
+               "mechopt.models.cam_law", "mechopt.models.cam_laws", "mechopt.models.cam_motion"),
               "mechopt.solvers.stop_impact", ("mechopt.figures.stop_impact", "mechopt.figures.cam_shape",
                                               "mechopt.figures.law_synthesis"), "mechopt.benchmarks.stop_impact",
               (("stop-impact", "stop-impact/rebound-177rpm"),)),

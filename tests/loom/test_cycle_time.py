@@ -1,6 +1,7 @@
 """The least cycle time of a recurrent machine (solvers/loom/cycle_time.py): recurrent operations
 (cycles = k), the maximum cycle ratio on the graph, its critical circuits and floats, the LP in
 (p, T) as certificate, and a max-plus example from the literature."""
+import dataclasses
 import math
 
 import networkx as nx
@@ -97,48 +98,53 @@ def test_recurrence_heights_2_and_3(long_d, expected, height):
     assert r.values["check_rel"] <= 1e-9
 
 
-def _random_network(rng):
+def _random_network(rng, mixed=False):
+    """Angles only, or (`mixed`) each floor and window an angle or a duration at random (time-based)."""
     n = int(rng.integers(3, 12))
     names = [f"e{i}" for i in range(n)]
+    unit = (lambda: "min_ms" if rng.random() < 0.5 else "min_deg") if mixed else (lambda: "min_deg")
     ops, seen = [], set()
     for i in range(n - 1):                     # a chain keeps every event linked, then more forward arcs
-        ops.append(op(names[i], names[i + 1], float(rng.uniform(0, 10)), unit="min_deg"))
+        first = "min_ms" if mixed and i == 0 else unit()        # mixed: one duration at least (time-based)
+        ops.append(op(names[i], names[i + 1], float(rng.uniform(0, 10)), unit=first))
         seen.add((i, i + 1))
     for _ in range(int(rng.integers(0, 2 * n))):
         i, j = sorted(rng.choice(n, 2, replace=False).tolist())
         if (i, j) not in seen:
             seen.add((i, j))
-            ops.append(op(names[i], names[j], float(rng.uniform(0, 10)), unit="min_deg"))
+            ops.append(op(names[i], names[j], float(rng.uniform(0, 10)), unit=unit()))
     recurrent = set()
     for _ in range(int(rng.integers(1, n + 2))):
         i, j, k = int(rng.integers(n)), int(rng.integers(n)), int(rng.integers(1, 4))
         if (i, j, k) not in recurrent:
             recurrent.add((i, j, k))
-            ops.append(op(names[i], names[j], float(rng.uniform(0, 30)), k, "min_deg"))
-    windows = [{"from": names[i], "to": names[j], "max_deg": float(rng.uniform(5, 40))}
+            ops.append(op(names[i], names[j], float(rng.uniform(0, 30)), k, unit()))
+    windows = [{"from": names[i], "to": names[j], "max_" + unit()[4:]: float(rng.uniform(5, 40))}
                for i, j in sorted(seen)[:int(rng.integers(0, 3))]]
     syncs = [{"events": [names[0], names[-1]]}] if rng.random() < 0.1 else []
     return Cyclogram(operations=ops, windows=windows, syncs=syncs)
 
 
-def test_against_the_lp_on_random_recurrent_networks():
+@pytest.mark.parametrize("mixed", [False, True], ids=["angles", "angles-and-durations"])
+def test_against_the_lp_on_random_recurrent_networks(mixed):
     rng = np.random.default_rng(20261129)
     statuses = []
     for _ in range(50):
-        task = _random_network(rng)
+        task = _random_network(rng, mixed)
         r = least_cycle_time(task, check=True)
         statuses.append(r.status)
         assert r.status in (Status.SOLVED, Status.INFEASIBLE), r.message
         assert r.diagnostics["check"]["status"] == r.status.value
         if r.status is Status.SOLVED:
-            T = r.values["cycle_deg"]
+            unit = r.diagnostics["unit"]
+            T = r.values["cycle_deg" if unit == "deg" else "cycle_time_ms"]
             assert r.values["check_rel"] <= 1e-9
             u = uniform_constraints(task)         # the times meet every constraint at T (the upper bound) ...
-            p = np.array([r.values[f"p_{v}_deg"] for v in u.names])
+            p = np.array([r.values[f"p_{v}_{unit}"] for v in u.names])
             assert np.all(p[u.heads] - p[u.tails] >= u.d - u.k * T - 1e-9 * max(1.0, T))
             circuit = r.diagnostics["critical_circuit"]         # ... and a circuit needs it (the lower bound)
             if circuit is not None:
-                assert circuit["length_deg"] / circuit["cycles"] == pytest.approx(T, rel=1e-12)
+                assert circuit[f"length_{unit}"] / circuit["cycles"] == pytest.approx(T, rel=1e-12)
     assert Status.SOLVED in statuses and Status.INFEASIBLE in statuses
 
 
@@ -187,10 +193,51 @@ def test_a_recurrent_row_carries_a_floor_only_and_one_cycle_solvers_refuse_it():
         plan_cyclogram(task)
 
 
-def test_angles_and_durations_do_not_mix_in_one_cycle_time():
-    ops = [op("a", "b", 3.0), op("b", "a", 10.0, 1, "min_deg")]
-    with pytest.raises(ModelError, match=r"operations\[b->a\]\.min_deg: the least cycle time of a time-based"):
-        least_cycle_time(Cyclogram(operations=ops))
+def test_angles_and_durations_mix_in_one_cycle_time():
+    """An angle is a fraction of the cycle: a -> b 3 ms, then b -> a of the next cycle at least 10 deg,
+    so T >= 3 + 10 T / 360, T = 3 * 360 / 350 ms; the brute force over circuits and the LP agree."""
+    task = Cyclogram(operations=[op("a", "b", 3.0), op("b", "a", 10.0, 1, "min_deg")])
+    r = least_cycle_time(task, check=True)
+    assert r.status is Status.SOLVED and r.values["cycle_time_ms"] == pytest.approx(3.0 * 360.0 / 350.0, rel=1e-12)
+    assert brute_force_ratio(task) == pytest.approx(r.values["cycle_time_ms"], rel=1e-12)
+    assert r.values["check_rel"] <= 1e-9 and r.diagnostics["critical_circuit"]["cycles"] == pytest.approx(35 / 36)
+
+
+def test_an_operation_with_an_angle_and_a_duration_takes_the_larger():
+    """c -> d at least 90 deg and 50 ms between 30 ms and 20 ms: T >= 100 by the durations, T >= 50 + T / 4
+    (66.7) by the angle, so 100; at 270 deg the angle rules: T >= 50 + 3 T / 4, T = 200 ms."""
+    ops = [op("a", "c", 30.0), {"from": "c", "to": "d", "min_deg": 90.0, "min_ms": 50.0}, op("d", "a", 20.0, 1)]
+    r = least_cycle_time(Cyclogram(operations=ops), check=True)
+    assert r.values["cycle_time_ms"] == pytest.approx(100.0, rel=1e-12) and r.values["check_rel"] <= 1e-9
+    ops[1] = {"from": "c", "to": "d", "min_deg": 270.0, "min_ms": 50.0}
+    r = least_cycle_time(Cyclogram(operations=ops), check=True)
+    assert r.values["cycle_time_ms"] == pytest.approx(200.0, rel=1e-12) and r.values["check_rel"] <= 1e-9
+
+
+def test_a_window_in_degrees_bounds_a_time_based_cycle():
+    """a -> b 100 ms inside a window of 90 deg: 100 <= T / 4, T >= 400 ms (the recurrence asks 150 only)."""
+    ops = [op("a", "b", 100.0), op("b", "a", 50.0, 1)]
+    r = least_cycle_time(Cyclogram(operations=ops, windows=[{"from": "a", "to": "b", "max_deg": 90.0}]), check=True)
+    assert r.values["cycle_time_ms"] == pytest.approx(400.0, rel=1e-12) and r.values["check_rel"] <= 1e-9
+    assert "window p(b) - p(a) <= 90 deg" in r.diagnostics["critical_circuit"]["operations"]
+
+
+def test_angles_that_overfill_their_window_fit_no_cycle_time():
+    ops = [{"from": "a", "to": "b", "min_deg": 200.0}, op("b", "c", 10.0), op("c", "a", 0.0, 1)]
+    r = least_cycle_time(Cyclogram(operations=ops, windows=[{"from": "a", "to": "b", "max_deg": 100.0}]), check=True)
+    assert r.status is Status.INFEASIBLE
+    assert "asks for 100 deg more than its cycles hold" in r.message and "a->b" in r.message
+
+
+def test_a_stress_bound_does_not_enter_a_time_based_cycle():
+    task = registry.find("loom/group1").build()[0]
+    assert task.stress_arcs()       # the loom's group 1 names stress models: a duration makes it time-based
+    first, second = task.arcs[0]
+    timed = dataclasses.replace(task, operations=[dict(o) | ({"min_ms": 5.0} if (str(o["from"]), str(o["to"])) ==
+                                                              (first, second) else {}) for o in task.operations],
+                                speed_rpm=None)
+    with pytest.raises(ModelError, match=r"\.stress: the least cycle time of a time-based network"):
+        least_cycle_time(timed)
 
 
 def test_a_recurrent_machine_from_its_timing_table():
@@ -256,3 +303,42 @@ def test_the_iteration_is_count_limited(monkeypatch):
     monkeypatch.setattr(cycle_time, "MAX_STEPS", 0)
     r = least_cycle_time(Cyclogram(operations=[op("a", "b", 3.0), op("b", "a", 3.0, 1)]))
     assert r.status is Status.LIMIT and "no answer after 0 Dinkelbach steps" in r.message
+
+
+def test_a_window_in_time_bounds_a_time_based_cycle():
+    """a -> b 100 ms, b -> a of the next cycle 50 ms: T = 150 ms; a window p(b) - p(a) <= 80 ms cannot
+    hold the 100 ms step (INFEASIBLE, the window named), and at 120 ms it holds without moving T."""
+    ops = [op("a", "b", 100.0), op("b", "a", 50.0, 1)]
+    held = least_cycle_time(Cyclogram(operations=ops, windows=[{"from": "a", "to": "b", "max_ms": 120.0}]), check=True)
+    assert held.status is Status.SOLVED and held.values["cycle_time_ms"] == pytest.approx(150.0, rel=1e-12)
+    short = least_cycle_time(Cyclogram(operations=ops, windows=[{"from": "a", "to": "b", "max_ms": 80.0}]))
+    assert short.status is Status.INFEASIBLE and "window p(b) - p(a) <= 80 ms spans no cycle" in short.message
+
+
+def test_a_window_in_time_is_its_angle_at_the_machine_s_speed():
+    """At 60 rpm the shaft turns 36 deg in 100 ms: a 100 ms window on a 40 deg step is 4 deg short."""
+    ops = [op("a", "b", 40.0, unit="min_deg")]
+    task = Cyclogram(operations=ops, speed_rpm=60.0, windows=[{"from": "a", "to": "b", "max_ms": 100.0}])
+    assert task.window_arcs() == [("a", "b", pytest.approx(36.0, rel=1e-12))]
+    assert plan_cyclogram(task).status is Status.INFEASIBLE
+    wide = Cyclogram(operations=ops, speed_rpm=60.0, windows=[{"from": "a", "to": "b", "max_ms": 120.0}])
+    assert plan_cyclogram(wide).values["span_deg"] == pytest.approx(40.0)
+    with pytest.raises(ModelError, match=r"windows\[0\]\.max_ms needs speed_rpm"):
+        plan_cyclogram(Cyclogram(operations=ops, windows=[{"from": "a", "to": "b", "max_ms": 100.0}]))
+
+
+@pytest.mark.parametrize("window, match", [({"from": "a", "to": "b"}, r"windows\[0\]: give max_deg .* got neither"),
+                                           ({"from": "a", "to": "b", "max_deg": 1.0, "max_ms": 1.0},
+                                            r"got max_deg and max_ms"),
+                                           ({"from": "a", "to": "b", "max_ms": 2e6}, r"windows\[0\]\.max_ms=2000000")])
+def test_a_window_gives_one_limit_in_range(window, match):
+    with pytest.raises(ModelError, match=match):
+        Cyclogram(operations=[op("a", "b", 40.0, unit="min_deg")], windows=[window])
+
+
+def test_the_highest_speed_refuses_a_window_in_time_by_name():
+    from mechopt.solvers.loom import max_machine_speed
+    task = Cyclogram(operations=[op("a", "b", 40.0, unit="min_deg"), op("b", "c", 100.0)], cycle_deg=360.0,
+                     windows=[{"from": "a", "to": "c", "max_ms": 300.0}])
+    with pytest.raises(ModelError, match=r"windows\[0\]\.max_ms: the highest speed takes windows as angles"):
+        max_machine_speed(task)
