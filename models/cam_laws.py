@@ -245,8 +245,8 @@ def scca(b: float, c: float, cv: float = 0.0, name: str | None = None) -> Law:
     b, c, cv >= 0, b + c + cv <= 1 (module docstring; cv = 0 is Norton's three-parameter family)."""
     parts = {"b": b, "c": c, "cv": cv}
     require(all(isinstance(v, (int, float)) and math.isfinite(v) and 0 <= v <= 1 for v in parts.values())
-            and b + c + cv <= 1 + 1e-12,
-            f"law=scca(b={b!r}, c={c!r}, cv={cv!r}): allowed 0 <= b, c, cv and b + c + cv <= 1", key="law")
+            and b + c + cv <= 1 + 1e-12 and cv < 1,
+            f"law=scca(b={b!r}, c={c!r}, cv={cv!r}): allowed 0 <= b, c, cv and b + c + cv <= 1, cv < 1", key="law")
     d = max(1.0 - b - c - cv, 0.0)
     edges = np.cumsum([0.0, b / 2, d / 2, c / 2, cv / 2])
     shapes = ((1.0, math.pi / b if b else 0.0, 0.0, 0.0),            # (A, w, phi, k0): a quarter sine up
@@ -274,16 +274,21 @@ def _trapezoid() -> Law:
 
 # ---------------------------------------------------------------- polynomial from conditions
 
+MAX_CONDITIONS = 12         # a polynomial law of degree 11 at most: beyond, its linear system is ill-conditioned
+
+
 def polynomial(conditions: Sequence, name: str | None = None) -> Law:
     """The polynomial of least degree (number of conditions - 1) meeting `conditions`, each
-    (xi, order, value): d^order S / dxi^order = value at xi (order 0..3). For a rise between dwells,
-    S, S', S'' at both ends give the 3-4-5 polynomial, and S''' = 0 too the 4-5-6-7. Its name
-    states its degree ("polynomial_deg5")."""
-    rows = [tuple(c) for c in conditions]
-    require(len(rows) >= 2 and all(len(r) == 3 for r in rows),
-            f"polynomial: conditions {rows!r}: expected two or more (xi, order, value)", key="law")
-    require(all(int(r[1]) == r[1] and 0 <= r[1] <= 3 and math.isfinite(r[0]) and math.isfinite(r[2])
-                for r in rows), f"polynomial: conditions {rows!r}: order allowed 0..3, xi and value finite", key="law")
+    (xi, order, value): d^order S / dxi^order = value at xi (order 0..3), 2 to MAX_CONDITIONS of
+    them. For a rise between dwells, S, S', S'' at both ends give the 3-4-5 polynomial, and
+    S''' = 0 too the 4-5-6-7. Its name states its degree ("polynomial_deg5")."""
+    rows = [tuple(c) if isinstance(c, (list, tuple)) else (c,) for c in conditions]
+    said = f"law=polynomial({quote(rows, 80)})"
+    require(2 <= len(rows) <= MAX_CONDITIONS and all(len(r) == 3 for r in rows),
+            f"{said}: expected two or more (xi, order, value), at most {MAX_CONDITIONS}", key="law")
+    require(all(all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in r)
+                and int(r[1]) == r[1] and 0 <= r[1] <= 3 for r in rows),
+            f"{said}: order allowed 0..3, xi and value finite numbers", key="law")
     degree = len(rows) - 1
     powers = np.arange(degree + 1)
     A = np.zeros((len(rows), degree + 1))
@@ -292,8 +297,8 @@ def polynomial(conditions: Sequence, name: str | None = None) -> Law:
         falling = np.array([math.perm(int(p), order) for p in powers], dtype=float)
         A[i] = falling * np.where(powers >= order, float(xi) ** np.maximum(powers - order, 0), 0.0)
     rank = np.linalg.matrix_rank(A)
-    require(rank == len(rows), f"polynomial: conditions {rows!r} are not independent (rank {rank} of "
-            f"{len(rows)}): a condition repeated or contradicting another", key="law")
+    require(rank == len(rows), f"{said}: the conditions are not independent (rank {rank} of {len(rows)}): "
+            "a condition repeated or contradicting another", key="law")
     coef = np.linalg.solve(A, np.array([r[2] for r in rows], dtype=float))
     derivs = [coef]
     for _ in range(3):

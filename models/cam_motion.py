@@ -197,7 +197,9 @@ def _segments(rows) -> tuple[Segment, ...]:
             "lift_mm}", key="segments")
     out, theta, s = [], 0.0, 0.0
     for k, row in enumerate(rows):
-        seg = row if isinstance(row, Segment) else _segment(row, f"segments[{k}]")
+        if isinstance(row, Segment):            # held to the same rules as a table
+            row = {"segment": row.kind, "law": row.law or "", "angle_deg": row.angle_deg, "lift_mm": row.lift_mm}
+        seg = _segment(row, f"segments[{k}]")
         out.append(Segment(seg.kind, seg.law, seg.angle_deg, seg.lift_mm, theta, s))
         theta, s = theta + seg.angle_deg, s + seg.lift_mm
     angles = " + ".join(f"{seg.angle_deg:g}" for seg in out)

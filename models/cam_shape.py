@@ -103,7 +103,10 @@ class CamShape:
     `rise_deg`, `dwell_deg` (upper), `return_deg` (the lower dwell is what is left of 360);
     `offset_mm` the translating follower's offset e; `centre_distance_mm` cam centre O to pivot A,
     `a_mm` pivot to roller, `b_mm` roller to C (oscillating); `chord_tol_mm` the point table's
-    chordal error; `max_pressure_angle_deg` the limit a design must keep. Structure: `law` (one
+    chordal error; `max_pressure_angle_deg` the limit a design must keep; for the shop's drawing
+    (`mechopt.cam_sheet`): `bore_diameter_mm` the shaft's bore (0: not stated, no drawing) and
+    `rise_start_shaft_deg` the machine shaft's angle at which the rise begins (a cyclogram's event;
+    the cam itself turns counter-clockwise, ORIENTATION). Structure: `law` (one
     of the library's; a synthesised law is passed as a `Law` to `pitch`, `flank`, `summarise` or
     the solver `solvers.stop_impact.cam_shape.shape_cam`), `follower`, `closure` ("spring": one
     flank; "groove": both walls of a grooved cam).
@@ -120,6 +123,8 @@ class CamShape:
     b_mm: Annotated[float, Ge(0)] = 0.0
     chord_tol_mm: Annotated[float, Interval(gt=0, le=1)] = 0.01
     max_pressure_angle_deg: Annotated[float, Interval(gt=0, lt=90)] = 45.0
+    bore_diameter_mm: Annotated[float, Ge(0), doc("0: not stated; below 2 x base_radius_mm")] = 0.0
+    rise_start_shaft_deg: Annotated[float, Interval(ge=0, lt=360)] = 0.0
     law: str = "cycloidal"
     follower: Literal["translating", "oscillating"] = "translating"
     closure: Literal["spring", "groove"] = "spring"
@@ -127,6 +132,8 @@ class CamShape:
     def __post_init__(self):
         check_fields(self)      # each input's range and kind (follower, closure: their Literal) on its field
         find_law(self.law)              # an unknown name: the library's ModelError, listing its laws
+        require(self.bore_diameter_mm < 2 * self.base_radius_mm, f"bore_diameter_mm={self.bore_diameter_mm:g}: "
+                f"allowed: below the base circle's diameter {2 * self.base_radius_mm:g} mm", key="bore_diameter_mm")
         total = self.rise_deg + self.dwell_deg + self.return_deg
         require(total <= 360.0, f"rise_deg + dwell_deg + return_deg = {total:g} deg: more than a turn (<= 360)",
                 key="rise_deg")

@@ -63,8 +63,8 @@ from annotated_types import Interval
 
 from mechopt.kit.errors import ModelError, require
 from mechopt.kit.settings import check_fields, range_fault
-from mechopt.models.cam_follower import LAWS
 from mechopt.models.cam_law import SplineLaw
+from mechopt.models.cam_laws import law as library_law
 from mechopt.models.effects import Effect, check_effects
 
 
@@ -190,8 +190,14 @@ class LeverStop:
         object.__setattr__(self, "effects", _names_or_numbers(self, "effects", number=False))
         check_fields(self)
         check_effects(self)
-        require(isinstance(self.law, SplineLaw) or self.law in ("", *LAWS),
-                f"law={self.law!r}: allowed {', '.join(LAWS)} (or a synthesised law)", key="law")
+        if not isinstance(self.law, SplineLaw) and self.law != "":
+            jumps = library_law(self.law).interior_jumps()      # any law of the library (mechopt.laws)
+            if jumps:       # the chain integrates the rise as one phase: it would step over the jump
+                xi, order, _ = jumps[0]
+                raise ModelError(f"law={self.law!r}: its {('velocity', 'acceleration')[order - 1]} steps inside "
+                                 f"the rise (at xi = {xi:g}); the lift's chain integrates the rise as one phase "
+                                 "and does not step over a jump: choose a law whose S'' is continuous inside the "
+                                 "rise", key="law")
         if self.launch == "restitution":     # C leaves at k v0: needs k and the approach it reverses
             for effect in ("initial_velocity", "impact_pulse"):
                 require(effect in self.effects, f"launch={self.launch!r} needs the effect '{effect}' (C leaves at k v0)",

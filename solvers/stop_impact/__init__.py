@@ -13,14 +13,15 @@
 * `cam_follower`  the lift cam's rise with the elastic lever (Fig. 4): contact with the plate,
                   approach velocity, dynamic errors, the roller's contact force.
 * `cam_shape`     the lift cam for the shop: pitch curve, profile, pressure angle, radius of
-                  curvature, undercut, point tables with their chordal error: `cam_profile`.
+                  curvature, undercut, point tables with their chordal error: `cam_profile`
+                  (`shape_cam` with any law, e.g. a synthesised one: `law_of(result)`).
 """
 from typing import TYPE_CHECKING
 
 from mechopt.kit.lazy import lazy_names
 
 if TYPE_CHECKING:       # for readers and the docs; at run time each name imports its module when used
-    from mechopt.solvers.stop_impact.cam_shape import cam_profile
+    from mechopt.solvers.stop_impact.cam_shape import cam_profile, shape_cam
     from mechopt.solvers.stop_impact.entry_points import (
                                                           cam_dynamics,
                                                           impact_forces,
@@ -30,12 +31,12 @@ if TYPE_CHECKING:       # for readers and the docs; at run time each name import
                                                           rebound,
     )
     from mechopt.solvers.stop_impact.fit import fit_roots
-    from mechopt.solvers.stop_impact.synthesis import synthesise_law
+    from mechopt.solvers.stop_impact.synthesis import law_of, synthesise_law
 
 __getattr__, __dir__ = lazy_names(__name__, {
-    "cam_shape": ["cam_profile"], "fit": ["fit_roots"], "synthesis": ["synthesise_law"],
+    "cam_shape": ["cam_profile", "shape_cam"], "fit": ["fit_roots"], "synthesis": ["law_of", "synthesise_law"],
     "entry_points": ["cam_dynamics", "impact_forces", "linearise_amplitude", "natural_frequencies",
                      "operating_point", "rebound"]})
 
-__all__ = ["cam_dynamics", "cam_profile", "fit_roots", "impact_forces", "linearise_amplitude", "natural_frequencies",
-           "operating_point", "rebound", "synthesise_law"]
+__all__ = ["cam_dynamics", "cam_profile", "fit_roots", "impact_forces", "law_of", "linearise_amplitude",
+           "natural_frequencies", "operating_point", "rebound", "shape_cam", "synthesise_law"]

@@ -382,7 +382,12 @@ def _run(args) -> int:
         ezdxf_module()                      # a missing extra is said before the solve, not after
     scene = registry.find(args.case)
     if args.dxf is not None:
-        from mechopt.dxf import dxf_path
+        from mechopt.dxf import NothingToExport, dxf_path, writer_of
+        try:
+            writer_of(scene)                # a solver with no drawing is said before the solve, not after
+        except NothingToExport as exc:
+            print(f"dxf: {exc}; nothing was solved", file=sys.stderr)
+            return CHECK_FAILED
         _check_outputs(table_file=dxf_path(scene, args.dxf), table_flag="--dxf", table_suffix=len(".lock"))
     result = registry.run(scene, overrides, drivers=args.drivers or args.json is not None)
     _print_run(result)
@@ -408,14 +413,14 @@ def _run(args) -> int:
 def _write_dxf(run, folder) -> int:
     """`run --dxf DIR`: the scene's curves as DXF, each layer's chordal error printed; a scene with
     nothing to export says so on stderr (exit 1 when it solved: the file asked for is not there)."""
-    from mechopt.dxf import NothingToExport, chord_note, export_run
+    from mechopt.dxf import NothingToExport, export_run, notes
     try:
         written = export_run(run, folder)
     except NothingToExport as exc:
         print(f"dxf: {exc}", file=sys.stderr)
         return CHECK_FAILED if run.success else 0
-    for path, curve in written:
-        print(f"dxf: {path} {chord_note(curve)}")
+    for line in notes([item for _, item in written]):
+        print(f"dxf: {written[0][0]} {line}")
     return 0
 
 

@@ -1,6 +1,9 @@
 """Curves for the shop as DXF: a solved scene's curves (a cam profile, a pitch curve, a torch
 path) as closed LWPOLYLINEs (open where a curve ends) on named layers, units mm, each from a point
 table whose chordal error is measured (`models/cam_shape.point_table`) and written into the drawing.
+Beside the curves a drawing may carry exact marks: circles (a bore), arcs, lines (a centre mark, a
+reference mark) and text notes (`ShopCircle`, `ShopArc`, `ShopLine`, `ShopText`; a cam's are made
+by `mechopt.cam_sheet`).
 
 Which curves a scene has is decided by its solver, as its figures are: a mechanism's output module
 registers a writer `@shop_drawing(solver, ...)` (a `Run` -> its `ShopCurve`s); this module knows
@@ -24,6 +27,7 @@ from mechopt.kit.registrar import by_solver
 
 INSUNITS_MM = 4                 # DXF $INSUNITS code of millimetres
 WHITE = 7                       # DXF colour index of a layer that names none (white on black, black on white)
+BYLAYER = 256                   # DXF colour index "as its layer" (an entity that names no colour of its own)
 
 
 class NothingToExport(MechoptError):
@@ -43,6 +47,62 @@ class ShopCurve:
     colour: int = WHITE
 
 
+@dataclass(frozen=True)
+class ShopCircle:
+    """A full circle (a bore): centre (x, y) [mm], radius [mm]."""
+    layer: str
+    centre: tuple[float, float]
+    radius_mm: float
+    what: str
+    colour: int = BYLAYER
+
+    def add_to(self, msp, attribs):
+        msp.add_circle(self.centre, self.radius_mm, dxfattribs=attribs)
+
+
+@dataclass(frozen=True)
+class ShopArc:
+    """An arc counter-clockwise from `start_deg` to `end_deg` (DXF's sense), centre [mm], radius [mm]."""
+    layer: str
+    centre: tuple[float, float]
+    radius_mm: float
+    start_deg: float
+    end_deg: float
+    what: str
+    colour: int = BYLAYER
+
+    def add_to(self, msp, attribs):
+        msp.add_arc(self.centre, self.radius_mm, self.start_deg, self.end_deg, dxfattribs=attribs)
+
+
+@dataclass(frozen=True)
+class ShopLine:
+    """A straight line from `start` to `end` (x, y) [mm]."""
+    layer: str
+    start: tuple[float, float]
+    end: tuple[float, float]
+    what: str
+    colour: int = BYLAYER
+
+    def add_to(self, msp, attribs):
+        msp.add_line(self.start, self.end, dxfattribs=attribs)
+
+
+@dataclass(frozen=True)
+class ShopText:
+    """A one-line note at `at` (x, y) [mm], `height_mm` tall (DXF TEXT)."""
+    layer: str
+    text: str
+    at: tuple[float, float]
+    height_mm: float
+    what: str = "note"
+    colour: int = BYLAYER
+
+    def add_to(self, msp, attribs):
+        msp.add_text(self.text, height=self.height_mm, dxfattribs=attribs | {"insert": self.at})
+
+
+SHOP_MARKS = (ShopCircle, ShopArc, ShopLine, ShopText)
 SHOP_DRAWINGS: dict[Callable, Callable] = {}
 
 
@@ -51,15 +111,23 @@ SHOP_DRAWINGS: dict[Callable, Callable] = {}
 shop_drawing = by_solver(SHOP_DRAWINGS, "shop_drawing", "draws for the shop")
 
 
-def shop_curves(run) -> list[ShopCurve]:
-    """The curves of a solved scene (a `registry.Run`); NothingToExport when it has none."""
-    import mechopt.figures  # noqa: F401  (each mechanism's output modules register their writers)
-    writer = SHOP_DRAWINGS.get(run.scene.solver)
+def writer_of(scene) -> Callable:
+    """The DXF writer of a scene's solver, looked up from the scene alone (before any solve);
+    NothingToExport naming the solvers that have one when it has none."""
+    from mechopt.figures.registry import import_rows
+    import_rows()           # each mechanism's output modules register their writers (a row added late too)
+    writer = SHOP_DRAWINGS.get(scene.solver)
     if writer is None:
         solvers = sorted({s.__name__ for s in SHOP_DRAWINGS})
-        raise NothingToExport(f"{run.scene.id}: nothing to export as DXF (task {type(run.task).__name__}); its solver "
-                              f"{run.scene.solver.__name__} has no DXF writer; --dxf draws the results of: "
+        raise NothingToExport(f"{scene.id}: nothing to export as DXF (task {scene.task_class.__name__}); its solver "
+                              f"{scene.solver.__name__} has no DXF writer; --dxf draws the results of: "
                               f"{', '.join(solvers)}")
+    return writer
+
+
+def shop_curves(run) -> list:
+    """The curves (and marks) of a solved scene (a `registry.Run`); NothingToExport when it has none."""
+    writer = writer_of(run.scene)
     if not run.success:
         raise NothingToExport(f"{run.scene.id}: status {run.status.value}, nothing exported as DXF "
                               f"({run.result.message})")
@@ -76,17 +144,22 @@ def ezdxf_module():
 
 
 def dxf_bytes(curves, *, title: str = "") -> bytes:
-    """A DXF drawing (R2010, units mm) of LWPOLYLINEs, one layer per curve."""
+    """A DXF drawing (R2010, units mm): each `ShopCurve` an LWPOLYLINE, each mark its entity, on
+    its layer (made with the colour of the first item that names it)."""
     ezdxf = ezdxf_module()
     doc = ezdxf.new("R2010", setup=False)
     doc.header["$INSUNITS"] = INSUNITS_MM
     doc.header["$MEASUREMENT"] = 1                  # metric
     msp = doc.modelspace()
-    for curve in curves:
-        if curve.layer not in doc.layers:
-            doc.layers.add(curve.layer, color=curve.colour)
-        msp.add_lwpolyline([tuple(map(float, p)) for p in curve.xy], close=curve.closed,
-                           dxfattribs={"layer": curve.layer})
+    for item in curves:
+        if item.layer not in doc.layers:
+            doc.layers.add(item.layer, color=WHITE if item.colour == BYLAYER else item.colour)
+        attribs = {"layer": item.layer} | ({} if item.colour == BYLAYER else {"color": item.colour})
+        if isinstance(item, ShopCurve):
+            msp.add_lwpolyline([tuple(map(float, p)) for p in item.xy], close=item.closed,
+                               dxfattribs={"layer": item.layer})
+        else:
+            item.add_to(msp, attribs)
     if title:
         doc.header["$PROJECTNAME"] = title[:250]
     stream = io.StringIO()
@@ -115,8 +188,8 @@ def write_dxf(curves, path) -> Path:
 
 
 def export_run(run, out_dir) -> list[tuple[Path, ShopCurve]]:
-    """Write a solved scene's curves as `<scene>.dxf` in `out_dir` (all layers in one drawing);
-    (path, curve) per curve written. NothingToExport when the scene has none."""
+    """Write a solved scene's curves (and marks) as `<scene>.dxf` in `out_dir` (all layers in one
+    drawing); (path, item) per item written. NothingToExport when the scene has none."""
     curves = shop_curves(run)
     path = dxf_path(run.scene, out_dir)
     write_dxf(curves, path)
@@ -141,10 +214,22 @@ def chord_note(curve: ShopCurve) -> str:
             f"({curve.what}; length {_length(curve):.6g} mm)")
 
 
+def notes(items) -> list[str]:
+    """Lines for the terminal: one per curve (`chord_note`), one per layer of marks (what they are;
+    text notes are in the drawing, not repeated)."""
+    marks: dict[str, list[str]] = {}
+    for item in items:
+        if not isinstance(item, (ShopCurve, ShopText)):
+            marks.setdefault(item.layer, []).append(item.what)
+    return ([chord_note(c) for c in items if isinstance(c, ShopCurve)]
+            + [f"{layer}: {'; '.join(dict.fromkeys(whats))}" for layer, whats in marks.items()])
+
+
 def _length(curve):
     xy = np.vstack([curve.xy, curve.xy[:1]]) if curve.closed else curve.xy
     return float(np.sum(np.hypot(*np.diff(xy, axis=0).T)))
 
 
-__all__ = ["SHOP_DRAWINGS", "NothingToExport", "ShopCurve", "chord_note", "dxf_bytes", "dxf_path", "export_run",
-           "ezdxf_module", "read_polylines", "shop_curves", "shop_drawing", "write_dxf"]
+__all__ = ["SHOP_DRAWINGS", "SHOP_MARKS", "NothingToExport", "ShopArc", "ShopCircle", "ShopCurve", "ShopLine", "ShopText",
+           "chord_note", "dxf_bytes", "dxf_path", "export_run", "ezdxf_module", "notes", "read_polylines",
+           "shop_curves", "shop_drawing", "write_dxf", "writer_of"]

@@ -273,15 +273,19 @@ def test_a_polynomial_meets_conditions_no_library_law_does():
     ([(0, 0, 0), (0, 0, 1)], "not independent"),
     ([(0, 4, 0), (1, 0, 1)], "order allowed 0..3"),
     ([(0, 0, 0), (1, 0, math.nan)], "finite"),
+    ([(0, 0, 0), (1, 0, "one")], "finite numbers"),
+    ([(0, 0, 0), 1.0], "expected two or more"),
+    ([(0, k, 0) for k in range(4)] + [(1, k, 1 - bool(k)) for k in range(4)] + [(0.5, 0, 0.5)] * 5, "at most 12"),
 ])
 def test_bad_polynomial_conditions_are_refused(conditions, match):
     with pytest.raises(ModelError, match=match):
         laws.polynomial(conditions)
 
 
-@pytest.mark.parametrize(("b", "c", "cv"), [(-0.1, 0.5, 0.0), (0.6, 0.6, 0.0), (0.2, 0.2, 0.7), (math.nan, 0.1, 0.0)])
+@pytest.mark.parametrize(("b", "c", "cv"), [(-0.1, 0.5, 0.0), (0.6, 0.6, 0.0), (0.2, 0.2, 0.7), (math.nan, 0.1, 0.0),
+                                          (0.0, 0.0, 1.0)])
 def test_bad_scca_fractions_are_refused(b, c, cv):
-    with pytest.raises(ModelError, match="allowed 0 <= b, c, cv and b \\+ c \\+ cv <= 1"):
+    with pytest.raises(ModelError, match="allowed 0 <= b, c, cv and b \\+ c \\+ cv <= 1, cv < 1"):
         laws.scca(b, c, cv)
 
 

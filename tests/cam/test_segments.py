@@ -272,3 +272,9 @@ def test_a_synthesised_law_is_a_segments_law_by_its_numbers():
     import casadi as ca
     with pytest.raises(ModelError, match="known by its numbers only, it has no CasADi form"):
         cam.segments[0].law.expression(ca.SX.sym("x"))
+
+
+def test_a_segment_given_as_an_object_is_held_to_the_tables_rules():
+    with pytest.raises(ModelError, match=r"segments\[0\]\.lift_mm=-10.0: allowed > 0 for a rise"):
+        CamMotion([Segment("rise", laws.law("cycloidal"), 180.0, -10.0),
+                   dict(segment="return", law="cycloidal", angle_deg=180, lift_mm=10.0)])

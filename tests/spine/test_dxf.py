@@ -16,8 +16,8 @@ from mechopt.cli import main
 from mechopt.figures import cam_cutter as cutter_output
 from mechopt.files import take_lock
 from mechopt.kit.errors import MechoptError, SceneError
-from mechopt.models.cam_cutter import limacon_implicit, real_point
-from mechopt.models.cam_shape import chord_errors, distance_to_segment, flank, pitch
+from mechopt.models.cam_cutter import ideal_point, limacon_implicit, real_point
+from mechopt.models.cam_shape import chord_errors, distance_to_segment, flank, mirrored, pitch
 
 LIFT = "stop-impact/lift-cam-profile"
 
@@ -27,10 +27,10 @@ def lift():
     return mechopt.solve(LIFT)
 
 
-def _within_chords(curve, t, xy, stated):
+def _within_chords(curve, t, xy, stated, period=2 * math.pi):
     """The model's curve, sampled densely inside every chord between the file's vertices, stays
     within the stated chordal error of that chord."""
-    ends = np.r_[t, 2 * math.pi]
+    ends = np.r_[t, period]
     frac = np.arange(1, 200) / 200
     inner = ends[:-1, None] + frac * np.diff(ends)[:, None]
     Q = np.asarray(curve(inner.ravel())).reshape(2, *inner.shape)
@@ -58,18 +58,73 @@ def test_the_lift_cam_re_read_by_ezdxf_matches_the_model_within_its_chordal_erro
         _within_chords(curve, t, xy, stated)
 
 
-def test_the_torch_path_is_the_solved_limacon_and_the_ideal_path_on_another_layer(tmp_path):
-    run = mechopt.solve("cam-cutter/minimax")
-    [(path, torch), (_, ideal)] = dxf.export_run(run, tmp_path)
+@pytest.fixture(scope="module")
+def minimax():
+    return mechopt.solve("cam-cutter/minimax")
+
+
+def _torch_cut(H, L):
+    """The limaçon from the origin to its double point (arccos(-L/H), where its inner loop begins)
+    and its mirror, as the shop's drawing tables it."""
+    end = math.acos(-L / H)
+    cut = mirrored(lambda s: np.array(real_point(s, H, L)), 0.0, end)
+    return cut, end, cutter_output.point_table(cut, cutter_output.TORCH_TOL_MM, period=2 * end, breaks=(end,))
+
+
+def test_the_torch_path_is_the_solved_limacon_and_the_ideal_path_on_another_layer(minimax, tmp_path):
+    [(path, torch), (_, ideal)] = dxf.export_run(minimax, tmp_path)
     read = dxf.read_polylines(path)
-    H, L = run.values["H_mm"], run.values["L_mm"]
+    H, L = minimax.values["H_mm"], minimax.values["L_mm"]
     xy = read["TORCH_PATH"]
     assert np.abs(limacon_implicit(xy[:, 0], xy[:, 1], H, L)).max() < 1e-6 * (H + L) ** 4
-    table = cutter_output.point_table(lambda s: np.array(real_point(s, H, L)), cutter_output.TORCH_TOL_MM)
+    curve, end, table = _torch_cut(H, L)
     assert np.allclose(xy, table.xy, atol=1e-9)
     assert torch.chord_error_mm <= cutter_output.TORCH_TOL_MM and ideal.chord_error_mm <= cutter_output.TORCH_TOL_MM
-    _within_chords(lambda s: np.array(real_point(s, H, L)), table.t, xy, torch.chord_error_mm)
+    _within_chords(curve, table.t, xy, torch.chord_error_mm, period=2 * end)
     assert np.abs(read["IDEAL_PATH"][:, 1]).max() > 0 and read["IDEAL_PATH"][0] == pytest.approx([0.0, 0.0], abs=1e-12)
+
+
+def _crossings(xy, closed=True) -> int:
+    """Pairs of non-adjacent segments of a polyline that cross (each strictly straddles the other's line)."""
+    A = xy if closed else xy[:-1]
+    B = np.roll(xy, -1, axis=0) if closed else xy[1:]
+    n = len(A)
+
+    def side(P, Q, R):                               # sign of (Q - P) x (R - P), all pairs
+        return np.sign((Q[:, None, 0] - P[:, None, 0]) * (R[None, :, 1] - P[:, None, 1])
+                       - (Q[:, None, 1] - P[:, None, 1]) * (R[None, :, 0] - P[:, None, 0]))
+    straddle = (side(A, B, A) * side(A, B, B) < 0) & (side(A, B, A) * side(A, B, B) < 0).T
+    i, j = np.triu_indices(n, 2)
+    keep = ~((i == 0) & (j == n - 1)) if closed else np.ones_like(i, bool)
+    return int(straddle[i[keep], j[keep]].sum())
+
+
+def test_the_torch_path_is_cut_without_its_inner_loop_and_ends_where_the_ideal_path_ends(minimax, tmp_path):
+    """The solved linkage's limaçon has an inner loop (H > L: a 12 x 6 mm contour inside the cam,
+    x -107 ... -95 mm); the drawing cuts to its double point and the mirror closes it."""
+    [(path, _), *_] = dxf.export_run(minimax, tmp_path)
+    read = dxf.read_polylines(path)
+    H, L = minimax.values["H_mm"], minimax.values["L_mm"]
+    assert H > L
+    whole = cutter_output.point_table(lambda s: np.array(real_point(s, H, L)), cutter_output.TORCH_TOL_MM)
+    assert _crossings(whole.xy) > 0                 # the whole limaçon crosses itself: the check can fail
+    xy = read["TORCH_PATH"]
+    assert _crossings(xy) == 0
+    # every vertex on the outer branch: about the pole (-(L + H), 0) its distance rho is L + H cos
+    # of its polar angle (on the inner loop it would be H cos - L)
+    u, v = xy[:, 0] + L + H, xy[:, 1]
+    rho = np.hypot(u, v)
+    assert np.abs(rho - (L + H * u / np.where(rho > 0, rho, 1.0)))[rho > 1e-9].max() < 1e-9 * (H + L)
+    on_axis = [p[np.abs(p[:, 1]) < 1e-9] for p in (xy, read["IDEAL_PATH"])]
+    assert [len(a) for a in on_axis] == [2, 2]      # the start at the origin, the corner at t_FINISH
+    assert on_axis[0][1] == pytest.approx([-(H + L), 0.0], abs=1e-9)             # the double point
+    end = np.array(ideal_point(minimax.task.t_end_rad, minimax.task.a_mm, minimax.task.h_mm))
+    assert on_axis[1][1] == pytest.approx(end, abs=1e-9)
+    # the ideal path's end lies on the cut's branch through the double point within the solved
+    # deviation: a brute-force foot search on the limaçon near its double point
+    s = math.acos(-L / H) + np.linspace(-0.05, 0.05, 200_001)
+    gap = np.hypot(*(np.array(real_point(s, H, L)) - end[:, None])).min()
+    assert gap <= minimax.values["max_deviation_mm"] * (1 + 1e-6)
 
 
 def test_cli_run_dxf_writes_the_drawing_and_names_each_layers_error(tmp_path, capsys):
@@ -81,7 +136,8 @@ def test_cli_run_dxf_writes_the_drawing_and_names_each_layers_error(tmp_path, ca
 
 def test_a_scene_with_nothing_to_export_says_so_and_writes_nothing(tmp_path, capsys):
     assert main(["run", "stop-impact/frequencies", "--dxf", str(tmp_path)]) == 1
-    assert "nothing to export as DXF (task LeverStop)" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "nothing to export as DXF (task LeverStop)" in err and "nothing was solved" in err
     assert not list(tmp_path.iterdir())
 
 
@@ -154,10 +210,13 @@ def test_without_ezdxf_the_cli_says_so_before_solving(monkeypatch, tmp_path, cap
 def test_an_ideal_path_its_mirror_does_not_close_is_drawn_open_to_its_end(tmp_path):
     run = mechopt.solve("cam-cutter/other-profile", t1_rad=2.5, err_width_mm=5.0)       # ends off the axis
     curves = {c.layer: c for c in dxf.shop_curves(run)}
-    ideal = curves["IDEAL_PATH"]
-    assert curves["TORCH_PATH"].closed and not ideal.closed and ideal.chord_error_mm <= cutter_output.TORCH_TOL_MM
+    ideal, torch = curves["IDEAL_PATH"], curves["TORCH_PATH"]
+    assert not torch.closed and not ideal.closed and ideal.chord_error_mm <= cutter_output.TORCH_TOL_MM
     end = np.array(run.task.path_point(np.array([2.5]))).ravel()
     assert ideal.xy[-1] == pytest.approx(end, abs=1e-12)
+    feet = np.column_stack([run.arrays["limacon_x_mm"], run.arrays["limacon_y_mm"]])[[0, -1]]
+    assert torch.xy[[0, -1]] == pytest.approx(feet, abs=1e-9)      # the torch cut between the path's feet
+    assert _crossings(torch.xy, closed=False) == 0
     path = dxf.write_dxf(list(curves.values()), tmp_path / "open.dxf")
     [polyline] = [e for e in ezdxf.readfile(str(path)).modelspace() if e.dxf.layer == "IDEAL_PATH"]
     assert not polyline.closed

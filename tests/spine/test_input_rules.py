@@ -37,6 +37,12 @@ NO_RANGE = {
     "ShapeSummary": "a computed result (radii and angles of a cam shape)",
     "PointTable": "a computed result (a shop's point table)",
     "Effect": "a description of an effect, no number",
+    "Law": "a library law: its forms and breaks are the library's own; end_order is derived, not given",
+    "_Piece": "a piece of a library law (SCCA, trapezoid), built by the library from its checked b, c, cv",
+    "Segment": "a row of CamMotion.segments, checked by `cam_motion._segment` (kind, angle in (0, 360] deg, the "
+               "lift's sign by kind, a finite number each) before it is built",
+    "Join": "a computed result (a step of s' or s'' where two segments meet)",
+    "CamMotion": "segments checked row by row (`cam_motion._segment`); a cam scene's task holds it",
 }
 
 

@@ -86,6 +86,22 @@ def test_every_law_agrees_with_dop853(cam, law):
     assert rise.contact_xi == pytest.approx(xi, rel=1e-9) and rise.approach_velocity_m_s == pytest.approx(v0, rel=1e-7)
 
 
+@pytest.mark.parametrize("law", ["modified_trapezoid", "polynomial_4567", "scca(0.2, 0.6, 0.2)"])
+def test_a_library_law_beyond_the_four_agrees_with_dop853(cam, law):
+    """Any law of mechopt.laws drives the lift (its CasADi form from the library), checked by scipy."""
+    task = dataclasses.replace(cam, law=law)
+    rise = follow_cam(task, 370.0)
+    xi, v0, status = follow_cam_reference(task, 370.0)
+    assert rise.status is status is Status.SOLVED
+    assert rise.contact_xi == pytest.approx(xi, rel=1e-9) and rise.approach_velocity_m_s == pytest.approx(v0, rel=1e-7)
+
+
+def test_a_law_whose_acceleration_steps_inside_the_rise_is_refused_by_name(cam):
+    with pytest.raises(ModelError, match=r"law='constant_acceleration': its acceleration steps inside the rise "
+                                         r"\(at xi = 0\.5\)"):
+        dataclasses.replace(cam, law="constant_acceleration")
+
+
 def test_a_stiff_lever_approaches_at_the_laws_own_velocity(cam):
     """Quasi-static limit: with a mass 10^4 times lighter (100 times the frequency), C follows the
     cam; it meets the plate where S(xi) = 1 - preload / H with H S'(xi) / T (a rigid lever)."""
@@ -229,7 +245,7 @@ def test_tangent_is_the_slope_of_the_exact_chain(chain):
 # ---------------------------------------------------------------- refused inputs
 
 @pytest.mark.parametrize("change, match", [
-    ({"law": "parabolic"}, r"law='parabolic': allowed cycloidal, modified_sine"),
+    ({"law": "parabolic"}, r"law='parabolic': unknown motion law; allowed: cycloidal, harmonic, modified_sine"),
     ({"closure_force_N": -1.0}, r"closure_force_N=-1\.0: allowed 0 \.\.\. 1e\+07"),
     ({"closure_force_N": 1e9}, r"closure_force_N=1000000000\.0: allowed 0 \.\.\. 1e\+07"),
     ({"stroke_mm": 0.0}, r"stroke_mm=0\.0: allowed 1e-06 \.\.\. 100000"),

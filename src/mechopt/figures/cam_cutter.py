@@ -163,18 +163,22 @@ def family_settings(run):
 
 @shop_drawing(grid_scan, robust, evolve, check, minimax, fit_linkage, joint_loads)
 def torch_shop_curves(run) -> list[ShopCurve]:
-    """The limaçon (10) of the solved (or given) links over a whole crank turn (its inner loop
-    too, where H > L: the torch runs it), and the ideal path (its upper half closed by its
-    mirror, corner at t_FINISH) on another layer."""
+    """The torch path over the range that is cut, and the ideal path (its upper half closed by
+    its mirror, corner at t_FINISH) on another layer.
+
+    The cut is the limaçon (10) of the solved (or given) links from the origin (s = 0) to where it
+    first meets the x axis again, closed by its mirror: its double point where |H| > L (the inner
+    loop beyond it is not cut: a contour inside the cam's body, the torch would gouge it), else
+    s = pi. An ideal path that its mirror does not close is cut open, between the limaçon's
+    points nearest its start and its end (the solver's foot points)."""
     task, values = run.task, run.values
     H, L = (values.get(k, getattr(task, k, None)) for k in ("H_mm", "L_mm"))
     if H is None or L is None:
         raise NothingToExport(f"{run.scene.id}: no linkage (H_mm, L_mm) in this result: no torch path to export")
-    limacon = point_table(lambda s: np.array(real_point(s, H, L)), TORCH_TOL_MM)
-    curves = [ShopCurve("TORCH_PATH", limacon.xy, limacon.chord_error_mm, f"limacon H={H:.6g} L={L:.6g} mm",
-                        colour=TORCH_COLOUR)]
+    torch = lambda s: np.array(real_point(s, H, L))             # noqa: E731
+    what = f"limacon H={H:.6g} L={L:.6g} mm"
     if not hasattr(task, "t_end_rad"):          # the loads' task knows its links, not the path they follow
-        return curves
+        return [_closed_cut(torch, cut_end_rad(H, L), what)]
     if isinstance(task, ProfileFit):
         upper = lambda t: np.array(task.path_point(t))              # noqa: E731
     else:
@@ -183,10 +187,36 @@ def torch_shop_curves(run) -> list[ShopCurve]:
     ends = upper(np.array([t0, t1]))
     if np.all(np.abs(ends[1]) <= AXIS_REL * task.size_mm):      # both ends on the axis: the mirror closes it
         ideal = point_table(mirrored(upper, t0, t1), TORCH_TOL_MM, period=2 * (t1 - t0), breaks=(t1 - t0,))
-        curves.append(ShopCurve("IDEAL_PATH", ideal.xy, ideal.chord_error_mm, "ideal path and its mirror",
-                                colour=IDEAL_COLOUR))
-    else:                                                       # drawn as given, from its start to its end
-        ideal = point_table(lambda t: upper(t0 + t), TORCH_TOL_MM, period=t1 - t0, closed=False)
-        curves.append(ShopCurve("IDEAL_PATH", ideal.xy, ideal.chord_error_mm, "ideal path, open", closed=False,
-                                colour=IDEAL_COLOUR))
-    return curves
+        return [_closed_cut(torch, cut_end_rad(H, L), what),
+                ShopCurve("IDEAL_PATH", ideal.xy, ideal.chord_error_mm, "ideal path and its mirror", colour=IDEAL_COLOUR)]
+    # drawn as given, from its start to its end; the torch between its foot points
+    ideal = point_table(lambda t: upper(t0 + t), TORCH_TOL_MM, period=t1 - t0, closed=False)
+    a = run.result.arrays
+    s0, s1 = (limacon_parameter(a["limacon_x_mm"][i], a["limacon_y_mm"][i], H, L) for i in (0, -1))
+    s1 += 2 * np.pi * (s1 <= s0)
+    cut = point_table(lambda s: torch(s0 + s), TORCH_TOL_MM, period=s1 - s0, closed=False)
+    return [ShopCurve("TORCH_PATH", cut.xy, cut.chord_error_mm, f"{what}, cut open between the path's ends",
+                      closed=False, colour=TORCH_COLOUR),
+            ShopCurve("IDEAL_PATH", ideal.xy, ideal.chord_error_mm, "ideal path, open", closed=False,
+                      colour=IDEAL_COLOUR)]
+
+
+def cut_end_rad(H, L) -> float:
+    """The crank parameter s in (0, pi] where the limaçon (10) first meets the x axis after the
+    origin: y = sin s (L + H cos s) = 0 at its double point s = arccos(-L / H) where |H| > L, else at pi."""
+    return float(np.arccos(-L / H)) if abs(H) > abs(L) else float(np.pi)
+
+
+def limacon_parameter(x, y, H, L) -> float:
+    """The crank parameter s of a point on the limaçon (10): about its pole (-(L + H), 0) the point
+    is (L + H cos s) (cos s, sin s), so s is the point's polar angle there, or that plus pi where
+    L + H cos s < 0 (the inner loop) [rad, in [0, 2 pi)]."""
+    polar = float(np.arctan2(y, x + L + H))
+    return min((s % (2 * np.pi) for s in (polar, polar + np.pi)),
+               key=lambda s: np.hypot(*(np.array(real_point(s, H, L)) - (x, y))))
+
+
+def _closed_cut(torch, end, what) -> ShopCurve:
+    table = point_table(mirrored(torch, 0.0, end), TORCH_TOL_MM, period=2 * end, breaks=(end,))
+    return ShopCurve("TORCH_PATH", table.xy, table.chord_error_mm, f"{what}, cut to s = {end:.6g} rad and its mirror",
+                     colour=TORCH_COLOUR)
