@@ -55,7 +55,9 @@ class CamFollower:
     0: only > 0, no cusp or undercut), `base_radius_min_mm`/`base_radius_max_mm` (the least base
     radius search's bounds), `on_jump` (the status when the spring cannot hold the follower at
     `speed_rpm`: INFEASIBLE or LIMIT, as the scene asks), `report_angle_deg` (a cam angle whose
-    follower and contact forces are reported, as a textbook problem asks them). Motion: `segments` (the cam's segments,
+    follower and contact forces are reported, as a textbook problem asks them). For the shop
+    (`mechopt run --dxf`): `bore_diameter_mm` (0: not stated) and `rise_start_shaft_deg`, the
+    machine shaft's angle at which the rise begins (the cam's phase, where the scene states it). Motion: `segments` (the cam's segments,
     read by `models/cam_motion.py`, with its `joins`: "warn" or "refuse" a step of s' or s''
     where segments meet) or `motion` (an object with `at`).
     """
@@ -89,6 +91,8 @@ class CamFollower:
     base_radius_max_mm: Length = 0.0
     on_jump: Literal["INFEASIBLE", "LIMIT"] = "INFEASIBLE"
     report_angle_deg: Annotated[float | None, Interval(ge=0, lt=360)] = None
+    bore_diameter_mm: Annotated[float, Ge(0), Le(100_000), doc("0: not stated, no drawing for the shop")] = 0.0
+    rise_start_shaft_deg: Annotated[float, Interval(ge=0, lt=360)] = 0.0
     joins: Literal["warn", "refuse"] = "warn"
     segments: object | None = None
     motion: object | None = None

@@ -16,6 +16,7 @@ from mechopt.models.cam_forces import (
     omega_rad_s,
     sign_changes,
 )
+from mechopt.models.cam_shape import point_table
 from mechopt.solvers.cam.extremes import polished_min
 
 __all__ = ["size_cam", "pressure_peaks", "convex_min"]
@@ -58,7 +59,8 @@ def convex_min(task: CamFollower, theta, radius, which: str, base_mm=None) -> tu
     return polished_min(f, theta, radius if flat else np.where(radius > 0, radius, np.inf))
 
 
-def size_cam(task: CamFollower, *, samples: Samples = 7200) -> Result:
+def size_cam(task: CamFollower, *, samples: Samples = 7200,
+             chord_tol_mm: Annotated[float, Interval(gt=0, le=1)] = 0.01) -> Result:
     """The cam's sizing figures over `samples` cam angles (extremes polished between samples):
 
     * pressure angle: `max_pressure_angle_rise_deg` and `_return_deg` (|phi|, with the signed
@@ -78,10 +80,13 @@ def size_cam(task: CamFollower, *, samples: Samples = 7200) -> Result:
     * Hertz stress (`roller_width_mm` > 0): `max_contact_stress_MPa` and its cam angle;
     * `pressure_angle` violated when above `max_pressure_angle_deg`.
 
-    Arrays: the cam angle, s, the pressure angle, radii, forces, stress, and the pitch curve and
-    profile as x/y [mm] in the cam frame (the cam at angle 0; a groove's other wall too).
-    Diagnostics: `rise_start_deg`, the direction (cam frame, from +x) of the contact at cam angle
-    0, where the motion starts (the rise start when the first segment is a rise); `sense`.
+    Arrays: the cam angle, s, the pressure angle, radii, forces and stress over `samples` angles;
+    the cam as the shop takes it in the cam frame (the cam at cam angle 0), point tables within
+    `chord_tol_mm` of the curves: `pitch_x_mm`/`_y_mm` (a flat face: the profile), `profile_...`
+    and a groove's `groove_outer_...` (none where the profile is undercut or cusped), their
+    measured chordal errors in diagnostics `chord_error_mm`. Diagnostics `rise_start_deg`: the
+    direction (cam frame, from +x) of the roller centre (a flat face: its foot) where the first
+    rise begins; `sense`.
     """
     clock = Clock()
     theta = np.linspace(0.0, 2 * math.pi, samples, endpoint=False)
@@ -106,12 +111,8 @@ def size_cam(task: CamFollower, *, samples: Samples = 7200) -> Result:
     arrays |= {"cam_angle_deg": np.degrees(theta), "s_mm": s, "ds_mm_per_rad": ds, "dds_mm_per_rad2": dds,
                "pressure_angle_deg": np.degrees(c.pressure_rad),
                "pitch_radius_mm": np.clip(c.pitch_radius_mm, -1e6, 1e6),
-               "profile_radius_mm": np.clip(c.profile_radius_mm, -1e6, 1e6),
-               "pitch_x_mm": c.pitch[0], "pitch_y_mm": c.pitch[1],
-               "profile_x_mm": c.profile[0], "profile_y_mm": c.profile[1]}
-    if task.closure == "groove":
-        outer = 2 * c.pitch - c.profile          # P + r n: the roller's other side
-        arrays |= {"groove_outer_x_mm": outer[0], "groove_outer_y_mm": outer[1]}
+               "profile_radius_mm": np.clip(c.profile_radius_mm, -1e6, 1e6)}
+    errors = _shop_tables(task, chord_tol_mm, shapeless=bool({"undercut", "cusp"} & set(violated)), arrays=arrays)
     only_jump = violated == ["jump"]
     status = (Status.SOLVED if not violated else Status.LIMIT if only_jump and task.on_jump == "LIMIT"
               else Status.INFEASIBLE)
@@ -119,8 +120,8 @@ def size_cam(task: CamFollower, *, samples: Samples = 7200) -> Result:
                                             f"pressure angle {values['max_pressure_angle_deg']:.3f} deg at most")
     return clock.result(status, values, message=message, violated=tuple(violated), arrays=arrays,
                         diagnostics={"follower": task.follower, "face": task.face, "sense": task.sense,
-                                     "closure": task.closure, "samples": samples,
-                                     "rise_start_deg": math.degrees(math.atan2(c.contact[1][0], c.contact[0][0]))})
+                                     "closure": task.closure, "samples": samples, "chord_error_mm": errors,
+                                     "rise_start_deg": _rise_start_deg(task)})
 
 
 def _curvature(task, theta, c, values, violated, said):
@@ -215,3 +216,32 @@ def _forces(task, theta, s, dds, c, values, violated, said, arrays):
 def _angles(degrees) -> str:
     """The first SHOWN_ANGLES cam angles, '...' for more."""
     return ", ".join(f"{a:.2f}" for a in degrees[:SHOWN_ANGLES]) + (" ..." if len(degrees) > SHOWN_ANGLES else "")
+
+
+def _shop_tables(task, tol_mm, *, shapeless, arrays) -> dict[str, float]:
+    """The cam's curves as point tables within `tol_mm` (models/cam_shape.point_table, the segment
+    joins among the points) into `arrays`; their measured chordal errors. An undercut or cusped
+    profile is not made (the pitch curve still is)."""
+    breaks = tuple(getattr(task.motion, "starts_rad", ()))
+    curves = {"pitch": lambda t: task.curves(t).pitch}
+    if not shapeless:
+        curves["profile"] = lambda t: task.curves(t).profile
+        if task.closure == "groove":
+            curves["groove_outer"] = lambda t: (lambda q: 2 * q.pitch - q.profile)(task.curves(t))   # P + r n
+    errors = {}
+    for name, curve in curves.items():
+        table = point_table(curve, tol_mm, breaks=breaks)
+        arrays |= {f"{name}_x_mm": table.xy[:, 0], f"{name}_y_mm": table.xy[:, 1],
+                   f"{name}_cam_angle_deg": np.degrees(table.t)}
+        errors[name] = table.chord_error_mm
+    return errors
+
+
+def _rise_start_deg(task) -> float:
+    """Where the first rise begins: the direction of the roller centre (a flat face: the foot of
+    its perpendicular) seen from the cam at cam angle 0 [deg] (cam angle 0 where the motion names
+    no segments)."""
+    segments = getattr(task.motion, "segments", ())
+    start = next((math.radians(seg.start_deg) for seg in segments if getattr(seg, "kind", "") == "rise"), 0.0)
+    p = task.curves(np.array([start])).pitch[:, 0]      # at the rise start s' = 0: a flat face's contact is its foot
+    return math.degrees(math.atan2(p[1], p[0]))

@@ -145,6 +145,7 @@ def test_an_undercut_roller_is_named_at_its_cam_angle():
     r = size_cam(task)
     assert r.status is Status.INFEASIBLE and "undercut" in r.violated
     assert f"{r.values['min_pitch_radius_at_deg']:.3f} deg" in r.message and "roller_radius_mm=12" in r.message
+    assert "pitch_x_mm" in r.arrays and "profile_x_mm" not in r.arrays       # no profile for the shop
 
 
 def test_a_pressure_angle_limit_no_base_radius_meets_is_infeasible_naming_the_least_angle():

@@ -1,9 +1,12 @@
 """Figures of a cam with any follower (solvers/cam): the cam as drawn (pitch curve, profile, a
 groove's other wall), its pressure angle and radii against the cam angle, its forces and contact
 stress; and the least base radius search's criterion against the base radius. They read the
-Result's arrays only."""
+Result's arrays only. `size_cam`'s drawing for the shop is `mechopt.cam_sheet`'s."""
 import numpy as np
 
+from mechopt.cam_sheet import Table, cam_sheet
+from mechopt.dxf import NothingToExport, shop_drawing
+from mechopt.figures.cam_shape import stated_phase
 from mechopt.figures.registry import figure, new_figure
 from mechopt.figures.text import literal
 from mechopt.solvers.cam import least_base_radius, size_cam
@@ -18,7 +21,7 @@ def cam_figures(run) -> dict:
     fig = new_figure(figsize=(6, 6))
     ax = fig.add_subplot()
     for name, (label, colour, style) in CURVES.items():
-        if f"{name}_x_mm" in a and (name != "pitch" or run.task.face == "roller"):
+        if f"{name}_x_mm" in a and (name != "pitch" or run.task.face == "roller"):     # a flat face's pitch is its profile
             ax.plot(np.r_[a[f"{name}_x_mm"], a[f"{name}_x_mm"][:1]], np.r_[a[f"{name}_y_mm"], a[f"{name}_y_mm"][:1]],
                     style, color=colour, lw=1, label=label)
     ax.plot([0], [0], "k+")
@@ -68,3 +71,21 @@ def base_radius_figures(run) -> dict:
     ax.set(xlabel="base radius [mm]", ylabel=("least profile radius [mm]" if "profile" in name
                                               else "largest pressure angle [deg]"), title=literal(run.scene.id))
     return {"criterion": fig}
+
+
+@shop_drawing(size_cam)
+def cam_shop_drawing(run) -> list:
+    """The cam for the shop (`mechopt.cam_sheet`): the solver's point tables with their measured
+    chordal errors, the centre and bore, the rise-start mark, the sense of rotation and the phase
+    on the shaft where the scene states `rise_start_shaft_deg`."""
+    task, arrays, errors = run.task, run.arrays, run.result.diagnostics["chord_error_mm"]
+    if task.bore_diameter_mm <= 0:
+        raise NothingToExport("bore_diameter_mm not stated (0): the drawing's bore needs it "
+                              "(e.g. --set bore_diameter_mm=20)")
+    tables = {name: Table(np.column_stack([arrays[f"{name}_x_mm"], arrays[f"{name}_y_mm"]]), errors[name])
+              for name in CURVES if name in errors}
+    notes = (f"{task.follower} {task.face} follower; the cam as it stands at cam angle 0",)
+    if task.face == "flat":
+        notes += ("flat face: PITCH_CURVE is the profile itself",)
+    return cam_sheet(**tables, bore_diameter_mm=task.bore_diameter_mm, sense=task.sense, phase=stated_phase(run),
+                     rise_start_deg=run.result.diagnostics["rise_start_deg"], notes=notes)
