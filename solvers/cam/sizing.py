@@ -221,9 +221,9 @@ def _angles(degrees) -> str:
 def _shop_tables(task, tol_mm, *, shapeless, arrays) -> dict[str, float]:
     """The cam's curves as point tables within `tol_mm` (models/cam_shape.point_table, the segment
     joins among the points) into `arrays`; their measured chordal errors. An undercut or cusped
-    profile is not made (the pitch curve still is)."""
+    profile is not made (a roller's pitch curve still is; a flat face's is its profile)."""
     breaks = tuple(getattr(task.motion, "starts_rad", ()))
-    curves = {"pitch": lambda t: task.curves(t).pitch}
+    curves = {"pitch": lambda t: task.curves(t).pitch} if task.face == "roller" or not shapeless else {}
     if not shapeless:
         curves["profile"] = lambda t: task.curves(t).profile
         if task.closure == "groove":
