@@ -211,12 +211,8 @@ class CamFollower:
         return np.sum((curves.contact - np.array([[self.pivot_distance_mm], [0.0]])) * along, axis=0)
 
     def warnings(self, values: dict) -> list[str]:
-        """The motion's (steps of s' or s'' at joins) and the oscillating follower's reading of s."""
-        out = list(getattr(self.motion, "warnings", lambda v: [])(values))
-        if self.follower == "oscillating":
-            out.append(f"oscillating follower: the motion's s is read as the arc run at arm_mm={self.arm_mm:g} "
-                       "from the pivot (a segment's lift_mm is that arc)")
-        return out
+        """The motion's: steps of s' or s'' where segments meet (an infinite acceleration or jerk)."""
+        return list(getattr(self.motion, "warnings", lambda v: [])(values))
 
 
 def motion_of_segments(segments, joins: str = "warn"):

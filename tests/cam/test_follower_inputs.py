@@ -78,3 +78,12 @@ def test_segments_that_miss_a_turn_are_refused_naming_the_file_and_the_sum(tmp_p
 def test_a_bad_value_set_on_the_command_line_names_its_range():
     with pytest.raises(MechoptError, match=r"roller_radius_mm=-5: allowed 0 \.\.\. 100,000"):
         registry.run("cam/translating-roller", {"roller_radius_mm": -5})
+
+
+def test_an_acceleration_jump_between_segments_reaches_the_cams_warnings_and_refuse_makes_it_an_error():
+    harmonic = {"segments[segment=return].law": "harmonic"}
+    r = registry.run("cam/translating-roller", harmonic)
+    assert any("acceleration jump of -33.75 mm/rad^2 at cam angle 180 deg" in w and "infinite jerk" in w
+               for w in r.result.warnings)
+    with pytest.raises(MechoptError, match="joins='refuse'"):
+        registry.run("cam/translating-roller", harmonic | {"joins": "refuse"})
