@@ -51,6 +51,10 @@ MECHANISMS = (
               "mechopt.solvers.stop_impact", ("mechopt.figures.stop_impact", "mechopt.figures.cam_shape",
                                               "mechopt.figures.law_synthesis"), "mechopt.benchmarks.stop_impact",
               (("stop-impact", "stop-impact/rebound-177rpm"),)),
+    Mechanism("cam", "Disc cams with any follower (textbook cams)",
+              ("mechopt.models.cam_followers", "mechopt.models.cam_geometry", "mechopt.models.cam_forces"),
+              "mechopt.solvers.cam", ("mechopt.figures.cam",), "mechopt.benchmarks.cam",
+              (("cam", "cam/translating-roller"),)),
 )
 
 
