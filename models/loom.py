@@ -613,6 +613,11 @@ class Cyclogram:
         scale = 1.0 if self.stress_speed_rpm is None or self.speed_rpm is None else self.speed_rpm / self.stress_speed_rpm
         return float(model["sigma_ref_MPa"]) * scale, float(model["t_ref_deg"])
 
+    @cached_property
+    def operation_names(self) -> dict[tuple[str, str], str]:
+        """(from, to) -> ' "name"' for the operations the table names (the conflict messages' words)."""
+        return {(x, y): f' "{name}"' for x, y, name in self.graph.edges(data="name") if name}
+
     def arc_data(self, k: int) -> dict:
         x, y = self.arcs[k]
         return self.graph.edges[x, y]

@@ -294,7 +294,7 @@ class Net:
 
     def arc_label(self, k):
         x, y = self.arcs[k]
-        return f"t({x}->{y}) >= {self.lb[k]:.6g} deg ({self.lb_why[k]})"
+        return f"t({x}->{y}) >= {self.lb[k]:.6g} deg ({self.lb_why[k]}){self.task.operation_names.get((x, y), '')}"
 
 
 def conflict_chain(net, max_conflicts: int = 1) -> list:

@@ -184,7 +184,9 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp",
         diagnostics |= {"conflict_groups": groups[:NAMED], "conflict_length": len(chain)}
         message = ("no speed fits: conflicting chain " + some_of(label for _, label, _ in chain)
                    + f" (needs {math.fsum(w for _, _, w in chain):.6g} deg more than its limits allow as n -> 0;"
-                   + f" groups {some_of(groups, sep=', ')})")
+                   + f" groups {some_of(groups, sep=', ')})") if chain else (
+            f"no speed above rest fits: the {chosen} method's highest speed is {n_max or 0.0:.6g} rpm, and no "
+            f"chain conflicts at rest")
         return clock.result(Status.INFEASIBLE, {}, message=message,
                             violated=tuple(label for _, label, _ in chain[:NAMED]), diagnostics=diagnostics)
     if status is Status.UNBOUNDED:
@@ -362,7 +364,8 @@ class _Undecided(Exception):
 def _arcs_at(task, net, lb):
     """The difference constraints with the arcs' bounds `lb` and the cycle, for `positive_cycle`."""
     first, last = net.names[net.first], net.names[net.last]
-    arcs = [(u, v, w, f"t({u}->{v}) >= {w:.6g} deg") for u, v, w in constraint_arcs(net, lb)]
+    names = task.operation_names
+    arcs = [(u, v, w, f"t({u}->{v}) >= {w:.6g} deg{names.get((u, v), '')}") for u, v, w in constraint_arcs(net, lb)]
     return arcs + [(last, first, -task.cycle_deg, f"cycle p({last}) - p({first}) <= {task.cycle_deg:.6g} deg")]
 
 
@@ -513,7 +516,11 @@ class SpeedGraph:
             if slope <= 0:
                 return 0.0                  # positive at rest: the n = 0 test says so first
             new = -(c + math.fsum(phi[~active])) / slope
-            if new >= n_rpm or np.array_equal(g * new > phi, active):
+            # the piece's line lies under the convex sum, so the sum at `new` is >= 0; where it is 0
+            # (to tol) `new` is the root, also when it falls on a kink g n = phi (an operation of a
+            # fixed angle, min_deg = max_deg, with a time floor: the next piece has no slope)
+            closes = c + math.fsum(np.maximum(phi, g * new)) <= self.tol
+            if new >= n_rpm or closes or np.array_equal(g * new > phi, active):
                 return min(new, n_rpm)
             n_rpm = new
         return n_rpm
@@ -551,7 +558,8 @@ class SpeedGraph:
                 law = why[k] if speed_set else "min_angle"
                 out.append(f"{law}[{x}->{y}] t >= {max(self.phi[k], self.g[k] * n_rpm):.6g} deg "
                            f"({group[x] or group[y] or '-'}"
-                           + (f", {self.g[k]:.6g} deg/rpm)" if speed_set else ")"))
+                           + (f", {self.g[k]:.6g} deg/rpm)" if speed_set else ")")
+                           + self.task.operation_names.get((x, y), ""))
             elif kind == "back":
                 u, v, w = names[self.back.tails[k]], names[self.back.heads[k]], self.back.weights[k]
                 out.append(f"sync p({u}) = p({v})" if self.kinds[k] == "sync"
