@@ -53,6 +53,7 @@ from annotated_types import Gt, Le, Lt
 from mechopt.kit.errors import MechoptError, ModelError, some_of
 from mechopt.kit.settings import check_fields
 from mechopt.models.effects import Effect
+from mechopt.models.loom_motions import MOTION_KEYS, motion_of
 from mechopt.models.provenance import provenance_problem
 from mechopt.models.stop_impact import LeverStop
 
@@ -69,12 +70,13 @@ AMPLITUDE_LAWS = ("linear",)
 _NOTE_KEYS = {"mark", "why", "where", "what"}         # provenance and description, not physics
 _EVENT_KEYS = {"mechanism", "group"} | _NOTE_KEYS
 _OP_KEYS = {"from", "to", "min_deg", "min_ms", "max_deg", "stress", "amplitude", "name", "group",
-            "mechanism", "cycles"} | _NOTE_KEYS
+            "mechanism", "cycles"} | set(MOTION_KEYS) | _NOTE_KEYS
 # an operations table read from a designer's CSV (scene: `operations = { csv = "ops.csv", columns =
 # [...] }`): its columns and their kinds; event names are text ("3", "10.1", "feed.start")
 OPERATION_COLUMNS = {"from": str, "to": str, "name": str, "group": str, "mechanism": str, "min_deg": float,
                      "min_ms": float, "max_deg": float, "stress": str, "amplitude": str, "mark": str, "why": str,
-                     "cycles": float}
+                     "cycles": float, "law": str, "stroke_mm": float, "max_accel_m_s2": float,
+                     "max_velocity_m_s": float}
 WINDOW_COLUMNS = {"from": str, "to": str, "max_deg": float, "max_ms": float} | {k: str for k in sorted(_NOTE_KEYS)}
 SYNC_COLUMNS = {"events": str} | {k: str for k in sorted(_NOTE_KEYS)}   # events "a;b;c": one sync per row
 _STRESS_KEYS = {"sigma_ref_MPa", "t_ref_deg"} | _NOTE_KEYS
@@ -279,13 +281,18 @@ class Cyclogram:
             if g.has_edge(x, y):
                 raise ModelError(f"{key}: given twice; one operation per pair of events", key=key)
             phi, min_ms = _floors(op, key)
+            motion = motion_of(op, key)
+            motion_ms, motion_limit = motion.least_ms() if motion else (0.0, "")
+            if motion_ms > (min_ms or 0.0):      # the motion's limits as a least duration (models/loom_motions.py)
+                min_ms = motion_ms
             stress, amplitude = op.get("stress"), op.get("amplitude")
             if stress is not None:
                 self._check_stress_ref(stress, key)
             if amplitude is not None:
                 self._check_amplitude_ref(amplitude, key)
-            g.add_edge(x, y, min_deg=phi, min_ms=min_ms, stress=stress,
-                       amplitude=amplitude, name=str(op.get("name", "")), group=str(op.get("group", "")))
+            g.add_edge(x, y, min_deg=phi, min_ms=min_ms, stress=stress, motion=motion, motion_limit=motion_limit
+                       if motion_ms and motion_ms == min_ms else "", amplitude=amplitude,
+                       name=str(op.get("name", "")), group=str(op.get("group", "")))
         if not nx.is_directed_acyclic_graph(g):
             cycle = nx.find_cycle(g)
             chain = some_of([cycle[0][0]] + [v for _, v in cycle], sep=" -> ")
@@ -407,7 +414,7 @@ class Cyclogram:
                 if end not in self.events:
                     raise ModelError(f"{key}: unknown event {end!r}; events: {some_of(self.events, sep=', ')}",
                                      key=key)
-            extra = sorted({"max_deg", "stress", "amplitude"} & op.keys())
+            extra = sorted(({"max_deg", "stress", "amplitude"} | set(MOTION_KEYS)) & op.keys())
             if extra:
                 raise ModelError(f"{key}.cycles={k}: a recurrent operation carries min_deg or min_ms only, not "
                                  f"{', '.join(extra)}", key=f"{key}.{extra[0]}")
@@ -618,6 +625,22 @@ class Cyclogram:
         """(from, to) -> ' "name"' for the operations the table names (the conflict messages' words)."""
         return {(x, y): f' "{name}"' for x, y, name in self.graph.edges(data="name") if name}
 
+    @cached_property
+    def motion_arcs(self) -> dict:
+        """Arc index (in `arcs` order) -> its Motion (models/loom_motions.py), for the operations with a law."""
+        return {k: d["motion"] for k, d in enumerate(self._arc_data) if d["motion"] is not None}
+
+    def motion_values(self, t_deg, speed_rpm) -> dict:
+        """Peak acceleration [m/s^2] and velocity [m/s] of every motion with a stroke, its angle
+        t (per arc, `arcs` order) at speed n: accel_<x>_<y>_m_s2, velocity_<x>_<y>_m_s."""
+        out = {}
+        for k, motion in self.motion_arcs.items() if speed_rpm else ():
+            if motion.stroke_mm is not None and t_deg[k] > 0:
+                x, y = self.arcs[k]
+                out[f"accel_{x}_{y}_m_s2"] = motion.peak_accel_m_s2(float(t_deg[k]), speed_rpm)
+                out[f"velocity_{x}_{y}_m_s"] = motion.peak_velocity_m_s(float(t_deg[k]), speed_rpm)
+        return out
+
     def arc_data(self, k: int) -> dict:
         x, y = self.arcs[k]
         return self.graph.edges[x, y]
@@ -629,7 +652,7 @@ class Cyclogram:
         why = ["min_angle"] * lb.size
         for k in self.time_arcs():
             if lb[k] > self.arc_data(k)["min_deg"]:
-                why[k] = "min_time"
+                why[k] = self.arc_data(k)["motion_limit"] or "min_time"
         for k in self.stress_arcs():
             bound = stress_bound_deg(*self.stress_reference(k), self.sigma_H_limit_MPa, stress_form)
             if bound > lb[k]:

@@ -445,6 +445,7 @@ def schedule_values(task, net, p):
     for k in net.stress_rows:
         x, y = net.arcs[k]
         values[f"sigma_{x}_{y}_MPa"] = float(stress_MPa(*task.stress_reference(k), t[k]))
+    values |= task.motion_values(t, task.speed_rpm)
     for group, members in task.group_indices.items():
         if members.size:
             values[f"span_{group}_deg"] = float(p[members].max() - p[members].min())
@@ -780,7 +781,7 @@ def _graph_sensitivities(task, net, p, d_lb, d_back, kinds, tol):
     phi, why = task.min_angles_deg(), net.lb_why
     sens, binding, sens_min = {}, [], {}
     phi_set = np.ones(len(why), dtype=bool)          # [phi] sets the bound, except where a law does
-    laws = np.array([k for k in (*net.stress_rows, *net.amp_rows) if why[k] not in ("min_angle", "min_time")],
+    laws = np.array([k for k in (*net.stress_rows, *net.amp_rows) if why[k] not in ("min_angle", "min_time", "max_accel", "max_velocity")],
                     dtype=np.int64)
     phi_set[laws] = False
     d_phi = np.where(phi_set, d_lb, 0.0) + 0.0

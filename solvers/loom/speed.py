@@ -71,6 +71,11 @@ def _reference_rpm(task):
     return task.speed_rpm
 
 
+def _time_law(task, k) -> str:
+    """What sets arc k's time floor: a motion's limit ("max_accel", "max_velocity") or its min_ms."""
+    return task.arc_data(k)["motion_limit"] or "min_time"
+
+
 def speed_coeffs_deg_per_rpm(task: Cyclogram, scan_to_deg: float = 60.0, scan_step_deg: float = 0.25
                              ) -> tuple[np.ndarray, list[str], dict]:
     """Per arc, the angle every rpm of speed asks for [deg/rpm], which law sets it ("min_time",
@@ -79,7 +84,7 @@ def speed_coeffs_deg_per_rpm(task: Cyclogram, scan_to_deg: float = 60.0, scan_st
     For the wavy rebound r* = n_ref / T, T the exact bound at n_ref on [phi, scan_to_deg]
     (`exact_amplitude_bound`): a <= limit for every n / t in [n_ref / scan_to_deg, r*]."""
     g = task.time_coeffs_deg_per_rpm()
-    why = ["min_time" if c > 0 else "" for c in g]
+    why = [_time_law(task, k) if c > 0 else "" for k, c in enumerate(g)]
     for k in task.stress_arcs():
         c = task.stress_coeff_deg_per_rpm(k)
         if c > g[k]:
@@ -306,7 +311,7 @@ def _exact_bounds_at(task, phi, scan_to_deg, scan_step_deg, n_rpm):
     it: the time floor, the stress bound sigma_ref t_ref n / ([sigma_H] n_ref), the rebound's
     exact bound on [phi, scan_to_deg] (inf where none holds there). At n = 0: [phi]."""
     lb = np.maximum(phi, task.time_coeffs_deg_per_rpm() * n_rpm)
-    why = ["min_time" if b > p else "" for b, p in zip(lb, phi)]
+    why = [_time_law(task, k) if b > p else "" for k, (b, p) in enumerate(zip(lb, phi))]
     for k in task.stress_arcs():
         bound = task.stress_coeff_deg_per_rpm(k) * n_rpm
         if bound > lb[k]:
@@ -420,6 +425,7 @@ def _speed_report(task, net, lb, why, n_max, tol, sg=None):
     for k in task.stress_arcs():
         x, y = net.arcs[k]
         values[f"sigma_{x}_{y}_MPa"] = float(task.stress_at_MPa(k, t[k], n_max))
+    values |= task.motion_values(t, n_max)
     group = dict(task.graph.nodes(data="group"))
     if sg is not None:
         schedule = graph_floats(net, sg.levels, sg.back, lb, task.cycle_deg, tol * max(1.0, task.cycle_deg))

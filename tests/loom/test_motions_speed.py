@@ -66,3 +66,49 @@ def test_a_conflict_names_the_operations_in_the_table_s_words():
     r = max_machine_speed(Cyclogram(operations=ops, cycle_deg=360.0), method="graph")
     assert r.status is Status.INFEASIBLE and r.message.startswith("no speed fits: conflicting chain")
     assert '"turret index"' in r.message and '"die dwell"' in r.message
+
+
+def test_the_turret_scene_s_speed_is_the_hand_calculation():
+    """The scene's table gives laws, strokes and an acceleration limit, no hand-converted min_ms:
+    the engine's speed is the hand calculation, and the die's peak acceleration there is its limit."""
+    from mechopt import registry
+
+    task = registry.find("loom/turret-die-speed").build()[0]
+    assert task.arc_data(task.arcs.index(("stopped", "bottom")))["min_ms"] == pytest.approx(least_stroke_ms())
+    for method in ("graph", "lp"):
+        r = max_machine_speed(task, method=method)
+        assert r.status is Status.SOLVED, r.message
+        assert r.values["max_speed_rpm"] == pytest.approx(hand_speed_rpm(), rel=1e-9)
+        omega = 2 * math.pi * r.values["max_speed_rpm"] / 60
+        beta = math.radians(r.values["t_stopped_bottom_deg"])
+        assert r.values["accel_stopped_bottom_m_s2"] == pytest.approx(CYCLOID_CA * STROKE_M * omega**2 / beta**2)
+        assert r.values["accel_stopped_bottom_m_s2"] == pytest.approx(ACCEL_M_S2, rel=1e-9)
+        assert "max_accel[stopped->bottom]" in r.message
+
+
+@pytest.mark.parametrize("cells, words", [
+    ({"stroke_mm": 50.0}, "needs the operation's motion law"),
+    ({"law": "cycloid"}, "unknown motion law"),
+    ({"law": "cycloidal", "max_accel_m_s2": 20.0}, "needs the stroke (stroke_mm)"),
+    ({"law": "cycloidal", "stroke_mm": -5.0}, "stroke_mm=-5.0: allowed (0, 100000] mm"),
+    ({"law": "cycloidal", "stroke_mm": 5.0, "max_velocity_m_s": 0.0}, "max_velocity_m_s=0.0: allowed"),
+])
+def test_a_bad_motion_cell_is_named(cells, words):
+    from mechopt.kit.errors import ModelError
+
+    ops = turret(timed_strokes=False)
+    ops[1] = ops[1] | cells
+    with pytest.raises(ModelError, match=None) as exc:
+        Cyclogram(operations=ops, cycle_deg=360.0)
+    assert words in str(exc.value) and "operations[turret.stop->die.bottom]" in str(exc.value)
+
+
+def test_a_velocity_limit_is_a_least_duration():
+    """v = Cv h / T <= v_max: T >= Cv h / v_max (cycloid Cv = 2): 2 x 0.05 / 0.5 = 200 ms."""
+    ops = turret(timed_strokes=False)
+    ops[1] = ops[1] | {"law": "cycloidal", "stroke_mm": 50.0, "max_velocity_m_s": 0.5}
+    task = Cyclogram(operations=ops, cycle_deg=360.0, speed_rpm=60.0)
+    k = task.arcs.index(("turret.stop", "die.bottom"))
+    assert task.arc_data(k)["min_ms"] == pytest.approx(200.0)
+    lb, why = task.lower_bounds_deg()
+    assert lb[k] == pytest.approx(0.006 * 60.0 * 200.0) and why[k] == "max_velocity"
