@@ -53,7 +53,16 @@ from annotated_types import Gt, Le, Lt
 from mechopt.kit.errors import MechoptError, ModelError, some_of
 from mechopt.kit.settings import check_fields
 from mechopt.models.effects import Effect
-from mechopt.models.loom_motions import MOTION_KEYS, motion_of
+from mechopt.models.loom_motions import (
+    CLEARANCE_COLUMNS,
+    LEAST_ANGLE,
+    MOTION_KEYS,
+    OBJECTIVES,
+    Clearance,
+    clearance_rows,
+    motion_of,
+    operation_index,
+)
 from mechopt.models.provenance import provenance_problem
 from mechopt.models.stop_impact import LeverStop
 
@@ -198,6 +207,11 @@ class Cyclogram:
     lever: dict | None = None
     # the highest speed the lever's law was studied at: above it a warning (`warnings`)
     lever_law_max_rpm: Annotated[float | None, Gt(0), Le(MAX_RPM)] = None
+    # motions (models/loom_motions.py): clearances between them, and the objective over their angles
+    clearances: list = field(default_factory=list)
+    maximize: str | None = None
+    least_angle_of: list = field(default_factory=list)
+    span_within_cycle: bool = True
 
     EFFECTS: ClassVar[dict[str, Effect]] = {
         "contact_stress": Effect(adds="sigma_max(t) <= [sigma_H] on operations naming a stress model",
@@ -212,7 +226,8 @@ class Cyclogram:
     # tables a scene may read from a CSV beside it, any length (an inline list holds at most 100 rows)
     CSV_TABLES: ClassVar[dict] = {"operations": (("from", "to"), OPERATION_COLUMNS),
                                   "windows": (("from", "to"), WINDOW_COLUMNS),
-                                  "syncs": (("events",), SYNC_COLUMNS), "tasks": (("task",), TASK_COLUMNS)}
+                                  "syncs": (("events",), SYNC_COLUMNS), "tasks": (("task",), TASK_COLUMNS),
+                                  "clearances": (("operation", "other"), CLEARANCE_COLUMNS)}
 
     def __post_init__(self):
         check_fields(self)
@@ -241,6 +256,46 @@ class Cyclogram:
             _ = self.lever_model    # builds and validates the lever (cached)
         self.graph          # builds and validates the network (cached)
         self._check_bounds()
+        self._check_motions()
+
+    def _check_motions(self):
+        """The clearances and the objective over the motions' angles, resolved (cached) and checked."""
+        _ = self.clearance_rows
+        if self.maximize is not None and self.maximize not in OBJECTIVES:
+            raise ModelError(f"maximize={self.maximize!r}: allowed {', '.join(OBJECTIVES)}", key="maximize")
+        if (self.maximize == LEAST_ANGLE) != bool(self.least_angle_of):
+            raise ModelError(f"least_angle_of: maximize = {LEAST_ANGLE!r} needs the operations it takes the least "
+                             f"angle of, and they need it", key="least_angle_of")
+        _ = self.least_angle_arcs
+        if not isinstance(self.span_within_cycle, bool):
+            raise ModelError(f"span_within_cycle={self.span_within_cycle!r}: allowed true, false", key="span_within_cycle")
+        if self.clearance_rows and any(c.cycles for c in self.clearance_rows) and self.cycle_deg is None:
+            raise ModelError("cycle_deg: a clearance with the other operation of a later cycle needs the cycle",
+                             key="cycle_deg")
+
+    @cached_property
+    def clearance_rows(self) -> tuple[Clearance, ...]:
+        """The `clearances` table resolved: operations as arc indices, displacements as angle fractions."""
+        names = [d["name"] for d in self._arc_data]
+        return clearance_rows(self.clearances, self.arcs, names, self.motion_arcs, MAX_CYCLES)
+
+    @cached_property
+    def least_angle_arcs(self) -> tuple[int, ...]:
+        """Arc indices of the operations whose least angle `maximize = "least_angle"` maximises."""
+        if not isinstance(self.least_angle_of, list):
+            raise ModelError(f"least_angle_of={self.least_angle_of!r}: a list of operations (names or from->to)",
+                             key="least_angle_of")
+        names = [d["name"] for d in self._arc_data]
+        return tuple(operation_index(self.arcs, names, ref, f"least_angle_of[{j}]")
+                     for j, ref in enumerate(self.least_angle_of))
+
+    def check_plain(self, solver: str) -> None:
+        """ModelError when the task asks for what only loom.plan_motions solves (clearances, the least angle)."""
+        if self.clearances or self.maximize is not None or not self.span_within_cycle:
+            key = "clearances" if self.clearances else ("maximize" if self.maximize else "span_within_cycle")
+            raise ModelError(f"{key}: {solver} take difference constraints only; a clearance (a row of the event-time "
+                             f"LP in two operations' angles), maximize = {LEAST_ANGLE!r} and span_within_cycle = false "
+                             f"are solved by loom.plan_motions", key=key)
 
     def _check_bounds(self):
         """Every derived lower bound inside the stated range, named by the inputs that set it."""

@@ -104,3 +104,79 @@ def motion_of(op: dict, key: str) -> Motion | None:
         raise ModelError(f"{key}: an acceleration or velocity limit needs the stroke (stroke_mm)",
                          key=f"{key}.stroke_mm")
     return Motion(str(given["law"]), **numbers)
+
+
+# a clearance: `operation` has reached `at` (a fraction of its stroke) before (or after) `other`
+# reaches `other_at`, `other` of `cycles` cycles later (0: the same cycle)
+CLEARANCE_COLUMNS = {"operation": str, "at": float, "relation": str, "other": str, "other_at": float,
+                     "cycles": float, "mark": str, "why": str, "where": str, "what": str}
+RELATIONS = ("before", "after")
+LEAST_ANGLE = "least_angle"
+OBJECTIVES = (LEAST_ANGLE,)
+
+
+@dataclass(frozen=True)
+class Clearance:
+    """p_a(x_a) <= p_b(x_b) + cycles T ("before"; "after": >=), p_k(x) = p(from_k) + x t_k: the
+    instants operation a (arc index) and b reach their displacement fractions (x: the angle fractions)."""
+    a: int
+    x_a: float
+    b: int
+    x_b: float
+    sign: float          # +1 before, -1 after
+    cycles: int
+    label: str
+
+
+def operation_index(arcs, names, ref, key) -> int:
+    """The arc index of an operation named in a table: by its `name` or as "from->to"."""
+    ref = str(ref).strip()
+    found = [k for k, name in enumerate(names) if name == ref] or \
+        [k for k, (x, y) in enumerate(arcs) if f"{x}->{y}" == ref]
+    if len(found) != 1:
+        why = "names two operations" if found else "no such operation"
+        shown = ", ".join(n or f"{x}->{y}" for n, (x, y) in list(zip(names, arcs))[:12])
+        raise ModelError(f"{key}={ref!r}: {why}; give an operation's name or from->to: {shown}", key=key)
+    return found[0]
+
+
+def clearance_rows(table, arcs, names, motions, max_cycles) -> tuple[Clearance, ...]:
+    """The clearances table checked and resolved: each row's operations, fractions in [0, 1]
+    (inside it only on an operation with a law: the fraction of its angle comes from the law),
+    relation and cycles."""
+    if not isinstance(table, list):
+        raise ModelError(f"clearances: expected a list of tables, got {table!r}", key="clearances")
+    out = []
+    for j, row in enumerate(table):
+        key = f"clearances[{j}]"
+        if not isinstance(row, dict):
+            raise ModelError(f"{key}: expected a table, got {row!r}", key=key)
+        unknown = sorted(set(row) - set(CLEARANCE_COLUMNS))
+        missing = [k for k in ("operation", "at", "relation", "other", "other_at") if k not in row]
+        if unknown or missing:
+            raise ModelError(f"{key}: " + (f"unknown {', '.join(unknown)}; allowed: {', '.join(CLEARANCE_COLUMNS)}"
+                                           if unknown else f"missing {', '.join(missing)}"), key=key)
+        ends = []
+        for op_key, at_key in (("operation", "at"), ("other", "other_at")):
+            k = operation_index(arcs, names, row[op_key], f"{key}.{op_key}")
+            c = row[at_key]
+            if isinstance(c, bool) or not isinstance(c, (int, float)) or not 0.0 <= c <= 1.0:
+                raise ModelError(f"{key}.{at_key}={c!r}: a fraction of the stroke, allowed [0, 1]", key=f"{key}.{at_key}")
+            if 0.0 < c < 1.0 and k not in motions:
+                raise ModelError(f"{key}.{at_key}={c:g}: inside the stroke needs the motion law of operation "
+                                 f"{row[op_key]!r} (its column law)", key=f"{key}.{at_key}")
+            ends.append((k, motions[k].angle_fraction(c) if k in motions else float(c)))
+        if row["relation"] not in RELATIONS:
+            raise ModelError(f"{key}.relation={row['relation']!r}: allowed {', '.join(RELATIONS)}", key=f"{key}.relation")
+        cycles = row.get("cycles", 0)
+        if cycles in (None, ""):
+            cycles = 0
+        if isinstance(cycles, bool) or not isinstance(cycles, (int, float)) or not float(cycles).is_integer() \
+                or not 0 <= cycles <= max_cycles:
+            raise ModelError(f"{key}.cycles={cycles!r}: a whole number in [0, {max_cycles}]", key=f"{key}.cycles")
+        later = f" of {int(cycles)} cycle{'s' if cycles != 1 else ''} later" if cycles else ""
+        label = (f"clearance {row['operation']!r} at {row['at']:g} {row['relation']} {row['other']!r} at "
+                 f"{row['other_at']:g}{later}")
+        out.append(Clearance(ends[0][0], ends[0][1], ends[1][0], ends[1][1],
+                             1.0 if row["relation"] == "before" else -1.0, int(cycles), label))
+    return tuple(out)

@@ -274,6 +274,7 @@ class Net:
 
     def _index_arrays(self, task):
         task.check_one_cycle("plan_cyclogram, max_machine_speed and repair_cyclogram")
+        task.check_plain("plan_cyclogram (graph and lp), max_machine_speed and repair_cyclogram")
         self.task = task
         names, self.tails, self.heads = task.index_arrays       # cached on the task: built once per network
         self.names = list(names)
