@@ -85,7 +85,7 @@ _OP_KEYS = {"from", "to", "min_deg", "min_ms", "max_deg", "stress", "amplitude",
 OPERATION_COLUMNS = {"from": str, "to": str, "name": str, "group": str, "mechanism": str, "min_deg": float,
                      "min_ms": float, "max_deg": float, "stress": str, "amplitude": str, "mark": str, "why": str,
                      "cycles": float, "law": str, "stroke_mm": float, "max_accel_m_s2": float,
-                     "max_velocity_m_s": float}
+                     "max_velocity_m_s": float, "direction": str}
 WINDOW_COLUMNS = {"from": str, "to": str, "max_deg": float, "max_ms": float} | {k: str for k in sorted(_NOTE_KEYS)}
 SYNC_COLUMNS = {"events": str} | {k: str for k in sorted(_NOTE_KEYS)}   # events "a;b;c": one sync per row
 _STRESS_KEYS = {"sigma_ref_MPa", "t_ref_deg"} | _NOTE_KEYS

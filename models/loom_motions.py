@@ -30,7 +30,8 @@ from mechopt.laws import law as cam_law
 MAX_STROKE_MM = 1e5
 MAX_ACCEL_M_S2 = 1e6
 MAX_VELOCITY_M_S = 1e4
-MOTION_KEYS = ("law", "stroke_mm", "max_accel_m_s2", "max_velocity_m_s")
+MOTION_KEYS = ("law", "stroke_mm", "max_accel_m_s2", "max_velocity_m_s", "direction")
+DIRECTIONS = ("out", "back")   # the stroke away from the mechanism's rest position, or back to it
 FRACTION_XTOL = 1e-14          # brentq's tolerance on x_c (a fraction of the angle)
 
 
@@ -41,6 +42,7 @@ class Motion:
     stroke_mm: float | None = None
     max_accel_m_s2: float | None = None
     max_velocity_m_s: float | None = None
+    direction: str = "out"
 
     @property
     def peaks(self) -> dict:
@@ -55,6 +57,14 @@ class Motion:
         if self.max_velocity_m_s is not None:
             out = max(out, (1000.0 * self.peaks["Cv"] * h_m / self.max_velocity_m_s, "max_velocity"))
         return out
+
+    def displacement(self, xi):
+        """The signed displacement at angle fractions xi (clipped to [0, 1]) [mm, or a fraction of
+        the stroke without stroke_mm]: + out, - back."""
+        import numpy as np
+
+        S = cam_law(self.law).values(np.clip(np.asarray(xi, dtype=float), 0.0, 1.0))[0]
+        return (1.0 if self.direction == "out" else -1.0) * (self.stroke_mm or 1.0) * S
 
     def peak_velocity_m_s(self, t_deg: float, speed_rpm: float) -> float:
         """Cv h / T, T = t / (6 n) s [m/s]."""
@@ -103,7 +113,10 @@ def motion_of(op: dict, key: str) -> Motion | None:
     if ("max_accel_m_s2" in numbers or "max_velocity_m_s" in numbers) and "stroke_mm" not in numbers:
         raise ModelError(f"{key}: an acceleration or velocity limit needs the stroke (stroke_mm)",
                          key=f"{key}.stroke_mm")
-    return Motion(str(given["law"]), **numbers)
+    direction = str(given.get("direction", "out"))
+    if direction not in DIRECTIONS:
+        raise ModelError(f"{key}.direction={direction!r}: allowed {', '.join(DIRECTIONS)}", key=f"{key}.direction")
+    return Motion(str(given["law"]), **numbers, direction=direction)
 
 
 # a clearance: `operation` has reached `at` (a fraction of its stroke) before (or after) `other`
