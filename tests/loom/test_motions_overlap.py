@@ -6,6 +6,7 @@ solves the cycloid's S(x) = c on its own closed form, not through the law librar
 import dataclasses
 import math
 
+import numpy as np
 import pytest
 from scipy.optimize import brentq
 
@@ -118,3 +119,20 @@ def test_least_angle_needs_its_operations():
         Cyclogram(operations=OPS, maximize="least_angle")
     with pytest.raises(ModelError, match="maximize='longest': allowed least_angle"):
         Cyclogram(operations=OPS, maximize="longest", least_angle_of=["push"])
+
+
+def test_the_timing_diagram_draws_the_overlapped_motions():
+    """A panel per mechanism; the die's curve over one cycle is the closed-form cycloid folded from
+    the next cycle: 30 mm at the turret's stop (150 deg) and at 0/360 deg, 50 mm at the dwell."""
+    from mechopt.figures.loom import motions
+
+    run = registry.run(registry.find("loom/turret-die-overlap"))
+    figures = motions(run)
+    assert set(figures) == {"cyclogram", "timing_diagram"}
+    turret_ax, die_ax = figures["timing_diagram"].axes
+    theta, die = (die_ax.lines[0].get_xdata(), die_ax.lines[0].get_ydata())
+    assert "die" in die_ax.get_ylabel() and "turret" in turret_ax.get_ylabel()
+    for angle, mm in ((150.0, 30.0), (0.0, 30.0), (360.0, 30.0), (250.0, 50.0)):
+        assert float(np.interp(angle, theta, die)) == pytest.approx(mm, abs=0.05)
+    rows = [t.get_text() for t in figures["cyclogram"].axes[0].get_yticklabels()]
+    assert not any("die done" in r for r in rows)          # a zero-angle link row is not drawn

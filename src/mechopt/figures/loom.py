@@ -38,10 +38,15 @@ def gantt(run, headline=None):
     first = {}
     for a in task.arcs:
         first[group[a]] = min(first.get(group[a], start[a]), start[a])
-    arcs = sorted(task.arcs, key=lambda a: (first[group[a]], group[a], start[a], values[f"p_{a[1]}_deg"], label[a]))
+    # a link row (a zero-angle operation that joins events, at zero angle in the plan) is no operation to draw
+    shown = [a for a in task.arcs if values[f"t_{a[0]}_{a[1]}_deg"] > 0 or task.graph.edges[a]["min_deg"] > 0
+             or task.graph.edges[a]["min_ms"] is not None or f"{a[0]}->{a[1]}" in critical] or task.arcs
+    arcs = sorted(shown, key=lambda a: (first[group[a]], group[a], start[a], values[f"p_{a[1]}_deg"], label[a]))
 
     dense = len(arcs) > DENSE_ROWS
     end = task.cycle_deg or values["span_deg"]
+    if not task.span_within_cycle:      # one cycle's events spread past a turn (loom.plan_motions)
+        end = max(end, values["span_deg"])
     fig = new_figure(figsize=(11, (DENSE_ROW_IN if dense else ROW_IN) * len(arcs) + 1.8))
     ax = fig.subplots()
     for row, (x, y) in enumerate(arcs):
@@ -75,7 +80,9 @@ def gantt(run, headline=None):
     if headline is None:            # the objective the plan's LP minimised (a machine's limiting operation)
         headline = (f"limiting op {values['limiting_op_deg']:.2f} deg" if "limiting_op_deg" in values
                     else f"span {values['span_deg']:.2f} deg")
-    ax.set_title(f"{literal(run.scene.id)}: {headline}, {len(arcs)} operations\n"
+    ax.set_title(f"{literal(run.scene.id)}: {headline}, {len(arcs)} operations"
+                 + (f" ({len(task.arcs) - len(arcs)} zero-angle link{'s' if len(task.arcs) - len(arcs) > 1 else ''} not drawn)" if len(arcs) < len(task.arcs) else "")
+                 + "\n"
                  f"critical chain (red) {literal(' - '.join(chain))}", fontsize=9, pad=22)
     ax.grid(True, axis="x", alpha=0.3)
     return {"cyclogram": fig}
