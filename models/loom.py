@@ -187,6 +187,13 @@ class Cyclogram:
     `stress_speed_rpm` the speed the stress references were taken at (default: speed_rpm).
     `lever` (structure): the lift lever's table (see `lever_stop`), the exact law a(t, n) behind
     the linear one; a task may give it instead of the linear law's slope and intercept.
+
+    Motions (models/loom_motions.py): an operation may carry `law`, `stroke_mm`, `direction` and
+    `max_accel_m_s2` / `max_velocity_m_s` (a least duration, folded into its min_ms);
+    `clearances` [{operation, at, relation, other, other_at, cycles?}] (a CSV too) between two
+    motions; `maximize = "least_angle"` over `least_angle_of` (operation names or "from->to");
+    `span_within_cycle` (default true: p(last) - p(first) <= cycle_deg; false when one cycle's
+    motions run into the next). These three are rows of loom.plan_motions' LP only.
     """
     operations: list = field(default_factory=list)
     tasks: list = field(default_factory=list)
