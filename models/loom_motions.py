@@ -21,11 +21,13 @@ times (not a difference constraint unless both angles are fixed).
 import math
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Annotated
 
+from annotated_types import Ge, Gt, Le
 from scipy.optimize import brentq
 
 from mechopt.kit.errors import MechoptError, ModelError
-from mechopt.laws import law as cam_law
+from mechopt.models.cam_laws import law as cam_law
 
 MAX_STROKE_MM = 1e5
 MAX_ACCEL_M_S2 = 1e6
@@ -39,9 +41,9 @@ FRACTION_XTOL = 1e-14          # brentq's tolerance on x_c (a fraction of the an
 class Motion:
     """An operation's motion: its law's name, stroke [mm] and limits (None: not given)."""
     law: str
-    stroke_mm: float | None = None
-    max_accel_m_s2: float | None = None
-    max_velocity_m_s: float | None = None
+    stroke_mm: Annotated[float | None, Gt(0), Le(MAX_STROKE_MM)] = None
+    max_accel_m_s2: Annotated[float | None, Gt(0), Le(MAX_ACCEL_M_S2)] = None
+    max_velocity_m_s: Annotated[float | None, Gt(0), Le(MAX_VELOCITY_M_S)] = None
     direction: str = "out"
 
     @property
@@ -132,12 +134,12 @@ OBJECTIVES = (LEAST_ANGLE,)
 class Clearance:
     """p_a(x_a) <= p_b(x_b) + cycles T ("before"; "after": >=), p_k(x) = p(from_k) + x t_k: the
     instants operation a (arc index) and b reach their displacement fractions (x: the angle fractions)."""
-    a: int
-    x_a: float
-    b: int
-    x_b: float
-    sign: float          # +1 before, -1 after
-    cycles: int
+    a: Annotated[int, Ge(0)]
+    x_a: Annotated[float, Ge(0), Le(1)]
+    b: Annotated[int, Ge(0)]
+    x_b: Annotated[float, Ge(0), Le(1)]
+    sign: Annotated[float, Ge(-1), Le(1)]          # +1 before, -1 after
+    cycles: Annotated[int, Ge(0)]
     label: str
 
 
