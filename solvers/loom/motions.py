@@ -102,10 +102,11 @@ def plan_motions(task: Cyclogram, *, backend: str = "HIGHS") -> Result:
                       f"{values['least_angle_deg']:.6g} deg" if task.maximize == LEAST_ANGLE
                       else f"span {values['span_deg']:.6g} deg")
     message = f"{objective_text}; limited by {some_of((r['constraint'] for r in limited), sep='; ') or 'nothing'}"
+    arrays = {"operation": task.operation_labels, "start_deg": pv[tails], "end_deg": pv[heads], "duration_deg": t}
     if worst > FEAS_TOL_DEG:
         return clock.result(Status.INACCURATE, values, message=f"a row is violated by {worst:.3g} deg; {message}",
-                            diagnostics=diagnostics)
-    return clock.result(Status.SOLVED, values, message=message, diagnostics=diagnostics)
+                            diagnostics=diagnostics, arrays=arrays)
+    return clock.result(Status.SOLVED, values, message=message, diagnostics=diagnostics, arrays=arrays)
 
 
 def _op(task, k) -> str:
