@@ -24,13 +24,14 @@ import math
 import cvxpy as cp
 import numpy as np
 
-from mechopt.kit.errors import ModelError, some_of
+from mechopt.kit.errors import NAMED, ModelError, some_of
 from mechopt.kit.result import Clock, Result, Status, from_cvxpy
 from mechopt.models.loom import LEAST_ANGLE, Cyclogram
 from mechopt.solvers.loom.event_time import incidence
 
 DUAL_TOL = 1e-7        # a constraint whose dual exceeds this binds (it stops the objective)
 FEAS_TOL_DEG = 1e-6    # the answer's rows re-checked in numpy to this [deg]
+CULPRIT_TRIES = 50     # an infeasible LP: rows dropped one at a time, at most these (one LP each)
 
 
 def plan_motions(task: Cyclogram, *, backend: str = "HIGHS") -> Result:
@@ -72,10 +73,15 @@ def plan_motions(task: Cyclogram, *, backend: str = "HIGHS") -> Result:
     except cp.error.SolverError as exc:
         return clock.result(Status.FAILED, {}, message=f"{backend}: {exc}")
     status = from_cvxpy(problem.status)
+    if status is Status.INFEASIBLE:
+        culprits, tried = _culprits(len(names), tails, heads, lb, first, rows, backend)
+        more = f" (the first {tried} of {len(rows)} rows tried)" if tried < len(rows) else ""
+        return clock.result(status, {}, violated=tuple(culprits[:NAMED]), message=(
+            "infeasible: the operations' bounds with " + (f"the rows {some_of(culprits, sep='; ')}: each one "
+                                                          f"dropped leaves a schedule{more}" if culprits else
+                                                          f"no single row dropped leaves a schedule{more}")))
     if status is not Status.SOLVED:
-        return clock.result(status, {}, message=f"the motions' LP: {problem.status}"
-                            + (" (the clearances, windows and the cycle leave no schedule)"
-                               if status is Status.INFEASIBLE else ""))
+        return clock.result(status, {}, message=f"the motions' LP: {problem.status}")
     pv = np.asarray(p.value, dtype=float)
     t = pv[heads] - pv[tails]
     values = {"span_deg": float(pv[last] - pv[first])}
@@ -107,6 +113,22 @@ def plan_motions(task: Cyclogram, *, backend: str = "HIGHS") -> Result:
         return clock.result(Status.INACCURATE, values, message=f"a row is violated by {worst:.3g} deg; {message}",
                             diagnostics=diagnostics, arrays=arrays)
     return clock.result(Status.SOLVED, values, message=message, diagnostics=diagnostics, arrays=arrays)
+
+
+def _culprits(n, tails, heads, lb, first, rows, backend) -> tuple[list[str], int]:
+    """The rows (windows, syncs, the cycle, clearances) without any one of which the bounds hold:
+    one feasibility LP per row, up to CULPRIT_TRIES rows; and how many were tried."""
+    D, out = incidence(n, tails, heads), []
+    tried = rows[:CULPRIT_TRIES]
+    for j in range(len(tried)):
+        p = cp.Variable(n)
+        cons = [D @ p >= lb, p[first] == 0] + [A @ p <= rhs for i, (A, rhs, _) in enumerate(tried) if i != j]
+        cons += [A @ p <= rhs for A, rhs, _ in rows[CULPRIT_TRIES:]]
+        problem = cp.Problem(cp.Minimize(0), cons)
+        problem.solve(solver=backend)
+        if from_cvxpy(problem.status) is Status.SOLVED:
+            out.append(tried[j][2])
+    return out, len(tried)
 
 
 def _op(task, k) -> str:

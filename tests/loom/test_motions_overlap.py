@@ -136,3 +136,18 @@ def test_the_timing_diagram_draws_the_overlapped_motions():
         assert float(np.interp(angle, theta, die)) == pytest.approx(mm, abs=0.05)
     rows = [t.get_text() for t in figures["cyclogram"].axes[0].get_yticklabels()]
     assert not any("die done" in r for r in rows)          # a zero-angle link row is not drawn
+
+
+def test_an_infeasible_plan_names_the_rows_that_conflict(solved):
+    """Die strokes of at least 125 deg, past the 122.34 the clearances allow: the two clearances
+    conflict (either dropped leaves a schedule); the die's own repetition (350 deg) still fits."""
+    task, _ = solved
+    ops = [dict(op) for op in task.operations]
+    for op in ops:
+        if op.get("name") in ("die down", "die up"):
+            op["min_deg"] = 125.0
+    r = plan_motions(dataclasses.replace(task, operations=ops))
+    assert r.status is Status.INFEASIBLE
+    assert r.message.startswith("infeasible: the operations' bounds with the rows ")
+    assert "clearance 'turret index' at 1 before 'die down' at 0.6" in r.message
+    assert "clearance 'die up' at 0.4 before 'turret index' at 0 of 1 cycle later" in r.message
