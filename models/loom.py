@@ -53,6 +53,16 @@ from annotated_types import Gt, Le, Lt
 from mechopt.kit.errors import MechoptError, ModelError, some_of
 from mechopt.kit.settings import check_fields
 from mechopt.models.effects import Effect
+from mechopt.models.loom_motions import (
+    CLEARANCE_COLUMNS,
+    LEAST_ANGLE,
+    MOTION_KEYS,
+    OBJECTIVES,
+    Clearance,
+    clearance_rows,
+    motion_of,
+    operation_index,
+)
 from mechopt.models.provenance import provenance_problem
 from mechopt.models.stop_impact import LeverStop
 
@@ -69,12 +79,13 @@ AMPLITUDE_LAWS = ("linear",)
 _NOTE_KEYS = {"mark", "why", "where", "what"}         # provenance and description, not physics
 _EVENT_KEYS = {"mechanism", "group"} | _NOTE_KEYS
 _OP_KEYS = {"from", "to", "min_deg", "min_ms", "max_deg", "stress", "amplitude", "name", "group",
-            "mechanism", "cycles"} | _NOTE_KEYS
+            "mechanism", "cycles"} | set(MOTION_KEYS) | _NOTE_KEYS
 # an operations table read from a designer's CSV (scene: `operations = { csv = "ops.csv", columns =
 # [...] }`): its columns and their kinds; event names are text ("3", "10.1", "feed.start")
 OPERATION_COLUMNS = {"from": str, "to": str, "name": str, "group": str, "mechanism": str, "min_deg": float,
                      "min_ms": float, "max_deg": float, "stress": str, "amplitude": str, "mark": str, "why": str,
-                     "cycles": float}
+                     "cycles": float, "law": str, "stroke_mm": float, "max_accel_m_s2": float,
+                     "max_velocity_m_s": float, "direction": str}
 WINDOW_COLUMNS = {"from": str, "to": str, "max_deg": float, "max_ms": float} | {k: str for k in sorted(_NOTE_KEYS)}
 SYNC_COLUMNS = {"events": str} | {k: str for k in sorted(_NOTE_KEYS)}   # events "a;b;c": one sync per row
 _STRESS_KEYS = {"sigma_ref_MPa", "t_ref_deg"} | _NOTE_KEYS
@@ -176,6 +187,13 @@ class Cyclogram:
     `stress_speed_rpm` the speed the stress references were taken at (default: speed_rpm).
     `lever` (structure): the lift lever's table (see `lever_stop`), the exact law a(t, n) behind
     the linear one; a task may give it instead of the linear law's slope and intercept.
+
+    Motions (models/loom_motions.py): an operation may carry `law`, `stroke_mm`, `direction` and
+    `max_accel_m_s2` / `max_velocity_m_s` (a least duration, folded into its min_ms);
+    `clearances` [{operation, at, relation, other, other_at, cycles?}] (a CSV too) between two
+    motions; `maximize = "least_angle"` over `least_angle_of` (operation names or "from->to");
+    `span_within_cycle` (default true: p(last) - p(first) <= cycle_deg; false when one cycle's
+    motions run into the next). These three are rows of loom.plan_motions' LP only.
     """
     operations: list = field(default_factory=list)
     tasks: list = field(default_factory=list)
@@ -196,6 +214,11 @@ class Cyclogram:
     lever: dict | None = None
     # the highest speed the lever's law was studied at: above it a warning (`warnings`)
     lever_law_max_rpm: Annotated[float | None, Gt(0), Le(MAX_RPM)] = None
+    # motions (models/loom_motions.py): clearances between them, and the objective over their angles
+    clearances: list = field(default_factory=list)
+    maximize: str | None = None
+    least_angle_of: list = field(default_factory=list)
+    span_within_cycle: bool = True
 
     EFFECTS: ClassVar[dict[str, Effect]] = {
         "contact_stress": Effect(adds="sigma_max(t) <= [sigma_H] on operations naming a stress model",
@@ -210,7 +233,8 @@ class Cyclogram:
     # tables a scene may read from a CSV beside it, any length (an inline list holds at most 100 rows)
     CSV_TABLES: ClassVar[dict] = {"operations": (("from", "to"), OPERATION_COLUMNS),
                                   "windows": (("from", "to"), WINDOW_COLUMNS),
-                                  "syncs": (("events",), SYNC_COLUMNS), "tasks": (("task",), TASK_COLUMNS)}
+                                  "syncs": (("events",), SYNC_COLUMNS), "tasks": (("task",), TASK_COLUMNS),
+                                  "clearances": (("operation", "other"), CLEARANCE_COLUMNS)}
 
     def __post_init__(self):
         check_fields(self)
@@ -239,6 +263,46 @@ class Cyclogram:
             _ = self.lever_model    # builds and validates the lever (cached)
         self.graph          # builds and validates the network (cached)
         self._check_bounds()
+        self._check_motions()
+
+    def _check_motions(self):
+        """The clearances and the objective over the motions' angles, resolved (cached) and checked."""
+        _ = self.clearance_rows
+        if self.maximize is not None and self.maximize not in OBJECTIVES:
+            raise ModelError(f"maximize={self.maximize!r}: allowed {', '.join(OBJECTIVES)}", key="maximize")
+        if (self.maximize == LEAST_ANGLE) != bool(self.least_angle_of):
+            raise ModelError(f"least_angle_of: maximize = {LEAST_ANGLE!r} needs the operations it takes the least "
+                             f"angle of, and they need it", key="least_angle_of")
+        _ = self.least_angle_arcs
+        if not isinstance(self.span_within_cycle, bool):
+            raise ModelError(f"span_within_cycle={self.span_within_cycle!r}: allowed true, false", key="span_within_cycle")
+        if self.clearance_rows and any(c.cycles for c in self.clearance_rows) and self.cycle_deg is None:
+            raise ModelError("cycle_deg: a clearance with the other operation of a later cycle needs the cycle",
+                             key="cycle_deg")
+
+    @cached_property
+    def clearance_rows(self) -> tuple[Clearance, ...]:
+        """The `clearances` table resolved: operations as arc indices, displacements as angle fractions."""
+        names = [d["name"] for d in self._arc_data]
+        return clearance_rows(self.clearances, self.arcs, names, self.motion_arcs, MAX_CYCLES)
+
+    @cached_property
+    def least_angle_arcs(self) -> tuple[int, ...]:
+        """Arc indices of the operations whose least angle `maximize = "least_angle"` maximises."""
+        if not isinstance(self.least_angle_of, list):
+            raise ModelError(f"least_angle_of={self.least_angle_of!r}: a list of operations (names or from->to)",
+                             key="least_angle_of")
+        names = [d["name"] for d in self._arc_data]
+        return tuple(operation_index(self.arcs, names, ref, f"least_angle_of[{j}]")
+                     for j, ref in enumerate(self.least_angle_of))
+
+    def check_plain(self, solver: str) -> None:
+        """ModelError when the task asks for what only loom.plan_motions solves (clearances, the least angle)."""
+        if self.clearances or self.maximize is not None or not self.span_within_cycle:
+            key = "clearances" if self.clearances else ("maximize" if self.maximize else "span_within_cycle")
+            raise ModelError(f"{key}: {solver} take difference constraints only; a clearance (a row of the event-time "
+                             f"LP in two operations' angles), maximize = {LEAST_ANGLE!r} and span_within_cycle = false "
+                             f"are solved by loom.plan_motions", key=key)
 
     def _check_bounds(self):
         """Every derived lower bound inside the stated range, named by the inputs that set it."""
@@ -279,13 +343,18 @@ class Cyclogram:
             if g.has_edge(x, y):
                 raise ModelError(f"{key}: given twice; one operation per pair of events", key=key)
             phi, min_ms = _floors(op, key)
+            motion = motion_of(op, key)
+            motion_ms, motion_limit = motion.least_ms() if motion else (0.0, "")
+            if motion_ms > (min_ms or 0.0):      # the motion's limits as a least duration (models/loom_motions.py)
+                min_ms = motion_ms
             stress, amplitude = op.get("stress"), op.get("amplitude")
             if stress is not None:
                 self._check_stress_ref(stress, key)
             if amplitude is not None:
                 self._check_amplitude_ref(amplitude, key)
-            g.add_edge(x, y, min_deg=phi, min_ms=min_ms, stress=stress,
-                       amplitude=amplitude, name=str(op.get("name", "")), group=str(op.get("group", "")))
+            g.add_edge(x, y, min_deg=phi, min_ms=min_ms, stress=stress, motion=motion, motion_limit=motion_limit
+                       if motion_ms and motion_ms == min_ms else "", amplitude=amplitude,
+                       name=str(op.get("name", "")), group=str(op.get("group", "")))
         if not nx.is_directed_acyclic_graph(g):
             cycle = nx.find_cycle(g)
             chain = some_of([cycle[0][0]] + [v for _, v in cycle], sep=" -> ")
@@ -407,7 +476,7 @@ class Cyclogram:
                 if end not in self.events:
                     raise ModelError(f"{key}: unknown event {end!r}; events: {some_of(self.events, sep=', ')}",
                                      key=key)
-            extra = sorted({"max_deg", "stress", "amplitude"} & op.keys())
+            extra = sorted(({"max_deg", "stress", "amplitude"} | set(MOTION_KEYS)) & op.keys())
             if extra:
                 raise ModelError(f"{key}.cycles={k}: a recurrent operation carries min_deg or min_ms only, not "
                                  f"{', '.join(extra)}", key=f"{key}.{extra[0]}")
@@ -613,6 +682,27 @@ class Cyclogram:
         scale = 1.0 if self.stress_speed_rpm is None or self.speed_rpm is None else self.speed_rpm / self.stress_speed_rpm
         return float(model["sigma_ref_MPa"]) * scale, float(model["t_ref_deg"])
 
+    @cached_property
+    def operation_names(self) -> dict[tuple[str, str], str]:
+        """(from, to) -> ' "name"' for the operations the table names (the conflict messages' words)."""
+        return {(x, y): f' "{name}"' for x, y, name in self.graph.edges(data="name") if name}
+
+    @cached_property
+    def motion_arcs(self) -> dict:
+        """Arc index (in `arcs` order) -> its Motion (models/loom_motions.py), for the operations with a law."""
+        return {k: d["motion"] for k, d in enumerate(self._arc_data) if d["motion"] is not None}
+
+    def motion_values(self, t_deg, speed_rpm) -> dict:
+        """Peak acceleration [m/s^2] and velocity [m/s] of every motion with a stroke, its angle
+        t (per arc, `arcs` order) at speed n: accel_<x>_<y>_m_s2, velocity_<x>_<y>_m_s."""
+        out = {}
+        for k, motion in self.motion_arcs.items() if speed_rpm else ():
+            if motion.stroke_mm is not None and t_deg[k] > 0:
+                x, y = self.arcs[k]
+                out[f"accel_{x}_{y}_m_s2"] = motion.peak_accel_m_s2(float(t_deg[k]), speed_rpm)
+                out[f"velocity_{x}_{y}_m_s"] = motion.peak_velocity_m_s(float(t_deg[k]), speed_rpm)
+        return out
+
     def arc_data(self, k: int) -> dict:
         x, y = self.arcs[k]
         return self.graph.edges[x, y]
@@ -624,7 +714,7 @@ class Cyclogram:
         why = ["min_angle"] * lb.size
         for k in self.time_arcs():
             if lb[k] > self.arc_data(k)["min_deg"]:
-                why[k] = "min_time"
+                why[k] = self.arc_data(k)["motion_limit"] or "min_time"
         for k in self.stress_arcs():
             bound = stress_bound_deg(*self.stress_reference(k), self.sigma_H_limit_MPa, stress_form)
             if bound > lb[k]:

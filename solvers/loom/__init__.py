@@ -12,6 +12,8 @@
   and re-solved until they hold;
 * `speed.max_machine_speed`: the whole machine's largest speed, an LP in (p, n) or bisection on n
   (part 5);
+* `motions.plan_motions`: the LP with clearances between motions and the least of several
+  motions' angles maximised (rows that are not difference constraints);
 * `cycle_time.least_cycle_time`: a recurrent machine's least cycle time, the maximum cycle ratio
   of its constraints, and the circuit that sets it (the LP in (p, T) as certificate);
 * `event_time`: the LP's matrices, and `HeldLP`, the LP held in HiGHS for many bound changes.
@@ -24,6 +26,7 @@ if TYPE_CHECKING:       # for readers and the docs; at run time each name import
     from mechopt.solvers.loom.codesign import codesign_machine_speed
     from mechopt.solvers.loom.cycle_time import least_cycle_time
     from mechopt.solvers.loom.event_time import HeldLP, build_event_time_lp, incidence
+    from mechopt.solvers.loom.motions import plan_motions
     from mechopt.solvers.loom.plan import conflict_chain, plan_cyclogram, positive_cycle
     from mechopt.solvers.loom.repair import exact_amplitude_bound, repair_cyclogram
     from mechopt.solvers.loom.speed import max_machine_speed
@@ -31,8 +34,8 @@ if TYPE_CHECKING:       # for readers and the docs; at run time each name import
 # a plan needs neither the co-design's stop-impact chain nor the speed LP: each imports when used
 __getattr__, __dir__ = lazy_names(__name__, {
     "codesign": ["codesign_machine_speed"], "cycle_time": ["least_cycle_time"], "event_time": ["HeldLP", "build_event_time_lp", "incidence"],
-    "plan": ["conflict_chain", "plan_cyclogram", "positive_cycle"],
+    "motions": ["plan_motions"], "plan": ["conflict_chain", "plan_cyclogram", "positive_cycle"],
     "repair": ["exact_amplitude_bound", "repair_cyclogram"], "speed": ["max_machine_speed"]})
 
 __all__ = ["HeldLP", "build_event_time_lp", "codesign_machine_speed", "conflict_chain", "exact_amplitude_bound", "incidence",
-           "least_cycle_time", "max_machine_speed", "plan_cyclogram", "positive_cycle", "repair_cyclogram"]
+           "least_cycle_time", "max_machine_speed", "plan_cyclogram", "plan_motions", "positive_cycle", "repair_cyclogram"]

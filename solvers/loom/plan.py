@@ -274,6 +274,7 @@ class Net:
 
     def _index_arrays(self, task):
         task.check_one_cycle("plan_cyclogram, max_machine_speed and repair_cyclogram")
+        task.check_plain("plan_cyclogram (graph and lp), max_machine_speed and repair_cyclogram")
         self.task = task
         names, self.tails, self.heads = task.index_arrays       # cached on the task: built once per network
         self.names = list(names)
@@ -294,7 +295,7 @@ class Net:
 
     def arc_label(self, k):
         x, y = self.arcs[k]
-        return f"t({x}->{y}) >= {self.lb[k]:.6g} deg ({self.lb_why[k]})"
+        return f"t({x}->{y}) >= {self.lb[k]:.6g} deg ({self.lb_why[k]}){self.task.operation_names.get((x, y), '')}"
 
 
 def conflict_chain(net, max_conflicts: int = 1) -> list:
@@ -445,6 +446,7 @@ def schedule_values(task, net, p):
     for k in net.stress_rows:
         x, y = net.arcs[k]
         values[f"sigma_{x}_{y}_MPa"] = float(stress_MPa(*task.stress_reference(k), t[k]))
+    values |= task.motion_values(t, task.speed_rpm)
     for group, members in task.group_indices.items():
         if members.size:
             values[f"span_{group}_deg"] = float(p[members].max() - p[members].min())
@@ -780,7 +782,7 @@ def _graph_sensitivities(task, net, p, d_lb, d_back, kinds, tol):
     phi, why = task.min_angles_deg(), net.lb_why
     sens, binding, sens_min = {}, [], {}
     phi_set = np.ones(len(why), dtype=bool)          # [phi] sets the bound, except where a law does
-    laws = np.array([k for k in (*net.stress_rows, *net.amp_rows) if why[k] not in ("min_angle", "min_time")],
+    laws = np.array([k for k in (*net.stress_rows, *net.amp_rows) if why[k] not in ("min_angle", "min_time", "max_accel", "max_velocity")],
                     dtype=np.int64)
     phi_set[laws] = False
     d_phi = np.where(phi_set, d_lb, 0.0) + 0.0

@@ -71,6 +71,11 @@ def _reference_rpm(task):
     return task.speed_rpm
 
 
+def _time_law(task, k) -> str:
+    """What sets arc k's time floor: a motion's limit ("max_accel", "max_velocity") or its min_ms."""
+    return task.arc_data(k)["motion_limit"] or "min_time"
+
+
 def speed_coeffs_deg_per_rpm(task: Cyclogram, scan_to_deg: float = 60.0, scan_step_deg: float = 0.25
                              ) -> tuple[np.ndarray, list[str], dict]:
     """Per arc, the angle every rpm of speed asks for [deg/rpm], which law sets it ("min_time",
@@ -79,7 +84,7 @@ def speed_coeffs_deg_per_rpm(task: Cyclogram, scan_to_deg: float = 60.0, scan_st
     For the wavy rebound r* = n_ref / T, T the exact bound at n_ref on [phi, scan_to_deg]
     (`exact_amplitude_bound`): a <= limit for every n / t in [n_ref / scan_to_deg, r*]."""
     g = task.time_coeffs_deg_per_rpm()
-    why = ["min_time" if c > 0 else "" for c in g]
+    why = [_time_law(task, k) if c > 0 else "" for k, c in enumerate(g)]
     for k in task.stress_arcs():
         c = task.stress_coeff_deg_per_rpm(k)
         if c > g[k]:
@@ -184,7 +189,9 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp",
         diagnostics |= {"conflict_groups": groups[:NAMED], "conflict_length": len(chain)}
         message = ("no speed fits: conflicting chain " + some_of(label for _, label, _ in chain)
                    + f" (needs {math.fsum(w for _, _, w in chain):.6g} deg more than its limits allow as n -> 0;"
-                   + f" groups {some_of(groups, sep=', ')})")
+                   + f" groups {some_of(groups, sep=', ')})") if chain else (
+            f"no speed above rest fits: the {chosen} method's highest speed is {n_max or 0.0:.6g} rpm, and no "
+            f"chain conflicts at rest")
         return clock.result(Status.INFEASIBLE, {}, message=message,
                             violated=tuple(label for _, label, _ in chain[:NAMED]), diagnostics=diagnostics)
     if status is Status.UNBOUNDED:
@@ -304,7 +311,7 @@ def _exact_bounds_at(task, phi, scan_to_deg, scan_step_deg, n_rpm):
     it: the time floor, the stress bound sigma_ref t_ref n / ([sigma_H] n_ref), the rebound's
     exact bound on [phi, scan_to_deg] (inf where none holds there). At n = 0: [phi]."""
     lb = np.maximum(phi, task.time_coeffs_deg_per_rpm() * n_rpm)
-    why = ["min_time" if b > p else "" for b, p in zip(lb, phi)]
+    why = [_time_law(task, k) if b > p else "" for k, (b, p) in enumerate(zip(lb, phi))]
     for k in task.stress_arcs():
         bound = task.stress_coeff_deg_per_rpm(k) * n_rpm
         if bound > lb[k]:
@@ -362,7 +369,8 @@ class _Undecided(Exception):
 def _arcs_at(task, net, lb):
     """The difference constraints with the arcs' bounds `lb` and the cycle, for `positive_cycle`."""
     first, last = net.names[net.first], net.names[net.last]
-    arcs = [(u, v, w, f"t({u}->{v}) >= {w:.6g} deg") for u, v, w in constraint_arcs(net, lb)]
+    names = task.operation_names
+    arcs = [(u, v, w, f"t({u}->{v}) >= {w:.6g} deg{names.get((u, v), '')}") for u, v, w in constraint_arcs(net, lb)]
     return arcs + [(last, first, -task.cycle_deg, f"cycle p({last}) - p({first}) <= {task.cycle_deg:.6g} deg")]
 
 
@@ -417,6 +425,7 @@ def _speed_report(task, net, lb, why, n_max, tol, sg=None):
     for k in task.stress_arcs():
         x, y = net.arcs[k]
         values[f"sigma_{x}_{y}_MPa"] = float(task.stress_at_MPa(k, t[k], n_max))
+    values |= task.motion_values(t, n_max)
     group = dict(task.graph.nodes(data="group"))
     if sg is not None:
         schedule = graph_floats(net, sg.levels, sg.back, lb, task.cycle_deg, tol * max(1.0, task.cycle_deg))
@@ -513,7 +522,11 @@ class SpeedGraph:
             if slope <= 0:
                 return 0.0                  # positive at rest: the n = 0 test says so first
             new = -(c + math.fsum(phi[~active])) / slope
-            if new >= n_rpm or np.array_equal(g * new > phi, active):
+            # the piece's line lies under the convex sum, so the sum at `new` is >= 0; where it is 0
+            # (to tol) `new` is the root, also when it falls on a kink g n = phi (an operation of a
+            # fixed angle, min_deg = max_deg, with a time floor: the next piece has no slope)
+            closes = c + math.fsum(np.maximum(phi, g * new)) <= self.tol
+            if new >= n_rpm or closes or np.array_equal(g * new > phi, active):
                 return min(new, n_rpm)
             n_rpm = new
         return n_rpm
@@ -551,7 +564,8 @@ class SpeedGraph:
                 law = why[k] if speed_set else "min_angle"
                 out.append(f"{law}[{x}->{y}] t >= {max(self.phi[k], self.g[k] * n_rpm):.6g} deg "
                            f"({group[x] or group[y] or '-'}"
-                           + (f", {self.g[k]:.6g} deg/rpm)" if speed_set else ")"))
+                           + (f", {self.g[k]:.6g} deg/rpm)" if speed_set else ")")
+                           + self.task.operation_names.get((x, y), ""))
             elif kind == "back":
                 u, v, w = names[self.back.tails[k]], names[self.back.heads[k]], self.back.weights[k]
                 out.append(f"sync p({u}) = p({v})" if self.kinds[k] == "sync"

@@ -42,7 +42,7 @@ MECHANISMS = (
               ("mechopt.figures.press",), "mechopt.benchmarks.press",
               (("press", "press/kd2322"), ("press-design", "press/flywheel-design"))),
     Mechanism("loom", "Loom cyclogram (paper 004)",
-              ("mechopt.models.loom",), "mechopt.solvers.loom",
+              ("mechopt.models.loom", "mechopt.models.loom_motions"), "mechopt.solvers.loom",
               ("mechopt.figures.loom",), "mechopt.benchmarks.loom",
               (("loom", "loom/group1"), ("cyclogram", "loom/packaging"))),
     Mechanism("stop-impact", "Lift lever at its stop (paper 004)",

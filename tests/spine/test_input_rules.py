@@ -43,6 +43,8 @@ NO_RANGE = {
                "lift's sign by kind, a finite number each) before it is built",
     "Join": "a computed result (a step of s' or s'' where two segments meet)",
     "CamMotion": "segments checked row by row (`cam_motion._segment`); a cam scene's task holds it",
+    "Motion": "an operation row's motion, its cells checked by `loom_motions.motion_of` before it is built",
+    "Clearance": "a clearances row resolved by `loom_motions.clearance_rows` from its checked cells",
 }
 
 

@@ -1,8 +1,10 @@
 """Figures for the loom cyclogram scenes (models/loom.py): the cyclogram as a Gantt chart, and
 for a repaired LP (loom.repair_cyclogram) each exact limit's excess over the rounds."""
+import numpy as np
+
 from mechopt.figures.registry import figure, new_figure
 from mechopt.figures.text import literal
-from mechopt.solvers.loom import least_cycle_time, max_machine_speed, plan_cyclogram, repair_cyclogram
+from mechopt.solvers.loom import least_cycle_time, max_machine_speed, plan_cyclogram, plan_motions, repair_cyclogram
 
 ROW_IN = 0.35              # inches per operation row on a small network ...
 DENSE_ROWS = 40           # ... past which rows narrow to DENSE_ROW_IN and bars lose their own labels
@@ -36,10 +38,15 @@ def gantt(run, headline=None):
     first = {}
     for a in task.arcs:
         first[group[a]] = min(first.get(group[a], start[a]), start[a])
-    arcs = sorted(task.arcs, key=lambda a: (first[group[a]], group[a], start[a], values[f"p_{a[1]}_deg"], label[a]))
+    # a link row (a zero-angle operation that joins events, at zero angle in the plan) is no operation to draw
+    shown = [a for a in task.arcs if values[f"t_{a[0]}_{a[1]}_deg"] > 0 or task.graph.edges[a]["min_deg"] > 0
+             or task.graph.edges[a]["min_ms"] is not None or f"{a[0]}->{a[1]}" in critical] or task.arcs
+    arcs = sorted(shown, key=lambda a: (first[group[a]], group[a], start[a], values[f"p_{a[1]}_deg"], label[a]))
 
     dense = len(arcs) > DENSE_ROWS
     end = task.cycle_deg or values["span_deg"]
+    if not task.span_within_cycle:      # one cycle's events spread past a turn (loom.plan_motions)
+        end = max(end, values["span_deg"])
     fig = new_figure(figsize=(11, (DENSE_ROW_IN if dense else ROW_IN) * len(arcs) + 1.8))
     ax = fig.subplots()
     for row, (x, y) in enumerate(arcs):
@@ -73,7 +80,9 @@ def gantt(run, headline=None):
     if headline is None:            # the objective the plan's LP minimised (a machine's limiting operation)
         headline = (f"limiting op {values['limiting_op_deg']:.2f} deg" if "limiting_op_deg" in values
                     else f"span {values['span_deg']:.2f} deg")
-    ax.set_title(f"{literal(run.scene.id)}: {headline}, {len(arcs)} operations\n"
+    ax.set_title(f"{literal(run.scene.id)}: {headline}, {len(arcs)} operations"
+                 + (f" ({len(task.arcs) - len(arcs)} zero-angle link{'s' if len(task.arcs) - len(arcs) > 1 else ''} not drawn)" if len(arcs) < len(task.arcs) else "")
+                 + "\n"
                  f"critical chain (red) {literal(' - '.join(chain))}", fontsize=9, pad=22)
     ax.grid(True, axis="x", alpha=0.3)
     return {"cyclogram": fig}
@@ -83,7 +92,87 @@ def gantt(run, headline=None):
 def gantt_at_speed(run):
     """The cyclogram at the machine's largest speed, headed by that speed."""
     speed = run.result.values.get("max_speed_rpm")
-    return gantt(run, headline=None if speed is None else f"max speed {speed:.2f} rpm")
+    figures = gantt(run, headline=None if speed is None else f"max speed {speed:.2f} rpm")
+    return figures | ({"timing_diagram": timing_diagram(run)} if figures and run.task.motion_arcs else {})
+
+
+@figure(plan_motions)
+def motions(run):
+    """The plan of a machine's motions: its cyclogram, and the timing diagram designers draw."""
+    values = run.result.values
+    if "span_deg" not in values:
+        return {}
+    headline = (f"least angle {values['least_angle_deg']:.2f} deg" if "least_angle_deg" in values
+                else f"span {values['span_deg']:.2f} deg")
+    figures = gantt(run, headline=headline)
+    return figures | ({"timing_diagram": timing_diagram(run)} if run.task.motion_arcs else {})
+
+
+CHART_POINTS = 721          # samples of the shaft angle over one cycle
+CHART_CYCLES = (-2, -1, 0, 1)   # a motion's copies of earlier and later cycles drawn into this one
+
+
+def timing_diagram(run):
+    """Displacement against shaft angle, one panel per group (mechanism), over one cycle: every
+    motion of the group by its law (cam law S over its angle, stroke in mm, + out, - back), its
+    copies of the cycles before and after folded in, so a stroke that runs into the next index shows
+    where it overlaps; each clearance's two instants as dotted lines (the turret stopped before the
+    die is 0.6 down, ...), and where a clearance names a displacement inside a stroke, its level
+    (dashed) and the interference region it guards (the motion past it: the die inside the turret's
+    space) shaded."""
+    task, values = run.task, run.result.values
+    cycle = task.cycle_deg or values["span_deg"]
+    theta = np.linspace(0.0, cycle, CHART_POINTS)
+    group_of = {k: task.arc_data(k)["group"] or task.graph.nodes[task.arcs[k][0]]["group"] or "-"
+                for k in task.motion_arcs}
+    groups = list(dict.fromkeys(group_of.values()))
+    fig = new_figure(figsize=(10, 2.2 * len(groups) + 1.2))
+    axes = np.atleast_1d(fig.subplots(len(groups), 1, sharex=True, squeeze=False)[:, 0])
+    panels = {}
+    for ax, group in zip(axes, groups):
+        total, names = np.zeros_like(theta), []
+        for k, motion in task.motion_arcs.items():
+            if group_of[k] != group:
+                continue
+            x, y = task.arcs[k]
+            start, angle = values[f"p_{x}_deg"], max(values[f"t_{x}_{y}_deg"], 1e-12)
+            total += sum(motion.displacement((theta - start - m * cycle) / angle) for m in CHART_CYCLES)
+            names.append(((start + angle / 2) % cycle, task.arc_data(k)["name"] or f"{x}-{y}", angle))
+        total -= total.min()
+        panels[group] = (ax, total)
+        ax.plot(theta, total, color="black", linewidth=1.5)
+        for mid, name, angle in names:      # each motion named at its middle, its angle beside the name
+            ax.annotate(literal(f"{name} {angle:.1f} deg"), (mid, np.interp(mid, theta, total)), fontsize=7,
+                        xytext=(4, 4), textcoords="offset points", color="tab:blue")
+        unit = "mm" if all(m.stroke_mm for k, m in task.motion_arcs.items() if group_of[k] == group) else "of stroke"
+        ax.set_ylabel(f"{literal(group)} [{unit}]", fontsize=8)
+        ax.grid(True, alpha=0.3)
+    for j, c in enumerate(task.clearance_rows):
+        for side, (k, xi, shift) in enumerate(((c.a, c.x_a, 0), (c.b, c.x_b, c.cycles))):
+            x, y = task.arcs[k]
+            at = (values[f"p_{x}_deg"] + xi * values[f"t_{x}_{y}_deg"] + shift * cycle) % cycle
+            for ax in axes:
+                ax.axvline(at, color="tab:red", linestyle=":", linewidth=1)
+            if side == 0:
+                axes[0].text(at, 1.0, f"c{j}", transform=axes[0].get_xaxis_transform(), color="tab:red",
+                             fontsize=7, ha="center", va="bottom")
+            if not 0.0 < xi < 1.0 or k not in task.motion_arcs:
+                continue
+            # the interference region this clearance guards: the motion past its threshold (before it on
+            # the `operation` side of a "before" row, after it on the `other` side; "after" the reverse)
+            ax, total = panels[group_of[k]]
+            sign = 1.0 if task.motion_arcs[k].direction == "out" else -1.0
+            sign *= (-1.0 if side == 0 else 1.0) * c.sign
+            level = float(np.interp(at, theta, total))
+            ax.axhline(level, color="tab:red", linestyle="--", linewidth=0.8)
+            for every in axes:      # on every panel: what else moves there moves into the region
+                every.fill_between(theta, 0, 1, where=sign * (total - level) >= 0, color="tab:red", alpha=0.08,
+                                   transform=every.get_xaxis_transform(), linewidth=0)
+    axes[-1].set_xlim(0, cycle)
+    axes[-1].set_xlabel("main shaft angle [deg] (one cycle; strokes of the next cycle folded in)")
+    axes[0].set_title(f"{literal(run.scene.id)}: displacement against shaft angle\nclearances c0..: dotted their "
+                      f"instants, dashed and shaded the displacement each guards", fontsize=9, pad=14)
+    return fig
 
 
 @figure(least_cycle_time)
