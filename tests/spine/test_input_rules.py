@@ -21,7 +21,7 @@ SCENES = {"PressDrive": "press/kd2322", "PressDesign": "press/flywheel-design", 
           "LinkageFit": "cam-cutter/minimax", "LinkageCheck": "cam-cutter/linkage-check",
           "LinkageLoads": "cam-cutter/joint-reactions", "ToolFamily": "cam-cutter/readjustable",
           "ProfileFit": "cam-cutter/other-profile", "CamShape": "stop-impact/lift-cam-profile",
-          "Cyclogram": "loom/group1", "LeverStop": "stop-impact/frequencies"}
+          "Cyclogram": "loom/group1", "LeverStop": "stop-impact/frequencies", "CamFollower": "cam/translating-roller"}
 
 # dataclasses of models/ whose numbers are no user's input, each with why they declare no range
 NO_RANGE = {
@@ -43,6 +43,8 @@ NO_RANGE = {
                "lift's sign by kind, a finite number each) before it is built",
     "Join": "a computed result (a step of s' or s'' where two segments meet)",
     "CamMotion": "segments checked row by row (`cam_motion._segment`); a cam scene's task holds it",
+    "CamCurves": "a computed result (a cam's pitch curve, profile, radii and pressure angle)",
+    "Load": "a press load resolved by `press_loads` from PressDrive's checked load_* fields (or its checked table)",
     "Motion": "an operation row's motion, its cells checked by `loom_motions.motion_of` before it is built",
     "Clearance": "a clearances row resolved by `loom_motions.clearance_rows` from its checked cells",
 }
