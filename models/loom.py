@@ -300,7 +300,7 @@ class Cyclogram:
         """ModelError when the task asks for what only loom.plan_motions solves (clearances, the least angle)."""
         if self.clearances or self.maximize is not None or not self.span_within_cycle:
             key = "clearances" if self.clearances else ("maximize" if self.maximize else "span_within_cycle")
-            raise ModelError(f"{key}: {solver} take difference constraints only; a clearance (a row of the event-time "
+            raise ModelError(f"{key}: not solved by {solver} (difference constraints only); a clearance (a row of the event-time "
                              f"LP in two operations' angles), maximize = {LEAST_ANGLE!r} and span_within_cycle = false "
                              f"are solved by loom.plan_motions", key=key)
 

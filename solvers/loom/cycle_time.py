@@ -256,6 +256,7 @@ def least_cycle_time(task: Cyclogram, *, check: bool = False,
     relative makes the answer INACCURATE (values check_rel, diagnostics check).
     """
     check_settings(least_cycle_time, backend=backend)
+    task.check_plain("loom.least_cycle_time")
     clock = Clock()
     u = uniform_constraints(task)
     bf = Circuits(u, len(task.arcs))

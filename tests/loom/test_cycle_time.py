@@ -342,3 +342,10 @@ def test_the_highest_speed_refuses_a_window_in_time_by_name():
                      windows=[{"from": "a", "to": "c", "max_ms": 300.0}])
     with pytest.raises(ModelError, match=r"windows\[0\]\.max_ms: the highest speed takes windows as angles"):
         max_machine_speed(task)
+
+
+def test_the_least_cycle_time_refuses_a_clearance_by_name():
+    task = registry.find("loom/turret-die-overlap").build()[0]
+    assert task.clearances
+    with pytest.raises(ModelError, match=r"clearances: not solved by loom\.least_cycle_time .* loom\.plan_motions"):
+        least_cycle_time(task)
