@@ -112,3 +112,14 @@ def quiet_banner() -> None:
             os.dup2(saved, 1)
             os.close(saved)
             os.close(null)
+
+
+def status_of(highs):
+    """A Highs object's model status after `run` as a Status, read through cvxpy's table of HiGHS'
+    statuses (HIGHS.STATUS_MAP) and `from_cvxpy`, as the loom's held LP reads it: one table. Only
+    kOptimal is SOLVED; an iteration limit is LIMIT; kUnknown, a solve error and anything the table
+    does not name are FAILED."""
+    from cvxpy.reductions.solvers.conic_solvers.highs_conif import HIGHS
+
+    from mechopt.kit.result import from_cvxpy
+    return from_cvxpy(HIGHS.STATUS_MAP.get(highs.getModelStatus().name, "unknown"))
