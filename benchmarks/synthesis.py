@@ -45,13 +45,7 @@ def _window_lp(task, coefficients, speeds, t_deg):
 
 
 def _uppers(lp):
-    from mechopt.solvers.stop_impact.synthesis import ROW_SPACING_XI
-    from mechopt.solvers.stop_impact.window_rows import INF
-    out = []
-    for xa in WINDOWS:
-        holds = np.concatenate([lp.xi < xa] * lp.masks[0] + [lp.xi >= xa - 1.01 * ROW_SPACING_XI[1]] * lp.masks[1])
-        out.append(np.where(holds, lp.upper, INF))
-    return out
+    return [lp.upper_at(xa) for xa in WINDOWS]
 
 
 def _per_lp(calls, repeats):

@@ -325,19 +325,24 @@ class WindowLP:
         self.slacks = rows.slacken() if slack else []
         self.masks = len(before), len(after)
         movable = np.concatenate(before + after)
-        self.held = HeldLP(rows, movable)
+        self.rows, self.held = rows, HeldLP(rows, movable)
         self.upper = rows.bounds()[1][movable]                         # where each movable row holds
         self.given_up = 0
+
+    def upper_at(self, window_xi):
+        """The movable rows' upper bounds with the window at xi_a = window_xi: the arrival rows hold
+        before it, the approach rows from it on (+inf where a row does not hold)."""
+        # the velocity rows start a row early: C may cross between the last row below and the window
+        holds = np.concatenate([self.xi < window_xi] * self.masks[0]
+                               + [self.xi >= window_xi - 1.01 * ROW_SPACING_XI[1]] * self.masks[1])
+        return np.where(holds, self.upper, INF)
 
     def solve(self, window_xi):
         """(status, c, value, slacks) with the arrival window starting at xi_a = window_xi. Each
         window is solved from scratch (HeldLP.solve: the answer does not depend on the windows
         solved before it, nor on the machine's speed or load); one that HiGHS does not settle within
         its iteration limits is given up: LIMIT, counted in `given_up`, no proof of infeasibility."""
-        # the velocity rows start a row early: C may cross between the last row below and the window
-        holds = np.concatenate([self.xi < window_xi] * self.masks[0]
-                               + [self.xi >= window_xi - 1.01 * ROW_SPACING_XI[1]] * self.masks[1])
-        status, x, value = self.held.solve(np.where(holds, self.upper, INF))
+        status, x, value = self.held.solve(self.upper_at(window_xi))
         if status is Status.LIMIT:
             self.given_up += 1
         if status is not Status.SOLVED:
