@@ -10,8 +10,8 @@ grid its velocity stays below u_k, with X >= target at the end so that it does a
 approach velocity is at most u_k H / T_k whatever the exact contact, and the rebound of eq. (2),
 max_s (v0 g(s) + p(s)) (v0 and the pulse scale together, the preload does not), is a convex
 piecewise-linear function of v0: r >= g_j v0 + p_j, one row per line of its upper envelope. xi_a
-is scanned (a few candidates, then the neighbours of the best): each candidate is one LP in
-cvxpy (HiGHS), status checked.
+is scanned (a few candidates, then the neighbours of the best): each candidate is one LP solve
+(HiGHS), status checked.
 
 Objectives (`objective`):
 * "least_rebound"      min over c of the largest rebound at the sampled speeds, at t = t_deg;
@@ -22,8 +22,10 @@ Objectives (`objective`):
                        LP's value, assumed to fall as t grows (more time, slower arrival: stated,
                        not proven); a t below the kinematic minimum is a bisection step.
 
-Each LP is built once per phase angle (the window a Parameter: a re-solve per window) and solved
-by HiGHS's dual simplex; the lever enters as a dense response matrix for few coefficients and as
+Each LP is assembled once per phase angle and sample set as sparse rows, scaled and held in HiGHS
+(solvers/stop_impact/window_rows.py); a window changes only the bounds of the rows it masks, and
+each window is solved from scratch by the dual simplex (the interior point where it does not
+settle, iteration limits both); the lever enters as a dense response matrix for few coefficients and as
 state variables tied by the exact step for many (`elastic_states`); the rows are sampled on the
 grid (every 0.015 in xi early in the rise, 0.004 near the plate), the roller's force kept 5 % above
 zero there, and the full grid (the dense check) and the chain judge the result. Not modelled: the
