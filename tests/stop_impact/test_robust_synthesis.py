@@ -4,7 +4,6 @@ own box (solvers/stop_impact/lever_box.py)."""
 import dataclasses
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,13 +18,13 @@ BOX = dict(box_frequency_low=0.9, box_frequency_high=1.1, box_zeta_low=0.03, box
 # coarse: what the tests show holds at any setting (the scenes run 24 coefficients, 5 speeds, 0.05 deg)
 COARSE = dict(objective="least_phase", coefficients=8, sample_speeds=2, phase_from_deg=26.0, phase_to_deg=45.0,
               phase_tol_deg=0.1, max_acceleration_mm_per_rad2=570.0, compare=False)
-ROBUST_SCENE = Path(__file__).resolve().parents[2] / "examples" / "robust" / "law-synthesis-robust.toml"
+ROBUST_SCENE = "stop-impact/law-synthesis-robust"
 AGREEMENT = 2e-3            # the synthesis' agreement_rel: the chain against its linear model, of the limit
 
 
 @pytest.fixture(scope="module")
 def lever():
-    return registry.find(str(ROBUST_SCENE)).build()[0]
+    return registry.find(ROBUST_SCENE).build()[0]
 
 
 @pytest.fixture(scope="module")
