@@ -261,3 +261,26 @@ def test_the_step_matrices_exponential_matches_scipys_expm(zeta):
     X = np.random.default_rng(5).normal(size=(20, 3, 3)) * 4
     ref = np.array([expm(x) for x in X])
     assert np.all(np.abs(small_expm(X) - ref).max(axis=(1, 2)) <= 1e-12 * np.maximum(1.0, np.abs(ref).max(axis=(1, 2))))
+
+
+def test_highs_statuses_read_as_cvxpys_table_reads_them():
+    """kit.highs' own table of HiGHS' model statuses gives, for every status HiGHS has, what cvxpy's
+    HIGHS.STATUS_MAP and from_cvxpy give (the loom's held LP reads them that way)."""
+    import highspy
+    from cvxpy.reductions.solvers.conic_solvers.highs_conif import HIGHS
+
+    from mechopt.kit.highs import status_of
+    from mechopt.kit.result import from_cvxpy
+
+    class Done:
+        def __init__(self, status):
+            self.status = status
+
+        def getModelStatus(self):
+            return self.status
+    names = [n for n in dir(highspy.HighsModelStatus) if n.startswith("k")]
+    assert len(names) > 10
+    for name in names:
+        status = getattr(highspy.HighsModelStatus, name)
+        assert status_of(Done(status)) is from_cvxpy(HIGHS.STATUS_MAP.get(name, "unknown")), name
+    assert status_of(Done(highspy.HighsModelStatus.kOptimal)) is Status.SOLVED
