@@ -68,11 +68,11 @@ from mechopt.models.cam_law import (
 from mechopt.models.stop_impact import LeverStop, speed_tag
 from mechopt.solvers.stop_impact.cam_follower import follow_cam, follower_data
 from mechopt.solvers.stop_impact.law import RollerLeftCam, rebound_amplitude_mm
-from mechopt.solvers.stop_impact.lever_box import LeverBox
+from mechopt.solvers.stop_impact.lever_box import LeverBox, takes_box
 from mechopt.solvers.stop_impact.response import closed_form_amplitude_m, response_parts
 from mechopt.solvers.stop_impact.window_rows import INF, HeldLP, Rows
 
-__all__ = ["BASES", "LinearLever", "box_values", "lever_box", "SpeedResponse", "WindowLP", "band_speeds", "design_law", "law_of", "linear_lever",
+__all__ = ["BASES", "LinearLever", "box_values", "SpeedResponse", "WindowLP", "band_speeds", "design_law", "law_of", "linear_lever",
            "predicted_rebounds_mm", "rebound_envelope", "speed_response", "v0_limit_m_s",
            "rebound_of_v0_mm", "synthesise_law"]
 
@@ -527,6 +527,7 @@ def _scan(lp, around=None):
 
 # ---------------------------------------------------------------- the solver a scene names
 
+@takes_box
 def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_rebound", "least_acceleration"]
                    = "least_phase",
                    coefficients: Annotated[int, Interval(ge=2, le=2000)] = 100,
@@ -544,12 +545,7 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
                    verify: bool = True,
                    agreement_rel: Annotated[float, Interval(gt=0, le=0.5)] = 2e-3,
                    compare: bool = True,
-                   box_frequency_low: Annotated[float, Interval(gt=0, le=10)] = 1.0,
-                   box_frequency_high: Annotated[float, Interval(gt=0, le=10)] = 1.0,
-                   box_zeta_low: Annotated[float, Interval(ge=0, le=1)] = 0.0,
-                   box_zeta_high: Annotated[float, Interval(ge=0, le=1)] = 0.0,
-                   box_speed_margin: Annotated[float, Interval(ge=0, le=1)] = 0.0,
-                   box_grid: Annotated[int, Interval(ge=2, le=50)] = 3,
+                   box: LeverBox | None = None,
                    robust: bool = False) -> Result:
     """Synthesise the lift cam's law (module docstring) and check it by the chain.
 
@@ -568,11 +564,12 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
         linear prediction to agree within agreement_rel (else INACCURATE).
     compare : the four library laws at the same t and speeds (values `<law>_rebound_mm_<rpm>` ...), and
         with least_phase the cycloid's least angle (`t_min_cycloidal_deg`, `phase_gain_percent`).
-    box_frequency_low, box_frequency_high, box_zeta_low, box_zeta_high, box_speed_margin, box_grid :
-        the lever's uncertain inputs on a box (solvers/stop_impact/lever_box.py): a factor on both
-        natural frequencies, the damping ratio (both 0: the task's own), the band's top raised by a
-        fraction, the dense check's points per axis. Given, the result reports the chain's worst
-        rebound over the box (`rebound_worst_box_mm`, its lever and speed in diagnostics).
+    box : the lever's uncertain inputs on a box (solvers/stop_impact/lever_box.py; a scene's settings
+        box_frequency_low, box_frequency_high, box_zeta_low, box_zeta_high, box_speed_margin,
+        box_grid: `takes_box`): a factor on both natural frequencies, the damping ratio (both 0: the
+        task's own), the band's top raised by a fraction, the dense check's points per axis. Given,
+        the result reports the chain's worst rebound over the box (`rebound_worst_box_mm`, its lever
+        and speed in diagnostics).
     robust : the law must keep the limit on the whole box: its corners and nominal are LP rows, its
         grid the dense check, a failing point added (`design_law`); with compare, the nominal law's
         and the cycloid's (at its least angle) worst over the same box beside it.
@@ -585,7 +582,7 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
     if phase_from_deg >= phase_to_deg:
         raise SettingError(f"phase_from_deg={phase_from_deg} >= phase_to_deg={phase_to_deg}: empty bracket",
                            key="phase_from_deg")
-    box = lever_box(box_frequency_low, box_frequency_high, box_zeta_low, box_zeta_high, box_speed_margin, box_grid)
+    box = box or LeverBox()
     clock = Clock()
     bounds = {"max_velocity_mm_per_rad": max_velocity_mm_per_rad,
               "max_acceleration_mm_per_rad2": max_acceleration_mm_per_rad2, "max_jerk_mm_per_rad3": max_jerk_mm_per_rad3}
@@ -743,14 +740,6 @@ def _least_phase(task, band, lo, hi, tol, common):
         if -f_hi <= ROOT_FTOL * limit or state["steps"] >= MAX_PHASE_STEPS:   # r*(hi) is the limit to the LP's digits
             break
     return best, hi, state
-
-
-def lever_box(box_frequency_low=1.0, box_frequency_high=1.0, box_zeta_low=0.0, box_zeta_high=0.0,
-              box_speed_margin=0.0, box_grid=3) -> LeverBox:
-    """The LeverBox of a solver's flat settings (both zeta bounds 0: the task's own damping ratio);
-    out-of-range or reversed bounds are a SettingError naming the key."""
-    zeta = None if box_zeta_low == box_zeta_high == 0.0 else (box_zeta_low, box_zeta_high)
-    return LeverBox((box_frequency_low, box_frequency_high), zeta, box_speed_margin, box_grid)
 
 
 def box_worst_point(task, law, t_deg, band, box, step, lever):

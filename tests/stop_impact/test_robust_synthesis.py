@@ -109,3 +109,21 @@ def test_the_synthesis_is_bit_identical_with_two_cpu_burners_beside_it(lever, no
             p.wait()
     assert law_of(loaded).coefficients == law_of(nominal).coefficients
     assert loaded.values == nominal.values
+
+
+def test_the_box_settings_are_declared_once_for_both_solvers_and_checked_by_the_scene_loader(lever):
+    """The synthesis and the co-design show the same six box settings (lever_box.BOX_SETTINGS) to the
+    scene loader; a scene's bad box setting is refused before any solve, naming the key; a Python
+    caller gives the box or its settings, not both."""
+    from mechopt.scene import solver_options
+    from mechopt.solvers.loom.codesign import codesign_machine_speed
+    from mechopt.solvers.stop_impact.lever_box import BOX_SETTINGS, LeverBox
+    for solver in (synthesise_law, codesign_machine_speed):
+        options = solver_options(solver)
+        assert "box" not in options
+        assert [options[p.name] for p in BOX_SETTINGS] == list(BOX_SETTINGS)
+    with pytest.raises(SettingError, match="box_zeta_low") as caught:
+        registry.run("stop-impact/law-synthesis", {"box_zeta_low": 2.0})
+    assert caught.value.key.endswith("box_zeta_low")
+    with pytest.raises(SettingError, match="box_grid"):
+        synthesise_law(lever, box=LeverBox(), box_grid=4, **COARSE)
