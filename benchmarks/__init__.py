@@ -11,11 +11,13 @@ import importlib
 from mechopt.mechanisms import mechanisms
 
 SPINE_STUDIES = {"sweep": "mechopt.benchmarks.sweep"}      # of the spine, not of one mechanism
+# a mechanism's second study, also run within its first (stop-impact's window LP: mechopt bench synthesis)
+MORE_STUDIES = {"synthesis": "mechopt.benchmarks.synthesis"}
 
 
 def studies() -> dict[str, str]:
     """Study name -> its module: one per mechanism, then the spine's."""
-    return {m.name: m.benchmark for m in mechanisms()} | SPINE_STUDIES
+    return {m.name: m.benchmark for m in mechanisms()} | MORE_STUDIES | SPINE_STUDIES
 
 
 STUDIES = studies()

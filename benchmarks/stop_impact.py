@@ -21,6 +21,7 @@ import time
 import numpy as np
 
 from mechopt import registry
+from mechopt.benchmarks import synthesis
 from mechopt.figures import save_figure
 from mechopt.solvers.stop_impact.cam_follower import follow_cam, follow_cam_reference
 from mechopt.solvers.stop_impact.entry_points import AGREEMENT_REL
@@ -175,7 +176,8 @@ def cli(repeats, out_dir, progress=None, quick=False) -> str:
     cam = cam_rows(repeats=repeats, progress=progress, quick=quick)
     cost = law_cost(repeats=1 if quick else min(repeats, 3), progress=progress, points=20 if quick else LAW_SAMPLE)
     synth = synthesis_table(synthesis_rows(repeats=1 if quick else min(repeats, 3), progress=progress, quick=quick))
-    return "\n".join([table(rows), "", cam_table(cam, cost), "", synth,
+    window = synthesis.cli(repeats, out_dir, progress=progress, quick=quick)
+    return "\n".join([table(rows), "", cam_table(cam, cost), "", synth, "", window,
                       *(f"plot: {p}" for p in plot(rows, cam, out_dir))])
 
 
@@ -207,7 +209,7 @@ def synthesis_rows(repeats=3, progress=None, quick=False):
                               lines=lines)
             return lp.solve(0.85)
         seconds, out = _median_time(cold, repeats)
-        rows.append({"method": f"LP (cvxpy + HiGHS), {k} coefficients", "seconds": seconds, "rebound_mm": out[2]})
+        rows.append({"method": f"LP (sparse rows, HiGHS), {k} coefficients", "seconds": seconds, "rebound_mm": out[2]})
         if progress:
             progress(f"LP {k}: {seconds:.3g} s")
     k = SYNTH_COEFFICIENTS[0]

@@ -28,13 +28,15 @@ from mechopt.kit.settings import Annotated, Interval
 from mechopt.models.loom import Cyclogram
 from mechopt.solvers.loom.speed import max_machine_speed
 from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
-from mechopt.solvers.stop_impact.synthesis import box_values, law_of, lever_box, linear_lever, synthesise_law
+from mechopt.solvers.stop_impact.lever_box import LeverBox, takes_box
+from mechopt.solvers.stop_impact.synthesis import box_values, law_of, linear_lever, synthesise_law
 
 __all__ = ["codesign_machine_speed"]
 
 BOX_STEP_RPM = 5.0          # the box's speeds at the re-planned t(3,7): every 5 rpm, as the synthesis' dense check
 
 
+@takes_box
 def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Interval(ge=2, le=2000)] = 40,
                            band_low_rpm: Annotated[float, Interval(gt=0, le=1e5)] = 180.0,
                            sample_speeds: Annotated[int, Interval(ge=1, le=50)] = 5,
@@ -44,12 +46,7 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
                            phase_tol_deg: Annotated[float, Interval(gt=0, le=1)] = 0.05,
                            scan_to_deg: Annotated[float, Interval(gt=0.0, le=360.0)] = 60.0,
                            scan_step_deg: Annotated[float, Interval(ge=1e-3, le=10.0)] = 0.25,
-                           box_frequency_low: Annotated[float, Interval(gt=0, le=10)] = 1.0,
-                           box_frequency_high: Annotated[float, Interval(gt=0, le=10)] = 1.0,
-                           box_zeta_low: Annotated[float, Interval(ge=0, le=1)] = 0.0,
-                           box_zeta_high: Annotated[float, Interval(ge=0, le=1)] = 0.0,
-                           box_speed_margin: Annotated[float, Interval(ge=0, le=1)] = 0.0,
-                           box_grid: Annotated[int, Interval(ge=2, le=50)] = 3,
+                           box: LeverBox | None = None,
                            robust: bool = False) -> Result:
     """The machine's highest speed with the lift's law synthesised (module docstring), against the
     same machine with its lever's own law (`speed_baseline_rpm`).
@@ -61,7 +58,7 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
     coefficients, sample_speeds, max_acceleration_mm_per_rad2, phase_from_deg, phase_to_deg,
         phase_tol_deg : the synthesis' (`synthesise_law`); the band is [band_low_rpm, speed_rpm].
     scan_to_deg, scan_step_deg : the engine's exact-bound scan (`max_machine_speed`).
-    box_frequency_low ... box_grid, robust : the lever's box (`synthesise_law`): with robust the law
+    box, robust : the lever's box (`synthesise_law`; a scene's box_frequency_low ... box_grid): with robust the law
         is synthesised on the whole box; given, the chain's worst rebound over the box at the
         re-planned t(3,7) over [band_low_rpm, speed] (the margin added) is `rebound_worst_box_mm`.
 
@@ -75,10 +72,7 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
     if band_low_rpm >= task.speed_rpm:
         raise SettingError(f"band_low_rpm={band_low_rpm} must be below speed_rpm={task.speed_rpm} (the band's top)",
                            key="band_low_rpm")
-    box_settings = dict(box_frequency_low=box_frequency_low, box_frequency_high=box_frequency_high,
-                        box_zeta_low=box_zeta_low, box_zeta_high=box_zeta_high, box_speed_margin=box_speed_margin,
-                        box_grid=box_grid)
-    box = lever_box(**box_settings)         # bad input refused before any work
+    box = box or LeverBox()
     clock = Clock()
     speed_settings = dict(scan_to_deg=scan_to_deg, scan_step_deg=scan_step_deg)
     baseline = max_machine_speed(task, **speed_settings)
@@ -92,7 +86,7 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
                              band_high_rpm=task.speed_rpm, sample_speeds=sample_speeds,
                              max_acceleration_mm_per_rad2=max_acceleration_mm_per_rad2,
                              phase_from_deg=phase_from_deg, phase_to_deg=phase_to_deg, phase_tol_deg=phase_tol_deg,
-                             compare=False, robust=robust, **box_settings)
+                             compare=False, robust=robust, box=box)
     values = {"speed_baseline_rpm": baseline.values["max_speed_rpm"]}
     took = {"synthesis_s": synthesis.elapsed()}                     # timings go to diagnostics: values are results
     if law_run.status is not Status.SOLVED:

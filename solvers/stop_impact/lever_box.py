@@ -9,15 +9,17 @@ key (frequency factor, zeta); the speed is the band's own axis. The synthesis ho
 corners and its nominal in the LP and checks a grid of it (solvers/stop_impact/synthesis.py).
 """
 import dataclasses
+import functools
+import inspect
 from dataclasses import dataclass
 
 import numpy as np
 
 from mechopt.kit.errors import SettingError
-from mechopt.kit.settings import range_fault
+from mechopt.kit.settings import Annotated, Interval, range_fault
 from mechopt.models.stop_impact import LeverStop
 
-__all__ = ["LeverBox"]
+__all__ = ["BOX_SETTINGS", "LeverBox", "box_of", "takes_box"]
 
 
 @dataclass(frozen=True)
@@ -91,3 +93,41 @@ class LeverBox:
         if key == (1.0, float(task.damping_ratio or 0.0)):
             return task
         return dataclasses.replace(task, E_GPa=task.E_GPa * f * f, damping_ratio=z)
+
+
+# The box as a scene's solver settings, declared once for every solver that takes a box (`takes_box`)
+BOX_SETTINGS = tuple(inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=default, annotation=annotation)
+                     for name, default, annotation in (
+                         ("box_frequency_low", 1.0, Annotated[float, Interval(gt=0, le=10)]),
+                         ("box_frequency_high", 1.0, Annotated[float, Interval(gt=0, le=10)]),
+                         ("box_zeta_low", 0.0, Annotated[float, Interval(ge=0, le=1)]),
+                         ("box_zeta_high", 0.0, Annotated[float, Interval(ge=0, le=1)]),
+                         ("box_speed_margin", 0.0, Annotated[float, Interval(ge=0, le=1)]),
+                         ("box_grid", 3, Annotated[int, Interval(ge=2, le=50)])))
+
+
+def box_of(box_frequency_low=1.0, box_frequency_high=1.0, box_zeta_low=0.0, box_zeta_high=0.0,
+           box_speed_margin=0.0, box_grid=3) -> LeverBox:
+    """The LeverBox of the flat settings (both zeta bounds 0: the task's own damping ratio);
+    out-of-range or reversed bounds are a SettingError naming the key."""
+    zeta = None if box_zeta_low == box_zeta_high == 0.0 else (box_zeta_low, box_zeta_high)
+    return LeverBox((box_frequency_low, box_frequency_high), zeta, box_speed_margin, box_grid)
+
+
+def takes_box(solver):
+    """`solver(task, *, ..., box: LeverBox | None = None)` as a solver a scene names: its signature
+    shows the box's flat settings (BOX_SETTINGS: box_frequency_low ... box_grid, checked by the
+    scene loader and listed by `mechopt describe`) in place of `box`; a Python caller gives either
+    those or `box=`, and bad box input is refused before any work."""
+    signature = inspect.signature(solver)
+    kept = [p for p in signature.parameters.values() if p.name != "box"]
+
+    @functools.wraps(solver)
+    def with_box(task, *args, box=None, **settings):
+        flat = {p.name: settings.pop(p.name) for p in BOX_SETTINGS if p.name in settings}
+        if box is not None and flat:
+            key = next(iter(flat))
+            raise SettingError(f"{key}={flat[key]!r} with box=...: give the box or its settings", key=key)
+        return solver(task, *args, box=box_of(**flat) if box is None else box, **settings)
+    with_box.__signature__ = signature.replace(parameters=kept + list(BOX_SETTINGS))
+    return with_box

@@ -10,8 +10,8 @@ grid its velocity stays below u_k, with X >= target at the end so that it does a
 approach velocity is at most u_k H / T_k whatever the exact contact, and the rebound of eq. (2),
 max_s (v0 g(s) + p(s)) (v0 and the pulse scale together, the preload does not), is a convex
 piecewise-linear function of v0: r >= g_j v0 + p_j, one row per line of its upper envelope. xi_a
-is scanned (a few candidates, then the neighbours of the best): each candidate is one LP in
-cvxpy (HiGHS), status checked.
+is scanned (a few candidates, then the neighbours of the best): each candidate is one LP solve
+(HiGHS), status checked.
 
 Objectives (`objective`):
 * "least_rebound"      min over c of the largest rebound at the sampled speeds, at t = t_deg;
@@ -22,8 +22,10 @@ Objectives (`objective`):
                        LP's value, assumed to fall as t grows (more time, slower arrival: stated,
                        not proven); a t below the kinematic minimum is a bisection step.
 
-Each LP is built once per phase angle (the window a Parameter: a re-solve per window) and solved
-by HiGHS's dual simplex; the lever enters as a dense response matrix for few coefficients and as
+Each LP is assembled once per phase angle and sample set as sparse rows, scaled and held in HiGHS
+(solvers/stop_impact/window_rows.py); a window changes only the bounds of the rows it masks, and
+each window is solved from scratch by the dual simplex (the interior point where it does not
+settle, iteration limits both); the lever enters as a dense response matrix for few coefficients and as
 state variables tied by the exact step for many (`elastic_states`); the rows are sampled on the
 grid (every 0.015 in xi early in the rise, 0.004 near the plate), the roller's force kept 5 % above
 zero there, and the full grid (the dense check) and the chain judge the result. Not modelled: the
@@ -43,19 +45,16 @@ speeds beside it: rebound, dynamic error, peak acceleration.
 """
 import dataclasses
 import math
-import warnings
 from dataclasses import dataclass
 from typing import Literal
 
-import cvxpy as cp
 import numpy as np
 from scipy import sparse
 from scipy.optimize import brentq
 
 from mechopt.kit.cache import BuildCache
 from mechopt.kit.errors import ModelError, SettingError
-from mechopt.kit.highs import interruptible_everywhere
-from mechopt.kit.result import Clock, Result, Status, from_cvxpy
+from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Annotated, Interval, NonNegative
 from mechopt.models.cam_follower import LAWS, law_values
 from mechopt.models.cam_law import (
@@ -69,15 +68,13 @@ from mechopt.models.cam_law import (
 from mechopt.models.stop_impact import LeverStop, speed_tag
 from mechopt.solvers.stop_impact.cam_follower import follow_cam, follower_data
 from mechopt.solvers.stop_impact.law import RollerLeftCam, rebound_amplitude_mm
-from mechopt.solvers.stop_impact.lever_box import LeverBox
+from mechopt.solvers.stop_impact.lever_box import LeverBox, takes_box
 from mechopt.solvers.stop_impact.response import closed_form_amplitude_m, response_parts
+from mechopt.solvers.stop_impact.window_rows import INF, HeldLP, Rows
 
-__all__ = ["BASES", "LinearLever", "box_values", "lever_box", "SpeedResponse", "WindowLP", "band_speeds", "design_law", "law_of", "linear_lever",
+__all__ = ["BASES", "LinearLever", "box_values", "SpeedResponse", "WindowLP", "band_speeds", "design_law", "law_of", "linear_lever",
            "predicted_rebounds_mm", "rebound_envelope", "speed_response", "v0_limit_m_s",
            "rebound_of_v0_mm", "synthesise_law"]
-
-interruptible_everywhere()  # no HiGHS banner, and Ctrl-C stops a window LP at its next iteration
-
 
 def law_of(result: Result) -> SplineLaw:
     """The synthesised law of a `synthesise_law` Result (its diagnostics law_knots, law_coefficients):
@@ -91,7 +88,6 @@ ROW_SPACING_XI = (0.015, 0.004)  # LP rows this far apart before / after ARRIVAL
 ARRIVAL_FROM_XI = 0.55          # where the plate comes near: rows close enough that X' cannot peak between them
 CONTACT_MARGIN = 0.05           # the roller's force kept above 5 % of the closure at the rows (it peaks between them)
 STATE_FORM_FROM = 200           # coefficients from which the LP carries the lever's states (elastic_states)
-BIG_X, BIG_V = 2.0, 30.0        # big-M of the window's masks: above any X - target, X' a useful rise has
 WINDOW_CANDIDATES = (0.7, 0.8, 0.9)            # xi_a scanned first, then halved steps around the best
 WINDOW_REFINE = 1               # halvings of the scan step around the best window
 ENVELOPE_POINTS = 2049          # time samples of eq. (2)'s window for the envelope's lines
@@ -99,15 +95,6 @@ ROOT_FTOL = 1e-4                # the least phase: r*(t) within this of the limi
 MAX_PHASE_STEPS = 40
 ROBUST_ROUNDS = 8               # rounds of the dense check over the box's grid for one LP (each adds every
                                 # lever's worst point that fails: a count)
-# HiGHS' interior point, each window from scratch: its work is a count of iterations (17-39 on the
-# scenes' windows, each a factorisation of the same size), where the dual simplex, warm or cold,
-# stalled on a few ill-scaled infeasible windows (coefficients 1e-8 ... 1e3: 300 iterations in
-# 7-41 s against 0.3 s for any other) and could only be stopped by a clock. Crossover gives the vertex.
-IPM_ITERATIONS = 400            # a window not settled in this many IPM iterations is given up (LIMIT)
-SIMPLEX_ITERATIONS = 50_000     # the dual simplex's budget where the IPM gives no status at all
-HIGHS_OPTIONS = {"solver": "ipm", "run_crossover": "on", "ipm_iteration_limit": IPM_ITERATIONS,
-                 "output_flag": False}       # options given, cvxpy no longer silences HiGHS' banner
-FALLBACK_OPTIONS = {"solver": "simplex", "simplex_iteration_limit": SIMPLEX_ITERATIONS, "output_flag": False}
 BASES = BuildCache("stop_impact.synthesis_bases", maxsize=8)
 
 
@@ -220,36 +207,45 @@ def speed_response(task, lever, rpm, t_deg, lines=None):
     return SpeedResponse(rpm, lam, zeta, T, lever.response(lam, zeta) if dense else None, lines)
 
 
-def elastic_states(lever, speed, c, rows):
-    """(ties, X at `rows`, X at the grid's end, X' and X'' at `rows`): the elastic lever at one speed
-    as affine expressions in the coefficients c. Two forms of one map, chosen by size (measured, one
-    LP at 420 rpm, HiGHS dual simplex): below STATE_FORM_FROM coefficients the superposition's
-    dense response matrix (few columns; 24 coefficients x 5 speeds: ~8x faster than the states);
-    from it on, e and e' as LP variables at every node tied to c by the exact first-order-hold step
-    (models/cam_law.py `step_matrices`): each row holds a few coefficients (10^3 coefficients:
-    0.75 s presolved against 6.4 s dense)."""
-    last = lever.xi.size - 1
+def elastic_states(rows, lever, speed, k, at):
+    """(X at the nodes `at`, X at the grid's end, X' and X'' at `at`), each (terms, offset): the
+    elastic lever at speed number k as affine maps of the Rows' columns. Two forms of one map, chosen
+    by size (measured, one LP at 420 rpm): below STATE_FORM_FROM coefficients the superposition's
+    dense response matrix on the coefficients c (few columns; 24 coefficients x 5 speeds: ~8x faster
+    than the states); from it on, e and e' as columns `e<k>`, `de<k>` at every node (at rest at node
+    0), tied to c by the exact first-order-hold step (models/cam_law.py `step_matrices`): each row
+    holds a few coefficients (10^3 coefficients: 0.75 s presolved against 6.4 s dense)."""
+    last = [lever.xi.size - 1]
     if speed.resp is not None:
         (X0, XB), (dX0, dXB), (ddX0, ddXB) = speed.resp
-        return ([], X0[rows] + XB[rows] @ c, X0[last] + XB[last] @ c, dX0[rows] + dXB[rows] @ c,
-                ddX0[rows] + ddXB[rows] @ c)
+        return tuple(([("c", mat[i])], off[i]) for (off, mat), i in
+                     (((X0, XB), at), ((X0, XB), last), ((dX0, dXB), at), ((ddX0, ddXB), at)))
     (s0, B), (d0, D), (a0, A), _ = lever.kin
     Phi, Ga, Gb = step_matrices(speed.lam, speed.zeta, lever.step)
-    e, de = cp.Variable(lever.xi.size), cp.Variable(lever.xi.size)
-    u = a0 + A @ c                                      # S'' at the nodes, linear between them
-    slope = (u[1:] - u[:-1]) / lever.step
-    ties = [e[0] == 0, de[0] == 0,
-            e[1:] == Phi[0, 0] * e[:-1] + Phi[0, 1] * de[:-1] + Ga[0] * u[:-1] + Gb[0] * slope,
-            de[1:] == Phi[1, 0] * e[:-1] + Phi[1, 1] * de[:-1] + Ga[1] * u[:-1] + Gb[1] * slope]
-    X, dX = s0 + B @ c + e, d0 + D @ c + de
-    ddX = -2 * speed.zeta * speed.lam * de - speed.lam ** 2 * e         # X'' = S'' + e''
-    return ties, X[rows], X[last], dX[rows], ddX[rows]
+    n, h = lever.xi.size, lever.step
+    e, de = f"e{k}", f"de{k}"
+    at_rest = (np.r_[0.0, np.full(n - 1, -INF)], np.r_[0.0, np.full(n - 1, INF)])
+    rows.column(e, n, *at_rest)
+    rows.column(de, n, *at_rest)
+    up, down = sparse.eye(n - 1, n, k=1, format="csr"), sparse.eye(n - 1, n, format="csr")
+    drive = lambda j: Ga[j] * A[:-1] + (Gb[j] / h) * (A[1:] - A[:-1])     # S'' linear over each step
+    for j, own in ((0, e), (1, de)):
+        shift = {e: -Phi[j, 0] * down, de: -Phi[j, 1] * down}
+        shift[own] = shift[own] + up
+        rows.tie([(e, shift[e]), (de, shift[de]), ("c", -drive(j))], Ga[j] * a0[:-1] + Gb[j] * np.diff(a0) / h)
+    pick = sparse.eye(n, format="csr")
+    X = ([("c", B[at]), (e, pick[at])], s0[at])
+    ddX = ([(de, -2 * speed.zeta * speed.lam * pick[at]), (e, -speed.lam ** 2 * pick[at])], np.zeros(len(at)))
+    return X, ([("c", B[last]), (e, pick[last])], s0[last]), ([("c", D[at]), (de, pick[at])], d0[at]), ddX
 
 
-def kinematic_rows(lever, c, t_deg, stroke_mm, bounds):
-    """{family: [expressions <= 0]} of the kinematic bounds given (velocity, acceleration, jerk of
-    C's travel against the cam angle), held at the knots and quarter points (`bound_kin`)."""
-    families = {}
+def _negated(terms):
+    return [(name, -coef) for name, coef in terms]
+
+
+def kinematic_rows(rows, lever, t_deg, stroke_mm, bounds):
+    """The kinematic bounds given (velocity, acceleration, jerk of C's travel against the cam angle)
+    as rows of the coefficients c, a family each, held at the knots and quarter points (`bound_kin`)."""
     t_rad = math.radians(t_deg)
     _, (d0, D), (a0, A), (j0, J) = lever.bound_kin
     for name, (off, mat), power, key in (("velocity", (d0, D), 1, "max_velocity_mm_per_rad"),
@@ -257,21 +253,8 @@ def kinematic_rows(lever, c, t_deg, stroke_mm, bounds):
                                          ("jerk", (j0, J), 3, "max_jerk_mm_per_rad3")):
         if bounds.get(key):
             lim = bounds[key] * t_rad**power / stroke_mm      # the bound on the analogue of S
-            expr = off + mat @ c
-            families[name] = [expr - lim, -expr - lim]
-    return families
-
-
-def limit_rows(families, slack=False, keep=("objective",)):
-    """(slacks, constraints) of {family: [expressions <= 0]}: each family but `keep` gets its own
-    nonnegative slack when `slack` (minimising their sum names the limits that bind)."""
-    slacks, constraints = {}, []
-    for name, pieces in families.items():
-        bound = 0
-        if slack and name not in keep:
-            bound = slacks[name] = cp.Variable(nonneg=True)
-        constraints += [piece <= bound for piece in pieces]
-    return slacks, constraints
+            rows.le(name, [("c", mat)], lim - off)
+            rows.le(name, [("c", -mat)], lim + off)
 
 
 def kinematic_conflict(lever, t_deg, stroke_mm, bounds):
@@ -279,19 +262,17 @@ def kinematic_conflict(lever, t_deg, stroke_mm, bounds):
     when some law keeps them all): one small LP with a slack per bound, the lever left out. Any
     window's LP holds these rows too, so a conflict here is infeasibility for every window, found
     without them (below the kinematic minimum they took HiGHS 1-16 s each)."""
-    c = cp.Variable(lever.basis.size)
-    families = kinematic_rows(lever, c, t_deg, stroke_mm, bounds)
-    if not families:
+    rows = Rows()
+    rows.column("c", lever.basis.size)
+    kinematic_rows(rows, lever, t_deg, stroke_mm, bounds)
+    if not rows.rows:
         return ()
-    slacks, constraints = limit_rows(families, slack=True)
-    problem = cp.Problem(cp.Minimize(sum(slacks.values())), constraints)
-    try:
-        problem.solve(solver=cp.HIGHS, highs_options={"output_flag": False})
-    except (cp.error.SolverError, ValueError):
+    names = rows.slacken()
+    held = HeldLP(rows, movable=[])
+    status, x, _ = held.solve([])
+    if status is not Status.SOLVED:
         return ()                                   # no verdict here: the windows' LPs decide
-    if from_cvxpy(problem.status) is not Status.SOLVED:
-        return ()
-    return tuple(name for name, v in slacks.items() if v.value > 1e-9)
+    return tuple(name for name in names if held.block(x, f"slack:{name}")[0] > 1e-9)
 
 
 def _rows(lever):
@@ -305,73 +286,71 @@ def _rows(lever):
 
 
 class WindowLP:
-    """The LP at one phase angle and set of speeds, built once; the arrival window's start xi_a is
-    a cvxpy Parameter (which rows hold, by a big-M mask in the right-hand side: DPP), so each
-    candidate window is a re-solve, not a rebuild. `slack`: each family of limits gets a slack
-    and the sum is minimised (which limits bind when nothing is feasible)."""
+    """The LP at one phase angle and set of speeds, assembled once as sparse rows and held in HiGHS
+    (solvers/stop_impact/window_rows.py); the arrival window's start xi_a decides which rows hold
+    (their upper bound, or +inf), so each candidate window changes bounds in place and re-solves.
+    `slack`: each family of limits gets a slack and the sum is minimised (which limits bind when
+    nothing is feasible)."""
 
     def __init__(self, task, lever, speeds, t_deg, *, objective, limit_mm, bounds, lines, slack=False):
         H = task.stroke_mm * 1e-3
         self.target = 1.0 - (task.preload_mm * 1e-3 / H if "preload" in task.effects else 0.0)
-        rows = _rows(lever)
-        self.xi = lever.xi[rows]
-        self.c = c = cp.Variable(lever.basis.size)
-        self.before = cp.Parameter(self.xi.size, nonneg=True)      # 0 where the row holds, 1 where not
-        self.after = cp.Parameter(self.xi.size, nonneg=True)
-        families = kinematic_rows(lever, c, t_deg, task.stroke_mm, bounds)
-        _, _, (a0, A), _ = lever.bound_kin
-        self.peak = peak = cp.Variable() if objective == "least_acceleration" else None
-        if peak is not None:
-            expr = a0 + A @ c
-            families["objective"] = [expr - peak, -expr - peak]
-        self.r = r = cp.Variable() if peak is None else None
+        at = np.flatnonzero(_rows(lever))
+        self.xi = lever.xi[at]
+        rows = Rows()
+        rows.column("c", lever.basis.size)
+        goal = "peak" if objective == "least_acceleration" else "r"
+        rows.column(goal, cost=0.0 if slack else 1.0)
+        kinematic_rows(rows, lever, t_deg, task.stroke_mm, bounds)
+        if goal == "peak":
+            _, _, (a0, A), _ = lever.bound_kin
+            rows.le("objective", [("c", A), ("peak", -np.ones(A.shape[0]))], -a0)
+            rows.le("objective", [("c", -A), ("peak", -np.ones(A.shape[0]))], a0)
         closure = task.closure_force_N if "cam_drive" in task.effects and task.closure_force_N is not None else None
-        ties, rows = [], np.flatnonzero(rows)
-        for sp in speeds:
-            tie, X, X_end, dX, ddX = elastic_states(lever, sp, c, rows)
-            ties += tie
+        before, after = [], []
+        for k, sp in enumerate(speeds):
+            (X, X0), (X_end, X0_end), (dX, dX0), (ddX, ddX0) = elastic_states(rows, lever, sp, k, at)
             scale = H / sp.T                                            # X' -> m/s
-            u = cp.Variable()
-            families.setdefault("arrival", []).extend([
-                X - self.target - BIG_X * self.before,                  # below the plate before xi_a
-                self.target - X_end])                                   # on it by the grid's end
-            families.setdefault("approach", []).append(dX - u - BIG_V * self.after)
+            u = f"u{k}"
+            rows.column(u)
+            before.append(rows.le("arrival", X, self.target - X0))     # below the plate before xi_a
+            rows.le("arrival", _negated(X_end), X0_end - self.target)   # on it by the grid's end
+            after.append(rows.le("approach", dX + [(u, -np.ones(at.size))], -dX0))
             g, p = lines if sp.lines is None else sp.lines
-            rebound = g * scale * u + p
-            families.setdefault("rebound", []).append(rebound - (limit_mm if r is None else r))
+            if goal == "r":
+                rows.le("rebound", [(u, g * scale), ("r", -np.ones(g.size))], -p)
+            else:
+                rows.le("rebound", [(u, g * scale)], limit_mm - p)
             if closure is not None:      # the roller stays on its cam: N = F + m H X'' / T^2 >= 0
-                families.setdefault("cam_contact", []).append(-ddX - (1 - CONTACT_MARGIN) * closure * sp.T**2
-                                                              / (task.mass_kg * H))
-        self.slacks, constraints = limit_rows(families, slack)
-        constraints += ties
-        goal = sum(self.slacks.values()) if slack else (peak if peak is not None else r)
-        self.problem = cp.Problem(cp.Minimize(goal), constraints)
+                rows.le("cam_contact", _negated(ddX), ddX0 + (1 - CONTACT_MARGIN) * closure * sp.T**2
+                        / (task.mass_kg * H))
+        self.slacks = rows.slacken() if slack else []
+        self.masks = len(before), len(after)
+        movable = np.concatenate(before + after)
+        self.rows, self.held = rows, HeldLP(rows, movable)
+        self.upper = rows.bounds()[1][movable]                         # where each movable row holds
         self.given_up = 0
+
+    def upper_at(self, window_xi):
+        """The movable rows' upper bounds with the window at xi_a = window_xi: the arrival rows hold
+        before it, the approach rows from it on (+inf where a row does not hold)."""
+        # the velocity rows start a row early: C may cross between the last row below and the window
+        holds = np.concatenate([self.xi < window_xi] * self.masks[0]
+                               + [self.xi >= window_xi - 1.01 * ROW_SPACING_XI[1]] * self.masks[1])
+        return np.where(holds, self.upper, INF)
 
     def solve(self, window_xi):
         """(status, c, value, slacks) with the arrival window starting at xi_a = window_xi. Each
-        window is solved from scratch (no warm start: the answer does not depend on the windows
+        window is solved from scratch (HeldLP.solve: the answer does not depend on the windows
         solved before it, nor on the machine's speed or load); one that HiGHS does not settle within
         its iteration limits is given up: LIMIT, counted in `given_up`, no proof of infeasibility."""
-        self.before.value = (self.xi >= window_xi).astype(float)
-        # the velocity rows start a row early: C may cross between the last row below and the window
-        self.after.value = (self.xi < window_xi - 1.01 * ROW_SPACING_XI[1]).astype(float)
-        with warnings.catch_warnings():                  # an iteration limit is a status here, not a warning
-            warnings.filterwarnings("ignore", "Solution may be inaccurate", UserWarning)
-            try:
-                self.problem.solve(solver=cp.HIGHS, warm_start=False, highs_options=HIGHS_OPTIONS)
-            except (cp.error.SolverError, ValueError):      # cvxpy raises ValueError on HiGHS' "unknown"
-                try:
-                    self.problem.solve(solver=cp.HIGHS, warm_start=False, highs_options=FALLBACK_OPTIONS)
-                except (cp.error.SolverError, ValueError) as exc:
-                    return Status.FAILED, None, math.inf, {"message": str(exc)}
-        status = from_cvxpy(self.problem.status)
+        status, x, value = self.held.solve(self.upper_at(window_xi))
         if status is Status.LIMIT:
             self.given_up += 1
         if status is not Status.SOLVED:
             return status, None, math.inf, {}
-        return (status, np.asarray(self.c.value).ravel(), float(self.problem.value),
-                {k: float(v.value) for k, v in self.slacks.items()})
+        return (status, self.held.block(x, "c"), value,
+                {name: float(self.held.block(x, f"slack:{name}")[0]) for name in self.slacks})
 
 
 # ---------------------------------------------------------------- predictions on the full grid
@@ -413,6 +392,7 @@ class _Design:
     message: str = ""
     violated: tuple = ()
     given_up: int = 0               # windows HiGHS did not settle within its iteration limits (WindowLP.solve)
+    retried: int = 0                # windows the dual simplex did not settle, retried by the interior point
 
 
 def design_law(task: LeverStop, t_deg: float, band_rpm: tuple, *, objective="least_rebound", coefficients=100,
@@ -446,7 +426,7 @@ def design_law(task: LeverStop, t_deg: float, band_rpm: tuple, *, objective="lea
                        conflict)
     levers = {key: LeverBox.lever(task, key) for key in box.grid_keys(task) + box.corners(task)}
     lines = {key: rebound_envelope(each, 4 * max(v0_limit_m_s(each, limit), 1e-3)) for key, each in levers.items()}
-    lps = given_up = 0
+    lps, counts = 0, {"given_up": 0, "retried": 0}
     for _ in range(rounds):
         levers |= {p[:2]: LeverBox.lever(task, p[:2]) for p in samples if p[:2] not in levers}
         lines |= {key: rebound_envelope(each, 4 * max(v0_limit_m_s(each, limit), 1e-3))
@@ -455,10 +435,11 @@ def design_law(task: LeverStop, t_deg: float, band_rpm: tuple, *, objective="lea
         nominal = lines[box.nominal(task)]
         lp = WindowLP(task, lever, speeds, t_deg, objective=objective, limit_mm=limit, bounds=bounds, lines=nominal)
         (status, c, value, xa), count = _scan(lp, around)
-        lps, given_up = lps + count, given_up + lp.given_up
+        lps = lps + count
+        counts = {"given_up": counts["given_up"] + lp.given_up, "retried": counts["retried"] + lp.held.retried}
         if status is Status.INFEASIBLE and not explain:
             return _Design(Status.INFEASIBLE, None, math.inf, xa, samples, lps,
-                           f"no law at t = {t_deg:.6g} deg keeps every limit", given_up=given_up)
+                           f"no law at t = {t_deg:.6g} deg keeps every limit", **counts)
         if status is Status.INFEASIBLE:
             slack = WindowLP(task, lever, speeds, t_deg, objective=objective, limit_mm=limit, bounds=bounds,
                               lines=nominal, slack=True)
@@ -467,21 +448,21 @@ def design_law(task: LeverStop, t_deg: float, band_rpm: tuple, *, objective="lea
             binding = tuple(k for k, v in sl.items() if v > 1e-9)
             return _Design(Status.INFEASIBLE, None, math.inf, xa, samples, lps + count,
                            f"no law at t = {t_deg:.6g} deg keeps every limit at {_points_text(samples)}; "
-                           f"binding: {', '.join(binding) or 'none found'}", binding, given_up)
+                           f"binding: {', '.join(binding) or 'none found'}", binding, **counts)
         if status is not Status.SOLVED:
             return _Design(status, None, math.inf, xa, samples, lps, f"HiGHS: {status.value} at xi_a = {xa:g}",
-                           given_up=given_up)
+                           **counts)
         law = lever.basis.law(c)
         bar = dense_bar_mm if dense_bar_mm is not None else value if objective == "least_rebound" else limit
         failing = [(mm, point) for key in box.grid_keys(task)
                    for mm, point in [_dense_worst(levers, [key], law, t_deg, dense, lever)]
                    if mm > bar * (1 + 1e-3) + 1e-4 * limit and point not in samples]
         if not failing:
-            return _Design(Status.SOLVED, law, value, xa, samples, lps, given_up=given_up)
+            return _Design(Status.SOLVED, law, value, xa, samples, lps, **counts)
         worst = max(failing)[1]
         samples = sorted(samples + [point for _, point in failing])   # broken between samples: sample them too
     return _Design(Status.LIMIT, law, value, xa, samples, lps,
-                   f"the dense check still fails at {_points_text([worst])} after {rounds} rounds", given_up=given_up)
+                   f"the dense check still fails at {_points_text([worst])} after {rounds} rounds", **counts)
 
 
 def _dense_worst(levers, keys, law, t_deg, dense, lever):
@@ -546,6 +527,7 @@ def _scan(lp, around=None):
 
 # ---------------------------------------------------------------- the solver a scene names
 
+@takes_box
 def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_rebound", "least_acceleration"]
                    = "least_phase",
                    coefficients: Annotated[int, Interval(ge=2, le=2000)] = 100,
@@ -563,12 +545,7 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
                    verify: bool = True,
                    agreement_rel: Annotated[float, Interval(gt=0, le=0.5)] = 2e-3,
                    compare: bool = True,
-                   box_frequency_low: Annotated[float, Interval(gt=0, le=10)] = 1.0,
-                   box_frequency_high: Annotated[float, Interval(gt=0, le=10)] = 1.0,
-                   box_zeta_low: Annotated[float, Interval(ge=0, le=1)] = 0.0,
-                   box_zeta_high: Annotated[float, Interval(ge=0, le=1)] = 0.0,
-                   box_speed_margin: Annotated[float, Interval(ge=0, le=1)] = 0.0,
-                   box_grid: Annotated[int, Interval(ge=2, le=50)] = 3,
+                   box: LeverBox | None = None,
                    robust: bool = False) -> Result:
     """Synthesise the lift cam's law (module docstring) and check it by the chain.
 
@@ -585,12 +562,14 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
     phase_from_deg, phase_to_deg, phase_tol_deg : the search's bracket and tolerance on t [deg].
     verify, agreement_rel : run the law through follow_cam (CVODES) and eq. (2) and require the
         linear prediction to agree within agreement_rel (else INACCURATE).
-    compare : the four library laws at the same t and speeds (values `<law>_rebound_mm_<rpm>` ...).
-    box_frequency_low, box_frequency_high, box_zeta_low, box_zeta_high, box_speed_margin, box_grid :
-        the lever's uncertain inputs on a box (solvers/stop_impact/lever_box.py): a factor on both
-        natural frequencies, the damping ratio (both 0: the task's own), the band's top raised by a
-        fraction, the dense check's points per axis. Given, the result reports the chain's worst
-        rebound over the box (`rebound_worst_box_mm`, its lever and speed in diagnostics).
+    compare : the four library laws at the same t and speeds (values `<law>_rebound_mm_<rpm>` ...), and
+        with least_phase the cycloid's least angle (`t_min_cycloidal_deg`, `phase_gain_percent`).
+    box : the lever's uncertain inputs on a box (solvers/stop_impact/lever_box.py; a scene's settings
+        box_frequency_low, box_frequency_high, box_zeta_low, box_zeta_high, box_speed_margin,
+        box_grid: `takes_box`): a factor on both natural frequencies, the damping ratio (both 0: the
+        task's own), the band's top raised by a fraction, the dense check's points per axis. Given,
+        the result reports the chain's worst rebound over the box (`rebound_worst_box_mm`, its lever
+        and speed in diagnostics).
     robust : the law must keep the limit on the whole box: its corners and nominal are LP rows, its
         grid the dense check, a failing point added (`design_law`); with compare, the nominal law's
         and the cycloid's (at its least angle) worst over the same box beside it.
@@ -603,7 +582,7 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
     if phase_from_deg >= phase_to_deg:
         raise SettingError(f"phase_from_deg={phase_from_deg} >= phase_to_deg={phase_to_deg}: empty bracket",
                            key="phase_from_deg")
-    box = lever_box(box_frequency_low, box_frequency_high, box_zeta_low, box_zeta_high, box_speed_margin, box_grid)
+    box = box or LeverBox()
     clock = Clock()
     bounds = {"max_velocity_mm_per_rad": max_velocity_mm_per_rad,
               "max_acceleration_mm_per_rad2": max_acceleration_mm_per_rad2, "max_jerk_mm_per_rad3": max_jerk_mm_per_rad3}
@@ -619,14 +598,15 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
     values, diagnostics = {}, {}
     if objective == "least_phase":
         design, t_deg, search = _least_phase(task, band, phase_from_deg, phase_to_deg, phase_tol_deg, common)
-        diagnostics |= {"bisection_steps": search["steps"], "windows_given_up": search["given_up"]}
+        diagnostics |= {"bisection_steps": search["steps"], "windows_given_up": search["given_up"],
+                        "windows_retried": search["retried"]}
         if design.status is not Status.SOLVED:
             return _unsolved(design, values, diagnostics, clock, t_deg, limit, task, band, dense_step_rpm)
     else:
         task.need("t_deg")
         t_deg = task.t_deg
         design = design_law(task, t_deg, band, objective=objective, **common)
-        diagnostics["windows_given_up"] = design.given_up
+        diagnostics |= {"windows_given_up": design.given_up, "windows_retried": design.retried}
         if design.status is not Status.SOLVED:
             return _unsolved(design, values, diagnostics, clock, t_deg, limit, task, band, dense_step_rpm)
     law = design.law
@@ -637,7 +617,7 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
         if robust and not box.trivial:
             values["t_min_robust_deg"] = t_deg
         t_cyc = _library_least_phase(task, "cycloidal", band, phase_from_deg, phase_to_deg, phase_tol_deg,
-                                     dense_step_rpm)
+                                     dense_step_rpm) if compare else None
         if t_cyc is not None:
             values["t_min_cycloidal_deg"] = t_cyc
             values["phase_gain_percent"] = 100.0 * (1.0 - t_deg / t_cyc)
@@ -712,13 +692,14 @@ def _least_phase(task, band, lo, hi, tol, common):
     HiGHS: counted, the search moves up) is a bisection step. The speeds the dense check added and
     the best window are carried to the next t."""
     limit = task.amplitude_limit_mm
-    state = {"samples": None, "around": None, "steps": 0, "given_up": 0}
+    state = {"samples": None, "around": None, "steps": 0, "given_up": 0, "retried": 0}
 
     def excess(t):
         d = design_law(task, t, band, objective="least_rebound", samples=state["samples"], around=state["around"],
                        dense_bar_mm=limit, explain=False, **common)
         state["steps"] += 1
         state["given_up"] += d.given_up
+        state["retried"] += d.retried
         if d.status is Status.SOLVED:
             state["samples"], state["around"] = d.speeds, d.window_xi
             return d.value - limit, d
@@ -759,14 +740,6 @@ def _least_phase(task, band, lo, hi, tol, common):
         if -f_hi <= ROOT_FTOL * limit or state["steps"] >= MAX_PHASE_STEPS:   # r*(hi) is the limit to the LP's digits
             break
     return best, hi, state
-
-
-def lever_box(box_frequency_low=1.0, box_frequency_high=1.0, box_zeta_low=0.0, box_zeta_high=0.0,
-              box_speed_margin=0.0, box_grid=3) -> LeverBox:
-    """The LeverBox of a solver's flat settings (both zeta bounds 0: the task's own damping ratio);
-    out-of-range or reversed bounds are a SettingError naming the key."""
-    zeta = None if box_zeta_low == box_zeta_high == 0.0 else (box_zeta_low, box_zeta_high)
-    return LeverBox((box_frequency_low, box_frequency_high), zeta, box_speed_margin, box_grid)
 
 
 def box_worst_point(task, law, t_deg, band, box, step, lever):

@@ -169,3 +169,118 @@ def test_the_kinematic_conflict_names_only_the_bound_that_binds(lever):
     both = {"max_velocity_mm_per_rad": 1000.0, "max_acceleration_mm_per_rad2": ACCEL}
     assert kinematic_conflict(linear_lever(16, 2), 20.0, lever.stroke_mm, both) == ("acceleration",)
     assert kinematic_conflict(linear_lever(16, 2), 40.0, lever.stroke_mm, both) == ()
+
+
+# ---------------------------------------------------------------- the window LP as sparse rows held in HiGHS
+
+@pytest.fixture(scope="module")
+def window_lp(lever):
+    from mechopt.solvers.stop_impact import synthesis as sy
+    lp_lever = sy.linear_lever(24, 2)
+    speeds = [sy.speed_response(lever, lp_lever, n, 31.0) for n in (280.0, 420.0)]
+    lines = sy.rebound_envelope(lever, 4 * sy.v0_limit_m_s(lever, lever.amplitude_limit_mm))
+    return lambda: sy.WindowLP(lever, lp_lever, speeds, 31.0, objective="least_rebound",
+                               limit_mm=lever.amplitude_limit_mm, bounds={"max_acceleration_mm_per_rad2": ACCEL},
+                               lines=lines)
+
+
+def test_the_held_lp_is_the_lp_of_its_unscaled_rows(window_lp):
+    """The rows scaled by powers of two and the bounds changed in place solve the LP that scipy's
+    linprog solves from the unscaled rows and this window's bounds, built here (its own HiGHS call)."""
+    from scipy.optimize import linprog
+    from scipy.sparse import csr_matrix
+    lp = window_lp()
+    status, c, value, _ = lp.solve(0.85)
+    A = csr_matrix(lp.rows.matrix())
+    lower, upper, col_lo, col_hi, cost = lp.rows.bounds()
+    upper[lp.held.movable] = lp.upper_at(0.85)
+    eq, le = lower == upper, np.isfinite(upper) & (lower != upper)
+    ref = linprog(cost, A_ub=A[le], b_ub=upper[le], A_eq=A[eq] if eq.any() else None,
+                  b_eq=upper[eq] if eq.any() else None, bounds=list(zip(np.where(np.isinf(col_lo), None, col_lo), np.where(np.isinf(col_hi), None, col_hi))),
+                  method="highs")
+    assert status is Status.SOLVED and ref.status == 0
+    assert value == pytest.approx(ref.fun, rel=1e-7)
+    # the scaled LP's vertex, mapped back, keeps the unscaled rows
+    x = np.asarray(lp.held.highs.getSolution().col_value) * lp.held.s
+    assert np.array_equal(lp.held.block(x, "c"), c)
+    assert np.all(A[le] @ x <= upper[le] + 1e-7 * (1 + abs(upper[le])))
+    assert A[eq] @ x == pytest.approx(upper[eq], abs=1e-9)
+
+
+def test_the_scaling_is_by_powers_of_two_and_brings_the_rows_near_one(window_lp):
+    from mechopt.solvers.stop_impact.window_rows import coefficient_range
+    lp = window_lp()
+    r, s = lp.held.r, lp.held.s
+    assert np.all(np.log2(r) == np.round(np.log2(r))) and np.all(np.log2(s) == np.round(np.log2(s)))
+    raw_low, raw_high = coefficient_range(lp.rows.matrix())
+    low, high = coefficient_range(lp.held.A)
+    assert raw_high / raw_low > 1e10                 # the rows as assembled: 1e-8 ... 1e3
+    assert 0.5 <= high <= 2.0
+    row_max = abs(lp.held.A).max(axis=1).toarray().ravel()
+    row_max = row_max[row_max > 0]                  # rows of zeros (S'' at a rest node) stay so
+    assert np.all((row_max >= 0.5) & (row_max <= 2.0))
+
+
+def test_a_window_does_not_depend_on_the_windows_solved_before_it(window_lp):
+    fresh = window_lp().solve(0.85)
+    lp = window_lp()
+    for xa in (0.7, 0.9, 0.75):
+        lp.solve(xa)
+    again = lp.solve(0.85)
+    assert again[0] is fresh[0] is Status.SOLVED
+    assert np.array_equal(again[1], fresh[1]) and again[2] == fresh[2]
+
+
+def test_a_window_neither_method_settles_is_given_up_and_counted_never_solved(window_lp, monkeypatch):
+    from mechopt.solvers.stop_impact import window_rows as wr
+    monkeypatch.setitem(wr.SIMPLEX_OPTIONS, "simplex_iteration_limit", 1)
+    monkeypatch.setitem(wr.IPM_OPTIONS, "ipm_iteration_limit", 1)
+    lp = window_lp()
+    status, c, value, _ = lp.solve(0.85)
+    assert status is Status.LIMIT and c is None and value == np.inf
+    assert lp.given_up == 1 and lp.held.retried == 1
+
+
+@pytest.mark.parametrize("zeta", [0.0, 0.05, 1.0, 2.5])
+def test_the_step_matrices_exponential_matches_scipys_expm(zeta):
+    """The first-order hold's 4 x 4 exponential (a scaled Taylor series, vectorised) against scipy's
+    Pade expm, matrix by matrix, over the lambdas the scenes reach (lambda = omega T: <= ~300 at the
+    plate's 768 Hz x 1.1 over a 60 deg rise at 180 rpm) and beyond, at the grids' steps h; both are
+    rounding-limited (~1e-12 of the entries at lambda 2000, where 18 squarings amplify it)."""
+    from scipy.linalg import expm
+
+    from mechopt.models.cam_law import small_expm
+    lam = np.geomspace(0.1, 500.0, 41)
+    for h in (1 / 600, 1 / 200):
+        M = np.zeros(lam.shape + (4, 4))
+        M[:, 0, 1], M[:, 1, 0], M[:, 1, 1], M[:, 1, 2], M[:, 2, 3] = 1.0, -lam**2, -2 * zeta * lam, -1.0, 1.0
+        ours = small_expm(M * h)
+        for k in range(lam.size):
+            ref = expm(M[k] * h)
+            assert np.abs(ours[k] - ref).max() <= 1e-12 * max(1.0, np.abs(ref).max())
+    X = np.random.default_rng(5).normal(size=(20, 3, 3)) * 4
+    ref = np.array([expm(x) for x in X])
+    assert np.all(np.abs(small_expm(X) - ref).max(axis=(1, 2)) <= 1e-12 * np.maximum(1.0, np.abs(ref).max(axis=(1, 2))))
+
+
+def test_highs_statuses_read_as_cvxpys_table_reads_them():
+    """kit.highs' own table of HiGHS' model statuses gives, for every status HiGHS has, what cvxpy's
+    HIGHS.STATUS_MAP and from_cvxpy give (the loom's held LP reads them that way)."""
+    import highspy
+    from cvxpy.reductions.solvers.conic_solvers.highs_conif import HIGHS
+
+    from mechopt.kit.highs import status_of
+    from mechopt.kit.result import from_cvxpy
+
+    class Done:
+        def __init__(self, status):
+            self.status = status
+
+        def getModelStatus(self):
+            return self.status
+    names = [n for n in dir(highspy.HighsModelStatus) if n.startswith("k")]
+    assert len(names) > 10
+    for name in names:
+        status = getattr(highspy.HighsModelStatus, name)
+        assert status_of(Done(status)) is from_cvxpy(HIGHS.STATUS_MAP.get(name, "unknown")), name
+    assert status_of(Done(highspy.HighsModelStatus.kOptimal)) is Status.SOLVED

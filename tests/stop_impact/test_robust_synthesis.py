@@ -4,7 +4,6 @@ own box (solvers/stop_impact/lever_box.py)."""
 import dataclasses
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,13 +18,13 @@ BOX = dict(box_frequency_low=0.9, box_frequency_high=1.1, box_zeta_low=0.03, box
 # coarse: what the tests show holds at any setting (the scenes run 24 coefficients, 5 speeds, 0.05 deg)
 COARSE = dict(objective="least_phase", coefficients=8, sample_speeds=2, phase_from_deg=26.0, phase_to_deg=45.0,
               phase_tol_deg=0.1, max_acceleration_mm_per_rad2=570.0, compare=False)
-ROBUST_SCENE = Path(__file__).resolve().parents[2] / "examples" / "robust" / "law-synthesis-robust.toml"
+ROBUST_SCENE = "stop-impact/law-synthesis-robust"
 AGREEMENT = 2e-3            # the synthesis' agreement_rel: the chain against its linear model, of the limit
 
 
 @pytest.fixture(scope="module")
 def lever():
-    return registry.find(str(ROBUST_SCENE)).build()[0]
+    return registry.find(ROBUST_SCENE).build()[0]
 
 
 @pytest.fixture(scope="module")
@@ -110,3 +109,21 @@ def test_the_synthesis_is_bit_identical_with_two_cpu_burners_beside_it(lever, no
             p.wait()
     assert law_of(loaded).coefficients == law_of(nominal).coefficients
     assert loaded.values == nominal.values
+
+
+def test_the_box_settings_are_declared_once_for_both_solvers_and_checked_by_the_scene_loader(lever):
+    """The synthesis and the co-design show the same six box settings (lever_box.BOX_SETTINGS) to the
+    scene loader; a scene's bad box setting is refused before any solve, naming the key; a Python
+    caller gives the box or its settings, not both."""
+    from mechopt.scene import solver_options
+    from mechopt.solvers.loom.codesign import codesign_machine_speed
+    from mechopt.solvers.stop_impact.lever_box import BOX_SETTINGS, LeverBox
+    for solver in (synthesise_law, codesign_machine_speed):
+        options = solver_options(solver)
+        assert "box" not in options
+        assert [options[p.name] for p in BOX_SETTINGS] == list(BOX_SETTINGS)
+    with pytest.raises(SettingError, match="box_zeta_low") as caught:
+        registry.run("stop-impact/law-synthesis", {"box_zeta_low": 2.0})
+    assert caught.value.key.endswith("box_zeta_low")
+    with pytest.raises(SettingError, match="box_grid"):
+        synthesise_law(lever, box=LeverBox(), box_grid=4, **COARSE)
