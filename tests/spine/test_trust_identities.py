@@ -26,7 +26,8 @@ from mechopt import registry, verdicts
 
 INDEPENDENT = ("closed form", "scipy", "quadpack", "radau", "cvodes", "dop853", "brute", "scan", "bisection",
                "differential evolution", "central differences", "energy balance", "virtual work", "longest path",
-               "nested", "simulated", "brent", "recomputed", "independent", "cross-check", "ipopt")
+               "nested", "simulated", "brent", "recomputed", "independent", "cross-check", "ipopt", "hand formula",
+               "by hand", "written apart", "kinematic inversion")
 
 
 def _calibrated_on(scene, *names):

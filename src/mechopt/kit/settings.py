@@ -148,7 +148,10 @@ def declared_range(annotation):
 def describe_range(low, high) -> str:
     """'> 0', '1 ... 10,000', 'any' for a range from `declared_range`."""
     sign = {"gt": ">", "ge": ">=", "lt": "<", "le": "<="}
-    text = lambda x: f"{x:,}" if isinstance(x, int) else f"{x:g}"        # noqa: E731
+    # by value, not type: typing caches Annotated[float, Le(1e5)] and Annotated[float, Le(100_000)] as one
+    # (their marks compare equal), so which of the two a field holds depends on the import order
+    text = lambda x: f"{int(x):,}" if float(x).is_integer() and (isinstance(x, int) or abs(x) < 1e6) \
+        else f"{x:g}"       # noqa: E731
     if low and high:
         return f"{'' if low[2] == 'ge' else '> '}{text(low[0])} ... {text(high[0])}{'' if high[2] == 'le' else ' (excl.)'}"
     if low:
