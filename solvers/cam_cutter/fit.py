@@ -276,20 +276,24 @@ def _best_of(px, py, task, box, seeds, count, slots, max_rounds, nlp):
 
 
 CERTIFY_SPREAD = 48     # nodes spread over the path in the bound's node set
-CERTIFY_WORST = 16      # plus the answer's worst nodes, where the bound is tight
+CERTIFY_WORST = 16      # plus the answer's highest peaks, where the bound is tight
 
 
 def _certify(task, px, py, box, H, L, deviation, gap_per_size, max_cells):
     """The certificate of `minimax`'s answer (H, L) [mm]: a lower bound on the deviation over the
     box from a node set (`certificate.box_lower_bound`), the gap, and whether it is within
     gap_per_size cam sizes. Node coordinates in mm."""
-    worst = np.argsort(foot_points(px, py, H, L, vertices=ROUND_VERTICES)[0])[::-1][:CERTIFY_WORST]
+    dist = foot_points(px, py, H, L, vertices=ROUND_VERTICES)[0]
+    padded = np.r_[-np.inf, dist, -np.inf]        # the answer's peaks, one node each: its active nodes
+    peaks = np.flatnonzero((dist >= padded[:-2]) & (dist >= padded[2:]))
+    worst = peaks[np.argsort(dist[peaks])[::-1][:CERTIFY_WORST]]
     nodes = np.unique(np.r_[np.linspace(0, px.size - 1, CERTIFY_SPREAD).round().astype(int), worst])
     target = gap_per_size * task.size_mm
-    lower, cells, complete = box_lower_bound(px[nodes], py[nodes], box, deviation, gap=target, max_cells=max_cells)
-    gap = max(deviation - lower, 0.0)
-    return {"global_lower_bound_mm": lower, "global_gap_mm": gap, "global_cells": cells,
-            "global_certified": bool(complete or gap <= target), "global_gap_target_mm": target}
+    got = box_lower_bound(px[nodes], py[nodes], box, deviation, gap=target, max_cells=max_cells)
+    gap = max(deviation - got.lower, 0.0)
+    return {"global_lower_bound_mm": got.lower, "global_gap_mm": gap, "global_cells": got.cells,
+            "global_certified": bool(got.complete or gap <= target), "global_gap_target_mm": target,
+            "global_warm_started": got.warm_started}
 
 
 def _exchange_rounds(px, py, a, box, H, L, count, slots, max_rounds, nlp):
