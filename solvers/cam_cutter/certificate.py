@@ -32,7 +32,7 @@ from mechopt.solvers.cam_cutter.deviation import foot_points
 from mechopt.solvers.cam_cutter.problem import ROUND_VERTICES
 
 __all__ = ["lipschitz_radius", "largest_distance", "grid_starts", "box_lower_bound", "Cells",
-           "Bound", "moved_bound"]
+           "Bound", "moved_bound", "warm_cells"]
 
 KEEP = 5                # nodes a cell's bound mixes, and its children are first measured on
 SECTORS = 8             # gradient directions `_diverse` picks nodes from
@@ -155,6 +155,24 @@ def _diverse(value, gH, gL):
     columns = np.arange(KEEP)
     return np.where(columns < filled[:, None], chosen[:, :KEEP] if chosen.shape[1] >= KEEP else
                     np.pad(chosen, ((0, 0), (0, KEEP - chosen.shape[1])), mode="edge"), by_value[:, :KEEP])
+
+
+def warm_cells(leaves: Cells, moved, box, grid=(16, 8)) -> Cells:
+    """The start of a warm certificate over `box`: the earlier `leaves` that meet the box, each
+    bound less `moved` [mm] (`moved_bound`), and the grid cells of the box that the leaves' box does
+    not hold, unmeasured. Together they cover the box (cells may overlap: a point's bound is the
+    least of its cells' either way)."""
+    H_lo, H_hi, L_lo, L_hi = box
+    meet = ((leaves.H + leaves.hH > H_lo) & (leaves.H - leaves.hH < H_hi)
+            & (leaves.L + leaves.hL > L_lo) & (leaves.L - leaves.hL < L_hi))
+    old = ((leaves.H - leaves.hH).min(), (leaves.H + leaves.hH).max(), (leaves.L - leaves.hL).min(),
+           (leaves.L + leaves.hL).max())
+    H, L, hH, hL = _grid(box, grid)
+    HH, LL = np.meshgrid(H, L, indexing="ij")
+    outside = ((HH - hH < old[0]) | (HH + hH > old[1]) | (LL - hL < old[2]) | (LL + hL > old[3])).ravel()
+    fresh = Cells(HH.ravel()[outside], LL.ravel()[outside], np.full(outside.sum(), hH), np.full(outside.sum(), hL),
+                  np.full(outside.sum(), -np.inf))
+    return _joined(moved_bound(leaves.take(meet), moved), fresh)
 
 
 def _measure(px, py, cells: Cells, nodes):
