@@ -37,10 +37,10 @@ import numpy as np
 
 __all__ = ["lipschitz_radius", "cell_bounds", "POLYLINE"]
 
-POLYLINE = 256          # N: the zero-order polyline; its error V pi / N only widens the window
+POLYLINE = 128          # N: the zero-order polyline; its error V pi / N only widens the window
 TANGENTS = 256           # tangent segments where the first-order bound does not apply: M (pi/n)^2/2 ~ 1e-5 size
 NEWTON_STEPS = 4
-INTERVALS = 24          # of the geometric partition of the first-order window (`_loss`)
+INTERVALS = 12          # of the geometric partition of the first-order window (`_loss`)
 ROUNDING = 1e-12        # relative: a margin for floating-point rounding in the bounds
 
 
@@ -88,15 +88,12 @@ def _run(near, j):
     and sigma [rad], the farthest a member lies from j plus half a spacing; the run is the whole
     circle (sigma = inf) where every vertex is near."""
     offset = ((np.arange(POLYLINE) - j[:, None] + POLYLINE // 2) & (POLYLINE - 1)) - POLYLINE // 2
-    rows = np.arange(j.size)[:, None]
-    rolled = near[rows, (np.arange(POLYLINE) + j[:, None] - POLYLINE // 2) & (POLYLINE - 1)]
-    centre = POLYLINE // 2
-    right = np.argmin(rolled[:, centre:], axis=1)           # offset of the first vertex not near
-    left = np.argmin(rolled[:, centre::-1], axis=1)
-    whole = rolled.all(axis=1)
-    member = (offset > -left[:, None]) & (offset < right[:, None])
+    right = np.where(near | (offset <= 0), POLYLINE, offset).min(axis=1)      # first vertex not near
+    left = np.where(near | (offset > 0), POLYLINE, -offset).min(axis=1)
+    whole = ~(~near).any(axis=1)
+    member = ((offset > -left[:, None]) & (offset < right[:, None])) | whole[:, None]
     sigma = np.where(whole, np.inf, (np.maximum(left, right) - 0.5) * (2 * np.pi / POLYLINE))
-    return member | whole[:, None], sigma
+    return member, sigma
 
 
 def _scan(px, py, H, L, slack):
@@ -181,13 +178,13 @@ def cell_bounds(px, py, H, L, hH, hL):
     spacing = V * np.pi / POLYLINE
     low, high, run1, run2, covered = _scan(px, py, H, L, 2 * r + spacing)
     zero = low - spacing - r - margin
-    branches = []
-    for sj, sigma in (run1, run2):
-        d0, gH, gL, E, ok = _branch(px, py, H, L, hH, hL, r, M, sj, sigma, margin)
-        branches.append((d0, gH, gL, E))
-        covered &= ok
-    first = covered & (branches[0][0] <= high)      # beyond both runs every point is farther than high + r
-    d0, gH, gL, E = (np.stack(v, axis=-1) for v in zip(*branches))
+    d0, gH, gL, E, ok = (np.repeat(v[:, None], 2, axis=1) for v in _branch(px, py, H, L, hH, hL, r, M, *run1, margin))
+    two = run2[0] != run1[0]                        # a second run: its own branch (else the first twice)
+    if two.any():
+        got = _branch(*(v[two] for v in (px, py, H, L, hH, hL, r, M, *run2, margin)))
+        for whole, part in zip((d0, gH, gL, E, ok), got):
+            whole[two, 1] = part
+    first = covered & ok.all(axis=1) & (d0[:, 0] <= high)   # beyond both runs every point is farther than high + r
     worst = (d0 - np.abs(gH) * hH[:, None] - np.abs(gL) * hL[:, None] - E).min(axis=1)
     zero = np.where(first, np.maximum(zero, worst), zero)
     if TANGENTS and not first.all():     # more branches near the node: the tangent-segment bound
@@ -209,7 +206,7 @@ def _branch(px, py, H, L, hH, hL, r, M, sj, sigma, margin):
     eps_u = np.abs(ux * vx + uy * vy)
     eps_t = np.abs(wx * vx + wy * vy) / np.where(speed > 0, speed, 1.0)
     gH, gL = -(ux * b[0] + uy * b[1]), -(ux * a[0] + uy * a[1])
-    sigma = sigma + np.abs((s0 - sj + np.pi) % (2 * np.pi) - np.pi)     # from s0, not the vertex
+    sigma = np.minimum(sigma + np.abs((s0 - sj + np.pi) % (2 * np.pi) - np.pi), 2 * np.pi)  # from s0; > pi: not ok
     level = d0 + r                                      # B(t0) = level: M t^2/2 - |Q'| t + level + eps_t + r = 0
     disc = speed * speed - 2 * M * (level + eps_t + r)
     t0 = (speed - np.sqrt(np.maximum(disc, 0.0))) / M

@@ -36,6 +36,7 @@ __all__ = ["lipschitz_radius", "largest_distance", "grid_starts", "box_lower_bou
 
 KEEP = 5                # nodes a cell's bound mixes, and its children are first measured on
 SECTORS = 8             # gradient directions `_diverse` picks nodes from
+SCREEN = 4              # the first cells are screened on every SCREEN-th node
 
 
 @dataclass(frozen=True)
@@ -196,6 +197,17 @@ def _measure(px, py, cells: Cells, nodes):
     return Cells(cells.H, cells.L, cells.hH, cells.hL, bound), np.take_along_axis(nodes, pick, axis=1)
 
 
+def _screened(px, py, cells: Cells, nodes, target):
+    """`_measure` on the node indices `nodes` (a row a cell), then the cells still below the target
+    on every node: a few nodes close most cells."""
+    cells, top = _measure(px, py, cells, nodes)
+    still = cells.bound < target
+    if still.any():
+        again, top[still] = _measure(px, py, cells.take(still), np.tile(np.arange(px.size), (int(still.sum()), 1)))
+        cells.bound[still] = again.bound
+    return cells, top
+
+
 def _joined(a: Cells, b: Cells) -> Cells:
     return Cells(*(np.concatenate([u, v]) for u, v in zip(
         (a.H, a.L, a.hH, a.hL, a.bound), (b.H, b.L, b.hH, b.hL, b.bound))))
@@ -222,9 +234,9 @@ def box_lower_bound(px, py, box, upper, *, gap, max_cells=20_000, grid=(16, 8), 
         H, L, hH, hL = _grid(box, grid)
         HH, LL = np.meshgrid(H, L, indexing="ij")
         start = Cells(HH.ravel(), LL.ravel(), np.full(HH.size, hH), np.full(HH.size, hL), np.full(HH.size, -np.inf))
-    every = np.arange(px.size)
     low = start.bound < target               # the first cells (a grid, or earlier leaves below the target)
-    fresh, top = _measure(px, py, start.take(low), np.tile(every, (int(low.sum()), 1)))
+    fresh, top = _screened(px, py, start.take(low), np.tile(np.arange(0, px.size, SCREEN), (int(low.sum()), 1)),
+                           target)
     cells = _joined(start.take(~low), fresh)
     top = np.vstack([np.zeros((int((~low).sum()), KEEP), dtype=int), top])     # closed cells: never split
     measured = int(low.sum())
@@ -234,11 +246,7 @@ def box_lower_bound(px, py, box, upper, *, gap, max_cells=20_000, grid=(16, 8), 
         if open_.size == 0 or room == 0:
             break
         open_ = open_[np.argsort(cells.bound[open_], kind="stable")[:room]]   # the lowest first when short
-        children, child_top = _measure(px, py, _split(cells.take(open_)), np.repeat(top[open_], 4, axis=0))
-        still = children.bound < target             # screened on the parent's nodes: the rest on every node
-        if still.any():
-            again, child_top[still] = _measure(px, py, children.take(still), np.tile(every, (int(still.sum()), 1)))
-            children.bound[still] = again.bound
+        children, child_top = _screened(px, py, _split(cells.take(open_)), np.repeat(top[open_], 4, axis=0), target)
         keep = np.ones(cells.H.size, dtype=bool)
         keep[open_] = False
         cells, top = _joined(cells.take(keep), children), np.vstack([top[keep], child_top])
