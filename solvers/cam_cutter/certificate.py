@@ -1,27 +1,29 @@
 """Is a linkage the global minimax over its box? A lower bound on the largest node distance over
 every (H, L) of the box, by branch and bound on cells of (H, L), and the starts a multistart takes.
 
-A cell's bound is the largest of three lower bounds on max_i distance(P_i, limaçon(H, L)) over
+A cell's bound is the largest of these lower bounds on max_i distance(P_i, limaçon(H, L)) over
 the cell, each from `bound.cell_bounds` (one call for every (cell, node) pair of a level):
 
-* a node's zero-order bound (its distance at the centre less the Lipschitz radius);
-* a node's first-order bound at its worst corner, d0 + g . (dH, dL) - E;
-* a weighted one: for weights w >= 0 summing to 1, max_i d_i >= sum_i w_i d_i, and the sum of the
-  nodes' first-order bounds is affine in (dH, dL), least at a corner:
-  sum w (d0 - E) - |sum w gH| hH - |sum w gL| hL. The weights are the answer's (`answer_weights`:
-  its active nodes, weighted so that their gradients cancel, as the multipliers of its KKT
-  conditions do), so near the answer the bound loses only second-order terms where the
-  single-node bounds lose the first-order ones.
+* a node's constant bound (zero order; or its first-order bound at its worst corner);
+* a mixed one, the dual of a small linear program: for weights w >= 0 summing to 1,
+  max_i d_i >= sum_i w_i d_i >= sum_i w_i lb_i, with lb_i a node's first-order bound (the least
+  of its runs' affine bounds d0 + g . (dH, dL) - E: concave), so the sum is concave in (dH, dL)
+  and least at one of the cell's corners. The weights tried (`_mixtures`) are the vertices of the
+  dual's simplex over KEEP nodes of different gradient directions (`_diverse`): each node alone,
+  pairs that cancel one gradient component, triples that cancel both. Near the answer, whose
+  active nodes' gradients cancel, this loses only second-order terms where one node loses r.
 
-A cell's children are measured on its parent's KEEP highest nodes and the weights' nodes: any
-subset of the nodes gives a lower bound, and a child's bound is at least its parent's. Cells are
-split level by level (all of a level in one call) until every cell's bound is within `gap` of
-`upper` (an achieved deviation: the early stop) or `max_cells` cells have been measured.
+A cell's children are measured on its KEEP nodes first, and those still below the target on
+every node: any subset of the nodes gives a lower bound, and a child's bound is at least its
+parent's. Cells are split level by level (all of a level in one call) until every cell's bound
+is within `gap` of `upper` (an achieved deviation: the early stop) or `max_cells` cells have been
+measured.
 
-Warm start (`box_lower_bound(start=...)`): the leaves of an earlier certificate over a box that
-holds this one, each bound lowered by how far the nodes moved. That is a bound: the distance to a
-curve is 1-Lipschitz in the point, so for every linkage max_i d(P_i') >= max_i d(P_i) - max_i |P_i' - P_i|
-(`moved_bound`). Only leaves below the target are measured again.
+Warm start (`box_lower_bound(start=...)`, `warm_cells`): the leaves of an earlier certificate
+meeting this box (and grid cells for any part of the box they miss), each bound lowered by how far
+the nodes moved. That is a bound: the distance to a curve is 1-Lipschitz in the point, so if every
+earlier node P_j has a node P_i' of this set within m, then for every linkage
+max_i d(P_i') >= max_j d(P_j) - m (`moved_bound`). Only leaves below the target are measured again.
 """
 from dataclasses import dataclass
 

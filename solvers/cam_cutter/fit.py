@@ -174,14 +174,22 @@ def minimax(task: LinkageFit | ProfileFit, *, count: Nodes = 1000, slots: Annota
     several basins (H > 0 and the mirrored crank H < 0, `models.cam_profile`): its box is the
     declared one (not widened), and the exchange rounds run from the brute-force start and from
     up to `starts` grid cells that are lower than their neighbours (`certificate.grid_starts`);
-    the best dense deviation is kept. Then the certificate: a branch and bound on a Lipschitz
-    bound (`certificate.box_lower_bound`) gives a lower bound on the deviation over the whole
-    box; `diagnostics["global_gap_mm"]` is the answer's deviation less that bound. A gap above
-    `gap_per_size` cam sizes (1e-3 mm on the paper's cam) after `max_cells` cells is not
-    certified: a SOLVED or INFEASIBLE answer is then INACCURATE ("not certified global").
-    `certify`: "auto" certifies a cam of any shape and not the cardioid (one start from its
-    matched linkage; the certificate costs ~70 of its solves: `cam-cutter/minimax` asks "on"),
-    whose answer then says `global_certified` False, "not checked".
+    the best dense deviation is kept. Then the certificate: a branch and bound on cells of
+    (H, L) with first-order bounds (`certificate.box_lower_bound`, `bound.cell_bounds`) gives a
+    lower bound on the deviation over the whole box at nodes of the path (CERTIFY_SPREAD spread,
+    the answer's CERTIFY_WORST highest peaks). It stops as soon as every cell is within
+    `gap_per_size` cam sizes (1e-3 mm on the paper's cam) of the answer; a gap above that after
+    `max_cells` cells is not certified: a SOLVED or INFEASIBLE answer is then INACCURATE ("not
+    certified global"). Inside a sweep it starts from the previous variant's cells (`_certify`).
+    `diagnostics`: `global_gap_mm` (the answer's deviation less the bound), `global_lower_bound_mm`,
+    `global_cells` (cells measured), `global_certified`, `global_warm_started`,
+    `global_warm_moved_mm` (how far the earlier nodes were from this path's).
+
+    `certify`: "on" certifies every answer; "off" none; "auto" (the default) a cam of any shape
+    (`ProfileFit`: several basins, searched from several starts) and not the cardioid
+    (`LinkageFit`: one start from its matched linkage, exact for h = 0), whose answer then says
+    `global_certified` False, "not checked" (`cam-cutter/minimax` asks "on": the certificate
+    costs some ten of its solves, `mechopt bench cam-cutter`).
     """
     _check_count(count)
     check_settings(minimax, slots=slots, max_rounds=max_rounds, nlp=nlp, widen=widen, starts=starts, certify=certify,
