@@ -37,7 +37,7 @@ __all__ = ["lipschitz_radius", "largest_distance", "grid_starts", "box_lower_bou
            "Bound", "moved_bound", "warm_cells"]
 
 KEEP = 5                # nodes a cell's bound mixes, and its children are first measured on
-SECTORS = 8             # gradient directions `_diverse` picks nodes from
+SECTORS = 8             # gradient directions `_diverse` picks nodes from (SECTORS + 1 >= KEEP)
 SCREEN = 4              # the first cells are screened on every SCREEN-th node
 
 
@@ -142,24 +142,6 @@ def _mixtures(gH, gL):
 CORNERS = np.array([(-1, -1), (-1, 1), (1, -1), (1, 1)], dtype=float)
 
 
-def _diverse(value, gH, gL):
-    """Per row, KEEP node columns: the highest `value` of each of SECTORS gradient directions (and
-    of the nodes with no gradient), the highest of those first. The bound needs nodes whose
-    gradients can cancel: the highest alone often crowd one peak of the path."""
-    sector = np.where((gH == 0) & (gL == 0), SECTORS,
-                      ((np.arctan2(gL, gH) + np.pi) * (SECTORS / (2 * np.pi))).astype(int) % SECTORS)
-    best = np.stack([np.where(sector == k, value, -np.inf).argmax(axis=1) for k in range(SECTORS + 1)], axis=1)
-    best_value = np.take_along_axis(np.where(np.isfinite(value), value, -np.inf), best, axis=1)
-    best_value = np.where(np.take_along_axis(sector, best, axis=1) == np.arange(SECTORS + 1), best_value, -np.inf)
-    chosen = np.take_along_axis(best, np.argsort(best_value, axis=1)[:, ::-1], axis=1)
-    # fewer sectors filled than KEEP: the remaining columns by value
-    by_value = np.argsort(value, axis=1)[:, ::-1]
-    filled = (best_value > -np.inf).sum(axis=1)
-    columns = np.arange(KEEP)
-    return np.where(columns < filled[:, None], chosen[:, :KEEP] if chosen.shape[1] >= KEEP else
-                    np.pad(chosen, ((0, 0), (0, KEEP - chosen.shape[1])), mode="edge"), by_value[:, :KEEP])
-
-
 def warm_cells(leaves: Cells, moved, box, grid=(16, 8)) -> Cells:
     """The start of a warm certificate over `box`: the earlier `leaves` that meet the box, each
     bound less `moved` [mm] (`moved_bound`), and the grid cells of the box that the leaves' box does
@@ -176,6 +158,21 @@ def warm_cells(leaves: Cells, moved, box, grid=(16, 8)) -> Cells:
     fresh = Cells(HH.ravel()[outside], LL.ravel()[outside], np.full(outside.sum(), hH), np.full(outside.sum(), hL),
                   np.full(outside.sum(), -np.inf))
     return _joined(moved_bound(leaves.take(meet), moved), fresh)
+
+
+def _diverse(value, gH, gL):
+    """Per row, KEEP node columns: the highest `value` of each of SECTORS gradient directions (and
+    of the nodes with no gradient), highest first, then the highest of the rest by value (repeats
+    harmless). The mixed bound needs nodes whose gradients can cancel: the highest alone often
+    crowd one peak of the path."""
+    sector = np.where((gH == 0) & (gL == 0), SECTORS,
+                      ((np.arctan2(gL, gH) + np.pi) * (SECTORS / (2 * np.pi))).astype(int) % SECTORS)
+    best = np.stack([np.where(sector == k, value, -np.inf).argmax(axis=1) for k in range(SECTORS + 1)], axis=1)
+    filled = np.take_along_axis(sector, best, axis=1) == np.arange(SECTORS + 1)     # the sector has a node
+    best_value = np.where(filled, np.take_along_axis(value, best, axis=1), -np.inf)
+    chosen = np.take_along_axis(best, np.argsort(best_value, axis=1)[:, ::-1], axis=1)[:, :KEEP]
+    by_value = np.argsort(value, axis=1)[:, ::-1][:, :KEEP]
+    return np.where(np.arange(KEEP) < filled.sum(axis=1)[:, None], chosen, by_value)
 
 
 def _measure(px, py, cells: Cells, nodes):
