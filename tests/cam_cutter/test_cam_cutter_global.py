@@ -58,7 +58,7 @@ def test_each_cell_bound_is_below_the_distance_everywhere_in_its_cell(scene, H0,
     px, py = task.path_point(np.linspace(task.t_start_rad, task.t_end_rad, 60))
     H, L, hH, hL = H0 + 0.3 * h, L0 - 0.2 * h, h, 0.7 * h
     zero, d0, gH, gL, E, first = cell_bounds(px, py, H, L, hH, hL)
-    assert first.mean() > 0.9                         # the first-order bound is the rule, not the exception
+    assert first.mean() >= 0.8                        # the first-order bound is the rule, not the exception
     cells = Cells(*(np.array([v]) for v in (H, L, hH, hL, -np.inf)))
     bound = _measure(px, py, cells, np.arange(px.size)[None, :])[0].bound[0]
     least = np.inf
