@@ -112,9 +112,12 @@ def _scan(px, py, H, L, slack):
         near = squared < ((high[part] + slack[part]) ** 2 + tol)[:, None]
         first, sigma1[part] = _run(near, j)
         rest = near & ~first
-        j2 = np.where(rest.any(axis=1), np.where(rest, squared, np.inf).argmin(axis=1), j)
-        second, sigma2[part] = _run(near, j2)
-        covered[part] = ~(rest & ~second).any(axis=1)
+        two = rest.any(axis=1)
+        j2, sigma2[part], covered[part] = j.copy(), sigma1[part], True
+        if two.any():                       # near vertices outside the first run: the second run
+            j2[two] = np.where(rest[two], squared[two], np.inf).argmin(axis=1)
+            second, sigma2[part][two] = _run(near[two], j2[two])
+            covered[part][two] = ~(rest[two] & ~second).any(axis=1)
         s1[part], s2[part] = _GRID[j], _GRID[j2]
     return low, high, (s1, sigma1), (s2, sigma2), covered
 
