@@ -38,7 +38,8 @@ import numpy as np
 __all__ = ["lipschitz_radius", "cell_bounds", "POLYLINE"]
 
 POLYLINE = 128          # N: the zero-order polyline; its error V pi / N only widens the window
-TANGENTS = 256           # tangent segments where the first-order bound does not apply: M (pi/n)^2/2 ~ 1e-5 size
+NEAR_ARCS = 32          # polyline arcs near a node that `_tangents` cuts finely
+SUBARCS = 32            # sub-arcs an arc: M (pi / (POLYLINE SUBARCS))^2 / 2 ~ 2e-5 mm on the paper's cam
 NEWTON_STEPS = 4
 INTERVALS = 12          # of the geometric partition of the first-order window (`_loss`)
 ROUNDING = 1e-12        # relative: a margin for floating-point rounding in the bounds
@@ -122,22 +123,29 @@ def _scan(px, py, H, L, slack):
     return low, high, (s1, sigma1), (s2, sigma2), covered
 
 
-def _tangents(px, py, H, L, n):
-    """A lower bound [mm] on the distance from P to the whole limaçon: to each of n tangent
-    segments Q_j + Q'_j t, |t| <= pi/n, at s_j = 2 pi j / n, less M (pi/n)^2 / 2, the farthest the
-    curve's arc strays from its tangent (Taylor: |Q''| <= M)."""
-    half = np.pi / n
-    s = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
+def _tangents(px, py, H, L, reach, spacing):
+    """A lower bound [mm] on the distance from P to the limaçon where the first-order bound does
+    not apply (several branches near P): every polyline vertex farther than `reach` [mm] bounds its
+    arc's points at reach less the spacing error V pi / N [mm]; the arcs of the
+    nearer ones (at most NEAR_ARCS, else the bound is -inf) are cut in SUBARCS, and the distance to
+    each sub-arc is at least that to its centre's tangent segment Q_k + Q'_k t, |t| <= pi/(N SUBARCS),
+    less M (pi/(N SUBARCS))^2 / 2, the farthest the arc strays from it (Taylor: |Q''| <= M)."""
+    half = np.pi / (POLYLINE * SUBARCS)
     out = np.empty(px.size)
     for k in range(0, px.size, CHUNK):
         part = slice(k, k + CHUNK)
-        Hp, Lp = H[part, None], L[part, None]
-        (x, y), (vx, vy), _, _, _ = _curve(s[None, :], Hp, Lp)
+        squared, tol = _squared(px[part], py[part], H[part], L[part])
+        near = squared < (reach[part] ** 2 + tol)[:, None]
+        order = np.argsort(~near, axis=1, kind="stable")[:, :NEAR_ARCS]       # the near vertices first
+        many = near.sum(axis=1) > NEAR_ARCS
+        s = (_GRID[order][..., None] + (2 * np.arange(SUBARCS) + 1 - SUBARCS) * half).reshape(order.shape[0], -1)
+        (x, y), (vx, vy), _, _, _ = _curve(s, H[part, None], L[part, None])
         wx, wy = px[part, None] - x, py[part, None] - y
-        speed2 = np.maximum(vx * vx + vy * vy, 1e-300)
-        t = np.clip((wx * vx + wy * vy) / speed2, -half, half)
-        gap = np.hypot(wx - t * vx, wy - t * vy).min(axis=1)
-        out[part] = gap - (np.abs(L[part]) + 2 * np.abs(H[part])) * half * half / 2
+        t = np.clip((wx * vx + wy * vy) / np.maximum(vx * vx + vy * vy, 1e-300), -half, half)
+        gap = np.hypot(wx - t * vx, wy - t * vy) - (np.abs(L[part]) + 2 * np.abs(H[part]))[:, None] * half * half / 2
+        used = np.repeat(np.take_along_axis(near, order, axis=1), SUBARCS, axis=1)
+        out[part] = np.where(many, -np.inf, np.minimum(np.where(used, gap, np.inf).min(axis=1),
+                                                       reach[part] - spacing[part]))
     return out
 
 
@@ -190,9 +198,11 @@ def cell_bounds(px, py, H, L, hH, hL):
     first = covered & ok.all(axis=1) & (d0[:, 0] <= high)   # beyond both runs every point is farther than high + r
     worst = (d0 - np.abs(gH) * hH[:, None] - np.abs(gL) * hL[:, None] - E).min(axis=1)
     zero = np.where(first, np.maximum(zero, worst), zero)
-    if TANGENTS and not first.all():     # more branches near the node: the tangent-segment bound
+    if not first.all():          # more branches near the node: the tangent-segment bound, finely
         other = ~first
-        zero[other] = np.maximum(zero[other], _tangents(px[other], py[other], H[other], L[other], TANGENTS)
+        reach = high[other] + 2 * r[other] + spacing[other]
+        zero[other] = np.maximum(zero[other], _tangents(px[other], py[other], H[other], L[other], reach,
+                                                                 spacing[other])
                                  - r[other] - margin[other])
     return zero, d0, gH, gL, E, first
 
