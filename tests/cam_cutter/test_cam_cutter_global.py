@@ -177,3 +177,16 @@ def test_the_robust_answer_is_the_best_worst_case_of_the_lattice_around_it():
 
     best = min(worst_case(i, j) for i in range(i0 - 5, i0 + 6) for j in range(j0 - 5, j0 + 6))
     assert worst_case(i0, j0) == pytest.approx(best, abs=1e-12)      # no lattice point within 0.05 mm does better
+
+
+def test_a_cam_whose_inner_loop_lies_near_a_node_is_still_certified():
+    # a = 22, h = 0.1 mm: the limaçon's inner loop (H - L ~ 1.8 mm) lies near the last node, whose
+    # first-order bound then does not apply; the tangent-segment bound on the near arcs closes it
+    run = registry.run("cam-cutter/minimax", {"a_mm": 22.0, "h_mm": 0.1})
+    d = run.result.diagnostics
+    assert run.status is Status.SOLVED and d["global_certified"] and d["global_cells"] < 5000
+    task = run.task
+    px, py = task.path_point(np.linspace(0.0, task.t_end_rad, 100))
+    H_lo, H_hi, L_lo, L_hi = d["box_mm"]
+    best = min(largest_distance(px, py, H, L) for H in np.arange(H_lo, H_hi, 1.0) for L in np.arange(L_lo, L_hi, 1.0))
+    assert d["global_lower_bound_mm"] <= best
