@@ -7,7 +7,9 @@ spec names the same variants every time it is expanded.
 
 Variants run in chunks: in this process by default, or on a Dask distributed cluster when a
 scheduler address is given. A worker finds the scene once and its solver keeps its build (the
-CasADi NLP, the cvxpy problem with Parameters) per process, so a chunk is re-solves, not rebuilds.
+CasADi NLP, the cvxpy problem with Parameters) per process, so a chunk is re-solves, not rebuilds;
+a chunk's variants share one `kit.warm` session, so a solver may start from the variant before
+(the cam-cutter certificate does, where its bound allows).
 A variant that fails (infeasible, solver error, a setting the model refuses) is a row with its
 status and message; the sweep goes on. Each finished chunk is written at once as one Parquet part
 in the folder ``<out>.parts/``; the parts are consolidated into ``<out>`` at the end, so a stopped
