@@ -149,10 +149,10 @@ def table(loom, cam, cam_pool, dask, dask_side=DASK_SIDE, loops=None):
 
 QUICK_SIDE, QUICK_DASK_SIDE = 30, 20          # --quick: 900 and 400 variants, one run each
 WARM_UP_S = 25.0                 # imports, clusters started, warm-up sweeps
-# per 10^4 variants / per run; cam: the scene certifies every answer (certify = "on"), re-measured with
-# the first-order certificate on a shared 2-core machine (--quick: 504 ms a variant in-process while
-# other work ran, 251 ms one by one, 154 ms on 2 processes)
-MEASURED_S = {"loom": 27.0, "cam": 2500.0, "cam_pool": 1540.0, "dask_chunk": 3.0}
+# per 10^4 variants / per run; cam: the scene certifies every answer (certify = "on"), re-measured
+# with the first-order certificate (--quick on a shared 2-core machine: 119 ms a variant in-process,
+# 196 ms one by one, 181 ms on 2 processes while other sessions ran; quick mode ~7 min in all)
+MEASURED_S = {"loom": 27.0, "cam": 1190.0, "cam_pool": 1810.0, "dask_chunk": 3.0}
 
 
 def expected_s(repeats, quick=False) -> float:
