@@ -25,7 +25,8 @@ when its node objective reaches the NLP's worst deviation, both answers verified
 And `global_rows`: what the global minimax costs against the local NLP in the same
 run, on the paper's cardioid and on the ellipse of `other-profile`: local = one start, no
 certificate (``starts=0, certify="off"``); global = the multistart (a cam of any shape) and the
-Lipschitz certificate (``certify="on"``); the ratio of their medians, the bands and the gap.
+certificate (``certify="on"``); the ratio of their medians, the bands and the gap. And
+`certified_map`: a what-if map of the cardioid solved certified and uncertified in the same run.
 """
 import statistics
 import time
@@ -39,7 +40,8 @@ from mechopt.solvers.cam_cutter import fit as trajectory_fit
 from mechopt.solvers.cam_cutter import joint_loads
 
 __all__ = ["cli", "run", "table", "ratios", "plot", "grid_box_timing", "targets_table", "PAPER_TASK", "BASELINE",
-           "TARGETS", "kinetostatics_rows", "family_rows", "family_peer", "family_table", "global_rows", "global_table"]
+           "TARGETS", "kinetostatics_rows", "family_rows", "family_peer", "family_table", "global_rows", "global_table", "certified_map",
+           "certified_map_table"]
 
 PAPER_TASK, _ = registry.find("cam-cutter/paper-grid").build()   # the paper's cardioid, band and box
 COUNTS = (20, 50, 100, 200, 500, 1000, 2000, 5000)
@@ -168,6 +170,46 @@ def global_table(rows):
               f"{r['local_mm']:>11.6f}{r['global_mm']:>11.6f}{r['gap_mm']:>9.1e}{r['cells']:>7}  {r['status']}"
               for r in rows]
     return "\n".join(lines)
+
+
+MAP_AXES = {"a_mm": (24.0, 26.0), "h_mm": (1.5, 2.5)}     # the certified what-if map: cam-cutter/minimax
+
+
+def certified_map(side=20, progress=None):
+    """A side x side what-if map of `cam-cutter/minimax` over MAP_AXES, its variants solved as a
+    sweep chunk solves them (`registry.run` in one `kit.warm` session), uncertified then certified
+    in the same run: wall seconds of each, their ratio, and how many were certified and warm-started."""
+    import itertools
+
+    import numpy as np
+
+    from mechopt.kit import warm
+    scene = registry.find("cam-cutter/minimax")
+    points = list(itertools.product(*(np.linspace(lo, hi, side) for lo, hi in MAP_AXES.values())))
+    registry.run(scene, {"certify": "off"})                  # the build, once
+    out = {"side": side}
+    for certify in ("off", "on"):
+        start = time.perf_counter()
+        with warm.session():
+            got = [registry.run(scene, dict(zip(MAP_AXES, map(float, p))) | {"certify": certify}).result
+                   for p in points]
+        out[f"{certify}_s"] = time.perf_counter() - start
+        if progress:
+            progress(f"certified map {side}x{side}, certify={certify}: {out[f'{certify}_s']:.1f} s")
+    out["ratio"] = out["on_s"] / out["off_s"]
+    out["certified"] = sum(bool(r.diagnostics["global_certified"]) for r in got)
+    out["warm_started"] = sum(bool(r.diagnostics["global_warm_started"]) for r in got)
+    out["statuses"] = {s: [r.status.value for r in got].count(s) for s in sorted({r.status.value for r in got})}
+    return out
+
+
+def certified_map_table(row):
+    """`certified_map` as text."""
+    return "\n".join(["", f"certified what-if map {row['side']} x {row['side']} of cam-cutter/minimax over "
+                       + " x ".join(f"{k} {lo:g}..{hi:g}" for k, (lo, hi) in MAP_AXES.items()) + " (same run)",
+                       f"{'uncertified s':>14}{'certified s':>13}{'ratio':>7}{'certified':>11}{'warm':>6}  statuses",
+                       f"{row['off_s']:>14.2f}{row['on_s']:>13.2f}{row['ratio']:>7.1f}{row['certified']:>11}"
+                       f"{row['warm_started']:>6}  {row['statuses']}"])
 
 
 def _cold_minimax(task, count):
@@ -329,14 +371,16 @@ def cli(repeats, out_dir, progress=None, quick=False) -> str:
         family = family_rows(sizes=(5, 20), repeats=repeats, progress=progress)
         peer = family_peer(cams=2, repeats=repeats, progress=progress)
         glob = global_rows(repeats=1, progress=progress)
+        chart = certified_map(side=8, progress=progress)
     else:
         rows = run(repeats=repeats, progress=progress)
         loads = kinetostatics_rows(repeats=repeats, progress=progress)
         family = family_rows(repeats=repeats, progress=progress)
         peer = family_peer(cams=4, repeats=repeats, progress=progress, de_repeats=3)
         glob = global_rows(repeats=min(repeats, 3), progress=progress)
+        chart = certified_map(side=20, progress=progress)
     paths = plot(rows, out_dir)
     timing = grid_box_timing(repeats=repeats, progress=progress)
     timing["family_20_cams_s"] = next(r["wall_s_median"] for r in family if r["cams"] == 20)
     return "\n".join([table(rows), targets_table(timing), family_table(loads, family, peer), global_table(glob),
-                      *(f"plot: {p}" for p in paths)])
+                      certified_map_table(chart), *(f"plot: {p}" for p in paths)])

@@ -1,35 +1,68 @@
-"""Is a linkage the global minimax over its box? A lower bound on the deviation over every (H, L)
-of the box, by branch and bound on a Lipschitz bound, and the starts a multistart takes from it.
+"""Is a linkage the global minimax over its box? A lower bound on the largest node distance over
+every (H, L) of the box, by branch and bound on cells of (H, L), and the starts a multistart takes.
 
-Lipschitz bound (from eq. (10)): moving the links by (dH, dL) moves the limaçon's point at crank
-parameter s by dL (cos s - 1, sin s) + dH/2 (cos 2s - 1, sin 2s), whose largest length over a
-cell is `lipschitz_radius`. Every point of the curve moves that far at most, so a node's
-distance to the closed curve changes no more. Over a cell of half-widths
-(hH, hL) the largest node distance is then at least its value at the centre less that radius;
-and the largest over any set of the path's points bounds the largest over the whole path.
+A cell's bound is the largest of these lower bounds on max_i distance(P_i, limaçon(H, L)) over
+the cell, each from `bound.cell_bounds` (one call for every (cell, node) pair of a level):
 
-The distance at a centre is `foot_points`' (nearest of ROUND_VERTICES polyline vertices, refined
-by Newton): the bound takes it as exact (tests check it against 2^16 vertices).
+* a node's constant bound (zero order; or its first-order bound at its worst corner);
+* a mixed one, the dual of a small linear program: for weights w >= 0 summing to 1,
+  max_i d_i >= sum_i w_i d_i >= sum_i w_i lb_i, with lb_i a node's first-order bound (the least
+  of its runs' affine bounds d0 + g . (dH, dL) - E: concave), so the sum is concave in (dH, dL)
+  and least at one of the cell's corners. The weights tried (`_mixtures`) are the vertices of the
+  dual's simplex over KEEP nodes of different gradient directions (`_diverse`): each node alone,
+  pairs that cancel one gradient component, triples that cancel both. Near the answer, whose
+  active nodes' gradients cancel, this loses only second-order terms where one node loses r.
+
+A cell's children are measured on its KEEP nodes first, and those still below the target on
+every node: any subset of the nodes gives a lower bound, and a child's bound is at least its
+parent's. Cells are split level by level (all of a level in one call) until every cell's bound
+is within `gap` of `upper` (an achieved deviation: the early stop) or `max_cells` cells have been
+measured.
+
+Warm start (`box_lower_bound(start=...)`, `warm_cells`): the leaves of an earlier certificate
+meeting this box (and grid cells for any part of the box they miss), each bound lowered by how far
+the nodes moved. That is a bound: the distance to a curve is 1-Lipschitz in the point, so if every
+earlier node P_j has a node P_i' of this set within m, then for every linkage
+max_i d(P_i') >= max_j d(P_j) - m (`moved_bound`). Only leaves below the target are measured again.
 """
-import heapq
-import math
+from dataclasses import dataclass
 
 import numpy as np
 
+from mechopt.solvers.cam_cutter.bound import cell_bounds, lipschitz_radius
 from mechopt.solvers.cam_cutter.deviation import foot_points
 from mechopt.solvers.cam_cutter.problem import ROUND_VERTICES
 
-__all__ = ["lipschitz_radius", "largest_distance", "grid_starts", "box_lower_bound"]
+__all__ = ["lipschitz_radius", "largest_distance", "grid_starts", "box_lower_bound", "Cells",
+           "Bound", "moved_bound", "warm_cells"]
+
+KEEP = 5                # nodes a cell's bound mixes, and its children are first measured on
+SECTORS = 8             # gradient directions `_diverse` picks nodes from (SECTORS + 1 >= KEEP)
+SCREEN = 4              # the first cells are screened on every SCREEN-th node
 
 
-def lipschitz_radius(hH, hL):
-    """The farthest any point of the limaçon (10) moves when H and L move by at most hH and hL [mm].
-    With u = s/2 the move dL (cos s - 1, sin s) + dH/2 (cos 2s - 1, sin 2s) has squared length
-    4 sin^2 u (dL^2 + (dH^2 + 2 dL dH) cos^2 u), largest at dL dH >= 0; as a function of
-    x = cos^2 u it is a parabola whose top is at x = (k - hL^2) / 2k, k = hH^2 + 2 hL hH."""
-    k = hH * hH + 2.0 * hL * hH
-    x = min(max((k - hL * hL) / (2.0 * k), 0.0), 1.0) if k > 0 else 0.0
-    return 2.0 * math.sqrt((1.0 - x) * (hL * hL + k * x))
+@dataclass(frozen=True)
+class Cells:
+    """Cells of (H, L) [mm]: centres, half-widths and lower bounds [mm], one entry a cell."""
+    H: np.ndarray
+    L: np.ndarray
+    hH: np.ndarray
+    hL: np.ndarray
+    bound: np.ndarray
+
+    def take(self, which) -> "Cells":
+        return Cells(*(v[which] for v in (self.H, self.L, self.hH, self.hL, self.bound)))
+
+
+@dataclass(frozen=True)
+class Bound:
+    """`box_lower_bound`'s answer: the lower bound [mm], cells measured, whether every cell reached
+    the target, whether it started from an earlier certificate's leaves, and the leaves."""
+    lower: float
+    cells: int
+    complete: bool
+    warm_started: bool
+    leaves: Cells
 
 
 def largest_distance(px, py, H, L):
@@ -62,22 +95,160 @@ def grid_starts(px, py, box, *, grid=(16, 8), count=4):
     return [(float(H[a]), float(L[b])) for a, b in zip(i[order], j[order])]
 
 
-def box_lower_bound(px, py, box, upper, *, gap, max_cells=20_000, grid=(16, 8)):
-    """A lower bound [mm] on the largest distance from the points (px, py) to the limaçon, over
-    every (H, L) in box = (H_lo, H_hi, L_lo, L_hi): cells of a grid split in four (best bound
-    first) until every cell's bound is within `gap` of `upper` (an achieved deviation) or
-    `max_cells` centres have been measured. Returns (lower bound, cells measured, complete)."""
+def moved_bound(cells: Cells, moved) -> Cells:
+    """Cells whose bounds hold for nodes moved by at most `moved` [mm]: each bound less `moved`."""
+    return Cells(cells.H, cells.L, cells.hH, cells.hL, cells.bound - moved)
+
+
+def _pairings(k):
+    """Index arrays of the node pairs and triples of k nodes."""
+    pairs = np.array([(i, j) for i in range(k) for j in range(i + 1, k)], dtype=int).reshape(-1, 2)
+    triples = np.array([(i, j, l) for i in range(k) for j in range(i + 1, k) for l in range(j + 1, k)],
+                       dtype=int).reshape(-1, 3)
+    return pairs, triples
+
+
+def _mixtures(gH, gL):
+    """Weights w (rows of the simplex over each cell's K nodes) at which the dual of
+    min over the cell of max_i (a_i + g_i . d) can be largest: each node alone, each pair mixed to
+    cancel one gradient component, each triple mixed to cancel both. Shape (cells, candidates, K)."""
+    count, k = gH.shape
+    pairs, triples = _pairings(k)
+    rows = np.arange(count)[:, None]
+    parts = [np.broadcast_to(np.eye(k), (count, k, k))]
+    for g in (gH, gL):                    # pairs: t g_i + (1 - t) g_j = 0 in one component
+        gi, gj = g[:, pairs[:, 0]], g[:, pairs[:, 1]]
+        t = np.clip(np.divide(gj, gj - gi, out=np.zeros_like(gi), where=np.abs(gj - gi) > 1e-300), 0.0, 1.0)
+        w = np.zeros((count, len(pairs), k))
+        w[rows, np.arange(len(pairs)), pairs[:, 0]] = t
+        w[rows, np.arange(len(pairs)), pairs[:, 1]] = 1.0 - t
+        parts.append(w)
+    if len(triples):                      # triples: sum w = 1, sum w gH = 0, sum w gL = 0 (Cramer)
+        hi, hj, hl = (gH[:, triples[:, m]] for m in range(3))
+        li, lj, ll = (gL[:, triples[:, m]] for m in range(3))
+        wi, wj, wl = hj * ll - hl * lj, hl * li - hi * ll, hi * lj - hj * li
+        total = wi + wj + wl
+        ok = np.abs(total) > 1e-12 * (np.abs(wi) + np.abs(wj) + np.abs(wl) + 1e-300)
+        w3 = np.stack([wi, wj, wl], axis=-1) / np.where(ok, total, 1.0)[..., None]
+        w3 = np.where(ok[..., None] & (w3 >= 0).all(axis=-1, keepdims=True), w3, 1.0 / 3)
+        w = np.zeros((count, len(triples), k))
+        for m in range(3):
+            w[rows, np.arange(len(triples)), triples[:, m]] = w3[..., m]
+        parts.append(w)
+    w = np.clip(np.concatenate(parts, axis=1), 0.0, None)
+    return w / w.sum(axis=-1, keepdims=True)          # on the simplex whatever the rounding: a bound
+
+
+CORNERS = np.array([(-1, -1), (-1, 1), (1, -1), (1, 1)], dtype=float)
+
+
+def warm_cells(leaves: Cells, moved, box, grid=(16, 8)) -> Cells:
+    """The start of a warm certificate over `box`: the earlier `leaves` that meet the box, each
+    bound less `moved` [mm] (`moved_bound`), and the grid cells of the box that the leaves' box does
+    not hold, unmeasured. Together they cover the box (cells may overlap: a point's bound is the
+    least of its cells' either way)."""
+    H_lo, H_hi, L_lo, L_hi = box
+    meet = ((leaves.H + leaves.hH > H_lo) & (leaves.H - leaves.hH < H_hi)
+            & (leaves.L + leaves.hL > L_lo) & (leaves.L - leaves.hL < L_hi))
+    old = ((leaves.H - leaves.hH).min(), (leaves.H + leaves.hH).max(), (leaves.L - leaves.hL).min(),
+           (leaves.L + leaves.hL).max())
     H, L, hH, hL = _grid(box, grid)
-    radius = lipschitz_radius(hH, hL)
-    cells = [(largest_distance(px, py, h, l) - radius, float(h), float(l), hH, hL) for h in H for l in L]
-    heapq.heapify(cells)
-    measured = len(cells)
-    while cells[0][0] < upper - gap and measured < max_cells:
-        bound, h, l, hH, hL = heapq.heappop(cells)
-        radius = lipschitz_radius(hH / 2, hL / 2)
-        for dh in (-hH / 2, hH / 2):
-            for dl in (-hL / 2, hL / 2):
-                child = max(bound, largest_distance(px, py, h + dh, l + dl) - radius)
-                heapq.heappush(cells, (child, h + dh, l + dl, hH / 2, hL / 2))
-        measured += 4
-    return float(cells[0][0]), measured, bool(cells[0][0] >= upper - gap)
+    HH, LL = np.meshgrid(H, L, indexing="ij")
+    outside = ((HH - hH < old[0]) | (HH + hH > old[1]) | (LL - hL < old[2]) | (LL + hL > old[3])).ravel()
+    fresh = Cells(HH.ravel()[outside], LL.ravel()[outside], np.full(outside.sum(), hH), np.full(outside.sum(), hL),
+                  np.full(outside.sum(), -np.inf))
+    return _joined(moved_bound(leaves.take(meet), moved), fresh)
+
+
+def _diverse(value, gH, gL):
+    """Per row, KEEP node columns: the highest `value` of each of SECTORS gradient directions (and
+    of the nodes with no gradient), highest first, then the highest of the rest by value (repeats
+    harmless). The mixed bound needs nodes whose gradients can cancel: the highest alone often
+    crowd one peak of the path."""
+    sector = np.where((gH == 0) & (gL == 0), SECTORS,
+                      ((np.arctan2(gL, gH) + np.pi) * (SECTORS / (2 * np.pi))).astype(int) % SECTORS)
+    best = np.stack([np.where(sector == k, value, -np.inf).argmax(axis=1) for k in range(SECTORS + 1)], axis=1)
+    filled = np.take_along_axis(sector, best, axis=1) == np.arange(SECTORS + 1)     # the sector has a node
+    best_value = np.where(filled, np.take_along_axis(value, best, axis=1), -np.inf)
+    chosen = np.take_along_axis(best, np.argsort(best_value, axis=1)[:, ::-1], axis=1)[:, :KEEP]
+    by_value = np.argsort(value, axis=1)[:, ::-1][:, :KEEP]
+    return np.where(np.arange(KEEP) < filled.sum(axis=1)[:, None], chosen, by_value)
+
+
+def _measure(px, py, cells: Cells, nodes):
+    """Bounds [mm] of `cells` measured on the node indices `nodes` (a row a cell), and each cell's
+    KEEP most promising nodes (highest bound at their best corner). The bound: for any weights w
+    on the simplex, max_i d_i >= sum_i w_i d_i >= sum_i w_i lb_i, lb_i a node's first-order bound
+    (the least of its runs' affine bounds: concave in (dH, dL)), so the sum is concave and least at
+    a corner; the largest over `_mixtures` of that least corner (the linear program's dual)."""
+    count, width = nodes.shape
+    zero, d0, gH, gL, E, first = cell_bounds(
+        px[nodes.ravel()], py[nodes.ravel()], *(np.repeat(v, width) for v in (cells.H, cells.L, cells.hH, cells.hL)))
+    dH, dL = CORNERS[:, 0] * np.repeat(cells.hH, width)[:, None], CORNERS[:, 1] * np.repeat(cells.hL, width)[:, None]
+    corner = ((d0 - E)[:, None, :] + gH[:, None, :] * dH[..., None] + gL[:, None, :] * dL[..., None]).min(axis=-1)
+    corner = np.where(first[:, None], np.maximum(corner, zero[:, None]), zero[:, None]).reshape(count, width, 4)
+    gH, gL = (np.where(first, g[:, 0], 0.0).reshape(count, width) for g in (gH, gL))
+    pick = _diverse(corner.max(axis=-1), gH, gL)
+    corner = np.take_along_axis(corner, pick[..., None], axis=1)
+    w = _mixtures(*(np.take_along_axis(g, pick, axis=1) for g in (gH, gL)))
+    dual = np.einsum("cmk,ckq->cmq", w, corner).min(axis=-1).max(axis=1)
+    bound = np.maximum(np.maximum(cells.bound, zero.reshape(count, width).max(axis=1)), dual)
+    return Cells(cells.H, cells.L, cells.hH, cells.hL, bound), np.take_along_axis(nodes, pick, axis=1)
+
+
+def _screened(px, py, cells: Cells, nodes, target):
+    """`_measure` on the node indices `nodes` (a row a cell), then the cells still below the target
+    on every node: a few nodes close most cells."""
+    cells, top = _measure(px, py, cells, nodes)
+    still = cells.bound < target
+    if still.any():
+        again, top[still] = _measure(px, py, cells.take(still), np.tile(np.arange(px.size), (int(still.sum()), 1)))
+        cells.bound[still] = again.bound
+    return cells, top
+
+
+def _joined(a: Cells, b: Cells) -> Cells:
+    return Cells(*(np.concatenate([u, v]) for u, v in zip(
+        (a.H, a.L, a.hH, a.hL, a.bound), (b.H, b.L, b.hH, b.hL, b.bound))))
+
+
+def _split(cells: Cells) -> Cells:
+    """Each cell's four children, in order (the first cell's four first), bound the parent's."""
+    hH, hL = cells.hH / 2, cells.hL / 2
+    sign = np.array([(-1, -1), (-1, 1), (1, -1), (1, 1)])
+    return Cells((cells.H[:, None] + sign[:, 0] * hH[:, None]).ravel(),
+                 (cells.L[:, None] + sign[:, 1] * hL[:, None]).ravel(),
+                 np.repeat(hH, 4), np.repeat(hL, 4), np.repeat(cells.bound, 4))
+
+
+def box_lower_bound(px, py, box, upper, *, gap, max_cells=20_000, grid=(16, 8), start: Cells | None = None) -> Bound:
+    """A lower bound [mm] on the largest distance from the points (px, py) to the limaçon, over
+    every (H, L) in box = (H_lo, H_hi, L_lo, L_hi): the cells of a grid (or `start`, an earlier
+    certificate's leaves covering the box, `moved_bound`), split in four level by level until every
+    cell's bound is within `gap` of `upper` (an achieved deviation) or `max_cells` cells have been
+    measured (the lowest split first when the room is short)."""
+    px, py = np.ravel(px).astype(float), np.ravel(py).astype(float)
+    target, warm = upper - gap, start is not None
+    if start is None:
+        H, L, hH, hL = _grid(box, grid)
+        HH, LL = np.meshgrid(H, L, indexing="ij")
+        start = Cells(HH.ravel(), LL.ravel(), np.full(HH.size, hH), np.full(HH.size, hL), np.full(HH.size, -np.inf))
+    low = start.bound < target               # the first cells (a grid, or earlier leaves below the target)
+    fresh, top = _screened(px, py, start.take(low), np.tile(np.arange(0, px.size, SCREEN), (int(low.sum()), 1)),
+                           target)
+    cells = _joined(start.take(~low), fresh)
+    top = np.vstack([np.zeros((int((~low).sum()), KEEP), dtype=int), top])     # closed cells: never split
+    measured = int(low.sum())
+    while True:
+        open_ = np.flatnonzero(cells.bound < target)
+        room = (max_cells - measured) // 4
+        if open_.size == 0 or room == 0:
+            break
+        open_ = open_[np.argsort(cells.bound[open_], kind="stable")[:room]]   # the lowest first when short
+        children, child_top = _screened(px, py, _split(cells.take(open_)), np.repeat(top[open_], 4, axis=0), target)
+        keep = np.ones(cells.H.size, dtype=bool)
+        keep[open_] = False
+        cells, top = _joined(cells.take(keep), children), np.vstack([top[keep], child_top])
+        measured += children.H.size
+    lower = float(cells.bound.min())
+    return Bound(lower, measured, bool(lower >= target), warm, cells)

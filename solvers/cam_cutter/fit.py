@@ -18,6 +18,7 @@ import casadi as ca
 import numpy as np
 from scipy.optimize import differential_evolution
 
+from mechopt.kit import warm
 from mechopt.kit.cache import BuildCache
 from mechopt.kit.errors import ModelError, SettingError
 from mechopt.kit.result import Clock, Result, Status
@@ -32,7 +33,7 @@ from mechopt.models.cam_cutter import (
     real_point,
 )
 from mechopt.models.cam_profile import MIN_LINK_PER_SIZE, ProfileFit
-from mechopt.solvers.cam_cutter.certificate import box_lower_bound, grid_starts
+from mechopt.solvers.cam_cutter.certificate import box_lower_bound, grid_starts, warm_cells
 from mechopt.solvers.cam_cutter.deviation import (
     deviation_arrays,
     foot_points,
@@ -173,14 +174,22 @@ def minimax(task: LinkageFit | ProfileFit, *, count: Nodes = 1000, slots: Annota
     several basins (H > 0 and the mirrored crank H < 0, `models.cam_profile`): its box is the
     declared one (not widened), and the exchange rounds run from the brute-force start and from
     up to `starts` grid cells that are lower than their neighbours (`certificate.grid_starts`);
-    the best dense deviation is kept. Then the certificate: a branch and bound on a Lipschitz
-    bound (`certificate.box_lower_bound`) gives a lower bound on the deviation over the whole
-    box; `diagnostics["global_gap_mm"]` is the answer's deviation less that bound. A gap above
-    `gap_per_size` cam sizes (1e-3 mm on the paper's cam) after `max_cells` cells is not
-    certified: a SOLVED or INFEASIBLE answer is then INACCURATE ("not certified global").
-    `certify`: "auto" certifies a cam of any shape and not the cardioid (one start from its
-    matched linkage; the certificate costs ~70 of its solves: `cam-cutter/minimax` asks "on"),
-    whose answer then says `global_certified` False, "not checked".
+    the best dense deviation is kept. Then the certificate: a branch and bound on cells of
+    (H, L) with first-order bounds (`certificate.box_lower_bound`, `bound.cell_bounds`) gives a
+    lower bound on the deviation over the whole box at nodes of the path (CERTIFY_SPREAD spread,
+    the answer's CERTIFY_WORST highest peaks). It stops as soon as every cell is within
+    `gap_per_size` cam sizes (1e-3 mm on the paper's cam) of the answer; a gap above that after
+    `max_cells` cells is not certified: a SOLVED or INFEASIBLE answer is then INACCURATE ("not
+    certified global"). Inside a sweep it starts from the previous variant's cells (`_certify`).
+    `diagnostics`: `global_gap_mm` (the answer's deviation less the bound), `global_lower_bound_mm`,
+    `global_cells` (cells measured), `global_certified`, `global_warm_started`,
+    `global_warm_moved_mm` (how far the earlier nodes were from this path's).
+
+    `certify`: "on" certifies every answer; "off" none; "auto" (the default) a cam of any shape
+    (`ProfileFit`: several basins, searched from several starts) and not the cardioid
+    (`LinkageFit`: one start from its matched linkage, exact for h = 0), whose answer then says
+    `global_certified` False, "not checked" (`cam-cutter/minimax` asks "on": the certificate
+    costs some ten of its solves, `mechopt bench cam-cutter`).
     """
     _check_count(count)
     check_settings(minimax, slots=slots, max_rounds=max_rounds, nlp=nlp, widen=widen, starts=starts, certify=certify,
@@ -276,20 +285,43 @@ def _best_of(px, py, task, box, seeds, count, slots, max_rounds, nlp):
 
 
 CERTIFY_SPREAD = 48     # nodes spread over the path in the bound's node set
-CERTIFY_WORST = 16      # plus the answer's worst nodes, where the bound is tight
+CERTIFY_WORST = 16      # plus the answer's highest peaks, where the bound is tight
+WARM_KEY = "cam_cutter.minimax.certificate"
+WARM_MOVE_PER_GAP = 10.0   # a warm start only when the nodes moved at most this many gap targets
 
 
 def _certify(task, px, py, box, H, L, deviation, gap_per_size, max_cells):
     """The certificate of `minimax`'s answer (H, L) [mm]: a lower bound on the deviation over the
     box from a node set (`certificate.box_lower_bound`), the gap, and whether it is within
-    gap_per_size cam sizes. Node coordinates in mm."""
-    worst = np.argsort(foot_points(px, py, H, L, vertices=ROUND_VERTICES)[0])[::-1][:CERTIFY_WORST]
+    gap_per_size cam sizes. Node coordinates in mm. In a sweep (`kit.warm`) it starts from the
+    previous variant's leaves (`certificate.warm_cells`), their bounds less how far its nodes are
+    from this path's nearest nodes, which join this node set; only where that move is at most
+    WARM_MOVE_PER_GAP gap targets (else the many fine leaves near the answer, all below the lowered
+    target, cost more than the cold start's few coarse cells)."""
+    dist = foot_points(px, py, H, L, vertices=ROUND_VERTICES)[0]
+    padded = np.r_[-np.inf, dist, -np.inf]        # the answer's peaks, one node each: its active nodes
+    peaks = np.flatnonzero((dist >= padded[:-2]) & (dist >= padded[2:]))
+    worst = peaks[np.argsort(dist[peaks])[::-1][:CERTIFY_WORST]]
     nodes = np.unique(np.r_[np.linspace(0, px.size - 1, CERTIFY_SPREAD).round().astype(int), worst])
     target = gap_per_size * task.size_mm
-    lower, cells, complete = box_lower_bound(px[nodes], py[nodes], box, deviation, gap=target, max_cells=max_cells)
-    gap = max(deviation - lower, 0.0)
-    return {"global_lower_bound_mm": lower, "global_gap_mm": gap, "global_cells": cells,
-            "global_certified": bool(complete or gap <= target), "global_gap_target_mm": target}
+    store, start, moved = warm.store(), None, 0.0
+    before = store.get(WARM_KEY) if store is not None else None
+    if before is not None:
+        # each earlier node's nearest node of this path joins the set: the earlier bounds, less the
+        # farthest of those moves, bound the largest distance over them (distance is 1-Lipschitz)
+        apart = np.hypot(before["px"][:, None] - px[None, :], before["py"][:, None] - py[None, :])
+        nearest = apart.argmin(axis=1)
+        moved = float(apart[np.arange(nearest.size), nearest].max())
+        if moved <= WARM_MOVE_PER_GAP * target:        # farther: its fine leaves cost more than a cold start
+            nodes = np.union1d(nodes, nearest)
+            start = warm_cells(before["leaves"], moved, box)
+    got = box_lower_bound(px[nodes], py[nodes], box, deviation, gap=target, max_cells=max_cells, start=start)
+    if store is not None:
+        store[WARM_KEY] = {"px": px[nodes], "py": py[nodes], "leaves": got.leaves}
+    gap = max(deviation - got.lower, 0.0)
+    return {"global_lower_bound_mm": got.lower, "global_gap_mm": gap, "global_cells": got.cells,
+            "global_certified": bool(got.complete or gap <= target), "global_gap_target_mm": target,
+            "global_warm_started": got.warm_started, "global_warm_moved_mm": moved}
 
 
 def _exchange_rounds(px, py, a, box, H, L, count, slots, max_rounds, nlp):

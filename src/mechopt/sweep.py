@@ -7,7 +7,9 @@ spec names the same variants every time it is expanded.
 
 Variants run in chunks: in this process by default, or on a Dask distributed cluster when a
 scheduler address is given. A worker finds the scene once and its solver keeps its build (the
-CasADi NLP, the cvxpy problem with Parameters) per process, so a chunk is re-solves, not rebuilds.
+CasADi NLP, the cvxpy problem with Parameters) per process, so a chunk is re-solves, not rebuilds;
+a chunk's variants share one `kit.warm` session, so a solver may start from the variant before
+(the cam-cutter certificate does, where its bound allows).
 A variant that fails (infeasible, solver error, a setting the model refuses) is a row with its
 status and message; the sweep goes on. Each finished chunk is written at once as one Parquet part
 in the folder ``<out>.parts/``; the parts are consolidated into ``<out>`` at the end, so a stopped
@@ -67,6 +69,7 @@ from mechopt.files import (
     temporary_target,
     write_bytes_atomic,
 )
+from mechopt.kit import warm
 from mechopt.kit.cache import BuildCache
 from mechopt.kit.errors import MechoptError, SceneError, SolverError, quote
 from mechopt.scene import MAX_SCENE_BYTES, Scene, loads, path_head, solver_options, split_assignment, task_fields
@@ -316,23 +319,26 @@ def _solve_rows(scene: Scene, chunk) -> list[dict]:
     """A refused setting (SceneError, ModelError) is an INVALID row, a crashed back end a FAILED row,
     anything else unexpected an ERROR row naming the exception: a sweep outlives its variants."""
     rows = []
-    for number, overrides in chunk:
-        row = {**overrides, "variant": number, "build_s": None, "solve_s": None}
-        try:
-            result = registry.run(scene, overrides).result
-        except SolverError as exc:
-            rows.append(row | {"status": "FAILED", "message": str(exc)})
-            continue
-        except MechoptError as exc:
-            rows.append(row | {"status": "INVALID", "message": str(exc)})
-            continue
-        except Exception as exc:       # noqa: BLE001 -- one bad variant must not end the study
-            rows.append(row | {"status": "ERROR", "message": f"{type(exc).__name__}: {exc}"})
-            continue
-        values = {k: float(v) for k, v in result.values.items() if k not in row}
-        rows.append(row | {"status": result.status.value, "message": result.message,
-                           "warnings": "; ".join(result.warnings), "build_s": result.timing.build_s, "solve_s": result.timing.solve_s} | values)
+    with warm.session():        # a variant may start from the one before it in the chunk (kit.warm)
+        for number, overrides in chunk:
+            rows.append(_solve_row(scene, number, overrides))
     return rows
+
+
+def _solve_row(scene, number, overrides) -> dict:
+    row = {**overrides, "variant": number, "build_s": None, "solve_s": None}
+    try:
+        result = registry.run(scene, overrides).result
+    except SolverError as exc:
+        return row | {"status": "FAILED", "message": str(exc)}
+    except MechoptError as exc:
+        return row | {"status": "INVALID", "message": str(exc)}
+    except Exception as exc:       # noqa: BLE001 -- one bad variant must not end the study
+        return row | {"status": "ERROR", "message": f"{type(exc).__name__}: {exc}"}
+    values = {k: float(v) for k, v in result.values.items() if k not in row}
+    return row | {"status": result.status.value, "message": result.message,
+                  "warnings": "; ".join(result.warnings), "build_s": result.timing.build_s,
+                  "solve_s": result.timing.solve_s} | values
 
 
 def sweep(scene: Scene, grid=(), random=(), *, samples: int = 0, seed: int = 0, out: Path | None = None,

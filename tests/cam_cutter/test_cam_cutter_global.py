@@ -5,7 +5,16 @@ import pytest
 
 from mechopt import registry
 from mechopt.kit.result import Status
-from mechopt.solvers.cam_cutter.certificate import box_lower_bound, largest_distance, lipschitz_radius
+from mechopt.solvers.cam_cutter.bound import cell_bounds
+from mechopt.solvers.cam_cutter.certificate import (
+    Cells,
+    _measure,
+    box_lower_bound,
+    largest_distance,
+    lipschitz_radius,
+    warm_cells,
+)
+from mechopt.solvers.cam_cutter.deviation import foot_points
 
 
 @pytest.mark.parametrize("hH, hL", [(0.0, 1.0), (1.0, 0.0), (1.0, 1.0), (3.0, 0.2), (0.01, 2.5)])
@@ -20,11 +29,88 @@ def test_the_lower_bound_is_below_every_linkage_of_its_box():
     task, _ = registry.find("cam-cutter/other-profile").build()
     px, py = task.path_point(np.linspace(task.t_start_rad, task.t_end_rad, 40))
     box = (-16.0, -11.0, 50.0, 55.0)
-    lower, cells, complete = box_lower_bound(px, py, box, upper=0.5, gap=0.02, max_cells=800)
+    got = box_lower_bound(px, py, box, upper=0.5, gap=0.02, max_cells=800)
     rng = np.random.default_rng(7)
     values = [largest_distance(px, py, rng.uniform(*box[:2]), rng.uniform(*box[2:])) for _ in range(200)]
-    assert cells > 64 and lower <= min(values)
-    assert lower > 0.25                # and it is no empty bound: the box's best is ~0.30 mm
+    assert got.cells >= 128 and got.lower <= min(values)
+    assert got.lower > 0.25                # and it is no empty bound: the box's best is ~0.30 mm
+
+
+def _dense_distance(px, py, H, L):
+    """Distance [mm] from each point to the limaçon (10): nearest of 2^16 vertices, then Newton on
+    the foot condition (`foot_points`, which the bound does not use: it has its own polyline,
+    Newton and windows)."""
+    return foot_points(px, py, H, L, vertices=2**16)[0]
+
+
+# cells about each scene's optimum, small and large, and one across the cardioid's double-point node
+CELLS = [("cam-cutter/minimax", 59.6018, 47.4275, h) for h in (0.002, 0.05, 1.0)] + \
+        [("cam-cutter/other-profile", -13.5629, 52.1528, h) for h in (0.002, 0.05, 1.0)] + \
+        [("cam-cutter/table-profile", 4.0764, 52.0001, h) for h in (0.001, 0.2)]
+
+
+@pytest.mark.parametrize("scene, H0, L0, h", CELLS)
+def test_each_cell_bound_is_below_the_distance_everywhere_in_its_cell(scene, H0, L0, h):
+    """Brute force: on a 7 x 7 grid of (H, L) over the cell (corners included) every node's dense
+    distance is at least the cell's zero-order bound and, where it applies, the first-order bound
+    at that (H, L); so the largest over nodes is at least the cell's bound (`_measure`)."""
+    task, _ = registry.find(scene).build()
+    px, py = task.path_point(np.linspace(task.t_start_rad, task.t_end_rad, 60))
+    H, L, hH, hL = H0 + 0.3 * h, L0 - 0.2 * h, h, 0.7 * h
+    zero, d0, gH, gL, E, first = cell_bounds(px, py, H, L, hH, hL)
+    assert first.mean() >= 0.8                        # the first-order bound is the rule, not the exception
+    cells = Cells(*(np.array([v]) for v in (H, L, hH, hL, -np.inf)))
+    bound = _measure(px, py, cells, np.arange(px.size)[None, :])[0].bound[0]
+    least = np.inf
+    for dH in np.linspace(-hH, hH, 7):
+        for dL in np.linspace(-hL, hL, 7):
+            true = _dense_distance(px, py, H + dH, L + dL)
+            affine = np.where(first, (d0 + gH * dH + gL * dL - E).min(axis=1), -np.inf)
+            assert np.all(true >= zero - 1e-12) and np.all(true >= affine - 1e-12)
+            least = min(least, true.max())
+    assert bound <= least + 1e-12
+    if h <= 0.002:                     # and near the optimum within the certificate's 1e-3 mm target
+        assert least - bound < 5e-4
+
+
+def test_the_first_order_bound_holds_at_the_double_point_node():
+    # the cardioid's last node sits by the limaçon's double point, where its two branches cross;
+    # it is one of the answer's active nodes, so the bound must be first order there
+    task, _ = registry.find("cam-cutter/minimax").build()
+    px, py = task.path_point(np.array([task.t_end_rad]))
+    zero, d0, gH, gL, E, first = cell_bounds(px, py, 59.6, 47.43, 0.01, 0.01)
+    assert first[0]
+    for dH in (-0.01, 0.0, 0.01):
+        for dL in (-0.01, 0.0, 0.01):
+            true = _dense_distance(px, py, 59.6 + dH, 47.43 + dL)[0]
+            assert true >= (d0[0] + gH[0] * dH + gL[0] * dL - E[0]).min() - 1e-12
+
+
+def test_a_warm_start_is_a_bound_for_the_moved_nodes():
+    """Leaves of one path's certificate, lowered by how far its nodes moved, bound another's."""
+    task, _ = registry.find("cam-cutter/minimax").build()
+    box = (58.0, 61.0, 46.0, 49.0)
+    t = np.linspace(0.0, task.t_end_rad, 30)
+    px, py = task.path_point(t)
+    first = box_lower_bound(px, py, box, upper=0.0609, gap=1e-3)
+    shift = 0.004                                      # the path moved rigidly by 4 um
+    moved = warm_cells(first.leaves, shift, box)
+    again = box_lower_bound(px + shift, py, box, upper=0.0609, gap=0.02, start=moved)
+    assert again.warm_started and again.cells < first.cells
+    grid = [(H, L) for H in np.linspace(58.0, 61.0, 13) for L in np.linspace(46.0, 49.0, 13)]
+    assert again.lower <= min(_dense_distance(px + shift, py, H, L).max() for H, L in grid)
+
+
+def test_a_sweep_warm_starts_the_certificate_and_keeps_the_answer():
+    from mechopt.kit import warm
+    cold = registry.run("cam-cutter/minimax", {"err_width_mm": 0.08}).result
+    with warm.session():
+        registry.run("cam-cutter/minimax", {"err_width_mm": 0.075})
+        hot = registry.run("cam-cutter/minimax", {"err_width_mm": 0.08}).result
+    assert hot.diagnostics["global_warm_started"] and not cold.diagnostics["global_warm_started"]
+    assert hot.diagnostics["global_cells"] < cold.diagnostics["global_cells"]
+    assert hot.status is cold.status is Status.SOLVED and hot.diagnostics["global_certified"]
+    assert hot.values == cold.values
 
 
 def test_the_cardioid_minimax_is_certified_global_over_its_box():
@@ -91,3 +177,16 @@ def test_the_robust_answer_is_the_best_worst_case_of_the_lattice_around_it():
 
     best = min(worst_case(i, j) for i in range(i0 - 5, i0 + 6) for j in range(j0 - 5, j0 + 6))
     assert worst_case(i0, j0) == pytest.approx(best, abs=1e-12)      # no lattice point within 0.05 mm does better
+
+
+def test_a_cam_whose_inner_loop_lies_near_a_node_is_still_certified():
+    # a = 22, h = 0.1 mm: the limaçon's inner loop (H - L ~ 1.8 mm) lies near the last node, whose
+    # first-order bound then does not apply; the tangent-segment bound on the near arcs closes it
+    run = registry.run("cam-cutter/minimax", {"a_mm": 22.0, "h_mm": 0.1})
+    d = run.result.diagnostics
+    assert run.status is Status.SOLVED and d["global_certified"] and d["global_cells"] < 5000
+    task = run.task
+    px, py = task.path_point(np.linspace(0.0, task.t_end_rad, 100))
+    H_lo, H_hi, L_lo, L_hi = d["box_mm"]
+    best = min(largest_distance(px, py, H, L) for H in np.arange(H_lo, H_hi, 1.0) for L in np.arange(L_lo, L_hi, 1.0))
+    assert d["global_lower_bound_mm"] <= best

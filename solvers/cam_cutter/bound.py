@@ -1,0 +1,240 @@
+"""Lower bounds on a node's distance to the limaçon (10) over a cell of link lengths (H, L) [mm],
+for many (cell, node) pairs at once: the certificate's bound (`certificate.box_lower_bound`).
+
+Eq. (10) is linear in the links: R(s; H, L) = L a(s) + H b(s), a = (cos s - 1, sin s),
+b = (cos 2s - 1, sin 2s) / 2, with |a'| = |b'| = |a''| = 1, |b''| = 2. On a cell of centre (H, L)
+and half-widths (hH, hL), with Q(s) = R(s; H, L) and the move m(s) = dL a(s) + dH b(s) to
+R(s; H + dH, L + dL), |dH| <= hH, |dL| <= hL:
+
+    |Q'| <= |L| + |H| =: V,   |Q''| <= |L| + 2|H| =: M,   |m| <= r (`lipschitz_radius`),   |m'| <= hL + hH.
+
+Zero order (a polyline of N vertices s_j = 2 pi j / N). Every s is within pi/N of a vertex, so
+|P - Q(s)| >= |P - Q_j| - V pi / N =: lb_j, and |P - R(s; cell point)| >= min_j lb_j - r.
+
+First order (Cauchy-Schwarz |X| >= |e . X| for a unit e, and Taylor in s). Take any s0 (the
+vertex nearest P, refined by Newton on the foot condition), d0 = |P - Q(s0)|, the unit normal
+u = (P - Q(s0)) / d0 and tangent tau = Q'(s0) / |Q'(s0)|, eps_u = |u . Q'(s0)|,
+eps_t = |tau . (P - Q(s0))| (both ~0 at a foot point). For X(s) = P - Q(s) - m(s), t = s - s0:
+
+    A:  |X| >= u . X >= d0 + g . (dH, dL) - (eps_u + hL + hH) |t| - M t^2 / 2,
+        g = -(u . b(s0), u . a(s0)): the first-order change of the distance with the links;
+    B:  |X| >= |tau . X| >= |Q'(s0)| |t| - M t^2 / 2 - eps_t - r;
+    C:  |X| >= lb_j - r on the arc of every vertex j.
+
+Let t0 be the least t with B(t) = d0 + r, and sigma the farthest (plus pi/N) that a vertex with
+lb_j < d0 + 2 r lies from s0. If t0 exists and B(sigma) >= d0 + r (B is concave: B >= d0 + r on
+[t0, sigma]), then for |t| <= t1 = min(t0, sigma) A holds, for t1 <= |t| <= sigma B gives
+|X| >= d0 + r, beyond sigma C gives |X| >= d0 + r, and since |g . (dH, dL)| = |u . m(s0)| <= r:
+
+    distance(P, limaçon(H + dH, L + dL)) >= d0 + g . (dH, dL) - E,   E = (eps_u + hL + hH) t1 + M t1^2 / 2,
+
+affine in the move up to E, which is ~ (d0 + r) (hL + hH) / |Q'| + M (d0 + r)^2 / (2 |Q'|^2): second
+order, where the zero-order bound loses r. Where the conditions fail (two branches of the curve
+near P, as at the double point) the pair keeps the zero-order bound. Each bound is checked
+against brute force over the cell (tests/cam_cutter/test_cam_cutter_global.py).
+"""
+import numpy as np
+
+__all__ = ["lipschitz_radius", "cell_bounds", "POLYLINE"]
+
+POLYLINE = 128          # N: the zero-order polyline; its error V pi / N only widens the window
+NEAR_ARCS = 32          # polyline arcs near a node that `_tangents` cuts finely
+SUBARCS = 16            # sub-arcs an arc: M (pi / (POLYLINE SUBARCS))^2 / 2 ~ 2e-4 mm on the paper's cam
+NEWTON_STEPS = 4
+INTERVALS = 12          # of the geometric partition of the first-order window (`_loss`)
+ROUNDING = 1e-12        # relative: a margin for floating-point rounding in the bounds
+
+
+def lipschitz_radius(hH, hL):
+    """The farthest any point of the limaçon (10) moves when H and L move by at most hH and hL [mm]
+    (arrays broadcast). With u = s/2 the move dL (cos s - 1, sin s) + dH/2 (cos 2s - 1, sin 2s) has
+    squared length 4 sin^2 u (dL^2 + (dH^2 + 2 dL dH) cos^2 u), largest at dL dH >= 0; as a function
+    of x = cos^2 u it is a parabola whose top is at x = (k - hL^2) / 2k, k = hH^2 + 2 hL hH."""
+    hH, hL = np.asarray(hH, dtype=float), np.asarray(hL, dtype=float)
+    k = hH * hH + 2.0 * hL * hH
+    x = np.clip((k - hL * hL) / (2.0 * np.where(k > 0, k, 1.0)), 0.0, 1.0) * (k > 0)
+    r = 2.0 * np.sqrt((1.0 - x) * (hL * hL + k * x))
+    return float(r) if r.ndim == 0 else r
+
+
+def _curve(s, H, L):
+    """Q(s), Q'(s), Q''(s) of eq. (10) and the vectors a(s), b(s): each an (x, y) pair of arrays."""
+    c, n = np.cos(s), np.sin(s)
+    c2, n2 = 2 * c * c - 1, 2 * n * c
+    a, b = (c - 1, n), ((c2 - 1) / 2, n2 / 2)
+    q = (L * a[0] + H * b[0], L * a[1] + H * b[1])
+    q1 = (-L * n - H * n2, L * c + H * c2)
+    q2 = (-L * c - 2 * H * c2, -L * n - 2 * H * n2)
+    return q, q1, q2, a, b
+
+
+_GRID = np.linspace(0.0, 2 * np.pi, POLYLINE, endpoint=False)
+_A = (np.cos(_GRID) - 1, np.sin(_GRID))
+_B = ((np.cos(2 * _GRID) - 1) / 2, np.sin(2 * _GRID) / 2)
+# |P - L a_j - H b_j|^2 = |P|^2 + features(P, H, L) @ _TERMS: one matrix product for every vertex
+_TERMS = np.array([-2 * _A[0], -2 * _A[1], -2 * _B[0], -2 * _B[1],
+                   _A[0] ** 2 + _A[1] ** 2, 2 * (_A[0] * _B[0] + _A[1] * _B[1]), _B[0] ** 2 + _B[1] ** 2])
+CHUNK = 128             # pairs a block: m n k below OpenBLAS's 4 x 65536 keeps its product on one thread
+
+
+def _squared(px, py, H, L):
+    """|P - Q_j|^2 [mm^2] to the POLYLINE vertices, a row a pair, and its rounding allowance."""
+    features = np.column_stack([L * px, L * py, H * px, H * py, L * L, L * H, H * H])
+    size = px * px + py * py
+    return size[:, None] + features @ _TERMS, 1e-13 * (size + 4 * (np.abs(L) + np.abs(H)) ** 2)
+
+
+def _run(near, j):
+    """The run of `near` vertices (a row a pair, circular) around vertex j: the mask of its members
+    and sigma [rad], the farthest a member lies from j plus half a spacing; the run is the whole
+    circle (sigma = inf) where every vertex is near."""
+    offset = ((np.arange(POLYLINE) - j[:, None] + POLYLINE // 2) & (POLYLINE - 1)) - POLYLINE // 2
+    right = np.where(near | (offset <= 0), POLYLINE, offset).min(axis=1)      # first vertex not near
+    left = np.where(near | (offset > 0), POLYLINE, -offset).min(axis=1)
+    whole = ~(~near).any(axis=1)
+    member = ((offset > -left[:, None]) & (offset < right[:, None])) | whole[:, None]
+    sigma = np.where(whole, np.inf, (np.maximum(left, right) - 0.5) * (2 * np.pi / POLYLINE))
+    return member, sigma
+
+
+def _scan(px, py, H, L, slack):
+    """Each pair's nearest vertex: lower and upper bounds on its distance [mm] (rounding allowed
+    for); the vertices nearer P than the upper bound plus `slack` [mm] ("near") in runs: the
+    nearest's run (its vertex's s [rad] and sigma [rad], `_run`) and the nearest vertex's run of the
+    rest (where there is one, else the first again); and whether the two runs hold every near vertex."""
+    low, high, s1, sigma1, s2, sigma2 = (np.empty(px.size) for _ in range(6))
+    covered = np.empty(px.size, dtype=bool)
+    for k in range(0, px.size, CHUNK):
+        part = slice(k, k + CHUNK)
+        squared, tol = _squared(px[part], py[part], H[part], L[part])
+        j = squared.argmin(axis=1)
+        least = squared[np.arange(j.size), j]
+        low[part], high[part] = np.sqrt(np.maximum(least - tol, 0.0)), np.sqrt(least + tol)
+        near = squared < ((high[part] + slack[part]) ** 2 + tol)[:, None]
+        first, sigma1[part] = _run(near, j)
+        rest = near & ~first
+        two = rest.any(axis=1)
+        j2, sigma2[part], covered[part] = j.copy(), sigma1[part], True
+        if two.any():                       # near vertices outside the first run: the second run
+            j2[two] = np.where(rest[two], squared[two], np.inf).argmin(axis=1)
+            second, sigma2[part][two] = _run(near[two], j2[two])
+            covered[part][two] = ~(rest[two] & ~second).any(axis=1)
+        s1[part], s2[part] = _GRID[j], _GRID[j2]
+    return low, high, (s1, sigma1), (s2, sigma2), covered
+
+
+def _tangents(px, py, H, L, reach, spacing):
+    """A lower bound [mm] on the distance from P to the limaçon where the first-order bound does
+    not apply (several branches near P): every polyline vertex farther than `reach` [mm] bounds its
+    arc's points at reach less the spacing error V pi / N [mm]; the arcs of the
+    nearer ones (at most NEAR_ARCS, else the bound is -inf) are cut in SUBARCS, and the distance to
+    each sub-arc is at least that to its centre's tangent segment Q_k + Q'_k t, |t| <= pi/(N SUBARCS),
+    less M (pi/(N SUBARCS))^2 / 2, the farthest the arc strays from it (Taylor: |Q''| <= M)."""
+    half = np.pi / (POLYLINE * SUBARCS)
+    offset = (2 * np.arange(SUBARCS) + 1 - SUBARCS) * half
+    co, so = np.cos(offset), np.sin(offset)
+    out = np.full(px.size, -np.inf)
+    for k in range(0, px.size, CHUNK):
+        part = np.arange(k, min(k + CHUNK, px.size))
+        squared, tol = _squared(px[part], py[part], H[part], L[part])
+        near = squared < (reach[part] ** 2 + tol)[:, None]
+        count = near.sum(axis=1)
+        few = count <= NEAR_ARCS                          # more near arcs: no bound (-inf)
+        if not few.any():
+            continue
+        part, near = part[few], near[few]
+        order = np.argsort(~near, axis=1, kind="stable")[:, :count[few].max()]     # the near vertices first
+        # cos and sin of s_j + offset by the sum formulas: a product where np.cos would cost 20x
+        cj, nj = np.cos(_GRID)[order][..., None], np.sin(_GRID)[order][..., None]
+        c, n = (cj * co - nj * so).reshape(part.size, -1), (nj * co + cj * so).reshape(part.size, -1)
+        Hp, Lp = H[part, None], L[part, None]
+        c2, n2 = 2 * c * c - 1, 2 * n * c
+        x, y = Lp * (c - 1) + Hp * (c2 - 1) / 2, n * (Lp + Hp * c)
+        vx, vy = -Lp * n - Hp * n2, Lp * c + Hp * c2
+        wx, wy = px[part, None] - x, py[part, None] - y
+        t = np.clip((wx * vx + wy * vy) / np.maximum(vx * vx + vy * vy, 1e-300), -half, half)
+        gap = np.hypot(wx - t * vx, wy - t * vy) - (np.abs(L[part]) + 2 * np.abs(H[part]))[:, None] * half * half / 2
+        used = np.repeat(np.take_along_axis(near, order, axis=1), SUBARCS, axis=1)
+        out[part] = np.minimum(np.where(used, gap, np.inf).min(axis=1), reach[part] - spacing[part])
+    return out
+
+
+def _foot(px, py, H, L, s):
+    """Newton on the foot condition (Q - P) . Q' = 0 from s, each step at most 2 pi / POLYLINE."""
+    step_max = 2 * np.pi / POLYLINE
+    for _ in range(NEWTON_STEPS):
+        (x, y), (vx, vy), (ax, ay), _, _ = _curve(s, H, L)
+        ex, ey = x - px, y - py
+        slope = vx * vx + vy * vy + ex * ax + ey * ay
+        s = s + np.clip(-(ex * vx + ey * vy) / np.where(slope > 0, slope, np.inf), -step_max, step_max)
+    return s
+
+
+def _loss(top, slope, speed, M, offset, t1):
+    """E [mm]: over |t| <= t1, |X| >= sqrt(A+^2 + B+^2) >= D - E for every D = d0 + g . (dH, dL) <= top,
+    with A = D - slope |t| - M t^2/2 (decreasing in |t|) and B = speed |t| - M t^2/2 - offset
+    (increasing up to t1 <= t0 <= speed / M). On [t_k, t_k+1] of a geometric partition of (0, t1]
+    (t_0 = t1 2^-INTERVALS) A >= D - alpha, alpha = slope t_k+1 + M t_k+1^2/2, and B >= B(t_k) =: beta,
+    so |X| >= D - alpha + sqrt((D - alpha)^2 + beta^2) - (D - alpha), a gain that falls as D rises:
+    it is taken at D = top (or |X| >= beta where D < alpha). [0, t_0]: alpha alone."""
+    t = t1[:, None] * 2.0 ** np.arange(-INTERVALS, 1)
+    alpha = slope[:, None] * t + M[:, None] * t * t / 2
+    beta = np.maximum(speed[:, None] * t - M[:, None] * t * t / 2 - offset[:, None], 0.0)[:, :-1]
+    x = np.maximum(top[:, None] - alpha[:, 1:], 0.0)
+    gain = np.hypot(x, beta) - x
+    return np.maximum(alpha[:, 0], (alpha[:, 1:] - gain).max(axis=1))
+
+
+def cell_bounds(px, py, H, L, hH, hL):
+    """Bounds on the distance [mm] from nodes (px, py) to the limaçon over cells of centre (H, L)
+    and half-widths (hH, hL), one (cell, node) pair an element (arrays of one shape; see the module
+    docstring). Returns (zero, d0, gH, gL, E, first): `zero` a constant bound over the cell; where
+    `first`, the distance at (H + dH, L + dL) is at least min_b (d0 + gH dH + gL dL - E)[b] over the
+    two runs b of arcs near the node (the last axis; one run is given twice). `zero` is at least
+    that bound's worst corner."""
+    px, py, H, L, hH, hL = (np.ravel(v).astype(float) for v in np.broadcast_arrays(px, py, H, L, hH, hL))
+    r = lipschitz_radius(hH, hL)
+    V, M = np.abs(L) + np.abs(H), np.abs(L) + 2 * np.abs(H)
+    margin = ROUNDING * (1.0 + V)
+    spacing = V * np.pi / POLYLINE
+    low, high, run1, run2, covered = _scan(px, py, H, L, 2 * r + spacing)
+    zero = low - spacing - r - margin
+    d0, gH, gL, E, ok = (np.repeat(v[:, None], 2, axis=1) for v in _branch(px, py, H, L, hH, hL, r, M, *run1, margin))
+    two = run2[0] != run1[0]                        # a second run: its own branch (else the first twice)
+    if two.any():
+        got = _branch(*(v[two] for v in (px, py, H, L, hH, hL, r, M, *run2, margin)))
+        for whole, part in zip((d0, gH, gL, E, ok), got):
+            whole[two, 1] = part
+    first = covered & ok.all(axis=1) & (d0[:, 0] <= high)   # beyond both runs every point is farther than high + r
+    worst = (d0 - np.abs(gH) * hH[:, None] - np.abs(gL) * hL[:, None] - E).min(axis=1)
+    zero = np.where(first, np.maximum(zero, worst), zero)
+    if not first.all():          # more branches near the node: the tangent-segment bound, finely
+        other = ~first
+        reach = high[other] + 2 * r[other] + spacing[other]
+        zero[other] = np.maximum(zero[other], _tangents(px[other], py[other], H[other], L[other], reach,
+                                                                 spacing[other])
+                                 - r[other] - margin[other])
+    return zero, d0, gH, gL, E, first
+
+
+def _branch(px, py, H, L, hH, hL, r, M, sj, sigma, margin):
+    """The first-order bound of one run of near arcs (module docstring): from the run's vertex sj
+    [rad] Newton's s0, then d0, gH, gL and E [mm]; `ok` where its conditions hold over the run,
+    whose farthest arc ends sigma [rad] from sj."""
+    s0 = _foot(px, py, H, L, sj)
+    (x, y), (vx, vy), _, a, b = _curve(s0, H, L)
+    wx, wy = px - x, py - y
+    d0, speed = np.hypot(wx, wy), np.hypot(vx, vy)
+    ux, uy = wx / np.where(d0 > 0, d0, 1.0), wy / np.where(d0 > 0, d0, 1.0)
+    eps_u = np.abs(ux * vx + uy * vy)
+    eps_t = np.abs(wx * vx + wy * vy) / np.where(speed > 0, speed, 1.0)
+    gH, gL = -(ux * b[0] + uy * b[1]), -(ux * a[0] + uy * a[1])
+    sigma = np.minimum(sigma + np.abs((s0 - sj + np.pi) % (2 * np.pi) - np.pi), 2 * np.pi)  # from s0; > pi: not ok
+    level = d0 + r                                      # B(t0) = level: M t^2/2 - |Q'| t + level + eps_t + r = 0
+    disc = speed * speed - 2 * M * (level + eps_t + r)
+    t0 = (speed - np.sqrt(np.maximum(disc, 0.0))) / M
+    B_sigma = speed * sigma - M * sigma * sigma / 2 - eps_t - r
+    ok = (d0 > 0) & (disc >= 0) & (sigma < np.pi) & ((sigma <= t0) | (B_sigma >= level))
+    t1 = np.where(ok, np.minimum(t0, sigma), 0.0)
+    E = _loss(d0 + np.abs(gH) * hH + np.abs(gL) * hL, eps_u + hL + hH, speed, M, eps_t + r, t1) + margin
+    return d0, gH, gL, E, ok
