@@ -65,6 +65,13 @@ class Rows:
             target.append(np.broadcast_to(np.asarray(value, float), size))
         return self.columns[name][0]
 
+    def bound(self, name, lower, upper):
+        """New bounds on the block `name`'s columns (a trust region)."""
+        size = self.columns[name][1]
+        k = list(self.columns).index(name)             # one entry of col_lower per block, in order
+        self.col_lower[k] = np.broadcast_to(np.asarray(lower, float), size)
+        self.col_upper[k] = np.broadcast_to(np.asarray(upper, float), size)
+
     def le(self, family, terms, upper):
         """Rows `sum of terms <= upper` of `family`; their indices."""
         return self._add(family, terms, upper, -INF)
