@@ -42,6 +42,7 @@ __all__ = ["CamGeometry", "GeometryCheck", "TRUST", "least_pressure_angle"]
 
 DIFF_STEP = 1e-6            # central-difference step in S, S', S'' (each O(1) over the rise)
 NODE_SPACING_XI = 0.01      # the rows' nodes over the rise and the return
+DROP_REL = 1e-8             # a row's entries below this share of its largest are dropped (rounding noise)
 TRUST = 0.05                # |c - c_k| per coefficient in one step (S in [0, 1])
 GEOMETRY_TOL_DEG = 0.02     # the exact pressure angle may exceed its limit by this and hold
 GEOMETRY_TOL_MM = 0.02      # the exact radius of curvature may fall short of its bound by this
@@ -121,6 +122,8 @@ class CamGeometry:
             theta = _angles(shape, xi, phase)
             (phi, kappa), grads = _quantities(shape, theta, S, dS, ddS)
             G = {name: sum(grads[name][j][:, None] * M for j, M in enumerate((B, D, A))) for name in ("phi", "kappa")}
+            for M in G.values():        # entries HiGHS would drop after scaling: dropped here, said
+                M[np.abs(M) < DROP_REL * np.abs(M).max(axis=1, keepdims=True)] = 0.0
             lim_phi = math.radians(self.max_pressure_angle_deg) - math.radians(backoff.get("pressure_angle", 0.0))
             for sign in (1.0, -1.0):          # |phi| <= limit, phi signed
                 rows.append(("pressure_angle", sign * G["phi"], lim_phi - sign * (phi - G["phi"] @ c_k)))

@@ -423,7 +423,8 @@ def _geometry_steps(task, t_deg, band_rpm, geometry, settings):
     d, backoff, check = _design(task, t_deg, band_rpm, **settings), {"pressure_angle": 0.0, "curvature_kappa": 0.0}, None
     for step in range(geometry.steps + 1):
         if d.status is not Status.SOLVED:
-            return dataclasses.replace(d, geometry_steps=step, message=d.message + f" (geometry step {step})")
+            said = f" (geometry step {step}: the rows linearised at the last law, its coefficients within {TRUST:g})"
+            return dataclasses.replace(d, geometry_steps=step, message=d.message + (said if step else ""))
         check = geometry.check(d.law, t_deg)
         if check.holds():
             return dataclasses.replace(d, geometry=check, geometry_steps=step)
@@ -697,6 +698,7 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
     values |= {"t_deg": t_deg, "lp_value": design.value, "window_xi": design.window_xi, "lps": float(design.lps)}
     if cam is not None:
         values |= _geometry_values(cam, design)
+        diagnostics["geometry_binds"] = [k for k in ("pressure_angle", "curvature") if values[f"{k}_binds"]]
     if objective == "least_phase":
         values["t_min_synthesized_deg"] = t_deg
         if robust and not box.trivial:
@@ -770,7 +772,7 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
                         warnings=warnings)
 
 
-BINDS_WITHIN = (0.05, 0.05)     # a geometry limit binds when the exact value is this near it [deg, mm]
+BINDS_WITHIN = (0.1, 0.1)       # a geometry limit binds when the exact value is this near it [deg, mm]
 
 
 def _geometry_values(cam, design):
