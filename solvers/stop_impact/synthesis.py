@@ -667,10 +667,15 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
         common |= {"box": box, "rounds": ROBUST_ROUNDS}
     cam = None
     if geometry:
-        shape = CamShape(base_radius_mm=cam_base_radius_mm, roller_radius_mm=cam_roller_radius_mm,
-                         stroke_mm=task.stroke_mm, rise_deg=phase_to_deg, return_deg=phase_to_deg,
-                         dwell_deg=cam_dwell_deg, centre_distance_mm=cam_centre_distance_mm, a_mm=task.a_mm,
-                         b_mm=task.b_mm, follower="oscillating", closure="groove")
+        try:        # the lever's arms and stroke, the rise and return over the bracket's top
+            shape = CamShape(base_radius_mm=cam_base_radius_mm, roller_radius_mm=cam_roller_radius_mm,
+                             stroke_mm=task.stroke_mm, rise_deg=phase_to_deg, return_deg=phase_to_deg,
+                             dwell_deg=cam_dwell_deg, centre_distance_mm=cam_centre_distance_mm, a_mm=task.a_mm,
+                             b_mm=task.b_mm, follower="oscillating", closure="groove")
+        except ModelError as exc:       # named as the setting (or the task's parameter) at fault
+            key = f"cam_{exc.key}" if exc.key in ("base_radius_mm", "roller_radius_mm", "centre_distance_mm",
+                                                  "dwell_deg") else "phase_to_deg" if exc.key == "rise_deg" else exc.key
+            raise SettingError(f"geometry: the lift cam cannot be made ({key}): {exc}", key=key) from None
         cam = CamGeometry(shape, max_pressure_angle_deg, min_curvature_margin_mm, geometry_steps)
         common["geometry"] = cam
     limit = task.amplitude_limit_mm
@@ -783,7 +788,7 @@ def _geometry_values(cam, design):
             "min_radius_of_curvature_mm": check.convex_mm, "min_concave_radius_mm": check.concave_mm,
             "pressure_angle_binds": float(check.excess["pressure_angle"] >= -BINDS_WITHIN[0]),
             "curvature_binds": float(check.excess["curvature"] >= -BINDS_WITHIN[1]),
-            "geometry_steps": float(design.geometry_steps)}
+            "geometry_steps_taken": float(design.geometry_steps)}
 
 
 def _least_angle(design, cam, task, t_deg, bounds, coefficients, continuity, values):

@@ -12,6 +12,7 @@ import pytest
 from test_cam_shape import _lever_points, _polygon_checks
 
 from mechopt import registry
+from mechopt.kit.errors import SettingError
 from mechopt.kit.result import Status
 from mechopt.models.cam_shape import summarise
 from mechopt.solvers.stop_impact import cam_rows
@@ -156,3 +157,12 @@ def test_the_rows_are_the_first_order_terms_of_the_exact_geometry(posed):
         gaps.append(max(np.abs((u - G @ (c + h * dc)) - (u2 - G2 @ (c + h * dc))).max()
                         for (_, G, u), (_, G2, u2) in zip(here, there)))
     assert gaps[1] / gaps[0] == pytest.approx(0.25, abs=0.05)
+
+
+@pytest.mark.parametrize("more, key", [({"cam_centre_distance_mm": 200.0}, "cam_centre_distance_mm"),
+                                       ({"cam_dwell_deg": 300.0}, "phase_to_deg")])
+def test_a_cam_that_cannot_be_made_is_refused_naming_the_setting(posed, more, key):
+    task, settings = posed
+    with pytest.raises(SettingError) as err:
+        synthesise_law(task, **(settings | more))
+    assert err.value.key == key and key in str(err.value)
