@@ -2,7 +2,7 @@
 curvature, linearised around the current law and solved in a short sequence of LPs.
 
 The cam is a `models.cam_shape.CamShape` (an oscillating roller follower in a groove, turning
-counter-clockwise: `pitch` takes the sense of rotation into its pitch curve), cut to the law over
+counter-clockwise: the pitch curve takes the sense of rotation in), cut to the law over
 the rise and, mirrored, over the return (1 - S over the same angle, as the shop's drawing of a
 synthesised law reads the lift cam's return). At a node xi the pressure angle phi and the pitch
 curve's signed curvature kappa = 1 / rho (> 0 convex) are smooth functions of (S, S', S'') there
@@ -11,17 +11,20 @@ the law being S = s0 + B c, each is linearised around the current coefficients c
 
     q(c) ~ q_k + (g_S B + g_D D + g_A A)(c - c_k),
 
-g the partial derivatives (central differences of `pitch` in S, S', S'', step DIFF_STEP: `pitch`
-is pointwise in them). The rows: phi <= max_pressure_angle_deg at the rise's and the return's
-nodes; kappa <= 1 / (roller radius + min_curvature_margin_mm) (the inner wall not undercut, with
+g the partial derivatives (central differences in S, S', S'', step DIFF_STEP, of the general
+roller cam `models.cam_geometry.roller_cam`, pointwise in them, whose pressure angle is signed:
+smooth where |phi| has a corner at 0). The rows: |phi| <= max_pressure_angle_deg at the rise's and
+the return's nodes (every NODE_SPACING_XI); kappa <= 1 / (roller radius + min_curvature_margin_mm) (the inner wall not undercut, with
 the margin) and, for a groove, -kappa <= the same (its outer wall, on the concave parts). Curvature
 is held rather than rho, which is infinite at every inflection.
 
 Sequential convex steps (a trust-region SLP: Nocedal & Wright, *Numerical Optimization*, 2nd ed.,
-Sec. 18.5 on trust regions for SQP/SLP): each step solves the window LP with the rows linearised
+Sec. 18.5 on trust regions for SQP/SLP): the law without these rows first; while its exact check
+breaks a limit, each step solves the window LP with the rows linearised
 at c_k and |c - c_k| <= TRUST (each coefficient) and checks its law exactly on the whole cam
-(`models.cam_shape.summarise`, 7200 cam angles, extremes polished); the exact excess of each family
-over its limit is added to that family's back-off for the next step. It stops when the exact
+(`models.cam_shape.summarise`, the other implementation, 7200 cam angles, extremes polished); the
+exact excess over its limit of a law the linearised rows gave (their error, and the nodes'
+spacing) is added to that family's back-off for the next step. It stops when the exact
 geometry holds within GEOMETRY_TOL_DEG / GEOMETRY_TOL_MM (SOLVED), when a step's LP has no law
 (INFEASIBLE: none within the trust region around c_k meets the linearised rows, which a
 non-convex set does not prove for the whole space: said so), or after `steps` steps (LIMIT naming
