@@ -416,9 +416,9 @@ def _geometry_steps(task, t_deg, band_rpm, geometry, settings):
     """The law without the cam's geometry, then while its exact geometry (`CamGeometry.check`)
     breaks a limit: the window LP again with the geometry rows linearised at the last law, its
     coefficients within TRUST of it, each family's limit lowered by the exact excess of the laws
-    the linearised rows gave so far (their error; solvers/stop_impact/cam_rows.py); the speeds and window of the last law carried. SOLVED when
-    the exact geometry holds; the LP's own status when a step has no law; LIMIT after
-    `geometry.steps` steps."""
+    the linearised rows gave so far (their error; solvers/stop_impact/cam_rows.py); the speeds and
+    window of the last law carried. SOLVED when the exact geometry holds; the LP's own status when
+    a step has no law; LIMIT after `geometry.steps` steps."""
     lever = linear_lever(settings.get("coefficients", 100), settings.get("continuity", 2))
     d, backoff, check = _design(task, t_deg, band_rpm, **settings), {"pressure_angle": 0.0, "curvature_kappa": 0.0}, None
     for step in range(geometry.steps + 1):
