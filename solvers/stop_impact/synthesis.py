@@ -29,7 +29,8 @@ settle, iteration limits both); the lever enters as a dense response matrix for 
 state variables tied by the exact step for many (`elastic_states`); the rows are sampled on the
 grid (every 0.015 in xi early in the rise, 0.004 near the plate), the roller's force kept 5 % above
 zero there, and the full grid (the dense check) and the chain judge the result. Not modelled: the
-pressure angle, the radius of curvature against the roller and the Hertz stress of the law.
+Hertz stress of the law; the cam's pressure angle and radius of curvature only when `geometry`
+(sequential LPs, solvers/stop_impact/cam_rows.py).
 
 A t whose kinematic bounds alone conflict (below the kinematic minimum) is refused by one small
 LP before any window is tried, naming the bounds that bind (`kinematic_conflict`).
@@ -65,8 +66,10 @@ from mechopt.models.cam_law import (
     intervals_for,
     step_matrices,
 )
+from mechopt.models.cam_shape import CamShape
 from mechopt.models.stop_impact import LeverStop, speed_tag
 from mechopt.solvers.stop_impact.cam_follower import follow_cam, follower_data
+from mechopt.solvers.stop_impact.cam_rows import TRUST, CamGeometry, GeometryCheck, least_pressure_angle
 from mechopt.solvers.stop_impact.law import RollerLeftCam, rebound_amplitude_mm
 from mechopt.solvers.stop_impact.lever_box import LeverBox, takes_box
 from mechopt.solvers.stop_impact.response import closed_form_amplitude_m, response_parts
@@ -292,7 +295,7 @@ class WindowLP:
     `slack`: each family of limits gets a slack and the sum is minimised (which limits bind when
     nothing is feasible)."""
 
-    def __init__(self, task, lever, speeds, t_deg, *, objective, limit_mm, bounds, lines, slack=False):
+    def __init__(self, task, lever, speeds, t_deg, *, objective, limit_mm, bounds, lines, slack=False, extra=None):
         H = task.stroke_mm * 1e-3
         self.target = 1.0 - (task.preload_mm * 1e-3 / H if "preload" in task.effects else 0.0)
         at = np.flatnonzero(_rows(lever))
@@ -302,6 +305,8 @@ class WindowLP:
         goal = "peak" if objective == "least_acceleration" else "r"
         rows.column(goal, cost=0.0 if slack else 1.0)
         kinematic_rows(rows, lever, t_deg, task.stroke_mm, bounds)
+        if extra is not None:           # the cam's geometry linearised at a law, its trust region (_geometry_steps)
+            extra(rows)
         if goal == "peak":
             _, _, (a0, A), _ = lever.bound_kin
             rows.le("objective", [("c", A), ("peak", -np.ones(A.shape[0]))], -a0)
@@ -393,11 +398,61 @@ class _Design:
     violated: tuple = ()
     given_up: int = 0               # windows HiGHS did not settle within its iteration limits (WindowLP.solve)
     retried: int = 0                # windows the dual simplex did not settle, retried by the interior point
+    c: np.ndarray | None = None     # the law's free coefficients
+    geometry: GeometryCheck | None = None   # its cam's exact geometry (with a CamGeometry)
+    geometry_steps: int = 0         # the sequential geometry LPs taken
 
 
-def design_law(task: LeverStop, t_deg: float, band_rpm: tuple, *, objective="least_rebound", coefficients=100,
-               continuity=2, sample_speeds=5, dense_step_rpm=5.0, bounds=None, rounds=4, samples=None,
-               around=None, dense_bar_mm=None, explain=True, box: LeverBox | None = None) -> _Design:
+def design_law(task: LeverStop, t_deg: float, band_rpm: tuple, *, geometry: CamGeometry | None = None,
+               **settings) -> _Design:
+    """The best law at phase angle `t_deg` (`_design`: its settings); with `geometry`, its cam's
+    pressure angle and radius of curvature held too, by sequential LPs (`_geometry_steps`)."""
+    if geometry is None:
+        return _design(task, t_deg, band_rpm, **settings)
+    return _geometry_steps(task, t_deg, band_rpm, geometry, settings)
+
+
+def _geometry_steps(task, t_deg, band_rpm, geometry, settings):
+    """The law without the cam's geometry, then while its exact geometry (`CamGeometry.check`)
+    breaks a limit: the window LP again with the geometry rows linearised at the last law, its
+    coefficients within TRUST of it, each family's limit lowered by the exact excess of the laws
+    the linearised rows gave so far (their error; solvers/stop_impact/cam_rows.py); the speeds and
+    window of the last law carried. SOLVED when the exact geometry holds; the LP's own status when
+    a step has no law; LIMIT after `geometry.steps` steps."""
+    lever = linear_lever(settings.get("coefficients", 100), settings.get("continuity", 2))
+    d, backoff, check = _design(task, t_deg, band_rpm, **settings), {"pressure_angle": 0.0, "curvature_kappa": 0.0}, None
+    for step in range(geometry.steps + 1):
+        if d.status is not Status.SOLVED:
+            said = f" (geometry step {step}: the rows linearised at the last law, its coefficients within {TRUST:g})"
+            return dataclasses.replace(d, geometry_steps=step, message=d.message + (said if step else ""))
+        check = geometry.check(d.law, t_deg)
+        if check.holds():
+            return dataclasses.replace(d, geometry=check, geometry_steps=step)
+        if step == geometry.steps:
+            break
+        if step:        # a law of the linearised rows that breaks the exact limit: the rows' error, backed off
+            backoff["pressure_angle"] += max(check.excess["pressure_angle"], 0.0)
+            least = geometry.least_radius_mm
+            if check.excess["curvature"] > 0:           # rho short by v: kappa over 1 / least by this
+                backoff["curvature_kappa"] += 1.0 / max(least - check.excess["curvature"], 1e-3 * least) - 1.0 / least
+        rows, c_k = geometry.linearised(lever, d.c, t_deg, backoff), d.c
+
+        def extra(lp_rows, rows=rows, c_k=c_k):
+            lp_rows.bound("c", c_k - TRUST, c_k + TRUST)
+            for family, G, upper in rows:
+                lp_rows.le(family, [("c", G)], upper)
+        d = _design(task, t_deg, band_rpm, **settings | {"samples": d.speeds, "around": d.window_xi, "extra": extra})
+    return dataclasses.replace(
+        d, status=Status.LIMIT, geometry=check, geometry_steps=geometry.steps,
+        message=f"the cam's geometry at t = {t_deg:.6g} deg still breaks its limits after {geometry.steps} "
+                f"sequential LPs (geometry_steps): pressure angle {check.pressure_deg:.4g} deg "
+                f"(max_pressure_angle_deg={geometry.max_pressure_angle_deg:g}), least radius of curvature "
+                f"{min(check.convex_mm, check.concave_mm):.4g} mm (bound {geometry.least_radius_mm:g} mm)")
+
+
+def _design(task: LeverStop, t_deg: float, band_rpm: tuple, *, objective="least_rebound", coefficients=100,
+            continuity=2, sample_speeds=5, dense_step_rpm=5.0, bounds=None, rounds=4, samples=None,
+            around=None, dense_bar_mm=None, explain=True, box: LeverBox | None = None, extra=None) -> _Design:
     """The best law at phase angle `t_deg` over the speed band: the LP over the arrival window
     (`_scan`), the dense check between the sampled speeds, a failing speed added and the LP solved
     again (at most `rounds` times). The dense check holds the law to the LP's own value (least
@@ -433,7 +488,8 @@ def design_law(task: LeverStop, t_deg: float, band_rpm: tuple, *, objective="lea
                   for key, each in levers.items() if key not in lines}
         speeds = [speed_response(levers[p[:2]], lever, p[2], t_deg, lines[p[:2]]) for p in samples]
         nominal = lines[box.nominal(task)]
-        lp = WindowLP(task, lever, speeds, t_deg, objective=objective, limit_mm=limit, bounds=bounds, lines=nominal)
+        lp = WindowLP(task, lever, speeds, t_deg, objective=objective, limit_mm=limit, bounds=bounds, lines=nominal,
+                      extra=extra)
         (status, c, value, xa), count = _scan(lp, around)
         lps = lps + count
         counts = {"given_up": counts["given_up"] + lp.given_up, "retried": counts["retried"] + lp.held.retried}
@@ -442,7 +498,7 @@ def design_law(task: LeverStop, t_deg: float, band_rpm: tuple, *, objective="lea
                            f"no law at t = {t_deg:.6g} deg keeps every limit", **counts)
         if status is Status.INFEASIBLE:
             slack = WindowLP(task, lever, speeds, t_deg, objective=objective, limit_mm=limit, bounds=bounds,
-                              lines=nominal, slack=True)
+                              lines=nominal, slack=True, extra=extra)
             (_, _, _, xa), count = _scan(slack)
             sl = slack.solve(xa)[3]
             binding = tuple(k for k, v in sl.items() if v > 1e-9)
@@ -458,11 +514,11 @@ def design_law(task: LeverStop, t_deg: float, band_rpm: tuple, *, objective="lea
                    for mm, point in [_dense_worst(levers, [key], law, t_deg, dense, lever)]
                    if mm > bar * (1 + 1e-3) + 1e-4 * limit and point not in samples]
         if not failing:
-            return _Design(Status.SOLVED, law, value, xa, samples, lps, **counts)
+            return _Design(Status.SOLVED, law, value, xa, samples, lps, **counts, c=c)
         worst = max(failing)[1]
         samples = sorted(samples + [point for _, point in failing])   # broken between samples: sample them too
     return _Design(Status.LIMIT, law, value, xa, samples, lps,
-                   f"the dense check still fails at {_points_text([worst])} after {rounds} rounds", **counts)
+                   f"the dense check still fails at {_points_text([worst])} after {rounds} rounds", **counts, c=c)
 
 
 def _dense_worst(levers, keys, law, t_deg, dense, lever):
@@ -546,7 +602,15 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
                    agreement_rel: Annotated[float, Interval(gt=0, le=0.5)] = 2e-3,
                    compare: bool = True,
                    box: LeverBox | None = None,
-                   robust: bool = False) -> Result:
+                   robust: bool = False,
+                   geometry: bool = False,
+                   max_pressure_angle_deg: Annotated[float, Interval(gt=0, lt=90)] = 45.0,
+                   min_curvature_margin_mm: NonNegative = 0.0,
+                   cam_base_radius_mm: Annotated[float, Interval(gt=0, le=1e4)] = 60.0,
+                   cam_roller_radius_mm: Annotated[float, Interval(gt=0, le=1e4)] = 15.0,
+                   cam_centre_distance_mm: Annotated[float, Interval(gt=0, le=1e4)] = 120.0,
+                   cam_dwell_deg: Annotated[float, Interval(ge=0, lt=360)] = 60.0,
+                   geometry_steps: Annotated[int, Interval(ge=1, le=50)] = 8) -> Result:
     """Synthesise the lift cam's law (module docstring) and check it by the chain.
 
     Parameters
@@ -573,6 +637,16 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
     robust : the law must keep the limit on the whole box: its corners and nominal are LP rows, its
         grid the dense check, a failing point added (`design_law`); with compare, the nominal law's
         and the cycloid's (at its least angle) worst over the same box beside it.
+    geometry : hold the lift cam's geometry too (solvers/stop_impact/cam_rows.py; off: nothing
+        changes): the cam an oscillating roller follower in a groove, turning counter-clockwise, its
+        lever arms and stroke the task's (a_mm, b_mm, stroke_mm), the rise and the mirrored return
+        over t; `cam_base_radius_mm`, `cam_roller_radius_mm`, `cam_centre_distance_mm` (cam centre
+        to the lever's pivot), `cam_dwell_deg` (upper dwell) [mm, deg]; the limits
+        `max_pressure_angle_deg` (rise and return) and the pitch curve's radius of curvature >=
+        roller radius + `min_curvature_margin_mm` on both walls of the groove; at most
+        `geometry_steps` sequential LPs per phase angle (LIMIT naming them when the exact geometry
+        still breaks a limit). Values: max_pressure_angle_{rise,return}_deg, min_radius_of_curvature_mm,
+        min_concave_radius_mm, pressure_angle_binds, curvature_binds (1: within BINDS_WITHIN of its limit).
     """
     task.need("stroke_mm", "amplitude_limit_mm")
     task.need_effect("cam_drive")
@@ -591,6 +665,19 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
                   dense_step_rpm=dense_step_rpm, bounds=bounds)
     if robust and not box.trivial:
         common |= {"box": box, "rounds": ROBUST_ROUNDS}
+    cam = None
+    if geometry:
+        try:        # the lever's arms and stroke, the rise and return over the bracket's top
+            shape = CamShape(base_radius_mm=cam_base_radius_mm, roller_radius_mm=cam_roller_radius_mm,
+                             stroke_mm=task.stroke_mm, rise_deg=phase_to_deg, return_deg=phase_to_deg,
+                             dwell_deg=cam_dwell_deg, centre_distance_mm=cam_centre_distance_mm, a_mm=task.a_mm,
+                             b_mm=task.b_mm, follower="oscillating", closure="groove")
+        except ModelError as exc:       # named as the setting (or the task's parameter) at fault
+            key = f"cam_{exc.key}" if exc.key in ("base_radius_mm", "roller_radius_mm", "centre_distance_mm",
+                                                  "dwell_deg") else "phase_to_deg" if exc.key == "rise_deg" else exc.key
+            raise SettingError(f"geometry: the lift cam cannot be made ({key}): {exc}", key=key) from None
+        cam = CamGeometry(shape, max_pressure_angle_deg, min_curvature_margin_mm, geometry_steps)
+        common["geometry"] = cam
     limit = task.amplitude_limit_mm
     build = Clock()
     linear_lever(coefficients, continuity)
@@ -601,6 +688,8 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
         diagnostics |= {"bisection_steps": search["steps"], "windows_given_up": search["given_up"],
                         "windows_retried": search["retried"]}
         if design.status is not Status.SOLVED:
+            if cam is not None and design.status is Status.INFEASIBLE:
+                design = _least_angle(design, cam, task, t_deg, bounds, coefficients, continuity, values)
             return _unsolved(design, values, diagnostics, clock, t_deg, limit, task, band, dense_step_rpm)
     else:
         task.need("t_deg")
@@ -612,6 +701,9 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
     law = design.law
     lever = linear_lever(coefficients, continuity)
     values |= {"t_deg": t_deg, "lp_value": design.value, "window_xi": design.window_xi, "lps": float(design.lps)}
+    if cam is not None:
+        values |= _geometry_values(cam, design)
+        diagnostics["geometry_binds"] = [k for k in ("pressure_angle", "curvature") if values[f"{k}_binds"]]
     if objective == "least_phase":
         values["t_min_synthesized_deg"] = t_deg
         if robust and not box.trivial:
@@ -683,6 +775,40 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
                                                                   "law_knots": list(law.knots),
                                                                   "law_coefficients": list(law.coefficients)},
                         warnings=warnings)
+
+
+BINDS_WITHIN = (0.1, 0.1)       # a geometry limit binds when the exact value is this near it [deg, mm]
+
+
+def _geometry_values(cam, design):
+    """The synthesised law's cam: pressure angles, least radii, which geometry limit binds."""
+    check = design.geometry
+    return {"max_pressure_angle_rise_deg": check.pressure_rise_deg,
+            "max_pressure_angle_return_deg": check.pressure_return_deg,
+            "min_radius_of_curvature_mm": check.convex_mm, "min_concave_radius_mm": check.concave_mm,
+            "pressure_angle_binds": float(check.excess["pressure_angle"] >= -BINDS_WITHIN[0]),
+            "curvature_binds": float(check.excess["curvature"] >= -BINDS_WITHIN[1]),
+            "geometry_steps_taken": float(design.geometry_steps)}
+
+
+def _least_angle(design, cam, task, t_deg, bounds, coefficients, continuity, values):
+    """No law at the bracket's top: the least largest pressure angle the sequential steps reach
+    there, the lever left out (`cam_rows.least_pressure_angle`, from the cycloid's fit), named in
+    the message and `least_pressure_angle_deg`."""
+    lever = linear_lever(coefficients, continuity)
+    (s0, B), *_ = lever.kin
+    rise = lever.rise
+    c0 = np.linalg.lstsq(B[np.flatnonzero(rise)].toarray(), law_values("cycloidal", lever.xi[rise])[0] - s0[rise], rcond=None)[0]
+    least, steps = least_pressure_angle(cam, lever, t_deg, c0,
+                                        lambda rows: kinematic_rows(rows, lever, t_deg, task.stroke_mm, bounds))
+    values["least_pressure_angle_deg"] = least
+    if least <= cam.max_pressure_angle_deg:
+        return design
+    return dataclasses.replace(
+        design, violated=tuple(dict.fromkeys(design.violated + ("pressure_angle",))),
+        message=design.message + f"; the least largest pressure angle a law of the space reaches at t = {t_deg:g} deg "
+                                 f"(the lever left out, {steps} sequential LPs) is {least:.4g} deg > "
+                                 f"max_pressure_angle_deg={cam.max_pressure_angle_deg:g}")
 
 
 def _least_phase(task, band, lo, hi, tol, common):

@@ -43,7 +43,8 @@ SIMPLEX_OPTIONS = {"solver": "simplex", "simplex_iteration_limit": SIMPLEX_ITERA
                    "output_flag": False}
 IPM_OPTIONS = {"solver": "ipm", "run_crossover": "on", "ipm_iteration_limit": IPM_ITERATIONS, "output_flag": False}
 SCALE_PASSES = 8                # Ruiz passes: each halves the distance (in powers of two) of a row's largest entry from 1
-TINY = 1e-9                     # entries this small are dropped before scaling, as HiGHS drops them (small_matrix_value)
+TINY = 1e-9                     # entries this small are dropped before and after scaling, as HiGHS drops them
+                                # (small_matrix_value; after: the same LP HiGHS solves, without its warning)
 
 
 class Rows:
@@ -64,6 +65,13 @@ class Rows:
         for target, value in ((self.col_lower, lower), (self.col_upper, upper), (self.cost, cost)):
             target.append(np.broadcast_to(np.asarray(value, float), size))
         return self.columns[name][0]
+
+    def bound(self, name, lower, upper):
+        """New bounds on the block `name`'s columns (a trust region)."""
+        size = self.columns[name][1]
+        k = list(self.columns).index(name)             # one entry of col_lower per block, in order
+        self.col_lower[k] = np.broadcast_to(np.asarray(lower, float), size)
+        self.col_upper[k] = np.broadcast_to(np.asarray(upper, float), size)
 
     def le(self, family, terms, upper):
         """Rows `sum of terms <= upper` of `family`; their indices."""
@@ -147,7 +155,9 @@ class HeldLP:
         A = rows.matrix()
         lower, upper, self.col_lower, self.col_upper, cost = rows.bounds()
         self.r, self.s = equilibrate(A)
-        self.A = sparse.diags(self.r) @ A @ sparse.diags(self.s)
+        self.A = sparse.csc_matrix(sparse.diags(self.r) @ A @ sparse.diags(self.s))
+        self.A.data[np.abs(self.A.data) <= TINY] = 0.0      # what HiGHS would drop (and warn of): dropped here
+        self.A.eliminate_zeros()
         self.columns, self.movable = rows.columns, np.asarray(movable, dtype=np.int32)
         self.row_lower, self.row_upper = self._scaled(lower, self.r), self._scaled(upper, self.r)
         self.cost = cost * self.s
