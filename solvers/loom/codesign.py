@@ -149,6 +149,8 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
     status = Status.SOLVED if held else Status.INACCURATE
     limiting = plan.diagnostics.get("limiting_constraint", "-")
     lift = _lift_bound(plan) or "no speed bound (its angle floor)"
+    if lift.startswith("amplitude") and "roller_left" in str(plan.diagnostics.get("amplitude_bounds_at_reference")):
+        lift += " (its edge: below it the roller leaves its cam, the closure force short)"
     other = next(r for r in READINGS if r != lift_stress)
     message = (f"{n:.6g} rpm with the synthesised lift law against {values['speed_baseline_rpm']:.6g} rpm with "
                f"{task.lever_model.law} ({values['gain_percent']:+.2f} %); the lift's t(3,7) now set by {lift} "
@@ -166,6 +168,7 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
                     "baseline_limiting_constraint": baseline.diagnostics.get("limiting_constraint"),
                     "lift_bound": lift, "timing": took, "baseline_lift_bound": _lift_bound(baseline),
                     "lift_bound_by_reading": {r: _lift_bound(p) for r, p in plans.items()},
+                    "lift_amplitude_bound": plan.diagnostics.get("amplitude_bounds_at_reference"),
                     "windows_given_up": law_run.diagnostics.get("windows_given_up", 0),
                     "limiting": plan.diagnostics.get("limiting"),
                     "law": str(law), "law_knots": list(law.knots), "law_coefficients": list(law.coefficients)}
@@ -182,10 +185,12 @@ def _stress_scale(task, law):
 
 
 def _peak_acceleration(law) -> float:
-    """Ca = max |S''| over the rise: a library law's `peaks`, a spline's on a dense grid."""
+    """Ca = max |S''| over the rise: a library law's `peaks`, a spline's on a dense grid with its knots
+    (a cubic's S'' is piecewise linear: its peak sits on a knot)."""
     if isinstance(law, str):
         return float(library_law(law).peaks["Ca"])
-    return float(np.abs(law.values(np.linspace(0.0, 1.0, PEAK_GRID))[2]).max())
+    xi = np.union1d(np.linspace(0.0, 1.0, PEAK_GRID), np.clip(law.knots, 0.0, 1.0))
+    return float(np.abs(law.values(xi)[2]).max())
 
 
 def _with_lift_stress(task, scale):
