@@ -84,60 +84,76 @@ def test_both_stress_readings_are_planned_and_the_lower_stress_is_never_slower(m
         codesign_machine_speed(machine, lift_stress="hertz", **COARSE)
 
 
-BOX = dict(box_frequency_low=0.9, box_frequency_high=1.1, box_zeta_low=0.03, box_zeta_high=0.08, box_speed_margin=0.05,
-           box_grid=2)
-SCAN = dict(scan_to_deg=50.0, scan_step_deg=0.5)       # coarse: a short walk per lever (the scenes: 60, 0.25)
+BOX = dict(box_frequency_low=0.9, box_frequency_high=1.1, box_zeta_low=0.03, box_zeta_high=0.08, box_speed_margin=0.05)
+ROBUST_SCENE = "loom/machine-speed-codesign-robust"
 
 
-@pytest.fixture(scope="module")
-def robust(machine):
-    """A coarse robust co-design on the box's corners (grid 2)."""
-    return codesign_machine_speed(machine, robust=True, **COARSE, **BOX, **SCAN)
+def designed_lever(machine, result, factor, zeta):
+    """The re-planned machine's lift lever rebuilt here: the result's law, the lever at (factor, zeta)
+    of the box (both natural frequencies times factor: E times its square)."""
+    return dataclasses.replace(machine.lever_model, law=codesign_law(result), E_GPa=machine.lever_model.E_GPa * factor**2,
+                               damping_ratio=zeta)
 
 
-def designed_machine(machine, result, factor=1.0, zeta=None):
-    """The re-planned machine rebuilt here: the result's law, the lift's stress scaled, the lever at
-    (factor, zeta) of the box (both frequencies times factor: E times its square)."""
-    lever = {**machine.lever, "law": codesign_law(result)}
-    if zeta is not None:
-        lever |= {"E_GPa": machine.lever_model.E_GPa * factor**2, "damping_ratio": zeta}
-    lift = machine.stress_models["lift_cam"]
-    models = machine.stress_models | {"lift_cam": lift | {"sigma_ref_MPa": lift["sigma_ref_MPa"]
-                                                         * result.values["stress_scale_lift"]}}
-    return dataclasses.replace(machine, lever=lever, stress_models=models)
-
-
-def test_the_robust_codesign_keeps_the_limit_on_a_finer_grid_of_the_box(machine, robust):
-    """The chain (solvers/stop_impact/law.py) at the re-planned t(3,7) on levers between the box's
-    corners and at speeds up to the machine's + 5 %, not the co-design's own box check."""
-    assert robust.status is Status.SOLVED, robust.message
-    v, limit = robust.values, machine.amplitude_limit_mm
-    assert v["rebound_worst_box_mm"] <= limit * (1 + 1e-6)
-    speeds = np.r_[np.arange(180.0, v["speed_rpm"] * 1.05, 15.0), v["speed_rpm"] * 1.05]
-    worst = -1.0
-    for factor in (0.9, 0.95, 1.0, 1.05, 1.1):
-        for zeta in (0.03, 0.08):
-            lever = designed_machine(machine, robust, factor, zeta).lever_model
-            a = rebound_amplitude_mm(lever, speeds, v["t_3_7_deg"], lost=np.nan)
+def test_the_robust_scenes_machine_keeps_the_limit_on_a_finer_grid_of_the_box(machine, solved_once):
+    """The chain (solvers/stop_impact/law.py) at the scene's re-planned t(3,7) on levers between the
+    box's grid points (frequency x0.9 ... 1.1 in 5, zeta 0.03 ... 0.08 in 4) at speeds 180 rpm ... the
+    machine's + 5 % every 10 rpm, not the co-design's own box check (its 3 x 3 grid, a speed where
+    its linear model peaks); the roller stays on its cam there."""
+    result = registry.run(ROBUST_SCENE).result
+    assert result.status is Status.SOLVED, result.message
+    v, limit = result.values, machine.amplitude_limit_mm
+    speeds = np.r_[np.arange(180.0, v["speed_rpm"] * 1.05, 10.0), v["speed_rpm"] * 1.05]
+    worst = (-1.0, None)
+    for factor in np.linspace(0.9, 1.1, 5):
+        for zeta in np.linspace(0.03, 0.08, 4):
+            a = rebound_amplitude_mm(designed_lever(machine, result, factor, zeta), speeds, v["t_3_7_deg"],
+                                     lost=np.nan)
             assert not np.isnan(a).any(), (factor, zeta, speeds[np.isnan(a)])
-            worst = max(worst, float(a.max()))
-    assert worst <= limit * (1 + 1e-6)
+            worst = max(worst, (float(a.max()), (factor, zeta, float(speeds[np.argmax(a)]))), key=lambda w: w[0])
+    assert worst[0] <= limit * (1 + 1e-6), worst
+    assert worst[0] == pytest.approx(v["rebound_worst_box_mm"], rel=1e-6)    # the box's corner at its top speed
+    at = result.diagnostics["rebound_worst_box_at"]
+    assert (at["frequency_factor"], at["zeta"], at["speed_rpm"]) == pytest.approx(worst[1])
 
 
-def test_the_box_speed_is_the_least_of_each_levers_own_highest_speed(machine, robust):
-    """Each lever's bound is t >= c_k (1 + margin) n: the feasible speeds are nested, so the machine on
-    the whole box runs at the least of the machines each on one lever (run 5 % fast), and the lever
-    the co-design names as binding is that one."""
+def test_the_box_speed_is_the_least_of_each_levers_own_highest_speed():
+    """The engine's box option on loom/machine-speed (the cycloid): each lever's bound is t >= c_k
+    (1 + margin) n, so the feasible speeds are nested and the machine on the whole box runs at the
+    least of the machines each on one lever (run 5 % fast); the lever named as binding is that one."""
     from mechopt.solvers.loom.speed import max_machine_speed
     from mechopt.solvers.stop_impact.lever_box import LeverBox
+    machine = registry.find("loom/machine-speed").build()[0]
+    scan = dict(scan_to_deg=56.0, scan_step_deg=0.5)       # coarse: a short walk per lever (the scenes: 60, 0.25)
+    whole = max_machine_speed(machine, **BOX, box_grid=2, **scan)
+    assert whole.status is Status.SOLVED, whole.message
     own = {}
     for key in ((1.0, machine.lever_model.damping_ratio), (0.9, 0.03), (0.9, 0.08), (1.1, 0.03), (1.1, 0.08)):
-        one = max_machine_speed(designed_machine(machine, robust, *key), box=LeverBox(speed_margin=0.05), **SCAN)
+        lever = {**machine.lever, "E_GPa": machine.lever_model.E_GPa * key[0] ** 2, "damping_ratio": key[1]}
+        one = max_machine_speed(dataclasses.replace(machine, lever=lever), box=LeverBox(speed_margin=0.05), **scan)
         assert one.status is Status.SOLVED, one.message
         own[key] = one.values["max_speed_rpm"]
     least = min(own, key=own.get)
-    assert robust.values["speed_rpm"] == pytest.approx(own[least], rel=1e-9)
-    binding = robust.diagnostics["box_binding"]
-    if robust.diagnostics["lift_bound"].startswith("amplitude"):
-        assert (binding["frequency_factor"], binding["zeta"]) == least
-        assert binding["speed_rpm"] == pytest.approx(1.05 * robust.values["speed_rpm"])
+    assert whole.values["max_speed_rpm"] == pytest.approx(own[least], rel=1e-9)
+    assert whole.values["max_speed_rpm"] < max(own.values())           # the box costs speed here
+    binding = whole.diagnostics["amplitude_box"]["3->7"]
+    assert (binding["frequency_factor"], binding["zeta"], binding["speed_factor"]) == (*least, 1.05)
+
+
+def test_the_nominal_scenes_lift_is_set_by_the_chains_contact_edge_not_by_the_stress(machine, solved_once):
+    """loom/machine-speed-codesign, its figures by independent means: under the law's own stress
+    (the cycloid's x sqrt(Ca_law / 2 pi)) the lift's stress bound falls below its rebound's, whose
+    edge is where the chain loses the roller's contact (below it the roller leaves its cam, the 1500 N
+    closure short), not 0.1 mm; the speed is the critical chain's closed form with that t(3,7); the
+    stress as calibrated (blind to the law) gives loom/machine-speed-codesign's earlier 485.1005 rpm."""
+    result = registry.run("loom/machine-speed-codesign").result
+    v = result.values
+    n, t37 = v["speed_rpm"], v["t_3_7_deg"]
+    fixed = 900 * 30 / (800 * 420) + 0.36      # the returner's stress bound and the chain's other arcs [deg/rpm]
+    assert v["speed_stress_given_rpm"] == pytest.approx(250 / (700 * 36 / 800 / 420 + fixed), rel=1e-9)
+    assert n == pytest.approx(250 / (t37 / n + fixed), rel=1e-9)
+    assert 700 * 36 / t37 * n / 420 * v["stress_scale_lift"] < 800
+    lever = dataclasses.replace(machine.lever_model, law=codesign_law(result))
+    held = float(rebound_amplitude_mm(lever, n, t37 * (1 + 1e-6), lost=np.nan))
+    assert held <= machine.amplitude_limit_mm
+    assert np.isnan(rebound_amplitude_mm(lever, n, t37 * (1 - 1e-4), lost=np.nan))
