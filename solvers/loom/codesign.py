@@ -24,8 +24,8 @@ t(3,7) >= n / r*: the same linear arc the graph engine already takes for the cyc
 5. The lift cam's contact stress (`lift_stress`). The machine's stress model sigma = sigma_ref
    t_ref / t is calibrated for the lever's own law (models/loom.py). Hertz line contact gives
    sigma ~ sqrt(F) and the inertial force F ~ Ca / t^2 (Ca = max |S''| of the unit rise), so a law
-   of another shape scales sigma_ref by sqrt(Ca_law / Ca_own) ("law_shape": about sqrt(4.78 /
-   6.28) = 0.872 for the scenes' laws against the cycloid). Assumed: the closure force's constant
+   of another shape scales sigma_ref by sqrt(Ca_law / Ca_own) ("law_shape": sqrt(4.78 / 6.28) =
+   0.872 for loom/machine-speed-codesign's law against the cycloid). Assumed: the closure force's constant
    part (the groove's 1500 N holds the roller whatever the law) and the change of the profile's
    curvature with the law are ignored. "given" keeps the model as calibrated, blind to the law's
    shape. The machine is planned under both readings (speed_stress_law_shape_rpm,
