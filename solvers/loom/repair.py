@@ -17,6 +17,7 @@ from mechopt.kit.settings import Interval, Tolerance
 from mechopt.models.loom import Cyclogram, stress_bound_deg, stress_MPa
 from mechopt.solvers.loom.plan import plan_cyclogram
 from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
+from mechopt.solvers.stop_impact.lever_box import LeverBox
 
 
 def exact_amplitude_mm(task: Cyclogram, t_deg, speed_rpm=None, lost=None):
@@ -44,6 +45,7 @@ class AmplitudeBound:
     amplitude_mm: float       # a at from_deg (at to_deg when none holds)
     why: str
     evaluations: int
+    lever: tuple | None = None      # the box's lever (frequency factor, zeta) it binds on (`box_amplitude_bound`)
 
     def statement(self) -> str:
         if self.from_deg is None:
@@ -51,7 +53,13 @@ class AmplitudeBound:
                     f"at the top of the stated range [{self.lo_deg:.6g}, {self.to_deg:.6g}] deg: no t there keeps it")
         return (f"a <= limit for every t in [{self.from_deg:.9g}, {self.to_deg:.6g}] deg at {self.speed_rpm:.6g} rpm "
                 f"(scan step {self.step_deg:g} deg from {self.to_deg:.6g} down, {self.why}"
-                f"{', brentq' if self.why == 'crossing' else ''}; {self.evaluations} evaluations)")
+                f"{', brentq' if self.why == 'crossing' else ''}; {self.evaluations} evaluations"
+                f"{self._on_lever()})")
+
+    def _on_lever(self) -> str:
+        if self.lever is None:
+            return ""
+        return f"; the box's binding lever: frequency x{self.lever[0]:.6g}, zeta {self.lever[1]:.6g}"
 
 
 def exact_amplitude_bound(task: Cyclogram, speed_rpm: float, lo_deg: float, to_deg: float,
@@ -299,6 +307,34 @@ def cached_amplitude_bound(task: Cyclogram, speed_rpm: float, lo_deg: float, to_
         return dataclasses.replace(walk, from_deg=lo_deg, lo_deg=lo_deg, why="range",
                                    amplitude_mm=float(np.ravel(exact_amplitude_mm(task, lo_deg, speed_rpm))[0]))
     return dataclasses.replace(walk, lo_deg=lo_deg)
+
+
+def box_amplitude_bound(task: Cyclogram, box: LeverBox | None, speed_rpm: float, lo_deg: float, to_deg: float,
+                        step_deg: float) -> AmplitudeBound:
+    """The rebound's exact bound on [lo_deg, to_deg] holding on every lever of the box's grid
+    (`LeverBox.grid_keys`: the nominal lever, the corners and the dense grid) at the speed raised by
+    the box's margin, speed_rpm (1 + margin): the largest of the levers' `cached_amplitude_bound`
+    (None, no t holds, counts as the largest), `lever` naming the one that binds. A law of fixed
+    shape makes each lever's rebound a function h_k(n / t), so its bound is t >= c_k n, the margin
+    multiplies it by (1 + margin), and the bound under the largest c_k holds every lever. Its
+    `speed_rpm` is the raised speed: the bound at the machine's speed n is from_deg n / speed_rpm
+    (1 + margin). Without a box (or a trivial one): `cached_amplitude_bound` at speed_rpm."""
+    if box is None or box.trivial:
+        return cached_amplitude_bound(task, speed_rpm, lo_deg, to_deg, step_deg)
+    nominal, worst = task.lever_model, None
+    for key in box.grid_keys(nominal):
+        each = LeverBox.lever(nominal, key)
+        on = task if each is nominal else dataclasses.replace(
+            task, lever={**task.lever, "E_GPa": each.E_GPa, "damping_ratio": each.damping_ratio})
+        bound = dataclasses.replace(cached_amplitude_bound(on, speed_rpm * (1.0 + box.speed_margin), lo_deg, to_deg,
+                                                           step_deg), lever=key)
+        if worst is None or _rank(bound) > _rank(worst):
+            worst = bound
+    return worst
+
+
+def _rank(bound: AmplitudeBound) -> float:
+    return math.inf if bound.from_deg is None else bound.from_deg
 
 
 WALK_FLOOR_DEG = 1.0             # the walk's lowest t: below it no cam rise of a loom

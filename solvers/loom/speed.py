@@ -26,7 +26,8 @@ from mechopt.solvers.loom.plan import (
     positive_cycle,
     schedule_floats,
 )
-from mechopt.solvers.loom.repair import cached_amplitude_bound, exact_amplitude_mm
+from mechopt.solvers.loom.repair import box_amplitude_bound, exact_amplitude_mm
+from mechopt.solvers.stop_impact.lever_box import LeverBox, takes_box
 
 
 def _angle_floors_deg(task: Cyclogram) -> np.ndarray:
@@ -76,13 +77,14 @@ def _time_law(task, k) -> str:
     return task.arc_data(k)["motion_limit"] or "min_time"
 
 
-def speed_coeffs_deg_per_rpm(task: Cyclogram, scan_to_deg: float = 60.0, scan_step_deg: float = 0.25
-                             ) -> tuple[np.ndarray, list[str], dict]:
+def speed_coeffs_deg_per_rpm(task: Cyclogram, scan_to_deg: float = 60.0, scan_step_deg: float = 0.25,
+                             box: LeverBox | None = None) -> tuple[np.ndarray, list[str], dict]:
     """Per arc, the angle every rpm of speed asks for [deg/rpm], which law sets it ("min_time",
     "contact_stress", "amplitude" or "" for none), and per amplitude arc its exact bound at the
     task's speed. Each law is f(n / t) <= limit, so it is t >= n / r*: a bound proportional to n.
     For the wavy rebound r* = n_ref / T, T the exact bound at n_ref on [phi, scan_to_deg]
-    (`exact_amplitude_bound`): a <= limit for every n / t in [n_ref / scan_to_deg, r*]."""
+    (`exact_amplitude_bound`): a <= limit for every n / t in [n_ref / scan_to_deg, r*]. With a
+    box, T is the largest over its levers at n_ref (1 + margin) (`box_amplitude_bound`)."""
     g = task.time_coeffs_deg_per_rpm()
     why = [_time_law(task, k) if c > 0 else "" for k, c in enumerate(g)]
     for k in task.stress_arcs():
@@ -92,19 +94,20 @@ def speed_coeffs_deg_per_rpm(task: Cyclogram, scan_to_deg: float = 60.0, scan_st
     bounds, phi = {}, _angle_floors_deg(task)
     for k in task.amplitude_arcs():
         n_ref = _reference_rpm(task)
-        bounds[k] = cached_amplitude_bound(task, n_ref, float(phi[k]), scan_to_deg, scan_step_deg)
+        bounds[k] = box_amplitude_bound(task, box, n_ref, float(phi[k]), scan_to_deg, scan_step_deg)
         c = math.inf if bounds[k].from_deg is None else bounds[k].from_deg / n_ref
         if c > g[k]:
             g[k], why[k] = c, "amplitude"
     return g, why, bounds
 
 
+@takes_box
 def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp", "bisection"] = "auto",
                       backend: Literal["HIGHS", "CLARABEL"] = "HIGHS",
                       rtol: Annotated[float, Interval(ge=1e-9, le=1e-2)] = 1e-7,
                       scan_to_deg: Annotated[float, Interval(gt=0.0, le=360.0)] = 60.0,
                       scan_step_deg: Annotated[float, Interval(ge=1e-3, le=10.0)] = 0.25,
-                      check: bool = False) -> Result:
+                      check: bool = False, box: LeverBox | None = None) -> Result:
     """The largest main-shaft speed n at which every group fits the machine's cycle, with
     the event times there.
 
@@ -146,6 +149,13 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp",
     every speed up to its search bound feasible or the rebound exceeds its limit on the whole
     stated range. With a rebound: amplitude_holds_from_*_deg and amplitude_holds_to_*_deg, the
     range of t at the answer on which a <= limit is shown.
+
+    box (a scene's box_frequency_low ... box_grid; lever_box.LeverBox): the rebound's bound is the
+    largest over the box's levers (its nominal, corners and grid) at the speed raised by its margin
+    (`box_amplitude_bound`): the machine holds the limit on every lever of the box, run up to
+    n (1 + margin). Each lever's bound is t >= c_k (1 + margin) n, so the answer is the least over
+    the levers of each lever's highest speed (their feasible sets are nested); diagnostics
+    amplitude_box names the lever that binds. amplitude_*_mm stays the nominal lever's at n.
     """
     check_settings(max_machine_speed, method=method, backend=backend)
     if task.cycle_deg is None:
@@ -158,12 +168,16 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp",
     clock = Clock()
     net = Net.structure(task)        # the speed LP has its own bounds
     phi = _angle_floors_deg(task)
-    g, why, amp_bounds = speed_coeffs_deg_per_rpm(task, scan_to_deg, scan_step_deg)
+    g, why, amp_bounds = speed_coeffs_deg_per_rpm(task, scan_to_deg, scan_step_deg, box)
     scales, probe = n_over_t_probe(task, scan_to_deg)
     chosen = ("graph" if scales else "bisection") if method == "auto" else method
     diagnostics = {"method": chosen, "method_asked": method, "n_over_t_probe_rel": probe, "backend": backend,
                    "amplitude_bounds_at_reference": {f"{task.arcs[k][0]}->{task.arcs[k][1]}": b.statement()
                                                      for k, b in amp_bounds.items()}}
+    margin = 1.0 if box is None else 1.0 + box.speed_margin        # the rebound's bounds hold at n (1 + margin)
+    if box is not None and not box.trivial:
+        diagnostics["amplitude_box"] = {f"{task.arcs[k][0]}->{task.arcs[k][1]}": {
+            "frequency_factor": b.lever[0], "zeta": b.lever[1], "speed_factor": margin} for k, b in amp_bounds.items()}
     unreached = [b for b in amp_bounds.values() if b.from_deg is None]
     if unreached:
         return clock.result(Status.LIMIT, {}, message=f"the rebound's bound is not on the stated range: "
@@ -175,7 +189,7 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp",
         n_max, status, message, clock.build_s, extra = _speed_lp(task, net, phi, g, backend)
         bounds_at = functools.partial(_lp_bounds_at, phi, g, why)
     else:
-        bounds_at = functools.partial(_exact_bounds_at, task, phi, scan_to_deg, scan_step_deg)
+        bounds_at = functools.partial(_exact_bounds_at, task, box, phi, scan_to_deg, scan_step_deg)
         n_max, status, message, clock.build_s, extra = _speed_bisection(task, net, bounds_at, rtol)
     sg = extra.pop("graph", None)
     cycle = extra.pop("limiting_cycle_arcs", None)
@@ -209,11 +223,12 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp",
         certified = _check_by_other(chosen, task, net, phi, g, why, backend, n_max, more)
         if "rel" in more["check"]:
             values["check_rel"] = more["check"]["rel"]        # validate's certificate (loom scenes: < 1e-9)
-    held = amp_bounds if chosen in ("lp", "graph") else _exact_amplitude_bounds(task, phi, scan_to_deg, scan_step_deg, n_max)
+    held = amp_bounds if chosen in ("lp", "graph") else _exact_amplitude_bounds(task, box, phi, scan_to_deg,
+                                                                                  scan_step_deg, n_max)
     for k, b in amp_bounds.items():      # the range of t on which the rebound was shown to hold, at n_max
         x, y = task.arcs[k]
         at = held[k]
-        scale = n_max / b.speed_rpm if chosen in ("lp", "graph") else 1.0
+        scale = n_max * margin / b.speed_rpm if chosen in ("lp", "graph") else 1.0
         values[f"amplitude_holds_from_{x}_{y}_deg"] = at.from_deg * scale
         values[f"amplitude_holds_to_{x}_{y}_deg"] = at.to_deg * scale
     diagnostics |= more
@@ -300,13 +315,13 @@ def _lp_bounds_at(phi, g, why, n_rpm):
     return lb, [w if g[k] * n_rpm >= phi[k] else "" for k, w in enumerate(why)]
 
 
-def _exact_amplitude_bounds(task, phi, scan_to_deg, scan_step_deg, n_rpm):
-    """Per amplitude arc, the rebound's exact bound at speed n on [phi, scan_to_deg]."""
-    return {k: cached_amplitude_bound(task, n_rpm, float(phi[k]), scan_to_deg, scan_step_deg)
+def _exact_amplitude_bounds(task, box, phi, scan_to_deg, scan_step_deg, n_rpm):
+    """Per amplitude arc, the rebound's exact bound at speed n on [phi, scan_to_deg] (over the box)."""
+    return {k: box_amplitude_bound(task, box, n_rpm, float(phi[k]), scan_to_deg, scan_step_deg)
             for k in task.amplitude_arcs()}
 
 
-def _exact_bounds_at(task, phi, scan_to_deg, scan_step_deg, n_rpm):
+def _exact_bounds_at(task, box, phi, scan_to_deg, scan_step_deg, n_rpm):
     """Each arc's smallest angle at speed n from the exact laws directly [deg], and which law sets
     it: the time floor, the stress bound sigma_ref t_ref n / ([sigma_H] n_ref), the rebound's
     exact bound on [phi, scan_to_deg] (inf where none holds there). At n = 0: [phi]."""
@@ -317,7 +332,7 @@ def _exact_bounds_at(task, phi, scan_to_deg, scan_step_deg, n_rpm):
         if bound > lb[k]:
             lb[k], why[k] = bound, "contact_stress"
     if n_rpm > 0:
-        for k, b in _exact_amplitude_bounds(task, phi, scan_to_deg, scan_step_deg, n_rpm).items():
+        for k, b in _exact_amplitude_bounds(task, box, phi, scan_to_deg, scan_step_deg, n_rpm).items():
             bound = math.inf if b.from_deg is None else b.from_deg
             if bound > lb[k]:
                 lb[k], why[k] = bound, "amplitude"
