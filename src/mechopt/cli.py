@@ -158,7 +158,7 @@ def _parser():
     bench.add_argument("--repeats", type=_positive_int, default=5, help="runs per point (>= 1); medians reported")
     bench.add_argument("--plot", type=Path, default=Path("out/bench"), metavar="DIR")
     bench.add_argument("--quick", action="store_true",
-                       help="a short version where the study offers one (sweep: ~1 min instead of ~15)")
+                       help="a short version where the study offers one (sweep: 900 variants a study, not 10^4)")
     fit = sub.add_parser("fit-force", parents=[common],
                          help="fit a polynomial force law to load-travel data (paper 001, eq. (1))")
     fit.add_argument("csv", type=Path, help="header names columns and units, e.g. travel_mm,load_N")

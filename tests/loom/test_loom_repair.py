@@ -178,7 +178,7 @@ def test_the_exact_law_needs_a_speed(task):
 
 
 @pytest.mark.parametrize("override, match", [
-    ({"lever.E_GPa.value": -1.0}, r"structure\.lever\.E_GPa=-1\.0: allowed 0\.001 \.\.\. 10000"),
+    ({"lever.E_GPa.value": -1.0}, r"structure\.lever\.E_GPa=-1\.0: allowed 0\.001 \.\.\. 10,000"),
     ({"lever.colour": 1.0}, r"lever\.colour: no entry 'colour' here; there are effects, law, E_GPa"),
     ({"lever.mass_kg": {"value": 1.0, "mark": "assumed"}}, r"lever\.mass_kg: marked 'assumed' needs a 'why'"),
     ({"lever.law": "square"}, r"lever\.law=.*square.*: unknown motion law; allowed: cycloidal"),

@@ -122,13 +122,15 @@ def test_bench_quick_is_offered_where_a_study_has_it_and_the_long_one_says_its_t
     from mechopt.benchmarks import sweep as sweep_bench
     assert main(["bench", "press", "--quick"]) == 2
     assert "bench press: no --quick version" in capsys.readouterr().err
-    # the full sweep study announces itself as long, the quick one as short, before anything runs
-    assert sweep_bench.expected_s(5) > 600 > 120 > sweep_bench.expected_s(5, quick=True)
+    # the full sweep study announces its expected time (from the budgets it measured) before anything runs,
+    # and points to the shorter --quick
+    full, quick = sweep_bench.expected_s(5), sweep_bench.expected_s(5, quick=True)
+    assert full > 600 and full > 10 * quick
     said = []
     monkeypatch.setattr(sweep_bench, "in_process", lambda *a, **k: (_ for _ in ()).throw(KeyboardInterrupt))
     with pytest.raises(KeyboardInterrupt):
         sweep_bench.cli(5, tmp_path, progress=said.append)
-    assert said and "expect about 13 min" in said[0] and "--quick" in said[0]
+    assert said and f"expect about {full / 60:.0f} min" in said[0] and "--quick" in said[0]
 
 
 def test_a_reader_that_leaves_early_is_not_an_error(monkeypatch, capsys):
