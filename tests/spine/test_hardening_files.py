@@ -118,6 +118,26 @@ def test_a_figure_is_written_whole_or_not_at_all(tmp_path, monkeypatch):
     assert target.read_bytes() == b"the old figure" and [p.name for p in tmp_path.iterdir()] == ["f.png"]
 
 
+def test_a_long_label_is_never_cut_at_the_figures_edge(tmp_path):
+    """A y label longer than the figure is wide (a long operation name on a timing diagram): the PNG grows
+    to hold it (its whole text inside the image), not cut at the figure's 4 in."""
+    import matplotlib
+    matplotlib.use("Agg")
+    from matplotlib.image import imread
+
+    from mechopt.figures import save_figure
+    from mechopt.figures.registry import new_figure
+    fig = new_figure(figsize=(4, 2))
+    ax = fig.add_subplot()
+    ax.set_yticks([0])
+    ax.set_yticklabels(["the die's descent to the turret face, station 3 of the indexing table " * 2])
+    fig.canvas.draw()
+    label = ax.get_yticklabels()[0].get_window_extent()
+    assert label.x0 < 0                              # drawn past the figure's left edge: the case in question
+    height, width = imread(save_figure(fig, tmp_path / "long.png", dpi=50)).shape[:2]
+    assert width >= label.width * 50 / fig.dpi        # the whole label is in the image
+
+
 def test_a_full_disk_is_one_clear_line(tmp_path, monkeypatch, capsys):
     def full(path, data):
         raise OSError(errno.ENOSPC, "No space left on device", str(path))

@@ -22,12 +22,17 @@ def save_figure(fig, path, *, dpi=110) -> Path:
     """Lay out, write (whole or not at all: drawn in memory, then renamed into place, so Ctrl-C
     or a full disk leaves no truncated PNG) and release a matplotlib figure (sweeps draw many)."""
     import io
+    import warnings
 
     from mechopt.files import write_bytes_atomic
     try:
-        fig.tight_layout()
+        with warnings.catch_warnings():     # margins too narrow for a long label: "tight" below holds it
+            warnings.filterwarnings("ignore", "Tight layout not applied", UserWarning)
+            fig.tight_layout()
         image = io.BytesIO()
-        fig.savefig(image, dpi=dpi, format=Path(path).suffix.lstrip(".") or "png")
+        # "tight": the image grows to hold every text (a long operation name is never cut at the edge)
+        fig.savefig(image, dpi=dpi, format=Path(path).suffix.lstrip(".") or "png", bbox_inches="tight",
+                    pad_inches=0.05)
         write_bytes_atomic(path, image.getvalue())
     finally:
         if fig.canvas.manager is not None:      # a pyplot figure: pyplot keeps it until closed
