@@ -26,8 +26,9 @@ def _modules():
 def wheel(tmp_path_factory):
     out = tmp_path_factory.mktemp("wheel")
     build = tmp_path_factory.mktemp("build")
-    subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", str(out),
-                    str(ROOT)], check=True, cwd=build, capture_output=True)
+    done = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", str(out), str(ROOT)],
+                          cwd=build, capture_output=True, text=True)
+    assert done.returncode == 0, f"pip wheel exited {done.returncode}: {done.stderr[-3000:]}"     # say why
     return next(out.glob("mechopt-*.whl"))
 
 
