@@ -43,6 +43,7 @@ from annotated_types import Ge, Gt, Interval, doc
 from mechopt.kit.errors import ModelError, require
 from mechopt.kit.settings import check_fields
 from mechopt.models.cam_follower import law_values
+from mechopt.models.cam_geometry import quarter, seen_from_cam
 from mechopt.models.cam_laws import law as find_law
 
 Law = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]
@@ -51,6 +52,7 @@ CHORD_SHARE = 0.9             # of the chord a circle of the local radius allows
                               # radius changing along it (the chords that still stray are halved)
 MAX_TABLE_POINTS = 200_000    # a tolerance finer than any shop needs stops here
 ORIENTATION = -1              # the pitch curve runs clockwise as the cam angle grows
+CCW = 1                       # the lift cam's sense of rotation (models/cam_geometry.py's sigma)
 
 
 def library_law(name: str) -> Law:
@@ -213,17 +215,6 @@ def roller_centre(shape: CamShape, theta, law: Law | None = None):
     return R, a * dpsi * along, a * (ddpsi * along + dpsi**2 * inward), along
 
 
-def _quarter(v):
-    """J v: v turned by +90 deg."""
-    return np.array([-v[1], v[0]])
-
-
-def _cam_frame(theta, v):
-    """Rot(-theta) v: a fixed-frame vector seen from the cam."""
-    c, s = np.cos(theta), np.sin(theta)
-    return np.array([c * v[0] + s * v[1], -s * v[0] + c * v[1]])
-
-
 @dataclass(frozen=True)
 class Pitch:
     """The pitch curve at cam angles `theta` [rad]: points P (2 x n, cam frame) [mm], unit
@@ -240,8 +231,8 @@ def pitch(shape: CamShape, theta, law: Law | None = None) -> Pitch:
     """The pitch curve, its normal, radius of curvature and pressure angle (module docstring)."""
     theta = np.atleast_1d(np.asarray(theta, dtype=float))
     R, dR, ddR, moving = roller_centre(shape, theta, law)
-    d1 = dR - _quarter(R)                   # P' and P'' before the turn Rot(-theta): the same lengths
-    d2 = ddR - 2 * _quarter(dR) - R
+    d1 = dR - quarter(R)                   # P' and P'' before the turn Rot(-theta): the same lengths
+    d2 = ddR - 2 * quarter(dR) - R
     speed = np.hypot(d1[0], d1[1])
     require(bool(np.all(speed > 0)), "the pitch curve stops (P' = 0): no cam has this layout", key="stroke_mm")
     cross = d1[0] * d2[1] - d1[1] * d2[0]
@@ -252,7 +243,7 @@ def pitch(shape: CamShape, theta, law: Law | None = None) -> Pitch:
     with np.errstate(divide="ignore", invalid="ignore"):
         radius = np.where(cross != 0, ORIENTATION * speed**3 / np.where(cross != 0, cross, 1.0), np.inf)
     pressure = np.arctan2(np.abs(np.sum(moving * tangent, axis=0)), np.abs(np.sum(moving * normal, axis=0)))
-    return Pitch(theta, _cam_frame(theta, R), _cam_frame(theta, normal), radius, pressure)
+    return Pitch(theta, seen_from_cam(theta, R, CCW), seen_from_cam(theta, normal, CCW), radius, pressure)
 
 
 def _outward(tangent, orientation):
