@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 import mechopt
-from mechopt.models.press import FORCE_KEYS, cutting_force_N
+from mechopt.models.press_laws import FORCE_KEYS, cutting_force_N
 
 scene = mechopt.load("press/kd2322")
 coefficients = [scene.params()[k] for k in FORCE_KEYS]

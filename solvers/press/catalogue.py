@@ -5,7 +5,7 @@ Rows go cheapest first (least rated power, then least breakdown torque), so the 
 first row with a feasible ratio: the rows before it are each shown infeasible, with the reason. A
 ratio is screened before any NLP when the motor's idle speed reduced by it (the fastest the crank
 can turn) is already below the speed band, when the motor cannot carry the cycle's mean load
-(`models.press.stall_check`), or when the steady motion at the starting flywheel turns the crank clearly
+(`models.press_energy.stall_check`), or when the steady motion at the starting flywheel turns the crank clearly
 off the band (one warm-started `steady_state`)."""
 
 import numpy as np
@@ -13,7 +13,8 @@ import numpy as np
 from mechopt.kit.errors import ModelError
 from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Annotated, Interval, Tolerance
-from mechopt.models.press import PressCatalogue, stall_check
+from mechopt.models.press_design import PressCatalogue
+from mechopt.models.press_energy import stall_check
 from mechopt.solvers.press.design import design
 from mechopt.solvers.press.periodic import steady_state
 from mechopt.solvers.press.problem import Samples

@@ -43,17 +43,10 @@ from mechopt.kit.cache import memoised
 from mechopt.kit.errors import ModelError
 from mechopt.kit.result import Clock, Result, Status, from_ipopt
 from mechopt.kit.settings import Annotated, Interval, Tolerance, check_settings
-from mechopt.models.press import (
-    BOUNDS,
-    FORCE_KEYS,
-    Dynamics,
-    PressDesign,
-    breakdown_torque_at_crank_Nm,
-    required_mean_torque_Nm,
-    single_stroke_margin_J,
-    stall_check,
-    structure,
-)
+from mechopt.models.press_design import BOUNDS, PressDesign, single_stroke_margin_J
+from mechopt.models.press_energy import breakdown_torque_at_crank_Nm, required_mean_torque_Nm, stall_check
+from mechopt.models.press_equations import Dynamics, structure
+from mechopt.models.press_laws import FORCE_KEYS
 from mechopt.solvers.press.periodic import steady_state
 from mechopt.solvers.press.problem import (
     TWO_PI,
@@ -211,7 +204,7 @@ def design(task: PressDesign, *, tol: Tolerance = 1e-10, samples: Samples = 16,
            max_iter: Annotated[int, Interval(ge=1, le=3000)] = 200, check_sensitivity: bool = False,
            start: Literal["rule_of_thumb", "press"] = "rule_of_thumb") -> Result:
     """The drive that minimises `task.objective` over `task.variables` subject to its limits, on
-    the periodic steady motion (see the module doc and `models.press.PressDesign`).
+    the periodic steady motion (see the module doc and `models.press_design.PressDesign`).
 
     Parameters
     ----------
@@ -583,7 +576,7 @@ def _box(task, nodes, scales, slacks):
 
 
 def _stall(task):
-    """`models.press.stall_check` at the biggest motor the bounds allow, with the least motor that could."""
+    """`models.press_energy.stall_check` at the biggest motor the bounds allow, with the least motor that could."""
     most = {k: task.bounds(k)[1] for k in ("gear_ratio", "motor_scale") if k in task.variables}
     drive = task.drive(most)
     stalled = stall_check(drive)

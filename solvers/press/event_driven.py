@@ -9,7 +9,8 @@ import numpy as np
 from mechopt.kit.errors import MechoptError, ModelError
 from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Annotated, Interval, Positive, Tolerance
-from mechopt.models.press import PressDrive, stall_check
+from mechopt.models.press import PressDrive
+from mechopt.models.press_energy import stall_check
 from mechopt.solvers.press.problem import (
     RIGID_LIMIT,
     TWO_PI,

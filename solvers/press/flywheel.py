@@ -10,7 +10,7 @@ periodic solutions (the sensitivity dC/dJ by difference of orbits); a step that 
 known so far is replaced by the bisection of the bracket in u (the safeguard). Each C(J) is one
 periodic solve (`steady_state`: Newton shooting, warm from the last orbit), its extremes refined
 between samples. At the lower bound C(J_min) <= C_max makes J_min the answer; C(J_max) > C_max is
-INFEASIBLE. The single-stroke limit (`models.press.single_stroke_margin_J`, linear in J at a given
+INFEASIBLE. The single-stroke limit (`models.press_design.single_stroke_margin_J`, linear in J at a given
 entry speed into the cut) then raises J when it needs more, by a fixed point on the entry speed.
 
 Counted and reported: the periodic solves. press/flywheel-design's NLP (`design`) answers the same
@@ -22,13 +22,8 @@ import numpy as np
 from mechopt.kit.errors import ModelError
 from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Annotated, Interval, Tolerance, check_settings
-from mechopt.models.press import (
-    PressDesign,
-    energy_swing_J,
-    inertia_at_crank_kgm2,
-    rule_of_thumb_flywheel_kgm2,
-    single_stroke_margin_J,
-)
+from mechopt.models.press_design import PressDesign, single_stroke_margin_J
+from mechopt.models.press_energy import energy_swing_J, inertia_at_crank_kgm2, rule_of_thumb_flywheel_kgm2
 from mechopt.solvers.press.periodic import steady_state
 from mechopt.solvers.press.problem import refuse_neutral_speed
 

@@ -8,7 +8,7 @@ With u = lambda sin phi, w = sqrt(1 - u^2), l = r / lambda, and phi' = omega con
           X' = r sin phi + r lambda sin phi cos phi / w
           X'' = r cos phi + r lambda cos 2phi / w + r lambda^3 sin^2 phi cos^2 phi / w^3
           beta' = lambda cos phi / w,   beta'' = (-lambda sin phi w^2 + u lambda^2 cos^2 phi) / w^3
-  paper   X = r (1 - cos phi + lambda/4 (1 - cos 2phi))  tan beta = u   (models.press.rod_angle_rad)
+  paper   X = r (1 - cos phi + lambda/4 (1 - cos 2phi))  tan beta = u   (models.press_laws.rod_angle_rad)
           X' = r (sin phi + lambda/2 sin 2phi),  X'' = r (cos phi + lambda cos 2phi)
           beta' = lambda cos phi / (1 + u^2),   beta'' = (-lambda sin phi (1 + u^2) - 2 u lambda^2 cos^2 phi) / (1 + u^2)^2
 (primes: d/dphi); velocities are omega times the first, accelerations omega^2 times the second.
@@ -17,7 +17,8 @@ import numpy as np
 
 from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Annotated, Interval
-from mechopt.models.press import FORCE_KEYS, PressDrive, cutting_force_N, linkage_forces, rod_angle_rad, travel_m
+from mechopt.models.press import PressDrive
+from mechopt.models.press_laws import FORCE_KEYS, cutting_force_N, linkage_forces, rod_angle_rad, travel_m
 
 # what a value at a crank angle is named after (`at_deg`): each array of the result
 AT_NAMES = ("travel_mm", "slider_velocity_m_s", "slider_acceleration_m_s2", "rod_angle_deg",
@@ -65,7 +66,7 @@ def working_load(task: PressDrive, phi, X_m):
 def kinetostatics(task: PressDrive, phi) -> dict:
     """Every rate, force and torque of the crank-slider at crank angles phi [rad] with the crank at the
     constant `nominal_speed_rad_s` (a rigid ideal drive: no dynamics solved). Forces as the dynamic
-    model's outputs (`models.press.linkage_forces`, the rod's mass at its middle, the tool's on the
+    model's outputs (`models.press_laws.linkage_forces`, the rod's mass at its middle, the tool's on the
     slide, weights with effect gravity); `crank_torque_Nm` is what the shaft gives the linkage,
     `input_torque_Nm` what the drive gives the crank: that, the constant load's torque and friction
     (the flywheel and the balanced crank need none at constant speed)."""
@@ -75,7 +76,7 @@ def kinetostatics(task: PressDrive, phi) -> dict:
     force, torque = working_load(task, np.mod(phi, 2 * np.pi), X)
     g = task.gravity_m_s2 if "gravity" in task.effects else 0.0
     Q = force + task.tool_mass_kg * (ddX * omega**2 - g)
-    # the rod's middle: x = r sin(phi) / 2, y = (r (1 - cos phi) + X) / 2 (models.press.rod_middle_m)
+    # the rod's middle: x = r sin(phi) / 2, y = (r (1 - cos phi) + X) / 2 (models.press_laws.rod_middle_m)
     rod_x = task.rod_mass_kg * (-0.5 * r_m * np.sin(phi)) * omega**2
     rod_y = task.rod_mass_kg * (0.5 * (r_m * np.cos(phi) + ddX) * omega**2 - g)
     rod_tool, _, crank, bearing, guide = linkage_forces(phi, beta, Q, rod_x, rod_y, r_m)

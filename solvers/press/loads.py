@@ -2,7 +2,7 @@
 motion (paper 001, Figs. 9-10): connecting-rod force, crank torque, main-bearing load, belt and motor
 torque, each with its peak and where it occurs (crank angle, tool travel).
 
-The loads themselves are outputs of the model (`models.press.linkage_forces`, evaluated along the
+The loads themselves are outputs of the model (`models.press_laws.linkage_forces`, evaluated along the
 orbit by `Dynamics.outputs`); this module only finds their peaks.
 
 The "resulting force" Q of Figs. 9-10: the paper plots "the loading Q (N) against the tool travel and

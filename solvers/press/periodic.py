@@ -9,14 +9,9 @@ from mechopt.kit.cache import BuildCache
 from mechopt.kit.errors import MechoptError
 from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Annotated, Interval, Tolerance
-from mechopt.models.press import (
-    PressDrive,
-    breakdown_torque_at_crank_Nm,
-    cut_work_J,
-    required_mean_torque_Nm,
-    stall_check,
-    structure,
-)
+from mechopt.models.press import PressDrive
+from mechopt.models.press_energy import breakdown_torque_at_crank_Nm, cut_work_J, required_mean_torque_Nm, stall_check
+from mechopt.models.press_equations import structure
 from mechopt.solvers.press.problem import (
     CUT_END,
     CUT_START,

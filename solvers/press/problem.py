@@ -15,20 +15,15 @@ from mechopt.kit.cache import memoised
 from mechopt.kit.errors import MechoptError, ModelError, SettingError
 from mechopt.kit.result import Status, from_casadi_integrator
 from mechopt.kit.settings import check_settings
-from mechopt.models.press import (
-    PARAMETERS,
-    WORK_NAMES,
-    Dynamics,
-    PressDrive,
+from mechopt.models.press import PressDrive
+from mechopt.models.press_energy import (
     belt_mode_rad_s,
     cut_work_J,
-    dynamics,
     energy_swing_J,
-    equations,
     inertia_at_crank_kgm2,
     rule_of_thumb_flywheel_kgm2,
-    structure,
 )
+from mechopt.models.press_equations import PARAMETERS, WORK_NAMES, Dynamics, dynamics, equations, structure
 from mechopt.models.press_loads import Load
 
 TWO_PI = 2 * np.pi
@@ -400,7 +395,7 @@ class Piece:
 def time_piece(key: tuple, tol: float, samples: int) -> ca.Function:
     """CVODES over a piece of duration p[0] in mode p[1:4] with the press's p (`PARAMETERS`) after
     them (time scaled to [0, 1]): the states at `samples` equally spaced times, the last being the
-    end of the piece. Built once per structure (`models.press.structure`)."""
+    end of the piece. Built once per structure (`models.press_equations.structure`)."""
     eq = equations(key)
     x = ca.SX.sym("x", eq.rhs.size1_in(0))
     p = ca.SX.sym("p", 4 + len(PARAMETERS))
@@ -617,7 +612,7 @@ class Revolution:
 
 @memoised(maxsize=16, per_thread=True)    # CVODES integrators: one per thread (see BuildCache)
 def revolution(key: tuple, tol: float, samples: int) -> Revolution:
-    """The `Revolution` of a structure (`models.press.structure`), built once per (structure, tol, samples)."""
+    """The `Revolution` of a structure (`models.press_equations.structure`), built once per (structure, tol, samples)."""
     eq = equations(key)
     names = eq.state_names
     n, iphi, iw = len(names), names.index("phi_rad"), names.index("omega_rad_s")

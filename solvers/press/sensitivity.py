@@ -15,7 +15,8 @@ import numpy as np
 from mechopt.kit.errors import MechoptError, ModelError
 from mechopt.kit.result import Clock, Result, Status, from_rootfinder
 from mechopt.kit.settings import Annotated, Interval, Tolerance
-from mechopt.models.press import WORK_NAMES, Equations, PressDrive, equations, parameters, structure
+from mechopt.models.press import PressDrive
+from mechopt.models.press_equations import WORK_NAMES, Equations, equations, parameters, structure
 from mechopt.solvers.press.periodic import steady_state
 from mechopt.solvers.press.problem import TWO_PI, casadi_failure, check_task, refuse_jumps, refuse_neutral_speed
 
@@ -42,7 +43,7 @@ def assumed_parameters(task: PressDrive) -> tuple[str, ...]:
 def _orbit_rhs(task: PressDrive, names):
     """The model's eqs. (2) for forward motion (friction sign +1, not stuck) with `names` and the
     rod-weight reading as the input p: f(x, U, p) -> (dx/dt, belt torque), x = the task's states then
-    the work integrals (`WORK_NAMES`). The structure's own Functions (`models.press.equations`), the
+    the work integrals (`WORK_NAMES`). The structure's own Functions (`models.press_equations.equations`), the
     other numbers the task's."""
     p = ca.SX.sym("p", len(names) + 1)
     given = dict(zip(names, ca.vertsplit(p)))

@@ -4,7 +4,7 @@ variables as symbols: the pieces of the design NLP (design.py).
 In the crank angle the cut starts and ends at fixed angles (they depend on the geometry only, not
 on the drive being designed), so they are interval boundaries and U is a constant on each
 interval: the switched force is kept exactly, never smoothed. Each interval is one CVODES
-integrator of the same equations `steady_state` uses (`models.press.dynamics`, here with the
+integrator of the same equations `steady_state` uses (`models.press_equations.dynamics`, here with the
 design variables left free), with three quadratures beside the states (`QUADRATURES`): time, and
 the integrals of the motor shaft torque and of its square (energy and RMS torque).
 """
@@ -14,7 +14,8 @@ import casadi as ca
 import numpy as np
 
 from mechopt.kit.cache import memoised
-from mechopt.models.press import WORK_NAMES, Dynamics, PressDesign, design_parameters, equations, sizing, structure
+from mechopt.models.press_design import PressDesign, design_parameters, sizing
+from mechopt.models.press_equations import WORK_NAMES, Dynamics, equations, structure
 from mechopt.solvers.press.problem import TWO_PI
 
 QUADRATURES = ("time_s", "motor_torque_integral_Nms", "motor_torque_sq_integral_N2m2s")

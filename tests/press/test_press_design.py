@@ -10,18 +10,10 @@ import pytest
 from mechopt import load
 from mechopt.kit.errors import ModelError, SettingError
 from mechopt.kit.result import Status
-from mechopt.models.press import (
-    FORCE_KEYS,
-    cut_work_J,
-    cutting_force_N,
-    design_parameters,
-    dynamics,
-    energy_swing_J,
-    equations,
-    mean_crank_inertia_kgm2,
-    rule_of_thumb_flywheel_kgm2,
-    structure,
-)
+from mechopt.models.press_design import design_parameters
+from mechopt.models.press_energy import cut_work_J, energy_swing_J, mean_crank_inertia_kgm2, rule_of_thumb_flywheel_kgm2
+from mechopt.models.press_equations import dynamics, equations, structure
+from mechopt.models.press_laws import FORCE_KEYS, cutting_force_N
 from mechopt.solvers.press import design, steady_state
 
 

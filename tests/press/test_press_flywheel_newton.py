@@ -8,7 +8,7 @@ import pytest
 from mechopt import registry
 from mechopt.kit.errors import ModelError
 from mechopt.kit.result import Status
-from mechopt.models.press import single_stroke_margin_J
+from mechopt.models.press_design import single_stroke_margin_J
 from mechopt.solvers import press as pd
 
 TASK, _ = registry.find("press/flywheel-design-newton").build()

@@ -9,7 +9,7 @@ import pytest
 from mechopt.force_data import read_force_csv
 from mechopt.kit.errors import ModelError, SettingError
 from mechopt.kit.result import Status
-from mechopt.models.press import cutting_force_N
+from mechopt.models.press_laws import cutting_force_N
 from mechopt.solvers.press.force_fit import fit_force
 
 EQ1 = {"c1_N_per_mm1": 1075.68, "c2_N_per_mm2": -406.8, "c3_N_per_mm3": -4.0, "c4_N_per_mm4": 90.93}

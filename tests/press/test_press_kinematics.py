@@ -1,5 +1,5 @@
 """The press's crank-slider at constant crank speed (`press.kinematics`): every rate against central
-differences of the model's own position functions (models.press.travel_m, rod_angle_rad), and the
+differences of the model's own position functions (models.press_laws.travel_m, rod_angle_rad), and the
 closed forms at the dead centres and at 90 deg; the scene's slider speed by a dense difference."""
 import dataclasses
 import math
@@ -10,7 +10,7 @@ import pytest
 from mechopt import registry
 from mechopt.kit.errors import SettingError
 from mechopt.kit.result import Status
-from mechopt.models.press import rod_angle_rad, travel_m
+from mechopt.models.press_laws import rod_angle_rad, travel_m
 from mechopt.solvers.press import kinematics
 from mechopt.solvers.press.kinematics import slider_crank_rates
 

@@ -9,16 +9,15 @@ from hypothesis import strategies as st
 
 from mechopt import registry
 from mechopt.kit.errors import ModelError
-from mechopt.models.press import (
-    PressDrive,
+from mechopt.models.press import PressDrive
+from mechopt.models.press_energy import crank_inertia, mean_crank_inertia_kgm2
+from mechopt.models.press_equations import dynamics
+from mechopt.models.press_laws import (
     coefficient_b,
     coefficient_d,
     coefficient_k,
-    crank_inertia,
     cutting_force_N,
-    dynamics,
     kloss_torque_Nm,
-    mean_crank_inertia_kgm2,
     rod_middle_m,
     travel_m,
 )
@@ -236,7 +235,7 @@ def test_infinite_or_huge_parameters_are_refused_naming_the_range(changes, match
 
 
 def test_mean_load_torque_and_breakdown_torque_at_the_crank():
-    from mechopt.models.press import breakdown_torque_at_crank_Nm, cut_work_J, required_mean_torque_Nm
+    from mechopt.models.press_energy import breakdown_torque_at_crank_Nm, cut_work_J, required_mean_torque_Nm
     work = (90.93 * 3**5 / 5 - 4 * 3**4 / 4 - 406.8 * 3**3 / 3 + 1075.68 * 3**2 / 2) / 1000   # integral of eq. (1)
     assert cut_work_J(PAPER) == pytest.approx(work, rel=1e-12)
     assert required_mean_torque_Nm(PAPER) == pytest.approx(work / (2 * np.pi) + 5.0, rel=1e-12)
@@ -246,7 +245,7 @@ def test_mean_load_torque_and_breakdown_torque_at_the_crank():
 def test_belt_mode_is_the_two_inertia_eigenfrequency():
     from scipy.linalg import eigh
 
-    from mechopt.models.press import belt_mode_rad_s, mean_crank_inertia_kgm2
+    from mechopt.models.press_energy import belt_mode_rad_s, mean_crank_inertia_kgm2
     k = PAPER.belt_stiffness_Nm_rad
     M = np.diag([PAPER.motor_inertia_kgm2 * PAPER.gear_ratio**2, mean_crank_inertia_kgm2(PAPER)])
     squares = eigh(k * np.array([[1.0, -1.0], [-1.0, 1.0]]), M, eigvals_only=True)   # 0 (rigid turning) and the mode

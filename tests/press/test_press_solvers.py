@@ -7,7 +7,8 @@ import pytest
 from mechopt import registry
 from mechopt.kit.errors import ModelError, SettingError
 from mechopt.kit.result import Status, from_ivp, from_rootfinder
-from mechopt.models.press import PressDrive, mean_crank_inertia_kgm2
+from mechopt.models.press import PressDrive
+from mechopt.models.press_energy import mean_crank_inertia_kgm2
 from mechopt.solvers import press as pd
 from mechopt.solvers.press import problem
 from mechopt.solvers.press.problem import initial_state, paper_U
@@ -335,7 +336,7 @@ def _belt_hz(task):
     """The belt mode from the two-inertia eigenproblem (independent of the model's formula)."""
     from scipy.linalg import eigh
 
-    from mechopt.models.press import mean_crank_inertia_kgm2
+    from mechopt.models.press_energy import mean_crank_inertia_kgm2
     M = np.diag([task.motor_inertia_kgm2 * task.gear_ratio**2, mean_crank_inertia_kgm2(task)])
     K = task.belt_stiffness_Nm_rad * np.array([[1.0, -1.0], [-1.0, 1.0]])
     return float(np.sqrt(eigh(K, M, eigvals_only=True).max()) / (2 * np.pi))
@@ -463,7 +464,7 @@ def test_a_what_if_re_solves_on_the_structures_build_from_the_last_orbit():
     """Other numbers, same structure: no new build (equations, revolution), the orbit
     warm-started from the last one by chord steps, and the same orbit as a cold solve."""
     from mechopt.kit.cache import clear
-    from mechopt.models.press import equations
+    from mechopt.models.press_equations import equations
     pd.steady_state(PAPER)
     builds = len(equations.cache), len(problem.revolution.cache)
     what = dataclasses.replace(PAPER, belt_stiffness_Nm_rad=6e4, flywheel_inertia_kgm2=5.5)

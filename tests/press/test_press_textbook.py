@@ -11,7 +11,8 @@ from scipy.optimize import brentq
 from mechopt import registry
 from mechopt.kit.errors import ModelError
 from mechopt.kit.result import Status
-from mechopt.models.press import PressDrive, crank_inertia, energy_swing_J, potential_J
+from mechopt.models.press import PressDrive
+from mechopt.models.press_energy import crank_inertia, energy_swing_J, potential_J
 from mechopt.solvers import press as pd
 from mechopt.solvers.press.kinematics import kinetostatics
 
@@ -154,7 +155,7 @@ def test_energy_per_stroke_shapes():
 def test_kinetostatics_crank_torque_by_the_power_balance():
     """At a constant crank speed the torque the shaft gives the linkage is, by the power balance,
     1/2 dJ_k/dphi omega^2 (the linkage's kinetic energy) + F X' (the load) + dV/dphi (the weights):
-    J_k by AD of the kinetic energy (models.press.crank_inertia), V the potential, not the
+    J_k by AD of the kinetic energy (models.press_energy.crank_inertia), V the potential, not the
     Newton-Euler joint forces the solver uses."""
     task = dataclasses.replace(PAPER, kinematics="exact", at_deg=(30.0, 150.0, 160.0, 300.0))
     result = pd.kinematics(task)
@@ -234,7 +235,7 @@ def test_a_table_with_a_jump_stops_every_method_at_it():
     """A crank-angle table with a drop at 155 deg: the jump is an event of its own in events, ivp and
     steady_state (the cut's work to the integration's tolerance, against the by-parts closed form);
     rk4 crosses it (first order); the design's NLP and the sensitivity refuse it."""
-    from mechopt.models.press import cut_work_J
+    from mechopt.models.press_energy import cut_work_J
     table = ((146.0, 0.0), (155.0, 2000.0), (155.0, 500.0), (163.0, 800.0))
     task = dataclasses.replace(CONSTANT, load_from_mm=None, load_to_mm=None, load_energy_J=None, load_table=table)
     assert np.degrees(task.load.jumps_rad) == pytest.approx([155.0])

@@ -105,7 +105,7 @@ def test_the_shipped_sample_record_gives_back_the_scenes_force_law(tmp_path):
 
     import numpy as np
 
-    from mechopt.models.press import FORCE_KEYS, cutting_force_N
+    from mechopt.models.press_laws import FORCE_KEYS, cutting_force_N
     sample = Path(__file__).resolve().parents[2] / "examples" / "instron-sample.csv"
     out = tmp_path / "fit.json"
     assert main(["fit-force", str(sample), "--degree", "4", "--json", str(out)]) == 0

@@ -10,7 +10,7 @@ from mechopt import registry
 from mechopt.cli import main
 from mechopt.kit.errors import SolverError
 from mechopt.kit.result import Result, Status, Timing
-from mechopt.models.press import PAPER_KINEMATICS_TOLERANCE, cutting_force_N, paper_kinematics_error, travel_m
+from mechopt.models.press_laws import PAPER_KINEMATICS_TOLERANCE, cutting_force_N, paper_kinematics_error, travel_m
 from mechopt.models.validity import out_of_range
 
 
