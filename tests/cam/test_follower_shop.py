@@ -33,7 +33,7 @@ def test_the_lift_cams_drawing_re_read_matches_the_other_models(tmp_path):
     [(other_path, _), *_] = export_run(other, tmp_path / "other")
     assert rise_mark_deg(other_path)[1] == pytest.approx(mark, abs=1e-6)
     # each vertex of one model's profile lies on the other's polyline: the same point-table rule on
-    # two models' profiles, written apart, that coincide (1e-10 mm measured)
+    # the profiles of two models whose roller centres are written apart (1e-10 mm measured)
     mine, theirs = read_polylines(path)["CAM_PROFILE"], read_polylines(other_path)["CAM_PROFILE"]
     A, B = theirs.T[:, None, :], np.roll(theirs, -1, axis=0).T[:, None, :]
     gap = np.min(distance_to_segment(mine.T[:, :, None], A, B), axis=1)
