@@ -86,7 +86,7 @@ def _dense(task, law, samples):
 # ---------------------------------------------------------------- a synthesised law's cam, for the shop
 
 SHOP_PREFIX = "cam_"        # a law solver's arrays of its cam: cam_pitch_x_mm ... (`law_cam`)
-SHOP_TABLES = ("pitch", "profile", "groove_outer")
+SHOP_TABLES = ("pitch", *FLANK_ARRAYS.values())
 
 
 def law_cam(lever, law, t_deg: float, geometry: dict, *, samples: int = 7200) -> tuple[dict, dict]:
