@@ -94,6 +94,14 @@ def roller_cam(theta, R, dR, ddR, g, roller_mm: float, sense: int) -> CamCurves:
                      signed_angle(g, normal), np.sum(normal * g, axis=0))
 
 
+def groove_outer_wall(c: CamCurves):
+    """A grooved cam's outer wall (2 x n, cam frame) [mm]: the roller's far side, P + r n, i.e.
+    2 P - profile for `roller_cam`'s profile P - r n. Its radius is rho + r: undercut where the
+    pitch curve is concave (rho < 0) with -rho <= r, as the inner wall is where it is convex with
+    rho <= r."""
+    return 2 * c.pitch - c.profile
+
+
 def flat_cam(theta, beta, dbeta, ddbeta, p, dp, ddp, g_of_contact, sense: int) -> CamCurves:
     """The cam under a flat face whose normal m (away from the cam) has the fixed-frame angle
     beta(theta) and whose distance from O is p(theta) (each with its first two theta-derivatives,

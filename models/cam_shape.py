@@ -16,12 +16,14 @@ Followers (the roller centre R(theta) in the fixed frame, the cam centre O at th
   swing Psi = H / (a + b) (H the stroke of its end C, read as the arc C runs: the small-angle
   reading of paper 004's "travel of C") and psi0 from |R| = Rp at u = 0.
 
-The pitch curve is R seen from the cam, P(theta) = Rot(-theta) R(theta); with J the quarter turn,
-P' = Rot(-theta) (R' - J R) and P'' = Rot(-theta) (R'' - 2 J R' - R), so its radius of curvature
-rho = |P'|^3 / (P' x P'') and the profile (the envelope of the roller circles, i.e. the parallel
-curve P -+ r n at the roller radius r) follow in closed form from u, u', u'' alone. Pressure
-angle: the angle between the roller centre's direction of motion and the pitch normal (the line
-of force). These are the standard relations of Norton, *Design of Machinery* (McGraw-Hill),
+What is this module's own: the lift cam's layout (`CamShape`), the law over the turn (`lift`)
+and the follower's roller centre R, R', R'' (`roller_centre`). The geometry from R on (pitch
+curve P = Rot(-theta) R, its normal, radius of curvature, profile P - r n) is
+`models/cam_geometry.roller_cam`'s, the one implementation every roller cam of the package
+takes (the cam turning counter-clockwise, CCW: its pitch curve runs clockwise); the groove's
+outer wall P + r n is `cam_geometry.groove_outer_wall`. Pressure angle here: the unsigned angle
+between the roller centre's direction of motion and the pitch normal (the line of force). These
+are the standard relations of Norton, *Design of Machinery* (McGraw-Hill),
 ch. 8 "Cam design" (pressure angle, radius of curvature, undercutting), and Rothbart (ed.), *Cam
 Design Handbook* (McGraw-Hill, 2004), ch. on cam profile determination; for a translating roller
 follower they reduce to the hand formulas tan phi = (s' - e) / (s0 + s) and, for e = 0,
@@ -43,7 +45,7 @@ from annotated_types import Ge, Gt, Interval, doc
 from mechopt.kit.errors import ModelError, require
 from mechopt.kit.settings import check_fields
 from mechopt.models.cam_follower import law_values
-from mechopt.models.cam_geometry import quarter, seen_from_cam
+from mechopt.models.cam_geometry import groove_outer_wall, roller_cam, seen_from_cam
 from mechopt.models.cam_laws import law as find_law
 
 Law = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]
@@ -51,8 +53,8 @@ CHORD_SAMPLES = 64            # points inside a chord where its distance to the 
 CHORD_SHARE = 0.9             # of the chord a circle of the local radius allows: a margin for the
                               # radius changing along it (the chords that still stray are halved)
 MAX_TABLE_POINTS = 200_000    # a tolerance finer than any shop needs stops here
-ORIENTATION = -1              # the pitch curve runs clockwise as the cam angle grows
 CCW = 1                       # the lift cam's sense of rotation (models/cam_geometry.py's sigma)
+ORIENTATION = -CCW            # so its pitch curve runs clockwise as the cam angle grows
 
 
 def library_law(name: str) -> Law:
@@ -227,30 +229,23 @@ class Pitch:
     pressure_rad: np.ndarray
 
 
-def pitch(shape: CamShape, theta, law: Law | None = None) -> Pitch:
-    """The pitch curve, its normal, radius of curvature and pressure angle (module docstring)."""
+def _cam(shape: CamShape, theta, law: Law | None):
+    """`models/cam_geometry.roller_cam` (the one implementation of a roller cam's pitch curve,
+    normal, radii and profile) of this follower's roller centre, the cam turning counter-clockwise
+    (CCW); and the roller centre's direction of motion (2 x n)."""
     theta = np.atleast_1d(np.asarray(theta, dtype=float))
     R, dR, ddR, moving = roller_centre(shape, theta, law)
-    d1 = dR - quarter(R)                   # P' and P'' before the turn Rot(-theta): the same lengths
-    d2 = ddR - 2 * quarter(dR) - R
-    speed = np.hypot(d1[0], d1[1])
-    require(bool(np.all(speed > 0)), "the pitch curve stops (P' = 0): no cam has this layout", key="stroke_mm")
-    cross = d1[0] * d2[1] - d1[1] * d2[0]
-    # Rot(-theta) turns clockwise as theta grows, so P runs clockwise (ORIENTATION; a test pins it
-    # by the sign of the enclosed area): convex parts there have P' x P'' < 0
-    tangent = d1 / speed
-    normal = _outward(tangent, ORIENTATION)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        radius = np.where(cross != 0, ORIENTATION * speed**3 / np.where(cross != 0, cross, 1.0), np.inf)
-    pressure = np.arctan2(np.abs(np.sum(moving * tangent, axis=0)), np.abs(np.sum(moving * normal, axis=0)))
-    return Pitch(theta, seen_from_cam(theta, R, CCW), seen_from_cam(theta, normal, CCW), radius, pressure)
+    return roller_cam(theta, R, dR, ddR, moving, shape.roller_radius_mm, CCW), moving
 
 
-def _outward(tangent, orientation):
-    """The unit normal pointing away from the cam's centre: right of the tangent for a
-    counter-clockwise run, left for a clockwise one."""
-    right = np.array([tangent[1], -tangent[0]])
-    return right if orientation > 0 else -right
+def pitch(shape: CamShape, theta, law: Law | None = None) -> Pitch:
+    """The pitch curve, its normal, radius of curvature and pressure angle (module docstring), from
+    `roller_cam`; the pressure angle unsigned: the angle between the lines of motion and of force."""
+    c, moving = _cam(shape, theta, law)
+    n = c.normal
+    # |sin| and |cos| of the signed angle from the motion to the normal (roller_cam's pressure_rad)
+    pressure = np.arctan2(np.abs(moving[0] * n[1] - moving[1] * n[0]), np.abs(c.lever))
+    return Pitch(c.theta, c.pitch, seen_from_cam(c.theta, n, CCW), c.pitch_radius_mm, pressure)
 
 
 FLANKS = {"spring": ("inner",), "groove": ("inner", "outer")}
@@ -258,22 +253,21 @@ FLANKS = {"spring": ("inner",), "groove": ("inner", "outer")}
 
 def flank(shape: CamShape, theta, side: Literal["inner", "outer"] = "inner", law: Law | None = None):
     """Points (2 x n, cam frame) [mm] of a profile flank: the envelope of the roller circles,
-    P - r n_out (inner: the cam's surface, a groove's inner wall) or P + r n_out (a groove's outer
-    wall). Refused (ModelError naming the cam angle of the least radius among the angles given)
-    where the flank is undercut."""
-    p = pitch(shape, theta, law)
-    bad = undercut_at(p, shape.roller_radius_mm, side)
+    `roller_cam`'s profile P - r n_out (inner: the cam's surface, a groove's inner wall) or
+    `groove_outer_wall` P + r n_out (a groove's outer wall). Refused (ModelError naming the cam
+    angle of the least radius among the angles given) where the flank is undercut."""
+    c, _ = _cam(shape, theta, law)
+    rho = c.pitch_radius_mm
+    bad = undercut_at(rho, shape.roller_radius_mm, side)
     if bad.any():
-        i = int(np.argmin(np.where(bad, np.abs(p.radius_mm), np.inf)))
-        raise ModelError(_undercut_message(shape, side, float(p.theta[i]), float(p.radius_mm[i])), key="roller_radius_mm")
-    sign = -1.0 if side == "inner" else 1.0
-    return p.P + sign * shape.roller_radius_mm * p.normal
+        i = int(np.argmin(np.where(bad, np.abs(rho), np.inf)))
+        raise ModelError(_undercut_message(shape, side, float(c.theta[i]), float(rho[i])), key="roller_radius_mm")
+    return c.profile if side == "inner" else groove_outer_wall(c)
 
 
-def undercut_at(p: Pitch, roller_mm: float, side: str) -> np.ndarray:
-    """Where a flank is undercut: the roller radius reaches the pitch curve's radius on the
-    side the flank is offset towards (convex for the inner flank, concave for the outer)."""
-    rho = p.radius_mm
+def undercut_at(rho, roller_mm: float, side: str) -> np.ndarray:
+    """Where a flank is undercut: the roller radius reaches the pitch curve's signed radius `rho`
+    [mm] on the side the flank is offset towards (convex for the inner flank, concave for the outer)."""
     return (rho > 0) & (rho <= roller_mm) if side == "inner" else (rho < 0) & (-rho <= roller_mm)
 
 

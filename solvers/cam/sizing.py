@@ -16,6 +16,7 @@ from mechopt.models.cam_forces import (
     omega_rad_s,
     sign_changes,
 )
+from mechopt.models.cam_geometry import groove_outer_wall
 from mechopt.models.cam_shape import point_table
 from mechopt.solvers.cam.extremes import polished_min
 
@@ -227,7 +228,7 @@ def _shop_tables(task, tol_mm, *, shapeless, arrays) -> dict[str, float]:
     if not shapeless:
         curves["profile"] = lambda t: task.curves(t).profile
         if task.closure == "groove":
-            curves["groove_outer"] = lambda t: (lambda q: 2 * q.pitch - q.profile)(task.curves(t))   # P + r n
+            curves["groove_outer"] = lambda t: groove_outer_wall(task.curves(t))      # P + r n
     errors = {}
     for name, curve in curves.items():
         table = point_table(curve, tol_mm, breaks=breaks)

@@ -43,6 +43,7 @@ from mechopt.kit.settings import Annotated, Interval, check_settings
 from mechopt.models.cam_laws import law as library_law
 from mechopt.models.loom import Cyclogram
 from mechopt.solvers.loom.speed import max_machine_speed
+from mechopt.solvers.stop_impact.cam_shape import law_cam, without_cam
 from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
 from mechopt.solvers.stop_impact.lever_box import LeverBox, takes_box
 from mechopt.solvers.stop_impact.synthesis import box_values, law_of, linear_lever, synthesise_law
@@ -52,6 +53,7 @@ __all__ = ["codesign_machine_speed"]
 BOX_STEP_RPM = 5.0          # the box's speeds at the re-planned t(3,7): every 5 rpm, as the synthesis' dense check
 PEAK_GRID = 200001          # xi points for a spline's max |S''|: its error ~ h^2 max|S''''| / 8, below 1e-8 here
 READINGS = ("law_shape", "given")
+LIFT_START = "3"            # the event where the lift's rise begins: operation (3,7) starts there
 
 
 @takes_box
@@ -88,7 +90,9 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
     speed_stress_<reading>_rpm and t_3_7_stress_<reading>_deg; stress_scale_lift = sqrt(ca_law /
     ca_own). Diagnostics: the limiting cycle and constraint of both plans, the bound that sets the
     lift's t(3,7) (lift_bound), with a box the lever and speed the lift's bound binds on
-    (box_binding). SOLVED when the chain keeps the limit at t(3,7) on the nominal lever and, given
+    (box_binding); the lift cam for the shop cut to the law at t(3,7) (`cam_shape.law_cam`, the
+    synthesis' cam geometry: arrays cam_pitch_x_mm ..., diagnostics cam with the shaft's angle at
+    event 3 where the rise begins). SOLVED when the chain keeps the limit at t(3,7) on the nominal lever and, given
     a box, on its grid; INACCURATE otherwise (the message says where).
     """
     check_settings(codesign_machine_speed, lift_stress=lift_stress)
@@ -172,8 +176,13 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
                     "windows_given_up": law_run.diagnostics.get("windows_given_up", 0),
                     "limiting": plan.diagnostics.get("limiting"),
                     "law": str(law), "law_knots": list(law.knots), "law_coefficients": list(law.coefficients)}
-    arrays = dict(law_run.arrays) | plan.arrays
-    return clock.result(status, values, message=message, diagnostics=diagnostics, arrays=arrays,
+    # the lift cam cut to the law at the re-planned t(3,7) (the synthesis' own was cut at its t_min),
+    # its phase on the shaft the re-planned cyclogram's event where the rise begins
+    shop, said = law_cam(task.lever_model, law, t37, law_run.diagnostics["cam"]["geometry"])
+    said["cam"] |= {"rise_start_shaft_deg": values[f"p_{LIFT_START}_deg"], "phase_event": LIFT_START,
+                    "phase_event_what": task.events.get(LIFT_START, {}).get("what", "the start of operation (3,7)")}
+    arrays = without_cam(law_run.arrays) | plan.arrays | shop
+    return clock.result(status, values, message=message, diagnostics=diagnostics | said, arrays=arrays,
                         warnings=plan.warnings)
 
 

@@ -1,6 +1,10 @@
 """The lift cam for the shop: the cam's shape from its law and follower
 (models/cam_shape.py), its checks (least radius of curvature, largest pressure angle, undercut
-margin) and the point tables a DXF or a CNC takes, each with its measured chordal error."""
+margin) and the point tables a DXF or a CNC takes, each with its measured chordal error. A law
+solver (the synthesis, the co-design) returns its law's cam as point tables too (`law_cam`), so the
+shop's drawing reads that Result's arrays (`mechopt.cam_sheet.sheet_of`)."""
+
+import math
 
 import numpy as np
 
@@ -9,7 +13,7 @@ from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Annotated, Interval
 from mechopt.models.cam_shape import FLANKS, CamShape, Law, check_undercut, flank, pitch, point_table, summarise
 
-__all__ = ["cam_profile", "shape_cam"]
+__all__ = ["SHOP_PREFIX", "cam_profile", "law_cam", "shape_cam", "without_cam"]
 
 FLANK_ARRAYS = {"inner": "profile", "outer": "groove_outer"}     # the arrays' names per flank
 
@@ -77,3 +81,49 @@ def _dense(task, law, samples):
     p = pitch(task, theta, law)
     return {"cam_angle_deg": np.degrees(theta), "radius_of_curvature_mm": np.clip(p.radius_mm, -1e6, 1e6),
             "pressure_angle_deg": np.degrees(p.pressure_rad)}
+
+
+# ---------------------------------------------------------------- a synthesised law's cam, for the shop
+
+SHOP_PREFIX = "cam_"        # a law solver's arrays of its cam: cam_pitch_x_mm ... (`law_cam`)
+SHOP_TABLES = ("pitch", *FLANK_ARRAYS.values())
+
+
+def law_cam(lever, law, t_deg: float, geometry: dict, *, samples: int = 7200) -> tuple[dict, dict]:
+    """(arrays, diagnostics) a law solver adds to its Result for the shop: the lift cam cut to
+    `law` (a spline law: `law.values(xi)` -> S, S', S'', ...) at phase angle `t_deg` [deg], an
+    oscillating roller follower in a groove turning counter-clockwise, the lever's arms and stroke
+    (`lever.a_mm`, `b_mm`, `stroke_mm`), the rise and the return with the same law over t (as
+    stop-impact/lift-cam-profile reads its return), and `geometry`: base_radius_mm,
+    roller_radius_mm, centre_distance_mm, dwell_deg (upper) [mm, deg], and any other `CamShape`
+    parameter (max_pressure_angle_deg, chord_tol_mm: CamShape's defaults where not given).
+
+    Arrays: its point tables (`shape_cam`: the cam frame at cam angle 0, where the rise begins)
+    as `cam_<table>_x_mm`, `_y_mm`, `_cam_angle_deg` for the pitch curve, the profile (the groove's
+    inner wall) and the groove's outer wall. Diagnostics `cam`: status and message, `geometry`,
+    `t_deg`, each table's measured chordal error, `rise_start_deg` (the roller centre's direction
+    as the rise begins, from +x counter-clockwise) and `sense`, the largest pressure angle and the
+    least radius of curvature. A cam that cannot be made or is not SOLVED has no tables (its
+    message says why: the shop's drawing refuses it)."""
+    said = {"geometry": dict(geometry), "t_deg": float(t_deg), "sense": "ccw"}
+    try:
+        shape = CamShape(stroke_mm=lever.stroke_mm, rise_deg=t_deg, return_deg=t_deg, a_mm=lever.a_mm,
+                         b_mm=lever.b_mm, follower="oscillating", closure="groove", **geometry)
+    except ModelError as exc:
+        return {}, {"cam": said | {"status": Status.INFEASIBLE.value, "message": f"the cam cannot be made: {exc}"}}
+    cam = shape_cam(shape, lambda xi: tuple(law.values(xi)[:3]), samples=samples)
+    said |= {"status": cam.status.value, "message": cam.message}
+    said |= {k: cam.values[k] for k in ("max_pressure_angle_deg", "min_radius_of_curvature_mm") if k in cam.values}
+    if cam.status is not Status.SOLVED:
+        return {}, {"cam": said}
+    a = cam.arrays
+    arrays = {f"{SHOP_PREFIX}{name}_{axis}": a[f"{name}_{axis}"] for name in SHOP_TABLES if f"{name}_x_mm" in a
+              for axis in ("x_mm", "y_mm", "cam_angle_deg")}
+    said |= {"chord_error_mm": cam.diagnostics["chord_error_mm"],
+             "rise_start_deg": math.degrees(math.atan2(a["pitch_y_mm"][0], a["pitch_x_mm"][0]))}
+    return arrays, {"cam": said}
+
+
+def without_cam(arrays: dict) -> dict:
+    """`arrays` less a law solver's cam tables (`law_cam`): for a caller that cuts its own cam."""
+    return {k: v for k, v in arrays.items() if not k.startswith(SHOP_PREFIX)}

@@ -70,6 +70,7 @@ from mechopt.models.cam_shape import CamShape
 from mechopt.models.stop_impact import LeverStop, speed_tag
 from mechopt.solvers.stop_impact.cam_follower import follow_cam, follower_data
 from mechopt.solvers.stop_impact.cam_rows import TRUST, CamGeometry, GeometryCheck, least_pressure_angle
+from mechopt.solvers.stop_impact.cam_shape import law_cam
 from mechopt.solvers.stop_impact.law import RollerLeftCam, rebound_amplitude_mm
 from mechopt.solvers.stop_impact.lever_box import LeverBox, takes_box
 from mechopt.solvers.stop_impact.response import closed_form_amplitude_m, response_parts
@@ -647,6 +648,11 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
         `geometry_steps` sequential LPs per phase angle (LIMIT naming them when the exact geometry
         still breaks a limit). Values: max_pressure_angle_{rise,return}_deg, min_radius_of_curvature_mm,
         min_concave_radius_mm, pressure_angle_binds, curvature_binds (1: within BINDS_WITHIN of its limit).
+
+    Whatever `geometry`, the law's cam for the shop (`cam_shape.law_cam`: the lift cam of the cam_*
+    settings, the lever's arms and stroke, rise and return over t): arrays `cam_pitch_x_mm` ...,
+    diagnostics `cam` (its status, chordal errors, rise-start direction, geometry); the DXF writer
+    draws from them.
     """
     task.need("stroke_mm", "amplitude_limit_mm")
     task.need_effect("cam_drive")
@@ -770,8 +776,10 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
     if compare:
         _compare(task, law, t_deg, sorted({p[2] for p in design.speeds if p[:2] == box.nominal(task)}), values)
     sampled = [p[2] if box.trivial else list(p) for p in design.speeds]
+    shop, said = law_cam(task, law, t_deg, {"base_radius_mm": cam_base_radius_mm, "roller_radius_mm": cam_roller_radius_mm,
+                                            "centre_distance_mm": cam_centre_distance_mm, "dwell_deg": cam_dwell_deg})
     return clock.result(status, values, message=message,
-                        arrays=arrays, diagnostics=diagnostics | {"sampled_speeds_rpm": sampled,
+                        arrays=arrays | shop, diagnostics=diagnostics | said | {"sampled_speeds_rpm": sampled,
                                                                   "law_knots": list(law.knots),
                                                                   "law_coefficients": list(law.coefficients)},
                         warnings=warnings)

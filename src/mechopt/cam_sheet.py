@@ -1,5 +1,6 @@
 """A cam's drawing for the shop, from any cam (any follower, any law): its curves, and the marks
-that put it on its shaft. `cam_sheet(...)` returns the items `mechopt.dxf` writes.
+that put it on its shaft. `cam_sheet(...)` returns the items `mechopt.dxf` writes; `sheet_of(...)`
+makes them from a solved cam's Result arrays (every cam writer's one path).
 
 The drawing is in the cam's own frame as it stands when the rise begins, units mm. Its layers
 (the interface a check outside the package may rely on):
@@ -91,6 +92,34 @@ def cam_sheet(pitch, profile, groove_outer=None, *, bore_diameter_mm: float, ris
     return items
 
 
+SHEET_TABLES = ("pitch", "profile", "groove_outer")     # a solver's point tables, as cam_sheet's arguments
+
+
+def sheet_of(arrays, chord_error_mm: dict, *, prefix: str = "", rise_start_deg: float | None = None, **sheet) -> list:
+    """The drawing of a solved cam from its Result alone (one path for every cam solver): the
+    point tables `<prefix><table>_x_mm`, `_y_mm` of `arrays` (pitch, profile, groove_outer: those
+    there are) with their measured chordal errors `chord_error_mm[table]`, and `cam_sheet`'s other
+    arguments (`sheet`: bore, sense, phase, notes). `rise_start_deg` None: the direction of the
+    pitch table's first vertex (a table that starts where the rise does)."""
+    tables = {name: Table(np.column_stack([arrays[f"{prefix}{name}_x_mm"], arrays[f"{prefix}{name}_y_mm"]]),
+                          float(chord_error_mm[name]))
+              for name in SHEET_TABLES if f"{prefix}{name}_x_mm" in arrays}
+    require("pitch" in tables and "profile" in tables, f"no point tables {prefix}pitch_x_mm and {prefix}profile_x_mm "
+            f"among the arrays ({', '.join(sorted(arrays)) or 'none'})", key="arrays")
+    if rise_start_deg is None:
+        rise_start_deg = math.degrees(math.atan2(tables["pitch"].xy[0, 1], tables["pitch"].xy[0, 0]))
+    return cam_sheet(**tables, rise_start_deg=rise_start_deg, **sheet)
+
+
+def bore_stated(task) -> str | None:
+    """Why a cam task cannot be drawn, knowable before it is solved: its bore not stated (0); None
+    where it is (`mechopt.dxf.drawable_if`)."""
+    if task.bore_diameter_mm > 0:
+        return None
+    return ("bore_diameter_mm not stated (0): the drawing's bore needs it (--set bore_diameter_mm=D, D [mm] below "
+            "the cam's least diameter)")
+
+
 def _radial(centre, angle_deg, r0, r1):
     a = math.radians(angle_deg)
     u = np.array([math.cos(a), math.sin(a)])
@@ -153,4 +182,5 @@ def _notes(centre, outer, bore_diameter_mm, rise_start_deg, sense, phase, extra)
             for k, line in enumerate([*lines, *extra])]
 
 
-__all__ = ["LAYER_COLOURS", "Phase", "SENSES", "Table", "cam_sheet", "shaft_zero_deg"]
+__all__ = ["LAYER_COLOURS", "Phase", "SENSES", "SHEET_TABLES", "Table", "bore_stated", "cam_sheet", "shaft_zero_deg",
+           "sheet_of"]

@@ -382,9 +382,9 @@ def _run(args) -> int:
         ezdxf_module()                      # a missing extra is said before the solve, not after
     scene = registry.find(args.case)
     if args.dxf is not None:
-        from mechopt.dxf import NothingToExport, dxf_path, writer_of
-        try:
-            writer_of(scene)                # a solver with no drawing is said before the solve, not after
+        from mechopt.dxf import NothingToExport, dxf_path, refuse_before_solve
+        try:                                # a scene that cannot be drawn is said before the solve, not after
+            refuse_before_solve(scene, lambda: registry.pose(scene, overrides)[0])
         except NothingToExport as exc:
             print(f"dxf: {exc}; nothing was solved", file=sys.stderr)
             return CHECK_FAILED

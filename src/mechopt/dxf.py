@@ -8,7 +8,8 @@ by `mechopt.cam_sheet`).
 Which curves a scene has is decided by its solver, as its figures are: a mechanism's output module
 registers a writer `@shop_drawing(solver, ...)` (a `Run` -> its `ShopCurve`s); this module knows
 no mechanism. A scene whose solver has no writer says so (`NothingToExport`), never writes an
-empty file.
+empty file; a writer's rule knowable from the posed task (a cam's bore: `drawable_if`) is asked
+before the solve.
 
 A file is written whole or not at all (`mechopt.files.write_bytes_atomic`), and by one writer at
 a time: `<file>.lock` beside it is held while it is written, and a second writer is refused.
@@ -125,9 +126,35 @@ def writer_of(scene) -> Callable:
     return writer
 
 
+def drawable_if(check: Callable) -> Callable:
+    """A DXF writer's rule on the task as posed, knowable before any solve: `check(task)` returns
+    why the scene cannot be drawn (a str) or None. Put under `@shop_drawing(...)`; the command
+    line asks it before solving (`refuse_before_solve`), `shop_curves` again on the solved task."""
+    def mark(writer):
+        writer.drawable_if = check
+        return writer
+    return mark
+
+
+def _undrawable(scene, task) -> None:
+    why = getattr(writer_of(scene), "drawable_if", lambda task: None)(task)
+    if why:
+        raise NothingToExport(f"{scene.id}: {why}")
+
+
+def refuse_before_solve(scene, pose: Callable) -> None:
+    """NothingToExport, before any solve, when the scene cannot be drawn: its solver has no writer
+    (`writer_of`), or its writer's rule (`drawable_if`) refuses the task `pose()` returns (the
+    task as posed: the file, its derived values, the overrides; asked only where there is a rule)."""
+    writer = writer_of(scene)
+    if hasattr(writer, "drawable_if"):
+        _undrawable(scene, pose())
+
+
 def shop_curves(run) -> list:
     """The curves (and marks) of a solved scene (a `registry.Run`); NothingToExport when it has none."""
     writer = writer_of(run.scene)
+    _undrawable(run.scene, run.task)
     if not run.success:
         raise NothingToExport(f"{run.scene.id}: status {run.status.value}, nothing exported as DXF "
                               f"({run.result.message})")
@@ -231,5 +258,5 @@ def _length(curve):
 
 
 __all__ = ["SHOP_DRAWINGS", "SHOP_MARKS", "NothingToExport", "ShopArc", "ShopCircle", "ShopCurve", "ShopLine", "ShopText",
-           "chord_note", "dxf_bytes", "dxf_path", "export_run", "ezdxf_module", "notes", "read_polylines",
-           "shop_curves", "shop_drawing", "write_dxf", "writer_of"]
+           "chord_note", "drawable_if", "dxf_bytes", "dxf_path", "export_run", "ezdxf_module", "notes", "read_polylines",
+           "refuse_before_solve", "shop_curves", "shop_drawing", "write_dxf", "writer_of"]

@@ -311,6 +311,12 @@ def run(scene: Scene | str, overrides: dict | None = None, *, drivers: bool = Fa
     return Run(scene, result, checks, overrides, task, settings)
 
 
+def pose(scene: Scene | str, overrides: dict | None = None):
+    """(task, settings) as `run` would solve them, without solving the scene: its file, the values
+    it derives from its sources (each solved once, as its file says), the overrides."""
+    return _pose(find(scene), dict(overrides or {}))
+
+
 def _pose(scene: Scene, overrides: dict, chain: tuple[str, ...] = ()):
     """The task and settings a scene poses: its file, the values it derives from other scenes'
     results (each source solved as its file says), then the overrides."""

@@ -105,7 +105,10 @@ def test_eccentric_jump_scene_against_the_closed_form():
 
 
 def test_the_lift_cam_in_the_cam_wing_agrees_with_models_cam_shape():
-    # the same cam by the other model, written apart (stop-impact/lift-cam-profile's parameters)
+    # the same cam posed by the other model (stop-impact/lift-cam-profile's parameters): the roller
+    # centre's kinematics written apart (cam_shape's lever swing H / (a + b) against cam_followers'
+    # arc s / a), the geometry from R on one implementation (cam_geometry.roller_cam); the values
+    # themselves are checked against an independent pitch polygon in tests/stop_impact/test_cam_shape.py
     shape = CamShape(base_radius_mm=60.0, roller_radius_mm=15.0, stroke_mm=35.0295, rise_deg=35.59355,
                      return_deg=35.59355, dwell_deg=60.0, centre_distance_mm=120.0, a_mm=80.0, b_mm=120.0,
                      follower="oscillating", closure="groove")

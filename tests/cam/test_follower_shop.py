@@ -33,7 +33,7 @@ def test_the_lift_cams_drawing_re_read_matches_the_other_models(tmp_path):
     [(other_path, _), *_] = export_run(other, tmp_path / "other")
     assert rise_mark_deg(other_path)[1] == pytest.approx(mark, abs=1e-6)
     # each vertex of one model's profile lies on the other's polyline: the same point-table rule on
-    # two models' profiles, written apart, that coincide (1e-10 mm measured)
+    # the profiles of two models whose roller centres are written apart (1e-10 mm measured)
     mine, theirs = read_polylines(path)["CAM_PROFILE"], read_polylines(other_path)["CAM_PROFILE"]
     A, B = theirs.T[:, None, :], np.roll(theirs, -1, axis=0).T[:, None, :]
     gap = np.min(distance_to_segment(mine.T[:, :, None], A, B), axis=1)
@@ -58,3 +58,25 @@ def test_a_cam_without_a_bore_or_not_solved_is_not_drawn(tmp_path):
     steep = registry.run("cam/translating-roller", {"base_radius_mm": 5.0, "bore_diameter_mm": 5.0})
     with pytest.raises(NothingToExport, match="INFEASIBLE"):
         export_run(steep, tmp_path)
+
+
+@pytest.mark.parametrize(("scene", "more"), [("cam/translating-roller", []),
+                                              ("stop-impact/lift-cam-profile", ["--set", "bore_diameter_mm=0"])])
+def test_dxf_of_a_cam_without_a_bore_is_refused_before_the_solve(scene, more, tmp_path, capsys, monkeypatch):
+    """The bore is a parameter of the posed task: `--dxf` reads it there (the scene's file, its
+    derived values, the --set) and refuses before any solver of the scene runs; a derived scene's
+    sources are still solved to pose it (loom/group1 for the lift cam's phase)."""
+    from mechopt import cli
+    from mechopt.solvers.cam import size_cam
+    from mechopt.solvers.stop_impact import cam_profile
+    solve = registry._solve
+
+    def no_cam_solve(solver, task, settings):
+        assert solver not in (size_cam, cam_profile), "the cam was solved before --dxf refused it"
+        return solve(solver, task, settings)
+    monkeypatch.setattr(registry, "_solve", no_cam_solve)
+    monkeypatch.setattr(registry, "run", lambda *a, **k: pytest.fail("solved before refusing --dxf"))
+    assert cli.main(["run", scene, "--dxf", str(tmp_path), *more]) == 1
+    err = capsys.readouterr().err
+    assert f"{scene}: bore_diameter_mm not stated (0)" in err and "nothing was solved" in err
+    assert not list(tmp_path.iterdir())

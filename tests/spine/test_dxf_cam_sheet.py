@@ -177,11 +177,40 @@ def test_a_cam_without_a_stated_bore_is_not_drawn(tmp_path):
     assert not list(tmp_path.iterdir())
 
 
-def test_the_codesigned_machines_lift_cam_is_placed_by_its_own_re_planned_cyclogram(tmp_path):
-    """A coarse co-design (tests/loom/test_codesign.py's settings): the shaft-zero mark is turned
-    back from the rise-start mark by the re-planned event 3, and the rise read back is its law."""
-    run = mechopt.solve("loom/machine-speed-codesign", coefficients=8, sample_speeds=2, phase_from_deg=30.0,
-                        phase_to_deg=42.0, phase_tol_deg=1.0)
+@pytest.fixture(scope="module")
+def codesigned():
+    """A coarse co-design (tests/loom/test_codesign.py's settings)."""
+    return mechopt.solve("loom/machine-speed-codesign", coefficients=8, sample_speeds=2, phase_from_deg=30.0,
+                         phase_to_deg=42.0, phase_tol_deg=1.0)
+
+
+@pytest.mark.parametrize(("which", "t_name"), [("synthesised", "t_deg"), ("codesigned", "t_3_7_deg")])
+def test_the_drawing_from_the_solvers_arrays_is_the_lift_cam_cut_to_its_law_as_before(which, t_name, tmp_path,
+                                                                                      request):
+    """The writers draw the cam the solver returned (arrays cam_...), no longer re-cutting it: its
+    polylines re-read with ezdxf are the lift cam of stop-impact/lift-cam-profile (its task as
+    posed, the lever's arms and stroke, rise and return over t) cut to the law by shape_cam, as
+    the writers made them before, to 1e-9 mm, vertex for vertex."""
+    from mechopt.solvers.stop_impact import shape_cam
+    run = request.getfixturevalue(which)
+    assert run.status.value == "SOLVED" and "cam_pitch_x_mm" in run.arrays
+    [(path, _), *_] = dxf.export_run(run, tmp_path)
+    drawn = dxf.read_polylines(path)
+    lever = run.task if which == "synthesised" else run.task.lever_model
+    t_deg, law = run.values[t_name], law_of(run.result)
+    shape = dataclasses.replace(mechopt.solve(LIFT).task, stroke_mm=lever.stroke_mm, a_mm=lever.a_mm,
+                                b_mm=lever.b_mm, rise_deg=t_deg, return_deg=t_deg)
+    before = shape_cam(shape, lambda xi: tuple(law.values(xi)[:3]))
+    assert set(drawn) == {"PITCH_CURVE", "CAM_PROFILE", "CAM_GROOVE_OUTER"}
+    for layer, name in (("PITCH_CURVE", "pitch"), ("CAM_PROFILE", "profile"), ("CAM_GROOVE_OUTER", "groove_outer")):
+        xy = np.column_stack([before.arrays[f"{name}_x_mm"], before.arrays[f"{name}_y_mm"]])
+        assert drawn[layer].shape == xy.shape and np.max(np.abs(drawn[layer] - xy)) < 1e-9
+
+
+def test_the_codesigned_machines_lift_cam_is_placed_by_its_own_re_planned_cyclogram(codesigned, tmp_path):
+    """The shaft-zero mark is turned back from the rise-start mark by the re-planned event 3, and
+    the rise read back is its law."""
+    run = codesigned
     assert run.status.value == "SOLVED"
     [(path, _), *_] = dxf.export_run(run, tmp_path)
     _, entities = _read(path)

@@ -119,6 +119,33 @@ def test_the_lift_cams_checks_are_an_independent_polygon_computations():
     assert run.status is Status.SOLVED and all(c.ok for c in run.checks)
 
 
+def test_the_lift_cams_geometry_is_cam_geometrys_roller_cam_one_implementation(monkeypatch):
+    """cam_shape computes the roller centre; the pitch curve, normal, radii and both walls of the
+    groove are models/cam_geometry's (one implementation): a call counted, and its signed pressure
+    angle folded onto [0, 90] deg is cam_shape's unsigned one."""
+    from mechopt.models import cam_geometry, cam_shape
+
+    calls = []
+
+    def counted(*args, **kwargs):
+        calls.append(args[-1])                  # the sense
+        return cam_geometry.roller_cam(*args, **kwargs)
+    monkeypatch.setattr(cam_shape, "roller_cam", counted)
+    cam = _lift_task()
+    theta = np.linspace(0, 2 * math.pi, 3601)
+    p = pitch(cam, theta)
+    inner, outer = flank(cam, theta, "inner"), flank(cam, theta, "outer")
+    assert calls == [1, 1, 1]                   # pitch, inner and outer wall; counter-clockwise
+    R, dR, ddR, moving = cam_shape.roller_centre(cam, theta)
+    c = cam_geometry.roller_cam(theta, R, dR, ddR, moving, cam.roller_radius_mm, 1)
+    signed = np.abs(c.pressure_rad)
+    assert np.max(np.abs(p.pressure_rad - np.minimum(signed, math.pi - signed))) < 1e-12
+    assert np.array_equal(p.P, c.pitch) and np.array_equal(inner, c.profile)
+    # the outer wall the roller's radius outside the pitch curve, the inner inside, along its normal
+    assert np.max(np.abs(outer - p.P - cam.roller_radius_mm * p.normal)) < 1e-12
+    assert np.max(np.abs(inner - p.P + cam.roller_radius_mm * p.normal)) < 1e-12
+
+
 def test_a_roller_larger_than_the_least_radius_of_curvature_is_an_undercut_named_with_its_angle():
     cam = _lift_task(roller_radius_mm=30.0, base_radius_mm=45.0)      # the same pitch curve, a larger roller
     result = cam_profile(cam)

@@ -4,8 +4,8 @@ stress; and the least base radius search's criterion against the base radius. Th
 Result's arrays only. `size_cam`'s drawing for the shop is `mechopt.cam_sheet`'s."""
 import numpy as np
 
-from mechopt.cam_sheet import Table, cam_sheet
-from mechopt.dxf import NothingToExport, shop_drawing
+from mechopt.cam_sheet import bore_stated, sheet_of
+from mechopt.dxf import drawable_if, shop_drawing
 from mechopt.figures.cam_shape import stated_phase
 from mechopt.figures.registry import figure, new_figure
 from mechopt.figures.text import literal
@@ -74,18 +74,15 @@ def base_radius_figures(run) -> dict:
 
 
 @shop_drawing(size_cam)
+@drawable_if(bore_stated)
 def cam_shop_drawing(run) -> list:
-    """The cam for the shop (`mechopt.cam_sheet`): the solver's point tables with their measured
-    chordal errors, the centre and bore, the rise-start mark, the sense of rotation and the phase
-    on the shaft where the scene states `rise_start_shaft_deg`."""
-    task, arrays, errors = run.task, run.arrays, run.result.diagnostics["chord_error_mm"]
-    if task.bore_diameter_mm <= 0:
-        raise NothingToExport("bore_diameter_mm not stated (0): the drawing's bore needs it "
-                              "(e.g. --set bore_diameter_mm=20)")
-    tables = {name: Table(np.column_stack([arrays[f"{name}_x_mm"], arrays[f"{name}_y_mm"]]), errors[name])
-              for name in CURVES if name in errors}
+    """The cam for the shop (`mechopt.cam_sheet.sheet_of`): the solver's point tables with their
+    measured chordal errors, the centre and bore, the rise-start mark, the sense of rotation and the
+    phase on the shaft where the scene states `rise_start_shaft_deg`. A task without a bore is
+    refused before the solve (`bore_stated`)."""
+    task, diagnostics = run.task, run.result.diagnostics
     notes = (f"{task.follower} {task.face} follower; the cam as it stands at cam angle 0",)
     if task.face == "flat":
         notes += ("flat face: PITCH_CURVE is the profile itself",)
-    return cam_sheet(**tables, bore_diameter_mm=task.bore_diameter_mm, sense=task.sense, phase=stated_phase(run),
-                     rise_start_deg=run.result.diagnostics["rise_start_deg"], notes=notes)
+    return sheet_of(run.arrays, diagnostics["chord_error_mm"], rise_start_deg=diagnostics["rise_start_deg"],
+                    bore_diameter_mm=task.bore_diameter_mm, sense=task.sense, phase=stated_phase(run), notes=notes)

@@ -2,19 +2,16 @@
 flanks), and the pitch curve's curvature and pressure
 angle against the cam angle. They read the Result's arrays only. The shop's drawing
 (`mechopt.cam_sheet`) adds the centre, bore, rise-start mark, sense and the phase on the shaft."""
-import math
 
 import numpy as np
 
-from mechopt.cam_sheet import Phase, Table, cam_sheet
-from mechopt.dxf import NothingToExport, shop_drawing
+from mechopt.cam_sheet import Phase, bore_stated, sheet_of
+from mechopt.dxf import drawable_if, shop_drawing
 from mechopt.figures.registry import figure, new_figure
 from mechopt.figures.text import literal
 from mechopt.models.cam_shape import ORIENTATION
 from mechopt.solvers.stop_impact import cam_profile, shape_cam
 
-# the solver's point tables, named as cam_sheet's arguments (it names their layers)
-SHEET_TABLES = ("pitch", "profile", "groove_outer")
 # the model's convention: its pitch curve runs clockwise as the cam angle grows, the cam turns ccw
 SENSE = "ccw" if ORIENTATION == -1 else "cw"
 PHASE_KEY = "rise_start_shaft_deg"
@@ -59,34 +56,29 @@ def cam_shape_figures(run) -> dict:
 
 
 @shop_drawing(cam_profile)
+@drawable_if(bore_stated)
 def cam_shop_curves(run) -> list:
-    """The cam for the shop: each point table the solver returned (its measured chordal error),
-    the centre and bore, the rise-start mark, the sense, the phase on the shaft as the scene states it."""
-    return cam_drawing(run.task, run.result, stated_phase(run))
-
-
-def cam_drawing(task, result, phase: Phase | None, notes=()) -> list:
-    """The drawing of a solved cam (a `cam_profile` or `shape_cam` Result of `task`, a CamShape):
-    the rise-start mark along the pitch curve's first vertex (the roller centre at cam angle 0)."""
-    if task.bore_diameter_mm <= 0:
-        raise NothingToExport("bore_diameter_mm not stated (0): the drawing's bore needs it "
-                              "(e.g. --set bore_diameter_mm=30)")
-    arrays, errors = result.arrays, result.diagnostics["chord_error_mm"]
-    tables = {name: Table(np.column_stack([arrays[f"{name}_x_mm"], arrays[f"{name}_y_mm"]]), errors[name])
-              for name in SHEET_TABLES if f"{name}_x_mm" in arrays}
-    start = math.degrees(math.atan2(arrays["pitch_y_mm"][0], arrays["pitch_x_mm"][0]))
-    return cam_sheet(**tables, bore_diameter_mm=task.bore_diameter_mm, rise_start_deg=start, sense=SENSE,
-                     phase=phase, notes=notes)
+    """The cam for the shop (`mechopt.cam_sheet.sheet_of`): each point table the solver returned
+    (its measured chordal error), the centre and bore, the rise-start mark along the pitch curve's
+    first vertex (the roller centre at cam angle 0, where the rise begins), the sense, the phase on
+    the shaft as the scene states it. A task without a bore is refused before the solve."""
+    return sheet_of(run.arrays, run.result.diagnostics["chord_error_mm"], bore_diameter_mm=run.task.bore_diameter_mm,
+                    sense=SENSE, phase=stated_phase(run))
 
 
 def stated_phase(run) -> Phase | None:
     """The cam's phase on its shaft where the scene states it (a --set, a derived value, a
     parameter), with where it comes from; None where it does not."""
-    spec, value = run.scene.spec, getattr(run.task, PHASE_KEY)
-    if PHASE_KEY in run.overrides:
+    return phase_stated(run.scene, run.task, run.overrides)
+
+
+def phase_stated(scene, task, overrides) -> Phase | None:
+    """`stated_phase` of a scene's task as posed (`registry.pose`), with the overrides it was posed with."""
+    spec, value = scene.spec, getattr(task, PHASE_KEY)
+    if PHASE_KEY in overrides:
         return Phase(value, f"set by --set {PHASE_KEY}")
     if PHASE_KEY in spec.derive:
-        return Phase(value, f"{run.scene.id} derives it from {spec.derive[PHASE_KEY]}, the cyclogram's event")
+        return Phase(value, f"{scene.id} derives it from {spec.derive[PHASE_KEY]}, the cyclogram's event")
     if PHASE_KEY in spec.params:
         p = spec.params[PHASE_KEY]
         return Phase(value, f"{p.mark}: {p.where or p.why or p.on}")

@@ -2,27 +2,26 @@
 laws at the same phase angle, its predicted rebound against speed with the limit, and for the
 co-designed machine the re-planned timing diagram. They read the Result's arrays only.
 
-The shop's drawing of a synthesised law (`--dxf`) is the lift cam cut to it: the law enters the
-lift cam's geometry (stop-impact/lift-cam-profile) and `shape_cam` makes its point tables."""
-import dataclasses
-
+The shop's drawing of a synthesised law (`--dxf`) is the lift cam cut to it, as its solver
+returned it (arrays `cam_...`: solvers/stop_impact/cam_shape.py `law_cam`), drawn by
+`mechopt.cam_sheet.sheet_of`."""
 import numpy as np
 
-from mechopt.cam_sheet import Phase
+from mechopt.cam_sheet import Phase, sheet_of
 from mechopt.dxf import NothingToExport, shop_drawing
-from mechopt.figures.cam_shape import cam_drawing, stated_phase
+from mechopt.figures.cam_shape import phase_stated
 from mechopt.figures.loom import gantt
 from mechopt.figures.registry import figure, new_figure
 from mechopt.figures.text import literal
 from mechopt.kit.result import Status
 from mechopt.models.cam_follower import LAWS
 from mechopt.solvers.loom import codesign_machine_speed
-from mechopt.solvers.stop_impact import law_of, shape_cam, synthesise_law
+from mechopt.solvers.stop_impact import law_of, synthesise_law
+from mechopt.solvers.stop_impact.cam_shape import SHOP_PREFIX
 
-# The lift cam whose law is synthesised: its scene states the cam's geometry (base and roller
-# radii, centre distance, upper dwell, bore) and its phase on the shaft (from the loom's cyclogram)
+# The lift cam whose law is synthesised: its scene states the cam's bore and its phase on the shaft
+# (from the loom's cyclogram); the cam's geometry is the solver's (its cam_* settings)
 LIFT_CAM = "stop-impact/lift-cam-profile"
-LIFT_START = "3"            # the loom's event where the lift's rise begins: operation (3,7), as the co-design names it
 
 ROWS = (("s_mm", "s [mm]"), ("ds_dphi_mm_per_rad", "ds/dphi [mm/rad]"),
         ("d2s_dphi2_mm_per_rad2", "d2s/dphi2 [mm/rad^2]"))
@@ -81,38 +80,41 @@ def _rebound(run):
 
 @shop_drawing(synthesise_law)
 def synthesised_cam(run) -> list:
-    """The lift cam cut to the synthesised law at its phase angle t_deg, placed on its shaft as
-    stop-impact/lift-cam-profile places it (its phase derived from the loom's cyclogram)."""
+    """The lift cam cut to the synthesised law at its phase angle t_deg, as the solver returned it
+    (arrays `cam_...`, diagnostics `cam`: solvers/stop_impact/cam_shape.py `law_cam`), its bore and
+    phase on the shaft as stop-impact/lift-cam-profile states them (the phase derived from the loom's
+    cyclogram: that scene posed, not solved)."""
     from mechopt import registry  # the spine's scene look-up, at call time (it imports the figures)
-    lift = registry.run(LIFT_CAM)          # its task as posed: the phase derived from the cyclogram
-    return _lift_cam(run, lift, run.task, run.values["t_deg"], stated_phase(lift))
+    lift, _ = registry.pose(LIFT_CAM)
+    return _lift_cam(run, lift.bore_diameter_mm, phase_stated(registry.find(LIFT_CAM), lift, {}))
 
 
 @shop_drawing(codesign_machine_speed)
 def codesigned_cam(run) -> list:
-    """The lift cam cut to the co-designed law at the re-planned t(3,7), placed on its shaft by the
-    re-planned cyclogram itself: the rise begins at event 3 (`p_3_deg`, the start of operation (3,7))."""
+    """The lift cam cut to the co-designed law at the re-planned t(3,7), as the solver returned it,
+    placed on its shaft by the re-planned cyclogram itself: the rise begins at the event the solver
+    names (event 3, `p_3_deg`, the start of operation (3,7)); the bore stop-impact/lift-cam-profile's."""
     from mechopt import registry
-    lift = registry.run(LIFT_CAM)
-    event = run.task.events.get(LIFT_START, {}).get("what", "the start of operation (3,7)")
-    phase = Phase(run.values[f"p_{LIFT_START}_deg"], f"{run.scene.id}'s re-planned cyclogram, event {LIFT_START}: {event}")
-    return _lift_cam(run, lift, run.task.lever_model, run.values["t_3_7_deg"], phase)
+    cam = run.result.diagnostics.get("cam", {})
+    phase = None if "rise_start_shaft_deg" not in cam else Phase(
+        cam["rise_start_shaft_deg"], f"{run.scene.id}'s re-planned cyclogram, event {cam['phase_event']}: "
+                                     f"{cam['phase_event_what']}")
+    return _lift_cam(run, registry.find(LIFT_CAM).build()[0].bore_diameter_mm, phase)
 
 
-def _lift_cam(run, lift, lever, t_deg, phase) -> list:
-    """The lift cam cut to `run`'s synthesised law: the geometry and bore of stop-impact/lift-cam-profile
-    (`lift`, its Run); the lever's arms and stroke of `lever`; the rise over `t_deg` and the return
-    with the same law over the same angle (as the lift cam's scene reads its return). The drawing's
-    notes say where each comes from."""
-    law = law_of(run.result)
-    shape = dataclasses.replace(lift.task, stroke_mm=lever.stroke_mm, a_mm=lever.a_mm, b_mm=lever.b_mm,
-                                rise_deg=t_deg, return_deg=t_deg)
-    cam = shape_cam(shape, lambda xi: tuple(law.values(xi)[:3]), **lift.settings)      # its samples
-    if cam.status is not Status.SOLVED:
-        raise NothingToExport(f"{run.scene.id}: the lift cam cut to the synthesised law is {cam.status.value}, "
-                              f"nothing exported as DXF ({cam.message})")
-    notes = [f"LAW: {law} of {run.scene.id}; rise and return over t = {t_deg:.6g} deg",
-             f"CAM: {LIFT_CAM}'s base, roller, centre distance, dwell and bore; lever arms and stroke of {run.scene.id}",
-             f"MAX PRESSURE ANGLE {cam.values['max_pressure_angle_deg']:.4g} deg, least pitch radius of curvature "
-             f"{cam.values['min_radius_of_curvature_mm']:.4g} mm"]
-    return cam_drawing(shape, cam, phase, notes)
+def _lift_cam(run, bore_diameter_mm, phase) -> list:
+    """The drawing of the cam `run`'s solver cut to its law (`mechopt.cam_sheet.sheet_of` on its
+    arrays `cam_...`); the notes say where the law, the cam and the bore come from."""
+    cam = run.result.diagnostics.get("cam", {})
+    if cam.get("status") != Status.SOLVED.value:
+        raise NothingToExport(f"{run.scene.id}: the lift cam cut to the synthesised law is "
+                              f"{cam.get('status', 'not made')}, nothing exported as DXF ({cam.get('message', '')})")
+    g = cam["geometry"]
+    notes = [f"LAW: {law_of(run.result)} of {run.scene.id}; rise and return over t = {cam['t_deg']:.6g} deg",
+             f"CAM: base {g['base_radius_mm']:g} mm, roller {g['roller_radius_mm']:g} mm, centre distance "
+             f"{g['centre_distance_mm']:g} mm, dwell {g['dwell_deg']:g} deg, lever arms and stroke of {run.scene.id}; "
+             f"bore of {LIFT_CAM}",
+             f"MAX PRESSURE ANGLE {cam['max_pressure_angle_deg']:.4g} deg, least pitch radius of curvature "
+             f"{cam['min_radius_of_curvature_mm']:.4g} mm"]
+    return sheet_of(run.arrays, cam["chord_error_mm"], prefix=SHOP_PREFIX, rise_start_deg=cam["rise_start_deg"],
+                    bore_diameter_mm=bore_diameter_mm, sense=cam["sense"], phase=phase, notes=notes)
