@@ -22,7 +22,7 @@ Sequential convex steps (a trust-region SLP: Nocedal & Wright, *Numerical Optimi
 Sec. 18.5 on trust regions for SQP/SLP): the law without these rows first; while its exact check
 breaks a limit, each step solves the window LP with the rows linearised
 at c_k and |c - c_k| <= TRUST (each coefficient) and checks its law exactly on the whole cam
-(`models.cam_shape.summarise`, the other implementation, 7200 cam angles, extremes polished); the
+(`models.cam_shape.summarise`, 7200 cam angles, extremes polished; the independent check is the polygon test's); the
 exact excess over its limit of a law the linearised rows gave (their error, and the nodes'
 spacing) is added to that family's back-off for the next step. It stops when the exact
 geometry holds within GEOMETRY_TOL_DEG / GEOMETRY_TOL_MM (SOLVED), when a step's LP has no law
