@@ -16,8 +16,7 @@ from mechopt.figures.text import literal
 from mechopt.kit.result import Status
 from mechopt.models.cam_follower import LAWS
 from mechopt.solvers.loom import codesign_machine_speed
-from mechopt.solvers.stop_impact import law_of, synthesise_law
-from mechopt.solvers.stop_impact.cam_shape import SHOP_PREFIX
+from mechopt.solvers.stop_impact import SHOP_PREFIX, law_of, synthesise_law
 
 # The lift cam whose law is synthesised: its scene states the cam's bore and its phase on the shaft
 # (from the loom's cyclogram); the cam's geometry is the solver's (its cam_* settings)
