@@ -16,18 +16,20 @@ from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Interval, Tolerance
 from mechopt.models.loom import Cyclogram, stress_bound_deg, stress_MPa
 from mechopt.solvers.loom.plan import plan_cyclogram
-from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
+from mechopt.solvers.stop_impact.law import chain_rebounds_mm
 from mechopt.solvers.stop_impact.lever_box import LeverBox
 
 
 def exact_amplitude_mm(task: Cyclogram, t_deg, speed_rpm=None, lost=None):
     """The lever's exact first rebound a(t, n) [mm] (the chain cam -> approach velocity -> impact
     -> eq. (2), solvers/stop_impact/law.py) at `speed_rpm`, by default the task's speed;
-    vectorised over t and n. Where the roller leaves its cam: RollerLeftCam, or `lost`."""
+    vectorised over t and n, the rises by the chain's batch path (`chain_rebounds_mm`: exact,
+    CVODES' per-point rise agrees to its own error, ~1e-10). Where the roller leaves its cam:
+    RollerLeftCam, or `lost`."""
     speed = task.speed_rpm if speed_rpm is None else speed_rpm
     if speed is None:
         raise ModelError("speed_rpm: the exact rebound law needs the main shaft's speed", key="speed_rpm")
-    return rebound_amplitude_mm(task.lever_model, speed, t_deg, lost=lost)
+    return chain_rebounds_mm(task.lever_model, speed, t_deg, lost=lost)
 
 
 @dataclass(frozen=True)
@@ -69,12 +71,19 @@ def exact_amplitude_bound(task: Cyclogram, speed_rpm: float, lo_deg: float, to_d
     limit (or where the roller leaves its cam), the crossing in that last step by brentq
     (bisection where the roller leaves: no rebound there to take a root of). a(t) is wavy (the
     lever rings during the rise), so no tangent can give this bound; wiggles narrower than the
-    step are not resolved (tests/loom/test_loom_repair.py checks the step against a dense scan)."""
+    step are not resolved (tests/loom/test_loom_repair.py checks the step against a dense scan).
+    The walk's points are evaluated WALK_BATCH at a time through the chain's batch path
+    (`walk_amplitude_mm`), in the walk's order; the first over the limit ends it as before (the
+    batch's points below it are counted in `evaluations`, their values unused)."""
     limit, count = task.amplitude_limit_mm, [0]
 
+    def excesses(t):
+        t = np.atleast_1d(np.asarray(t, float))
+        count[0] += t.size
+        return walk_amplitude_mm(task, t, speed_rpm) - limit
+
     def excess(t):
-        count[0] += 1
-        return float(np.ravel(exact_amplitude_mm(task, t, speed_rpm, lost=np.inf))[0]) - limit
+        return float(excesses(t)[0])
 
     def bound(from_deg, amplitude, why):
         return AmplitudeBound(speed_rpm, from_deg, lo_deg, to_deg, step_deg, amplitude, why, count[0])
@@ -83,18 +92,29 @@ def exact_amplitude_bound(task: Cyclogram, speed_rpm: float, lo_deg: float, to_d
         return bound(None, top + limit, "none")
     hi = to_deg
     while hi > lo_deg:
-        lo = max(hi - step_deg, lo_deg)
-        over = excess(lo)
-        if over > 0 and math.isfinite(over):
-            root = brentq(excess, lo, hi, xtol=1e-12 * hi, rtol=4 * np.finfo(float).eps)
-            return bound(root, excess(root) + limit, "crossing")
-        if over > 0:                            # the roller leaves its cam at lo: its edge by bisection
-            while hi - lo > 1e-10 * hi:
-                mid = 0.5 * (lo + hi)
-                lo, hi = (mid, hi) if excess(mid) > 0 else (lo, mid)
-            return bound(hi, excess(hi) + limit, "roller_left")
-        hi = lo
+        tops, los = [], []
+        while hi > lo_deg and len(los) < WALK_BATCH:       # the walk's points, stepped as one by one
+            tops.append(hi)
+            hi = max(hi - step_deg, lo_deg)
+            los.append(hi)
+        for top_deg, lo, over in zip(tops, los, excesses(los)):
+            if over > 0 and math.isfinite(over):
+                root = brentq(excess, lo, top_deg, xtol=1e-12 * top_deg, rtol=4 * np.finfo(float).eps)
+                return bound(root, excess(root) + limit, "crossing")
+            if over > 0:                            # the roller leaves its cam at lo: its edge by bisection
+                while top_deg - lo > 1e-10 * top_deg:
+                    mid = 0.5 * (lo + top_deg)
+                    lo, top_deg = (mid, top_deg) if excess(mid) > 0 else (lo, mid)
+                return bound(top_deg, excess(top_deg) + limit, "roller_left")
     return bound(lo_deg, excess(lo_deg) + limit, "range")
+
+
+WALK_BATCH = 32                  # the walk's points per call of the chain's batch path
+
+
+def walk_amplitude_mm(task: Cyclogram, t_deg, speed_rpm: float):
+    """`exact_amplitude_mm` at many t for the walk: inf where the roller leaves its cam."""
+    return exact_amplitude_mm(task, t_deg, speed_rpm, lost=np.inf)
 
 
 @dataclass
