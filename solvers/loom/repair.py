@@ -16,6 +16,7 @@ from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Interval, Tolerance
 from mechopt.models.loom import Cyclogram, stress_bound_deg, stress_MPa
 from mechopt.solvers.loom.plan import plan_cyclogram
+from mechopt.solvers.stop_impact.cam_follower import dwell_length, follower_data
 from mechopt.solvers.stop_impact.law import chain_rebounds_mm
 from mechopt.solvers.stop_impact.lever_box import LeverBox
 
@@ -312,21 +313,63 @@ _AMPLITUDE_BOUNDS = BuildCache("loom.amplitude_bound", maxsize=64)
 
 def cached_amplitude_bound(task: Cyclogram, speed_rpm: float, lo_deg: float, to_deg: float,
                            step_deg: float) -> AmplitudeBound:
-    """`exact_amplitude_bound` on [lo_deg, to_deg], from one walk per lever, limit, speed and top
-    (kept: a walk of the chain is about a hundred rises, a second). The walk goes down to
-    WALK_FLOOR_DEG; an arc whose [phi] lies above its crossing is shown to hold from [phi] on
-    (the walk saw a <= limit on all of [phi, to_deg]), so arcs with different [phi] share it."""
+    """`exact_amplitude_bound` on [lo_deg, to_deg], from one walk per lever, limit and grid of n / t
+    (kept). The walk goes down to WALK_FLOOR_DEG; an arc whose [phi] lies above its crossing is
+    shown to hold from [phi] on (the walk saw a <= limit on all of [phi, to_deg]), so arcs with
+    different [phi] share it.
+
+    What determines a walk: the lever as the chain reads it (`walk_lever`: not the angle, speeds
+    or limit a scene reports at), the limit, and its points r_i = n / t_i, t_i = to - i step, i.e.
+    (to / n, step / n). The rebound is a function of r = n / t alone where the law's shape is
+    fixed: the rise in its own time xi depends on lambda = omega t / (6 n) and the roller's force
+    N = F_closure + m H X'' / T^2 on T = t / (6 n) only, and eq. (2) on v0 = X'(contact) H / T
+    (models/cam_follower.py, models/stop_impact.py) -- except where the cycle cuts the dwell
+    (360 / t - 1 below the dwell's periods: it depends on t and n apart; it is checked at the
+    walks' tops, where it binds first since it cuts only above t = 360 - 48 pi n / omega). So a walk
+    at speed n1 is the walk at n2 = c n1 on the range and step scaled by c, every bound scaled
+    by c (tests/loom/test_walk.py checks it against a fresh walk at n2). A walk that ran down to
+    its floor is not scaled (the floor is an angle)."""
     if speed_rpm is None:
         raise ModelError("speed_rpm: the exact rebound law needs the main shaft's speed", key="speed_rpm")
     check_walk(to_deg, step_deg)
-    key = (task.lever_model, task.amplitude_limit_mm, float(speed_rpm), float(to_deg),
-           float(step_deg))
-    walk, _ = _AMPLITUDE_BOUNDS.get(key, lambda: exact_amplitude_bound(task, speed_rpm, min(WALK_FLOOR_DEG, to_deg),
-                                                                       to_deg, step_deg))
+    n, floor = float(speed_rpm), min(WALK_FLOOR_DEG, to_deg)
+    key = (walk_lever(task), task.amplitude_limit_mm, float(to_deg) / n, float(step_deg) / n)
+    (walk, walked_rpm), _ = _AMPLITUDE_BOUNDS.get(
+        key, lambda: (exact_amplitude_bound(task, n, floor, to_deg, step_deg), n))
+    if walked_rpm != n:
+        c = n / walked_rpm
+        if walk.why == "range" or not (_n_over_t(task, walked_rpm, walk.to_deg) and _n_over_t(task, n, to_deg)):
+            walk = exact_amplitude_bound(task, n, floor, to_deg, step_deg)
+        else:
+            walk = dataclasses.replace(walk, speed_rpm=n, from_deg=None if walk.from_deg is None else walk.from_deg * c,
+                                       lo_deg=floor, to_deg=to_deg, step_deg=step_deg)
     if walk.from_deg is not None and walk.from_deg <= lo_deg:
         return dataclasses.replace(walk, from_deg=lo_deg, lo_deg=lo_deg, why="range",
                                    amplitude_mm=float(np.ravel(exact_amplitude_mm(task, lo_deg, speed_rpm))[0]))
     return dataclasses.replace(walk, lo_deg=lo_deg)
+
+
+# the lever's inputs the rebound a(t, n) does not read (the angle and speeds a scene reports at,
+# its limit: the walk's key holds the limit it is walked against)
+_NOT_READ_BY_THE_CHAIN = ("t_deg", "speed_nominal_rpm", "amplitude_limit_mm", "speeds_rpm")
+
+
+def walk_lever(task: Cyclogram) -> tuple:
+    """The task's lever as the walk's key, its inputs the chain reads (name, value): two machines
+    (or scenes) with one lever share its walk."""
+    lever = task.lever_model
+    return tuple((f.name, getattr(lever, f.name)) for f in dataclasses.fields(lever)
+                 if f.name not in _NOT_READ_BY_THE_CHAIN)
+
+
+def _n_over_t(task: Cyclogram, speed_rpm: float, top_deg: float) -> bool:
+    """Whether the rebound is a function of n / t on a walk from top_deg down at speed n: always
+    for the fitted law (v0 proportional to n / t); for the chain while the cycle does not cut the
+    dwell after the rise, which it would first at the top."""
+    lever = task.lever_model
+    if "cam_drive" not in lever.effects:
+        return True
+    return not dwell_length(follower_data(lever, speed_rpm, top_deg)[0], top_deg)[1]
 
 
 def box_amplitude_bound(task: Cyclogram, box: LeverBox | None, speed_rpm: float, lo_deg: float, to_deg: float,

@@ -65,14 +65,22 @@ def _law_parts(law, xi):
     """(S, S', S'') at xi (any shape): the rise on [0, 1], rest before, the dwell after (as
     `law_values`, from the library's numpy forms)."""
     xi = np.asarray(xi, float)
+    inside = np.clip(xi.ravel(), 0.0, 1.0)
     if isinstance(law, SplineLaw):
-        flat = law.values(xi.ravel())[:3]
+        flat = [np.nan_to_num(part(inside)) for part in _spline_parts(law)]
     else:
-        flat = library_law(law).values(np.clip(xi.ravel(), 0.0, 1.0))[:3]
-        after, before = xi.ravel() > 1.0, xi.ravel() < 0.0
-        flat = (np.where(after, 1.0, np.where(before, 0.0, flat[0])),
-                *(np.where(after | before, 0.0, v) for v in flat[1:]))
+        flat = library_law(law).values(inside)[:3]
+    after, before = xi.ravel() > 1.0, xi.ravel() < 0.0
+    flat = (np.where(after, 1.0, np.where(before, 0.0, flat[0])),
+            *(np.where(after | before, 0.0, v) for v in flat[1:]))
     return tuple(np.reshape(v, xi.shape) for v in flat)
+
+
+@memoised(maxsize=16)
+def _spline_parts(law: SplineLaw):
+    """S, S', S'' of a synthesised law as B-splines, built once (SplineLaw.values builds them per call)."""
+    spline = law._spline()
+    return spline, spline.derivative(1), spline.derivative(2)
 
 
 def _piece_integrals(law, mu, starts, ends):
@@ -111,8 +119,10 @@ def _grid_integrals(law, joins, mu):
     shift = np.exp(-mu[:, None] * offsets[None, :])
     sums = shift.real @ drive.T + 1j * (shift.imag @ drive.T)     # (real products: BLAS)
     cells = np.exp(-mu[:, None] * grid[None, :-1]) * sums
-    for c in split:
-        cells[:, c] = _interval_integrals(law, joins, mu, np.full(mu.size, grid[c]), np.full(mu.size, grid[c + 1]))
+    if split.size:              # every (mu, join cell) pair in one call
+        pairs = _interval_integrals(law, joins, np.repeat(mu, split.size), np.tile(grid[split], mu.size),
+                                    np.tile(grid[split + 1], mu.size))
+        cells[:, split] = pairs.reshape(mu.size, split.size)
     return np.concatenate([np.zeros((mu.size, 1), complex), np.cumsum(cells, axis=1)], axis=1)
 
 
@@ -197,7 +207,9 @@ def _locate(law, mu, w, joins, lo, hi, I_lo, target):
         with np.errstate(divide="ignore", invalid="ignore"):
             step = np.where(slope > 0, xi - gap / slope, 0.5 * (a + b))
         nxt = np.where((a < step) & (step < b), step, 0.5 * (a + b))
-        done |= np.abs(nxt - xi) <= 1e-15
+        # follow_cam stops where the next iterate is within 1e-15; here also where Newton's own
+        # step is (at the root the bracket may reject it and restart bisection for ~1e-15 more)
+        done |= (np.abs(nxt - xi) <= 1e-15) | (np.abs(step - xi) <= 1e-15)
         if done.all():
             break
         xi = np.where(done, xi, nxt)
