@@ -20,6 +20,10 @@ from mechopt.solvers.stop_impact.cam_follower import dwell_length, follower_data
 from mechopt.solvers.stop_impact.law import chain_rebounds_mm
 from mechopt.solvers.stop_impact.lever_box import LeverBox
 
+# the exact law a(t, n) the loom's solvers evaluate: the chain by its batch path (one name, where a
+# test puts another law in its place)
+rebound_amplitude_mm = chain_rebounds_mm
+
 
 def exact_amplitude_mm(task: Cyclogram, t_deg, speed_rpm=None, lost=None):
     """The lever's exact first rebound a(t, n) [mm] (the chain cam -> approach velocity -> impact
@@ -30,7 +34,7 @@ def exact_amplitude_mm(task: Cyclogram, t_deg, speed_rpm=None, lost=None):
     speed = task.speed_rpm if speed_rpm is None else speed_rpm
     if speed is None:
         raise ModelError("speed_rpm: the exact rebound law needs the main shaft's speed", key="speed_rpm")
-    return chain_rebounds_mm(task.lever_model, speed, t_deg, lost=lost)
+    return rebound_amplitude_mm(task.lever_model, speed, t_deg, lost=lost)
 
 
 @dataclass(frozen=True)
