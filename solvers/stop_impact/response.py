@@ -12,7 +12,6 @@ for every reading). The first rebound is the largest q in [0, 2 tau + 2 pi / ome
 * `ode_amplitude_m`       CasADi/CVODES on the ODE itself, integrated phase by phase so the
   integrator never steps over a kink of Q_F.
 """
-import dataclasses
 import math
 
 import casadi as ca
@@ -89,7 +88,7 @@ def response_parts(imp: Impact, t):
     h0, U0, R0 = _kernel(imp, t)
     pressed = (-P / m * U0, -P / m * h0[0], -P / m * h0[1])
     moving = (v0 * h0[0], v0 * h0[1], v0 * h0[2])
-    if np.all(np.asarray(F) == 0.0):         # (F an array: many approaches at once)
+    if F == 0.0:
         return moving, pressed
     h1, U1, R1 = _kernel(imp, t - tau, order=6 if expanding else 2)
     h2, U2, R2 = _kernel(imp, t - 2 * tau, order=2)
@@ -105,23 +104,20 @@ def response_parts(imp: Impact, t):
 def _polish_peak(imp, t_grid, q_grid, derivatives):
     """Largest q on a grid, polished by safeguarded Newton on q' = 0 inside the grid cells either
     side (`derivatives(t) -> (q, q', q'')`): a Newton step that leaves the bracket is replaced by
-    bisection, so a peak far narrower than a cell (heavy damping) is still found. Over many
-    responses at once (q_grid rows) each row stops where it would alone (its t frozen once done)."""
+    bisection, so a peak far narrower than a cell (heavy damping) is still found."""
     i = np.argmax(q_grid, axis=-1)
     t = t_grid[i]
     best = np.take_along_axis(q_grid, i[..., None], -1)[..., 0] if q_grid.ndim > 1 else q_grid[i]
     dt = t_grid[1] - t_grid[0]
     lo, hi = np.maximum(t - dt, t_grid[0]), np.minimum(t + dt, t_grid[-1])
-    frozen = np.zeros(np.shape(t), bool)
     for _ in range(100):
         _, qd, qdd = derivatives(t)
         lo, hi = np.where(qd > 0, t, lo), np.where(qd > 0, hi, t)
         newton = t - qd / np.where(qdd < 0, qdd, -1.0)
         inside = (qdd < 0) & (newton > lo) & (newton < hi)
         t_next = np.where(inside, newton, 0.5 * (lo + hi))
-        done = frozen | (np.abs(t_next - t) <= 1e-15 * t_grid[-1])
-        t = np.where(frozen, t, t_next)
-        frozen = done
+        done = np.abs(t_next - t) <= 1e-15 * t_grid[-1]
+        t = t_next
         if np.all(done):
             break
     return np.maximum(derivatives(t)[0], best), t
@@ -133,17 +129,6 @@ def closed_form_amplitude_m(imp: Impact):
     q = closed_form_response(imp, t)[0]
     peak, when = _polish_peak(imp, t, q, lambda s: closed_form_response(imp, s))
     return max(float(peak), 0.0), float(when)
-
-
-def closed_form_amplitudes_m(imp: Impact):
-    """`closed_form_amplitude_m` of many approaches of one lever at once: `imp` with v0_m_s and
-    force_N arrays (N,), the rest shared. Returns (amplitudes [m], times [s]), each row as alone."""
-    t = np.linspace(0.0, imp.window_s, GRID_POINTS)
-    rows = dataclasses.replace(imp, v0_m_s=np.asarray(imp.v0_m_s, float)[:, None],
-                               force_N=np.asarray(imp.force_N, float)[:, None])
-    q = closed_form_response(rows, t)[0]
-    peak, when = _polish_peak(imp, t, q, lambda s: closed_form_response(imp, s))
-    return np.maximum(peak, 0.0), when
 
 
 # --- quadrature

@@ -158,32 +158,29 @@ def rise_batch(task: LeverStop, speed_rpm, t_deg):
     e, de = _state(mu[:, None], w[:, None], grid[None, :], I_nodes)
     X = S_grid[None, :] + e
     hit = (X[:, :-1] < target[:, None]) & (X[:, 1:] >= target[:, None])
-    in_rise = hit.any(axis=1)
-    j_rise = np.argmax(hit, axis=1)
-    # the dwell's samples (I fixed at I(1)), for the points that do not meet the plate in the rise
-    I_end = I_nodes[:, -1]
-    dwell_xi = 1.0 + dwell[:, None] * grid[None, :]
-    e_d, de_d = _state(mu[:, None], w[:, None], dwell_xi, I_end[:, None])
-    hit_d = (1.0 + e_d[:, :-1] < target[:, None]) & (1.0 + e_d[:, 1:] >= target[:, None])
-    found = in_rise | hit_d.any(axis=1)
-    j = np.where(in_rise, j_rise, np.argmax(hit_d, axis=1))
-    rows = np.arange(mu.size)
-    lo = np.where(in_rise, grid[j], dwell_xi[rows, j])
-    hi = np.where(in_rise, grid[np.minimum(j + 1, POINTS - 1)], dwell_xi[rows, np.minimum(j + 1, POINTS - 1)])
-    I_lo = np.where(in_rise, I_nodes[rows, j], I_end)
+    in_rise, j_rise = hit.any(axis=1), np.argmax(hit, axis=1)
+    rows, k = np.arange(mu.size), np.arange(POINTS)[None, :]
+    damp, stiff = 2.0 * zeta * lam, lam * lam
+    lo, hi, I_lo = grid[j_rise], grid[np.minimum(j_rise + 1, POINTS - 1)], I_nodes[rows, j_rise]
+    rise_seen = np.where(in_rise[:, None], k <= j_rise[:, None], True)
+    least = np.where(rise_seen, -damp[:, None] * de - stiff[:, None] * e, np.inf).min(axis=1)
+    found = in_rise.copy()
+    late = np.flatnonzero(~in_rise)
+    if late.size:               # the dwell's samples (I fixed at I(1)) where the rise does not meet the plate
+        xi_d = 1.0 + dwell[late, None] * grid[None, :]
+        e_d, de_d = _state(mu[late, None], w[late, None], xi_d, I_nodes[late, -1:])
+        hit_d = (1.0 + e_d[:, :-1] < target[late, None]) & (1.0 + e_d[:, 1:] >= target[late, None])
+        j_d, at = np.argmax(hit_d, axis=1), np.arange(late.size)
+        found[late] = hit_d.any(axis=1)
+        lo[late], hi[late] = xi_d[at, j_d], xi_d[at, np.minimum(j_d + 1, POINTS - 1)]
+        I_lo[late] = I_nodes[late, -1]
+        ddX_d = -damp[late, None] * de_d - stiff[late, None] * e_d
+        least[late] = np.minimum(least[late], np.where(k <= j_d[:, None], ddX_d, np.inf).min(axis=1))
     xi_c, e_c, de_c = _locate(task.law, mu, w, joins, lo, hi, I_lo, target)
-    # the roller's force on the samples up to the contact (follow_cam's `force`)
-    scale = task.mass_kg * H / T**2
+    # the roller's force N = F_closure + m H X'' / T^2 on the samples up to the contact and at it
+    least = np.minimum(least, -damp * de_c - stiff * e_c)
     closure = task.closure_force_N if "cam_drive" in task.effects else 0.0
-    rise_ddX = -(2.0 * zeta * lam)[:, None] * de - (lam * lam)[:, None] * e
-    dwell_ddX = -(2.0 * zeta * lam)[:, None] * de_d - (lam * lam)[:, None] * e_d
-    k = np.arange(POINTS)[None, :]
-    rise_seen = np.where(in_rise[:, None], k <= j[:, None], True)
-    dwell_seen = ~in_rise[:, None] & (k <= j[:, None])
-    least = np.minimum(np.where(rise_seen, rise_ddX, np.inf).min(axis=1),
-                       np.where(dwell_seen, dwell_ddX, np.inf).min(axis=1))
-    least = np.minimum(least, -(2.0 * zeta * lam) * de_c - lam * lam * e_c)
-    left = closure + scale * least < 0
+    left = closure + task.mass_kg * H / T**2 * least < 0
     dS_c = _law_parts(task.law, xi_c)[1]
     speed = (dS_c + de_c) * H / T
     good = found & np.isfinite(speed)
