@@ -18,14 +18,15 @@ From there follow_cam's rules: the first sample where X = S + e reaches the plat
 then the dwell's samples), the contact by the same safeguarded Newton, v0 = X' H / T there, and
 the roller leaves its cam where N = F_closure + m H X'' / T^2 < 0 on a sample before the contact
 (X'' = -2 zeta lambda e' - lambda^2 e, the law's S'' cancelling). CVODES at the chain's reltol
-1e-12 differs from this by its own error (~1e-10 relative in v0; tests/stop_impact/test_walk_batch.py).
+1e-12 differs from this by its own error (~1e-10 relative in v0; tests/loom/test_walk.py).
 
-Points this path does not take (zeta >= 1, a law of unknown joins, no contact within the
-window, a dwell the cycle cuts, a growth e^{zeta lambda} past EXP_LIMIT) are marked for the
-per-point chain."""
+Points this path does not take (zeta >= 1, a law of unknown joins or of two joins in one cell,
+no contact within the window, a dwell the cycle cuts, a growth e^{zeta lambda} past EXP_LIMIT)
+are marked for the per-point chain."""
 import numpy as np
 
 from mechopt.kit.cache import memoised
+from mechopt.kit.errors import ModelError
 from mechopt.models.cam_law import SplineLaw
 from mechopt.models.cam_laws import law as library_law
 from mechopt.models.stop_impact import LeverStop
@@ -47,7 +48,7 @@ def law_joins(law) -> np.ndarray | None:
     else:
         try:
             knots = np.asarray(library_law(law).breaks, float)
-        except Exception:       # noqa: BLE001  (a law the library does not name: the per-point chain)
+        except ModelError:      # a law the library does not name: the per-point chain
             return None
     return knots[(knots > 0.0) & (knots < 1.0)]
 
@@ -79,7 +80,8 @@ def _law_parts(law, xi):
 @memoised(maxsize=16)
 def _spline_parts(law: SplineLaw):
     """S, S', S'' of a synthesised law as B-splines, built once (SplineLaw.values builds them per call)."""
-    spline = law._spline()
+    from scipy.interpolate import BSpline
+    spline = BSpline(np.asarray(law.knots, float), np.asarray(law.coefficients, float), law.degree, extrapolate=False)
     return spline, spline.derivative(1), spline.derivative(2)
 
 
@@ -140,7 +142,7 @@ def rise_batch(task: LeverStop, speed_rpm, t_deg):
     size = n_rpm.size
     v0, outcome = np.zeros(size), np.full(size, NOT_TAKEN)
     joins = law_joins(task.law) if "cam_drive" in task.effects else None
-    if joins is None or size == 0:
+    if joins is None or size == 0 or np.any(np.diff(joins) <= 1.0 / (POINTS - 1)):     # one join a cell at most
         return v0, outcome
     data = [follower_data(task, n, tt) for n, tt in zip(n_rpm, t)]
     lam, zeta, H, target, T = (np.array([d[i] for d in data]) for i in range(5))
