@@ -92,17 +92,19 @@ def exact_amplitude_bound(task: Cyclogram, speed_rpm: float, lo_deg: float, to_d
 
     def bound(from_deg, amplitude, why):
         return AmplitudeBound(speed_rpm, from_deg, lo_deg, to_deg, step_deg, amplitude, why, count[0])
-    top = excess(to_deg)
-    if top > 0:
-        return bound(None, top + limit, "none")
-    hi = to_deg
-    while hi > lo_deg:
+    hi, first = to_deg, True
+    while hi > lo_deg or first:
         tops, los = [], []
         while hi > lo_deg and len(los) < WALK_BATCH:       # the walk's points, stepped as one by one
             tops.append(hi)
             hi = max(hi - step_deg, lo_deg)
             los.append(hi)
-        for top_deg, lo, over in zip(tops, los, excesses(los)):
+        overs = excesses([to_deg, *los] if first else los)
+        if first:                               # the top in the first batch: over the limit there, none holds
+            top, overs, first = overs[0], overs[1:], False
+            if top > 0:
+                return bound(None, top + limit, "none")
+        for top_deg, lo, over in zip(tops, los, overs):
             if over > 0 and math.isfinite(over):
                 root = brentq(excess, lo, top_deg, xtol=1e-12 * top_deg, rtol=4 * np.finfo(float).eps)
                 return bound(root, excess(root) + limit, "crossing")
