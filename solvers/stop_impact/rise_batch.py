@@ -53,28 +53,28 @@ def law_joins(law) -> np.ndarray | None:
     return knots[(knots > 0.0) & (knots < 1.0)]
 
 
-def _pieces(left, right, joins):
-    """Each interval [left, right] split at the join inside it (at most one: the joins lie further
-    apart than a cell), as (starts, ends) of two pieces per interval (the first may be empty)."""
-    k = np.searchsorted(joins, left, side="right")
-    inside = np.append(joins, np.inf)[k]
-    cut = np.where(inside < right, inside, left)
-    return np.stack([left, cut], -1), np.stack([cut, right], -1)
+def _cuts(left, right, joins):
+    """Where each interval [left, right] is cut: at the join inside it (at most one: the joins lie
+    further apart than a cell), else at left (an empty first piece)."""
+    inside = np.append(joins, np.inf)[np.searchsorted(joins, left, side="right")]
+    return np.where(inside < right, inside, left)
 
 
 def _law_parts(law, xi):
     """(S, S', S'') at xi (any shape): the rise on [0, 1], rest before, the dwell after (as
     `law_values`, from the library's numpy forms)."""
     xi = np.asarray(xi, float)
-    inside = np.clip(xi.ravel(), 0.0, 1.0)
+    flat = xi.ravel()
+    inside = np.clip(flat, 0.0, 1.0)
     if isinstance(law, SplineLaw):
-        flat = [np.nan_to_num(part(inside)) for part in _spline_parts(law)]
+        parts = [np.nan_to_num(part(inside)) for part in _spline_parts(law)]
     else:
-        flat = library_law(law).values(inside)[:3]
-    after, before = xi.ravel() > 1.0, xi.ravel() < 0.0
-    flat = (np.where(after, 1.0, np.where(before, 0.0, flat[0])),
-            *(np.where(after | before, 0.0, v) for v in flat[1:]))
-    return tuple(np.reshape(v, xi.shape) for v in flat)
+        parts = list(library_law(law).values(inside)[:3])
+    if np.any(inside != flat):                  # past the rise (or before it)
+        after, before = flat > 1.0, flat < 0.0
+        parts = [np.where(after, 1.0, np.where(before, 0.0, parts[0])),
+                 *(np.where(after | before, 0.0, v) for v in parts[1:])]
+    return tuple(np.reshape(v, xi.shape) for v in parts)
 
 
 @memoised(maxsize=16)
@@ -85,18 +85,15 @@ def _spline_parts(law: SplineLaw):
     return spline, spline.derivative(1), spline.derivative(2)
 
 
-def _piece_integrals(law, mu, starts, ends):
-    """integral_starts^ends e^{-mu s} S''(s) ds, one piece per point (mu, starts, ends: (N,))."""
-    half = 0.5 * (ends - starts)
-    nodes = (0.5 * (ends + starts))[:, None] + half[:, None] * _X
-    return (np.exp(-mu[:, None] * nodes) * _law_parts(law, nodes)[2] * _W * half[:, None]).sum(-1)
-
-
 def _interval_integrals(law, joins, mu, left, right):
-    """integral_left^right e^{-mu s} S''(s) ds per point, split at a join inside."""
-    first, second = _pieces(left, right, joins)
-    return (_piece_integrals(law, mu, first[:, 0], first[:, 1])
-            + _piece_integrals(law, mu, second[:, 0], second[:, 1]))
+    """integral_left^right e^{-mu s} S''(s) ds per point (mu, left, right: (N,)), by Gauss-Legendre
+    on the two pieces either side of a join inside (the first empty without one)."""
+    cut = _cuts(left, right, joins)
+    starts, ends = np.stack([left, cut], -1), np.stack([cut, right], -1)
+    half = 0.5 * (ends - starts)
+    nodes = (0.5 * (ends + starts))[..., None] + half[..., None] * _X
+    drive = _law_parts(law, nodes)[2] * _W * half[..., None]
+    return (np.exp(-mu[:, None, None] * nodes) * drive).sum(axis=(-2, -1))
 
 
 @memoised(maxsize=16)
