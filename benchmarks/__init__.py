@@ -11,8 +11,9 @@ import importlib
 from mechopt.mechanisms import mechanisms
 
 SPINE_STUDIES = {"sweep": "mechopt.benchmarks.sweep"}      # of the spine, not of one mechanism
-# a mechanism's second study, also run within its first (stop-impact's window LP: mechopt bench synthesis)
-MORE_STUDIES = {"synthesis": "mechopt.benchmarks.synthesis"}
+# a mechanism's further studies (stop-impact's window LP, also run within its first: mechopt bench synthesis;
+# the loom's exact-bound walk and the co-design's whole command: mechopt bench walk)
+MORE_STUDIES = {"synthesis": "mechopt.benchmarks.synthesis", "walk": "mechopt.benchmarks.walk"}
 
 
 def studies() -> dict[str, str]:

@@ -16,14 +16,21 @@ from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Interval, Tolerance
 from mechopt.models.loom import Cyclogram, stress_bound_deg, stress_MPa
 from mechopt.solvers.loom.plan import plan_cyclogram
-from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
+from mechopt.solvers.stop_impact.cam_follower import dwell_length, follower_data
+from mechopt.solvers.stop_impact.law import chain_rebounds_mm
 from mechopt.solvers.stop_impact.lever_box import LeverBox
+
+# the exact law a(t, n) the loom's solvers evaluate: the chain by its batch path (one name, where a
+# test puts another law in its place)
+rebound_amplitude_mm = chain_rebounds_mm
 
 
 def exact_amplitude_mm(task: Cyclogram, t_deg, speed_rpm=None, lost=None):
     """The lever's exact first rebound a(t, n) [mm] (the chain cam -> approach velocity -> impact
     -> eq. (2), solvers/stop_impact/law.py) at `speed_rpm`, by default the task's speed;
-    vectorised over t and n. Where the roller leaves its cam: RollerLeftCam, or `lost`."""
+    vectorised over t and n, the rises by the chain's batch path (`chain_rebounds_mm`: exact,
+    CVODES' per-point rise agrees to its own error, ~1e-10). Where the roller leaves its cam:
+    RollerLeftCam, or `lost`."""
     speed = task.speed_rpm if speed_rpm is None else speed_rpm
     if speed is None:
         raise ModelError("speed_rpm: the exact rebound law needs the main shaft's speed", key="speed_rpm")
@@ -69,32 +76,52 @@ def exact_amplitude_bound(task: Cyclogram, speed_rpm: float, lo_deg: float, to_d
     limit (or where the roller leaves its cam), the crossing in that last step by brentq
     (bisection where the roller leaves: no rebound there to take a root of). a(t) is wavy (the
     lever rings during the rise), so no tangent can give this bound; wiggles narrower than the
-    step are not resolved (tests/loom/test_loom_repair.py checks the step against a dense scan)."""
+    step are not resolved (tests/loom/test_loom_repair.py checks the step against a dense scan).
+    The walk's points are evaluated WALK_BATCH at a time through the chain's batch path
+    (`walk_amplitude_mm`), in the walk's order; the first over the limit ends it as before (the
+    batch's points below it are counted in `evaluations`, their values unused)."""
     limit, count = task.amplitude_limit_mm, [0]
 
+    def excesses(t):
+        t = np.atleast_1d(np.asarray(t, float))
+        count[0] += t.size
+        return walk_amplitude_mm(task, t, speed_rpm) - limit
+
     def excess(t):
-        count[0] += 1
-        return float(np.ravel(exact_amplitude_mm(task, t, speed_rpm, lost=np.inf))[0]) - limit
+        return float(excesses(t)[0])
 
     def bound(from_deg, amplitude, why):
         return AmplitudeBound(speed_rpm, from_deg, lo_deg, to_deg, step_deg, amplitude, why, count[0])
-    top = excess(to_deg)
-    if top > 0:
-        return bound(None, top + limit, "none")
-    hi = to_deg
-    while hi > lo_deg:
-        lo = max(hi - step_deg, lo_deg)
-        over = excess(lo)
-        if over > 0 and math.isfinite(over):
-            root = brentq(excess, lo, hi, xtol=1e-12 * hi, rtol=4 * np.finfo(float).eps)
-            return bound(root, excess(root) + limit, "crossing")
-        if over > 0:                            # the roller leaves its cam at lo: its edge by bisection
-            while hi - lo > 1e-10 * hi:
-                mid = 0.5 * (lo + hi)
-                lo, hi = (mid, hi) if excess(mid) > 0 else (lo, mid)
-            return bound(hi, excess(hi) + limit, "roller_left")
-        hi = lo
+    hi, first = to_deg, True
+    while hi > lo_deg or first:
+        tops, los = [], []
+        while hi > lo_deg and len(los) < WALK_BATCH:       # the walk's points, stepped as one by one
+            tops.append(hi)
+            hi = max(hi - step_deg, lo_deg)
+            los.append(hi)
+        overs = excesses([to_deg, *los] if first else los)
+        if first:                               # the top in the first batch: over the limit there, none holds
+            top, overs, first = overs[0], overs[1:], False
+            if top > 0:
+                return bound(None, top + limit, "none")
+        for top_deg, lo, over in zip(tops, los, overs):
+            if over > 0 and math.isfinite(over):
+                root = brentq(excess, lo, top_deg, xtol=1e-12 * top_deg, rtol=4 * np.finfo(float).eps)
+                return bound(root, excess(root) + limit, "crossing")
+            if over > 0:                            # the roller leaves its cam at lo: its edge by bisection
+                while top_deg - lo > 1e-10 * top_deg:
+                    mid = 0.5 * (lo + top_deg)
+                    lo, top_deg = (mid, top_deg) if excess(mid) > 0 else (lo, mid)
+                return bound(top_deg, excess(top_deg) + limit, "roller_left")
     return bound(lo_deg, excess(lo_deg) + limit, "range")
+
+
+WALK_BATCH = 32                  # the walk's points per call of the chain's batch path
+
+
+def walk_amplitude_mm(task: Cyclogram, t_deg, speed_rpm: float):
+    """`exact_amplitude_mm` at many t for the walk: inf where the roller leaves its cam."""
+    return exact_amplitude_mm(task, t_deg, speed_rpm, lost=np.inf)
 
 
 @dataclass
@@ -292,21 +319,63 @@ _AMPLITUDE_BOUNDS = BuildCache("loom.amplitude_bound", maxsize=64)
 
 def cached_amplitude_bound(task: Cyclogram, speed_rpm: float, lo_deg: float, to_deg: float,
                            step_deg: float) -> AmplitudeBound:
-    """`exact_amplitude_bound` on [lo_deg, to_deg], from one walk per lever, limit, speed and top
-    (kept: a walk of the chain is about a hundred rises, a second). The walk goes down to
-    WALK_FLOOR_DEG; an arc whose [phi] lies above its crossing is shown to hold from [phi] on
-    (the walk saw a <= limit on all of [phi, to_deg]), so arcs with different [phi] share it."""
+    """`exact_amplitude_bound` on [lo_deg, to_deg], from one walk per lever, limit and grid of n / t
+    (kept). The walk goes down to WALK_FLOOR_DEG; an arc whose [phi] lies above its crossing is
+    shown to hold from [phi] on (the walk saw a <= limit on all of [phi, to_deg]), so arcs with
+    different [phi] share it.
+
+    What determines a walk: the lever as the chain reads it (`walk_lever`: not the angle, speeds
+    or limit a scene reports at), the limit, and its points r_i = n / t_i, t_i = to - i step, i.e.
+    (to / n, step / n). The rebound is a function of r = n / t alone where the law's shape is
+    fixed: the rise in its own time xi depends on lambda = omega t / (6 n) and the roller's force
+    N = F_closure + m H X'' / T^2 on T = t / (6 n) only, and eq. (2) on v0 = X'(contact) H / T
+    (models/cam_follower.py, models/stop_impact.py) -- except where the cycle cuts the dwell
+    (360 / t - 1 below the dwell's periods: it depends on t and n apart; it is checked at the
+    walks' tops, where it binds first since it cuts only above t = 360 - 48 pi n / omega). So a walk
+    at speed n1 is the walk at n2 = c n1 on the range and step scaled by c, every bound scaled
+    by c (tests/loom/test_walk.py checks it against a fresh walk at n2). A walk that ran down to
+    its floor is not scaled (the floor is an angle)."""
     if speed_rpm is None:
         raise ModelError("speed_rpm: the exact rebound law needs the main shaft's speed", key="speed_rpm")
     check_walk(to_deg, step_deg)
-    key = (task.lever_model, task.amplitude_limit_mm, float(speed_rpm), float(to_deg),
-           float(step_deg))
-    walk, _ = _AMPLITUDE_BOUNDS.get(key, lambda: exact_amplitude_bound(task, speed_rpm, min(WALK_FLOOR_DEG, to_deg),
-                                                                       to_deg, step_deg))
+    n, floor = float(speed_rpm), min(WALK_FLOOR_DEG, to_deg)
+    key = (walk_lever(task), task.amplitude_limit_mm, float(to_deg) / n, float(step_deg) / n)
+    (walk, walked_rpm), _ = _AMPLITUDE_BOUNDS.get(
+        key, lambda: (exact_amplitude_bound(task, n, floor, to_deg, step_deg), n))
+    if walked_rpm != n:
+        c = n / walked_rpm
+        if walk.why == "range" or not (_n_over_t(task, walked_rpm, walk.to_deg) and _n_over_t(task, n, to_deg)):
+            walk = exact_amplitude_bound(task, n, floor, to_deg, step_deg)
+        else:
+            walk = dataclasses.replace(walk, speed_rpm=n, from_deg=None if walk.from_deg is None else walk.from_deg * c,
+                                       lo_deg=floor, to_deg=to_deg, step_deg=step_deg)
     if walk.from_deg is not None and walk.from_deg <= lo_deg:
         return dataclasses.replace(walk, from_deg=lo_deg, lo_deg=lo_deg, why="range",
                                    amplitude_mm=float(np.ravel(exact_amplitude_mm(task, lo_deg, speed_rpm))[0]))
     return dataclasses.replace(walk, lo_deg=lo_deg)
+
+
+# the lever's inputs the rebound a(t, n) does not read (the angle and speeds a scene reports at,
+# its limit: the walk's key holds the limit it is walked against)
+_NOT_READ_BY_THE_CHAIN = ("t_deg", "speed_nominal_rpm", "amplitude_limit_mm", "speeds_rpm")
+
+
+def walk_lever(task: Cyclogram) -> tuple:
+    """The task's lever as the walk's key, its inputs the chain reads (name, value): two machines
+    (or scenes) with one lever share its walk."""
+    lever = task.lever_model
+    return tuple((f.name, getattr(lever, f.name)) for f in dataclasses.fields(lever)
+                 if f.name not in _NOT_READ_BY_THE_CHAIN)
+
+
+def _n_over_t(task: Cyclogram, speed_rpm: float, top_deg: float) -> bool:
+    """Whether the rebound is a function of n / t on a walk from top_deg down at speed n: always
+    for the fitted law (v0 proportional to n / t); for the chain while the cycle does not cut the
+    dwell after the rise, which it would first at the top."""
+    lever = task.lever_model
+    if "cam_drive" not in lever.effects:
+        return True
+    return not dwell_length(follower_data(lever, speed_rpm, top_deg)[0], top_deg)[1]
 
 
 def box_amplitude_bound(task: Cyclogram, box: LeverBox | None, speed_rpm: float, lo_deg: float, to_deg: float,
@@ -338,8 +407,8 @@ def _rank(bound: AmplitudeBound) -> float:
 
 
 WALK_FLOOR_DEG = 1.0             # the walk's lowest t: below it no cam rise of a loom
-# the walk's work, estimated before it starts: each point is one rise of the chain (~30 ms on the
-# 2-core machine: the scenes' 236 points take ~7 s, 1436 points at scan_to_deg = 360 took 46 s)
+# the walk's work, counted before it starts: each point is one rise of the chain (in the batch path
+# about 0.4 ms on the 2-core machine, a CVODES rise ~30 ms), so that a mistyped step is refused
 MAX_WALK_POINTS = 1000
 
 
@@ -348,7 +417,7 @@ def check_walk(to_deg: float, step_deg: float) -> None:
     points = math.ceil((to_deg - min(WALK_FLOOR_DEG, to_deg)) / step_deg)
     if points > MAX_WALK_POINTS:
         raise SettingError(f"scan_to_deg={to_deg:g}, scan_step_deg={step_deg:g}: the walk for the rebound's exact "
-                           f"bound would take {points} rebounds (about {points * 0.03:.0f} s), the limit is "
+                           f"bound would take {points} rebounds, the limit is "
                            f"{MAX_WALK_POINTS}: raise scan_step_deg to >= "
                            f"{(to_deg - WALK_FLOOR_DEG) / MAX_WALK_POINTS:.3g} deg or lower scan_to_deg to <= "
                            f"{WALK_FLOOR_DEG + MAX_WALK_POINTS * step_deg:.3g} deg", key="scan_step_deg")

@@ -23,7 +23,7 @@ from mechopt.kit.errors import ModelError, SceneError
 from mechopt.kit.result import Status
 from mechopt.models.loom import lever_stop
 from mechopt.solvers.loom import plan_cyclogram, repair_cyclogram
-from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
+from mechopt.solvers.stop_impact.law import chain_rebounds_mm, rebound_amplitude_mm
 
 LIMIT_MM, SIGMA_H_MPA = 0.1, 800.0
 FITTED_LEVER = {k: v for k, v in LEVER.items() if k != "t_deg"} | {
@@ -166,9 +166,10 @@ def test_a_range_on_which_no_angle_keeps_the_limit_is_infeasible_with_the_best_r
     r = repair_cyclogram(task, stress_form="exact", scan_to_deg=35.0)
     assert r.status is Status.INFEASIBLE
     assert "exceeds the limit at the top of the stated range [30, 35] deg" in r.message
-    a35 = float(rebound_amplitude_mm(lever_stop(task.lever), 420.0, 35.0))
+    a35 = float(chain_rebounds_mm(lever_stop(task.lever), 420.0, 35.0))         # the loom's law: the batch path
     assert f"{a35:.6g} mm" in r.message and r.violated == ("amplitude[3->7]",) and r.values == {}
     assert r.diagnostics["best_amplitude_mm"] == a35 and r.diagnostics["best_t_deg"] == 35.0
+    assert a35 == pytest.approx(float(rebound_amplitude_mm(lever_stop(task.lever), 420.0, 35.0)), rel=1e-9)  # CVODES
 
 
 def test_the_exact_law_needs_a_speed(task):
@@ -221,7 +222,8 @@ def test_at_another_speed_the_rebound_is_h_of_n_over_t(task, dense_root):
     assert r.status is Status.SOLVED
     assert r.values["t_3_7_deg"] == pytest.approx(30.0, abs=1e-9)
     lever = lever_stop(task.lever)
-    assert r.values["exact_amplitude_3_7_mm"] == float(rebound_amplitude_mm(lever, 420.0, 42.0))
+    assert r.values["exact_amplitude_3_7_mm"] == pytest.approx(float(chain_rebounds_mm(lever, 420.0, 42.0)), rel=1e-13)
+    assert r.values["exact_amplitude_3_7_mm"] == pytest.approx(float(rebound_amplitude_mm(lever, 420.0, 42.0)), rel=1e-9)
     assert r.values["amplitude_holds_from_3_7_deg"] == 30.0          # a holds on the whole stated range
     # the returner's stress bound 33.75 deg at 420 rpm falls to 24.1 deg: its [phi] = 30 deg sets the angle
     assert r.values["t_9_10_deg"] == pytest.approx(30.0, abs=1e-9)
