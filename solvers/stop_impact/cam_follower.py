@@ -24,7 +24,7 @@ from mechopt.kit.errors import MechoptError
 from mechopt.kit.result import Status, from_casadi_integrator, from_ivp
 from mechopt.models.cam_follower import law_function, law_values, relative_acceleration, rise_duration_s
 from mechopt.models.stop_impact import LeverStop
-from mechopt.solvers.stop_impact.crossover import Crossover, crossovers
+from mechopt.solvers.stop_impact.crossover import Crossover, Groove, crossovers
 
 DWELL_PERIODS = 4.0         # how long after the rise C may still reach its plate [natural periods]
 
@@ -147,10 +147,12 @@ def follow_cam(task: LeverStop, speed_rpm, t_deg=None, *, reltol: float = 1e-10,
     below = np.flatnonzero(force < 0)
     crossed = ()
     if below.size and task.closure == "groove":     # a crossover to the other wall, not lift-off
-        located = lambda j: _locate_sign_change(end_int, task, xi, e, de, j, lam, zeta, H, T,   # noqa: E731
-                                                before=bool(force[j - 1] >= 0))
-        crossed, capped = crossovers(xi, force, located, mass_kg=task.mass_kg, T_s=T,
-                                     backlash_m=task.backlash_mm * 1e-3)
+        def located(j):          # (xi, X, X') where N changes sign between samples j - 1 and j
+            at = _locate_sign_change(end_int, task, xi, e, de, j, lam, zeta, H, T, before=bool(force[j - 1] >= 0))
+            y = _at(end_int, task.law, [e[j - 1], de[j - 1]], float(xi[j - 1]), at, lam, zeta, 1.0 if at <= 1 else 0.0)
+            S, dS = (float(v[0]) for v in law_values(task.law, at)[:2])
+            return at, S + y[0], dS + y[1]
+        crossed, capped = crossovers(xi, force, located, groove_of(task, lam, zeta, H, T))
         message += "; " + crossover_text(crossed, t_deg, task.backlash_mm)
         if capped:
             status = Status.LIMIT
@@ -166,6 +168,15 @@ def follow_cam(task: LeverStop, speed_rpm, t_deg=None, *, reltol: float = 1e-10,
     return CamRise(float(speed_rpm), float(t_deg), xi, X, dX, ddX, contact, v0,
                    _largest(xi, e, de, dde) * H * 1e3, float(force.min()), leaves, status, message, build_s,
                    tuple(crossed))
+
+
+def groove_of(task, lam, zeta, H, T) -> Groove:
+    """The rise's data for its flights (solvers/stop_impact/crossover.py): the walls' pitch path is
+    the law's S over the rise, the dwell's 1 past it."""
+    def path(xi):
+        S, dS = law_values(task.law, xi)[:2]
+        return np.where(xi > 1.0, 1.0, S), np.where(xi > 1.0, 0.0, dS)
+    return Groove(lam, zeta, task.closure_force_N * T**2 / (task.mass_kg * H), task.backlash_mm * 1e-3 / H, T, H, path)
 
 
 def crossover_text(crossed, t_deg, backlash_mm) -> str:

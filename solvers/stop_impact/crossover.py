@@ -7,17 +7,22 @@ the groove's play (the backlash): an impact at the other wall, the "crossover sh
 form-closed cams (Norton, *Cam Design and Manufacturing Handbook*, 2nd ed., Industrial Press
 2009, ch. 10; Rothbart, *Cam Design Handbook*, ch. 11), not a lift-off.
 
-The flight, a stated first-order model (the backlash small against the stroke): from the
-crossover the walls go on along the in-contact path, the follower flies free of them, so it
-drifts across the play under the force it now lacks: the relative acceleration towards the
-other wall is -w N(t) / m (w = +1 leaving the driving wall, -1 leaving the other one; N the
-in-contact force the chain computed, reduced mass m at C). From rest relative to the walls at the
-crossover, the relative displacement d(t) = double integral of it; the roller lands on the other
-wall where d reaches the backlash (its impact speed d'(t) there), or back on its own wall where
-d returns to 0 first (the force turned back within the flight). N is taken piecewise linear
-between the chain's samples (the flight spans tens of them), each cell integrated exactly, the
-landing located in its cell by brentq. What this leaves out (the link's state during the flight,
-the offset wall after it) is measured by the hybrid model of solvers/stop_impact/groove.py.
+The flight (stated model; in the rise's own time xi, X = x / H, lambda, zeta as in
+models/cam_follower.py, phi = F T^2 / (m H) the closure force F in those units): the roller is
+massless, so while it touches neither wall the link carries the closure force alone: C flies
+under it, X'' = -phi, and the roller R follows C through the link's damper,
+lambda^2 (R - X) + 2 zeta lambda (R' - X') = -phi, in closed form:
+
+    X(s) = X0 + X0' s - phi s^2 / 2,   R - X = -phi / lambda^2 + (R0 - X0 + phi / lambda^2) exp(-lambda s / (2 zeta))
+
+(s = xi - xi_c; R0 on the wall it leaves). It lands where R meets the other wall (the pitch path
+S shifted by the backlash delta / H, delta reduced to C's travel) or its own again; the impact
+speed is |R' - S'| H / T there. The landing is inelastic for the massless roller (it takes the
+wall's motion) and leaves C's state as it is; a wall that cannot hold N with that state sends
+the roller off again at once. Each flight starts from the chain's state at its crossover (the
+walls taken without backlash before it): the first crossover's flight is this model's exact
+one, later ones start from the backlash-free path. solvers/stop_impact/groove.py follows the
+whole rise with the backlash (and checks the first flight by DOP853).
 """
 import math
 from dataclasses import dataclass
@@ -26,14 +31,15 @@ import numpy as np
 from scipy.optimize import brentq
 
 MAX_CROSSOVERS = 1000          # per rise: a count limit (a roller rattling in its groove), said when hit
+WALL = {1: "inner", -1: "outer"}
 
 
 @dataclass(frozen=True)
 class Crossover:
     """One crossover: where N changes sign (xi, a fraction of the rise, > 1 in the dwell), the
     wall the roller leaves ("inner": the driving wall, N >= 0; "outer": the other one), where it
-    lands and on which wall, and the impact speed there [m/s] (None: C met its plate, or the
-    followed window ended, before the roller landed)."""
+    lands and on which wall, and the impact speed there [m/s] (None: the followed window ended
+    before the roller landed)."""
     xi: float
     leaves: str
     lands_xi: float | None
@@ -45,58 +51,86 @@ class Crossover:
         return self.xi * t_deg
 
 
-WALL = {1: "inner", -1: "outer"}
+@dataclass(frozen=True)
+class Groove:
+    """One rise's data for its flights: lambda, zeta, phi (closure), gap = delta / H, the rise's
+    time T [s] and stroke H [m], and `path(xi)` -> (S, S') of the walls' pitch path (arrays)."""
+    lam: float
+    zeta: float
+    phi: float
+    gap: float
+    T: float
+    H: float
+    path: object
+
+    def force(self, xi, X, dX, wall):
+        """N / (m H / T^2) on wall `wall` (+1 inner: path S; -1 outer: S + gap) for C at (X, X')."""
+        S, dS = self.path(np.atleast_1d(xi))
+        offset = 0.0 if wall == 1 else self.gap
+        return float(-2 * self.zeta * self.lam * (dX - dS[0]) - self.lam**2 * (X - S[0] - offset) + self.phi)
+
+    def flight(self, xi0, X0, dX0, wall, grid):
+        """(landing xi, wall landed on, impact speed [m/s], X, X' there) of the flight from the
+        crossover at xi0 leaving `wall` with C at (X0, X0') (module docstring); the landing
+        bracketed on `grid` (xi, increasing), polished by brentq; None where the grid ends first."""
+        lam, zeta, phi = self.lam, self.zeta, self.phi
+        here = 0.0 if wall == 1 else self.gap
+        there = self.gap if wall == 1 else 0.0
+        u0 = float(self.path(np.atleast_1d(xi0))[0][0]) + here - X0 + phi / lam**2
+        rate = lam / (2 * zeta)
+
+        def state(xi):          # X, X', R, R'
+            s = np.asarray(xi, float) - xi0
+            X, dX = X0 + dX0 * s - phi * s * s / 2, dX0 - phi * s
+            decay = np.exp(-rate * s)
+            return X, dX, X - phi / lam**2 + u0 * decay, dX - rate * u0 * decay
+
+        def gaps(xi):           # towards the other wall (> 0 before it) and off its own (> 0 while away)
+            S = self.path(np.atleast_1d(xi))[0]
+            R = state(xi)[2]
+            return wall * (S + there - R), wall * (R - S - here)
+        x = np.r_[xi0, grid[grid > xi0 + 1e-9]]       # a sample at the start itself: its own wall
+        if x.size < 2:
+            return None
+        to_other, off_own = gaps(x)
+        off_own[0] = 1.0                        # it starts on its own wall
+        bad = np.flatnonzero((to_other[1:] <= 0) | (off_own[1:] <= 0))
+        if not bad.size:
+            return None
+        i = int(bad[0])
+        other = to_other[i + 1] <= 0 and (off_own[i + 1] > 0 or to_other[i + 1] <= off_own[i + 1])
+        k = 0 if other else 1
+        f = lambda xi: gaps(np.array([xi]))[k][0]       # noqa: E731
+        lo = x[i] if f(x[i]) > 0 else x[i] + 1e-15 * max(1.0, x[i])
+        land = x[i + 1] if f(x[i + 1]) == 0 else brentq(f, lo, x[i + 1], xtol=1e-15)
+        X, dX, _, dR = (float(v) for v in state(land))
+        dS = float(self.path(np.atleast_1d(land))[1][0])
+        return land, (-wall if other else wall), abs(dR - dS) * self.H / self.T, X, dX
 
 
-def flight(xi, force_N, start, wall, *, mass_kg, T_s, backlash_m):
-    """(landing xi, landing wall +1 / -1, impact speed [m/s]) of the flight from a crossover at
-    `start` (xi) leaving wall `wall` (+1 inner, -1 outer), on the in-contact force `force_N`
-    sampled at `xi` (piecewise linear, N(start) = 0 inserted); None where the samples end first."""
-    after = xi > start
-    x = np.r_[start, xi[after]]
-    acc = -wall * np.r_[0.0, np.asarray(force_N, float)[after]] / mass_kg    # towards the other wall [m/s^2]
-    if x.size < 2:
-        return None
-    h = np.diff(x) * T_s
-    a0, a1 = acc[:-1], acc[1:]
-    w = np.r_[0.0, np.cumsum(0.5 * h * (a0 + a1))]
-    d = np.r_[0.0, np.cumsum(w[:-1] * h + h * h * (2 * a0 + a1) / 6)]
-    past = np.flatnonzero((d[1:] >= backlash_m) | ((d[1:] <= 0.0) & (w[1:] < 0.0)))
-    if not past.size:
-        return None
-    i = int(past[0])
-    other = d[i + 1] >= backlash_m
-    goal = backlash_m if other else 0.0
-
-    def gap(tau):
-        return d[i] + w[i] * tau + a0[i] * tau**2 / 2 + (a1[i] - a0[i]) * tau**3 / (6 * h[i]) - goal
-    lo = 1e-300 if i == 0 else 0.0     # the flight's first instant sits at d = 0 itself
-    tau = h[i] if gap(h[i]) == 0 else brentq(gap, lo, h[i], xtol=1e-15 * max(h[i], 1e-300))
-    speed = abs(w[i] + a0[i] * tau + (a1[i] - a0[i]) * tau**2 / (2 * h[i]))
-    return float(x[i] + tau / T_s), (-wall if other else wall), float(speed)
-
-
-def crossovers(xi, force_N, locate, *, mass_kg, T_s, backlash_m):
-    """The crossovers along one rise, in order: from the driving wall, each sign change of N the
-    roller's wall cannot give starts a flight (`flight`); it lands, and the wall it lands on holds
-    it until N leaves that wall's sign again. `locate(j)` is the xi where N changes sign between
-    samples j - 1 and j (located by the chain). Returns (crossovers, whether MAX_CROSSOVERS was hit)."""
+def crossovers(xi, force_N, locate, groove: Groove):
+    """The crossovers along one rise, in order. From the driving wall, each sign change of N on
+    the chain's samples that the roller's wall cannot give starts a flight (`Groove.flight`),
+    `locate(j)` -> (xi, X, X') of the chain where N changes sign between samples j - 1 and j.
+    The wall it lands on holds it (C's state at the landing: else a flight again at once) until N
+    on the samples leaves that wall's sign. Returns (crossovers, whether MAX_CROSSOVERS was hit)."""
     force = np.asarray(force_N, float)
-    out, wall, pos = [], 1, -math.inf
+    out, wall, pos, start, last = [], 1, -math.inf, None, None
     while len(out) < MAX_CROSSOVERS:
-        wrong = np.flatnonzero((xi > pos) & (wall * force < 0))
-        if not wrong.size:
-            return out, False
-        j = int(wrong[0])
-        held = wall * np.interp(pos, xi, force) >= 0 if math.isfinite(pos) else True
-        start = max(locate(j), pos) if held else pos    # landed on a wall that cannot hold it: off at once
-        landed = flight(xi, force, start, wall, mass_kg=mass_kg, T_s=T_s, backlash_m=backlash_m)
+        if start is None:
+            wrong = np.flatnonzero((xi > pos) & (wall * force < 0))
+            if not wrong.size:
+                return out, False
+            start = locate(int(wrong[0]))
+            if start[0] < pos:              # the path's sign changed within the last flight: off at its landing
+                start = last
+        x0, X0, dX0 = start
+        landed = groove.flight(x0, X0, dX0, wall, xi)
         if landed is None:
-            out.append(Crossover(float(start), WALL[wall], None, None, None))
+            out.append(Crossover(float(x0), WALL[wall], None, None, None))
             return out, False
-        pos, new, speed = landed
-        out.append(Crossover(float(start), WALL[wall], pos, WALL[new], speed))
-        if new == wall and pos <= start:        # no progress (cannot happen with d > 0 after the start)
-            return out, False
-        wall = new
+        pos, new, speed, X, dX = landed
+        out.append(Crossover(float(x0), WALL[wall], pos, WALL[new], speed))
+        wall, last = new, (pos, X, dX)
+        start = last if wall * groove.force(pos, X, dX, wall) < 0 else None
     return out, True

@@ -1,0 +1,126 @@
+"""The lift cam as a groove (closure "groove"): N < 0 is a crossover to the other wall across the
+backlash, located, with its flight and impact, not a lift-off; the hybrid model with the backlash."""
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from mechopt import registry
+from mechopt.kit.errors import MechoptError
+from mechopt.kit.result import Status
+from mechopt.models.cam_follower import rise_duration_s
+from mechopt.solvers.stop_impact.cam_follower import follow_cam
+from mechopt.solvers.stop_impact.groove import follow_groove, rebound_with_backlash_mm
+from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
+
+BACKLASH_MM = 0.05
+
+
+@pytest.fixture(scope="module")
+def force():
+    return registry.find("stop-impact/amplitude-law").build()[0]     # the cycloid, closure 1500 N, "force"
+
+
+@pytest.fixture(scope="module")
+def groove(force):
+    return dataclasses.replace(force, closure="groove", backlash_mm=BACKLASH_MM)
+
+
+def cycloid(xi):
+    """S, S', S'' of the cycloid by hand (not the library's)."""
+    w = 2 * math.pi
+    return xi - math.sin(w * xi) / w, 1 - math.cos(w * xi), w * math.sin(w * xi)
+
+
+def hand_flight(task, speed_rpm, delta_mm):
+    """By hand in physical time [s] and absolute x [m]: the rise on the inner wall to where
+    N = F + m x'' falls through 0 (DOP853's event), then the free flight: m x'' = -F, the massless
+    roller r through the link c (r - x) + b (r' - x') = -F, to where r meets the outer wall
+    s + delta or its own wall s (events). Returns (crossover xi, landing xi, wall, impact [m/s])."""
+    T = float(rise_duration_s(speed_rpm, task.t_deg))
+    H, m, F = task.stroke_mm * 1e-3, task.mass_kg, task.closure_force_N
+    c = task.c_free_N_per_m
+    b = 2 * task.damping_ratio * math.sqrt(c * m)
+
+    def wall(t):
+        S, dS, ddS = cycloid(t / T)
+        return H * S, H * dS / T, H * ddS / T**2
+
+    def driven(t, y):
+        s, ds, _ = wall(t)
+        return [y[1], (c * (s - y[0]) + b * (ds - y[1])) / m]
+
+    def lifts(t, y):
+        return F + m * driven(t, y)[1]
+    lifts.terminal, lifts.direction = True, -1
+    run = solve_ivp(driven, (0.0, T), [0.0, 0.0], method="DOP853", rtol=1e-12, atol=1e-16, events=lifts)
+    t0, (x0, v0) = run.t_events[0][0], run.y_events[0][0]
+    r0 = wall(t0)[0]
+
+    def free(t, y):          # x, x', r
+        return [y[1], -F / m, y[1] + (-F - c * (y[2] - y[0])) / b]
+
+    def outer(t, y):
+        return y[2] - wall(t)[0] - delta_mm * 1e-3
+    outer.terminal, outer.direction = True, 1
+
+    def inner(t, y):
+        return y[2] - wall(t)[0]
+    inner.terminal, inner.direction = True, -1
+    fly = solve_ivp(free, (t0, T), [x0, v0, r0], method="DOP853", rtol=1e-12, atol=1e-16, events=(outer, inner),
+                    first_step=1e-9)
+    k = 0 if fly.t_events[0].size else 1
+    t1, y1 = fly.t_events[k][0], fly.y_events[k][0]
+    impact = abs(free(t1, y1)[2] - wall(t1)[1])
+    return t0 / T, t1 / T, ("outer", "inner")[k], impact
+
+
+def test_the_groove_gives_a_crossover_where_the_force_closure_leaves_the_cam(force, groove):
+    """At 600 rpm the 1500 N closure is short (force: INFEASIBLE, the roller leaves the cam); in the
+    groove the same point is a crossover: SOLVED, C meets its plate, the rebound computed."""
+    left = follow_cam(force, 600.0)
+    assert left.status is Status.INFEASIBLE and "leaves the cam" in left.message
+    rise = follow_cam(groove, 600.0)
+    assert rise.status is Status.SOLVED and rise.contact_xi is not None
+    assert rise.crossovers and rise.crossovers[0].xi == pytest.approx(left.leaves_cam_xi, abs=1e-12)
+    assert "crossover" in rise.message and "leaves the cam" not in rise.message
+    assert rebound_amplitude_mm(groove, 600.0, groove.t_deg) > 0.1      # computed, not refused
+
+
+@pytest.mark.parametrize("speed, closure_N", [(600.0, None), (520.0, None), (420.0, 0.0)])
+def test_the_crossover_and_its_impact_agree_with_a_hand_flight(groove, speed, closure_N):
+    """The chain's first crossover (CVODES, bisection) and its flight (closed form) against a hand
+    DOP853 in physical time (the cycloid by hand, events on N and on the walls): the crossover's
+    angle, where the roller lands, on which wall, and its impact speed. 600 rpm lands on the outer
+    wall, 520 rpm falls back on its own wall; 420 rpm in a bare groove (F = 0) crosses mid-rise."""
+    task = groove if closure_N is None else dataclasses.replace(groove, closure_force_N=closure_N)
+    first = follow_cam(task, speed).crossovers[0]
+    xi_c, xi_land, wall, impact = hand_flight(task, speed, BACKLASH_MM)
+    assert first.xi == pytest.approx(xi_c, abs=1e-8)          # CVODES at reltol 1e-10
+    assert first.lands_xi == pytest.approx(xi_land, abs=1e-7)
+    assert first.lands_on == wall
+    assert first.impact_m_s == pytest.approx(impact, rel=1e-5)
+
+
+def test_the_hybrid_with_a_vanishing_backlash_is_the_chain(groove):
+    """The hybrid model (DOP853, walls offset by the backlash) tends to the chain's backlash-free
+    approach as the backlash shrinks; at 0.05 mm it moves the approach at 520 rpm."""
+    chain = follow_cam(groove, 520.0).approach_velocity_m_s
+    tiny = follow_groove(dataclasses.replace(groove, backlash_mm=1e-6), 520.0)
+    assert tiny.status is Status.SOLVED and tiny.approach_velocity_m_s == pytest.approx(chain, rel=1e-5)
+    rebound, real = rebound_with_backlash_mm(groove, 520.0)
+    assert real.flights and abs(real.approach_velocity_m_s / chain - 1) > 0.01
+    assert rebound > 0
+
+
+def test_the_groove_needs_its_backlash_and_only_it(force):
+    with pytest.raises(MechoptError, match="backlash_mm"):
+        dataclasses.replace(force, closure="groove")
+    with pytest.raises(MechoptError, match="backlash_mm=0.05 belongs to closure='groove'"):
+        dataclasses.replace(force, backlash_mm=0.05)
+    with pytest.raises(MechoptError, match="closure"):
+        dataclasses.replace(force, closure="spring")
+    with pytest.raises(MechoptError, match="backlash_mm"):
+        dataclasses.replace(force, closure="groove", backlash_mm=50.0)
