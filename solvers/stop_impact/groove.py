@@ -32,6 +32,7 @@ from mechopt.kit.result import Status, from_ivp
 from mechopt.models.cam_follower import law_values
 from mechopt.models.stop_impact import LeverStop
 from mechopt.solvers.stop_impact.cam_follower import dwell_length, follower_data
+from mechopt.solvers.stop_impact.response import closed_form_amplitude_m
 
 MAX_SWITCHES = 200          # phase changes followed in one rise (a count)
 
@@ -143,8 +144,8 @@ def _ended(run, flights):
 
 def rebound_with_backlash_mm(task: LeverStop, speed_rpm, t_deg=None):
     """(first rebound [mm] from the hybrid's v0, the hybrid's GrooveRise): eq. (2) on the approach
-    the backlash gives (closed form, solvers/stop_impact/response.py)."""
-    from mechopt.solvers.stop_impact.response import closed_form_amplitude_m
+    the backlash gives (closed form, solvers/stop_impact/response.py), whether or not a crossover
+    comes before the plate (the chain, solvers/stop_impact/law.py, takes it only then)."""
     rise = follow_groove(task, speed_rpm, t_deg)
     if rise.status is not Status.SOLVED or rise.contact_xi is None:
         return math.nan, rise
