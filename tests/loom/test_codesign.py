@@ -140,20 +140,34 @@ def test_the_box_speed_is_the_least_of_each_levers_own_highest_speed():
     assert (binding["frequency_factor"], binding["zeta"], binding["speed_factor"]) == (*least, 1.05)
 
 
-def test_the_nominal_scenes_lift_is_set_by_the_chains_contact_edge_not_by_the_stress(machine, solved_once):
-    """loom/machine-speed-codesign, its figures by independent means: under the law's own stress
-    (the cycloid's x sqrt(Ca_law / 2 pi)) the lift's stress bound falls below its rebound's, whose
-    edge is where the chain loses the roller's contact (below it the roller leaves its cam, the 1500 N
-    closure short), not 0.1 mm; the speed is the critical chain's closed form with that t(3,7); the
-    stress as calibrated (blind to the law) gives loom/machine-speed-codesign's earlier 485.1005 rpm."""
+def test_the_nominal_scenes_lift_is_set_by_the_rebound_with_the_backlash_in_the_groove(machine, solved_once):
+    """loom/machine-speed-codesign, its figures by independent means, under both closure readings.
+    Groove (the scene's): the lift's t(3,7) is where the chain, with the groove's backlash (its rise
+    crosses to the other wall once before C meets its plate), reaches 0.1 mm: the hybrid model's
+    rebound at t(3,7) is the limit and a hair below it exceeds it; the stress (the cycloid's x
+    sqrt(Ca_law / 2 pi)) stays below. Force (its figure before): t(3,7) is the chain's contact edge
+    (below it the roller leaves its cam, the 1500 N closure short), not 0.1 mm. Each speed is the
+    critical chain's closed form with its t(3,7); the stress as calibrated (blind to the law) gives
+    the scene's earlier 485.1005 rpm."""
+    from mechopt.solvers.stop_impact.groove import rebound_with_backlash_mm
     result = registry.run("loom/machine-speed-codesign").result
     v = result.values
-    n, t37 = v["speed_rpm"], v["t_3_7_deg"]
     fixed = 900 * 30 / (800 * 420) + 0.36      # the returner's stress bound and the chain's other arcs [deg/rpm]
     assert v["speed_stress_given_rpm"] == pytest.approx(250 / (700 * 36 / 800 / 420 + fixed), rel=1e-9)
-    assert n == pytest.approx(250 / (t37 / n + fixed), rel=1e-9)
-    assert 700 * 36 / t37 * n / 420 * v["stress_scale_lift"] < 800
-    lever = dataclasses.replace(machine.lever_model, law=codesign_law(result))
-    held = float(rebound_amplitude_mm(lever, n, t37 * (1 + 1e-6), lost=np.nan))
+    law = codesign_law(result)
+    for closure in ("groove", "force"):
+        n, t37 = v[f"speed_closure_{closure}_rpm"], v[f"t_3_7_closure_{closure}_deg"]
+        assert n == pytest.approx(250 / (t37 / n + fixed), rel=1e-9)
+        assert 700 * 36 / t37 * n / 420 * v["stress_scale_lift"] < 800
+    n, t37 = v["speed_rpm"], v["t_3_7_deg"]
+    assert (n, t37) == (v["speed_closure_groove_rpm"], v["t_3_7_closure_groove_deg"])
+    groove = dataclasses.replace(machine.lever_model, law=law, closure="groove", backlash_mm=0.05)
+    at, rise = rebound_with_backlash_mm(groove, n, t37)
+    assert len(rise.flights) == 1 and rise.flights[0][0] < rise.contact_xi
+    assert at == pytest.approx(machine.amplitude_limit_mm, rel=1e-6)
+    assert rebound_with_backlash_mm(groove, n, t37 * (1 - 1e-4))[0] > machine.amplitude_limit_mm
+    force = dataclasses.replace(machine.lever_model, law=law)
+    n, t37 = v["speed_closure_force_rpm"], v["t_3_7_closure_force_deg"]
+    held = float(rebound_amplitude_mm(force, n, t37 * (1 + 1e-6), lost=np.nan))
     assert held <= machine.amplitude_limit_mm
-    assert np.isnan(rebound_amplitude_mm(lever, n, t37 * (1 - 1e-4), lost=np.nan))
+    assert np.isnan(rebound_amplitude_mm(force, n, t37 * (1 - 1e-4), lost=np.nan))

@@ -34,47 +34,66 @@ def cycloid(xi):
     return xi - math.sin(w * xi) / w, 1 - math.cos(w * xi), w * math.sin(w * xi)
 
 
-def hand_flight(task, speed_rpm, delta_mm):
-    """By hand in physical time [s] and absolute x [m]: the rise on the inner wall to where
-    N = F + m x'' falls through 0 (DOP853's event), then the free flight: m x'' = -F, the massless
-    roller r through the link c (r - x) + b (r' - x') = -F, to where r meets the outer wall
-    s + delta or its own wall s (events). Returns (crossover xi, landing xi, wall, impact [m/s])."""
+def hand_groove(task, speed_rpm, delta_mm, law=cycloid):
+    """By hand in physical time [s] and absolute x [m]: C driven through the link c, b by the wall
+    it rides (the inner wall s, the outer s + delta) while N = F + m x'' has that wall's sign
+    (DOP853 events on N); in flight m x'' = -F and the massless roller r follows through the link,
+    c (r - x) + b (r' - x') = -F, until r meets a wall (events); to the plate x = H - preload.
+    Returns ([(leave xi, land xi, wall landed on, impact m/s), ...], contact xi, v0 [m/s])."""
     T = float(rise_duration_s(speed_rpm, task.t_deg))
     H, m, F = task.stroke_mm * 1e-3, task.mass_kg, task.closure_force_N
     c = task.c_free_N_per_m
     b = 2 * task.damping_ratio * math.sqrt(c * m)
+    delta, plate_x = delta_mm * 1e-3, H - task.preload_mm * 1e-3
 
     def wall(t):
-        S, dS, ddS = cycloid(t / T)
-        return H * S, H * dS / T, H * ddS / T**2
+        if t >= T:
+            return H, 0.0
+        S, dS, _ = law(t / T)
+        return H * S, H * dS / T
 
-    def driven(t, y):
-        s, ds, _ = wall(t)
-        return [y[1], (c * (s - y[0]) + b * (ds - y[1])) / m]
-
-    def lifts(t, y):
-        return F + m * driven(t, y)[1]
-    lifts.terminal, lifts.direction = True, -1
-    run = solve_ivp(driven, (0.0, T), [0.0, 0.0], method="DOP853", rtol=1e-12, atol=1e-16, events=lifts)
-    t0, (x0, v0) = run.t_events[0][0], run.y_events[0][0]
-    r0 = wall(t0)[0]
+    def driven(offset):
+        def f(t, y):
+            s, ds = wall(t)
+            return [y[1], (c * (s + offset - y[0]) + b * (ds - y[1])) / m]
+        return f
 
     def free(t, y):          # x, x', r
         return [y[1], -F / m, y[1] + (-F - c * (y[2] - y[0])) / b]
 
-    def outer(t, y):
-        return y[2] - wall(t)[0] - delta_mm * 1e-3
-    outer.terminal, outer.direction = True, 1
+    def plate(t, y):
+        return y[0] - plate_x
+    plate.terminal, plate.direction = True, 1
+    t, y, on, flights = 0.0, np.zeros(2), 1, []
+    while True:
+        offset = 0.0 if on == 1 else delta
+        if on * (F + m * driven(offset)(t, y)[1]) >= 0:
 
-    def inner(t, y):
-        return y[2] - wall(t)[0]
-    inner.terminal, inner.direction = True, -1
-    fly = solve_ivp(free, (t0, T), [x0, v0, r0], method="DOP853", rtol=1e-12, atol=1e-16, events=(outer, inner),
-                    first_step=1e-9)
-    k = 0 if fly.t_events[0].size else 1
-    t1, y1 = fly.t_events[k][0], fly.y_events[k][0]
-    impact = abs(free(t1, y1)[2] - wall(t1)[1])
-    return t0 / T, t1 / T, ("outer", "inner")[k], impact
+            def off(u, z, o=offset):
+                return F + m * driven(o)(u, z)[1]
+            off.terminal, off.direction = True, -on
+            run = solve_ivp(driven(offset), (t, 3 * T), y, method="DOP853", rtol=1e-12, atol=1e-16,
+                            events=(plate, off), first_step=1e-9)
+            if run.t_events[0].size:
+                return flights, run.t_events[0][0] / T, run.y_events[0][0][1]
+            t, y = run.t_events[1][0], run.y_events[1][0]
+
+        def outer(u, z, o=delta if on == 1 else 0.0):
+            return z[2] - wall(u)[0] - o
+        outer.terminal, outer.direction = True, on
+
+        def back(u, z, o=offset):
+            return z[2] - wall(u)[0] - o
+        back.terminal, back.direction = True, -on
+        fly = solve_ivp(free, (t, 3 * T), [*y, wall(t)[0] + offset], method="DOP853", rtol=1e-12, atol=1e-16,
+                        events=(plate, outer, back), first_step=1e-9)
+        k = min((e[0], i) for i, e in enumerate(fly.t_events) if e.size)[1]
+        if k == 0:
+            return flights, fly.t_events[0][0] / T, fly.y_events[0][0][1]
+        t1, z = fly.t_events[k][0], fly.y_events[k][0]
+        landed = -on if k == 1 else on
+        flights.append((t / T, t1 / T, ("outer", "inner")[landed == 1], abs(free(t1, z)[2] - wall(t1)[1])))
+        t, y, on = t1, z[:2], landed
 
 
 def test_the_groove_gives_a_crossover_where_the_force_closure_leaves_the_cam(force, groove):
@@ -97,11 +116,26 @@ def test_the_crossover_and_its_impact_agree_with_a_hand_flight(groove, speed, cl
     wall, 520 rpm falls back on its own wall; 420 rpm in a bare groove (F = 0) crosses mid-rise."""
     task = groove if closure_N is None else dataclasses.replace(groove, closure_force_N=closure_N)
     first = follow_cam(task, speed).crossovers[0]
-    xi_c, xi_land, wall, impact = hand_flight(task, speed, BACKLASH_MM)
+    flights, _, _ = hand_groove(task, speed, BACKLASH_MM)
+    xi_c, xi_land, wall, impact = flights[0]
     assert first.xi == pytest.approx(xi_c, abs=1e-8)          # CVODES at reltol 1e-10
     assert first.lands_xi == pytest.approx(xi_land, abs=1e-7)
     assert first.lands_on == wall
     assert first.impact_m_s == pytest.approx(impact, rel=1e-5)
+
+
+@pytest.mark.parametrize("speed", [520.0, 600.0])
+def test_the_hybrid_rise_with_the_backlash_agrees_with_a_hand_one(groove, speed):
+    """The hybrid model (solvers/stop_impact/groove.py, in the rise's own time) against the hand
+    DOP853 in physical time: every flight (where, which wall, impact) and C's approach at its plate."""
+    real = follow_groove(groove, speed)
+    flights, contact, v0 = hand_groove(groove, speed, BACKLASH_MM)
+    assert real.status is Status.SOLVED and len(real.flights) == len(flights)
+    for (x0, x1, _, landed, impact), hand in zip(real.flights, flights):
+        assert (x0, x1) == pytest.approx(hand[:2], abs=1e-8)
+        assert ("outer", "inner")[landed == 1] == hand[2] and impact == pytest.approx(hand[3], rel=1e-6)
+    assert real.contact_xi == pytest.approx(contact, abs=1e-9)
+    assert real.approach_velocity_m_s == pytest.approx(v0, rel=1e-7)
 
 
 def test_the_hybrid_with_a_vanishing_backlash_is_the_chain(groove):
