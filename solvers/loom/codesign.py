@@ -31,14 +31,18 @@ t(3,7) >= n / r*: the same linear arc the graph engine already takes for the cyc
    shape. The machine is planned under both readings (speed_stress_law_shape_rpm,
    speed_stress_given_rpm); speed_rpm is the chosen one's.
 6. The lift cam's closure (`lift_closure`, models/stop_impact.py): "force" (the roller held on its
-   flank by the lever's closure_force_N; N < 0 is lift-off, past which the chain refuses: the edge
-   below which no t(3,7) is planned, and the synthesis keeps N >= 5 % of the closure) or "groove"
-   (the paper's Fig. 3: a grooved cam; N < 0 is a crossover across `lift_backlash_mm`, reported, no
-   edge and no contact rows). Given a backlash, both readings are planned, each with its own law
-   and its own cycloid baseline (speed_closure_<reading>_rpm, gain_closure_<reading>_percent, ...);
-   speed_rpm is the chosen one's. Under the groove the crossovers at the re-planned t(3,7) are
-   reported, and the approach and rebound with the backlash by the hybrid model
-   (solvers/stop_impact/groove.py) beside the chain's backlash-free walls.
+   flank by the lever's closure_force_N; N < 0 is lift-off, past which the chain refuses: an edge
+   below which no t(3,7) is planned) or "groove" (the paper's Fig. 3: a grooved cam; N < 0 is a
+   crossover across `lift_backlash_mm`, no edge; where one comes before the plate the chain's
+   approach is the hybrid model's with the backlash, solvers/stop_impact/groove.py). The synthesis
+   keeps the roller on its driving wall (N >= 5 % of the closure) under both: against lift-off, or
+   against a crossover whose flight the LP's linear lever does not hold (without those rows the
+   chain with the backlash missed the LP's prediction by 0.33 of the limit); so one law serves
+   both. Given a backlash (and `beside`), both readings are planned, each with its own cycloid
+   baseline (speed_closure_<reading>_rpm, t_3_7_closure_<reading>_deg,
+   gain_closure_<reading>_percent); speed_rpm is the chosen one's. Under the groove the crossovers
+   at the re-planned t(3,7) are reported (count, angle, largest impact), with the approach and
+   rebound of walls without play beside the backlash's.
 """
 import dataclasses
 import math
@@ -65,6 +69,8 @@ BOX_STEP_RPM = 5.0          # the box's speeds at the re-planned t(3,7): every 5
 PEAK_GRID = 200001          # xi points for a spline's max |S''|: its error ~ h^2 max|S''''| / 8, below 1e-8 here
 READINGS = ("law_shape", "given")
 CLOSURES = ("force", "groove")
+GEOMETRY_VALUES = ("max_pressure_angle_rise_deg", "max_pressure_angle_return_deg", "min_radius_of_curvature_mm",
+                   "min_concave_radius_mm", "pressure_angle_binds", "curvature_binds", "geometry_steps_taken")
 
 
 @takes_box
@@ -81,7 +87,16 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
                            robust: bool = False,
                            lift_stress: Literal["law_shape", "given"] = "law_shape",
                            lift_closure: Literal["force", "groove"] = "force",
-                           lift_backlash_mm: Annotated[float, Interval(ge=0.0, le=10.0)] = 0.0) -> Result:
+                           lift_backlash_mm: Annotated[float, Interval(ge=0.0, le=10.0)] = 0.0,
+                           beside: bool = True,
+                           geometry: bool = False,
+                           max_pressure_angle_deg: Annotated[float, Interval(gt=0, lt=90)] = 45.0,
+                           min_curvature_margin_mm: Annotated[float, Interval(ge=0)] = 0.0,
+                           cam_base_radius_mm: Annotated[float, Interval(gt=0, le=1e4)] = 60.0,
+                           cam_roller_radius_mm: Annotated[float, Interval(gt=0, le=1e4)] = 15.0,
+                           cam_centre_distance_mm: Annotated[float, Interval(gt=0, le=1e4)] = 120.0,
+                           cam_dwell_deg: Annotated[float, Interval(ge=0, lt=360)] = 60.0,
+                           geometry_steps: Annotated[int, Interval(ge=1, le=50)] = 8) -> Result:
     """The machine's highest speed with the lift's law synthesised (module docstring), against the
     same machine with its lever's own law (`speed_baseline_rpm`).
 
@@ -98,8 +113,12 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
         t(3,7) over [band_low_rpm, speed] (the margin added) is `rebound_worst_box_mm`.
     lift_stress : the lift cam's stress reading (module docstring, 5.): "law_shape" or "given".
     lift_closure, lift_backlash_mm : the lift cam's closure reading (module docstring, 6.) and the
-        groove's backlash reduced to C [mm] (0: not given; "groove" needs it; given, the other
-        closure reading is planned beside the chosen one).
+        groove's backlash reduced to C [mm] (0: not given; "groove" needs it; given, and with
+        `beside`, the other closure reading is planned beside the chosen one).
+    geometry, max_pressure_angle_deg ... geometry_steps : the law synthesised with its cam's
+        geometry bounds (`synthesise_law`'s, stop-impact/law-synthesis-geometry): pressure angle and
+        radius of curvature held at t_min at n_ref; the re-planned t(3,7) >= t_min, where a law of
+        fixed shape only gets gentler (its s' and s'' scale as 1 / t and 1 / t^2).
 
     Values: speed_rpm, speed_baseline_rpm, gain_percent, t_min_synthesized_deg (at n_ref),
     t_3_7_deg and the chain's rebound there (rebound_chain_mm); under both stress readings
@@ -128,7 +147,13 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
                               max_acceleration_mm_per_rad2=max_acceleration_mm_per_rad2,
                               phase_from_deg=phase_from_deg, phase_to_deg=phase_to_deg,
                               phase_tol_deg=phase_tol_deg, compare=False, robust=robust, box=box)
-    closures = [lift_closure] + [c for c in CLOSURES if c != lift_closure and lift_backlash_mm > 0]
+    if geometry:
+        synthesis_settings |= dict(geometry=True, max_pressure_angle_deg=max_pressure_angle_deg,
+                                   min_curvature_margin_mm=min_curvature_margin_mm,
+                                   cam_base_radius_mm=cam_base_radius_mm, cam_roller_radius_mm=cam_roller_radius_mm,
+                                   cam_centre_distance_mm=cam_centre_distance_mm, cam_dwell_deg=cam_dwell_deg,
+                                   geometry_steps=geometry_steps)
+    closures = [lift_closure] + [c for c in CLOSURES if c != lift_closure and lift_backlash_mm > 0 and beside]
     done = {}
     for closure in closures:                # the chosen reading first, under both stress readings
         stresses = READINGS if closure == lift_closure else (lift_stress,)
@@ -149,6 +174,8 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
         values[f"speed_stress_{reading}_rpm"] = each.values["max_speed_rpm"]
         values[f"t_3_7_stress_{reading}_deg"] = each.values["t_3_7_deg"]
     values |= {"stress_scale_lift": scale} | peaks
+    if geometry:                             # the cam's geometry of the law at t_min (n_ref): the synthesis'
+        values |= {k: law_run.values[k] for k in GEOMETRY_VALUES if k in law_run.values}
     plan, designed = plans[lift_stress], machines[lift_stress]
     n, t37 = plan.values["max_speed_rpm"], plan.values["t_3_7_deg"]
     chain = float(rebound_amplitude_mm(designed.lever_model, n, t37))     # the loop closed by the chain
