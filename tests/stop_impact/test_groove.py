@@ -158,3 +158,18 @@ def test_the_groove_needs_its_backlash_and_only_it(force):
         dataclasses.replace(force, closure="spring")
     with pytest.raises(MechoptError, match="backlash_mm"):
         dataclasses.replace(force, closure="groove", backlash_mm=50.0)
+
+
+def test_the_scenes_crossovers_are_the_hand_flights():
+    """stop-impact/cam-dynamics-groove's crossovers against the hand DOP853 (physical time, the
+    cycloid by hand): their count, the first's cam angle and the largest impact at 520 and 600 rpm."""
+    run = registry.run("stop-impact/cam-dynamics-groove").result
+    task = registry.find("stop-impact/cam-dynamics-groove").build()[0]
+    assert run.status is Status.SOLVED, run.message
+    for speed in (520.0, 600.0):
+        flights, contact, _ = hand_groove(task, speed, task.backlash_mm)
+        before = [f for f in flights if f[0] < contact]
+        tag = f"{speed:g}"
+        assert run.values[f"crossovers_{tag}"] == len(before) == 1
+        assert run.values[f"crossover_angle_deg_{tag}"] == pytest.approx(before[0][0] * task.t_deg, rel=1e-8)
+        assert run.values[f"crossover_impact_max_m_s_{tag}"] == pytest.approx(before[0][3], rel=1e-5)
