@@ -115,6 +115,8 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
     lift_closure, lift_backlash_mm : the lift cam's closure reading (module docstring, 6.) and the
         groove's backlash reduced to C [mm] (0: not given; "groove" needs it; given, and with
         `beside`, the other closure reading is planned beside the chosen one).
+    beside : plan the other readings (stress, and closure given a backlash) beside the chosen ones;
+        false: the chosen readings alone (one plan: the command's CPU roughly halved).
     geometry, max_pressure_angle_deg ... geometry_steps : the law synthesised with its cam's
         geometry bounds (`synthesise_law`'s, stop-impact/law-synthesis-geometry): pressure angle and
         radius of curvature held at t_min at n_ref; the re-planned t(3,7) >= t_min, where a law of
@@ -156,7 +158,7 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
     closures = [lift_closure] + [c for c in CLOSURES if c != lift_closure and lift_backlash_mm > 0 and beside]
     done = {}
     for closure in closures:                # the chosen reading first, under both stress readings
-        stresses = READINGS if closure == lift_closure else (lift_stress,)
+        stresses = READINGS if closure == lift_closure and beside else (lift_stress,)
         # one law for both: the LP keeps the roller on its driving wall either way (no lift-off / no crossover)
         law_run = done[lift_closure]["law_run"] if done else None
         one = _plan_reading(_with_closure(task, closure, lift_backlash_mm), stresses, synthesis_settings,
@@ -210,8 +212,8 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
                f"{task.lever_model.law} ({values['gain_percent']:+.2f} %); the lift's t(3,7) now set by {lift} "
                f"(baseline: {_lift_bound(baseline) or '-'}); limiting: {limiting} "
                f"(baseline {baseline.diagnostics.get('limiting_constraint', '-')}); the chain at t(3,7) = {t37:.4g} deg: "
-               f"{chain:.4g} mm; the lift's stress read from the {lift_stress} (x{scale:.4f} on the given; "
-               f"read {other}: {values[f'speed_stress_{other}_rpm']:.6g} rpm)")
+               f"{chain:.4g} mm; the lift's stress read from the {lift_stress} (x{scale:.4f} on the given"
+               + (f"; read {other}: {values[f'speed_stress_{other}_rpm']:.6g} rpm)" if beside else ")"))
     for closure in done:
         if closure != lift_closure:
             message += (f"; read as {closure}-closed: {values[f'speed_closure_{closure}_rpm']:.6g} rpm, t(3,7) = "
