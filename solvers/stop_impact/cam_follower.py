@@ -24,7 +24,7 @@ from mechopt.kit.errors import MechoptError
 from mechopt.kit.result import Status, from_casadi_integrator, from_ivp
 from mechopt.models.cam_follower import law_function, law_values, relative_acceleration, rise_duration_s
 from mechopt.models.stop_impact import LeverStop
-from mechopt.solvers.stop_impact.crossover import Crossover, Groove, crossovers
+from mechopt.solvers.stop_impact.crossover import Crossover, Groove, crossovers, law_path
 
 DWELL_PERIODS = 4.0         # how long after the rise C may still reach its plate [natural periods]
 
@@ -173,8 +173,10 @@ def follow_cam(task: LeverStop, speed_rpm, t_deg=None, *, reltol: float = 1e-10,
 def groove_of(task, lam, zeta, H, T) -> Groove:
     """The rise's data for its flights (solvers/stop_impact/crossover.py): the walls' pitch path is
     the law's S over the rise, the dwell's 1 past it."""
+    law = law_path(task.law)
+
     def path(xi):
-        S, dS = law_values(task.law, xi)[:2]
+        S, dS, _ = law(xi)
         return np.where(xi > 1.0, 1.0, S), np.where(xi > 1.0, 0.0, dS)
     return Groove(lam, zeta, task.closure_force_N * T**2 / (task.mass_kg * H), task.backlash_mm * 1e-3 / H, T, H, path)
 

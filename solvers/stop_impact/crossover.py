@@ -30,6 +30,28 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
+
+def law_path(law):
+    """xi (array) -> (S, S', S'') of the law over the rise, the dwell's (1, 0, 0) past it: a
+    synthesised spline's B-spline and its two derivatives built once (its `values` builds them on
+    every call, 2 ms: the hybrid's integrator calls it thousands of times), a library law's
+    CasADi function as the chain has it."""
+    from mechopt.models.cam_follower import law_values
+    from mechopt.models.cam_law import SplineLaw
+    if not isinstance(law, SplineLaw):
+        return lambda xi: law_values(law, xi)
+    from scipy.interpolate import BSpline
+    spline = BSpline(np.asarray(law.knots), np.asarray(law.coefficients), law.degree, extrapolate=False)
+    parts = (spline, spline.derivative(1), spline.derivative(2))
+
+    def path(xi):
+        xi = np.atleast_1d(np.asarray(xi, float))
+        inside, after = np.clip(xi, 0.0, 1.0), xi > 1.0
+        S, dS, ddS = (np.nan_to_num(p(inside)) for p in parts)
+        return np.where(after, 1.0, S), np.where(after, 0.0, dS), np.where(after, 0.0, ddS)
+    return path
+
+
 MAX_CROSSOVERS = 1000          # per rise: a count limit (a roller rattling in its groove), said when hit
 WALL = {1: "inner", -1: "outer"}
 

@@ -29,9 +29,9 @@ from scipy.integrate import solve_ivp
 
 from mechopt.kit.errors import ModelError
 from mechopt.kit.result import Status, from_ivp
-from mechopt.models.cam_follower import law_values
 from mechopt.models.stop_impact import LeverStop
 from mechopt.solvers.stop_impact.cam_follower import dwell_length, follower_data
+from mechopt.solvers.stop_impact.crossover import law_path
 from mechopt.solvers.stop_impact.response import closed_form_amplitude_m
 
 MAX_SWITCHES = 200          # phase changes followed in one rise (a count)
@@ -62,8 +62,10 @@ def follow_groove(task: LeverStop, speed_rpm, t_deg=None, *, rtol: float = 1e-11
     gap = task.backlash_mm * 1e-3 / H
     end = 1.0 + dwell_length(lam, t_deg)[0]
 
+    law = law_path(task.law)
+
     def path(xi):
-        S, dS, ddS = (float(v[0]) for v in law_values(task.law, xi))
+        S, dS, ddS = (float(v[0]) for v in law(xi))
         return (S, dS, ddS) if xi <= 1.0 else (1.0, 0.0, 0.0)
 
     def driven(offset):
