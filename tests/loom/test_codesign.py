@@ -93,9 +93,12 @@ ROBUST_SCENE = "loom/machine-speed-codesign-robust"
 
 def designed_lever(machine, result, factor, zeta):
     """The re-planned machine's lift lever rebuilt here: the result's law, the lever at (factor, zeta)
-    of the box (both natural frequencies times factor: E times its square)."""
+    of the box (both natural frequencies times factor: E times its square), the scene's closure."""
+    closure = {}
+    if result.diagnostics.get("lift_closure") == "groove":
+        closure = dict(closure="groove", backlash_mm=registry.find(ROBUST_SCENE).build()[1]["lift_backlash_mm"])
     return dataclasses.replace(machine.lever_model, law=codesign_law(result), E_GPa=machine.lever_model.E_GPa * factor**2,
-                               damping_ratio=zeta)
+                               damping_ratio=zeta, **closure)
 
 
 def test_the_robust_scenes_machine_keeps_the_limit_on_a_finer_grid_of_the_box(machine, solved_once):
