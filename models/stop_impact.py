@@ -42,9 +42,11 @@ Readings taken where the paper is silent or inconsistent (each pinned by a test)
   is lift-off, past which the one-flank model does not hold: INFEASIBLE) and "groove" (form
   closure, the paper's Fig. 3 "кулачок пазовый": a grooved cam; `closure_force_N` then presses
   the roller on its driving wall, 0 for a bare groove, and N < 0 is a crossover to the other
-  wall across `backlash_mm`, an impact located and reported, not a lift-off; the chain's rise
-  takes the walls without backlash, the backlash's effect on the approach measured apart:
-  solvers/stop_impact/cam_follower.py). "force" is the default (the scenes' earlier figures).
+  wall across `backlash_mm`, an impact located and reported, not a lift-off: the crossover comes
+  before the stop impact eq. (2) starts from, and where it comes before C meets its plate its
+  flight across the backlash moves the approach, so the chain takes the approach of the hybrid
+  model with the backlash there: solvers/stop_impact/crossover.py, groove.py, law.py). "force"
+  is the default (the scenes' earlier figures).
 * Preload (effect `preload`): the cam drives the lever `preload_mm` past the plate; the moving
   lever (Fig. 5) holds that as a constant force P = c_free * preload pressing C onto the plate,
   a constant -P added to Q_F in eq. (2).
