@@ -173,3 +173,24 @@ def test_the_scenes_crossovers_are_the_hand_flights():
         assert run.values[f"crossovers_{tag}"] == len(before) == 1
         assert run.values[f"crossover_angle_deg_{tag}"] == pytest.approx(before[0][0] * task.t_deg, rel=1e-8)
         assert run.values[f"crossover_impact_max_m_s_{tag}"] == pytest.approx(before[0][3], rel=1e-5)
+
+
+def test_the_synthesis_keeps_the_roller_on_its_driving_wall_in_a_groove_too(force, groove):
+    """The window LP's rows holding N >= 5 % of the closure are the same under both closures,
+    named for what they prevent (lift-off / a crossover, whose flight the LP's linear lever does
+    not hold): one LP, one law."""
+    from mechopt.solvers.stop_impact import synthesis as sy
+    lp_lever = sy.linear_lever(16, 2)
+    lines = sy.rebound_envelope(force, 4 * sy.v0_limit_m_s(dataclasses.replace(force, amplitude_limit_mm=0.1), 0.1))
+    built = {}
+    for task in (force, groove):
+        speeds = [sy.speed_response(task, lp_lever, n, 31.0) for n in (280.0, 420.0)]
+        lp = sy.WindowLP(task, lp_lever, speeds, 31.0, objective="least_rebound", limit_mm=0.1,
+                         bounds={"max_acceleration_mm_per_rad2": 570.0}, lines=lines)
+        built[task.closure] = (np.array(lp.rows.family), lp.rows.bounds(), lp.solve(0.85))
+    (fam_f, bounds_f, solved_f), (fam_g, bounds_g, solved_g) = built["force"], built["groove"]
+    assert (fam_f == "cam_contact").sum() == (fam_g == "no_crossover").sum() > 0
+    assert not (fam_g == "cam_contact").any()
+    assert np.array_equal(np.where(fam_f == "cam_contact", "held", fam_f), np.where(fam_g == "no_crossover", "held", fam_g))
+    assert all(np.array_equal(a, b) for a, b in zip(bounds_f, bounds_g))
+    assert solved_f[0] is solved_g[0] is Status.SOLVED and np.array_equal(solved_f[1], solved_g[1])
