@@ -142,7 +142,7 @@ def lever_stop(table) -> LeverStop:
     _table(table, "lever", dict)
     args = {}
     for key, entry in table.items():
-        if key in ("effects", "law"):
+        if key in ("effects", "law", "closure"):      # names, not numbers
             args[key] = entry
             continue
         if isinstance(entry, dict):

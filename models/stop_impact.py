@@ -37,6 +37,16 @@ Readings taken where the paper is silent or inconsistent (each pinned by a test)
   is the restitution itself, C leaves at k v0; eq. (2) then runs with q0' = k v0 and no pulse).
   Under a v0 proportional to n / t both give a rebound proportional to n / t (one constant
   apart); they differ where the preload does not scale (177 rpm) and in the chain.
+* Closure of the roller on its cam (structure `closure`, effect `cam_drive`), two readings:
+  "force" (the roller held on one flank by `closure_force_N`; a contact force N = F + m x'' < 0
+  is lift-off, past which the one-flank model does not hold: INFEASIBLE) and "groove" (form
+  closure, the paper's Fig. 3 "кулачок пазовый": a grooved cam; `closure_force_N` then presses
+  the roller on its driving wall, 0 for a bare groove, and N < 0 is a crossover to the other
+  wall across `backlash_mm`, an impact located and reported, not a lift-off: the crossover comes
+  before the stop impact eq. (2) starts from, and where it comes before C meets its plate its
+  flight across the backlash moves the approach, so the chain takes the approach of the hybrid
+  model with the backlash there: solvers/stop_impact/crossover.py, groove.py, law.py). "force"
+  is the default (the scenes' earlier figures).
 * Preload (effect `preload`): the cam drives the lever `preload_mm` past the plate; the moving
   lever (Fig. 5) holds that as a constant force P = c_free * preload pressing C onto the plate,
   a constant -P added to Q_F in eq. (2).
@@ -95,7 +105,7 @@ STATED_RANGE = {
     "a_stop_mm": (1e-3, 1e5), "b_stop_mm": (1e-3, 1e5), "mass_kg": (1e-6, 1e6), "stroke_mm": (1e-6, 1e5),
     "velocity_factor": (1e-6, 1e3), "speed_nominal_rpm": (1e-3, 1e6),
     "amplitude_limit_mm": (1e-9, 1e5), "inertia_A_kgm2": (1e-12, 1e6), "damping_ratio": (0.0, 1e3),
-    "preload_mm": (0.0, 1e5), "closure_force_N": (0.0, 1e7),
+    "preload_mm": (0.0, 1e5), "closure_force_N": (0.0, 1e7), "backlash_mm": (0.0, 10.0),
 }
 
 
@@ -140,7 +150,8 @@ class LeverStop:
     `speed_nominal_rpm`, `amplitude_limit_mm` the operating speed (where the amplitude law is
     linearised, where `operating_point` is measured) and the limit the rebound must keep;
     `restitution` k (effect impact_pulse) and `inertia_A_kgm2` J_A (optional: m l^2 when not
-    given); `damping_ratio` zeta (effect damping, of the link in the rise and of the plate);
+    given); `closure` "force" | "groove" and `backlash_mm` (groove only: the groove's play,
+    reduced to C's travel) the roller's closure (module docstring); `damping_ratio` zeta (effect damping, of the link in the rise and of the plate);
     `preload_mm` (effect preload); `closure_force_N` the force holding the roller on its cam and
     `law` the cam's motion law (structure; effect cam_drive, which replaces `velocity_factor`);
     `law_slope_mm_per_deg`, `law_intercept_mm` the amplitude law a(3,7) = slope t + intercept the
@@ -166,10 +177,12 @@ class LeverStop:
     damping_ratio: Annotated[float | None, stated("damping_ratio")] = None
     preload_mm: Annotated[float | None, stated("preload_mm")] = None
     closure_force_N: Annotated[float | None, stated("closure_force_N")] = None
+    backlash_mm: Annotated[float | None, stated("backlash_mm")] = None
     law_slope_mm_per_deg: Annotated[float | None, Interval(lt=0)] = None
     law_intercept_mm: Annotated[float | None, Interval(gt=0)] = None
     law: str | SplineLaw = ""       # a library law's name, or a synthesised law (solvers/stop_impact/synthesis.py)
     launch: Literal["pulse_plus_v0", "restitution"] = "pulse_plus_v0"   # how C leaves the plate (module docstring)
+    closure: Literal["force", "groove"] = "force"     # what N < 0 means (module docstring)
     speeds_rpm: tuple = ()
     effects: tuple = ()
 
@@ -202,6 +215,13 @@ class LeverStop:
             for effect in ("initial_velocity", "impact_pulse"):
                 require(effect in self.effects, f"launch={self.launch!r} needs the effect '{effect}' (C leaves at k v0)",
                         key="launch")
+        if self.closure == "groove":         # the groove's play: needed, and only there
+            require("cam_drive" in self.effects and self.backlash_mm is not None,
+                    f"closure='groove' needs the effect 'cam_drive' and backlash_mm (the groove's play reduced to C, "
+                    f"mm; got backlash_mm={self.backlash_mm})", key="backlash_mm")
+        else:
+            require(self.backlash_mm is None, f"backlash_mm={self.backlash_mm} belongs to closure='groove' "
+                    f"(closure={self.closure!r}); drop it or set closure='groove'", key="backlash_mm")
         if "cam_drive" in self.effects:      # one source of the approach velocity: the cam, not a fitted factor
             require(self.velocity_factor is None, f"velocity_factor={self.velocity_factor} is not used with the "
                     "effect 'cam_drive' (the cam computes the approach velocity); drop it", key="velocity_factor")

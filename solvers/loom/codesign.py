@@ -30,6 +30,19 @@ t(3,7) >= n / r*: the same linear arc the graph engine already takes for the cyc
    curvature with the law are ignored. "given" keeps the model as calibrated, blind to the law's
    shape. The machine is planned under both readings (speed_stress_law_shape_rpm,
    speed_stress_given_rpm); speed_rpm is the chosen one's.
+6. The lift cam's closure (`lift_closure`, models/stop_impact.py): "force" (the roller held on its
+   flank by the lever's closure_force_N; N < 0 is lift-off, past which the chain refuses: an edge
+   below which no t(3,7) is planned) or "groove" (the paper's Fig. 3: a grooved cam; N < 0 is a
+   crossover across `lift_backlash_mm`, no edge; where one comes before the plate the chain's
+   approach is the hybrid model's with the backlash, solvers/stop_impact/groove.py). The synthesis
+   keeps the roller on its driving wall (N >= 5 % of the closure) under both: against lift-off, or
+   against a crossover whose flight the LP's linear lever does not hold (without those rows the
+   chain with the backlash missed the LP's prediction by 0.33 of the limit); so one law serves
+   both. Given a backlash (and `beside`), both readings are planned, each with its own cycloid
+   baseline (speed_closure_<reading>_rpm, t_3_7_closure_<reading>_deg,
+   gain_closure_<reading>_percent); speed_rpm is the chosen one's. Under the groove the crossovers
+   at the re-planned t(3,7) are reported (count, angle, largest impact), with the approach and
+   rebound of walls without play beside the backlash's.
 """
 import dataclasses
 import math
@@ -43,9 +56,12 @@ from mechopt.kit.settings import Annotated, Interval, check_settings
 from mechopt.models.cam_laws import law as library_law
 from mechopt.models.loom import Cyclogram
 from mechopt.solvers.loom.speed import max_machine_speed
+from mechopt.solvers.stop_impact.cam_follower import follow_cam
 from mechopt.solvers.stop_impact.cam_shape import law_cam, without_cam
-from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
+from mechopt.solvers.stop_impact.groove import rebound_with_backlash_mm
+from mechopt.solvers.stop_impact.law import CHAIN_RELTOL, rebound_amplitude_mm
 from mechopt.solvers.stop_impact.lever_box import LeverBox, takes_box
+from mechopt.solvers.stop_impact.response import closed_form_amplitude_m
 from mechopt.solvers.stop_impact.synthesis import box_values, law_of, linear_lever, synthesise_law
 
 __all__ = ["codesign_machine_speed"]
@@ -54,6 +70,9 @@ BOX_STEP_RPM = 5.0          # the box's speeds at the re-planned t(3,7): every 5
 PEAK_GRID = 200001          # xi points for a spline's max |S''|: its error ~ h^2 max|S''''| / 8, below 1e-8 here
 READINGS = ("law_shape", "given")
 LIFT_START = "3"            # the event where the lift's rise begins: operation (3,7) starts there
+CLOSURES = ("force", "groove")
+GEOMETRY_VALUES = ("max_pressure_angle_rise_deg", "max_pressure_angle_return_deg", "min_radius_of_curvature_mm",
+                   "min_concave_radius_mm", "pressure_angle_binds", "curvature_binds", "geometry_steps_taken")
 
 
 @takes_box
@@ -68,7 +87,18 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
                            scan_step_deg: Annotated[float, Interval(ge=1e-3, le=10.0)] = 0.25,
                            box: LeverBox | None = None,
                            robust: bool = False,
-                           lift_stress: Literal["law_shape", "given"] = "law_shape") -> Result:
+                           lift_stress: Literal["law_shape", "given"] = "law_shape",
+                           lift_closure: Literal["force", "groove"] = "force",
+                           lift_backlash_mm: Annotated[float, Interval(ge=0.0, le=10.0)] = 0.0,
+                           beside: bool = True,
+                           geometry: bool = False,
+                           max_pressure_angle_deg: Annotated[float, Interval(gt=0, lt=90)] = 45.0,
+                           min_curvature_margin_mm: Annotated[float, Interval(ge=0)] = 0.0,
+                           cam_base_radius_mm: Annotated[float, Interval(gt=0, le=1e4)] = 60.0,
+                           cam_roller_radius_mm: Annotated[float, Interval(gt=0, le=1e4)] = 15.0,
+                           cam_centre_distance_mm: Annotated[float, Interval(gt=0, le=1e4)] = 120.0,
+                           cam_dwell_deg: Annotated[float, Interval(ge=0, lt=360)] = 60.0,
+                           geometry_steps: Annotated[int, Interval(ge=1, le=50)] = 8) -> Result:
     """The machine's highest speed with the lift's law synthesised (module docstring), against the
     same machine with its lever's own law (`speed_baseline_rpm`).
 
@@ -84,6 +114,15 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
         (module docstring, 4.) and the chain's worst rebound over the box's grid at the re-planned
         t(3,7) over [band_low_rpm, speed] (the margin added) is `rebound_worst_box_mm`.
     lift_stress : the lift cam's stress reading (module docstring, 5.): "law_shape" or "given".
+    lift_closure, lift_backlash_mm : the lift cam's closure reading (module docstring, 6.) and the
+        groove's backlash reduced to C [mm] (0: not given; "groove" needs it; given, and with
+        `beside`, the other closure reading is planned beside the chosen one).
+    beside : plan the other readings (stress, and closure given a backlash) beside the chosen ones;
+        false: the chosen readings alone (one plan: the command's CPU roughly halved).
+    geometry, max_pressure_angle_deg ... geometry_steps : the law synthesised with its cam's
+        geometry bounds (`synthesise_law`'s, stop-impact/law-synthesis-geometry): pressure angle and
+        radius of curvature held at t_min at n_ref; the re-planned t(3,7) >= t_min, where a law of
+        fixed shape only gets gentler (its s' and s'' scale as 1 / t and 1 / t^2).
 
     Values: speed_rpm, speed_baseline_rpm, gain_percent, t_min_synthesized_deg (at n_ref),
     t_3_7_deg and the chain's rebound there (rebound_chain_mm); under both stress readings
@@ -95,48 +134,54 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
     event 3 where the rise begins). SOLVED when the chain keeps the limit at t(3,7) on the nominal lever and, given
     a box, on its grid; INACCURATE otherwise (the message says where).
     """
-    check_settings(codesign_machine_speed, lift_stress=lift_stress)
+    check_settings(codesign_machine_speed, lift_stress=lift_stress, lift_closure=lift_closure,
+                   lift_backlash_mm=lift_backlash_mm)
     if task.lever is None or task.amplitude_limit_mm is None or task.speed_rpm is None:
         raise ModelError("codesign: needs the lever's table [structure.lever], amplitude_limit_mm and speed_rpm",
                          key="lever")
     if band_low_rpm >= task.speed_rpm:
         raise SettingError(f"band_low_rpm={band_low_rpm} must be below speed_rpm={task.speed_rpm} (the band's top)",
                            key="band_low_rpm")
+    if lift_closure == "groove" and lift_backlash_mm <= 0:
+        raise SettingError(f"lift_backlash_mm={lift_backlash_mm}: allowed > 0 with lift_closure='groove' (the "
+                           "groove's play reduced to C, mm)", key="lift_backlash_mm")
     box = box or LeverBox()
     clock = Clock()
     speed_settings = dict(scan_to_deg=scan_to_deg, scan_step_deg=scan_step_deg, box=box)
-    baseline = max_machine_speed(task, **speed_settings)
-    if baseline.status is not Status.SOLVED:
-        return clock.result(baseline.status, {}, message=f"the baseline machine: {baseline.message}",
-                            violated=baseline.violated)
-    lever = dataclasses.replace(task.lever_model, amplitude_limit_mm=task.amplitude_limit_mm,
-                                speed_nominal_rpm=task.speed_rpm)
-    synthesis = Clock()
-    law_run = synthesise_law(lever, objective="least_phase", coefficients=coefficients, band_low_rpm=band_low_rpm,
-                             band_high_rpm=task.speed_rpm, sample_speeds=sample_speeds,
-                             max_acceleration_mm_per_rad2=max_acceleration_mm_per_rad2,
-                             phase_from_deg=phase_from_deg, phase_to_deg=phase_to_deg, phase_tol_deg=phase_tol_deg,
-                             compare=False, robust=robust, box=box)
-    values = {"speed_baseline_rpm": baseline.values["max_speed_rpm"]}
-    took = {"synthesis_s": synthesis.elapsed()}                     # timings go to diagnostics: values are results
-    if law_run.status is not Status.SOLVED:
-        return clock.result(law_run.status, values, message=f"the lift's law: {law_run.message}",
-                            violated=law_run.violated)
-    law = law_of(law_run)
-    values["t_min_synthesized_deg"] = law_run.values["t_min_synthesized_deg"]
-    replan = Clock()
-    scale, peaks = _stress_scale(task, law)
-    machines = {reading: _with_lift_stress(dataclasses.replace(task, lever={**task.lever, "law": law}),
-                                           scale if reading == "law_shape" else 1.0) for reading in READINGS}
-    plans = {reading: max_machine_speed(machine, **speed_settings) for reading, machine in machines.items()}
-    took["replan_s"] = replan.elapsed()
+    synthesis_settings = dict(objective="least_phase", coefficients=coefficients, band_low_rpm=band_low_rpm,
+                              band_high_rpm=task.speed_rpm, sample_speeds=sample_speeds,
+                              max_acceleration_mm_per_rad2=max_acceleration_mm_per_rad2,
+                              phase_from_deg=phase_from_deg, phase_to_deg=phase_to_deg,
+                              phase_tol_deg=phase_tol_deg, compare=False, robust=robust, box=box)
+    if geometry:
+        synthesis_settings |= dict(geometry=True, max_pressure_angle_deg=max_pressure_angle_deg,
+                                   min_curvature_margin_mm=min_curvature_margin_mm,
+                                   cam_base_radius_mm=cam_base_radius_mm, cam_roller_radius_mm=cam_roller_radius_mm,
+                                   cam_centre_distance_mm=cam_centre_distance_mm, cam_dwell_deg=cam_dwell_deg,
+                                   geometry_steps=geometry_steps)
+    closures = [lift_closure] + [c for c in CLOSURES if c != lift_closure and lift_backlash_mm > 0 and beside]
+    done = {}
+    for closure in closures:                # the chosen reading first, under both stress readings
+        stresses = READINGS if closure == lift_closure and beside else (lift_stress,)
+        # one law for both: the LP keeps the roller on its driving wall either way (no lift-off / no crossover)
+        law_run = done[lift_closure]["law_run"] if done else None
+        one = _plan_reading(_with_closure(task, closure, lift_backlash_mm), stresses, synthesis_settings,
+                            speed_settings, law_run)
+        if isinstance(one, tuple):          # (status, message, violated, values): a step failed
+            status, message, violated, partial = one
+            return clock.result(status, partial, message=f"closure {closure}: {message}", violated=violated)
+        done[closure] = one
+    chosen = done[lift_closure]
+    baseline, law_run, law, plans, machines = (chosen[k] for k in ("baseline", "law_run", "law", "plans", "machines"))
+    scale, peaks, took = chosen["scale"], chosen["peaks"], chosen["took"]
+    values = {"speed_baseline_rpm": baseline.values["max_speed_rpm"],
+              "t_min_synthesized_deg": law_run.values["t_min_synthesized_deg"]}
     for reading, each in plans.items():
-        if each.status is not Status.SOLVED:
-            return clock.result(each.status, values, message=f"the re-planned machine ({reading} stress): "
-                                f"{each.message}", violated=each.violated)
         values[f"speed_stress_{reading}_rpm"] = each.values["max_speed_rpm"]
         values[f"t_3_7_stress_{reading}_deg"] = each.values["t_3_7_deg"]
     values |= {"stress_scale_lift": scale} | peaks
+    if geometry:                             # the cam's geometry of the law at t_min (n_ref): the synthesis'
+        values |= {k: law_run.values[k] for k in GEOMETRY_VALUES if k in law_run.values}
     plan, designed = plans[lift_stress], machines[lift_stress]
     n, t37 = plan.values["max_speed_rpm"], plan.values["t_3_7_deg"]
     chain = float(rebound_amplitude_mm(designed.lever_model, n, t37))     # the loop closed by the chain
@@ -152,16 +197,38 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
         held = held and values["rebound_worst_box_mm"] <= task.amplitude_limit_mm * (1 + 1e-6)
     status = Status.SOLVED if held else Status.INACCURATE
     limiting = plan.diagnostics.get("limiting_constraint", "-")
-    lift = _lift_bound(plan) or "no speed bound (its angle floor)"
-    if lift.startswith("amplitude") and "roller_left" in str(plan.diagnostics.get("amplitude_bounds_at_reference")):
-        lift += " (its edge: below it the roller leaves its cam, the closure force short)"
+    lift = _lift_text(plan)
+    by_closure = {}
+    for closure, one in done.items():        # each closure reading: its speed, t(3,7), gain and what binds
+        each, base = one["plans"][lift_stress], one["baseline"].values["max_speed_rpm"]
+        values |= {f"speed_closure_{closure}_rpm": each.values["max_speed_rpm"],
+                   f"t_3_7_closure_{closure}_deg": each.values["t_3_7_deg"],
+                   f"speed_baseline_closure_{closure}_rpm": base,
+                   f"gain_closure_{closure}_percent": 100.0 * (each.values["max_speed_rpm"] / base - 1.0)}
+        by_closure[closure] = {"lift_bound": _lift_text(each), "baseline_lift_bound": _lift_text(one["baseline"])}
+    if "groove" in done:                     # the crossovers at the groove's design point, the backlash's effect
+        groove = done["groove"]
+        values |= _groove_values(groove["machines"][lift_stress].lever_model,
+                                 groove["plans"][lift_stress].values["max_speed_rpm"],
+                                 groove["plans"][lift_stress].values["t_3_7_deg"])
     other = next(r for r in READINGS if r != lift_stress)
     message = (f"{n:.6g} rpm with the synthesised lift law against {values['speed_baseline_rpm']:.6g} rpm with "
                f"{task.lever_model.law} ({values['gain_percent']:+.2f} %); the lift's t(3,7) now set by {lift} "
                f"(baseline: {_lift_bound(baseline) or '-'}); limiting: {limiting} "
                f"(baseline {baseline.diagnostics.get('limiting_constraint', '-')}); the chain at t(3,7) = {t37:.4g} deg: "
-               f"{chain:.4g} mm; the lift's stress read from the {lift_stress} (x{scale:.4f} on the given; "
-               f"read {other}: {values[f'speed_stress_{other}_rpm']:.6g} rpm)")
+               f"{chain:.4g} mm; the lift's stress read from the {lift_stress} (x{scale:.4f} on the given"
+               + (f"; read {other}: {values[f'speed_stress_{other}_rpm']:.6g} rpm)" if beside else ")"))
+    for closure in done:
+        if closure != lift_closure:
+            message += (f"; read as {closure}-closed: {values[f'speed_closure_{closure}_rpm']:.6g} rpm, t(3,7) = "
+                        f"{values[f't_3_7_closure_{closure}_deg']:.5g} deg set by {by_closure[closure]['lift_bound']} "
+                        f"({values[f'gain_closure_{closure}_percent']:+.2f} % over its cycloid)")
+    if "crossovers_3_7" in values:
+        message += (f"; in the groove at its t(3,7): {values['crossovers_3_7']:g} crossover(s) in the rise; with "
+                    f"the backlash {lift_backlash_mm:g} mm the approach is "
+                    f"{values.get('approach_velocity_backlash_m_s', math.nan):.4g} m/s, the rebound "
+                    f"{values.get('rebound_backlash_mm', math.nan):.4g} mm (walls without play: "
+                    f"{values['approach_velocity_no_backlash_m_s']:.4g} m/s, {values['rebound_no_backlash_mm']:.4g} mm)")
     if not box.trivial:
         message += (f"; on the box the lift's bound binds at {diagnostics['box_binding']}; the chain's worst there "
                     f"{values['rebound_worst_box_mm']:.4g} mm at {diagnostics.get('rebound_worst_box_at')}")
@@ -172,6 +239,7 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
                     "baseline_limiting_constraint": baseline.diagnostics.get("limiting_constraint"),
                     "lift_bound": lift, "timing": took, "baseline_lift_bound": _lift_bound(baseline),
                     "lift_bound_by_reading": {r: _lift_bound(p) for r, p in plans.items()},
+                    "lift_bound_by_closure": by_closure, "lift_closure": lift_closure,
                     "lift_amplitude_bound": plan.diagnostics.get("amplitude_bounds_at_reference"),
                     "windows_given_up": law_run.diagnostics.get("windows_given_up", 0),
                     "limiting": plan.diagnostics.get("limiting"),
@@ -184,6 +252,74 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
     arrays = without_cam(law_run.arrays) | plan.arrays | shop
     return clock.result(status, values, message=message, diagnostics=diagnostics | said, arrays=arrays,
                         warnings=plan.warnings)
+
+
+def _with_closure(task, closure, backlash_mm):
+    """The machine with its lift lever's closure reading (module docstring, 6.)."""
+    lever = {k: v for k, v in task.lever.items() if k != "backlash_mm"} | {"closure": closure}
+    if closure == "groove":
+        lever["backlash_mm"] = backlash_mm
+    return dataclasses.replace(task, lever=lever)
+
+
+def _plan_reading(task, stresses, synthesis_settings, speed_settings, law_run=None):
+    """One closure reading: the cycloid's machine (the baseline), the law synthesised for its lever
+    (or `law_run`'s, another reading's: the LP is the same under both closures, its rows named
+    apart), the machine re-planned with it under each stress reading of `stresses`. A dict of the
+    steps, or (status, message, violated, values so far) where a step is not SOLVED."""
+    baseline = max_machine_speed(task, **speed_settings)
+    if baseline.status is not Status.SOLVED:
+        return baseline.status, f"the baseline machine: {baseline.message}", baseline.violated, {}
+    lever = dataclasses.replace(task.lever_model, amplitude_limit_mm=task.amplitude_limit_mm,
+                                speed_nominal_rpm=task.speed_rpm)
+    synthesis = Clock()
+    law_run = law_run or synthesise_law(lever, **synthesis_settings)
+    took = {"synthesis_s": synthesis.elapsed()}                     # timings go to diagnostics: values are results
+    if law_run.status is not Status.SOLVED:
+        return (law_run.status, f"the lift's law: {law_run.message}", law_run.violated,
+                {"speed_baseline_rpm": baseline.values["max_speed_rpm"]})
+    law = law_of(law_run)
+    replan = Clock()
+    scale, peaks = _stress_scale(task, law)
+    machines = {reading: _with_lift_stress(dataclasses.replace(task, lever={**task.lever, "law": law}),
+                                           scale if reading == "law_shape" else 1.0) for reading in stresses}
+    plans = {reading: max_machine_speed(machine, **speed_settings) for reading, machine in machines.items()}
+    took["replan_s"] = replan.elapsed()
+    for reading, each in plans.items():
+        if each.status is not Status.SOLVED:
+            return (each.status, f"the re-planned machine ({reading} stress): {each.message}", each.violated,
+                    {"speed_baseline_rpm": baseline.values["max_speed_rpm"]})
+    return {"baseline": baseline, "law_run": law_run, "law": law, "plans": plans, "machines": machines,
+            "scale": scale, "peaks": peaks, "took": took}
+
+
+def _groove_values(lever, n_rpm, t_deg):
+    """At the groove reading's design point (n, t(3,7)): the crossovers of the chain's rise (count,
+    the first's cam angle, the largest impact, each flight from the backlash-free path) and the
+    approach with the backlash (the hybrid model, solvers/stop_impact/groove.py: the chain's own
+    where a crossover comes before the plate) beside the backlash-free walls' approach and rebound."""
+    rise = follow_cam(lever, n_rpm, t_deg, reltol=CHAIN_RELTOL)
+    speeds = [c.impact_m_s for c in rise.crossovers if c.impact_m_s is not None]
+    out = {"crossovers_3_7": float(len(rise.crossovers)),
+           "approach_velocity_no_backlash_m_s": rise.approach_velocity_m_s,
+           "rebound_no_backlash_mm": closed_form_amplitude_m(
+               lever.impact(n_rpm, t_deg, v0_m_s=rise.approach_velocity_m_s))[0] * 1e3}
+    if rise.crossovers:
+        out["crossover_angle_3_7_deg"] = rise.crossovers[0].angle_deg(t_deg)
+    if speeds:
+        out["crossover_impact_max_m_s"] = max(speeds)
+    rebound, real = rebound_with_backlash_mm(lever, n_rpm, t_deg)
+    if real.status is Status.SOLVED and real.contact_xi is not None:
+        out |= {"approach_velocity_backlash_m_s": real.approach_velocity_m_s, "rebound_backlash_mm": rebound}
+    return out
+
+
+def _lift_text(plan):
+    """What sets the lift's t(3,7) in a plan, its edge named where the roller leaves its cam."""
+    lift = _lift_bound(plan) or "no speed bound (its angle floor)"
+    if lift.startswith("amplitude") and "roller_left" in str(plan.diagnostics.get("amplitude_bounds_at_reference")):
+        lift += " (its edge: below it the roller leaves its cam, the closure force short)"
+    return lift
 
 
 def _stress_scale(task, law):

@@ -6,7 +6,10 @@ stays on its cam.
                           ends are phase ends, never stepped over); the contact with the plate is
                           located by Newton on X(xi) = 1 - preload / H, each iterate integrated
                           afresh from the grid node before it; a contact force N < 0 is located
-                          by bisection the same way.
+                          by bisection the same way. Closure "force": N < 0 is lift-off
+                          (INFEASIBLE); "groove": a crossover to the other wall, each one
+                          located with its flight and impact (solvers/stop_impact/crossover.py),
+                          the rise followed on (the walls taken without backlash).
 * `follow_cam_reference`  scipy's DOP853 with its own event location: an independent check.
 """
 import math
@@ -21,6 +24,7 @@ from mechopt.kit.errors import MechoptError
 from mechopt.kit.result import Status, from_casadi_integrator, from_ivp
 from mechopt.models.cam_follower import law_function, law_values, relative_acceleration, rise_duration_s
 from mechopt.models.stop_impact import LeverStop
+from mechopt.solvers.stop_impact.crossover import Crossover, Groove, crossovers, law_path
 
 DWELL_PERIODS = 4.0         # how long after the rise C may still reach its plate [natural periods]
 
@@ -48,10 +52,11 @@ class CamRise:
     approach_velocity_m_s: float      # x' at the contact (0 without one)
     dynamic_error_mm: float           # max |x - s| over the samples up to the contact
     min_contact_force_N: float        # least roller force N = F_closure + m x'' before the contact
-    leaves_cam_xi: float | None       # first N = 0 (the roller would lift off), located
+    leaves_cam_xi: float | None       # first N = 0 (the roller would lift off), located (closure "force")
     status: Status
     message: str
     build_s: float
+    crossovers: tuple[Crossover, ...] = ()   # closure "groove": the roller's crossings, in order
 
 
 def follower_data(task: LeverStop, speed_rpm, t_deg):
@@ -140,16 +145,55 @@ def follow_cam(task: LeverStop, speed_rpm, t_deg=None, *, reltol: float = 1e-10,
                    f"({60 / speed_rpm * 1e3:.4g} ms a turn): C does not reach its plate before the cam comes round, "
                    "outside the one-rise model; stiffen the lever (E_GPa, J_x_mm4) or lighten it (mass_kg)")
     below = np.flatnonzero(force < 0)
-    if below.size:
+    crossed = ()
+    if below.size and task.closure == "groove":     # a crossover to the other wall, not lift-off
+        def located(j):          # (xi, X, X') where N changes sign between samples j - 1 and j
+            at = _locate_sign_change(end_int, task, xi, e, de, j, lam, zeta, H, T, before=bool(force[j - 1] >= 0))
+            y = _at(end_int, task.law, [e[j - 1], de[j - 1]], float(xi[j - 1]), at, lam, zeta, 1.0 if at <= 1 else 0.0)
+            S, dS = (float(v[0]) for v in law_values(task.law, at)[:2])
+            return at, S + y[0], dS + y[1]
+        crossed, capped = crossovers(xi, force, located, groove_of(task, lam, zeta, H, T))
+        message += "; " + crossover_text(crossed, t_deg, task.backlash_mm)
+        if capped:
+            status = Status.LIMIT
+            message += f" (stopped at {len(crossed)} crossovers: a count limit, the rest not followed)"
+    elif below.size:
         j = int(below[0])
-        leaves = _locate_lift_off(end_int, task, xi, e, de, j, lam, zeta, H, T)
+        leaves = _locate_sign_change(end_int, task, xi, e, de, j, lam, zeta, H, T)
         status = Status.INFEASIBLE
         message = (f"the roller leaves the cam at xi = {leaves:.4f} (cam angle {leaves * t_deg:.3f} deg of the rise): "
                    f"contact force {force.min():.4g} N < 0 at {speed_rpm:g} rpm; closure_force_N="
                    f"{task.closure_force_N:g} does not hold it")
     v0 = float(dX[-1]) * H / T if contact is not None else 0.0
     return CamRise(float(speed_rpm), float(t_deg), xi, X, dX, ddX, contact, v0,
-                   _largest(xi, e, de, dde) * H * 1e3, float(force.min()), leaves, status, message, build_s)
+                   _largest(xi, e, de, dde) * H * 1e3, float(force.min()), leaves, status, message, build_s,
+                   tuple(crossed))
+
+
+def groove_of(task, lam, zeta, H, T) -> Groove:
+    """The rise's data for its flights (solvers/stop_impact/crossover.py): the walls' pitch path is
+    the law's S over the rise, the dwell's 1 past it."""
+    law = law_path(task.law)
+
+    def path(xi):
+        S, dS, _ = law(xi)
+        return np.where(xi > 1.0, 1.0, S), np.where(xi > 1.0, 0.0, dS)
+    return Groove(lam, zeta, task.closure_force_N * T**2 / (task.mass_kg * H), task.backlash_mm * 1e-3 / H, T, H, path)
+
+
+def crossover_text(crossed, t_deg, backlash_mm) -> str:
+    """The crossovers in words: how many, the first's cam angle and the largest impact speed."""
+    if not crossed:
+        return "groove: no crossover"
+    speeds = [c.impact_m_s for c in crossed if c.impact_m_s is not None]
+    first = crossed[0]
+    text = (f"groove: {len(crossed)} crossover(s) across backlash_mm={backlash_mm:g}, the first off the "
+            f"{first.leaves} wall at cam angle {first.angle_deg(t_deg):.3f} deg of the rise")
+    if speeds:
+        text += f", impacts up to {max(speeds):.4g} m/s"
+    if any(c.impact_m_s is None for c in crossed):
+        text += "; one still in flight when the followed window ends"
+    return text
 
 
 def _largest(xi, e, de, dde):
@@ -194,19 +238,23 @@ def _locate(end_int, law, y0, lo, hi, lam, zeta, rising, target):
     return xi, y
 
 
-def _locate_lift_off(end_int, task, xi, e, de, j, lam, zeta, H, T):
-    """The first xi where the roller force falls through zero: bisection between samples j-1 and j."""
+def _locate_sign_change(end_int, task, xi, e, de, j, lam, zeta, H, T, before=True):
+    """The xi where the roller force changes sign between samples j-1 and j (`before`: it pushes,
+    N >= 0, at j-1; so for the first lift-off): bisection, each midpoint integrated afresh from
+    sample j-1."""
     if j == 0:
         return float(xi[0])
     lo, hi = float(xi[j - 1]), float(xi[j])
     y0 = np.array([e[j - 1], de[j - 1]])
     rising = 1.0 if hi <= 1.0 else 0.0
+
+    def pushes(x):
+        y = _at(end_int, task.law, y0, float(xi[j - 1]), x, lam, zeta, rising)
+        ddS = law_values(task.law, x)[2][0] if rising else 0.0
+        return _contact_force_N(task, H, T, ddS + relative_acceleration(ddS, y[0], y[1], lam, zeta)) >= 0
     for _ in range(50):
         mid = 0.5 * (lo + hi)
-        y = _at(end_int, task.law, y0, float(xi[j - 1]), mid, lam, zeta, rising)
-        ddS = law_values(task.law, mid)[2][0] if rising else 0.0
-        ddX = ddS + relative_acceleration(ddS, y[0], y[1], lam, zeta)
-        lo, hi = (mid, hi) if _contact_force_N(task, H, T, ddX) >= 0 else (lo, mid)
+        lo, hi = (mid, hi) if pushes(mid) == before else (lo, mid)
     return 0.5 * (lo + hi)
 
 

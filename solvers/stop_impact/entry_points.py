@@ -269,6 +269,8 @@ def cam_dynamics(task: LeverStop, *, reltol: Tolerance = 1e-10,
         values[f"approach_velocity_m_s{suffix}"] = rise.approach_velocity_m_s
         values[f"dynamic_error_mm{suffix}"] = rise.dynamic_error_mm
         values[f"min_contact_force_N{suffix}"] = rise.min_contact_force_N
+        if task.closure == "groove":        # N < 0 a crossover to the other wall: where, how many, how hard
+            values |= _crossover_values(rise, suffix)
         if rise.contact_xi is not None and suffix:
             values[f"contact_angle_deg{suffix}"] = rise.contact_xi * task.t_deg
         if n == task.speed_nominal_rpm:
@@ -303,6 +305,18 @@ def cam_dynamics(task: LeverStop, *, reltol: Tolerance = 1e-10,
     return clock.result(Status.SOLVED, values, arrays=arrays,
                         message=f"{task.law} rise, {nominal.message} at {nominal.contact_xi * task.t_deg:.4f} deg; "
                                 f"DOP853 agrees to {spread:.1e}" if nominal.contact_xi is not None else nominal.message)
+
+
+def _crossover_values(rise, suffix):
+    """A grooved cam's crossovers in one rise (solvers/stop_impact/crossover.py): their count, the
+    first's cam angle [deg] and the largest impact speed across the backlash [m/s]."""
+    out = {f"crossovers{suffix}": float(len(rise.crossovers))}
+    if rise.crossovers:
+        out[f"crossover_angle_deg{suffix}"] = rise.crossovers[0].angle_deg(rise.t_deg)
+    speeds = [c.impact_m_s for c in rise.crossovers if c.impact_m_s is not None]
+    if speeds:
+        out[f"crossover_impact_max_m_s{suffix}"] = max(speeds)
+    return out
 
 
 def _rigid_approach_m_s(task, speed_rpm):

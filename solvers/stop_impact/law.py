@@ -4,7 +4,10 @@ angle, and its tangent: the linear constraint the loom's LP takes.
 Two sources of the approach velocity v0, by the task's effects:
 
 * `cam_drive` (the chain): cam law -> elastic lever (solvers/stop_impact/cam_follower.py) ->
-  v0 at the located contact -> impact pulse and eq. (2) -> first rebound. v0 is no longer
+  v0 at the located contact -> impact pulse and eq. (2) -> first rebound. In a groove (closure
+  "groove") whose roller crosses to the other wall before C meets its plate, v0 is the hybrid
+  model's with the backlash (solvers/stop_impact/groove.py): the crossover comes before the
+  stop impact, and its flight moves the approach (eq. (2) itself starts after the stop impact). v0 is no longer
   proportional to n / t (the dynamic error grows with speed), so each (n, t) is its own rise.
 * otherwise the fitted proportionality v0 = velocity_factor * stroke * Omega / t.
 """
@@ -15,6 +18,7 @@ from mechopt.kit.errors import ModelError, SolverError
 from mechopt.kit.result import Status
 from mechopt.models.stop_impact import Impact, LeverStop
 from mechopt.solvers.stop_impact.cam_follower import follow_cam
+from mechopt.solvers.stop_impact.groove import follow_groove
 from mechopt.solvers.stop_impact.response import closed_form_amplitude_m, response_parts
 from mechopt.solvers.stop_impact.rise_batch import ROLLER_LEFT, TAKEN, rise_batch
 
@@ -47,6 +51,14 @@ def _rise_velocity(task: LeverStop, speed_rpm: float, t_deg: float | None) -> fl
     if rise.status is not Status.SOLVED:        # (no contact at all: C settles onto the plate, v0 = 0)
         raise RollerLeftCam(f"speed {speed_rpm:g} rpm, t = {rise.t_deg:g} deg: no approach velocity: {rise.message}",
                             rise.status)
+    if rise.crossovers and (rise.contact_xi is None or rise.crossovers[0].xi < rise.contact_xi):
+        # a groove's crossover before the plate: its flight across the backlash moves C's approach
+        # (the walls taken with their play: the hybrid model, solvers/stop_impact/groove.py)
+        real = follow_groove(task, speed_rpm, t_deg)
+        if real.status is not Status.SOLVED:
+            raise RollerLeftCam(f"speed {speed_rpm:g} rpm, t = {rise.t_deg:g} deg: the groove's rise with its "
+                                f"backlash: {real.message}", real.status)
+        return real.approach_velocity_m_s
     return rise.approach_velocity_m_s
 
 

@@ -28,7 +28,8 @@ each window is solved from scratch by the dual simplex (the interior point where
 settle, iteration limits both); the lever enters as a dense response matrix for few coefficients and as
 state variables tied by the exact step for many (`elastic_states`); the rows are sampled on the
 grid (every 0.015 in xi early in the rise, 0.004 near the plate), the roller's force kept 5 % above
-zero there, and the full grid (the dense check) and the chain judge the result. Not modelled: the
+zero there (a force closure: no lift-off; a groove: no crossover, whose flight across the backlash the
+linear model does not hold), and the full grid (the dense check) and the chain judge the result. Not modelled: the
 Hertz stress of the law; the cam's pressure angle and radius of curvature only when `geometry`
 (sequential LPs, solvers/stop_impact/cam_rows.py).
 
@@ -312,7 +313,11 @@ class WindowLP:
             _, _, (a0, A), _ = lever.bound_kin
             rows.le("objective", [("c", A), ("peak", -np.ones(A.shape[0]))], -a0)
             rows.le("objective", [("c", -A), ("peak", -np.ones(A.shape[0]))], a0)
+        # the roller kept on its driving wall (rows below): under a force closure against lift-off; in a
+        # groove against a crossover, whose flight across the backlash moves C's approach off this
+        # linear model (solvers/stop_impact/groove.py: 0.33 of the limit on loom/machine-speed-codesign's law)
         closure = task.closure_force_N if "cam_drive" in task.effects and task.closure_force_N is not None else None
+        held = "cam_contact" if task.closure == "force" else "no_crossover"
         before, after = [], []
         for k, sp in enumerate(speeds):
             (X, X0), (X_end, X0_end), (dX, dX0), (ddX, ddX0) = elastic_states(rows, lever, sp, k, at)
@@ -328,7 +333,7 @@ class WindowLP:
             else:
                 rows.le("rebound", [(u, g * scale)], limit_mm - p)
             if closure is not None:      # the roller stays on its cam: N = F + m H X'' / T^2 >= 0
-                rows.le("cam_contact", _negated(ddX), ddX0 + (1 - CONTACT_MARGIN) * closure * sp.T**2
+                rows.le(held, _negated(ddX), ddX0 + (1 - CONTACT_MARGIN) * closure * sp.T**2
                         / (task.mass_kg * H))
         self.slacks = rows.slacken() if slack else []
         self.masks = len(before), len(after)

@@ -1,6 +1,9 @@
 """The machine's speed co-designed with the lift cam's synthesised law."""
 import dataclasses
 import math
+import sys
+from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -90,9 +93,12 @@ ROBUST_SCENE = "loom/machine-speed-codesign-robust"
 
 def designed_lever(machine, result, factor, zeta):
     """The re-planned machine's lift lever rebuilt here: the result's law, the lever at (factor, zeta)
-    of the box (both natural frequencies times factor: E times its square)."""
+    of the box (both natural frequencies times factor: E times its square), the scene's closure."""
+    closure = {}
+    if result.diagnostics.get("lift_closure") == "groove":
+        closure = dict(closure="groove", backlash_mm=registry.find(ROBUST_SCENE).build()[1]["lift_backlash_mm"])
     return dataclasses.replace(machine.lever_model, law=codesign_law(result), E_GPa=machine.lever_model.E_GPa * factor**2,
-                               damping_ratio=zeta)
+                               damping_ratio=zeta, **closure)
 
 
 def test_the_robust_scenes_machine_keeps_the_limit_on_a_finer_grid_of_the_box(machine, solved_once):
@@ -140,20 +146,74 @@ def test_the_box_speed_is_the_least_of_each_levers_own_highest_speed():
     assert (binding["frequency_factor"], binding["zeta"], binding["speed_factor"]) == (*least, 1.05)
 
 
-def test_the_nominal_scenes_lift_is_set_by_the_chains_contact_edge_not_by_the_stress(machine, solved_once):
-    """loom/machine-speed-codesign, its figures by independent means: under the law's own stress
-    (the cycloid's x sqrt(Ca_law / 2 pi)) the lift's stress bound falls below its rebound's, whose
-    edge is where the chain loses the roller's contact (below it the roller leaves its cam, the 1500 N
-    closure short), not 0.1 mm; the speed is the critical chain's closed form with that t(3,7); the
-    stress as calibrated (blind to the law) gives loom/machine-speed-codesign's earlier 485.1005 rpm."""
+def test_the_nominal_scenes_lift_is_set_by_the_rebound_with_the_backlash_in_the_groove(machine, solved_once):
+    """loom/machine-speed-codesign, its figures by independent means, under both closure readings.
+    Groove (the scene's): the lift's t(3,7) is where the chain, with the groove's backlash (its rise
+    crosses to the other wall once before C meets its plate), reaches 0.1 mm: the hybrid model's
+    rebound at t(3,7) is the limit and a hair below it exceeds it; the stress (the cycloid's x
+    sqrt(Ca_law / 2 pi)) stays below. Force (its figure before): t(3,7) is the chain's contact edge
+    (below it the roller leaves its cam, the 1500 N closure short), not 0.1 mm. Each speed is the
+    critical chain's closed form with its t(3,7); the stress as calibrated (blind to the law) gives
+    the scene's earlier 485.1005 rpm."""
     result = registry.run("loom/machine-speed-codesign").result
     v = result.values
-    n, t37 = v["speed_rpm"], v["t_3_7_deg"]
     fixed = 900 * 30 / (800 * 420) + 0.36      # the returner's stress bound and the chain's other arcs [deg/rpm]
     assert v["speed_stress_given_rpm"] == pytest.approx(250 / (700 * 36 / 800 / 420 + fixed), rel=1e-9)
-    assert n == pytest.approx(250 / (t37 / n + fixed), rel=1e-9)
-    assert 700 * 36 / t37 * n / 420 * v["stress_scale_lift"] < 800
-    lever = dataclasses.replace(machine.lever_model, law=codesign_law(result))
-    held = float(rebound_amplitude_mm(lever, n, t37 * (1 + 1e-6), lost=np.nan))
+    law = codesign_law(result)
+    for closure in ("groove", "force"):
+        n, t37 = v[f"speed_closure_{closure}_rpm"], v[f"t_3_7_closure_{closure}_deg"]
+        assert n == pytest.approx(250 / (t37 / n + fixed), rel=1e-9)
+        assert 700 * 36 / t37 * n / 420 * v["stress_scale_lift"] < 800
+    assert (v["speed_rpm"], v["t_3_7_deg"]) == (v["speed_closure_groove_rpm"], v["t_3_7_closure_groove_deg"])
+    assert_the_groove_sets_t37_by_the_backlash(machine, result)
+    force = dataclasses.replace(machine.lever_model, law=law)
+    n, t37 = v["speed_closure_force_rpm"], v["t_3_7_closure_force_deg"]
+    held = float(rebound_amplitude_mm(force, n, t37 * (1 + 1e-6), lost=np.nan))
     assert held <= machine.amplitude_limit_mm
-    assert np.isnan(rebound_amplitude_mm(lever, n, t37 * (1 - 1e-4), lost=np.nan))
+    assert np.isnan(rebound_amplitude_mm(force, n, t37 * (1 - 1e-4), lost=np.nan))
+
+
+def assert_the_groove_sets_t37_by_the_backlash(machine, result):
+    """The hybrid model with the 0.05 mm backlash (solvers/stop_impact/groove.py, checked against a
+    hand DOP853 in tests/stop_impact/test_groove.py) at the scene's speed and t(3,7): one crossing
+    before C meets its plate, the rebound (eq. (2) closed form) at the limit, over it a hair below."""
+    from mechopt.solvers.stop_impact.groove import rebound_with_backlash_mm
+    v = result.values
+    n, t37 = v["speed_rpm"], v["t_3_7_deg"]
+    groove = dataclasses.replace(machine.lever_model, law=codesign_law(result), closure="groove", backlash_mm=0.05)
+    at, rise = rebound_with_backlash_mm(groove, n, t37)
+    assert len(rise.flights) == 1 and rise.flights[0][0] < rise.contact_xi
+    assert at == pytest.approx(machine.amplitude_limit_mm, rel=1e-6)
+    assert rebound_with_backlash_mm(groove, n, t37 * (1 - 1e-4))[0] > machine.amplitude_limit_mm
+
+
+def test_the_geometry_scenes_law_keeps_its_cam_and_the_groove_sets_t37(machine, solved_once):
+    """loom/machine-speed-codesign-geometry: the speed is the critical chain's closed form with its
+    t(3,7); that t(3,7) is the groove's rebound with the backlash at the limit; the law's cam (its
+    rise and mirrored return over t) keeps the 34 deg pressure angle and roller + 5 mm radius at
+    t_min, where the synthesis held them, and is gentler at the re-planned t(3,7): by the
+    independent pitch polygon of tests/stop_impact/test_cam_shape.py (the lever's positions alone)."""
+    sys.path.insert(0, str(Path(__file__).parents[1] / "stop_impact"))
+    from test_cam_shape import _polygon_checks
+    scene = registry.find("loom/machine-speed-codesign-geometry")
+    settings = scene.build()[1]
+    result = registry.run(scene.id).result
+    assert result.status is Status.SOLVED, result.message
+    v = result.values
+    fixed = 900 * 30 / (800 * 420) + 0.36
+    assert v["speed_rpm"] == pytest.approx(250 / (v["t_3_7_deg"] / v["speed_rpm"] + fixed), rel=1e-9)
+    assert v["t_3_7_deg"] > v["t_min_synthesized_deg"]
+    assert_the_groove_sets_t37_by_the_backlash(machine, result)
+    lever = machine.lever_model
+
+    def cam(t_deg):
+        return SimpleNamespace(base_radius_mm=settings["cam_base_radius_mm"],
+                               roller_radius_mm=settings["cam_roller_radius_mm"],
+                               centre_distance_mm=settings["cam_centre_distance_mm"], dwell_deg=settings["cam_dwell_deg"],
+                               a_mm=lever.a_mm, b_mm=lever.b_mm, stroke_mm=lever.stroke_mm, rise_deg=t_deg,
+                               return_deg=t_deg, law=codesign_law(result))
+    (convex, concave, phi), (convex37, _, phi37) = (_polygon_checks(cam(t)) for t in (v["t_min_synthesized_deg"],
+                                                                                      v["t_3_7_deg"]))
+    assert phi == pytest.approx(v["max_pressure_angle_return_deg"], rel=1e-5)
+    assert phi <= 34.0 + 0.1 and min(convex, concave) >= 20.0 - 0.01
+    assert phi37 < phi and convex37 > convex
