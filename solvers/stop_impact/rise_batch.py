@@ -134,7 +134,8 @@ def _state(mu, w, xi, I):
 def rise_batch(task: LeverStop, speed_rpm, t_deg):
     """v0 [m/s] at each (n, t) (1-d arrays of one length) and the outcome per point: TAKEN (v0
     as follow_cam would give it, status SOLVED), ROLLER_LEFT (follow_cam's INFEASIBLE: the
-    contact force falls below 0 before C meets its plate) or NOT_TAKEN (the per-point chain's)."""
+    contact force falls below 0 before C meets its plate, force closure) or NOT_TAKEN (the
+    per-point chain's: among them a groove's crossover)."""
     n_rpm, t = (np.asarray(a, float).ravel() for a in (speed_rpm, t_deg))
     size = n_rpm.size
     v0, outcome = np.zeros(size), np.full(size, NOT_TAKEN)
@@ -183,7 +184,10 @@ def rise_batch(task: LeverStop, speed_rpm, t_deg):
     dS_c = _law_parts(task.law, xi_c)[1]
     speed = (dS_c + de_c) * H / T
     good = found & np.isfinite(speed)
-    outcome[pick] = np.where(good, np.where(left, ROLLER_LEFT, TAKEN), NOT_TAKEN)
+    # in a groove N < 0 is a crossover, not a lift-off: its flight across the backlash is the
+    # per-point chain's (solvers/stop_impact/groove.py)
+    lifted = ROLLER_LEFT if task.closure == "force" else NOT_TAKEN
+    outcome[pick] = np.where(good, np.where(left, lifted, TAKEN), NOT_TAKEN)
     v0[pick] = np.where(good & ~left, speed, 0.0)
     return v0, outcome
 

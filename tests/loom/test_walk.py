@@ -159,3 +159,18 @@ def test_the_fresh_highest_speed_walks_once_and_its_re_solve_never(task, monkeyp
     assert len(walks) == 1
     assert first.values["max_speed_rpm"] == again.values["max_speed_rpm"] == pytest.approx(469.555918, rel=1e-6)
     clear_caches()
+
+
+def test_in_a_groove_the_batch_leaves_a_crossover_to_the_per_point_chain(task):
+    """Where a force closure's roller would leave its cam, a groove's crosses to the other wall: the
+    batch must not call it lift-off (ROLLER_LEFT) but hand it to the per-point chain, whose groove
+    model (the flight across the backlash) gives the rebound, the same as rebound_amplitude_mm's."""
+    groove = dataclasses.replace(task.lever_model, closure="groove", backlash_mm=0.05)
+    t = np.arange(20.0, 41.0, 2.0)
+    _, force_outcome = rise_batch(task.lever_model, np.full(t.size, N_RPM), t)
+    _, outcome = rise_batch(groove, np.full(t.size, N_RPM), t)
+    crossing = force_outcome == ROLLER_LEFT
+    assert crossing.any() and not (outcome == ROLLER_LEFT).any()
+    assert list(outcome[crossing]) == [NOT_TAKEN] * int(crossing.sum())
+    a = chain_rebounds_mm(groove, N_RPM, t[crossing])
+    assert np.all(np.isfinite(a)) and np.all(a > 0)
