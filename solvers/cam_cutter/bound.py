@@ -41,7 +41,8 @@ POLYLINE = 128          # N: the zero-order polyline; its error V pi / N only wi
 NEAR_ARCS = 32          # polyline arcs near a node that `_tangents` cuts finely
 SUBARCS = 16            # sub-arcs an arc: M (pi / (POLYLINE SUBARCS))^2 / 2 ~ 2e-4 mm on the paper's cam
 NEWTON_STEPS = 4
-INTERVALS = 12          # of the geometric partition of the first-order window (`_loss`)
+INTERVALS = 12          # geometric points of the partition of the first-order window (`_loss`)
+UNIFORM = 24            # and uniform ones
 ROUNDING = 1e-12        # relative: a margin for floating-point rounding in the bounds
 
 
@@ -170,19 +171,27 @@ def _foot(px, py, H, L, s):
     return s
 
 
-def _loss(top, slope, speed, M, offset, t1):
+def _loss(top, slope, quad, M3, speed, M, offset, t1):
     """E [mm]: over |t| <= t1, |X| >= sqrt(A+^2 + B+^2) >= D - E for every D = d0 + g . (dH, dL) <= top,
-    with A = D - slope |t| - M t^2/2 (decreasing in |t|) and B = speed |t| - M t^2/2 - offset
-    (increasing up to t1 <= t0 <= speed / M). On [t_k, t_k+1] of a geometric partition of (0, t1]
-    (t_0 = t1 2^-INTERVALS) A >= D - alpha, alpha = slope t_k+1 + M t_k+1^2/2, and B >= B(t_k) =: beta,
-    so |X| >= D - alpha + sqrt((D - alpha)^2 + beta^2) - (D - alpha), a gain that falls as D rises:
-    it is taken at D = top (or |X| >= beta where D < alpha). [0, t_0]: alpha alone."""
-    t = t1[:, None] * 2.0 ** np.arange(-INTERVALS, 1)
-    alpha = slope[:, None] * t + M[:, None] * t * t / 2
-    beta = np.maximum(speed[:, None] * t - M[:, None] * t * t / 2 - offset[:, None], 0.0)[:, :-1]
-    x = np.maximum(top[:, None] - alpha[:, 1:], 0.0)
-    gain = np.hypot(x, beta) - x
-    return np.maximum(alpha[:, 0], (alpha[:, 1:] - gain).max(axis=1))
+    with A = D - l(t), l(t) = slope |t| + quad t^2/2 + M3 |t|^3/6 (quad signed: a curve bending
+    away from P gains), and B = speed |t| - M t^2/2 - offset (concave). On [t_k, t_k+1] of a
+    partition of [0, t1] (0, geometric points t1 2^-k down from t1/2, and t1 j/UNIFORM)
+    A >= D - alpha, alpha = slope t_k+1 + max(quad t_k^2, quad t_k+1^2)/2 + M3 t_k+1^3/6 (each term
+    bounded on its own), and B >= beta, the lesser of B at the ends (concave), so
+    |X| >= D - alpha + sqrt((D - alpha)^2 + beta^2) - (D - alpha), a gain that falls as D rises:
+    it is taken at D = top (or |X| >= beta where D < alpha). The first interval starts at 0, where
+    beta = 0 and alpha >= 0: E >= 0."""
+    t = t1[:, None] * _FRACTIONS
+    lo, hi = t[:, :-1], t[:, 1:]
+    alpha = (slope[:, None] * hi + np.maximum(quad[:, None] * lo * lo, quad[:, None] * hi * hi) / 2
+             + M3[:, None] * hi ** 3 / 6)
+    B = speed[:, None] * t - M[:, None] * t * t / 2 - offset[:, None]
+    beta = np.maximum(np.minimum(B[:, :-1], B[:, 1:]), 0.0)
+    x = np.maximum(top[:, None] - alpha, 0.0)
+    return (alpha - (np.hypot(x, beta) - x)).max(axis=1)
+
+
+_FRACTIONS = np.unique(np.r_[0.0, 2.0 ** -np.arange(INTERVALS, 0, -1), np.linspace(0.0, 1.0, UNIFORM + 1)])
 
 
 def cell_bounds(px, py, H, L, hH, hL):
@@ -222,19 +231,26 @@ def _branch(px, py, H, L, hH, hL, r, M, sj, sigma, margin):
     [rad] Newton's s0, then d0, gH, gL and E [mm]; `ok` where its conditions hold over the run,
     whose farthest arc ends sigma [rad] from sj."""
     s0 = _foot(px, py, H, L, sj)
-    (x, y), (vx, vy), _, a, b = _curve(s0, H, L)
+    (x, y), (vx, vy), (ax, ay), a, b = _curve(s0, H, L)
     wx, wy = px - x, py - y
     d0, speed = np.hypot(wx, wy), np.hypot(vx, vy)
     ux, uy = wx / np.where(d0 > 0, d0, 1.0), wy / np.where(d0 > 0, d0, 1.0)
+    tx, ty = vx / np.where(speed > 0, speed, 1.0), vy / np.where(speed > 0, speed, 1.0)
     eps_u = np.abs(ux * vx + uy * vy)
-    eps_t = np.abs(wx * vx + wy * vy) / np.where(speed > 0, speed, 1.0)
+    eps_t = np.abs(wx * tx + wy * ty)
     gH, gL = -(ux * b[0] + uy * b[1]), -(ux * a[0] + uy * a[1])
+    # k >= |u . m'(s0)| and rt >= |tau . m(s0)|: a' = (-a_y, a_x + 1), b' = (-2 b_y, 2 b_x + 1)
+    k = np.abs(uy * (a[0] + 1) - ux * a[1]) * hL + np.abs(uy * (2 * b[0] + 1) - 2 * ux * b[1]) * hH
+    rt = np.abs(tx * a[0] + ty * a[1]) * hL + np.abs(tx * b[0] + ty * b[1]) * hH
+    quad = ux * ax + uy * ay + hL + 2 * hH              # u . Q''(s0) + max |m''|
+    M3 = np.abs(L) + 4 * np.abs(H)                      # max |Q'''| (|a'''| = 1, |b'''| = 4)
+    top = d0 + np.abs(gH) * hH + np.abs(gL) * hL         # the largest D over the cell
     sigma = np.minimum(sigma + np.abs((s0 - sj + np.pi) % (2 * np.pi) - np.pi), 2 * np.pi)  # from s0; > pi: not ok
-    level = d0 + r                                      # B(t0) = level: M t^2/2 - |Q'| t + level + eps_t + r = 0
-    disc = speed * speed - 2 * M * (level + eps_t + r)
-    t0 = (speed - np.sqrt(np.maximum(disc, 0.0))) / M
-    B_sigma = speed * sigma - M * sigma * sigma / 2 - eps_t - r
-    ok = (d0 > 0) & (disc >= 0) & (sigma < np.pi) & ((sigma <= t0) | (B_sigma >= level))
+    pace, offset = speed - hL - hH, eps_t + rt           # B(t) = pace |t| - M t^2/2 - offset
+    disc = pace * pace - 2 * M * (top + offset)          # B(t0) = top
+    t0 = (pace - np.sqrt(np.maximum(disc, 0.0))) / M
+    B_sigma = pace * sigma - M * sigma * sigma / 2 - offset
+    ok = (d0 > 0) & (pace > 0) & (disc >= 0) & (sigma < np.pi) & ((sigma <= t0) | (B_sigma >= top))
     t1 = np.where(ok, np.minimum(t0, sigma), 0.0)
-    E = _loss(d0 + np.abs(gH) * hH + np.abs(gL) * hL, eps_u + hL + hH, speed, M, eps_t + r, t1) + margin
+    E = _loss(top, eps_u + k, quad, M3, pace, M, offset, t1) + margin
     return d0, gH, gL, E, ok

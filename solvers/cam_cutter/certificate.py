@@ -38,6 +38,7 @@ __all__ = ["lipschitz_radius", "largest_distance", "grid_starts", "box_lower_bou
 
 KEEP = 5                # nodes a cell's bound mixes, and its children are first measured on
 SECTORS = 8             # gradient directions `_diverse` picks nodes from (SECTORS + 1 >= KEEP)
+REACH = 3               # and the nodes highest at a corner
 SCREEN = 4              # the first cells are screened on every SCREEN-th node
 
 
@@ -160,7 +161,7 @@ def warm_cells(leaves: Cells, moved, box, grid=(16, 8)) -> Cells:
     return _joined(moved_bound(leaves.take(meet), moved), fresh)
 
 
-def _diverse(value, gH, gL):
+def _diverse(value, reach, gH, gL):
     """Per row, KEEP node columns: the highest `value` of each of SECTORS gradient directions (and
     of the nodes with no gradient), highest first, then the highest of the rest by value (repeats
     harmless). The mixed bound needs nodes whose gradients can cancel: the highest alone often
@@ -172,7 +173,8 @@ def _diverse(value, gH, gL):
     best_value = np.where(filled, np.take_along_axis(value, best, axis=1), -np.inf)
     chosen = np.take_along_axis(best, np.argsort(best_value, axis=1)[:, ::-1], axis=1)[:, :KEEP]
     by_value = np.argsort(value, axis=1)[:, ::-1][:, :KEEP]
-    return np.where(np.arange(KEEP) < filled.sum(axis=1)[:, None], chosen, by_value)
+    chosen = np.where(np.arange(KEEP) < filled.sum(axis=1)[:, None], chosen, by_value)
+    return np.hstack([chosen, np.argsort(reach, axis=1)[:, ::-1][:, :REACH]])
 
 
 def _measure(px, py, cells: Cells, nodes):
@@ -188,7 +190,7 @@ def _measure(px, py, cells: Cells, nodes):
     corner = ((d0 - E)[:, None, :] + gH[:, None, :] * dH[..., None] + gL[:, None, :] * dL[..., None]).min(axis=-1)
     corner = np.where(first[:, None], np.maximum(corner, zero[:, None]), zero[:, None]).reshape(count, width, 4)
     gH, gL = (np.where(first, g[:, 0], 0.0).reshape(count, width) for g in (gH, gL))
-    pick = _diverse(corner.max(axis=-1), gH, gL)
+    pick = _diverse(corner.mean(axis=-1), corner.max(axis=-1), gH, gL)
     corner = np.take_along_axis(corner, pick[..., None], axis=1)
     w = _mixtures(*(np.take_along_axis(g, pick, axis=1) for g in (gH, gL)))
     dual = np.einsum("cmk,ckq->cmq", w, corner).min(axis=-1).max(axis=1)
@@ -237,7 +239,7 @@ def box_lower_bound(px, py, box, upper, *, gap, max_cells=20_000, grid=(16, 8), 
     fresh, top = _screened(px, py, start.take(low), np.tile(np.arange(0, px.size, SCREEN), (int(low.sum()), 1)),
                            target)
     cells = _joined(start.take(~low), fresh)
-    top = np.vstack([np.zeros((int((~low).sum()), KEEP), dtype=int), top])     # closed cells: never split
+    top = np.vstack([np.zeros((int((~low).sum()), KEEP + REACH), dtype=int), top])     # closed cells: never split
     measured = int(low.sum())
     while True:
         open_ = np.flatnonzero(cells.bound < target)
