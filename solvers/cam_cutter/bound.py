@@ -35,7 +35,7 @@ against brute force over the cell (tests/cam_cutter/test_cam_cutter_global.py).
 """
 import numpy as np
 
-__all__ = ["lipschitz_radius", "cell_bounds", "POLYLINE"]
+__all__ = ["lipschitz_radius", "cell_bounds", "tangent_bound", "POLYLINE"]
 
 POLYLINE = 128          # N: the zero-order polyline; its error V pi / N only widens the window
 NEAR_ARCS = 32          # polyline arcs near a node that `_tangents` cuts finely
@@ -194,13 +194,16 @@ def _loss(top, slope, quad, M3, speed, M, offset, t1):
 _FRACTIONS = np.unique(np.r_[0.0, 2.0 ** -np.arange(INTERVALS, 0, -1), np.linspace(0.0, 1.0, UNIFORM + 1)])
 
 
-def cell_bounds(px, py, H, L, hH, hL):
+def cell_bounds(px, py, H, L, hH, hL, *, fine=True, width=None, target=np.inf):
     """Bounds on the distance [mm] from nodes (px, py) to the limaçon over cells of centre (H, L)
     and half-widths (hH, hL), one (cell, node) pair an element (arrays of one shape; see the module
     docstring). Returns (zero, d0, gH, gL, E, first): `zero` a constant bound over the cell; where
     `first`, the distance at (H + dH, L + dL) is at least min_b (d0 + gH dH + gL dL - E)[b] over the
     two runs b of arcs near the node (the last axis; one run is given twice). `zero` is at least
-    that bound's worst corner."""
+    that bound's worst corner and, with `fine`, where not `first`, `tangent_bound` (which a caller
+    may ask for later, for the pairs whose cells are still open). Given `width` (the pairs come
+    `width` a cell, cell by cell), a cell whose zero-order bound on one of its nodes reaches
+    `target` [mm] is closed: its pairs keep that bound alone (`first` False)."""
     px, py, H, L, hH, hL = (np.ravel(v).astype(float) for v in np.broadcast_arrays(px, py, H, L, hH, hL))
     r = lipschitz_radius(hH, hL)
     V, M = np.abs(L) + np.abs(H), np.abs(L) + 2 * np.abs(H)
@@ -208,22 +211,38 @@ def cell_bounds(px, py, H, L, hH, hL):
     spacing = V * np.pi / POLYLINE
     low, high, run1, run2, covered = _scan(px, py, H, L, 2 * r + spacing)
     zero = low - spacing - r - margin
-    d0, gH, gL, E, ok = (np.repeat(v[:, None], 2, axis=1) for v in _branch(px, py, H, L, hH, hL, r, M, *run1, margin))
-    two = run2[0] != run1[0]                        # a second run: its own branch (else the first twice)
-    if two.any():
-        got = _branch(*(v[two] for v in (px, py, H, L, hH, hL, r, M, *run2, margin)))
+    d0, gH, gL, E = (np.zeros((px.size, 2)) for _ in range(4))
+    ok = np.zeros((px.size, 2), dtype=bool)
+    wanted = np.ones(px.size, dtype=bool) if width is None else \
+        np.repeat(zero.reshape(-1, width).max(axis=1) < target, width)      # cells still open
+    for b, (sj, sigma) in enumerate((run1, run2)):
+        if b:                                       # a second run: its own branch (else the first twice)
+            wanted &= run2[0] != run1[0]
+        got = _branch(*(v[wanted] for v in (px, py, H, L, hH, hL, r, M, sj, sigma, margin)))
         for whole, part in zip((d0, gH, gL, E, ok), got):
-            whole[two, 1] = part
+            whole[wanted, b:] = part[:, None]
     first = covered & ok.all(axis=1) & (d0[:, 0] <= high)   # beyond both runs every point is farther than high + r
     worst = (d0 - np.abs(gH) * hH[:, None] - np.abs(gL) * hL[:, None] - E).min(axis=1)
     zero = np.where(first, np.maximum(zero, worst), zero)
-    if not first.all():          # more branches near the node: the tangent-segment bound, finely
+    if fine and not first.all():          # more branches near the node: the tangent-segment bound
         other = ~first
-        reach = high[other] + 2 * r[other] + spacing[other]
-        zero[other] = np.maximum(zero[other], _tangents(px[other], py[other], H[other], L[other], reach,
-                                                                 spacing[other])
-                                 - r[other] - margin[other])
+        zero[other] = np.maximum(zero[other], tangent_bound(*(v[other] for v in (px, py, H, L, hH, hL))))
     return zero, d0, gH, gL, E, first
+
+
+def tangent_bound(px, py, H, L, hH, hL):
+    """A constant bound [mm] on the distance from nodes (px, py) to the limaçon over cells of centre
+    (H, L) and half-widths (hH, hL), one pair an element, where several branches pass near the
+    node: `_tangents` at the cell's centre, less the move r (`lipschitz_radius`)."""
+    px, py, H, L, hH, hL = (np.ravel(v).astype(float) for v in np.broadcast_arrays(px, py, H, L, hH, hL))
+    r = lipschitz_radius(hH, hL)
+    V = np.abs(L) + np.abs(H)
+    spacing = V * np.pi / POLYLINE
+    high = np.empty(px.size)
+    for k in range(0, px.size, CHUNK):
+        squared, tol = _squared(px[k:k + CHUNK], py[k:k + CHUNK], H[k:k + CHUNK], L[k:k + CHUNK])
+        high[k:k + CHUNK] = np.sqrt(squared.min(axis=1) + tol)
+    return _tangents(px, py, H, L, high + 2 * r + spacing, spacing) - r - ROUNDING * (1.0 + V)
 
 
 def _branch(px, py, H, L, hH, hL, r, M, sj, sigma, margin):

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mechopt.solvers.cam_cutter.bound import cell_bounds, lipschitz_radius
+from mechopt.solvers.cam_cutter.bound import cell_bounds, lipschitz_radius, tangent_bound
 from mechopt.solvers.cam_cutter.deviation import foot_points
 from mechopt.solvers.cam_cutter.problem import ROUND_VERTICES
 
@@ -38,7 +38,7 @@ __all__ = ["lipschitz_radius", "largest_distance", "grid_starts", "box_lower_bou
 
 KEEP = 5                # nodes a cell's bound mixes, and its children are first measured on
 SECTORS = 8             # gradient directions `_diverse` picks nodes from (SECTORS + 1 >= KEEP)
-REACH = 3               # and the nodes highest at a corner
+REACH = 3               # and the nodes highest at a corner (the dual mixes both)
 SCREEN = 4              # the first cells are screened on every SCREEN-th node
 
 
@@ -161,7 +161,7 @@ def warm_cells(leaves: Cells, moved, box, grid=(16, 8)) -> Cells:
     return _joined(moved_bound(leaves.take(meet), moved), fresh)
 
 
-def _diverse(value, reach, gH, gL):
+def _diverse(value, gH, gL):
     """Per row, KEEP node columns: the highest `value` of each of SECTORS gradient directions (and
     of the nodes with no gradient), highest first, then the highest of the rest by value (repeats
     harmless). The mixed bound needs nodes whose gradients can cancel: the highest alone often
@@ -172,39 +172,55 @@ def _diverse(value, reach, gH, gL):
     filled = np.take_along_axis(sector, best, axis=1) == np.arange(SECTORS + 1)     # the sector has a node
     best_value = np.where(filled, np.take_along_axis(value, best, axis=1), -np.inf)
     chosen = np.take_along_axis(best, np.argsort(best_value, axis=1)[:, ::-1], axis=1)[:, :KEEP]
-    by_value = np.argsort(value, axis=1)[:, ::-1][:, :KEEP]
-    chosen = np.where(np.arange(KEEP) < filled.sum(axis=1)[:, None], chosen, by_value)
-    return np.hstack([chosen, np.argsort(reach, axis=1)[:, ::-1][:, :REACH]])
+    by_value = np.argsort(value, axis=1)[:, ::-1]
+    by_value = by_value[:, np.arange(KEEP) % by_value.shape[1]]          # fewer nodes than KEEP: repeats
+    return np.where(np.arange(KEEP) < filled.sum(axis=1)[:, None], chosen, by_value)
 
 
-def _measure(px, py, cells: Cells, nodes):
+def _measure(px, py, cells: Cells, nodes, target=np.inf):
     """Bounds [mm] of `cells` measured on the node indices `nodes` (a row a cell), and each cell's
-    KEEP most promising nodes (highest bound at their best corner). The bound: for any weights w
-    on the simplex, max_i d_i >= sum_i w_i d_i >= sum_i w_i lb_i, lb_i a node's first-order bound
-    (the least of its runs' affine bounds: concave in (dH, dL)), so the sum is concave and least at
-    a corner; the largest over `_mixtures` of that least corner (the linear program's dual)."""
+    most promising nodes (`_diverse`). The bound: for any weights w on the simplex,
+    max_i d_i >= sum_i w_i d_i >= sum_i w_i lb_i, lb_i a node's first-order bound (the least of its
+    runs' affine bounds: concave in (dH, dL)), so the sum is concave and least at a corner; the
+    largest over `_mixtures` of that least corner (the linear program's dual). The costly
+    tangent-segment bound (`bound.tangent_bound`) of the pairs with no first-order bound is taken
+    only in the cells still below `target` without it (any bound of a node is a bound)."""
     count, width = nodes.shape
-    zero, d0, gH, gL, E, first = cell_bounds(
-        px[nodes.ravel()], py[nodes.ravel()], *(np.repeat(v, width) for v in (cells.H, cells.L, cells.hH, cells.hL)))
+    pairs = (px[nodes.ravel()], py[nodes.ravel()], *(np.repeat(v, width) for v in (cells.H, cells.L, cells.hH, cells.hL)))
+    zero, d0, gH, gL, E, first = cell_bounds(*pairs, fine=False, width=width, target=target)
+    bound, pick = _combined(cells, zero, d0, gH, gL, E, first, width)
+    fine = np.repeat(bound < target, width) & ~first
+    if fine.any():
+        zero[fine] = np.maximum(zero[fine], tangent_bound(*(v[fine] for v in pairs)))
+        rows = np.flatnonzero(fine.reshape(count, width).any(axis=1))
+        part = np.repeat(rows * width, width) + np.tile(np.arange(width), rows.size)
+        bound[rows], pick[rows] = _combined(cells.take(rows), *(v[part] for v in (zero, d0, gH, gL, E, first)), width)
+    return Cells(cells.H, cells.L, cells.hH, cells.hL, bound), np.take_along_axis(nodes, pick, axis=1)
+
+
+def _combined(cells: Cells, zero, d0, gH, gL, E, first, width):
+    """`_measure`'s bound of each cell from its pairs' bounds (`bound.cell_bounds`, `width` pairs a
+    cell), and the columns of the nodes its children are screened on: the dual's (`_diverse` by
+    the bound at the centre, the corners' mean, and the REACH highest at a corner)."""
+    count = cells.H.size
     dH, dL = CORNERS[:, 0] * np.repeat(cells.hH, width)[:, None], CORNERS[:, 1] * np.repeat(cells.hL, width)[:, None]
     corner = ((d0 - E)[:, None, :] + gH[:, None, :] * dH[..., None] + gL[:, None, :] * dL[..., None]).min(axis=-1)
     corner = np.where(first[:, None], np.maximum(corner, zero[:, None]), zero[:, None]).reshape(count, width, 4)
     gH, gL = (np.where(first, g[:, 0], 0.0).reshape(count, width) for g in (gH, gL))
-    pick = _diverse(corner.mean(axis=-1), corner.max(axis=-1), gH, gL)
-    corner = np.take_along_axis(corner, pick[..., None], axis=1)
+    pick = np.hstack([_diverse(corner.mean(axis=-1), gH, gL), np.argsort(corner.max(axis=-1), axis=1)[:, np.arange(-REACH, 0) % width]])
     w = _mixtures(*(np.take_along_axis(g, pick, axis=1) for g in (gH, gL)))
-    dual = np.einsum("cmk,ckq->cmq", w, corner).min(axis=-1).max(axis=1)
-    bound = np.maximum(np.maximum(cells.bound, zero.reshape(count, width).max(axis=1)), dual)
-    return Cells(cells.H, cells.L, cells.hH, cells.hL, bound), np.take_along_axis(nodes, pick, axis=1)
+    dual = np.einsum("cmk,ckq->cmq", w, np.take_along_axis(corner, pick[..., None], axis=1)).min(axis=-1).max(axis=1)
+    return np.maximum(np.maximum(cells.bound, zero.reshape(count, width).max(axis=1)), dual), pick
 
 
 def _screened(px, py, cells: Cells, nodes, target):
     """`_measure` on the node indices `nodes` (a row a cell), then the cells still below the target
     on every node: a few nodes close most cells."""
-    cells, top = _measure(px, py, cells, nodes)
+    cells, top = _measure(px, py, cells, nodes, target)
     still = cells.bound < target
     if still.any():
-        again, top[still] = _measure(px, py, cells.take(still), np.tile(np.arange(px.size), (int(still.sum()), 1)))
+        again, top[still] = _measure(px, py, cells.take(still), np.tile(np.arange(px.size), (int(still.sum()), 1)),
+                                     target)
         cells.bound[still] = again.bound
     return cells, top
 
