@@ -13,9 +13,9 @@ the cell, each from `bound.cell_bounds` (one call for every (cell, node) pair of
   pairs that cancel one gradient component, triples that cancel both. Near the answer, whose
   active nodes' gradients cancel, this loses only second-order terms where one node loses r.
 
-A cell's children are measured on its KEEP nodes first, and those still below the target on
-every node: any subset of the nodes gives a lower bound, and a child's bound is at least its
-parent's. Cells are split level by level (all of a level in one call) until every cell's bound
+The first cells are measured on every SCREEN-th node; a cell's children on its KEEP + REACH
+nodes first, and those still below the target on every node: any subset of the nodes gives a
+lower bound, and a child's bound is at least its parent's. Cells are split level by level (all of a level in one call) until every cell's bound
 is within `gap` of `upper` (an achieved deviation: the early stop) or `max_cells` cells have been
 measured.
 
@@ -143,11 +143,14 @@ def _mixtures(gH, gL):
 CORNERS = np.array([(-1, -1), (-1, 1), (1, -1), (1, 1)], dtype=float)
 
 
-def warm_cells(leaves: Cells, moved, box, grid=(16, 8)) -> Cells:
+def warm_cells(leaves: Cells, moved, box, grid=(16, 8), finest=0.0) -> Cells:
     """The start of a warm certificate over `box`: the earlier `leaves` that meet the box, each
     bound less `moved` [mm] (`moved_bound`), and the grid cells of the box that the leaves' box does
-    not hold, unmeasured. Together they cover the box (cells may overlap: a point's bound is the
-    least of its cells' either way)."""
+    not hold, unmeasured. Leaves narrower than `finest` [mm] (the fine ones about the earlier
+    answer, which a move of the path makes stale) give way to unmeasured cells `finest` wide over
+    their bounding box, so the partition is reused down to the scale the move leaves valid.
+    Together they cover the box (cells may overlap: a point's bound is the least of its cells'
+    either way)."""
     H_lo, H_hi, L_lo, L_hi = box
     meet = ((leaves.H + leaves.hH > H_lo) & (leaves.H - leaves.hH < H_hi)
             & (leaves.L + leaves.hL > L_lo) & (leaves.L - leaves.hL < L_hi))
@@ -158,7 +161,19 @@ def warm_cells(leaves: Cells, moved, box, grid=(16, 8)) -> Cells:
     outside = ((HH - hH < old[0]) | (HH + hH > old[1]) | (LL - hL < old[2]) | (LL + hL > old[3])).ravel()
     fresh = Cells(HH.ravel()[outside], LL.ravel()[outside], np.full(outside.sum(), hH), np.full(outside.sum(), hL),
                   np.full(outside.sum(), -np.inf))
-    return _joined(moved_bound(leaves.take(meet), moved), fresh)
+    kept = leaves.take(meet)
+    small = np.maximum(kept.hH, kept.hL) < finest
+    if small.any():
+        fine = kept.take(small)
+        span = ((fine.H - fine.hH).min(), (fine.H + fine.hH).max(), (fine.L - fine.hL).min(), (fine.L + fine.hL).max())
+        aspect = fine.hH[0] / max(fine.hH[0], fine.hL[0]), fine.hL[0] / max(fine.hH[0], fine.hL[0])
+        count = [max(1, int(np.ceil((span[2 * k + 1] - span[2 * k]) / (2 * finest * aspect[k])))) for k in (0, 1)]
+        H, L, hH, hL = _grid(span, count)
+        HH, LL = np.meshgrid(H, L, indexing="ij")
+        fresh = _joined(fresh, Cells(HH.ravel(), LL.ravel(), np.full(HH.size, hH), np.full(HH.size, hL),
+                                     np.full(HH.size, -np.inf)))
+        kept = kept.take(~small)
+    return _joined(moved_bound(kept, moved), fresh)
 
 
 def _diverse(value, gH, gL):
@@ -213,12 +228,12 @@ def _combined(cells: Cells, zero, d0, gH, gL, E, first, width):
     return np.maximum(np.maximum(cells.bound, zero.reshape(count, width).max(axis=1)), dual), pick
 
 
-def _screened(px, py, cells: Cells, nodes, target):
-    """`_measure` on the node indices `nodes` (a row a cell), then the cells still below the target
-    on every node: a few nodes close most cells."""
+def _screened(px, py, cells: Cells, nodes, target, *, recheck=True):
+    """`_measure` on the node indices `nodes` (a row a cell), then (with `recheck`) the cells still
+    below the target on every node: a few nodes close most cells."""
     cells, top = _measure(px, py, cells, nodes, target)
     still = cells.bound < target
-    if still.any():
+    if recheck and still.any():
         again, top[still] = _measure(px, py, cells.take(still), np.tile(np.arange(px.size), (int(still.sum()), 1)),
                                      target)
         cells.bound[still] = again.bound
@@ -252,8 +267,10 @@ def box_lower_bound(px, py, box, upper, *, gap, max_cells=20_000, grid=(16, 8), 
         HH, LL = np.meshgrid(H, L, indexing="ij")
         start = Cells(HH.ravel(), LL.ravel(), np.full(HH.size, hH), np.full(HH.size, hL), np.full(HH.size, -np.inf))
     low = start.bound < target               # the first cells (a grid, or earlier leaves below the target)
+    # the first grid on every SCREEN-th node, split without a recheck: a coarse cell seldom closes
+    # on the rest, and its children are screened on its best nodes, then rechecked
     fresh, top = _screened(px, py, start.take(low), np.tile(np.arange(0, px.size, SCREEN), (int(low.sum()), 1)),
-                           target)
+                           target, recheck=warm)
     cells = _joined(start.take(~low), fresh)
     top = np.vstack([np.zeros((int((~low).sum()), KEEP + REACH), dtype=int), top])     # closed cells: never split
     measured = int(low.sum())
