@@ -98,19 +98,28 @@ def _run(near, j):
     return member, sigma
 
 
-def _scan(px, py, H, L, slack):
-    """Each pair's nearest vertex: lower and upper bounds on its distance [mm] (rounding allowed
-    for); the vertices nearer P than the upper bound plus `slack` [mm] ("near") in runs: the
+def _nearest(px, py, H, L):
+    """Lower and upper bounds [mm] on each pair's distance to its nearest POLYLINE vertex
+    (rounding allowed for)."""
+    low, high = np.empty(px.size), np.empty(px.size)
+    for k in range(0, px.size, CHUNK):
+        part = slice(k, k + CHUNK)
+        squared, tol = _squared(px[part], py[part], H[part], L[part])
+        least = squared.min(axis=1)
+        low[part], high[part] = np.sqrt(np.maximum(least - tol, 0.0)), np.sqrt(least + tol)
+    return low, high
+
+
+def _scan(px, py, H, L, high, slack):
+    """The vertices nearer P than `high` (`_nearest`) plus `slack` [mm] ("near") in runs: the
     nearest's run (its vertex's s [rad] and sigma [rad], `_run`) and the nearest vertex's run of the
     rest (where there is one, else the first again); and whether the two runs hold every near vertex."""
-    low, high, s1, sigma1, s2, sigma2 = (np.empty(px.size) for _ in range(6))
+    s1, sigma1, s2, sigma2 = (np.empty(px.size) for _ in range(4))
     covered = np.empty(px.size, dtype=bool)
     for k in range(0, px.size, CHUNK):
         part = slice(k, k + CHUNK)
         squared, tol = _squared(px[part], py[part], H[part], L[part])
         j = squared.argmin(axis=1)
-        least = squared[np.arange(j.size), j]
-        low[part], high[part] = np.sqrt(np.maximum(least - tol, 0.0)), np.sqrt(least + tol)
         near = squared < ((high[part] + slack[part]) ** 2 + tol)[:, None]
         first, sigma1[part] = _run(near, j)
         rest = near & ~first
@@ -121,7 +130,7 @@ def _scan(px, py, H, L, slack):
             second, sigma2[part][two] = _run(near[two], j2[two])
             covered[part][two] = ~(rest[two] & ~second).any(axis=1)
         s1[part], s2[part] = _GRID[j], _GRID[j2]
-    return low, high, (s1, sigma1), (s2, sigma2), covered
+    return (s1, sigma1), (s2, sigma2), covered
 
 
 def _tangents(px, py, H, L, reach, spacing):
@@ -209,16 +218,20 @@ def cell_bounds(px, py, H, L, hH, hL, *, fine=True, width=None, target=np.inf):
     V, M = np.abs(L) + np.abs(H), np.abs(L) + 2 * np.abs(H)
     margin = ROUNDING * (1.0 + V)
     spacing = V * np.pi / POLYLINE
-    low, high, run1, run2, covered = _scan(px, py, H, L, 2 * r + spacing)
+    low, high = _nearest(px, py, H, L)
     zero = low - spacing - r - margin
     d0, gH, gL, E = (np.zeros((px.size, 2)) for _ in range(4))
-    ok = np.zeros((px.size, 2), dtype=bool)
+    ok, covered = np.zeros((px.size, 2), dtype=bool), np.zeros(px.size, dtype=bool)
     wanted = np.ones(px.size, dtype=bool) if width is None else \
         np.repeat(zero.reshape(-1, width).max(axis=1) < target, width)      # cells still open
-    for b, (sj, sigma) in enumerate((run1, run2)):
+    runs = _scan(*(v[wanted] for v in (px, py, H, L, high)), (2 * r + spacing)[wanted])
+    covered[wanted] = runs[2]
+    for b, (sj, sigma) in enumerate(runs[:2]):
         if b:                                       # a second run: its own branch (else the first twice)
-            wanted &= run2[0] != run1[0]
-        got = _branch(*(v[wanted] for v in (px, py, H, L, hH, hL, r, M, sj, sigma, margin)))
+            two = runs[1][0] != runs[0][0]
+            wanted[wanted] = two
+            sj, sigma = sj[two], sigma[two]
+        got = _branch(*(v[wanted] for v in (px, py, H, L, hH, hL, r, M)), sj, sigma, margin[wanted])
         for whole, part in zip((d0, gH, gL, E, ok), got):
             whole[wanted, b:] = part[:, None]
     first = covered & ok.all(axis=1) & (d0[:, 0] <= high)   # beyond both runs every point is farther than high + r
@@ -238,10 +251,7 @@ def tangent_bound(px, py, H, L, hH, hL):
     r = lipschitz_radius(hH, hL)
     V = np.abs(L) + np.abs(H)
     spacing = V * np.pi / POLYLINE
-    high = np.empty(px.size)
-    for k in range(0, px.size, CHUNK):
-        squared, tol = _squared(px[k:k + CHUNK], py[k:k + CHUNK], H[k:k + CHUNK], L[k:k + CHUNK])
-        high[k:k + CHUNK] = np.sqrt(squared.min(axis=1) + tol)
+    high = _nearest(px, py, H, L)[1]
     return _tangents(px, py, H, L, high + 2 * r + spacing, spacing) - r - ROUNDING * (1.0 + V)
 
 

@@ -8,7 +8,7 @@ the cell, each from `bound.cell_bounds` (one call for every (cell, node) pair of
 * a mixed one, the dual of a small linear program: for weights w >= 0 summing to 1,
   max_i d_i >= sum_i w_i d_i >= sum_i w_i lb_i, with lb_i a node's first-order bound (the least
   of its runs' affine bounds d0 + g . (dH, dL) - E: concave), so the sum is concave in (dH, dL)
-  and least at one of the cell's corners. The weights tried (`_mixtures`) are the vertices of the
+  and least at one of the cell's corners. The weights tried (`_dual`) are the vertices of the
   dual's simplex over KEEP nodes of different gradient directions (`_diverse`): each node alone,
   pairs that cancel one gradient component, triples that cancel both. Near the answer, whose
   active nodes' gradients cancel, this loses only second-order terms where one node loses r.
@@ -25,6 +25,7 @@ the nodes moved. That is a bound: the distance to a curve is 1-Lipschitz in the 
 earlier node P_j has a node P_i' of this set within m, then for every linkage
 max_i d(P_i') >= max_j d(P_j) - m (`moved_bound`). Only leaves below the target are measured again.
 """
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -101,6 +102,7 @@ def moved_bound(cells: Cells, moved) -> Cells:
     return Cells(cells.H, cells.L, cells.hH, cells.hL, cells.bound - moved)
 
 
+@functools.cache
 def _pairings(k):
     """Index arrays of the node pairs and triples of k nodes."""
     pairs = np.array([(i, j) for i in range(k) for j in range(i + 1, k)], dtype=int).reshape(-1, 2)
@@ -109,35 +111,31 @@ def _pairings(k):
     return pairs, triples
 
 
-def _mixtures(gH, gL):
-    """Weights w (rows of the simplex over each cell's K nodes) at which the dual of
+def _dual(gH, gL, corner):
+    """The best of the dual's mixtures w (on the simplex over each cell's K nodes) at which
     min over the cell of max_i (a_i + g_i . d) can be largest: each node alone, each pair mixed to
-    cancel one gradient component, each triple mixed to cancel both. Shape (cells, candidates, K)."""
+    cancel one gradient component, each triple mixed to cancel both; each valued at its least
+    corner, min_k sum_i w_i corner[i, k] (`corner`: cell, node, corner [mm]). Per cell [mm]."""
     count, k = gH.shape
     pairs, triples = _pairings(k)
-    rows = np.arange(count)[:, None]
-    parts = [np.broadcast_to(np.eye(k), (count, k, k))]
+    best = corner.min(axis=-1).max(axis=1)                       # each node alone
+    ci, cj = corner[:, pairs[:, 0]], corner[:, pairs[:, 1]]
     for g in (gH, gL):                    # pairs: t g_i + (1 - t) g_j = 0 in one component
         gi, gj = g[:, pairs[:, 0]], g[:, pairs[:, 1]]
         t = np.clip(np.divide(gj, gj - gi, out=np.zeros_like(gi), where=np.abs(gj - gi) > 1e-300), 0.0, 1.0)
-        w = np.zeros((count, len(pairs), k))
-        w[rows, np.arange(len(pairs)), pairs[:, 0]] = t
-        w[rows, np.arange(len(pairs)), pairs[:, 1]] = 1.0 - t
-        parts.append(w)
+        best = np.maximum(best, (t[..., None] * ci + (1.0 - t[..., None]) * cj).min(axis=-1).max(axis=1))
     if len(triples):                      # triples: sum w = 1, sum w gH = 0, sum w gL = 0 (Cramer)
         hi, hj, hl = (gH[:, triples[:, m]] for m in range(3))
         li, lj, ll = (gL[:, triples[:, m]] for m in range(3))
-        wi, wj, wl = hj * ll - hl * lj, hl * li - hi * ll, hi * lj - hj * li
-        total = wi + wj + wl
-        ok = np.abs(total) > 1e-12 * (np.abs(wi) + np.abs(wj) + np.abs(wl) + 1e-300)
-        w3 = np.stack([wi, wj, wl], axis=-1) / np.where(ok, total, 1.0)[..., None]
-        w3 = np.where(ok[..., None] & (w3 >= 0).all(axis=-1, keepdims=True), w3, 1.0 / 3)
-        w = np.zeros((count, len(triples), k))
-        for m in range(3):
-            w[rows, np.arange(len(triples)), triples[:, m]] = w3[..., m]
-        parts.append(w)
-    w = np.clip(np.concatenate(parts, axis=1), 0.0, None)
-    return w / w.sum(axis=-1, keepdims=True)          # on the simplex whatever the rounding: a bound
+        w = np.stack([hj * ll - hl * lj, hl * li - hi * ll, hi * lj - hj * li], axis=-1)
+        total = w.sum(axis=-1)
+        ok = np.abs(total) > 1e-12 * (np.abs(w).sum(axis=-1) + 1e-300)
+        w = np.clip(w / np.where(ok, total, 1.0)[..., None], 0.0, None)
+        w = np.where(ok[..., None], w, 1.0)
+        w /= w.sum(axis=-1, keepdims=True)             # on the simplex whatever the rounding: a bound
+        mixed = sum(w[..., m, None] * corner[:, triples[:, m]] for m in range(3))
+        best = np.maximum(best, mixed.min(axis=-1).max(axis=1))
+    return best
 
 
 CORNERS = np.array([(-1, -1), (-1, 1), (1, -1), (1, 1)], dtype=float)
@@ -183,7 +181,7 @@ def _diverse(value, gH, gL):
     crowd one peak of the path."""
     sector = np.where((gH == 0) & (gL == 0), SECTORS,
                       ((np.arctan2(gL, gH) + np.pi) * (SECTORS / (2 * np.pi))).astype(int) % SECTORS)
-    best = np.stack([np.where(sector == k, value, -np.inf).argmax(axis=1) for k in range(SECTORS + 1)], axis=1)
+    best = np.where(sector[..., None] == np.arange(SECTORS + 1), value[..., None], -np.inf).argmax(axis=1)
     filled = np.take_along_axis(sector, best, axis=1) == np.arange(SECTORS + 1)     # the sector has a node
     best_value = np.where(filled, np.take_along_axis(value, best, axis=1), -np.inf)
     chosen = np.take_along_axis(best, np.argsort(best_value, axis=1)[:, ::-1], axis=1)[:, :KEEP]
@@ -197,18 +195,25 @@ def _measure(px, py, cells: Cells, nodes, target=np.inf):
     most promising nodes (`_diverse`). The bound: for any weights w on the simplex,
     max_i d_i >= sum_i w_i d_i >= sum_i w_i lb_i, lb_i a node's first-order bound (the least of its
     runs' affine bounds: concave in (dH, dL)), so the sum is concave and least at a corner; the
-    largest over `_mixtures` of that least corner (the linear program's dual). The costly
+    largest over `_dual` of that least corner (the linear program's dual). The costly
     tangent-segment bound (`bound.tangent_bound`) of the pairs with no first-order bound is taken
     only in the cells still below `target` without it (any bound of a node is a bound)."""
     count, width = nodes.shape
     pairs = (px[nodes.ravel()], py[nodes.ravel()], *(np.repeat(v, width) for v in (cells.H, cells.L, cells.hH, cells.hL)))
     zero, d0, gH, gL, E, first = cell_bounds(*pairs, fine=False, width=width, target=target)
-    bound, pick = _combined(cells, zero, d0, gH, gL, E, first, width)
-    fine = np.repeat(bound < target, width) & ~first
-    if fine.any():
-        zero[fine] = np.maximum(zero[fine], tangent_bound(*(v[fine] for v in pairs)))
-        rows = np.flatnonzero(fine.reshape(count, width).any(axis=1))
-        part = np.repeat(rows * width, width) + np.tile(np.arange(width), rows.size)
+    bound = np.maximum(cells.bound, zero.reshape(count, width).max(axis=1))
+    pick = np.zeros((count, KEEP + REACH), dtype=int)               # a closed cell's: never used
+    for stage in range(2):
+        rows = np.flatnonzero(bound < target)
+        if stage:               # the tangent-segment bound, in the cells the others left open
+            fine = np.zeros((count, width), dtype=bool)
+            fine[rows] = ~first.reshape(count, width)[rows]
+            rows = np.flatnonzero(fine.any(axis=1))
+            if rows.size == 0:
+                break
+            fine = fine.ravel()
+            zero[fine] = np.maximum(zero[fine], tangent_bound(*(v[fine] for v in pairs)))
+        part = (rows[:, None] * width + np.arange(width)).ravel()
         bound[rows], pick[rows] = _combined(cells.take(rows), *(v[part] for v in (zero, d0, gH, gL, E, first)), width)
     return Cells(cells.H, cells.L, cells.hH, cells.hL, bound), np.take_along_axis(nodes, pick, axis=1)
 
@@ -223,8 +228,7 @@ def _combined(cells: Cells, zero, d0, gH, gL, E, first, width):
     corner = np.where(first[:, None], np.maximum(corner, zero[:, None]), zero[:, None]).reshape(count, width, 4)
     gH, gL = (np.where(first, g[:, 0], 0.0).reshape(count, width) for g in (gH, gL))
     pick = np.hstack([_diverse(corner.mean(axis=-1), gH, gL), np.argsort(corner.max(axis=-1), axis=1)[:, np.arange(-REACH, 0) % width]])
-    w = _mixtures(*(np.take_along_axis(g, pick, axis=1) for g in (gH, gL)))
-    dual = np.einsum("cmk,ckq->cmq", w, np.take_along_axis(corner, pick[..., None], axis=1)).min(axis=-1).max(axis=1)
+    dual = _dual(*(np.take_along_axis(g, pick, axis=1) for g in (gH, gL)), np.take_along_axis(corner, pick[..., None], axis=1))
     return np.maximum(np.maximum(cells.bound, zero.reshape(count, width).max(axis=1)), dual), pick
 
 
