@@ -41,8 +41,8 @@ POLYLINE = 128          # N: the zero-order polyline; its error V pi / N only wi
 NEAR_ARCS = 32          # polyline arcs near a node that `_tangents` cuts finely
 SUBARCS = 16            # sub-arcs an arc: M (pi / (POLYLINE SUBARCS))^2 / 2 ~ 2e-4 mm on the paper's cam
 NEWTON_STEPS = 4
-INTERVALS = 12          # geometric points of the partition of the first-order window (`_loss`)
-UNIFORM = 24            # and uniform ones
+INTERVALS = 8          # geometric points of the partition of the first-order window (`_loss`)
+UNIFORM = 16            # and uniform ones
 ROUNDING = 1e-12        # relative: a margin for floating-point rounding in the bounds
 
 
@@ -75,7 +75,7 @@ _B = ((np.cos(2 * _GRID) - 1) / 2, np.sin(2 * _GRID) / 2)
 # |P - L a_j - H b_j|^2 = |P|^2 + features(P, H, L) @ _TERMS: one matrix product for every vertex
 _TERMS = np.array([-2 * _A[0], -2 * _A[1], -2 * _B[0], -2 * _B[1],
                    _A[0] ** 2 + _A[1] ** 2, 2 * (_A[0] * _B[0] + _A[1] * _B[1]), _B[0] ** 2 + _B[1] ** 2])
-CHUNK = 128             # pairs a block: m n k below OpenBLAS's 4 x 65536 keeps its product on one thread
+CHUNK = 256             # pairs a block: m n k below OpenBLAS's 4 x 65536 keeps its product on one thread
 
 
 def _squared(px, py, H, L):
@@ -192,12 +192,12 @@ def _loss(top, slope, quad, M3, speed, M, offset, t1):
     beta = 0 and alpha >= 0: E >= 0."""
     t = t1[:, None] * _FRACTIONS
     lo, hi = t[:, :-1], t[:, 1:]
-    alpha = (slope[:, None] * hi + np.maximum(quad[:, None] * lo * lo, quad[:, None] * hi * hi) / 2
-             + M3[:, None] * hi ** 3 / 6)
-    B = speed[:, None] * t - M[:, None] * t * t / 2 - offset[:, None]
+    hi2 = hi * hi
+    alpha = hi * (slope[:, None] + M3[:, None] * hi2 / 6) + np.maximum(quad[:, None] * (lo * lo), quad[:, None] * hi2) / 2
+    B = t * (speed[:, None] - M[:, None] * t / 2) - offset[:, None]
     beta = np.maximum(np.minimum(B[:, :-1], B[:, 1:]), 0.0)
     x = np.maximum(top[:, None] - alpha, 0.0)
-    return (alpha - (np.hypot(x, beta) - x)).max(axis=1)
+    return (alpha + x - np.sqrt(x * x + beta * beta)).max(axis=1)
 
 
 _FRACTIONS = np.unique(np.r_[0.0, 2.0 ** -np.arange(INTERVALS, 0, -1), np.linspace(0.0, 1.0, UNIFORM + 1)])
