@@ -2,36 +2,48 @@
 for many (cell, node) pairs at once: the certificate's bound (`certificate.box_lower_bound`).
 
 Eq. (10) is linear in the links: R(s; H, L) = L a(s) + H b(s), a = (cos s - 1, sin s),
-b = (cos 2s - 1, sin 2s) / 2, with |a'| = |b'| = |a''| = 1, |b''| = 2. On a cell of centre (H, L)
-and half-widths (hH, hL), with Q(s) = R(s; H, L) and the move m(s) = dL a(s) + dH b(s) to
-R(s; H + dH, L + dL), |dH| <= hH, |dL| <= hL:
+b = (cos 2s - 1, sin 2s) / 2, with |a'| = |b'| = |a''| = |a'''| = 1, |b''| = 2, |b'''| = 4. On a
+cell of centre (H, L) and half-widths (hH, hL), with Q(s) = R(s; H, L) and the move
+m(s) = dL a(s) + dH b(s) to R(s; H + dH, L + dL), |dH| <= hH, |dL| <= hL:
 
-    |Q'| <= |L| + |H| =: V,   |Q''| <= |L| + 2|H| =: M,   |m| <= r (`lipschitz_radius`),   |m'| <= hL + hH.
+    |Q'| <= |L| + |H| =: V,  |Q''| <= |L| + 2|H| =: M,  |Q'''| <= |L| + 4|H| =: M3,
+    |m| <= r (`lipschitz_radius`),  |m'| <= hL + hH,  |m''| <= hL + 2 hH.
 
 Zero order (a polyline of N vertices s_j = 2 pi j / N). Every s is within pi/N of a vertex, so
 |P - Q(s)| >= |P - Q_j| - V pi / N =: lb_j, and |P - R(s; cell point)| >= min_j lb_j - r.
 
-First order (Cauchy-Schwarz |X| >= |e . X| for a unit e, and Taylor in s). Take any s0 (the
-vertex nearest P, refined by Newton on the foot condition), d0 = |P - Q(s0)|, the unit normal
-u = (P - Q(s0)) / d0 and tangent tau = Q'(s0) / |Q'(s0)|, eps_u = |u . Q'(s0)|,
-eps_t = |tau . (P - Q(s0))| (both ~0 at a foot point). For X(s) = P - Q(s) - m(s), t = s - s0:
+First order (Cauchy-Schwarz |X| >= |e . X| for a unit e, and Taylor in s with its remainder).
+Take any s0 (the vertex nearest P, refined by Newton on the foot condition; any s0 gives a bound,
+a good one a tight bound), d0 = |P - Q(s0)|, the unit vectors u = (P - Q(s0)) / d0 and n, u turned
+a right angle, eps_u = |u . Q'(s0)| (~0 at a foot point), v = |n . Q'(s0)| = sqrt(|Q'(s0)|^2 - eps_u^2),
+the signed bend q = u . Q''(s0) (negative where the curve bends away from P), and the move's own
+parts at s0, k = |u . a'(s0)| hL + |u . b'(s0)| hH >= |u . m'(s0)| and
+rt = |n . a(s0)| hL + |n . b(s0)| hH >= |n . m(s0)|. For X(s) = P - Q(s) - m(s), t = s - s0
+(n . (P - Q(s0)) = 0; a rounding residue eps_t is allowed for):
+u . (Q(s) - Q(s0)) <= eps_u |t| + q t^2/2 + M3 |t|^3/6, u . (m(s) - m(s0)) <= k |t| + (hL + 2 hH) t^2/2,
+|n . (Q(s) - Q(s0))| >= v |t| - M t^2/2 and |n . m(s)| <= rt + (hL + hH) |t|:
 
-    A:  |X| >= u . X >= d0 + g . (dH, dL) - (eps_u + hL + hH) |t| - M t^2 / 2,
-        g = -(u . b(s0), u . a(s0)): the first-order change of the distance with the links;
-    B:  |X| >= |tau . X| >= |Q'(s0)| |t| - M t^2 / 2 - eps_t - r;
+    A:  u . X >= D - (eps_u + k) |t| - (q + hL + 2 hH) t^2/2 - M3 |t|^3/6,
+        D = d0 + g . (dH, dL), g = -(u . b(s0), u . a(s0)) (u . m(s0) = -g . (dH, dL));
+    B:  |n . X| >= (v - hL - hH) |t| - M t^2/2 - eps_t - rt   (concave in |t|);
     C:  |X| >= lb_j - r on the arc of every vertex j.
 
-Let t0 be the least t with B(t) = d0 + r, and sigma the farthest (plus pi/N) that a vertex with
-lb_j < d0 + 2 r lies from s0. If t0 exists and B(sigma) >= d0 + r (B is concave: B >= d0 + r on
-[t0, sigma]), then for |t| <= t1 = min(t0, sigma) A holds, for t1 <= |t| <= sigma B gives
-|X| >= d0 + r, beyond sigma C gives |X| >= d0 + r, and since |g . (dH, dL)| = |u . m(s0)| <= r:
+D is at most top = d0 + |gH| hH + |gL| hL <= d0 + r. Let t0 be the least t with B(t) = top, and
+sigma the farthest (plus pi/N) that a vertex with lb_j < high + 2 r (high >= the nearest vertex's
+distance >= d0) lies from s0. If t0 exists and B(sigma) >= top (B concave: B >= top on [t0, sigma]),
+then for |t| <= t1 = min(t0, sigma) |X| = sqrt((u . X)^2 + (n . X)^2) >= sqrt(A+^2 + B+^2),
+for t1 <= |t| <= sigma B gives |X| >= top >= D, beyond sigma C gives |X| >= high + r >= top, so
 
-    distance(P, limaçon(H + dH, L + dL)) >= d0 + g . (dH, dL) - E,   E = (eps_u + hL + hH) t1 + M t1^2 / 2,
+    distance(P, limaçon(H + dH, L + dL)) >= d0 + g . (dH, dL) - E,
 
-affine in the move up to E, which is ~ (d0 + r) (hL + hH) / |Q'| + M (d0 + r)^2 / (2 |Q'|^2): second
-order, where the zero-order bound loses r. Where the conditions fail (two branches of the curve
-near P, as at the double point) the pair keeps the zero-order bound. Each bound is checked
-against brute force over the cell (tests/cam_cutter/test_cam_cutter_global.py).
+E the largest over a partition of [0, t1] of D - sqrt(A+^2 + B+^2) with A and B bounded on each
+piece (`_loss`). E is second order in the cell: where the curve bends away from P (q < 0) A's loss
+is at most (eps_u + k)^2 / (2 |q|); elsewhere B leaves A only |t| <~ rt / v, a loss
+~ k rt / v + q rt^2 / (2 v^2), both products of the move; the zero-order bound loses r.
+Where the conditions fail (two branches of the curve near P, as at the double point) the pair
+keeps the zero-order bound, raised by the tangent-segment one (`tangent_bound`). Each bound is
+checked against brute force over cells near and far from the optima
+(tests/cam_cutter/test_cam_cutter_global.py).
 """
 import numpy as np
 
@@ -41,7 +53,7 @@ POLYLINE = 128          # N: the zero-order polyline; its error V pi / N only wi
 NEAR_ARCS = 32          # polyline arcs near a node that `_tangents` cuts finely
 SUBARCS = 16            # sub-arcs an arc: M (pi / (POLYLINE SUBARCS))^2 / 2 ~ 2e-4 mm on the paper's cam
 NEWTON_STEPS = 4
-INTERVALS = 8          # geometric points of the partition of the first-order window (`_loss`)
+INTERVALS = 8           # geometric points of the partition of the first-order window (`_loss`)
 UNIFORM = 16            # and uniform ones
 ROUNDING = 1e-12        # relative: a margin for floating-point rounding in the bounds
 
@@ -264,18 +276,19 @@ def _branch(px, py, H, L, hH, hL, r, M, sj, sigma, margin):
     wx, wy = px - x, py - y
     d0, speed = np.hypot(wx, wy), np.hypot(vx, vy)
     ux, uy = wx / np.where(d0 > 0, d0, 1.0), wy / np.where(d0 > 0, d0, 1.0)
-    tx, ty = vx / np.where(speed > 0, speed, 1.0), vy / np.where(speed > 0, speed, 1.0)
+    tx, ty = -uy, ux                                     # the unit normal to u: exactly orthogonal
     eps_u = np.abs(ux * vx + uy * vy)
-    eps_t = np.abs(wx * tx + wy * ty)
+    eps_t = np.abs(wx * tx + wy * ty)                     # ~0 (w is along u): rounding only
     gH, gL = -(ux * b[0] + uy * b[1]), -(ux * a[0] + uy * a[1])
-    # k >= |u . m'(s0)| and rt >= |tau . m(s0)|: a' = (-a_y, a_x + 1), b' = (-2 b_y, 2 b_x + 1)
+    # k >= |u . m'(s0)| and rt >= |n . m(s0)|: a' = (-a_y, a_x + 1), b' = (-2 b_y, 2 b_x + 1)
     k = np.abs(uy * (a[0] + 1) - ux * a[1]) * hL + np.abs(uy * (2 * b[0] + 1) - 2 * ux * b[1]) * hH
     rt = np.abs(tx * a[0] + ty * a[1]) * hL + np.abs(tx * b[0] + ty * b[1]) * hH
     quad = ux * ax + uy * ay + hL + 2 * hH              # u . Q''(s0) + max |m''|
     M3 = np.abs(L) + 4 * np.abs(H)                      # max |Q'''| (|a'''| = 1, |b'''| = 4)
     top = d0 + np.abs(gH) * hH + np.abs(gL) * hL         # the largest D over the cell
     sigma = np.minimum(sigma + np.abs((s0 - sj + np.pi) % (2 * np.pi) - np.pi), 2 * np.pi)  # from s0; > pi: not ok
-    pace, offset = speed - hL - hH, eps_t + rt           # B(t) = pace |t| - M t^2/2 - offset
+    pace = np.sqrt(np.maximum(speed * speed - eps_u * eps_u, 0.0)) - hL - hH   # |n . Q'(s0)| less |m'|
+    offset = eps_t + rt                                  # B(t) = pace |t| - M t^2/2 - offset
     disc = pace * pace - 2 * M * (top + offset)          # B(t0) = top
     t0 = (pace - np.sqrt(np.maximum(disc, 0.0))) / M
     B_sigma = pace * sigma - M * sigma * sigma / 2 - offset
