@@ -9,21 +9,27 @@ the cell, each from `bound.cell_bounds` (one call for every (cell, node) pair of
   max_i d_i >= sum_i w_i d_i >= sum_i w_i lb_i, with lb_i a node's first-order bound (the least
   of its runs' affine bounds d0 + g . (dH, dL) - E: concave), so the sum is concave in (dH, dL)
   and least at one of the cell's corners. The weights tried (`_dual`) are the vertices of the
-  dual's simplex over KEEP nodes of different gradient directions (`_diverse`): each node alone,
-  pairs that cancel one gradient component, triples that cancel both. Near the answer, whose
-  active nodes' gradients cancel, this loses only second-order terms where one node loses r.
+  dual's simplex over KEEP + REACH nodes: KEEP of different gradient directions, each the highest
+  at the cell's centre in its direction (`_diverse`), and the REACH highest at a corner: each node
+  alone, pairs that cancel one gradient component, triples that cancel both. On the scenes' cells
+  about their optima this is the linear program's optimum over every node (the test compares).
+  Near the answer, whose active nodes' gradients cancel, it loses only second-order terms.
 
-The first cells are measured on every SCREEN-th node; a cell's children on its KEEP + REACH
-nodes first, and those still below the target on every node: any subset of the nodes gives a
-lower bound, and a child's bound is at least its parent's. Cells are split level by level (all of a level in one call) until every cell's bound
-is within `gap` of `upper` (an achieved deviation: the early stop) or `max_cells` cells have been
-measured.
+The costly bounds are taken only where they can close a cell: the first-order bound in cells the
+zero-order one left open, the tangent-segment bound in cells still open after the first order
+(`_measure`). The first grid is measured on every SCREEN-th node and split without a recheck (a
+coarse cell seldom closes on the rest); a cell's children are measured on its KEEP + REACH nodes
+first, and those still below the target on every node: any subset of the nodes gives a lower
+bound, and a child's bound is at least its parent's. Cells are split level by level (all of a
+level in one call) until every cell's bound is within `gap` of `upper` (an achieved deviation: the
+early stop) or `max_cells` cells have been measured.
 
 Warm start (`box_lower_bound(start=...)`, `warm_cells`): the leaves of an earlier certificate
 meeting this box (and grid cells for any part of the box they miss), each bound lowered by how far
 the nodes moved. That is a bound: the distance to a curve is 1-Lipschitz in the point, so if every
 earlier node P_j has a node P_i' of this set within m, then for every linkage
-max_i d(P_i') >= max_j d(P_j) - m (`moved_bound`). Only leaves below the target are measured again.
+max_i d(P_i') >= max_j d(P_j) - m (`moved_bound`). Only leaves below the target are measured again;
+leaves finer than the move give way to unmeasured cells as wide (`warm_cells(finest=...)`).
 """
 import functools
 from dataclasses import dataclass
