@@ -180,16 +180,17 @@ def minimax(task: LinkageFit | ProfileFit, *, count: Nodes = 1000, slots: Annota
     the answer's CERTIFY_WORST highest peaks). It stops as soon as every cell is within
     `gap_per_size` cam sizes (1e-3 mm on the paper's cam) of the answer; a gap above that after
     `max_cells` cells is not certified: a SOLVED or INFEASIBLE answer is then INACCURATE ("not
-    certified global"). Inside a sweep it starts from the previous variant's cells (`_certify`).
-    `diagnostics`: `global_gap_mm` (the answer's deviation less the bound), `global_lower_bound_mm`,
-    `global_cells` (cells measured), `global_certified`, `global_warm_started`,
-    `global_warm_moved_mm` (how far the earlier nodes were from this path's).
+    certified global"). Inside a sweep it starts from the previous variant's cells where the path
+    moved little (`_certify`). `diagnostics`: `global_gap_mm` (the answer's deviation less the
+    bound), `global_lower_bound_mm`, `global_cells` (cells measured), `global_certified`,
+    `global_warm_started`, `global_warm_moved_mm` (how far the earlier nodes were from this
+    path's), `global_warm_reused_cells`, `global_warm_coarsened_mm`.
 
     `certify`: "on" certifies every answer; "off" none; "auto" (the default) a cam of any shape
     (`ProfileFit`: several basins, searched from several starts) and not the cardioid
     (`LinkageFit`: one start from its matched linkage, exact for h = 0), whose answer then says
     `global_certified` False, "not checked" (`cam-cutter/minimax` asks "on": the certificate
-    costs some ten of its solves, `mechopt bench cam-cutter`).
+    costs some four of its solves, `mechopt bench cam-cutter`).
     """
     _check_count(count)
     check_settings(minimax, slots=slots, max_rounds=max_rounds, nlp=nlp, widen=widen, starts=starts, certify=certify,
