@@ -175,10 +175,11 @@ def global_table(rows):
 MAP_AXES = {"a_mm": (24.0, 26.0), "h_mm": (1.5, 2.5)}     # the certified what-if map: cam-cutter/minimax
 
 
-def certified_map(side=20, progress=None):
+def certified_map(side=20, progress=None, repeats=3):
     """A side x side what-if map of `cam-cutter/minimax` over MAP_AXES, its variants solved as a
-    sweep chunk solves them (`registry.run` in one `kit.warm` session), uncertified then certified
-    in the same run: wall seconds of each, their ratio, and how many were certified and warm-started."""
+    sweep chunk solves them (`registry.run` in one `kit.warm` session), uncertified then certified,
+    `repeats` times in turn in the same run: the median wall seconds of each, their ratio, and how
+    many were certified and warm-started."""
     import itertools
 
     import numpy as np
@@ -187,18 +188,21 @@ def certified_map(side=20, progress=None):
     scene = registry.find("cam-cutter/minimax")
     points = list(itertools.product(*(np.linspace(lo, hi, side) for lo, hi in MAP_AXES.values())))
     registry.run(scene, {"certify": "off"})                  # the build, once
-    out = {"side": side}
-    for certify in ("off", "on"):
-        start = time.perf_counter()
-        with warm.session():
-            got = [registry.run(scene, dict(zip(MAP_AXES, map(float, p))) | {"certify": certify}).result
-                   for p in points]
-        out[f"{certify}_s"] = time.perf_counter() - start
-        if progress:
-            progress(f"certified map {side}x{side}, certify={certify}: {out[f'{certify}_s']:.1f} s")
+    walls = {"off": [], "on": []}
+    for k in range(repeats):
+        for certify in walls:
+            start = time.perf_counter()
+            with warm.session():
+                got = [registry.run(scene, dict(zip(MAP_AXES, map(float, p))) | {"certify": certify}).result
+                       for p in points]
+            walls[certify].append(time.perf_counter() - start)
+            if progress:
+                progress(f"certified map {side}x{side}, certify={certify} run {k + 1}/{repeats}: {walls[certify][-1]:.1f} s")
+    out = {"side": side, "runs": repeats} | {f"{c}_s": statistics.median(w) for c, w in walls.items()}
     out["ratio"] = out["on_s"] / out["off_s"]
     out["certified"] = sum(bool(r.diagnostics["global_certified"]) for r in got)
     out["warm_started"] = sum(bool(r.diagnostics["global_warm_started"]) for r in got)
+    out["cells"] = sum(r.diagnostics["global_cells"] for r in got)
     out["statuses"] = {s: [r.status.value for r in got].count(s) for s in sorted({r.status.value for r in got})}
     return out
 
@@ -206,10 +210,11 @@ def certified_map(side=20, progress=None):
 def certified_map_table(row):
     """`certified_map` as text."""
     return "\n".join(["", f"certified what-if map {row['side']} x {row['side']} of cam-cutter/minimax over "
-                       + " x ".join(f"{k} {lo:g}..{hi:g}" for k, (lo, hi) in MAP_AXES.items()) + " (same run)",
-                       f"{'uncertified s':>14}{'certified s':>13}{'ratio':>7}{'certified':>11}{'warm':>6}  statuses",
+                       + " x ".join(f"{k} {lo:g}..{hi:g}" for k, (lo, hi) in MAP_AXES.items())
+                       + f" (same run, medians of {row['runs']})",
+                       f"{'uncertified s':>14}{'certified s':>13}{'ratio':>7}{'certified':>11}{'warm':>6}{'cells':>8}  statuses",
                        f"{row['off_s']:>14.2f}{row['on_s']:>13.2f}{row['ratio']:>7.1f}{row['certified']:>11}"
-                       f"{row['warm_started']:>6}  {row['statuses']}"])
+                       f"{row['warm_started']:>6}{row['cells']:>8}  {row['statuses']}"])
 
 
 def _cold_minimax(task, count):
@@ -371,14 +376,14 @@ def cli(repeats, out_dir, progress=None, quick=False) -> str:
         family = family_rows(sizes=(5, 20), repeats=repeats, progress=progress)
         peer = family_peer(cams=2, repeats=repeats, progress=progress)
         glob = global_rows(repeats=1, progress=progress)
-        chart = certified_map(side=8, progress=progress)
+        chart = certified_map(side=8, progress=progress, repeats=1)
     else:
         rows = run(repeats=repeats, progress=progress)
         loads = kinetostatics_rows(repeats=repeats, progress=progress)
         family = family_rows(repeats=repeats, progress=progress)
         peer = family_peer(cams=4, repeats=repeats, progress=progress, de_repeats=3)
         glob = global_rows(repeats=min(repeats, 3), progress=progress)
-        chart = certified_map(side=20, progress=progress)
+        chart = certified_map(side=20, progress=progress, repeats=min(repeats, 3))
     paths = plot(rows, out_dir)
     timing = grid_box_timing(repeats=repeats, progress=progress)
     timing["family_20_cams_s"] = next(r["wall_s_median"] for r in family if r["cams"] == 20)
