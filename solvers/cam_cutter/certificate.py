@@ -151,8 +151,8 @@ def warm_cells(leaves: Cells, moved, box, grid=(16, 8), finest=0.0) -> Cells:
     """The start of a warm certificate over `box`: the earlier `leaves` that meet the box, each
     bound less `moved` [mm] (`moved_bound`), and the grid cells of the box that the leaves' box does
     not hold, unmeasured. Leaves narrower than `finest` [mm] (the fine ones about the earlier
-    answer, which a move of the path makes stale) give way to unmeasured cells `finest` wide over
-    their bounding box, so the partition is reused down to the scale the move leaves valid.
+    answer, which a move of the path makes stale) give way to the unmeasured cells `finest` wide
+    of a lattice that meet them, so the partition is reused down to the scale the move leaves valid.
     Together they cover the box (cells may overlap: a point's bound is the least of its cells'
     either way)."""
     H_lo, H_hi, L_lo, L_hi = box
@@ -169,13 +169,20 @@ def warm_cells(leaves: Cells, moved, box, grid=(16, 8), finest=0.0) -> Cells:
     small = np.maximum(kept.hH, kept.hL) < finest
     if small.any():
         fine = kept.take(small)
-        span = ((fine.H - fine.hH).min(), (fine.H + fine.hH).max(), (fine.L - fine.hL).min(), (fine.L + fine.hL).max())
-        aspect = fine.hH[0] / max(fine.hH[0], fine.hL[0]), fine.hL[0] / max(fine.hH[0], fine.hL[0])
-        count = [max(1, int(np.ceil((span[2 * k + 1] - span[2 * k]) / (2 * finest * aspect[k])))) for k in (0, 1)]
-        H, L, hH, hL = _grid(span, count)
-        HH, LL = np.meshgrid(H, L, indexing="ij")
-        fresh = _joined(fresh, Cells(HH.ravel(), LL.ravel(), np.full(HH.size, hH), np.full(HH.size, hL),
-                                     np.full(HH.size, -np.inf)))
+        # a lattice of cells `finest` wide (the leaves' aspect), those meeting a fine leaf: every
+        # lattice index from a leaf's lowest to its highest, a side, so they cover every fine leaf
+        aspect = np.array([fine.hH[0], fine.hL[0]]) / max(fine.hH[0], fine.hL[0])
+        width = 2 * finest * aspect
+        origin = np.array([(fine.H - fine.hH).min(), (fine.L - fine.hL).min()])
+        index = [np.floor((np.stack([c - h, c + h]) - o) / w).astype(int)            # (lo, hi) a leaf
+                 for c, h, o, w in ((fine.H, fine.hH, origin[0], width[0]), (fine.L, fine.hL, origin[1], width[1]))]
+        steps = [range(int((i[1] - i[0]).max()) + 1) for i in index]
+        ij = np.unique(np.concatenate([np.column_stack([np.minimum(index[0][0] + a, index[0][1]),
+                                                        np.minimum(index[1][0] + b, index[1][1])])
+                                       for a in steps[0] for b in steps[1]]), axis=0)
+        centre = origin + (ij + 0.5) * width
+        fresh = _joined(fresh, Cells(centre[:, 0], centre[:, 1], np.full(len(ij), width[0] / 2),
+                                     np.full(len(ij), width[1] / 2), np.full(len(ij), -np.inf)))
         kept = kept.take(~small)
     return _joined(moved_bound(kept, moved), fresh)
 

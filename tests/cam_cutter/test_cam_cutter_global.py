@@ -132,6 +132,23 @@ def test_a_warm_start_is_a_bound_for_the_moved_nodes():
     assert again.lower <= min(_dense_distance(px + shift, py, H, L).max() for H, L in grid)
 
 
+def test_a_warm_start_coarsened_to_the_move_is_still_a_bound():
+    """Leaves finer than `finest` give way to unmeasured cells as wide over their span: fewer
+    cells to start from, and the bound still below brute force over the moved path's box."""
+    task, _ = registry.find("cam-cutter/minimax").build()
+    box = (58.0, 61.0, 46.0, 49.0)
+    px, py = task.path_point(np.linspace(0.0, task.t_end_rad, 30))
+    first = box_lower_bound(px, py, box, upper=0.0609, gap=1e-3)
+    shift = 0.03                                       # 30 gap targets: the fine leaves are stale
+    start = warm_cells(first.leaves, shift, box, finest=0.1)
+    fine = np.maximum(first.leaves.hH, first.leaves.hL) < 0.1
+    assert fine.any() and start.H.size < first.leaves.H.size
+    assert np.all(np.isinf(start.bound[-(start.H.size - int((~fine).sum())):]))      # the new cells: unmeasured
+    again = box_lower_bound(px + shift, py, box, upper=0.0609, gap=1e-3, start=start)
+    grid = [(H, L) for H in np.linspace(58.0, 61.0, 13) for L in np.linspace(46.0, 49.0, 13)]
+    assert again.warm_started and again.lower <= min(_dense_distance(px + shift, py, H, L).max() for H, L in grid)
+
+
 def test_a_sweep_warm_starts_the_certificate_and_keeps_the_answer():
     from mechopt.kit import warm
     cold = registry.run("cam-cutter/minimax", {"err_width_mm": 0.08}).result
