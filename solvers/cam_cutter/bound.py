@@ -112,37 +112,31 @@ def _run(near, j):
 
 def _nearest(px, py, H, L):
     """Lower and upper bounds [mm] on each pair's distance to its nearest POLYLINE vertex
-    (rounding allowed for)."""
-    low, high = np.empty(px.size), np.empty(px.size)
+    (rounding allowed for), and the squared distances to every vertex with their rounding
+    allowance (`_squared`, a row a pair)."""
+    squared, tol = np.empty((px.size, POLYLINE)), np.empty(px.size)
     for k in range(0, px.size, CHUNK):
         part = slice(k, k + CHUNK)
-        squared, tol = _squared(px[part], py[part], H[part], L[part])
-        least = squared.min(axis=1)
-        low[part], high[part] = np.sqrt(np.maximum(least - tol, 0.0)), np.sqrt(least + tol)
-    return low, high
+        squared[part], tol[part] = _squared(px[part], py[part], H[part], L[part])
+    least = squared.min(axis=1)
+    return np.sqrt(np.maximum(least - tol, 0.0)), np.sqrt(least + tol), squared, tol
 
 
-def _scan(px, py, H, L, high, slack):
+def _scan(squared, tol, high, slack):
     """The vertices nearer P than `high` (`_nearest`) plus `slack` [mm] ("near") in runs: the
     nearest's run (its vertex's s [rad] and sigma [rad], `_run`) and the nearest vertex's run of the
     rest (where there is one, else the first again); and whether the two runs hold every near vertex."""
-    s1, sigma1, s2, sigma2 = (np.empty(px.size) for _ in range(4))
-    covered = np.empty(px.size, dtype=bool)
-    for k in range(0, px.size, CHUNK):
-        part = slice(k, k + CHUNK)
-        squared, tol = _squared(px[part], py[part], H[part], L[part])
-        j = squared.argmin(axis=1)
-        near = squared < ((high[part] + slack[part]) ** 2 + tol)[:, None]
-        first, sigma1[part] = _run(near, j)
-        rest = near & ~first
-        two = rest.any(axis=1)
-        j2, sigma2[part], covered[part] = j.copy(), sigma1[part], True
-        if two.any():                       # near vertices outside the first run: the second run
-            j2[two] = np.where(rest[two], squared[two], np.inf).argmin(axis=1)
-            second, sigma2[part][two] = _run(near[two], j2[two])
-            covered[part][two] = ~(rest[two] & ~second).any(axis=1)
-        s1[part], s2[part] = _GRID[j], _GRID[j2]
-    return (s1, sigma1), (s2, sigma2), covered
+    j = squared.argmin(axis=1)
+    near = squared < ((high + slack) ** 2 + tol)[:, None]
+    first, sigma1 = _run(near, j)
+    rest = near & ~first
+    two = rest.any(axis=1)
+    j2, sigma2, covered = j.copy(), sigma1.copy(), np.ones(j.size, dtype=bool)
+    if two.any():                       # near vertices outside the first run: the second run
+        j2[two] = np.where(rest[two], squared[two], np.inf).argmin(axis=1)
+        second, sigma2[two] = _run(near[two], j2[two])
+        covered[two] = ~(rest[two] & ~second).any(axis=1)
+    return (_GRID[j], sigma1), (_GRID[j2], sigma2), covered
 
 
 def _tangents(px, py, H, L, reach, spacing):
@@ -230,22 +224,24 @@ def cell_bounds(px, py, H, L, hH, hL, *, fine=True, width=None, target=np.inf):
     V, M = np.abs(L) + np.abs(H), np.abs(L) + 2 * np.abs(H)
     margin = ROUNDING * (1.0 + V)
     spacing = V * np.pi / POLYLINE
-    low, high = _nearest(px, py, H, L)
+    low, high, squared, tol = _nearest(px, py, H, L)
     zero = low - spacing - r - margin
     d0, gH, gL, E = (np.zeros((px.size, 2)) for _ in range(4))
     ok, covered = np.zeros((px.size, 2), dtype=bool), np.zeros(px.size, dtype=bool)
     wanted = np.ones(px.size, dtype=bool) if width is None else \
         np.repeat(zero.reshape(-1, width).max(axis=1) < target, width)      # cells still open
-    runs = _scan(*(v[wanted] for v in (px, py, H, L, high)), (2 * r + spacing)[wanted])
+    runs = _scan(squared[wanted], tol[wanted], high[wanted], (2 * r + spacing)[wanted])
     covered[wanted] = runs[2]
-    for b, (sj, sigma) in enumerate(runs[:2]):
-        if b:                                       # a second run: its own branch (else the first twice)
-            two = runs[1][0] != runs[0][0]
-            wanted[wanted] = two
-            sj, sigma = sj[two], sigma[two]
-        got = _branch(*(v[wanted] for v in (px, py, H, L, hH, hL, r, M)), sj, sigma, margin[wanted])
-        for whole, part in zip((d0, gH, gL, E, ok), got):
-            whole[wanted, b:] = part[:, None]
+    # both runs' branches in one call: the first run of every wanted pair, the second where there
+    # is one (else the first stands for both)
+    one = np.flatnonzero(wanted)
+    two = runs[1][0] != runs[0][0]
+    rows = np.r_[one, one[two]]
+    got = _branch(*(v[rows] for v in (px, py, H, L, hH, hL, r, M)), np.r_[runs[0][0], runs[1][0][two]],
+                  np.r_[runs[0][1], runs[1][1][two]], margin[rows])
+    for whole, part in zip((d0, gH, gL, E, ok), got):
+        whole[one, :] = part[:one.size, None]
+        whole[one[two], 1] = part[one.size:]
     first = covered & ok.all(axis=1) & (d0[:, 0] <= high)   # beyond both runs every point is farther than high + r
     worst = (d0 - np.abs(gH) * hH[:, None] - np.abs(gL) * hL[:, None] - E).min(axis=1)
     zero = np.where(first, np.maximum(zero, worst), zero)
