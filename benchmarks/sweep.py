@@ -150,10 +150,10 @@ def table(loom, cam, cam_pool, dask, dask_side=DASK_SIDE, loops=None):
 QUICK_SIDE, QUICK_DASK_SIDE = 30, 20          # --quick: 900 and 400 variants, one run each
 WARM_UP_S = 25.0                 # imports, clusters started, warm-up sweeps
 # per 10^4 variants / per run; cam: the scene certifies every answer (certify = "on"), re-measured
-# with the second-order certificate (--quick on a shared 2-core machine, load ~4: 85 ms a variant
-# in-process, 53 ms one by one, 64 ms on 2 processes; 56 ms of CPU a variant, 12 ms uncertified;
-# quick mode 2 min 56 s in all, 2 min 12 s of CPU)
-MEASURED_S = {"loom": 27.0, "cam": 845.0, "cam_pool": 645.0, "dask_chunk": 3.0}
+# with the second-order certificate (--quick on a 2-core machine shared by six sessions, load ~5:
+# 71 ms a variant in-process, 69 ms one by one, 74 ms on 2 processes; 46 ms of CPU a variant,
+# 12.5 ms uncertified; quick mode 3 min 1 s in all, 1 min 58 s of CPU in the main process)
+MEASURED_S = {"loom": 27.0, "cam": 710.0, "cam_pool": 740.0, "dask_chunk": 3.0}
 
 
 def expected_s(repeats, quick=False) -> float:
