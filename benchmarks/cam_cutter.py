@@ -142,18 +142,25 @@ def family_table(loads, family, peer):
     return "\n".join(lines)
 
 
-GLOBAL_TASKS = {"paper cardioid": PAPER_TASK, "other-profile ellipse": registry.find("cam-cutter/other-profile").build()[0]}
+GLOBAL_TASKS = {"paper cardioid": PAPER_TASK, "minimax scene's box": registry.find("cam-cutter/minimax").build()[0],
+                "other-profile ellipse": registry.find("cam-cutter/other-profile").build()[0]}
 
 
 def global_rows(repeats=3, progress=None, *, count=1000):
     """Per task of GLOBAL_TASKS: the local NLP (one start, no certificate) and the global minimax
-    (multistart where the task is a general curve, certificate), medians of `repeats` warm runs."""
+    (multistart where the task is a general curve, certificate), run in turn `repeats` times
+    (a load that drifts during the run slows both alike): medians of the warm runs."""
     rows = []
     for name, task in GLOBAL_TASKS.items():
-        local_s, local = _timed(lambda: trajectory_fit.minimax(task, count=count, starts=0, certify="off"),
-                                repeats, progress, f"local NLP  {name}")
-        global_s, best = _timed(lambda: trajectory_fit.minimax(task, count=count, certify="on"),
-                                repeats, progress, f"global     {name}")
+        walls, got = {"local": [], "global": []}, {}
+        for k in range(repeats):
+            for kind, settings in (("local", {"starts": 0, "certify": "off"}), ("global", {"certify": "on"})):
+                wall, got[kind] = _timed(lambda: trajectory_fit.minimax(task, count=count, **settings), 1, None, "")
+                walls[kind].append(wall)
+                if progress:
+                    progress(f"{kind:<6} {name} run {k + 1}/{repeats}: {wall:.4f} s")
+        local_s, global_s = statistics.median(walls["local"]), statistics.median(walls["global"])
+        local, best = got["local"], got["global"]
         rows.append({"task": name, "local_wall_s": local_s, "global_wall_s": global_s,
                      "global_over_local": global_s / local_s, "local_mm": local.values["max_deviation_mm"],
                      "global_mm": best.values["max_deviation_mm"], "gap_mm": best.diagnostics["global_gap_mm"],
@@ -163,10 +170,10 @@ def global_rows(repeats=3, progress=None, *, count=1000):
 
 def global_table(rows):
     """`global_rows` as fixed-width text."""
-    lines = ["", "global minimax against the local NLP (same run; warm builds)",
+    lines = ["", "global minimax against the local NLP (same run, in turn; warm builds; medians)",
              f"{'task':<24}{'local s':>9}{'global s':>10}{'ratio':>7}{'local mm':>11}{'global mm':>11}"
              f"{'gap mm':>9}{'cells':>7}  status"]
-    lines += [f"{r['task']:<24}{r['local_wall_s']:>9.3f}{r['global_wall_s']:>10.3f}{r['global_over_local']:>7.0f}"
+    lines += [f"{r['task']:<24}{r['local_wall_s']:>9.3f}{r['global_wall_s']:>10.3f}{r['global_over_local']:>7.1f}"
               f"{r['local_mm']:>11.6f}{r['global_mm']:>11.6f}{r['gap_mm']:>9.1e}{r['cells']:>7}  {r['status']}"
               for r in rows]
     return "\n".join(lines)
@@ -175,10 +182,11 @@ def global_table(rows):
 MAP_AXES = {"a_mm": (24.0, 26.0), "h_mm": (1.5, 2.5)}     # the certified what-if map: cam-cutter/minimax
 
 
-def certified_map(side=20, progress=None):
+def certified_map(side=20, progress=None, repeats=3):
     """A side x side what-if map of `cam-cutter/minimax` over MAP_AXES, its variants solved as a
-    sweep chunk solves them (`registry.run` in one `kit.warm` session), uncertified then certified
-    in the same run: wall seconds of each, their ratio, and how many were certified and warm-started."""
+    sweep chunk solves them (`registry.run` in one `kit.warm` session), uncertified then certified,
+    `repeats` times in turn in the same run: the median wall seconds of each, their ratio, and how
+    many were certified and warm-started."""
     import itertools
 
     import numpy as np
@@ -187,18 +195,21 @@ def certified_map(side=20, progress=None):
     scene = registry.find("cam-cutter/minimax")
     points = list(itertools.product(*(np.linspace(lo, hi, side) for lo, hi in MAP_AXES.values())))
     registry.run(scene, {"certify": "off"})                  # the build, once
-    out = {"side": side}
-    for certify in ("off", "on"):
-        start = time.perf_counter()
-        with warm.session():
-            got = [registry.run(scene, dict(zip(MAP_AXES, map(float, p))) | {"certify": certify}).result
-                   for p in points]
-        out[f"{certify}_s"] = time.perf_counter() - start
-        if progress:
-            progress(f"certified map {side}x{side}, certify={certify}: {out[f'{certify}_s']:.1f} s")
+    walls = {"off": [], "on": []}
+    for k in range(repeats):
+        for certify in walls:
+            start = time.perf_counter()
+            with warm.session():
+                got = [registry.run(scene, dict(zip(MAP_AXES, map(float, p))) | {"certify": certify}).result
+                       for p in points]
+            walls[certify].append(time.perf_counter() - start)
+            if progress:
+                progress(f"certified map {side}x{side}, certify={certify} run {k + 1}/{repeats}: {walls[certify][-1]:.1f} s")
+    out = {"side": side, "runs": repeats} | {f"{c}_s": statistics.median(w) for c, w in walls.items()}
     out["ratio"] = out["on_s"] / out["off_s"]
     out["certified"] = sum(bool(r.diagnostics["global_certified"]) for r in got)
     out["warm_started"] = sum(bool(r.diagnostics["global_warm_started"]) for r in got)
+    out["cells"] = sum(r.diagnostics["global_cells"] for r in got)
     out["statuses"] = {s: [r.status.value for r in got].count(s) for s in sorted({r.status.value for r in got})}
     return out
 
@@ -206,10 +217,11 @@ def certified_map(side=20, progress=None):
 def certified_map_table(row):
     """`certified_map` as text."""
     return "\n".join(["", f"certified what-if map {row['side']} x {row['side']} of cam-cutter/minimax over "
-                       + " x ".join(f"{k} {lo:g}..{hi:g}" for k, (lo, hi) in MAP_AXES.items()) + " (same run)",
-                       f"{'uncertified s':>14}{'certified s':>13}{'ratio':>7}{'certified':>11}{'warm':>6}  statuses",
+                       + " x ".join(f"{k} {lo:g}..{hi:g}" for k, (lo, hi) in MAP_AXES.items())
+                       + f" (same run, medians of {row['runs']})",
+                       f"{'uncertified s':>14}{'certified s':>13}{'ratio':>7}{'certified':>11}{'warm':>6}{'cells':>8}  statuses",
                        f"{row['off_s']:>14.2f}{row['on_s']:>13.2f}{row['ratio']:>7.1f}{row['certified']:>11}"
-                       f"{row['warm_started']:>6}  {row['statuses']}"])
+                       f"{row['warm_started']:>6}{row['cells']:>8}  {row['statuses']}"])
 
 
 def _cold_minimax(task, count):
@@ -371,14 +383,14 @@ def cli(repeats, out_dir, progress=None, quick=False) -> str:
         family = family_rows(sizes=(5, 20), repeats=repeats, progress=progress)
         peer = family_peer(cams=2, repeats=repeats, progress=progress)
         glob = global_rows(repeats=1, progress=progress)
-        chart = certified_map(side=8, progress=progress)
+        chart = certified_map(side=8, progress=progress, repeats=1)
     else:
         rows = run(repeats=repeats, progress=progress)
         loads = kinetostatics_rows(repeats=repeats, progress=progress)
         family = family_rows(repeats=repeats, progress=progress)
         peer = family_peer(cams=4, repeats=repeats, progress=progress, de_repeats=3)
         glob = global_rows(repeats=min(repeats, 3), progress=progress)
-        chart = certified_map(side=20, progress=progress)
+        chart = certified_map(side=20, progress=progress, repeats=min(repeats, 3))
     paths = plot(rows, out_dir)
     timing = grid_box_timing(repeats=repeats, progress=progress)
     timing["family_20_cams_s"] = next(r["wall_s_median"] for r in family if r["cams"] == 20)

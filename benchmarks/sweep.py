@@ -34,7 +34,7 @@ TARGETS = {"sweep_over_solve_loop": 1.20, "workers_2_over_in_process": 0.75, "da
 LOOP_SAMPLES = 100               # variants of the grid solved one by one for the baseline
 LOOM_GRID = ("amplitude_limit_mm=0.05:0.2:{n}", "sigma_H_limit_MPa=600:1000:{n}")
 CAM_GRID = ("a_mm=20:30:{n}", "h_mm=0:3:{n}")
-CAM_REPEATS_MAX = 3               # a 10^4 cam sweep takes ~2 min: at most 3 runs for the median
+CAM_REPEATS_MAX = 3               # a 10^4 cam sweep takes ~10 min: at most 3 runs for the median
 DASK_CHUNKS = (100, 500, 2000)
 DASK_SIDE = 45                   # 2 025 variants per Dask sweep
 
@@ -150,9 +150,10 @@ def table(loom, cam, cam_pool, dask, dask_side=DASK_SIDE, loops=None):
 QUICK_SIDE, QUICK_DASK_SIDE = 30, 20          # --quick: 900 and 400 variants, one run each
 WARM_UP_S = 25.0                 # imports, clusters started, warm-up sweeps
 # per 10^4 variants / per run; cam: the scene certifies every answer (certify = "on"), re-measured
-# with the first-order certificate (--quick on a shared 2-core machine: 119 ms a variant in-process,
-# 196 ms one by one, 181 ms on 2 processes while other sessions ran; quick mode ~7 min in all)
-MEASURED_S = {"loom": 27.0, "cam": 1190.0, "cam_pool": 1810.0, "dask_chunk": 3.0}
+# with the second-order certificate (--quick on a 2-core machine shared by six sessions, load ~5:
+# 71 ms a variant in-process, 69 ms one by one, 74 ms on 2 processes; 46 ms of CPU a variant,
+# 12.5 ms uncertified; quick mode 3 min 1 s in all, 1 min 58 s of CPU in the main process)
+MEASURED_S = {"loom": 27.0, "cam": 710.0, "cam_pool": 740.0, "dask_chunk": 3.0}
 
 
 def expected_s(repeats, quick=False) -> float:

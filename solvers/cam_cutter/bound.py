@@ -2,46 +2,59 @@
 for many (cell, node) pairs at once: the certificate's bound (`certificate.box_lower_bound`).
 
 Eq. (10) is linear in the links: R(s; H, L) = L a(s) + H b(s), a = (cos s - 1, sin s),
-b = (cos 2s - 1, sin 2s) / 2, with |a'| = |b'| = |a''| = 1, |b''| = 2. On a cell of centre (H, L)
-and half-widths (hH, hL), with Q(s) = R(s; H, L) and the move m(s) = dL a(s) + dH b(s) to
-R(s; H + dH, L + dL), |dH| <= hH, |dL| <= hL:
+b = (cos 2s - 1, sin 2s) / 2, with |a'| = |b'| = |a''| = |a'''| = 1, |b''| = 2, |b'''| = 4. On a
+cell of centre (H, L) and half-widths (hH, hL), with Q(s) = R(s; H, L) and the move
+m(s) = dL a(s) + dH b(s) to R(s; H + dH, L + dL), |dH| <= hH, |dL| <= hL:
 
-    |Q'| <= |L| + |H| =: V,   |Q''| <= |L| + 2|H| =: M,   |m| <= r (`lipschitz_radius`),   |m'| <= hL + hH.
+    |Q'| <= |L| + |H| =: V,  |Q''| <= |L| + 2|H| =: M,  |Q'''| <= |L| + 4|H| =: M3,
+    |m| <= r (`lipschitz_radius`),  |m'| <= hL + hH,  |m''| <= hL + 2 hH.
 
 Zero order (a polyline of N vertices s_j = 2 pi j / N). Every s is within pi/N of a vertex, so
 |P - Q(s)| >= |P - Q_j| - V pi / N =: lb_j, and |P - R(s; cell point)| >= min_j lb_j - r.
 
-First order (Cauchy-Schwarz |X| >= |e . X| for a unit e, and Taylor in s). Take any s0 (the
-vertex nearest P, refined by Newton on the foot condition), d0 = |P - Q(s0)|, the unit normal
-u = (P - Q(s0)) / d0 and tangent tau = Q'(s0) / |Q'(s0)|, eps_u = |u . Q'(s0)|,
-eps_t = |tau . (P - Q(s0))| (both ~0 at a foot point). For X(s) = P - Q(s) - m(s), t = s - s0:
+First order (Cauchy-Schwarz |X| >= |e . X| for a unit e, and Taylor in s with its remainder).
+Take any s0 (the vertex nearest P, refined by Newton on the foot condition; any s0 gives a bound,
+a good one a tight bound), d0 = |P - Q(s0)|, the unit vectors u = (P - Q(s0)) / d0 and n, u turned
+a right angle, eps_u = |u . Q'(s0)| (~0 at a foot point), v = |n . Q'(s0)| = sqrt(|Q'(s0)|^2 - eps_u^2),
+the signed bend q = u . Q''(s0) (negative where the curve bends away from P), and the move's own
+parts at s0, k = |u . a'(s0)| hL + |u . b'(s0)| hH >= |u . m'(s0)| and
+rt = |n . a(s0)| hL + |n . b(s0)| hH >= |n . m(s0)|. For X(s) = P - Q(s) - m(s), t = s - s0
+(n . (P - Q(s0)) = 0; a rounding residue eps_t is allowed for):
+u . (Q(s) - Q(s0)) <= eps_u |t| + q t^2/2 + M3 |t|^3/6, u . (m(s) - m(s0)) <= k |t| + (hL + 2 hH) t^2/2,
+|n . (Q(s) - Q(s0))| >= v |t| - M t^2/2 and |n . m(s)| <= rt + (hL + hH) |t|:
 
-    A:  |X| >= u . X >= d0 + g . (dH, dL) - (eps_u + hL + hH) |t| - M t^2 / 2,
-        g = -(u . b(s0), u . a(s0)): the first-order change of the distance with the links;
-    B:  |X| >= |tau . X| >= |Q'(s0)| |t| - M t^2 / 2 - eps_t - r;
+    A:  u . X >= D - (eps_u + k) |t| - (q + hL + 2 hH) t^2/2 - M3 |t|^3/6,
+        D = d0 + g . (dH, dL), g = -(u . b(s0), u . a(s0)) (u . m(s0) = -g . (dH, dL));
+    B:  |n . X| >= (v - hL - hH) |t| - M t^2/2 - eps_t - rt   (concave in |t|);
     C:  |X| >= lb_j - r on the arc of every vertex j.
 
-Let t0 be the least t with B(t) = d0 + r, and sigma the farthest (plus pi/N) that a vertex with
-lb_j < d0 + 2 r lies from s0. If t0 exists and B(sigma) >= d0 + r (B is concave: B >= d0 + r on
-[t0, sigma]), then for |t| <= t1 = min(t0, sigma) A holds, for t1 <= |t| <= sigma B gives
-|X| >= d0 + r, beyond sigma C gives |X| >= d0 + r, and since |g . (dH, dL)| = |u . m(s0)| <= r:
+D is at most top = d0 + |gH| hH + |gL| hL <= d0 + r. Let t0 be the least t with B(t) = top, and
+sigma the farthest (plus pi/N) that a vertex with lb_j < high + 2 r (high >= the nearest vertex's
+distance >= d0) lies from s0. If t0 exists and B(sigma) >= top (B concave: B >= top on [t0, sigma]),
+then for |t| <= t1 = min(t0, sigma) |X| = sqrt((u . X)^2 + (n . X)^2) >= sqrt(A+^2 + B+^2),
+for t1 <= |t| <= sigma B gives |X| >= top >= D, beyond sigma C gives |X| >= high + r >= top, so
 
-    distance(P, limaçon(H + dH, L + dL)) >= d0 + g . (dH, dL) - E,   E = (eps_u + hL + hH) t1 + M t1^2 / 2,
+    distance(P, limaçon(H + dH, L + dL)) >= d0 + g . (dH, dL) - E,
 
-affine in the move up to E, which is ~ (d0 + r) (hL + hH) / |Q'| + M (d0 + r)^2 / (2 |Q'|^2): second
-order, where the zero-order bound loses r. Where the conditions fail (two branches of the curve
-near P, as at the double point) the pair keeps the zero-order bound. Each bound is checked
-against brute force over the cell (tests/cam_cutter/test_cam_cutter_global.py).
+E the largest over a partition of [0, t1] of D - sqrt(A+^2 + B+^2) with A and B bounded on each
+piece (`_loss`). E is second order in the cell: where the curve bends away from P (q < 0) A's loss
+is at most (eps_u + k)^2 / (2 |q|); elsewhere B leaves A only |t| <~ rt / v, a loss
+~ k rt / v + q rt^2 / (2 v^2), both products of the move; the zero-order bound loses r.
+Where the conditions fail (two branches of the curve near P, as at the double point) the pair
+keeps the zero-order bound, raised by the tangent-segment one (`tangent_bound`). Each bound is
+checked against brute force over cells near and far from the optima
+(tests/cam_cutter/test_cam_cutter_global.py).
 """
 import numpy as np
 
-__all__ = ["lipschitz_radius", "cell_bounds", "POLYLINE"]
+__all__ = ["lipschitz_radius", "cell_bounds", "tangent_bound", "POLYLINE"]
 
 POLYLINE = 128          # N: the zero-order polyline; its error V pi / N only widens the window
 NEAR_ARCS = 32          # polyline arcs near a node that `_tangents` cuts finely
 SUBARCS = 16            # sub-arcs an arc: M (pi / (POLYLINE SUBARCS))^2 / 2 ~ 2e-4 mm on the paper's cam
 NEWTON_STEPS = 4
-INTERVALS = 12          # of the geometric partition of the first-order window (`_loss`)
+INTERVALS = 8           # geometric points of the partition of the first-order window (`_loss`)
+UNIFORM = 16            # and uniform ones
 ROUNDING = 1e-12        # relative: a margin for floating-point rounding in the bounds
 
 
@@ -74,7 +87,7 @@ _B = ((np.cos(2 * _GRID) - 1) / 2, np.sin(2 * _GRID) / 2)
 # |P - L a_j - H b_j|^2 = |P|^2 + features(P, H, L) @ _TERMS: one matrix product for every vertex
 _TERMS = np.array([-2 * _A[0], -2 * _A[1], -2 * _B[0], -2 * _B[1],
                    _A[0] ** 2 + _A[1] ** 2, 2 * (_A[0] * _B[0] + _A[1] * _B[1]), _B[0] ** 2 + _B[1] ** 2])
-CHUNK = 128             # pairs a block: m n k below OpenBLAS's 4 x 65536 keeps its product on one thread
+CHUNK = 256             # pairs a block: m n k below OpenBLAS's 4 x 65536 keeps its product on one thread
 
 
 def _squared(px, py, H, L):
@@ -97,30 +110,33 @@ def _run(near, j):
     return member, sigma
 
 
-def _scan(px, py, H, L, slack):
-    """Each pair's nearest vertex: lower and upper bounds on its distance [mm] (rounding allowed
-    for); the vertices nearer P than the upper bound plus `slack` [mm] ("near") in runs: the
-    nearest's run (its vertex's s [rad] and sigma [rad], `_run`) and the nearest vertex's run of the
-    rest (where there is one, else the first again); and whether the two runs hold every near vertex."""
-    low, high, s1, sigma1, s2, sigma2 = (np.empty(px.size) for _ in range(6))
-    covered = np.empty(px.size, dtype=bool)
+def _nearest(px, py, H, L):
+    """Lower and upper bounds [mm] on each pair's distance to its nearest POLYLINE vertex
+    (rounding allowed for), and the squared distances to every vertex with their rounding
+    allowance (`_squared`, a row a pair)."""
+    squared, tol = np.empty((px.size, POLYLINE)), np.empty(px.size)
     for k in range(0, px.size, CHUNK):
         part = slice(k, k + CHUNK)
-        squared, tol = _squared(px[part], py[part], H[part], L[part])
-        j = squared.argmin(axis=1)
-        least = squared[np.arange(j.size), j]
-        low[part], high[part] = np.sqrt(np.maximum(least - tol, 0.0)), np.sqrt(least + tol)
-        near = squared < ((high[part] + slack[part]) ** 2 + tol)[:, None]
-        first, sigma1[part] = _run(near, j)
-        rest = near & ~first
-        two = rest.any(axis=1)
-        j2, sigma2[part], covered[part] = j.copy(), sigma1[part], True
-        if two.any():                       # near vertices outside the first run: the second run
-            j2[two] = np.where(rest[two], squared[two], np.inf).argmin(axis=1)
-            second, sigma2[part][two] = _run(near[two], j2[two])
-            covered[part][two] = ~(rest[two] & ~second).any(axis=1)
-        s1[part], s2[part] = _GRID[j], _GRID[j2]
-    return low, high, (s1, sigma1), (s2, sigma2), covered
+        squared[part], tol[part] = _squared(px[part], py[part], H[part], L[part])
+    least = squared.min(axis=1)
+    return np.sqrt(np.maximum(least - tol, 0.0)), np.sqrt(least + tol), squared, tol
+
+
+def _scan(squared, tol, high, slack):
+    """The vertices nearer P than `high` (`_nearest`) plus `slack` [mm] ("near") in runs: the
+    nearest's run (its vertex's s [rad] and sigma [rad], `_run`) and the nearest vertex's run of the
+    rest (where there is one, else the first again); and whether the two runs hold every near vertex."""
+    j = squared.argmin(axis=1)
+    near = squared < ((high + slack) ** 2 + tol)[:, None]
+    first, sigma1 = _run(near, j)
+    rest = near & ~first
+    two = rest.any(axis=1)
+    j2, sigma2, covered = j.copy(), sigma1.copy(), np.ones(j.size, dtype=bool)
+    if two.any():                       # near vertices outside the first run: the second run
+        j2[two] = np.where(rest[two], squared[two], np.inf).argmin(axis=1)
+        second, sigma2[two] = _run(near[two], j2[two])
+        covered[two] = ~(rest[two] & ~second).any(axis=1)
+    return (_GRID[j], sigma1), (_GRID[j2], sigma2), covered
 
 
 def _tangents(px, py, H, L, reach, spacing):
@@ -170,51 +186,81 @@ def _foot(px, py, H, L, s):
     return s
 
 
-def _loss(top, slope, speed, M, offset, t1):
+def _loss(top, slope, quad, M3, speed, M, offset, t1):
     """E [mm]: over |t| <= t1, |X| >= sqrt(A+^2 + B+^2) >= D - E for every D = d0 + g . (dH, dL) <= top,
-    with A = D - slope |t| - M t^2/2 (decreasing in |t|) and B = speed |t| - M t^2/2 - offset
-    (increasing up to t1 <= t0 <= speed / M). On [t_k, t_k+1] of a geometric partition of (0, t1]
-    (t_0 = t1 2^-INTERVALS) A >= D - alpha, alpha = slope t_k+1 + M t_k+1^2/2, and B >= B(t_k) =: beta,
-    so |X| >= D - alpha + sqrt((D - alpha)^2 + beta^2) - (D - alpha), a gain that falls as D rises:
-    it is taken at D = top (or |X| >= beta where D < alpha). [0, t_0]: alpha alone."""
-    t = t1[:, None] * 2.0 ** np.arange(-INTERVALS, 1)
-    alpha = slope[:, None] * t + M[:, None] * t * t / 2
-    beta = np.maximum(speed[:, None] * t - M[:, None] * t * t / 2 - offset[:, None], 0.0)[:, :-1]
-    x = np.maximum(top[:, None] - alpha[:, 1:], 0.0)
-    gain = np.hypot(x, beta) - x
-    return np.maximum(alpha[:, 0], (alpha[:, 1:] - gain).max(axis=1))
+    with A = D - l(t), l(t) = slope |t| + quad t^2/2 + M3 |t|^3/6 (quad signed: a curve bending
+    away from P gains), and B = speed |t| - M t^2/2 - offset (concave). On [t_k, t_k+1] of a
+    partition of [0, t1] (0, geometric points t1 2^-k down from t1/2, and t1 j/UNIFORM)
+    A >= D - alpha, alpha = slope t_k+1 + max(quad t_k^2, quad t_k+1^2)/2 + M3 t_k+1^3/6 (each term
+    bounded on its own), and B >= beta, the lesser of B at the ends (concave), so
+    |X| >= D - alpha + sqrt((D - alpha)^2 + beta^2) - (D - alpha), a gain that falls as D rises:
+    it is taken at D = top (or |X| >= beta where D < alpha). The first interval starts at 0, where
+    beta = 0 and alpha >= 0: E >= 0."""
+    t = t1[:, None] * _FRACTIONS
+    lo, hi = t[:, :-1], t[:, 1:]
+    hi2 = hi * hi
+    alpha = hi * (slope[:, None] + M3[:, None] * hi2 / 6) + np.maximum(quad[:, None] * (lo * lo), quad[:, None] * hi2) / 2
+    B = t * (speed[:, None] - M[:, None] * t / 2) - offset[:, None]
+    beta = np.maximum(np.minimum(B[:, :-1], B[:, 1:]), 0.0)
+    x = np.maximum(top[:, None] - alpha, 0.0)
+    return (alpha + x - np.sqrt(x * x + beta * beta)).max(axis=1)
 
 
-def cell_bounds(px, py, H, L, hH, hL):
+_FRACTIONS = np.unique(np.r_[0.0, 2.0 ** -np.arange(INTERVALS, 0, -1), np.linspace(0.0, 1.0, UNIFORM + 1)])
+
+
+def cell_bounds(px, py, H, L, hH, hL, *, fine=True, width=None, target=np.inf):
     """Bounds on the distance [mm] from nodes (px, py) to the limaçon over cells of centre (H, L)
     and half-widths (hH, hL), one (cell, node) pair an element (arrays of one shape; see the module
     docstring). Returns (zero, d0, gH, gL, E, first): `zero` a constant bound over the cell; where
     `first`, the distance at (H + dH, L + dL) is at least min_b (d0 + gH dH + gL dL - E)[b] over the
     two runs b of arcs near the node (the last axis; one run is given twice). `zero` is at least
-    that bound's worst corner."""
+    that bound's worst corner and, with `fine`, where not `first`, `tangent_bound` (which a caller
+    may ask for later, for the pairs whose cells are still open). Given `width` (the pairs come
+    `width` a cell, cell by cell), a cell whose zero-order bound on one of its nodes reaches
+    `target` [mm] is closed: its pairs keep that bound alone (`first` False)."""
     px, py, H, L, hH, hL = (np.ravel(v).astype(float) for v in np.broadcast_arrays(px, py, H, L, hH, hL))
     r = lipschitz_radius(hH, hL)
     V, M = np.abs(L) + np.abs(H), np.abs(L) + 2 * np.abs(H)
     margin = ROUNDING * (1.0 + V)
     spacing = V * np.pi / POLYLINE
-    low, high, run1, run2, covered = _scan(px, py, H, L, 2 * r + spacing)
+    low, high, squared, tol = _nearest(px, py, H, L)
     zero = low - spacing - r - margin
-    d0, gH, gL, E, ok = (np.repeat(v[:, None], 2, axis=1) for v in _branch(px, py, H, L, hH, hL, r, M, *run1, margin))
-    two = run2[0] != run1[0]                        # a second run: its own branch (else the first twice)
-    if two.any():
-        got = _branch(*(v[two] for v in (px, py, H, L, hH, hL, r, M, *run2, margin)))
-        for whole, part in zip((d0, gH, gL, E, ok), got):
-            whole[two, 1] = part
+    d0, gH, gL, E = (np.zeros((px.size, 2)) for _ in range(4))
+    ok, covered = np.zeros((px.size, 2), dtype=bool), np.zeros(px.size, dtype=bool)
+    wanted = np.ones(px.size, dtype=bool) if width is None else \
+        np.repeat(zero.reshape(-1, width).max(axis=1) < target, width)      # cells still open
+    runs = _scan(squared[wanted], tol[wanted], high[wanted], (2 * r + spacing)[wanted])
+    covered[wanted] = runs[2]
+    # both runs' branches in one call: the first run of every wanted pair, the second where there
+    # is one (else the first stands for both)
+    one = np.flatnonzero(wanted)
+    two = runs[1][0] != runs[0][0]
+    rows = np.r_[one, one[two]]
+    got = _branch(*(v[rows] for v in (px, py, H, L, hH, hL, r, M)), np.r_[runs[0][0], runs[1][0][two]],
+                  np.r_[runs[0][1], runs[1][1][two]], margin[rows])
+    for whole, part in zip((d0, gH, gL, E, ok), got):
+        whole[one, :] = part[:one.size, None]
+        whole[one[two], 1] = part[one.size:]
     first = covered & ok.all(axis=1) & (d0[:, 0] <= high)   # beyond both runs every point is farther than high + r
     worst = (d0 - np.abs(gH) * hH[:, None] - np.abs(gL) * hL[:, None] - E).min(axis=1)
     zero = np.where(first, np.maximum(zero, worst), zero)
-    if not first.all():          # more branches near the node: the tangent-segment bound, finely
+    if fine and not first.all():          # more branches near the node: the tangent-segment bound
         other = ~first
-        reach = high[other] + 2 * r[other] + spacing[other]
-        zero[other] = np.maximum(zero[other], _tangents(px[other], py[other], H[other], L[other], reach,
-                                                                 spacing[other])
-                                 - r[other] - margin[other])
+        zero[other] = np.maximum(zero[other], tangent_bound(*(v[other] for v in (px, py, H, L, hH, hL))))
     return zero, d0, gH, gL, E, first
+
+
+def tangent_bound(px, py, H, L, hH, hL):
+    """A constant bound [mm] on the distance from nodes (px, py) to the limaçon over cells of centre
+    (H, L) and half-widths (hH, hL), one pair an element, where several branches pass near the
+    node: `_tangents` at the cell's centre, less the move r (`lipschitz_radius`)."""
+    px, py, H, L, hH, hL = (np.ravel(v).astype(float) for v in np.broadcast_arrays(px, py, H, L, hH, hL))
+    r = lipschitz_radius(hH, hL)
+    V = np.abs(L) + np.abs(H)
+    spacing = V * np.pi / POLYLINE
+    high = _nearest(px, py, H, L)[1]
+    return _tangents(px, py, H, L, high + 2 * r + spacing, spacing) - r - ROUNDING * (1.0 + V)
 
 
 def _branch(px, py, H, L, hH, hL, r, M, sj, sigma, margin):
@@ -222,19 +268,27 @@ def _branch(px, py, H, L, hH, hL, r, M, sj, sigma, margin):
     [rad] Newton's s0, then d0, gH, gL and E [mm]; `ok` where its conditions hold over the run,
     whose farthest arc ends sigma [rad] from sj."""
     s0 = _foot(px, py, H, L, sj)
-    (x, y), (vx, vy), _, a, b = _curve(s0, H, L)
+    (x, y), (vx, vy), (ax, ay), a, b = _curve(s0, H, L)
     wx, wy = px - x, py - y
     d0, speed = np.hypot(wx, wy), np.hypot(vx, vy)
     ux, uy = wx / np.where(d0 > 0, d0, 1.0), wy / np.where(d0 > 0, d0, 1.0)
+    tx, ty = -uy, ux                                     # the unit normal to u: exactly orthogonal
     eps_u = np.abs(ux * vx + uy * vy)
-    eps_t = np.abs(wx * vx + wy * vy) / np.where(speed > 0, speed, 1.0)
+    eps_t = np.abs(wx * tx + wy * ty)                     # ~0 (w is along u): rounding only
     gH, gL = -(ux * b[0] + uy * b[1]), -(ux * a[0] + uy * a[1])
+    # k >= |u . m'(s0)| and rt >= |n . m(s0)|: a' = (-a_y, a_x + 1), b' = (-2 b_y, 2 b_x + 1)
+    k = np.abs(uy * (a[0] + 1) - ux * a[1]) * hL + np.abs(uy * (2 * b[0] + 1) - 2 * ux * b[1]) * hH
+    rt = np.abs(tx * a[0] + ty * a[1]) * hL + np.abs(tx * b[0] + ty * b[1]) * hH
+    quad = ux * ax + uy * ay + hL + 2 * hH              # u . Q''(s0) + max |m''|
+    M3 = np.abs(L) + 4 * np.abs(H)                      # max |Q'''| (|a'''| = 1, |b'''| = 4)
+    top = d0 + np.abs(gH) * hH + np.abs(gL) * hL         # the largest D over the cell
     sigma = np.minimum(sigma + np.abs((s0 - sj + np.pi) % (2 * np.pi) - np.pi), 2 * np.pi)  # from s0; > pi: not ok
-    level = d0 + r                                      # B(t0) = level: M t^2/2 - |Q'| t + level + eps_t + r = 0
-    disc = speed * speed - 2 * M * (level + eps_t + r)
-    t0 = (speed - np.sqrt(np.maximum(disc, 0.0))) / M
-    B_sigma = speed * sigma - M * sigma * sigma / 2 - eps_t - r
-    ok = (d0 > 0) & (disc >= 0) & (sigma < np.pi) & ((sigma <= t0) | (B_sigma >= level))
+    pace = np.sqrt(np.maximum(speed * speed - eps_u * eps_u, 0.0)) - hL - hH   # |n . Q'(s0)| less |m'|
+    offset = eps_t + rt                                  # B(t) = pace |t| - M t^2/2 - offset
+    disc = pace * pace - 2 * M * (top + offset)          # B(t0) = top
+    t0 = (pace - np.sqrt(np.maximum(disc, 0.0))) / M
+    B_sigma = pace * sigma - M * sigma * sigma / 2 - offset
+    ok = (d0 > 0) & (pace > 0) & (disc >= 0) & (sigma < np.pi) & ((sigma <= t0) | (B_sigma >= top))
     t1 = np.where(ok, np.minimum(t0, sigma), 0.0)
-    E = _loss(d0 + np.abs(gH) * hH + np.abs(gL) * hL, eps_u + hL + hH, speed, M, eps_t + r, t1) + margin
+    E = _loss(top, eps_u + k, quad, M3, pace, M, offset, t1) + margin
     return d0, gH, gL, E, ok

@@ -8,28 +8,35 @@ the cell, each from `bound.cell_bounds` (one call for every (cell, node) pair of
 * a mixed one, the dual of a small linear program: for weights w >= 0 summing to 1,
   max_i d_i >= sum_i w_i d_i >= sum_i w_i lb_i, with lb_i a node's first-order bound (the least
   of its runs' affine bounds d0 + g . (dH, dL) - E: concave), so the sum is concave in (dH, dL)
-  and least at one of the cell's corners. The weights tried (`_mixtures`) are the vertices of the
-  dual's simplex over KEEP nodes of different gradient directions (`_diverse`): each node alone,
-  pairs that cancel one gradient component, triples that cancel both. Near the answer, whose
-  active nodes' gradients cancel, this loses only second-order terms where one node loses r.
+  and least at one of the cell's corners. The weights tried (`_dual`) are the vertices of the
+  dual's simplex over KEEP + REACH nodes: KEEP of different gradient directions, each the highest
+  at the cell's centre in its direction (`_diverse`), and the REACH highest at a corner: each node
+  alone, pairs that cancel one gradient component, triples that cancel both. On the scenes' cells
+  about their optima this is the linear program's optimum over every node (the test compares).
+  Near the answer, whose active nodes' gradients cancel, it loses only second-order terms.
 
-A cell's children are measured on its KEEP nodes first, and those still below the target on
-every node: any subset of the nodes gives a lower bound, and a child's bound is at least its
-parent's. Cells are split level by level (all of a level in one call) until every cell's bound
-is within `gap` of `upper` (an achieved deviation: the early stop) or `max_cells` cells have been
-measured.
+The costly bounds are taken only where they can close a cell: the first-order bound in cells the
+zero-order one left open, the tangent-segment bound in cells still open after the first order
+(`_measure`). The first grid is measured on every SCREEN-th node and split without a recheck (a
+coarse cell seldom closes on the rest); a cell's children are measured on its KEEP + REACH nodes
+first, and those still below the target on every node: any subset of the nodes gives a lower
+bound, and a child's bound is at least its parent's. Cells are split level by level (all of a
+level in one call) until every cell's bound is within `gap` of `upper` (an achieved deviation: the
+early stop) or `max_cells` cells have been measured.
 
 Warm start (`box_lower_bound(start=...)`, `warm_cells`): the leaves of an earlier certificate
 meeting this box (and grid cells for any part of the box they miss), each bound lowered by how far
 the nodes moved. That is a bound: the distance to a curve is 1-Lipschitz in the point, so if every
 earlier node P_j has a node P_i' of this set within m, then for every linkage
-max_i d(P_i') >= max_j d(P_j) - m (`moved_bound`). Only leaves below the target are measured again.
+max_i d(P_i') >= max_j d(P_j) - m (`moved_bound`). Only leaves below the target are measured again;
+leaves finer than the move give way to unmeasured cells as wide (`warm_cells(finest=...)`).
 """
+import functools
 from dataclasses import dataclass
 
 import numpy as np
 
-from mechopt.solvers.cam_cutter.bound import cell_bounds, lipschitz_radius
+from mechopt.solvers.cam_cutter.bound import cell_bounds, lipschitz_radius, tangent_bound
 from mechopt.solvers.cam_cutter.deviation import foot_points
 from mechopt.solvers.cam_cutter.problem import ROUND_VERTICES
 
@@ -38,6 +45,7 @@ __all__ = ["lipschitz_radius", "largest_distance", "grid_starts", "box_lower_bou
 
 KEEP = 5                # nodes a cell's bound mixes, and its children are first measured on
 SECTORS = 8             # gradient directions `_diverse` picks nodes from (SECTORS + 1 >= KEEP)
+REACH = 3               # and the nodes highest at a corner (the dual mixes both)
 SCREEN = 4              # the first cells are screened on every SCREEN-th node
 
 
@@ -100,6 +108,7 @@ def moved_bound(cells: Cells, moved) -> Cells:
     return Cells(cells.H, cells.L, cells.hH, cells.hL, cells.bound - moved)
 
 
+@functools.cache
 def _pairings(k):
     """Index arrays of the node pairs and triples of k nodes."""
     pairs = np.array([(i, j) for i in range(k) for j in range(i + 1, k)], dtype=int).reshape(-1, 2)
@@ -108,45 +117,44 @@ def _pairings(k):
     return pairs, triples
 
 
-def _mixtures(gH, gL):
-    """Weights w (rows of the simplex over each cell's K nodes) at which the dual of
+def _dual(gH, gL, corner):
+    """The best of the dual's mixtures w (on the simplex over each cell's K nodes) at which
     min over the cell of max_i (a_i + g_i . d) can be largest: each node alone, each pair mixed to
-    cancel one gradient component, each triple mixed to cancel both. Shape (cells, candidates, K)."""
+    cancel one gradient component, each triple mixed to cancel both; each valued at its least
+    corner, min_k sum_i w_i corner[i, k] (`corner`: cell, node, corner [mm]). Per cell [mm]."""
     count, k = gH.shape
     pairs, triples = _pairings(k)
-    rows = np.arange(count)[:, None]
-    parts = [np.broadcast_to(np.eye(k), (count, k, k))]
+    best = corner.min(axis=-1).max(axis=1)                       # each node alone
+    ci, cj = corner[:, pairs[:, 0]], corner[:, pairs[:, 1]]
     for g in (gH, gL):                    # pairs: t g_i + (1 - t) g_j = 0 in one component
         gi, gj = g[:, pairs[:, 0]], g[:, pairs[:, 1]]
         t = np.clip(np.divide(gj, gj - gi, out=np.zeros_like(gi), where=np.abs(gj - gi) > 1e-300), 0.0, 1.0)
-        w = np.zeros((count, len(pairs), k))
-        w[rows, np.arange(len(pairs)), pairs[:, 0]] = t
-        w[rows, np.arange(len(pairs)), pairs[:, 1]] = 1.0 - t
-        parts.append(w)
+        best = np.maximum(best, (t[..., None] * ci + (1.0 - t[..., None]) * cj).min(axis=-1).max(axis=1))
     if len(triples):                      # triples: sum w = 1, sum w gH = 0, sum w gL = 0 (Cramer)
         hi, hj, hl = (gH[:, triples[:, m]] for m in range(3))
         li, lj, ll = (gL[:, triples[:, m]] for m in range(3))
-        wi, wj, wl = hj * ll - hl * lj, hl * li - hi * ll, hi * lj - hj * li
-        total = wi + wj + wl
-        ok = np.abs(total) > 1e-12 * (np.abs(wi) + np.abs(wj) + np.abs(wl) + 1e-300)
-        w3 = np.stack([wi, wj, wl], axis=-1) / np.where(ok, total, 1.0)[..., None]
-        w3 = np.where(ok[..., None] & (w3 >= 0).all(axis=-1, keepdims=True), w3, 1.0 / 3)
-        w = np.zeros((count, len(triples), k))
-        for m in range(3):
-            w[rows, np.arange(len(triples)), triples[:, m]] = w3[..., m]
-        parts.append(w)
-    w = np.clip(np.concatenate(parts, axis=1), 0.0, None)
-    return w / w.sum(axis=-1, keepdims=True)          # on the simplex whatever the rounding: a bound
+        w = np.stack([hj * ll - hl * lj, hl * li - hi * ll, hi * lj - hj * li], axis=-1)
+        total = w.sum(axis=-1)
+        ok = np.abs(total) > 1e-12 * (np.abs(w).sum(axis=-1) + 1e-300)
+        w = np.clip(w / np.where(ok, total, 1.0)[..., None], 0.0, None)
+        w = np.where(ok[..., None], w, 1.0)
+        w /= w.sum(axis=-1, keepdims=True)             # on the simplex whatever the rounding: a bound
+        mixed = sum(w[..., m, None] * corner[:, triples[:, m]] for m in range(3))
+        best = np.maximum(best, mixed.min(axis=-1).max(axis=1))
+    return best
 
 
 CORNERS = np.array([(-1, -1), (-1, 1), (1, -1), (1, 1)], dtype=float)
 
 
-def warm_cells(leaves: Cells, moved, box, grid=(16, 8)) -> Cells:
+def warm_cells(leaves: Cells, moved, box, grid=(16, 8), finest=0.0) -> Cells:
     """The start of a warm certificate over `box`: the earlier `leaves` that meet the box, each
     bound less `moved` [mm] (`moved_bound`), and the grid cells of the box that the leaves' box does
-    not hold, unmeasured. Together they cover the box (cells may overlap: a point's bound is the
-    least of its cells' either way)."""
+    not hold, unmeasured. Leaves narrower than `finest` [mm] (the fine ones about the earlier
+    answer, which a move of the path makes stale) give way to the unmeasured cells `finest` wide
+    of a lattice that meet them, so the partition is reused down to the scale the move leaves valid.
+    Together they cover the box (cells may overlap: a point's bound is the least of its cells'
+    either way)."""
     H_lo, H_hi, L_lo, L_hi = box
     meet = ((leaves.H + leaves.hH > H_lo) & (leaves.H - leaves.hH < H_hi)
             & (leaves.L + leaves.hL > L_lo) & (leaves.L - leaves.hL < L_hi))
@@ -157,7 +165,26 @@ def warm_cells(leaves: Cells, moved, box, grid=(16, 8)) -> Cells:
     outside = ((HH - hH < old[0]) | (HH + hH > old[1]) | (LL - hL < old[2]) | (LL + hL > old[3])).ravel()
     fresh = Cells(HH.ravel()[outside], LL.ravel()[outside], np.full(outside.sum(), hH), np.full(outside.sum(), hL),
                   np.full(outside.sum(), -np.inf))
-    return _joined(moved_bound(leaves.take(meet), moved), fresh)
+    kept = leaves.take(meet)
+    small = np.maximum(kept.hH, kept.hL) < finest
+    if small.any():
+        fine = kept.take(small)
+        # a lattice of cells `finest` wide (the leaves' aspect), those meeting a fine leaf: every
+        # lattice index from a leaf's lowest to its highest, a side, so they cover every fine leaf
+        aspect = np.array([fine.hH[0], fine.hL[0]]) / max(fine.hH[0], fine.hL[0])
+        width = 2 * finest * aspect
+        origin = np.array([(fine.H - fine.hH).min(), (fine.L - fine.hL).min()])
+        index = [np.floor((np.stack([c - h, c + h]) - o) / w).astype(int)            # (lo, hi) a leaf
+                 for c, h, o, w in ((fine.H, fine.hH, origin[0], width[0]), (fine.L, fine.hL, origin[1], width[1]))]
+        steps = [range(int((i[1] - i[0]).max()) + 1) for i in index]
+        ij = np.unique(np.concatenate([np.column_stack([np.minimum(index[0][0] + a, index[0][1]),
+                                                        np.minimum(index[1][0] + b, index[1][1])])
+                                       for a in steps[0] for b in steps[1]]), axis=0)
+        centre = origin + (ij + 0.5) * width
+        fresh = _joined(fresh, Cells(centre[:, 0], centre[:, 1], np.full(len(ij), width[0] / 2),
+                                     np.full(len(ij), width[1] / 2), np.full(len(ij), -np.inf)))
+        kept = kept.take(~small)
+    return _joined(moved_bound(kept, moved), fresh)
 
 
 def _diverse(value, gH, gL):
@@ -167,42 +194,65 @@ def _diverse(value, gH, gL):
     crowd one peak of the path."""
     sector = np.where((gH == 0) & (gL == 0), SECTORS,
                       ((np.arctan2(gL, gH) + np.pi) * (SECTORS / (2 * np.pi))).astype(int) % SECTORS)
-    best = np.stack([np.where(sector == k, value, -np.inf).argmax(axis=1) for k in range(SECTORS + 1)], axis=1)
+    best = np.where(sector[..., None] == np.arange(SECTORS + 1), value[..., None], -np.inf).argmax(axis=1)
     filled = np.take_along_axis(sector, best, axis=1) == np.arange(SECTORS + 1)     # the sector has a node
     best_value = np.where(filled, np.take_along_axis(value, best, axis=1), -np.inf)
     chosen = np.take_along_axis(best, np.argsort(best_value, axis=1)[:, ::-1], axis=1)[:, :KEEP]
-    by_value = np.argsort(value, axis=1)[:, ::-1][:, :KEEP]
+    by_value = np.argsort(value, axis=1)[:, ::-1]
+    by_value = by_value[:, np.arange(KEEP) % by_value.shape[1]]          # fewer nodes than KEEP: repeats
     return np.where(np.arange(KEEP) < filled.sum(axis=1)[:, None], chosen, by_value)
 
 
-def _measure(px, py, cells: Cells, nodes):
+def _measure(px, py, cells: Cells, nodes, target=np.inf):
     """Bounds [mm] of `cells` measured on the node indices `nodes` (a row a cell), and each cell's
-    KEEP most promising nodes (highest bound at their best corner). The bound: for any weights w
-    on the simplex, max_i d_i >= sum_i w_i d_i >= sum_i w_i lb_i, lb_i a node's first-order bound
-    (the least of its runs' affine bounds: concave in (dH, dL)), so the sum is concave and least at
-    a corner; the largest over `_mixtures` of that least corner (the linear program's dual)."""
+    most promising nodes (`_diverse`). The bound: for any weights w on the simplex,
+    max_i d_i >= sum_i w_i d_i >= sum_i w_i lb_i, lb_i a node's first-order bound (the least of its
+    runs' affine bounds: concave in (dH, dL)), so the sum is concave and least at a corner; the
+    largest over `_dual` of that least corner (the linear program's dual). The costly
+    tangent-segment bound (`bound.tangent_bound`) of the pairs with no first-order bound is taken
+    only in the cells still below `target` without it (any bound of a node is a bound)."""
     count, width = nodes.shape
-    zero, d0, gH, gL, E, first = cell_bounds(
-        px[nodes.ravel()], py[nodes.ravel()], *(np.repeat(v, width) for v in (cells.H, cells.L, cells.hH, cells.hL)))
+    pairs = (px[nodes.ravel()], py[nodes.ravel()], *(np.repeat(v, width) for v in (cells.H, cells.L, cells.hH, cells.hL)))
+    zero, d0, gH, gL, E, first = cell_bounds(*pairs, fine=False, width=width, target=target)
+    bound = np.maximum(cells.bound, zero.reshape(count, width).max(axis=1))
+    pick = np.zeros((count, KEEP + REACH), dtype=int)               # a closed cell's: never used
+    for stage in range(2):
+        rows = np.flatnonzero(bound < target)
+        if stage:               # the tangent-segment bound, in the cells the others left open
+            fine = np.zeros((count, width), dtype=bool)
+            fine[rows] = ~first.reshape(count, width)[rows]
+            rows = np.flatnonzero(fine.any(axis=1))
+            if rows.size == 0:
+                break
+            fine = fine.ravel()
+            zero[fine] = np.maximum(zero[fine], tangent_bound(*(v[fine] for v in pairs)))
+        part = (rows[:, None] * width + np.arange(width)).ravel()
+        bound[rows], pick[rows] = _combined(cells.take(rows), *(v[part] for v in (zero, d0, gH, gL, E, first)), width)
+    return Cells(cells.H, cells.L, cells.hH, cells.hL, bound), np.take_along_axis(nodes, pick, axis=1)
+
+
+def _combined(cells: Cells, zero, d0, gH, gL, E, first, width):
+    """`_measure`'s bound of each cell from its pairs' bounds (`bound.cell_bounds`, `width` pairs a
+    cell), and the columns of the nodes its children are screened on: the dual's (`_diverse` by
+    the bound at the centre, the corners' mean, and the REACH highest at a corner)."""
+    count = cells.H.size
     dH, dL = CORNERS[:, 0] * np.repeat(cells.hH, width)[:, None], CORNERS[:, 1] * np.repeat(cells.hL, width)[:, None]
     corner = ((d0 - E)[:, None, :] + gH[:, None, :] * dH[..., None] + gL[:, None, :] * dL[..., None]).min(axis=-1)
     corner = np.where(first[:, None], np.maximum(corner, zero[:, None]), zero[:, None]).reshape(count, width, 4)
     gH, gL = (np.where(first, g[:, 0], 0.0).reshape(count, width) for g in (gH, gL))
-    pick = _diverse(corner.max(axis=-1), gH, gL)
-    corner = np.take_along_axis(corner, pick[..., None], axis=1)
-    w = _mixtures(*(np.take_along_axis(g, pick, axis=1) for g in (gH, gL)))
-    dual = np.einsum("cmk,ckq->cmq", w, corner).min(axis=-1).max(axis=1)
-    bound = np.maximum(np.maximum(cells.bound, zero.reshape(count, width).max(axis=1)), dual)
-    return Cells(cells.H, cells.L, cells.hH, cells.hL, bound), np.take_along_axis(nodes, pick, axis=1)
+    pick = np.hstack([_diverse(corner.mean(axis=-1), gH, gL), np.argsort(corner.max(axis=-1), axis=1)[:, np.arange(-REACH, 0) % width]])
+    dual = _dual(*(np.take_along_axis(g, pick, axis=1) for g in (gH, gL)), np.take_along_axis(corner, pick[..., None], axis=1))
+    return np.maximum(np.maximum(cells.bound, zero.reshape(count, width).max(axis=1)), dual), pick
 
 
-def _screened(px, py, cells: Cells, nodes, target):
-    """`_measure` on the node indices `nodes` (a row a cell), then the cells still below the target
-    on every node: a few nodes close most cells."""
-    cells, top = _measure(px, py, cells, nodes)
+def _screened(px, py, cells: Cells, nodes, target, *, recheck=True):
+    """`_measure` on the node indices `nodes` (a row a cell), then (with `recheck`) the cells still
+    below the target on every node: a few nodes close most cells."""
+    cells, top = _measure(px, py, cells, nodes, target)
     still = cells.bound < target
-    if still.any():
-        again, top[still] = _measure(px, py, cells.take(still), np.tile(np.arange(px.size), (int(still.sum()), 1)))
+    if recheck and still.any():
+        again, top[still] = _measure(px, py, cells.take(still), np.tile(np.arange(px.size), (int(still.sum()), 1)),
+                                     target)
         cells.bound[still] = again.bound
     return cells, top
 
@@ -234,10 +284,12 @@ def box_lower_bound(px, py, box, upper, *, gap, max_cells=20_000, grid=(16, 8), 
         HH, LL = np.meshgrid(H, L, indexing="ij")
         start = Cells(HH.ravel(), LL.ravel(), np.full(HH.size, hH), np.full(HH.size, hL), np.full(HH.size, -np.inf))
     low = start.bound < target               # the first cells (a grid, or earlier leaves below the target)
+    # the first grid on every SCREEN-th node, split without a recheck: a coarse cell seldom closes
+    # on the rest, and its children are screened on its best nodes, then rechecked
     fresh, top = _screened(px, py, start.take(low), np.tile(np.arange(0, px.size, SCREEN), (int(low.sum()), 1)),
-                           target)
+                           target, recheck=warm)
     cells = _joined(start.take(~low), fresh)
-    top = np.vstack([np.zeros((int((~low).sum()), KEEP), dtype=int), top])     # closed cells: never split
+    top = np.vstack([np.zeros((int((~low).sum()), KEEP + REACH), dtype=int), top])     # closed cells: never split
     measured = int(low.sum())
     while True:
         open_ = np.flatnonzero(cells.bound < target)

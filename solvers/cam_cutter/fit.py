@@ -180,16 +180,17 @@ def minimax(task: LinkageFit | ProfileFit, *, count: Nodes = 1000, slots: Annota
     the answer's CERTIFY_WORST highest peaks). It stops as soon as every cell is within
     `gap_per_size` cam sizes (1e-3 mm on the paper's cam) of the answer; a gap above that after
     `max_cells` cells is not certified: a SOLVED or INFEASIBLE answer is then INACCURATE ("not
-    certified global"). Inside a sweep it starts from the previous variant's cells (`_certify`).
-    `diagnostics`: `global_gap_mm` (the answer's deviation less the bound), `global_lower_bound_mm`,
-    `global_cells` (cells measured), `global_certified`, `global_warm_started`,
-    `global_warm_moved_mm` (how far the earlier nodes were from this path's).
+    certified global"). Inside a sweep it starts from the previous variant's cells where the path
+    moved little (`_certify`). `diagnostics`: `global_gap_mm` (the answer's deviation less the
+    bound), `global_lower_bound_mm`, `global_cells` (cells measured), `global_certified`,
+    `global_warm_started`, `global_warm_moved_mm` (how far the earlier nodes were from this
+    path's), `global_warm_reused_cells`, `global_warm_coarsened_mm`.
 
     `certify`: "on" certifies every answer; "off" none; "auto" (the default) a cam of any shape
     (`ProfileFit`: several basins, searched from several starts) and not the cardioid
     (`LinkageFit`: one start from its matched linkage, exact for h = 0), whose answer then says
     `global_certified` False, "not checked" (`cam-cutter/minimax` asks "on": the certificate
-    costs some ten of its solves, `mechopt bench cam-cutter`).
+    costs some four of its solves, `mechopt bench cam-cutter`).
     """
     _check_count(count)
     check_settings(minimax, slots=slots, max_rounds=max_rounds, nlp=nlp, widen=widen, starts=starts, certify=certify,
@@ -284,10 +285,11 @@ def _best_of(px, py, task, box, seeds, count, slots, max_rounds, nlp):
     return best | {"starts": len(seeds), "build_s": build_s, "back_ends": back_ends}
 
 
-CERTIFY_SPREAD = 48     # nodes spread over the path in the bound's node set
+CERTIFY_SPREAD = 24     # nodes spread over the path in the bound's node set (48 cost 10-20 % more, the same verdicts)
 CERTIFY_WORST = 16      # plus the answer's highest peaks, where the bound is tight
 WARM_KEY = "cam_cutter.minimax.certificate"
-WARM_MOVE_PER_GAP = 10.0   # a warm start only when the nodes moved at most this many gap targets
+WARM_COARSEN = 2.0         # earlier leaves narrower than this many node moves give way to cells that wide
+WARM_KEEP_PER_GAP = 10.0   # a warm start only when the nodes moved at most this many gap targets
 
 
 def _certify(task, px, py, box, H, L, deviation, gap_per_size, max_cells):
@@ -296,15 +298,20 @@ def _certify(task, px, py, box, H, L, deviation, gap_per_size, max_cells):
     gap_per_size cam sizes. Node coordinates in mm. In a sweep (`kit.warm`) it starts from the
     previous variant's leaves (`certificate.warm_cells`), their bounds less how far its nodes are
     from this path's nearest nodes, which join this node set; only where that move is at most
-    WARM_MOVE_PER_GAP gap targets (else the many fine leaves near the answer, all below the lowered
-    target, cost more than the cold start's few coarse cells)."""
+    WARM_KEEP_PER_GAP gap targets. The leaves narrower than WARM_COARSEN times that move (the fine
+    ones about the earlier answer, all below the lowered target) give way to unmeasured cells that
+    wide over their span (`warm_cells`). A farther move starts cold: the earlier partition alone
+    (every cell measured again on this path's nodes, its fine leaves coarsened to the move) cost
+    more than the cold grid on a what-if map of the cardioid (`mechopt bench cam-cutter`: 8 x 8,
+    neighbours 0.1 mm apart, 24 821 cells against 16 120). `global_warm_reused_cells` counts the
+    cells a warm start starts from, `global_warm_coarsened_mm` is that width."""
     dist = foot_points(px, py, H, L, vertices=ROUND_VERTICES)[0]
     padded = np.r_[-np.inf, dist, -np.inf]        # the answer's peaks, one node each: its active nodes
     peaks = np.flatnonzero((dist >= padded[:-2]) & (dist >= padded[2:]))
     worst = peaks[np.argsort(dist[peaks])[::-1][:CERTIFY_WORST]]
     nodes = np.unique(np.r_[np.linspace(0, px.size - 1, CERTIFY_SPREAD).round().astype(int), worst])
     target = gap_per_size * task.size_mm
-    store, start, moved = warm.store(), None, 0.0
+    store, start, moved, reused = warm.store(), None, 0.0, 0
     before = store.get(WARM_KEY) if store is not None else None
     if before is not None:
         # each earlier node's nearest node of this path joins the set: the earlier bounds, less the
@@ -312,16 +319,18 @@ def _certify(task, px, py, box, H, L, deviation, gap_per_size, max_cells):
         apart = np.hypot(before["px"][:, None] - px[None, :], before["py"][:, None] - py[None, :])
         nearest = apart.argmin(axis=1)
         moved = float(apart[np.arange(nearest.size), nearest].max())
-        if moved <= WARM_MOVE_PER_GAP * target:        # farther: its fine leaves cost more than a cold start
+        if moved <= WARM_KEEP_PER_GAP * target:       # farther: a cold start costs less (module docstring)
             nodes = np.union1d(nodes, nearest)
-            start = warm_cells(before["leaves"], moved, box)
+            start = warm_cells(before["leaves"], moved, box, finest=WARM_COARSEN * moved)
+            reused = int(start.H.size)
     got = box_lower_bound(px[nodes], py[nodes], box, deviation, gap=target, max_cells=max_cells, start=start)
     if store is not None:
         store[WARM_KEY] = {"px": px[nodes], "py": py[nodes], "leaves": got.leaves}
     gap = max(deviation - got.lower, 0.0)
     return {"global_lower_bound_mm": got.lower, "global_gap_mm": gap, "global_cells": got.cells,
             "global_certified": bool(got.complete or gap <= target), "global_gap_target_mm": target,
-            "global_warm_started": got.warm_started, "global_warm_moved_mm": moved}
+            "global_warm_started": got.warm_started, "global_warm_moved_mm": moved,
+            "global_warm_reused_cells": reused, "global_warm_coarsened_mm": WARM_COARSEN * moved if reused else 0.0}
 
 
 def _exchange_rounds(px, py, a, box, H, L, count, slots, max_rounds, nlp):

@@ -73,6 +73,37 @@ def test_each_cell_bound_is_below_the_distance_everywhere_in_its_cell(scene, H0,
         assert least - bound < 5e-4
 
 
+# the second-order window (signed curvature, the move's own normal and tangential parts): cells at
+# each optimum where it closes the certificate, one far from it, and a coarse one across it
+DENSE_CELLS = [("cam-cutter/minimax", 59.6018, 47.4275, 0.0, 0.05), ("cam-cutter/minimax", 59.6018, 47.4275, 0.0, 0.1),
+               ("cam-cutter/minimax", 59.6018, 47.4275, 3.0, 0.5), ("cam-cutter/minimax", 59.6018, 47.4275, 0.0, 0.8),
+               ("cam-cutter/other-profile", -13.5629, 52.1528, 0.0, 0.05)]
+
+
+@pytest.mark.parametrize("scene, H0, L0, away, h", DENSE_CELLS)
+def test_the_bound_is_below_brute_force_on_a_dense_grid_of_its_cell(scene, H0, L0, away, h):
+    """Brute force on a 13 x 13 grid of (H, L) over the cell (corners included): every node's
+    dense distance is at least each of its bounds, and the cell's bound (`_measure`, on every node)
+    is at most the least largest distance; at the cardioid's optimum it is within the certificate's
+    1e-3 mm target already at h = 0.05 mm (the window of the first-order bound second order in h)."""
+    task, _ = registry.find(scene).build()
+    px, py = task.path_point(np.linspace(task.t_start_rad, task.t_end_rad, 60))
+    H, L, hH, hL = H0 + away, L0 - 0.7 * away, h, 2 * h
+    zero, d0, gH, gL, E, first = cell_bounds(px, py, H, L, hH, hL)
+    cells = Cells(*(np.array([v]) for v in (H, L, hH, hL, -np.inf)))
+    bound = _measure(px, py, cells, np.arange(px.size)[None, :])[0].bound[0]
+    least = np.inf
+    for dH in np.linspace(-hH, hH, 13):
+        for dL in np.linspace(-hL, hL, 13):
+            true = _dense_distance(px, py, H + dH, L + dL)
+            affine = np.where(first, (d0 + gH * dH + gL * dL - E).min(axis=1), -np.inf)
+            assert np.all(true >= zero - 1e-12) and np.all(true >= affine - 1e-12)
+            least = min(least, true.max())
+    assert bound <= least + 1e-12
+    if scene == "cam-cutter/minimax" and away == 0.0 and h <= 0.05:
+        assert least - bound < 1e-3
+
+
 def test_the_first_order_bound_holds_at_the_double_point_node():
     # the cardioid's last node sits by the limaçon's double point, where its two branches cross;
     # it is one of the answer's active nodes, so the bound must be first order there
@@ -99,6 +130,23 @@ def test_a_warm_start_is_a_bound_for_the_moved_nodes():
     assert again.warm_started and again.cells < first.cells
     grid = [(H, L) for H in np.linspace(58.0, 61.0, 13) for L in np.linspace(46.0, 49.0, 13)]
     assert again.lower <= min(_dense_distance(px + shift, py, H, L).max() for H, L in grid)
+
+
+def test_a_warm_start_coarsened_to_the_move_is_still_a_bound():
+    """Leaves finer than `finest` give way to unmeasured cells as wide over their span: fewer
+    cells to start from, and the bound still below brute force over the moved path's box."""
+    task, _ = registry.find("cam-cutter/minimax").build()
+    box = (58.0, 61.0, 46.0, 49.0)
+    px, py = task.path_point(np.linspace(0.0, task.t_end_rad, 30))
+    first = box_lower_bound(px, py, box, upper=0.0609, gap=1e-3)
+    shift = 0.03                                       # 30 gap targets: the fine leaves are stale
+    start = warm_cells(first.leaves, shift, box, finest=0.1)
+    fine = np.maximum(first.leaves.hH, first.leaves.hL) < 0.1
+    assert fine.any() and start.H.size < first.leaves.H.size
+    assert np.all(np.isinf(start.bound[-(start.H.size - int((~fine).sum())):]))      # the new cells: unmeasured
+    again = box_lower_bound(px + shift, py, box, upper=0.0609, gap=1e-3, start=start)
+    grid = [(H, L) for H in np.linspace(58.0, 61.0, 13) for L in np.linspace(46.0, 49.0, 13)]
+    assert again.warm_started and again.lower <= min(_dense_distance(px + shift, py, H, L).max() for H, L in grid)
 
 
 def test_a_sweep_warm_starts_the_certificate_and_keeps_the_answer():
