@@ -38,11 +38,11 @@ from scipy.optimize import linprog
 from mechopt import registry
 from mechopt.figures import save_figure
 from mechopt.kit.cache import clear as clear_caches
-from mechopt.models.loom import Cyclogram
-from mechopt.solvers.loom import HeldLP, build_event_time_lp, incidence, max_machine_speed, plan_cyclogram
-from mechopt.solvers.loom import plan as cyclogram_lp
-from mechopt.solvers.loom.graph import NO_BACK_ARCS, BackArcs, HeldSpan, Levels, a_path, tight_arcs
-from mechopt.solvers.loom.speed import SpeedGraph, speed_coeffs_deg_per_rpm
+from mechopt.models.cyclogram import Cyclogram
+from mechopt.solvers.cyclogram import HeldLP, build_event_time_lp, incidence, max_machine_speed, plan_cyclogram
+from mechopt.solvers.cyclogram import plan as cyclogram_lp
+from mechopt.solvers.cyclogram.graph import NO_BACK_ARCS, BackArcs, HeldSpan, Levels, a_path, tight_arcs
+from mechopt.solvers.cyclogram.speed import SpeedGraph, speed_coeffs_deg_per_rpm
 
 __all__ = ["TARGETS", "cli", "graph_targets", "layered", "machine", "machine_speed", "random_dag", "scale",
            "sigma_what_if", "speed_verdicts", "what_if"]

@@ -41,8 +41,8 @@ from mechopt.kit.errors import ModelError, SettingError
 from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Annotated, Interval, check_settings
 from mechopt.models.cam_laws import law as library_law
-from mechopt.models.loom import Cyclogram
-from mechopt.solvers.loom.speed import max_machine_speed
+from mechopt.models.cyclogram import Cyclogram
+from mechopt.solvers.cyclogram.speed import max_machine_speed
 from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
 from mechopt.solvers.stop_impact.lever_box import LeverBox, takes_box
 from mechopt.solvers.stop_impact.synthesis import box_values, law_of, linear_lever, synthesise_law

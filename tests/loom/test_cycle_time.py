@@ -11,9 +11,9 @@ import pytest
 from mechopt import registry
 from mechopt.kit.errors import ModelError
 from mechopt.kit.result import Status
-from mechopt.models.loom import Cyclogram
+from mechopt.models.cyclogram import Cyclogram
+from mechopt.solvers.cyclogram.cycle_time import uniform_constraints
 from mechopt.solvers.loom import least_cycle_time, plan_cyclogram
-from mechopt.solvers.loom.cycle_time import uniform_constraints
 
 
 def op(x, y, d, k=0, unit="min_ms"):

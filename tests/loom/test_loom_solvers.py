@@ -15,7 +15,7 @@ from mechopt.benchmarks.loom import layered
 from mechopt.kit.cache import clear as clear_caches
 from mechopt.kit.errors import SolverError
 from mechopt.kit.result import Status
-from mechopt.models.loom import Cyclogram
+from mechopt.models.cyclogram import Cyclogram
 from mechopt.solvers.loom import plan as cyclogram_lp
 from mechopt.solvers.loom import plan_cyclogram
 

@@ -13,7 +13,7 @@ from scipy.optimize import brentq
 from mechopt import registry
 from mechopt.kit.errors import ModelError
 from mechopt.kit.result import Status
-from mechopt.models.loom import Cyclogram
+from mechopt.models.cyclogram import Cyclogram
 from mechopt.solvers.loom import max_machine_speed, plan_cyclogram, plan_motions
 
 NO_OVERLAP_STROKE_DEG = (360.0 - 150.0 - 100.0) / 2      # 55 deg (source, part 1)

@@ -8,7 +8,7 @@ import math
 import pytest
 
 from mechopt.kit.result import Status
-from mechopt.models.loom import Cyclogram
+from mechopt.models.cyclogram import Cyclogram
 from mechopt.solvers.loom import max_machine_speed
 
 STROKE_M = 0.050            # the die's stroke (source, part 1)
