@@ -72,7 +72,7 @@ def test_no_model_or_solver_opens_a_file():
 def test_the_rule_is_checked_on_the_code_it_names():
     # the test above would pass on an empty tree: make sure it reads the real folders
     assert len(list((ROOT / "models").glob("*.py"))) >= 5 and len(list((ROOT / "solvers").rglob("*.py"))) >= 10
-    assert "mechopt.kit.result" in imports_of(ROOT / "solvers" / "loom" / "plan.py")
+    assert "mechopt.kit.result" in imports_of(ROOT / "solvers" / "cyclogram" / "plan.py")
 
 
 def test_no_package_folder_at_the_root_shadows_the_installed_one():
