@@ -21,16 +21,17 @@ from typing import TYPE_CHECKING
 from mechopt.kit.lazy import lazy_names
 
 if TYPE_CHECKING:       # for readers and the docs; at run time each name imports its module when used
+    from mechopt.solvers.cyclogram.conflicts import conflict_chain, positive_cycle
     from mechopt.solvers.cyclogram.cycle_time import least_cycle_time
     from mechopt.solvers.cyclogram.event_time import HeldLP, build_event_time_lp, incidence
     from mechopt.solvers.cyclogram.motions import plan_motions
-    from mechopt.solvers.cyclogram.plan import conflict_chain, plan_cyclogram, positive_cycle
+    from mechopt.solvers.cyclogram.plan import plan_cyclogram
     from mechopt.solvers.cyclogram.speed import max_machine_speed
 
 # a plan needs neither the speed LP nor cvxpy's LP: each imports when used
 __getattr__, __dir__ = lazy_names(__name__, {
     "cycle_time": ["least_cycle_time"], "event_time": ["HeldLP", "build_event_time_lp", "incidence"],
-    "motions": ["plan_motions"], "plan": ["conflict_chain", "plan_cyclogram", "positive_cycle"],
+    "motions": ["plan_motions"], "plan": ["plan_cyclogram"], "conflicts": ["conflict_chain", "positive_cycle"],
     "speed": ["max_machine_speed"]})
 
 __all__ = ["HeldLP", "build_event_time_lp", "conflict_chain", "incidence", "least_cycle_time", "max_machine_speed",

@@ -36,9 +36,10 @@ from scipy.sparse.csgraph import connected_components
 from mechopt.kit.errors import NAMED, ModelError, some_of
 from mechopt.kit.result import Clock, Result, Status, from_cvxpy
 from mechopt.kit.settings import check_settings
-from mechopt.models.cyclogram import Cyclogram, time_floor_deg
+from mechopt.models.cyclogram import Cyclogram
+from mechopt.models.cyclogram_bounds import time_floor_deg
+from mechopt.solvers.cyclogram.certify import certified
 from mechopt.solvers.cyclogram.graph import ROUND_OFF, a_path, level_segments, topological_levels
-from mechopt.solvers.cyclogram.plan import certified
 
 MAX_STEPS = 10_000           # Dinkelbach steps (each one Bellman-Ford pass): LIMIT past it
 FLOAT_MAX_EVENTS = 500       # floats by a max-plus Floyd-Warshall (n^3) for networks up to this many events

@@ -7,7 +7,7 @@ structure, so a longest-path pass is one numpy reduce per level (no Python loop 
 with back arcs, Bellman-Ford runs in rounds: a DAG pass, then the back arcs relaxed. A longest
 simple path uses each back arc at most once, so len(back) + 1 rounds settle every distance
 unless a positive cycle exists: still improving after them is the proof of one (the cycle is
-then named by `plan.positive_cycle` on the labelled constraints).
+then named by `conflicts.positive_cycle` on the labelled constraints).
 
 Why numpy over levels, and a compiled pass for large networks: on the layered 10^5-event
 network (3 x 10^5 arcs, 1000 levels) a numpy pass costs ~10 us of Python per level and call,

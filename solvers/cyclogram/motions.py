@@ -26,7 +26,8 @@ import numpy as np
 
 from mechopt.kit.errors import NAMED, ModelError, some_of
 from mechopt.kit.result import Clock, Result, Status, from_cvxpy
-from mechopt.models.cyclogram import LEAST_ANGLE, Cyclogram
+from mechopt.models.cyclogram import Cyclogram
+from mechopt.models.cyclogram_motions import LEAST_ANGLE
 from mechopt.solvers.cyclogram.event_time import incidence
 
 DUAL_TOL = 1e-7        # a constraint whose dual exceeds this binds (it stops the objective)

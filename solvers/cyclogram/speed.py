@@ -11,21 +11,14 @@ from mechopt.kit.cache import BuildCache
 from mechopt.kit.errors import NAMED, ModelError, some_of
 from mechopt.kit.result import Clock, Result, Status, from_cvxpy
 from mechopt.kit.settings import Interval, check_settings
-from mechopt.models.cyclogram import MAX_RPM, Cyclogram
+from mechopt.models.cyclogram import Cyclogram
+from mechopt.models.cyclogram_tables import MAX_RPM
+from mechopt.solvers.cyclogram.conflicts import constraint_arcs, positive_cycle
 from mechopt.solvers.cyclogram.event_time import HeldLP, incidence
 from mechopt.solvers.cyclogram.graph import Levels, a_path, tight_arcs
-from mechopt.solvers.cyclogram.plan import (
-    LP_BUILDS,
-    Net,
-    back_arcs,
-    constraint_arcs,
-    dag_times,
-    graph_floats,
-    longest_distances,
-    plan_arrays,
-    positive_cycle,
-    schedule_floats,
-)
+from mechopt.solvers.cyclogram.lp_method import LP_BUILDS
+from mechopt.solvers.cyclogram.net import Net, back_arcs, plan_arrays
+from mechopt.solvers.cyclogram.schedule import graph_floats
 from mechopt.solvers.loom.repair import box_amplitude_bound, exact_amplitude_mm
 from mechopt.solvers.stop_impact.lever_box import LeverBox, takes_box
 
@@ -405,26 +398,27 @@ def _certify_speed(task, net, bounds_at, n_max, tol):
     return ""
 
 
+def _passes(net, sg=None):
+    """The longest-path passes over the operations and the back arcs without the machine cycle
+    (windows, syncs): `sg`'s (a SpeedGraph) when given, else built (Levels: once per structure)."""
+    if sg is not None:
+        return sg.levels, sg.back
+    return Levels.of(len(net.names), net.tails, net.heads), back_arcs(net, with_cycle=False)[0]
+
+
 def _closed_without_the_cycle(net, lb_above, sg=None) -> bool:
     """Whether the bounds just above the highest speed hold a positive cycle of operations, windows
     and syncs alone: then a window, not the machine's cycle, limits the speed, and a longer cycle
     gives none (dn/dcycle = 0; the critical chain's slope is dn/dwindow)."""
-    levels, back = (sg.levels, sg.back) if sg else (Levels.of(len(net.names), net.tails, net.heads),
-                                                    back_arcs(net, with_cycle=False)[0])
+    levels, back = _passes(net, sg)
     return bool(len(back)) and bool(np.all(np.isfinite(lb_above))) and levels.has_positive_cycle(lb_above, back)
 
 
 def _speed_report(task, net, lb, why, n_max, tol, sg=None):
     """Event times at max speed (earliest start), exact readings, and which constraints limit it
-    (with `sg`, a SpeedGraph: times and floats by its numpy passes)."""
-    first = net.names[net.first]
-    if sg is not None:
-        p = sg.levels.longest_from(net.first, lb, sg.back)
-    elif task.windows or task.syncs:
-        early = longest_distances(constraint_arcs(net, lb), first)
-        p = np.array([early.get(v, 0.0) for v in net.names])
-    else:
-        p, _ = dag_times(len(net.names), net.tails, net.heads, lb, net.first, net.last, task.cycle_deg)
+    (times and floats by the longest-path passes: `sg`'s, a SpeedGraph, when given)."""
+    levels, back = _passes(net, sg)
+    p = levels.longest_from(net.first, lb, back)
     t = p[net.heads] - p[net.tails]
     values = {"max_speed_rpm": n_max, "cycle_time_ms": 60_000.0 / n_max, "span_deg": float(p[net.last] - p[net.first])}
     if task.limiting_op is not None:
@@ -442,10 +436,7 @@ def _speed_report(task, net, lb, why, n_max, tol, sg=None):
         values[f"sigma_{x}_{y}_MPa"] = float(task.stress_at_MPa(k, t[k], n_max))
     values |= task.motion_values(t, n_max)
     group = dict(task.graph.nodes(data="group"))
-    if sg is not None:
-        schedule = graph_floats(net, sg.levels, sg.back, lb, task.cycle_deg, tol * max(1.0, task.cycle_deg))
-    else:
-        schedule = schedule_floats(task, net, lb, task.cycle_deg, tol * max(1.0, task.cycle_deg))
+    schedule = graph_floats(net, levels, back, lb, task.cycle_deg, tol * max(1.0, task.cycle_deg))
     floats, critical, chain = (schedule.get(k, []) for k in ("float_deg", "critical_ops", "critical_chain"))
     limiting = []
     for k, (x, y) in enumerate(net.arcs):
@@ -514,7 +505,7 @@ class SpeedGraph:
         return [("op", int(k)) if k < m else ("back", int(k - m)) for k in arcs] + [("cycle", 0)]
 
     def _windows_cycle(self, lb):
-        """A positive cycle without the machine cycle (windows, syncs): plan.positive_cycle's own
+        """A positive cycle without the machine cycle (windows, syncs): conflicts.positive_cycle's own
         Bellman-Ford, which returns the cycle (the numpy pass only proves one exists)."""
         names, net, back = self.net.names, self.net, self.back
         arcs = [(x, y, float(lb[k]), ("op", k)) for k, (x, y) in enumerate(net.arcs)]

@@ -14,7 +14,8 @@ from mechopt.kit.cache import BuildCache
 from mechopt.kit.errors import ModelError, SettingError
 from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Interval, Tolerance
-from mechopt.models.cyclogram import Cyclogram, stress_bound_deg, stress_MPa
+from mechopt.models.cyclogram import Cyclogram
+from mechopt.models.loom_limits import stress_bound_deg, stress_MPa
 from mechopt.solvers.cyclogram.plan import plan_cyclogram
 from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
 from mechopt.solvers.stop_impact.lever_box import LeverBox

@@ -50,12 +50,14 @@ MECHANISMS = (
               (("press", "press/kd2322"), ("press-design", "press/flywheel-design"))),
     # the engine of any cyclic machine; its scenes keep their loom/ ids (cases/loom) for one release
     Mechanism("cyclogram", "Cyclogram of a cyclic machine (paper 004's network)",
-              ("mechopt.models.cyclogram", "mechopt.models.cyclogram_motions"), "mechopt.solvers.cyclogram",
+              ("mechopt.models.cyclogram", "mechopt.models.cyclogram_network", "mechopt.models.cyclogram_views",
+               "mechopt.models.cyclogram_bounds", "mechopt.models.cyclogram_tables", "mechopt.models.cyclogram_motions"),
+              "mechopt.solvers.cyclogram",
               (), "mechopt.benchmarks.loom", (("cyclogram", "loom/packaging"),), cases="loom"),
     # the STB loom, the cyclogram's case: its own limits and solvers (models/loom*.py also keep the
     # cyclogram's old paths for one release)
     Mechanism("loom", "STB loom: the cyclogram's case (paper 004)",
-              ("mechopt.models.loom", "mechopt.models.loom_motions"), "mechopt.solvers.loom",
+              ("mechopt.models.loom_limits", "mechopt.models.loom", "mechopt.models.loom_motions"), "mechopt.solvers.loom",
               ("mechopt.figures.loom",), "mechopt.benchmarks.loom", (("loom", "loom/group1"),)),
     Mechanism("stop-impact", "Lift lever at its stop (paper 004)",
               ("mechopt.models.stop_impact", "mechopt.models.cam_follower", "mechopt.models.cam_shape",

@@ -12,8 +12,9 @@ from mechopt import registry
 from mechopt.kit.errors import SettingError
 from mechopt.kit.result import Status
 from mechopt.models.cyclogram import Cyclogram
+from mechopt.solvers.cyclogram.certify import certify
+from mechopt.solvers.cyclogram.conflicts import positive_cycle
 from mechopt.solvers.cyclogram.graph import BackArcs, Levels, PositiveCycle
-from mechopt.solvers.cyclogram.plan import certify, positive_cycle
 from mechopt.solvers.loom import plan_cyclogram, repair_cyclogram
 
 
@@ -125,7 +126,7 @@ def test_a_timing_table_past_ten_thousand_operations_reports_arrays_and_agrees_w
     arrays (no p_* / t_* values, float_deg a note), consistent with the span, and the LP beside
     it (check = true) gives the same span."""
     from mechopt.benchmarks.loom import layered
-    from mechopt.solvers.cyclogram.plan import PER_NAME_MAX_OPS
+    from mechopt.solvers.cyclogram.net import PER_NAME_MAX_OPS
     n = 4_000
     tails, heads, w = layered(n)
     assert len(tails) > PER_NAME_MAX_OPS
@@ -232,7 +233,7 @@ def test_a_one_limit_what_if_is_solved_and_certified_by_the_held_graph():
     for the changed task, certified (times feasible, a tight chain of the same value); a window
     the changed bounds cannot meet is INFEASIBLE; a wrong bound vector is not certified as another's."""
     from mechopt.solvers.cyclogram.graph import HeldSpan
-    from mechopt.solvers.cyclogram.plan import Net, back_arcs
+    from mechopt.solvers.cyclogram.net import Net, back_arcs
     task = registry.find("loom/group1").build()[0]
     net = Net(task, "exact")
     held = HeldSpan(len(net.names), net.tails, net.heads, net.first, net.last, back_arcs(net, with_cycle=False)[0])

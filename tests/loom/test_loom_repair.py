@@ -21,7 +21,7 @@ import mechopt.solvers.loom.repair as loom_solver
 from mechopt import clear_caches, registry
 from mechopt.kit.errors import ModelError, SceneError
 from mechopt.kit.result import Status
-from mechopt.models.cyclogram import lever_stop
+from mechopt.models.loom_limits import lever_stop
 from mechopt.solvers.loom import plan_cyclogram, repair_cyclogram
 from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
 

@@ -18,7 +18,8 @@ import mechopt.solvers.loom.repair as loom_solver
 from mechopt import clear_caches, registry
 from mechopt.kit.errors import ModelError
 from mechopt.kit.result import Status
-from mechopt.models.cyclogram import Cyclogram, lever_stop
+from mechopt.models.cyclogram import Cyclogram
+from mechopt.models.loom_limits import lever_stop
 from mechopt.solvers.loom import exact_amplitude_bound, max_machine_speed, plan_cyclogram
 from mechopt.solvers.stop_impact.law import RollerLeftCam, rebound_amplitude_mm
 
@@ -225,7 +226,7 @@ def test_a_time_floor_is_an_angle_at_the_task_s_speed():
 
 
 def test_held_highs_model_agrees_with_the_cvxpy_lp_and_says_infeasible():
-    from mechopt.solvers.cyclogram.plan import Net
+    from mechopt.solvers.cyclogram.net import Net
     from mechopt.solvers.loom import HeldLP
     task = registry.find("loom/group1").build()[0]
     net = Net(task, "exact")

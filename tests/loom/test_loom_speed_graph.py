@@ -159,7 +159,7 @@ def test_one_limit_changed_on_group1_the_graph_re_solves_and_certifies_the_held_
     graph pass, both against a fresh LP of the changed scene; a held answer off by 1e-6 deg is
     INACCURATE, and a network that cannot be held agrees only with an infeasible LP."""
     from mechopt.solvers.cyclogram.graph import HeldSpan
-    from mechopt.solvers.cyclogram.plan import Net, back_arcs
+    from mechopt.solvers.cyclogram.net import Net, back_arcs
     from mechopt.solvers.loom import HeldLP
     task = registry.find("loom/group1").build()[0]
     net = Net(task, "exact")
