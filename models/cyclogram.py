@@ -1,16 +1,19 @@
-"""Network cyclogram of a machine: events, operations and their limits (paper 004: Podgorny et al. 2018).
+"""The network cyclogram of a cyclic machine: events, operations and their limits (the model of
+Podgorny et al. 2018, paper 004; its STB loom is this wing's case, cases/loom/).
 
 Vertices are events (characteristic positions of mechanisms) with times p; arcs are operations
 (x, y) with phase angle t(x, y) = p(y) - p(x) (the paper: "the difference of the event times").
-Each operation carries a minimum angle [phi], optionally a contact-stress model of its cam pair
-and an amplitude model of its working member. Angles are machine degrees of the main shaft, not
-radians: the paper's coefficients (mm/deg) and every cyclogram are in degrees.
+Each operation carries a minimum angle [phi] or a least duration (min_ms), optionally a motion
+(models/cyclogram_motions.py) and, as on the STB loom, a contact-stress model of its cam pair and an
+amplitude model of its working member (the loom's laws, models/loom_limits.py). Angles are machine
+degrees of the main shaft, not radians: the paper's coefficients (mm/deg) and every cyclogram are
+in degrees. An operation with `cycles` = k ends at an event of k cycles later (a recurrent machine).
 
 Every limit is a lower bound on the phase angle, so the cyclogram is a system of difference
 constraints p(y) - p(x) >= lb(x, y); windows (p(y) - p(x) <= w) and synchronisations
 (p(x) = p(y)) add arcs of the other sign. `lower_bounds_deg` gives lb for any limit values.
 
-Effects a scene may call for:
+Effects a scene may call for (the STB loom's limits):
 
 ==============  =====================================================  =====================
 effect          adds                                                   paper
@@ -24,9 +27,13 @@ stop_vibration  a(t) = slope t + intercept <= amplitude limit on       linearise
 ==============  =====================================================  =====================
 
 Speed (`speed_rpm`, the main shaft's n): the stresses and the exact rebound law are taken at
-n; the stress references (sigma_ref at t_ref) hold at `stress_speed_rpm` (default n). An operation may also need a time rather than an angle
-(`min_ms`, e.g. the microshuttle's flight): at n it spans at least 6 n T deg (360 deg per
-60/n s), so its lower bound is max(min_deg, 0.006 n min_ms).
+n; the stress references (sigma_ref at t_ref) hold at `stress_speed_rpm` (default n). An operation
+may also need a time rather than an angle (`min_ms`, e.g. the loom's microshuttle flight): at n it
+spans at least 6 n T deg (360 deg per 60/n s), so its lower bound is max(min_deg, 0.006 n min_ms).
+
+The task is one dataclass of parts, each one job: cyclogram_tables (the tables a scene gives, their
+columns and checks, task tables), cyclogram_network (the graph built and checked), cyclogram_views
+(index arrays and labels for the solvers), cyclogram_bounds (each operation's least angle).
 """
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -81,7 +88,7 @@ class Cyclogram(Network, Views, Bounds):
     time-based network); `syncs` [{events = [a, b, ...]}]: equal times. Windows and syncs too may
     come from a CSV of any length (columns from, to, max_deg or max_ms; a sync's events "a;b;c").
     An operation with `cycles` = k > 0 is recurrent: it ends at its `to` of k cycles later
-    (`recurrences`; the least cycle time, `loom.least_cycle_time`).
+    (`recurrences`; the least cycle time, `cyclogram.least_cycle_time`).
     `limiting_op` [x, y]: maximise t(x, y) inside `cycle_deg` instead of minimising the span.
     Every entry may carry provenance notes: mark (given / assumed / calibrated), why, where, what.
 
@@ -94,12 +101,12 @@ class Cyclogram(Network, Views, Bounds):
     `lever` (structure): the lift lever's table (see `lever_stop`), the exact law a(t, n) behind
     the linear one; a task may give it instead of the linear law's slope and intercept.
 
-    Motions (models/loom_motions.py): an operation may carry `law`, `stroke_mm`, `direction` and
+    Motions (models/cyclogram_motions.py): an operation may carry `law`, `stroke_mm`, `direction` and
     `max_accel_m_s2` / `max_velocity_m_s` (a least duration, folded into its min_ms);
     `clearances` [{operation, at, relation, other, other_at, cycles?}] (a CSV too) between two
     motions; `maximize = "least_angle"` over `least_angle_of` (operation names or "from->to");
     `span_within_cycle` (default true: p(last) - p(first) <= cycle_deg; false when one cycle's
-    motions run into the next). These three are rows of loom.plan_motions' LP only.
+    motions run into the next). These three are rows of cyclogram.plan_motions' LP only.
     """
     operations: list = field(default_factory=list)
     tasks: list = field(default_factory=list)
@@ -120,7 +127,7 @@ class Cyclogram(Network, Views, Bounds):
     lever: dict | None = None
     # the highest speed the lever's law was studied at: above it a warning (`warnings`)
     lever_law_max_rpm: Annotated[float | None, Gt(0), Le(MAX_RPM)] = None
-    # motions (models/loom_motions.py): clearances between them, and the objective over their angles
+    # motions (models/cyclogram_motions.py): clearances between them, and the objective over their angles
     clearances: list = field(default_factory=list)
     maximize: str | None = None
     least_angle_of: list = field(default_factory=list)
@@ -203,12 +210,12 @@ class Cyclogram(Network, Views, Bounds):
                      for j, ref in enumerate(self.least_angle_of))
 
     def check_plain(self, solver: str) -> None:
-        """ModelError when the task asks for what only loom.plan_motions solves (clearances, the least angle)."""
+        """ModelError when the task asks for what only cyclogram.plan_motions solves (clearances, the least angle)."""
         if self.clearances or self.maximize is not None or not self.span_within_cycle:
             key = "clearances" if self.clearances else ("maximize" if self.maximize else "span_within_cycle")
             raise ModelError(f"{key}: not solved by {solver} (difference constraints only); a clearance (a row of the event-time "
                              f"LP in two operations' angles), maximize = {LEAST_ANGLE!r} and span_within_cycle = false "
-                             f"are solved by loom.plan_motions", key=key)
+                             f"are solved by cyclogram.plan_motions", key=key)
 
     def _check_bounds(self):
         """Every derived lower bound inside the stated range, named by the inputs that set it."""

@@ -55,7 +55,7 @@ class Network:
             phi, min_ms = floors_of(op, key)
             motion = motion_of(op, key)
             motion_ms, motion_limit = motion.least_ms() if motion else (0.0, "")
-            if motion_ms > (min_ms or 0.0):      # the motion's limits as a least duration (models/loom_motions.py)
+            if motion_ms > (min_ms or 0.0):      # the motion's limits as a least duration (models/cyclogram_motions.py)
                 min_ms = motion_ms
             stress, amplitude = op.get("stress"), op.get("amplitude")
             if stress is not None:
@@ -143,7 +143,7 @@ class Network:
         event `to` of k cycles later after `from` of this one (T the cycle; d its min_deg, or min_ms
         in a time-based network). `from` may equal `to` (a station busy for d before it starts
         again). They carry a floor only (min_deg or min_ms): no window, stress or amplitude. The
-        least cycle time over them is `loom.least_cycle_time`; a one-cycle solver refuses them
+        least cycle time over them is `cyclogram.least_cycle_time`; a one-cycle solver refuses them
         (`check_one_cycle`). Rows with cycles = 0 are ordinary operations."""
         check_table(self.operations, "operations", list)
         out, seen = [], set()
@@ -183,5 +183,5 @@ class Network:
             op = self.recurrences[0]
             key = f"operations[{op['from']}->{op['to']}].cycles"
             raise ModelError(f"{key}={op['cycles']}: {solver} schedules one cycle and takes no recurrent "
-                             f"operation; the least cycle time of a recurrent network is loom.least_cycle_time",
+                             f"operation; the least cycle time of a recurrent network is cyclogram.least_cycle_time",
                              key=key)

@@ -125,7 +125,7 @@ class Views:
 
     @cached_property
     def motion_arcs(self) -> dict:
-        """Arc index (in `arcs` order) -> its Motion (models/loom_motions.py), for the operations with a law."""
+        """Arc index (in `arcs` order) -> its Motion (models/cyclogram_motions.py), for the operations with a law."""
         return {k: d["motion"] for k, d in enumerate(self._arc_data) if d["motion"] is not None}
 
     def motion_values(self, t_deg, speed_rpm) -> dict:

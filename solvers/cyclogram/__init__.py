@@ -1,4 +1,5 @@
-"""Event times of a network cyclogram (paper 004, problem (1)): a linear program, solved on its graph.
+"""The cyclogram wing's solvers: event times of a cyclic machine's network (paper 004, problem (1);
+the STB loom is its case), a linear program solved on its graph.
 
     minimise p(N) - p(1)   subject to   p(y) - p(x) >= [phi(x, y)]                 every operation
                                         p(y) - p(x) >= sigma-bound(x, y; [sigma_H])  cam pairs
@@ -6,8 +7,10 @@
                                         p(y) - p(x) <= w,  p(a) = p(b)             windows, syncs
                                         p(1) = 0                                     anchor
 
-* `plan.plan_cyclogram`: this LP solved on the graph (its dual, longest paths: `graph`, the
-  default) or in cvxpy (method "lp"), each checked against the other on demand (check=True);
+* `plan.plan_cyclogram`: this LP solved on the graph (`graph_method`: its dual, longest paths on
+  `graph.Levels`, the default) or in cvxpy (`lp_method`), each checked against the other on demand
+  (check=True, `certify`); `net` (the task as index arrays), `schedule` (values, floats, the
+  critical chain), `conflicts` (an infeasible network's positive cycles, named);
 * `speed.max_machine_speed`: the whole machine's largest speed, an LP in (p, n) or bisection on n
   (part 5);
 * `motions.plan_motions`: the LP with clearances between motions and the least of several
@@ -15,6 +18,8 @@
 * `cycle_time.least_cycle_time`: a recurrent machine's least cycle time, the maximum cycle ratio
   of its constraints, and the circuit that sets it (the LP in (p, T) as certificate);
 * `event_time`: the LP's matrices, and `HeldLP`, the LP held in HiGHS for many bound changes.
+
+The STB loom's own solvers (the exact rebound's repair, the lift law's co-design) are mechopt.solvers.loom's.
 """
 from typing import TYPE_CHECKING
 

@@ -131,7 +131,7 @@ def _check_time_based(task):
         raise ModelError(f"{mixed[0]}: the least cycle time of a time-based network (min_ms) takes durations "
                          f"and angles (fractions of the cycle), not a bound set at a speed (also "
                          f"{some_of(mixed[1:], sep=', ') or 'nothing else'}); give speed_rpm, or use "
-                         f"loom.max_machine_speed", key=mixed[0].split(".")[0])
+                         f"cyclogram.max_machine_speed", key=mixed[0].split(".")[0])
 
 
 class Circuits:
@@ -257,7 +257,7 @@ def least_cycle_time(task: Cyclogram, *, check: bool = False,
     relative makes the answer INACCURATE (values check_rel, diagnostics check).
     """
     check_settings(least_cycle_time, backend=backend)
-    task.check_plain("loom.least_cycle_time")
+    task.check_plain("cyclogram.least_cycle_time")
     clock = Clock()
     u = uniform_constraints(task)
     bf = Circuits(u, len(task.arcs))

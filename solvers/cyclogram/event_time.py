@@ -93,7 +93,7 @@ class HeldLP:
     """The event-time LP held in HiGHS itself (highspy) with its basis: for many solves that change
     only bounds ([phi] per arc, the cycle), as bisection and what-if re-solves do. A re-solve is
     a hot-started dual simplex on the bounds changed in place: no cvxpy parameter application,
-    no model hand-over (about 0.07 ms against cvxpy's 1 ms on group 1; benchmarks/loom.py).
+    no model hand-over (about 0.07 ms against cvxpy's 1 ms on the STB loom's group 1; benchmarks/loom.py).
 
     Rows: arcs p(y) - p(x) >= lb, windows <= w, syncs = 0, the cycle p(last) - p(first) <=
     cycle; p(first) = 0 as a column bound. Minimises the span. HiGHS's status words are read

@@ -14,7 +14,7 @@ network (3 x 10^5 arcs, 1000 levels) a numpy pass costs ~10 us of Python per lev
 ~9 ms per pass, so one forward and one backward pass with the floats, the critical chain and
 the duals took ~30 ms (the target: 20 ms). A compiled loop over the arcs in level order
 (kernel.py, numba) takes ~2 ms per pass: with it the whole solve measured ~9 ms (best of 15 on
-the shared 2-core machine; medians under load are in `mechopt bench loom`). numba stays
+the shared 2-core machine; medians under load are in `mechopt bench cyclogram`). numba stays
 optional (extra `fast`): it is imported only for networks of COMPILED_MIN_ARCS arcs and more
 (no scene of the package), its compiled code cached on disk, and without it the numpy levels
 give the same answers. scipy.sparse.csgraph has no DAG pass and its Bellman-Ford is O(V E).
@@ -32,7 +32,7 @@ from mechopt.solvers.cyclogram.kernel import COMPILED_MIN_ARCS, kernels
 
 ROUND_OFF = 1e-12          # relative: an improvement below it (of the largest |w|) is round-off, not a cycle
 
-_LEVELS = BuildCache("loom.graph_levels", maxsize=8)
+_LEVELS = BuildCache("cyclogram.graph_levels", maxsize=8)
 
 
 @dataclass(frozen=True)

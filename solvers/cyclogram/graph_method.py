@@ -24,7 +24,7 @@ RANGING_MAX_TABLE = 10_000  # a ranging table per operation for networks up to t
 
 
 def plan_graph(task, *, stress_form, tol_deg) -> Result:
-    """Event times, floats, duals and ranging by longest paths (solvers/loom/graph.py)."""
+    """Event times, floats, duals and ranging by longest paths (solvers/cyclogram/graph.py)."""
     clock = Clock()
     net = Net(task, stress_form)
     levels = Levels.of(len(net.names), net.tails, net.heads)

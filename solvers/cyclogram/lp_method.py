@@ -24,7 +24,7 @@ from mechopt.solvers.cyclogram.schedule import (
 if TYPE_CHECKING:      # the LP's modules (cvxpy: seconds to import) load only when the LP is asked for
     from mechopt.solvers.cyclogram.event_time import EventTimeLP
 
-LP_BUILDS = BuildCache("loom.event_time_lp", maxsize=8)
+LP_BUILDS = BuildCache("cyclogram.event_time_lp", maxsize=8)
 
 
 def plan_lp(task, *, stress_form, tol_deg, backend, warm_start) -> Result:

@@ -10,7 +10,7 @@ of several motions' angles maximised, in one LP (cvxpy + HiGHS).
                 p(first) = 0
 
 p_k(x) = p(from_k) + x (p(to_k) - p(from_k)) is the instant operation k reaches the fraction of
-its stroke whose angle fraction is x (S(x) = c, models/loom_motions.py): a fixed fraction for a
+its stroke whose angle fraction is x (S(x) = c, models/cyclogram_motions.py): a fixed fraction for a
 fixed law, so the row is linear in the event times, though not a difference of two of them unless
 both angles are fixed. This is why the clearances and the objective live here and not on the
 graph (plan_cyclogram's method "graph" and the highest-speed solvers take difference constraints

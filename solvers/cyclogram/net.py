@@ -20,7 +20,7 @@ class Net:
         self.amp_rows = task.amplitude_arcs()
         if self.amp_rows and not task.has_linear_amplitude:
             raise ModelError("amplitude_slope_mm_per_deg: the LP needs the linear amplitude law; with the lever's "
-                             "exact law alone use loom.repair_cyclogram or loom.max_machine_speed",
+                             "exact law alone use loom.repair_cyclogram or cyclogram.max_machine_speed",
                              key="amplitude_slope_mm_per_deg")
         self.lb, self.lb_why = task.lower_bounds_deg(stress_form)
 

@@ -37,8 +37,8 @@ def plan_cyclogram(task: Cyclogram, *, method: Literal["graph", "lp"] = "graph",
 
     Parameters
     ----------
-    task : the network and its limits (models/loom.py).
-    method : "graph" (longest paths on the difference constraints, solvers/loom/graph.py: the
+    task : the network and its limits (models/cyclogram.py).
+    method : "graph" (longest paths on the difference constraints, solvers/cyclogram/graph.py: the
         LP's dual solved exactly) or "lp" (the cvxpy model of the design card).
     backend : LP solver behind cvxpy (method "lp", and the check).
     stress_form : "exact" sigma_max(t) <= [sigma_H] as t >= K/[sigma_H]; "linear" its tangent at t_ref.
@@ -47,7 +47,7 @@ def plan_cyclogram(task: Cyclogram, *, method: Literal["graph", "lp"] = "graph",
     check : also solve by the other method and compare: status, span (or limiting_op_deg) to
         tol_deg and, where the critical chain is unique, every sens_*; a mismatch makes the result
         INACCURATE. The value check_rel is the objectives' difference per degree above 1 (the
-        loom scenes expect it below 1e-9: the LP as certificate in `mechopt validate`).
+        cyclogram scenes expect it below 1e-9: the LP as certificate in `mechopt validate`).
 
     Returns
     -------

@@ -36,14 +36,14 @@ def n_over_t_probe(task: Cyclogram, scan_to_deg: float) -> tuple[bool, float]:
     change seen. The time floor (0.006 n T) and the stress (sigma_ref t_ref n / (t n_ref)) are by
     their form; the rebound is probed: a(c t, c n) against a(t, n) for c = 0.5, 2 at t =
     scan_to_deg and 3/4 of it, n the task's speed. (The chain passes: its rise in its own time
-    depends on lambda = omega t / Omega only, and the impact on v0 only; see models/loom.py.)"""
+    depends on lambda = omega t / Omega only, and the impact on v0 only; see models/loom_limits.py, the STB loom's laws.)"""
     if not task.amplitude_arcs():
         return True, 0.0
     key = (task.lever_model, float(_reference_rpm(task)), float(scan_to_deg))    # a property of the law alone
     return _PROBES.get(key, lambda: _probe(task, scan_to_deg))[0]
 
 
-_PROBES = BuildCache("loom.n_over_t_probe", maxsize=16)
+_PROBES = BuildCache("cyclogram.n_over_t_probe", maxsize=16)
 
 
 def _probe(task, scan_to_deg):
@@ -156,7 +156,7 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp",
     if task.time_windows():         # its angle 0.006 n max_ms would move with the speed sought: not modelled
         k = task.time_windows()[0]
         raise ModelError(f"windows[{k}].max_ms: the highest speed takes windows as angles (max_deg); a window in "
-                         f"time holds at a given speed (loom.plan_cyclogram with speed_rpm, or the least cycle "
+                         f"time holds at a given speed (cyclogram.plan_cyclogram with speed_rpm, or the least cycle "
                          f"time of a time-based network)", key=f"windows[{k}].max_ms")
     clock = Clock()
     net = Net.structure(task)        # the speed LP has its own bounds
@@ -215,7 +215,7 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp",
     if check and not certified and chosen in ("graph", "lp"):
         certified = _check_by_other(chosen, task, net, phi, g, why, backend, n_max, more)
         if "rel" in more["check"]:
-            values["check_rel"] = more["check"]["rel"]        # validate's certificate (loom scenes: < 1e-9)
+            values["check_rel"] = more["check"]["rel"]        # validate's certificate (the scenes: < 1e-9)
     held = amp_bounds if chosen in ("lp", "graph") else _exact_amplitude_bounds(task, box, phi, scan_to_deg,
                                                                                   scan_step_deg, n_max)
     for k, b in amp_bounds.items():      # the range of t on which the rebound was shown to hold, at n_max

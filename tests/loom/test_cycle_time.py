@@ -1,4 +1,4 @@
-"""The least cycle time of a recurrent machine (solvers/loom/cycle_time.py): recurrent operations
+"""The least cycle time of a recurrent machine (solvers/cyclogram/cycle_time.py): recurrent operations
 (cycles = k), the maximum cycle ratio on the graph, its critical circuits and floats, the LP in
 (p, T) as certificate, and a max-plus example from the literature."""
 import dataclasses
@@ -12,8 +12,8 @@ from mechopt import registry
 from mechopt.kit.errors import ModelError
 from mechopt.kit.result import Status
 from mechopt.models.cyclogram import Cyclogram
+from mechopt.solvers.cyclogram import least_cycle_time, plan_cyclogram
 from mechopt.solvers.cyclogram.cycle_time import uniform_constraints
-from mechopt.solvers.loom import least_cycle_time, plan_cyclogram
 
 
 def op(x, y, d, k=0, unit="min_ms"):
@@ -299,7 +299,7 @@ def test_a_network_is_given_by_operations_or_by_tasks():
 
 
 def test_the_iteration_is_count_limited(monkeypatch):
-    from mechopt.solvers.loom import cycle_time
+    from mechopt.solvers.cyclogram import cycle_time
     monkeypatch.setattr(cycle_time, "MAX_STEPS", 0)
     r = least_cycle_time(Cyclogram(operations=[op("a", "b", 3.0), op("b", "a", 3.0, 1)]))
     assert r.status is Status.LIMIT and "no answer after 0 Dinkelbach steps" in r.message
@@ -337,7 +337,7 @@ def test_a_window_gives_one_limit_in_range(window, match):
 
 
 def test_the_highest_speed_refuses_a_window_in_time_by_name():
-    from mechopt.solvers.loom import max_machine_speed
+    from mechopt.solvers.cyclogram import max_machine_speed
     task = Cyclogram(operations=[op("a", "b", 40.0, unit="min_deg"), op("b", "c", 100.0)], cycle_deg=360.0,
                      windows=[{"from": "a", "to": "c", "max_ms": 300.0}])
     with pytest.raises(ModelError, match=r"windows\[0\]\.max_ms: the highest speed takes windows as angles"):

@@ -12,10 +12,11 @@ from mechopt import registry
 from mechopt.kit.errors import SettingError
 from mechopt.kit.result import Status
 from mechopt.models.cyclogram import Cyclogram
+from mechopt.solvers.cyclogram import plan_cyclogram
 from mechopt.solvers.cyclogram.certify import certify
 from mechopt.solvers.cyclogram.conflicts import positive_cycle
 from mechopt.solvers.cyclogram.graph import BackArcs, Levels, PositiveCycle
-from mechopt.solvers.loom import plan_cyclogram, repair_cyclogram
+from mechopt.solvers.loom import repair_cyclogram
 
 
 def random_blocks(count, size, seed):

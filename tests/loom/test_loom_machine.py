@@ -10,7 +10,7 @@ from mechopt.kit.errors import ModelError, SceneError
 from mechopt.kit.result import Status
 from mechopt.models.cyclogram import Cyclogram
 from mechopt.scene import load
-from mechopt.solvers.loom import plan_cyclogram
+from mechopt.solvers.cyclogram import plan_cyclogram
 
 CASES = Path(registry.cases_dir()) / "loom"
 

@@ -16,10 +16,9 @@ from mechopt.kit.cache import clear as clear_caches
 from mechopt.kit.errors import SolverError
 from mechopt.kit.result import Status
 from mechopt.models.cyclogram import Cyclogram
-from mechopt.solvers.cyclogram import conflicts, lp_method
+from mechopt.solvers.cyclogram import conflicts, lp_method, plan_cyclogram
 from mechopt.solvers.cyclogram.graph import PositiveCycle
 from mechopt.solvers.cyclogram.net import Net
-from mechopt.solvers.loom import plan_cyclogram
 
 T_3_7_MIN_DEG = (0.208 - 0.1) / 0.003          # from the published law and limit
 
