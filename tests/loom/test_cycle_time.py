@@ -189,7 +189,7 @@ def test_a_recurrent_row_carries_a_floor_only_and_one_cycle_solvers_refuse_it():
         Cyclogram(operations=[op("a", "b", 3.0, unit="min_deg"),
                               {"from": "b", "to": "a", "min_deg": 1.0, "cycles": 1, "max_deg": 5.0}])
     task = Cyclogram(operations=[op("a", "b", 3.0, unit="min_deg"), op("b", "a", 1.0, 1, "min_deg")], cycle_deg=360.0)
-    with pytest.raises(ModelError, match=r"operations\[b->a\]\.cycles=1: plan_cyclogram.*loom\.least_cycle_time"):
+    with pytest.raises(ModelError, match=r"operations\[b->a\]\.cycles=1: plan_cyclogram.*cyclogram\.least_cycle_time"):
         plan_cyclogram(task)
 
 
@@ -347,5 +347,5 @@ def test_the_highest_speed_refuses_a_window_in_time_by_name():
 def test_the_least_cycle_time_refuses_a_clearance_by_name():
     task = registry.find("loom/turret-die-overlap").build()[0]
     assert task.clearances
-    with pytest.raises(ModelError, match=r"clearances: not solved by loom\.least_cycle_time .* loom\.plan_motions"):
+    with pytest.raises(ModelError, match=r"clearances: not solved by cyclogram\.least_cycle_time .* cyclogram\.plan_motions"):
         least_cycle_time(task)
