@@ -38,11 +38,14 @@ from scipy.optimize import linprog
 from mechopt import registry
 from mechopt.figures import save_figure
 from mechopt.kit.cache import clear as clear_caches
-from mechopt.models.loom import Cyclogram
-from mechopt.solvers.loom import HeldLP, build_event_time_lp, incidence, max_machine_speed, plan_cyclogram
-from mechopt.solvers.loom import plan as cyclogram_lp
-from mechopt.solvers.loom.graph import NO_BACK_ARCS, BackArcs, HeldSpan, Levels, a_path, tight_arcs
-from mechopt.solvers.loom.speed import SpeedGraph, speed_coeffs_deg_per_rpm
+from mechopt.models.cyclogram import Cyclogram
+from mechopt.solvers.cyclogram import HeldLP, build_event_time_lp, incidence, max_machine_speed, plan_cyclogram
+from mechopt.solvers.cyclogram.graph import NO_BACK_ARCS, BackArcs, HeldSpan, Levels
+from mechopt.solvers.cyclogram.graph_method import longest_schedule
+from mechopt.solvers.cyclogram.lp_method import set_parameters
+from mechopt.solvers.cyclogram.net import Net, back_arcs
+from mechopt.solvers.cyclogram.schedule import critical_path, float_array
+from mechopt.solvers.cyclogram.speed import SpeedGraph, speed_coeffs_deg_per_rpm
 
 __all__ = ["TARGETS", "cli", "graph_targets", "layered", "machine", "machine_speed", "random_dag", "scale",
            "sigma_what_if", "speed_verdicts", "what_if"]
@@ -112,26 +115,20 @@ def _linprog(n, tails, heads, w):
     return build, time.perf_counter() - start - build, float(res.x[n - 1] - res.x[0])
 
 
-def _graph(n, tails, heads, w, back=NO_BACK_ARCS, tol=1e-9):
-    """The graph method's kernel as plan_cyclogram runs it: levels (build), then earliest and
-    latest times, floats, one critical chain and the duals (arcs' uses on a longest path). From
-    2 x 10^4 arcs the passes are the compiled ones when numba is installed (solvers/loom/kernel.py;
+def _graph(n, tails, heads, w, back=NO_BACK_ARCS, tol=1e-6):
+    """The graph method as plan_cyclogram runs it (its own functions, solvers/cyclogram/graph_method.py
+    and schedule.py): levels (build), then the earliest times with the duals (the arcs' uses on a
+    longest path), the latest times and floats, one critical chain; without the per-name report. From
+    2 x 10^4 arcs the passes are the compiled ones when numba is installed (solvers/cyclogram/kernel.py;
     MECHOPT_NO_NUMBA=1: the numpy levels)."""
     start = time.perf_counter()
     levels = Levels(n, tails, heads)
+    net = Net.of_arrays(n, tails, heads, w)
     build = time.perf_counter() - start
-    early = levels.longest_from(0, w, back)
-    span = early[n - 1]
-    closed = BackArcs(np.r_[back.tails, n - 1], np.r_[back.heads, 0], np.r_[back.weights, -span])
-    late = -levels.longest_to(0, w, closed)
-    floats = late[heads] - early[tails] - w
-    critical = np.flatnonzero(floats <= tol * max(1.0, span))
-    a_path(n, tails[critical], heads[critical], 0, n - 1)                        # the critical chain
-    all_t, all_h, all_w = ((tails, heads, w) if not len(back) else
-                           (np.r_[tails, back.tails], np.r_[heads, back.heads], np.r_[w, back.weights]))
-    tight = tight_arcs(all_t, all_h, all_w, early, tol * max(1.0, span))
-    duals = np.bincount(tight[a_path(n, all_t[tight], all_h[tight], 0, n - 1)], minlength=len(all_t))
-    assert duals[:len(tails)].max() >= 1
+    early, span, uses, _, _ = longest_schedule(net, levels, back, tol)
+    floats = float_array(net, levels, back, w, span, early=early)
+    critical_path(net, floats, tol)
+    assert uses.max() >= 1
     return build, time.perf_counter() - start - build, float(span)
 
 
@@ -277,13 +274,13 @@ def what_if(repeats=5, progress=None, warm_max=WARM_MAX_EVENTS):
     row["resolve_cold_s"] = _median_time(resolve(False), repeats)
     row["resolve_warm_s"] = _median_time(resolve(True), repeats)
     out.append(row)
-    net = cyclogram_lp.Net(task, "exact")
+    net = Net(task, "exact")
 
     def build_group1():
         lp = build_event_time_lp(len(net.names), net.tails, net.heads, first=net.first, last=net.last,
                                  stress_rows=net.stress_rows, stress_ref=net.stress_ref,
                                  amplitude_rows=net.amp_rows)
-        cyclogram_lp.set_parameters(lp, task, net)
+        set_parameters(lp, task, net)
         lp.problem.solve(solver="HIGHS", warm_start=False)
         return lp
     lp = build_group1()
@@ -338,10 +335,10 @@ def sigma_what_if(task, fresh_lp_s, repeats):
     vector and the span re-solved by a fresh graph pass certified by LP duality (`HeldSpan.solve`:
     the times feasible, a tight chain of the same value), and the held HiGHS model re-solved and
     certified by a pass; against the fresh LP build + solve (`fresh_lp_s`)."""
-    net = cyclogram_lp.Net(task, "exact")
+    net = Net(task, "exact")
     rows = np.asarray(net.stress_rows, dtype=np.int64)
     floor, k_ref = task.min_angles_deg()[rows], net.stress_ref[0] * net.stress_ref[1]
-    back = cyclogram_lp.back_arcs(net, with_cycle=False)[0]
+    back = back_arcs(net, with_cycle=False)[0]
     graph = HeldSpan(len(net.names), net.tails, net.heads, net.first, net.last, back)
     held = HeldLP(len(net.names), net.tails, net.heads, first=net.first, last=net.last,
                   window_arcs=net.window_idx, sync_arcs=net.sync_idx)
@@ -352,7 +349,7 @@ def sigma_what_if(task, fresh_lp_s, repeats):
     def bounds(sigma):                    # only the stress rows move (t >= sigma_ref t_ref / [sigma_H])
         lb[rows] = np.maximum(floor, k_ref / sigma)
         return lb
-    check = cyclogram_lp.Net(dataclasses.replace(task, sigma_H_limit_MPa=700.0), "exact").lb
+    check = Net(dataclasses.replace(task, sigma_H_limit_MPa=700.0), "exact").lb
     if not np.allclose(bounds(700.0), check, rtol=1e-15, atol=0.0):
         raise RuntimeError("the what-if's bounds are not the model's")
 
@@ -444,7 +441,7 @@ def machine_speed(repeats=3, progress=None):
     task = tasks["chain"]                 # the parametric solve alone: Newton's passes, no report
     g, _, _ = speed_coeffs_deg_per_rpm(task)
     phi = np.fromiter((d for *_, d in task.graph.edges(data="min_deg")), dtype=float, count=len(task.arcs))
-    solver = SpeedGraph(task, cyclogram_lp.Net.structure(task), phi, g)
+    solver = SpeedGraph(task, Net.structure(task), phi, g)
     seconds = statistics.median(_time(solver.highest_speed) for _ in range(max(repeats, 5)))
     n_core, _, steps = solver.highest_speed()
     rows.append({"case": "graph solve alone, chain", "seconds": seconds, "speed_rpm": n_core, "status": "SOLVED",

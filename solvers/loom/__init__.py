@@ -1,41 +1,39 @@
-"""Event times of a network cyclogram (paper 004, problem (1)): a linear program, solved on its graph.
+"""The STB loom's own solvers, on the cyclogram wing's engine (mechopt.solvers.cyclogram):
 
-    minimise p(N) - p(1)   subject to   p(y) - p(x) >= [phi(x, y)]                 every operation
-                                        p(y) - p(x) >= sigma-bound(x, y; [sigma_H])  cam pairs
-                                        slope (p(7) - p(3)) + intercept <= a_lim    amplitude law
-                                        p(y) - p(x) <= w,  p(a) = p(b)             windows, syncs
-                                        p(1) = 0                                     anchor
+* `repair.repair_cyclogram`: the cyclogram's optimum checked on the loom's exact rebound and
+  contact stress, re-cut and re-solved until they hold;
+* `codesign.codesign_machine_speed`: the machine's highest speed co-designed with the lift cam's law.
 
-* `plan.plan_cyclogram`: this LP solved on the graph (its dual, longest paths: `graph`, the
-  default) or in cvxpy (method "lp"), each checked against the other on demand (check=True);
-* `repair.repair_cyclogram`: its optimum checked on the exact rebound and contact stress, re-cut
-  and re-solved until they hold;
-* `speed.max_machine_speed`: the whole machine's largest speed, an LP in (p, n) or bisection on n
-  (part 5);
-* `motions.plan_motions`: the LP with clearances between motions and the least of several
-  motions' angles maximised (rows that are not difference constraints);
-* `cycle_time.least_cycle_time`: a recurrent machine's least cycle time, the maximum cycle ratio
-  of its constraints, and the circuit that sets it (the LP in (p, T) as certificate);
-* `event_time`: the LP's matrices, and `HeldLP`, the LP held in HiGHS for many bound changes.
+The engine's names (`plan_cyclogram`, `max_machine_speed`, `least_cycle_time`, `plan_motions`, ...)
+and its modules (`mechopt.solvers.loom.plan`, `.graph`, ...) answer here too, for one release:
+the same functions and modules as mechopt.solvers.cyclogram's (scenes saying `loom.plan_cyclogram`
+run as before).
 """
 from typing import TYPE_CHECKING
 
 from mechopt.kit.lazy import lazy_names
 
 if TYPE_CHECKING:       # for readers and the docs; at run time each name imports its module when used
+    from mechopt.solvers.cyclogram import (
+        HeldLP,
+        build_event_time_lp,
+        conflict_chain,
+        incidence,
+        least_cycle_time,
+        max_machine_speed,
+        plan_cyclogram,
+        plan_motions,
+        positive_cycle,
+    )
     from mechopt.solvers.loom.codesign import codesign_machine_speed
-    from mechopt.solvers.loom.cycle_time import least_cycle_time
-    from mechopt.solvers.loom.event_time import HeldLP, build_event_time_lp, incidence
-    from mechopt.solvers.loom.motions import plan_motions
-    from mechopt.solvers.loom.plan import conflict_chain, plan_cyclogram, positive_cycle
     from mechopt.solvers.loom.repair import exact_amplitude_bound, repair_cyclogram
-    from mechopt.solvers.loom.speed import max_machine_speed
 
-# a plan needs neither the co-design's stop-impact chain nor the speed LP: each imports when used
+# the loom's own solvers, then the engine's names by their old modules (aliases of the cyclogram's)
 __getattr__, __dir__ = lazy_names(__name__, {
-    "codesign": ["codesign_machine_speed"], "cycle_time": ["least_cycle_time"], "event_time": ["HeldLP", "build_event_time_lp", "incidence"],
+    "codesign": ["codesign_machine_speed"], "repair": ["exact_amplitude_bound", "repair_cyclogram"],
+    "cycle_time": ["least_cycle_time"], "event_time": ["HeldLP", "build_event_time_lp", "incidence"],
     "motions": ["plan_motions"], "plan": ["conflict_chain", "plan_cyclogram", "positive_cycle"],
-    "repair": ["exact_amplitude_bound", "repair_cyclogram"], "speed": ["max_machine_speed"]})
+    "speed": ["max_machine_speed"]})
 
 __all__ = ["HeldLP", "build_event_time_lp", "codesign_machine_speed", "conflict_chain", "exact_amplitude_bound", "incidence",
            "least_cycle_time", "max_machine_speed", "plan_cyclogram", "plan_motions", "positive_cycle", "repair_cyclogram"]

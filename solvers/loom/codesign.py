@@ -54,8 +54,8 @@ from mechopt.kit.errors import ModelError, SettingError
 from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Annotated, Interval, check_settings
 from mechopt.models.cam_laws import law as library_law
-from mechopt.models.loom import Cyclogram
-from mechopt.solvers.loom.speed import max_machine_speed
+from mechopt.models.cyclogram import Cyclogram
+from mechopt.solvers.cyclogram.speed import max_machine_speed
 from mechopt.solvers.stop_impact.cam_follower import follow_cam
 from mechopt.solvers.stop_impact.cam_shape import law_cam, without_cam
 from mechopt.solvers.stop_impact.groove import rebound_with_backlash_mm

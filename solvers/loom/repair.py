@@ -14,8 +14,9 @@ from mechopt.kit.cache import BuildCache
 from mechopt.kit.errors import ModelError, SettingError
 from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Interval, Tolerance
-from mechopt.models.loom import Cyclogram, stress_bound_deg, stress_MPa
-from mechopt.solvers.loom.plan import plan_cyclogram
+from mechopt.models.cyclogram import Cyclogram
+from mechopt.models.loom_limits import stress_bound_deg, stress_MPa
+from mechopt.solvers.cyclogram.plan import plan_cyclogram
 from mechopt.solvers.stop_impact.cam_follower import dwell_length, follower_data
 from mechopt.solvers.stop_impact.law import chain_rebounds_mm
 from mechopt.solvers.stop_impact.lever_box import LeverBox

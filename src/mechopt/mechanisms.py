@@ -5,7 +5,8 @@
 their figure modules (which register their functions by solver). A fifth mechanism is one row
 here plus its own files (docs/new-mechanism.md walks one through):
 
-    cases/<name>/*.toml            its scenes (found by the registry: no list)
+    cases/<name>/*.toml            its scenes (found by the registry: no list); `cases` names
+                                   another row's folder where a wing's scenes live there
     models/<module>.py             its physics (a scene's `task = "<module>.<Class>"`): declared
                                    ranges on its fields, its own `warnings(values)`
     solvers/<package>/             its solvers (a scene's `solver = "<package>.<function>"`)
@@ -30,6 +31,12 @@ class Mechanism:
     figures: tuple[str, ...]           # figure modules (they register by solver)
     benchmark: str                     # the `mechopt bench <name>` study
     templates: tuple[tuple[str, str], ...]    # (`mechopt new` name, the registry scene it copies)
+    cases: str = ""                    # the cases folder of its scenes, when not its name
+
+    @property
+    def folder(self) -> str:
+        """The cases folder (and scene-id prefix) of its scenes."""
+        return self.cases or self.name
 
 
 MECHANISMS = (
@@ -42,10 +49,17 @@ MECHANISMS = (
                "mechopt.models.press_equations", "mechopt.models.press_design", "mechopt.models.press_loads"), "mechopt.solvers.press",
               ("mechopt.figures.press",), "mechopt.benchmarks.press",
               (("press", "press/kd2322"), ("press-design", "press/flywheel-design"))),
-    Mechanism("loom", "Loom cyclogram (paper 004)",
-              ("mechopt.models.loom", "mechopt.models.loom_motions"), "mechopt.solvers.loom",
-              ("mechopt.figures.loom",), "mechopt.benchmarks.loom",
-              (("loom", "loom/group1"), ("cyclogram", "loom/packaging"))),
+    # the engine of any cyclic machine; its scenes keep their loom/ ids (cases/loom) for one release
+    Mechanism("cyclogram", "Cyclogram of a cyclic machine (paper 004's network)",
+              ("mechopt.models.cyclogram", "mechopt.models.cyclogram_network", "mechopt.models.cyclogram_views",
+               "mechopt.models.cyclogram_bounds", "mechopt.models.cyclogram_tables", "mechopt.models.cyclogram_motions"),
+              "mechopt.solvers.cyclogram",
+              (), "mechopt.benchmarks.loom", (("cyclogram", "loom/packaging"),), cases="loom"),
+    # the STB loom, the cyclogram's case: its own limits and solvers (models/loom*.py also keep the
+    # cyclogram's old paths for one release)
+    Mechanism("loom", "STB loom: the cyclogram's case (paper 004)",
+              ("mechopt.models.loom_limits", "mechopt.models.loom", "mechopt.models.loom_motions"), "mechopt.solvers.loom",
+              ("mechopt.figures.loom",), "mechopt.benchmarks.loom", (("loom", "loom/group1"),)),
     Mechanism("stop-impact", "Lift lever at its stop (paper 004)",
               ("mechopt.models.stop_impact", "mechopt.models.cam_follower", "mechopt.models.cam_shape",
                "mechopt.models.cam_law", "mechopt.models.cam_laws", "mechopt.models.cam_motion"),

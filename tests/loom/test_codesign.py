@@ -127,7 +127,7 @@ def test_the_box_speed_is_the_least_of_each_levers_own_highest_speed():
     """The engine's box option on loom/machine-speed (the cycloid): each lever's bound is t >= c_k
     (1 + margin) n, so the feasible speeds are nested and the machine on the whole box runs at the
     least of the machines each on one lever (run 5 % fast); the lever named as binding is that one."""
-    from mechopt.solvers.loom.speed import max_machine_speed
+    from mechopt.solvers.cyclogram.speed import max_machine_speed
     from mechopt.solvers.stop_impact.lever_box import LeverBox
     machine = registry.find("loom/machine-speed").build()[0]
     scan = dict(scan_to_deg=56.0, scan_step_deg=0.5)       # coarse: a short walk per lever (the scenes: 60, 0.25)

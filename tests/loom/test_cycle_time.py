@@ -1,4 +1,4 @@
-"""The least cycle time of a recurrent machine (solvers/loom/cycle_time.py): recurrent operations
+"""The least cycle time of a recurrent machine (solvers/cyclogram/cycle_time.py): recurrent operations
 (cycles = k), the maximum cycle ratio on the graph, its critical circuits and floats, the LP in
 (p, T) as certificate, and a max-plus example from the literature."""
 import dataclasses
@@ -11,9 +11,9 @@ import pytest
 from mechopt import registry
 from mechopt.kit.errors import ModelError
 from mechopt.kit.result import Status
-from mechopt.models.loom import Cyclogram
-from mechopt.solvers.loom import least_cycle_time, plan_cyclogram
-from mechopt.solvers.loom.cycle_time import uniform_constraints
+from mechopt.models.cyclogram import Cyclogram
+from mechopt.solvers.cyclogram import least_cycle_time, plan_cyclogram
+from mechopt.solvers.cyclogram.cycle_time import uniform_constraints
 
 
 def op(x, y, d, k=0, unit="min_ms"):
@@ -189,7 +189,7 @@ def test_a_recurrent_row_carries_a_floor_only_and_one_cycle_solvers_refuse_it():
         Cyclogram(operations=[op("a", "b", 3.0, unit="min_deg"),
                               {"from": "b", "to": "a", "min_deg": 1.0, "cycles": 1, "max_deg": 5.0}])
     task = Cyclogram(operations=[op("a", "b", 3.0, unit="min_deg"), op("b", "a", 1.0, 1, "min_deg")], cycle_deg=360.0)
-    with pytest.raises(ModelError, match=r"operations\[b->a\]\.cycles=1: plan_cyclogram.*loom\.least_cycle_time"):
+    with pytest.raises(ModelError, match=r"operations\[b->a\]\.cycles=1: plan_cyclogram.*cyclogram\.least_cycle_time"):
         plan_cyclogram(task)
 
 
@@ -299,7 +299,7 @@ def test_a_network_is_given_by_operations_or_by_tasks():
 
 
 def test_the_iteration_is_count_limited(monkeypatch):
-    from mechopt.solvers.loom import cycle_time
+    from mechopt.solvers.cyclogram import cycle_time
     monkeypatch.setattr(cycle_time, "MAX_STEPS", 0)
     r = least_cycle_time(Cyclogram(operations=[op("a", "b", 3.0), op("b", "a", 3.0, 1)]))
     assert r.status is Status.LIMIT and "no answer after 0 Dinkelbach steps" in r.message
@@ -337,7 +337,7 @@ def test_a_window_gives_one_limit_in_range(window, match):
 
 
 def test_the_highest_speed_refuses_a_window_in_time_by_name():
-    from mechopt.solvers.loom import max_machine_speed
+    from mechopt.solvers.cyclogram import max_machine_speed
     task = Cyclogram(operations=[op("a", "b", 40.0, unit="min_deg"), op("b", "c", 100.0)], cycle_deg=360.0,
                      windows=[{"from": "a", "to": "c", "max_ms": 300.0}])
     with pytest.raises(ModelError, match=r"windows\[0\]\.max_ms: the highest speed takes windows as angles"):
@@ -347,5 +347,5 @@ def test_the_highest_speed_refuses_a_window_in_time_by_name():
 def test_the_least_cycle_time_refuses_a_clearance_by_name():
     task = registry.find("loom/turret-die-overlap").build()[0]
     assert task.clearances
-    with pytest.raises(ModelError, match=r"clearances: not solved by loom\.least_cycle_time .* loom\.plan_motions"):
+    with pytest.raises(ModelError, match=r"clearances: not solved by cyclogram\.least_cycle_time .* cyclogram\.plan_motions"):
         least_cycle_time(task)

@@ -11,10 +11,12 @@ import mechopt
 from mechopt import registry
 from mechopt.kit.errors import SettingError
 from mechopt.kit.result import Status
-from mechopt.models.loom import Cyclogram
-from mechopt.solvers.loom import plan_cyclogram, repair_cyclogram
-from mechopt.solvers.loom.graph import BackArcs, Levels, PositiveCycle
-from mechopt.solvers.loom.plan import certify, positive_cycle
+from mechopt.models.cyclogram import Cyclogram
+from mechopt.solvers.cyclogram import plan_cyclogram
+from mechopt.solvers.cyclogram.certify import certify
+from mechopt.solvers.cyclogram.conflicts import positive_cycle
+from mechopt.solvers.cyclogram.graph import BackArcs, Levels, PositiveCycle
+from mechopt.solvers.loom import repair_cyclogram
 
 
 def random_blocks(count, size, seed):
@@ -125,7 +127,7 @@ def test_a_timing_table_past_ten_thousand_operations_reports_arrays_and_agrees_w
     arrays (no p_* / t_* values, float_deg a note), consistent with the span, and the LP beside
     it (check = true) gives the same span."""
     from mechopt.benchmarks.loom import layered
-    from mechopt.solvers.loom.plan import PER_NAME_MAX_OPS
+    from mechopt.solvers.cyclogram.net import PER_NAME_MAX_OPS
     n = 4_000
     tails, heads, w = layered(n)
     assert len(tails) > PER_NAME_MAX_OPS
@@ -212,7 +214,7 @@ def test_the_compiled_passes_give_the_numpy_passes_answers_with_windows_and_sync
     """kernel.py (numba) on a network past COMPILED_MIN_ARCS: every distance from the first and
     to the last event, with windows and a sync as back arcs, equals the numpy levels' bit for bit."""
     from mechopt.benchmarks.loom import random_dag
-    from mechopt.solvers.loom.kernel import COMPILED_MIN_ARCS, kernels
+    from mechopt.solvers.cyclogram.kernel import COMPILED_MIN_ARCS, kernels
     if kernels() is None:
         pytest.skip("numba not installed: the numpy passes are the only ones")
     n = 20_000
@@ -231,8 +233,8 @@ def test_a_one_limit_what_if_is_solved_and_certified_by_the_held_graph():
     """HeldSpan.solve, a what-if: [sigma_H] moved on loom/group1, the span is plan_cyclogram's
     for the changed task, certified (times feasible, a tight chain of the same value); a window
     the changed bounds cannot meet is INFEASIBLE; a wrong bound vector is not certified as another's."""
-    from mechopt.solvers.loom.graph import HeldSpan
-    from mechopt.solvers.loom.plan import Net, back_arcs
+    from mechopt.solvers.cyclogram.graph import HeldSpan
+    from mechopt.solvers.cyclogram.net import Net, back_arcs
     task = registry.find("loom/group1").build()[0]
     net = Net(task, "exact")
     held = HeldSpan(len(net.names), net.tails, net.heads, net.first, net.last, back_arcs(net, with_cycle=False)[0])
@@ -281,7 +283,7 @@ def test_a_million_events_certified_by_duality():
     a primal and a dual solution of the same value, so the span is the LP's optimum."""
     import math
 
-    from mechopt.solvers.loom.graph import a_path, tight_arcs
+    from mechopt.solvers.cyclogram.graph import a_path, tight_arcs
     n, width = 1_000_000, 100                 # layers of 100 events, each fed by 3 of the layer before
     rng = np.random.default_rng(0)
     inner = np.arange(1, n - 1)

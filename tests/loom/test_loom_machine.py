@@ -8,9 +8,9 @@ import pytest
 from mechopt import registry
 from mechopt.kit.errors import ModelError, SceneError
 from mechopt.kit.result import Status
-from mechopt.models.loom import Cyclogram
+from mechopt.models.cyclogram import Cyclogram
 from mechopt.scene import load
-from mechopt.solvers.loom import plan_cyclogram
+from mechopt.solvers.cyclogram import plan_cyclogram
 
 CASES = Path(registry.cases_dir()) / "loom"
 

@@ -7,7 +7,8 @@ from hypothesis import strategies as st
 
 from mechopt import registry
 from mechopt.kit.errors import ModelError, SceneError
-from mechopt.models.loom import Cyclogram, amplitude_bound_deg, amplitude_mm, stress_bound_deg, stress_MPa
+from mechopt.models.cyclogram import Cyclogram
+from mechopt.models.loom_limits import amplitude_bound_deg, amplitude_mm, stress_bound_deg, stress_MPa
 from mechopt.scene import load
 
 SLOPE_MM_PER_DEG, INTERCEPT_MM, LIMIT_MM = -0.003, 0.208, 0.1      # Podgorny et al. (2018), Results and discussion; Research methodology

@@ -21,8 +21,9 @@ import mechopt.solvers.loom.repair as loom_solver
 from mechopt import clear_caches, registry
 from mechopt.kit.errors import ModelError, SceneError
 from mechopt.kit.result import Status
-from mechopt.models.loom import lever_stop
-from mechopt.solvers.loom import plan_cyclogram, repair_cyclogram
+from mechopt.models.loom_limits import lever_stop
+from mechopt.solvers.cyclogram import plan_cyclogram
+from mechopt.solvers.loom import repair_cyclogram
 from mechopt.solvers.stop_impact.law import chain_rebounds_mm, rebound_amplitude_mm
 
 LIMIT_MM, SIGMA_H_MPA = 0.1, 800.0

@@ -15,9 +15,10 @@ from mechopt.benchmarks.loom import layered
 from mechopt.kit.cache import clear as clear_caches
 from mechopt.kit.errors import SolverError
 from mechopt.kit.result import Status
-from mechopt.models.loom import Cyclogram
-from mechopt.solvers.loom import plan as cyclogram_lp
-from mechopt.solvers.loom import plan_cyclogram
+from mechopt.models.cyclogram import Cyclogram
+from mechopt.solvers.cyclogram import conflicts, lp_method, plan_cyclogram
+from mechopt.solvers.cyclogram.graph import PositiveCycle
+from mechopt.solvers.cyclogram.net import Net
 
 T_3_7_MIN_DEG = (0.208 - 0.1) / 0.003          # from the published law and limit
 
@@ -159,7 +160,7 @@ def test_lp_certificate_primal_feasible_dual_nonnegative_complementary():
     task = scene_task("loom/group1")
     clear_caches()
     r = plan_cyclogram(task, method="lp")
-    [lp] = cyclogram_lp.LP_BUILDS.values()
+    [lp] = lp_method.LP_BUILDS.values()
     duals = {}
     for name in ("min_angle", "contact_stress", "amplitude"):
         con = lp.blocks[name]
@@ -242,10 +243,10 @@ def test_limiting_operation_without_a_cycle_is_unbounded_not_a_number():
 
 
 def test_cross_check_failure_is_inaccurate_not_solved(monkeypatch):
-    monkeypatch.setattr(cyclogram_lp.nx, "dag_longest_path_length", lambda g, **kw: -1.0)
+    monkeypatch.setattr(lp_method, "longest_certificate", lambda net: (-1.0, -1.0))
     r = plan_cyclogram(net([(1, 2, 10), (2, 3, 20)]), method="lp")
     assert r.status is Status.INACCURATE and r.values["span_deg"] == pytest.approx(30.0)
-    assert r.message.startswith("cross-check failed: LP span_deg = 30.0 but networkx dag_longest_path_length "
+    assert r.message.startswith("cross-check failed: LP span_deg = 30.0 but the longest path on the graph "
                                 "gives -1.0 (tolerance 1e-06 deg per degree above 1)")
 
 
@@ -266,7 +267,7 @@ def test_back_end_crash_is_failed_and_inaccurate_is_not_passed_on(monkeypatch):
         m.setattr(cp.Problem, "solve", crash)
         r = plan_cyclogram(task, method="lp")
     assert r.status is Status.FAILED and r.values == {} and "HiGHS exploded" in r.message
-    monkeypatch.setattr(cyclogram_lp, "from_cvxpy", lambda status: Status.INACCURATE)
+    monkeypatch.setattr(lp_method, "from_cvxpy", lambda status: Status.INACCURATE)
     r = plan_cyclogram(task, method="lp")
     assert r.status is Status.INACCURATE and r.values == {}
 
@@ -327,15 +328,17 @@ def test_gantt_figure_is_written_for_a_solved_scene_and_skipped_for_an_infeasibl
 
 def test_an_optimum_contradicting_a_positive_cycle_is_not_solved(monkeypatch):
     task = net([(1, 2, 10), (2, 3, 20)], windows=[{"from": "1", "to": "3", "max_deg": 40.0}])
-    monkeypatch.setattr(cyclogram_lp, "constraint_arcs", lambda net, lb: [("1", "2", 10.0), ("2", "1", 0.0)])
+    def cycle(net):
+        raise PositiveCycle
+    monkeypatch.setattr(lp_method, "longest_certificate", cycle)
     r = plan_cyclogram(task, method="lp")
     assert r.status is Status.INACCURATE and "longest_path_deg" not in r.values
-    assert r.message.startswith("cross-check failed: the LP reports an optimum but Bellman-Ford finds a positive "
-                                "cycle that the conflict search")
+    assert r.message.startswith("cross-check failed: the LP reports an optimum but the longest-path passes find a "
+                                "positive cycle that the conflict search")
 
 
 def test_infeasible_without_a_positive_cycle_says_it_may_be_numerical(monkeypatch):
-    monkeypatch.setattr(cyclogram_lp, "conflict_chain", lambda net: [])
+    monkeypatch.setattr(lp_method, "conflict_chain", lambda net: [])
     r = plan_cyclogram(scene_task("loom/group1-window-conflict"), method="lp")
     assert r.status is Status.INFEASIBLE and r.values == {}
     assert r.message == "HIGHS: infeasible (no positive cycle among the difference constraints: a numerical failure?)"
@@ -374,7 +377,7 @@ def test_networkx_negative_cycle_extraction_is_not_relied_on():
     # the machine's cycle made infeasible: networkx's find_negative_cycle detects but cannot extract it
     # from a root joined to every event (networkx issue #5916); our search must name it
     task = registry.find("loom/machine").build({"operations[from=12,to=13].min_deg": 300.0})[0]
-    chain = cyclogram_lp.conflict_chain(cyclogram_lp.Net(task, "exact"))
+    chain = conflicts.conflict_chain(Net(task, "exact"))
     assert chain and _chain_excess_deg(task, [v for v, _, _ in chain]) > 0
 
 
@@ -406,7 +409,7 @@ def test_clarabel_reporting_optimal_on_a_positive_cycle_is_overruled():
 
 def test_positive_cycle_search_finds_tiny_cycles_and_ignores_round_off():
     arcs = [("a", "b", 0.1, "ab"), ("b", "c", 0.2, "bc"), ("c", "a", -0.3 + 1e-9, "ca")]
-    cycle = cyclogram_lp.positive_cycle(arcs)
+    cycle = conflicts.positive_cycle(arcs)
     assert sorted(label for *_, label in cycle) == ["ab", "bc", "ca"]
     zero = [("a", "b", 0.1, "ab"), ("b", "c", 0.2, "bc"), ("c", "a", -(0.1 + 0.2), "ca")]   # 0 up to round-off
-    assert cyclogram_lp.positive_cycle(zero) == []
+    assert conflicts.positive_cycle(zero) == []

@@ -18,8 +18,10 @@ import mechopt.solvers.loom.repair as loom_solver
 from mechopt import clear_caches, registry
 from mechopt.kit.errors import ModelError
 from mechopt.kit.result import Status
-from mechopt.models.loom import Cyclogram, lever_stop
-from mechopt.solvers.loom import exact_amplitude_bound, max_machine_speed, plan_cyclogram
+from mechopt.models.cyclogram import Cyclogram
+from mechopt.models.loom_limits import lever_stop
+from mechopt.solvers.cyclogram import max_machine_speed, plan_cyclogram
+from mechopt.solvers.loom import exact_amplitude_bound
 from mechopt.solvers.stop_impact.law import RollerLeftCam, rebound_amplitude_mm
 
 CHAIN_FIXED_DEG = 20 + 10 + 15 + 5 + 20 + 15 + 25     # [phi] along 1-3-7-8-9-10-10.1-10.2-11-12-13-24
@@ -225,8 +227,8 @@ def test_a_time_floor_is_an_angle_at_the_task_s_speed():
 
 
 def test_held_highs_model_agrees_with_the_cvxpy_lp_and_says_infeasible():
-    from mechopt.solvers.loom import HeldLP
-    from mechopt.solvers.loom.plan import Net
+    from mechopt.solvers.cyclogram import HeldLP
+    from mechopt.solvers.cyclogram.net import Net
     task = registry.find("loom/group1").build()[0]
     net = Net(task, "exact")
     held = HeldLP(len(net.names), net.tails, net.heads, first=net.first, last=net.last, with_cycle=True)

@@ -10,8 +10,8 @@ import pytest
 from mechopt import registry
 from mechopt.benchmarks.loom import machine
 from mechopt.kit.result import Status
-from mechopt.models.loom import Cyclogram
-from mechopt.solvers.loom import max_machine_speed, plan_cyclogram
+from mechopt.models.cyclogram import Cyclogram
+from mechopt.solvers.cyclogram import max_machine_speed, plan_cyclogram
 
 CHAIN_FIXED_DEG = 20 + 10 + 15 + 5 + 20 + 15 + 25     # [phi] along loom/machine-speed's critical chain
 STRESS_9_10_DEG_PER_RPM = 900 * 30 / (800 * 420)
@@ -143,7 +143,7 @@ def test_a_window_that_limits_the_speed_is_on_the_named_cycle(task):
 
 
 def test_a_check_that_disagrees_is_inaccurate(task, monkeypatch):
-    import mechopt.solvers.loom.speed as speed
+    import mechopt.solvers.cyclogram.speed as speed
     real = speed._speed_lp
 
     def off(*args):
@@ -158,9 +158,9 @@ def test_one_limit_changed_on_group1_the_graph_re_solves_and_certifies_the_held_
     """A what-if: [sigma_H] moved; the held HiGHS model re-solved and certified by a fresh
     graph pass, both against a fresh LP of the changed scene; a held answer off by 1e-6 deg is
     INACCURATE, and a network that cannot be held agrees only with an infeasible LP."""
-    from mechopt.solvers.loom import HeldLP
-    from mechopt.solvers.loom.graph import HeldSpan
-    from mechopt.solvers.loom.plan import Net, back_arcs
+    from mechopt.solvers.cyclogram import HeldLP
+    from mechopt.solvers.cyclogram.graph import HeldSpan
+    from mechopt.solvers.cyclogram.net import Net, back_arcs
     task = registry.find("loom/group1").build()[0]
     net = Net(task, "exact")
     held = HeldLP(len(net.names), net.tails, net.heads, first=net.first, last=net.last,

@@ -1,4 +1,4 @@
-"""Clearances between motions and the least angle maximised in one LP (loom.plan_motions), on the
+"""Clearances between motions and the least angle maximised in one LP (cyclogram.plan_motions), on the
 turret-and-die machine with overlap (Mechanical Design Handbook blog, "Timing Diagram" parts 1-4,
 2009: turret 100 mm on a cycloid over 150 deg, die 50 mm down, 100 deg dwell, up; overlapping the
 die's strokes with the index makes its acceleration "5 times lower"). The hand calculation below
@@ -13,8 +13,8 @@ from scipy.optimize import brentq
 from mechopt import registry
 from mechopt.kit.errors import ModelError
 from mechopt.kit.result import Status
-from mechopt.models.loom import Cyclogram
-from mechopt.solvers.loom import max_machine_speed, plan_cyclogram, plan_motions
+from mechopt.models.cyclogram import Cyclogram
+from mechopt.solvers.cyclogram import max_machine_speed, plan_cyclogram, plan_motions
 
 NO_OVERLAP_STROKE_DEG = (360.0 - 150.0 - 100.0) / 2      # 55 deg (source, part 1)
 
@@ -79,7 +79,7 @@ def test_the_other_reading_of_the_face(solved):
 def test_the_graph_and_the_speed_solvers_refuse_a_clearance(solved):
     task, _ = solved
     for solve in (plan_cyclogram, lambda t: plan_cyclogram(t, method="lp"), max_machine_speed):
-        with pytest.raises(ModelError, match="solved by loom.plan_motions"):
+        with pytest.raises(ModelError, match="solved by cyclogram.plan_motions"):
             solve(task)
 
 

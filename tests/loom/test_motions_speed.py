@@ -8,8 +8,8 @@ import math
 import pytest
 
 from mechopt.kit.result import Status
-from mechopt.models.loom import Cyclogram
-from mechopt.solvers.loom import max_machine_speed
+from mechopt.models.cyclogram import Cyclogram
+from mechopt.solvers.cyclogram import max_machine_speed
 
 STROKE_M = 0.050            # the die's stroke (source, part 1)
 ACCEL_M_S2 = 20.0           # assumed limit: the hand calculation (73.14 rpm)

@@ -72,7 +72,7 @@ def test_no_model_or_solver_opens_a_file():
 def test_the_rule_is_checked_on_the_code_it_names():
     # the test above would pass on an empty tree: make sure it reads the real folders
     assert len(list((ROOT / "models").glob("*.py"))) >= 5 and len(list((ROOT / "solvers").rglob("*.py"))) >= 10
-    assert "mechopt.kit.result" in imports_of(ROOT / "solvers" / "loom" / "plan.py")
+    assert "mechopt.kit.result" in imports_of(ROOT / "solvers" / "cyclogram" / "plan.py")
 
 
 def test_no_package_folder_at_the_root_shadows_the_installed_one():
@@ -153,8 +153,8 @@ def test_every_mechanism_file_is_named_by_exactly_one_row():
     assert named(lambda m: [m.solvers]) == sorted(p.parent.name for p in (ROOT / "solvers").glob("*/__init__.py"))
     assert named(lambda m: m.figures) == sorted({p.stem for p in (ROOT / "src" / "mechopt" / "figures").glob("*.py")}
                                                 - SPINE_FIGURES)
-    assert sorted(m.name for m in mechanisms()) == sorted(p.name for p in (ROOT / "cases").iterdir() if p.is_dir()
-                                                          and not p.name.startswith("_"))
+    assert sorted({m.folder for m in mechanisms()}) == sorted(p.name for p in (ROOT / "cases").iterdir() if p.is_dir()
+                                                               and not p.name.startswith("_"))
 
 
 def test_every_row_imports_and_its_templates_are_scenes():
@@ -163,7 +163,7 @@ def test_every_row_imports_and_its_templates_are_scenes():
         for name in (*m.models, m.solvers, *m.figures, m.benchmark):
             importlib.import_module(name)
         for _, scene in m.templates:
-            assert registry.find(scene).id.startswith(m.name + "/")
+            assert registry.find(scene).id.startswith(m.folder + "/")
 
 
 def test_the_readers_hold_no_list_of_mechanisms():

@@ -4,7 +4,8 @@ import numpy as np
 
 from mechopt.figures.registry import figure, new_figure
 from mechopt.figures.text import literal
-from mechopt.solvers.loom import least_cycle_time, max_machine_speed, plan_cyclogram, plan_motions, repair_cyclogram
+from mechopt.solvers.cyclogram import least_cycle_time, max_machine_speed, plan_cyclogram, plan_motions
+from mechopt.solvers.loom import repair_cyclogram
 
 ROW_IN = 0.35              # inches per operation row on a small network ...
 DENSE_ROWS = 40           # ... past which rows narrow to DENSE_ROW_IN and bars lose their own labels

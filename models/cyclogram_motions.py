@@ -1,0 +1,197 @@
+"""A motion per operation of a cyclogram, and clearances between two motions.
+
+An operation may carry a cam law (`mechopt.laws`: a unit rise S(xi), xi = its fraction of the
+operation's angle) and a stroke h [mm]; its phase angle t is then the motion's duration. At a
+main-shaft speed n [rpm] (omega = 2 pi n / 60 rad/s, the angle t deg lasting t / (6 n) s) its
+peak velocity and acceleration are (Norton, Cam Design and Manufacturing Handbook, 2nd ed., ch. 3;
+Rothbart (ed.), Cam Design Handbook, 2004, ch. 2)
+
+    v = Cv h / T,    a = Ca h / T^2,      T = t / (6 n) s,
+
+so a limit a <= a_max is T >= sqrt(Ca h / a_max) and v <= v_max is T >= Cv h / v_max: a least
+duration, as an operation's `min_ms` (its angle 0.006 n T grows with the speed; the highest-speed
+solvers take it as they take the stress bound). `least_ms` gives it; the network folds it into the
+operation's time floor.
+
+A displacement fraction c of the stroke is reached at the fraction x_c of the angle with
+S(x_c) = c (`angle_fraction`, brentq on the law): the instant p(from) + x_c (p(to) - p(from)), a
+fixed fraction for a fixed law, so a clearance between two motions is one linear row in the event
+times (not a difference constraint unless both angles are fixed).
+"""
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import Annotated
+
+from annotated_types import Ge, Gt, Le
+from scipy.optimize import brentq
+
+from mechopt.kit.errors import MechoptError, ModelError
+from mechopt.models.cam_laws import law as cam_law
+
+MAX_STROKE_MM = 1e5
+MAX_ACCEL_M_S2 = 1e6
+MAX_VELOCITY_M_S = 1e4
+MOTION_KEYS = ("law", "stroke_mm", "max_accel_m_s2", "max_velocity_m_s", "direction")
+DIRECTIONS = ("out", "back")   # the stroke away from the mechanism's rest position, or back to it
+FRACTION_XTOL = 1e-14          # brentq's tolerance on x_c (a fraction of the angle)
+
+
+@dataclass(frozen=True)
+class Motion:
+    """An operation's motion: its law's name, stroke [mm] and limits (None: not given)."""
+    law: str
+    stroke_mm: Annotated[float | None, Gt(0), Le(MAX_STROKE_MM)] = None
+    max_accel_m_s2: Annotated[float | None, Gt(0), Le(MAX_ACCEL_M_S2)] = None
+    max_velocity_m_s: Annotated[float | None, Gt(0), Le(MAX_VELOCITY_M_S)] = None
+    direction: str = "out"
+
+    @property
+    def peaks(self) -> dict:
+        return cam_law(self.law).peaks
+
+    def least_ms(self) -> tuple[float, str]:
+        """The least duration the limits allow [ms] and which limit sets it ("max_accel",
+        "max_velocity"; 0 and "" with none)."""
+        h_m, out = (self.stroke_mm or 0.0) / 1000.0, (0.0, "")
+        if self.max_accel_m_s2 is not None:
+            out = max(out, (1000.0 * math.sqrt(self.peaks["Ca"] * h_m / self.max_accel_m_s2), "max_accel"))
+        if self.max_velocity_m_s is not None:
+            out = max(out, (1000.0 * self.peaks["Cv"] * h_m / self.max_velocity_m_s, "max_velocity"))
+        return out
+
+    def displacement(self, xi):
+        """The signed displacement at angle fractions xi (clipped to [0, 1]) [mm, or a fraction of
+        the stroke without stroke_mm]: + out, - back."""
+        import numpy as np
+
+        S = cam_law(self.law).values(np.clip(np.asarray(xi, dtype=float), 0.0, 1.0))[0]
+        return (1.0 if self.direction == "out" else -1.0) * (self.stroke_mm or 1.0) * S
+
+    def peak_velocity_m_s(self, t_deg: float, speed_rpm: float) -> float:
+        """Cv h / T, T = t / (6 n) s [m/s]."""
+        return self.peaks["Cv"] * (self.stroke_mm or 0.0) / 1000.0 * 6.0 * speed_rpm / t_deg
+
+    def peak_accel_m_s2(self, t_deg: float, speed_rpm: float) -> float:
+        """Ca h / T^2, T = t / (6 n) s [m/s^2]."""
+        return self.peaks["Ca"] * (self.stroke_mm or 0.0) / 1000.0 * (6.0 * speed_rpm / t_deg) ** 2
+
+    def angle_fraction(self, c: float) -> float:
+        """x_c: the fraction of the operation's angle at which the fraction c of the stroke is reached."""
+        return _angle_fraction(self.law, float(c))
+
+
+@lru_cache(maxsize=256)
+def _angle_fraction(name: str, c: float) -> float:
+    if c <= 0.0 or c >= 1.0:
+        return min(max(c, 0.0), 1.0)
+    law = cam_law(name)
+    # S rises monotonically from 0 to 1 (every library law: S' >= 0); brentq brackets the one root
+    return brentq(lambda x: float(law.values([x])[0][0]) - c, 0.0, 1.0, xtol=FRACTION_XTOL)
+
+
+def motion_of(op: dict, key: str) -> Motion | None:
+    """The Motion of an operation row (None without a `law`), its cells checked: errors name the
+    row and the key with the allowed range."""
+    given = {k: op[k] for k in MOTION_KEYS if k in op and op[k] not in (None, "")}
+    if not given:
+        return None
+    if "law" not in given:
+        raise ModelError(f"{key}.{next(iter(given))}: a stroke or a limit needs the operation's motion law "
+                         f"(column law)", key=f"{key}.law")
+    try:
+        cam_law(str(given["law"]))
+    except MechoptError as exc:
+        raise ModelError(f"{key}.{exc}", key=f"{key}.law") from None
+    numbers = {}
+    for name, top, unit in (("stroke_mm", MAX_STROKE_MM, "mm"), ("max_accel_m_s2", MAX_ACCEL_M_S2, "m/s^2"),
+                            ("max_velocity_m_s", MAX_VELOCITY_M_S, "m/s")):
+        if name not in given:
+            continue
+        value = given[name]
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value <= top:
+            raise ModelError(f"{key}.{name}={value!r}: allowed (0, {top:g}] {unit}", key=f"{key}.{name}")
+        numbers[name] = float(value)
+    if ("max_accel_m_s2" in numbers or "max_velocity_m_s" in numbers) and "stroke_mm" not in numbers:
+        raise ModelError(f"{key}: an acceleration or velocity limit needs the stroke (stroke_mm)",
+                         key=f"{key}.stroke_mm")
+    direction = str(given.get("direction", "out"))
+    if direction not in DIRECTIONS:
+        raise ModelError(f"{key}.direction={direction!r}: allowed {', '.join(DIRECTIONS)}", key=f"{key}.direction")
+    return Motion(str(given["law"]), **numbers, direction=direction)
+
+
+# a clearance: `operation` has reached `at` (a fraction of its stroke) before (or after) `other`
+# reaches `other_at`, `other` of `cycles` cycles later (0: the same cycle)
+CLEARANCE_COLUMNS = {"operation": str, "at": float, "relation": str, "other": str, "other_at": float,
+                     "cycles": float, "mark": str, "why": str, "where": str, "what": str}
+RELATIONS = ("before", "after")
+LEAST_ANGLE = "least_angle"
+OBJECTIVES = (LEAST_ANGLE,)
+
+
+@dataclass(frozen=True)
+class Clearance:
+    """p_a(x_a) <= p_b(x_b) + cycles T ("before"; "after": >=), p_k(x) = p(from_k) + x t_k: the
+    instants operation a (arc index) and b reach their displacement fractions (x: the angle fractions)."""
+    a: Annotated[int, Ge(0)]
+    x_a: Annotated[float, Ge(0), Le(1)]
+    b: Annotated[int, Ge(0)]
+    x_b: Annotated[float, Ge(0), Le(1)]
+    sign: Annotated[float, Ge(-1), Le(1)]          # +1 before, -1 after
+    cycles: Annotated[int, Ge(0)]
+    label: str
+
+
+def operation_index(arcs, names, ref, key) -> int:
+    """The arc index of an operation named in a table: by its `name` or as "from->to"."""
+    ref = str(ref).strip()
+    found = [k for k, name in enumerate(names) if name == ref] or \
+        [k for k, (x, y) in enumerate(arcs) if f"{x}->{y}" == ref]
+    if len(found) != 1:
+        why = "names two operations" if found else "no such operation"
+        shown = ", ".join(n or f"{x}->{y}" for n, (x, y) in list(zip(names, arcs))[:12])
+        raise ModelError(f"{key}={ref!r}: {why}; give an operation's name or from->to: {shown}", key=key)
+    return found[0]
+
+
+def clearance_rows(table, arcs, names, motions, max_cycles) -> tuple[Clearance, ...]:
+    """The clearances table checked and resolved: each row's operations, fractions in [0, 1]
+    (inside it only on an operation with a law: the fraction of its angle comes from the law),
+    relation and cycles."""
+    if not isinstance(table, list):
+        raise ModelError(f"clearances: expected a list of tables, got {table!r}", key="clearances")
+    out = []
+    for j, row in enumerate(table):
+        key = f"clearances[{j}]"
+        if not isinstance(row, dict):
+            raise ModelError(f"{key}: expected a table, got {row!r}", key=key)
+        unknown = sorted(set(row) - set(CLEARANCE_COLUMNS))
+        missing = [k for k in ("operation", "at", "relation", "other", "other_at") if k not in row]
+        if unknown or missing:
+            raise ModelError(f"{key}: " + (f"unknown {', '.join(unknown)}; allowed: {', '.join(CLEARANCE_COLUMNS)}"
+                                           if unknown else f"missing {', '.join(missing)}"), key=key)
+        ends = []
+        for op_key, at_key in (("operation", "at"), ("other", "other_at")):
+            k = operation_index(arcs, names, row[op_key], f"{key}.{op_key}")
+            c = row[at_key]
+            if isinstance(c, bool) or not isinstance(c, (int, float)) or not 0.0 <= c <= 1.0:
+                raise ModelError(f"{key}.{at_key}={c!r}: a fraction of the stroke, allowed [0, 1]", key=f"{key}.{at_key}")
+            if 0.0 < c < 1.0 and k not in motions:
+                raise ModelError(f"{key}.{at_key}={c:g}: inside the stroke needs the motion law of operation "
+                                 f"{row[op_key]!r} (its column law)", key=f"{key}.{at_key}")
+            ends.append((k, motions[k].angle_fraction(c) if k in motions else float(c)))
+        if row["relation"] not in RELATIONS:
+            raise ModelError(f"{key}.relation={row['relation']!r}: allowed {', '.join(RELATIONS)}", key=f"{key}.relation")
+        cycles = row.get("cycles", 0)
+        if cycles in (None, ""):
+            cycles = 0
+        if isinstance(cycles, bool) or not isinstance(cycles, (int, float)) or not float(cycles).is_integer() \
+                or not 0 <= cycles <= max_cycles:
+            raise ModelError(f"{key}.cycles={cycles!r}: a whole number in [0, {max_cycles}]", key=f"{key}.cycles")
+        later = f" of {int(cycles)} cycle{'s' if cycles != 1 else ''} later" if cycles else ""
+        label = (f"clearance {row['operation']!r} at {row['at']:g} {row['relation']} {row['other']!r} at "
+                 f"{row['other_at']:g}{later}")
+        out.append(Clearance(ends[0][0], ends[0][1], ends[1][0], ends[1][1],
+                             1.0 if row["relation"] == "before" else -1.0, int(cycles), label))
+    return tuple(out)
