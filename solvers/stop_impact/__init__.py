@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING
 from mechopt.kit.lazy import lazy_names
 
 if TYPE_CHECKING:       # for readers and the docs; at run time each name imports its module when used
-    from mechopt.solvers.stop_impact.cam_shape import SHOP_PREFIX, cam_profile, shape_cam
+    from mechopt.solvers.stop_impact.cam_shape import cam_profile, shape_cam
     from mechopt.solvers.stop_impact.entry_points import (
                                                           cam_dynamics,
                                                           impact_forces,
@@ -38,5 +38,5 @@ __getattr__, __dir__ = lazy_names(__name__, {
     "entry_points": ["cam_dynamics", "impact_forces", "linearise_amplitude", "natural_frequencies",
                      "operating_point", "rebound"]})
 
-__all__ = ["SHOP_PREFIX", "cam_dynamics", "cam_profile", "fit_roots", "impact_forces", "law_of", "linearise_amplitude",
+__all__ = ["cam_dynamics", "cam_profile", "fit_roots", "impact_forces", "law_of", "linearise_amplitude",
            "natural_frequencies", "operating_point", "rebound", "shape_cam", "synthesise_law"]
