@@ -115,7 +115,9 @@ CHART_CYCLES = (-2, -1, 0, 1)   # a motion's copies of earlier and later cycles 
 
 def timing_diagram(run):
     """Displacement against shaft angle, one panel per group (mechanism), over one cycle: every
-    motion of the group by its law (cam law S over its angle, stroke in mm, + out, - back), its
+    motion of the group by its law (cam law S over its angle, stroke in mm, + out, - back; an
+    oscillating output's swing in deg on a panel of its own, not a second axis: a panel's curve is
+    the sum of its motions, meaningful in one unit, and a clearance's level is read on it), its
     copies of the cycles before and after folded in, so a stroke that runs into the next index shows
     where it overlaps; each clearance's two instants as dotted lines (the turret stopped before the
     die is 0.6 down, ...), and where a clearance names a displacement inside a stroke, its level
@@ -124,8 +126,10 @@ def timing_diagram(run):
     task, values = run.task, run.result.values
     cycle = task.cycle_deg or values["span_deg"]
     theta = np.linspace(0.0, cycle, CHART_POINTS)
-    group_of = {k: task.arc_data(k)["group"] or task.graph.nodes[task.arcs[k][0]]["group"] or "-"
-                for k in task.motion_arcs}
+    # a panel per group and stroke unit: an oscillating output's swing [deg] is not added to a
+    # slide's travel [mm], so a group with both gets two panels, each with one ordinate
+    group_of = {k: (task.arc_data(k)["group"] or task.graph.nodes[task.arcs[k][0]]["group"] or "-",
+                    m.units[0] if m.stroke is not None else "of stroke") for k, m in task.motion_arcs.items()}
     groups = list(dict.fromkeys(group_of.values()))
     fig = new_figure(figsize=(10, 2.2 * len(groups) + 1.2))
     axes = np.atleast_1d(fig.subplots(len(groups), 1, sharex=True, squeeze=False)[:, 0])
@@ -145,8 +149,7 @@ def timing_diagram(run):
         for mid, name, angle in names:      # each motion named at its middle, its angle beside the name
             ax.annotate(literal(f"{name} {angle:.1f} deg"), (mid, np.interp(mid, theta, total)), fontsize=7,
                         xytext=(4, 4), textcoords="offset points", color="tab:blue")
-        unit = "mm" if all(m.stroke_mm for k, m in task.motion_arcs.items() if group_of[k] == group) else "of stroke"
-        ax.set_ylabel(f"{literal(group)} [{unit}]", fontsize=8)
+        ax.set_ylabel(f"{literal(group[0])} [{group[1]}]", fontsize=8)
         ax.grid(True, alpha=0.3)
     for j, c in enumerate(task.clearance_rows):
         for side, (k, xi, shift) in enumerate(((c.a, c.x_a, 0), (c.b, c.x_b, c.cycles))):
