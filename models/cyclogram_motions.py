@@ -183,7 +183,31 @@ CLEARANCE_COLUMNS = {"operation": str, "at": float, "relation": str, "other": st
                      "cycles": float, "mark": str, "why": str, "where": str, "what": str}
 RELATIONS = ("before", "after")
 LEAST_ANGLE = "least_angle"
-OBJECTIVES = (LEAST_ANGLE,)
+# the least of t_k / sqrt(Ca_k h_k): maximising it minimises the largest peak acceleration of the set
+LEAST_SCALED_ANGLE = "least_scaled_angle"
+OBJECTIVES = (LEAST_ANGLE, LEAST_SCALED_ANGLE)
+
+
+def objective_weights(maximize, arcs, motions, refs) -> tuple[float, ...]:
+    """w_k of each operation of the objective's set (arc indices `arcs`, named `refs`), the LP's rows
+    t_k >= z w_k: 1 for "least_angle"; for "least_scaled_angle" w_k = sqrt(Ca_k h_k) [h in m, or
+    rad for an oscillating output], so that with T_k = t_k / (6 n) the peak acceleration
+    a_k = Ca_k h_k (6 n)^2 / t_k^2 [m/s^2 or rad/s^2; t deg, n rpm] is at most (6 n)^2 / z^2, equal
+    to it on every row that binds: the least scaled angle z maximised is the largest peak
+    acceleration minimised, one LP for motions of different laws and strokes."""
+    if maximize != LEAST_SCALED_ANGLE:
+        return tuple(1.0 for _ in arcs)
+    kinds = set()
+    for j, (k, ref) in enumerate(zip(arcs, refs)):
+        if k not in motions or motions[k].stroke is None:
+            raise ModelError(f"least_angle_of[{j}]={ref!r}: maximize = {LEAST_SCALED_ANGLE!r} needs its motion law "
+                             f"and stroke (columns law, stroke_mm or stroke_deg)", key=f"least_angle_of[{j}]")
+        kinds.add(motions[k].units[1])
+    if len(kinds) > 1:
+        raise ModelError(f"least_angle_of: maximize = {LEAST_SCALED_ANGLE!r} over translating (stroke_mm) and "
+                         f"oscillating (stroke_deg) motions compares m/s^2 with rad/s^2: name motions of one kind",
+                         key="least_angle_of")
+    return tuple(math.sqrt(motions[k].peaks["Ca"] * motions[k].stroke_si) for k in arcs)
 
 
 @dataclass(frozen=True)

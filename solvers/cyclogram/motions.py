@@ -1,12 +1,12 @@
 """Event times of a cyclogram whose operations are motions: clearances between them and the least
 of several motions' angles maximised, in one LP (cvxpy + HiGHS).
 
-    maximise z  (maximize = "least_angle")  or  minimise p(last) - p(first)
+    maximise z  (maximize = "least_angle" or "least_scaled_angle")  or  minimise p(last) - p(first)
     subject to  p(y) - p(x) >= lb(x, y)                        every operation (its limits at speed_rpm)
                 p(y) - p(x) <= w,  p(a) = p(b)                 windows, syncs
                 p(last) - p(first) <= cycle                    unless span_within_cycle = false
                 s (p_a(x_a) - p_b(x_b) - k cycle) <= 0         clearances (s = +1 before, -1 after)
-                p(y) - p(x) >= z                               each operation of least_angle_of
+                p(y) - p(x) >= z w_k                           each operation k of least_angle_of
                 p(first) = 0
 
 p_k(x) = p(from_k) + x (p(to_k) - p(from_k)) is the instant operation k reaches the fraction of
@@ -18,6 +18,11 @@ only, and refuse them). A clearance with `cycles` = k names the other operation 
 (its instants k cycle_deg on): a machine whose die rises into the turret's next index is posed
 over one cycle, not unrolled by hand. With span_within_cycle = false the events of one cycle may
 spread over more than a turn (each motion's repetition is then its own clearance of cycles = 1).
+
+w_k = 1 maximises the least angle; w_k = sqrt(Ca_k h_k) ("least_scaled_angle",
+models/cyclogram_motions.objective_weights) minimises the largest peak acceleration Ca_k h_k
+(6 n)^2 / t_k^2 of motions of different laws and strokes, still one LP: at the answer the motions
+whose rows bind share that peak, (6 n)^2 / z^2.
 """
 import math
 
@@ -27,7 +32,7 @@ import numpy as np
 from mechopt.kit.errors import NAMED, ModelError, some_of
 from mechopt.kit.result import Clock, Result, Status, from_cvxpy
 from mechopt.models.cyclogram import Cyclogram
-from mechopt.models.cyclogram_motions import LEAST_ANGLE
+from mechopt.models.cyclogram_motions import LEAST_ANGLE, LEAST_SCALED_ANGLE
 from mechopt.solvers.cyclogram.event_time import incidence
 
 DUAL_TOL = 1e-7        # a constraint whose dual exceeds this binds (it stops the objective)
@@ -59,10 +64,10 @@ def plan_motions(task: Cyclogram, *, backend: str = "HIGHS") -> Result:
     for A, rhs, label in rows:           # A p <= rhs, one row each
         cons.append(A @ p <= rhs)
         labels.append(label)
-    least = task.least_angle_arcs
-    if task.maximize == LEAST_ANGLE:
-        for k in least:
-            cons.append(p[heads[k]] - p[tails[k]] >= z)
+    least, weights = task.least_angle_arcs, task.objective_weights
+    if task.maximize is not None:
+        for k, w in zip(least, weights):
+            cons.append(p[heads[k]] - p[tails[k]] >= w * z)
             labels.append(f"least_angle_of {_op(task, k)}")
         objective = cp.Maximize(z)
     else:
@@ -88,6 +93,8 @@ def plan_motions(task: Cyclogram, *, backend: str = "HIGHS") -> Result:
     values = {"span_deg": float(pv[last] - pv[first])}
     if task.maximize == LEAST_ANGLE:
         values["least_angle_deg"] = float(min(t[k] for k in least))
+    elif task.maximize == LEAST_SCALED_ANGLE:
+        values |= _scaled(task, t, least, weights)
     values |= {f"p_{v}_deg": float(pv[i]) for i, v in enumerate(names)}
     values |= {f"t_{x}_{y}_deg": float(t[k]) for k, (x, y) in enumerate(task.arcs)}
     for j, (A, rhs, label) in enumerate(rows):
@@ -101,19 +108,43 @@ def plan_motions(task: Cyclogram, *, backend: str = "HIGHS") -> Result:
     limited += [{"constraint": f"{why[k]}[{_op(task, k)}] t >= {lb[k]:.6g} deg", "dual": float(d)}
                 for k, d in enumerate(np.atleast_1d(cons[0].dual_value)) if d > DUAL_TOL]
     # the objective's own rows bind by definition: what stops it are the others
+    at_objective = [row["constraint"][len("least_angle_of "):] for row in limited
+                    if row["constraint"].startswith("least_angle_of")]
     limited = [row for row in limited if row["constraint"] != "operations"
                and not row["constraint"].startswith("least_angle_of")]
     diagnostics = {"limited_by": limited, "backend": backend, "worst_row_deg": worst,
-                   "angle_fractions": {row.label: [row.x_a, row.x_b] for row in task.clearance_rows}}
-    objective_text = (f"least angle of {some_of((_op(task, k) for k in least), sep=', ')} = "
-                      f"{values['least_angle_deg']:.6g} deg" if task.maximize == LEAST_ANGLE
-                      else f"span {values['span_deg']:.6g} deg")
+                   "angle_fractions": {row.label: [row.x_a, row.x_b] for row in task.clearance_rows},
+                   "objective_binds": at_objective}
+    objective_text = _objective_text(task, values, least)
     message = f"{objective_text}; limited by {some_of((r['constraint'] for r in limited), sep='; ') or 'nothing'}"
     arrays = {"operation": task.operation_labels, "start_deg": pv[tails], "end_deg": pv[heads], "duration_deg": t}
     if worst > FEAS_TOL_DEG:
         return clock.result(Status.INACCURATE, values, message=f"a row is violated by {worst:.3g} deg; {message}",
                             diagnostics=diagnostics, arrays=arrays)
     return clock.result(Status.SOLVED, values, message=message, diagnostics=diagnostics, arrays=arrays)
+
+
+def _scaled(task, t, least, weights) -> dict:
+    """The least scaled angle z = min t_k / w_k [deg / sqrt(m), or sqrt(rad)] and at speed_rpm the
+    largest peak acceleration of the set, (6 n)^2 / z^2 [m/s^2, or rad/s^2]."""
+    unit = task.motion_arcs[least[0]].units
+    z = float(min(t[k] / w for k, w in zip(least, weights)))
+    out = {f"least_scaled_angle_deg_per_sqrt_{'rad' if unit[0] == 'deg' else 'm'}": z}
+    if task.speed_rpm:
+        out[f"highest_peak_accel_{unit[1]}"] = (6.0 * task.speed_rpm / z) ** 2
+    return out
+
+
+def _objective_text(task, values, least) -> str:
+    ops = some_of((_op(task, k) for k in least), sep=", ")
+    if task.maximize == LEAST_ANGLE:
+        return f"least angle of {ops} = {values['least_angle_deg']:.6g} deg"
+    if task.maximize == LEAST_SCALED_ANGLE:
+        unit = task.motion_arcs[least[0]].units[1]
+        peak = values.get(f"highest_peak_accel_{unit}")
+        peak = "" if peak is None else f" (largest peak acceleration {peak:.6g} {unit.replace('_s2', '/s^2')})"
+        return f"least scaled angle t / sqrt(Ca h) of {ops} maximised{peak}"
+    return f"span {values['span_deg']:.6g} deg"
 
 
 def _culprits(n, tails, heads, lb, first, rows, backend) -> tuple[list[str], int]:
@@ -166,7 +197,7 @@ def _rows(task, names, tails, heads, first, last) -> list:
         shift = c.cycles * (task.cycle_deg or 0.0)
         out.append((c.sign * row([(tails[c.a], 1.0 - c.x_a), (heads[c.a], c.x_a),
                                   (tails[c.b], c.x_b - 1.0), (heads[c.b], -c.x_b)]), c.sign * shift, c.label))
-    if not out and task.maximize == LEAST_ANGLE:
+    if not out and task.maximize is not None:
         raise ModelError("least_angle_of: with no window, cycle or clearance the angles grow without end",
                          key="least_angle_of")
     return out

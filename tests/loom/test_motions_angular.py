@@ -91,3 +91,66 @@ def test_the_timing_diagram_draws_the_swing_in_deg_on_its_own_panel():
     assert labels == ["feed [mm]", "feed [deg]"]
     assert max(fig.axes[1].lines[0].get_ydata()) == pytest.approx(SWING_DEG, abs=1e-9)
     assert max(fig.axes[0].lines[0].get_ydata()) == pytest.approx(40.0, abs=1e-9)
+
+
+# the least of several peak accelerations (maximize = "least_scaled_angle"): two motions, different
+# laws and strokes, one after the other in a 200 deg window (assumed numbers, round)
+BALANCE_OPS = [{"from": "a", "to": "b", "min_deg": 10.0, "name": "push", "law": "cycloidal", "stroke_mm": 50.0},
+               {"from": "b", "to": "c", "min_deg": 10.0, "name": "lift", "law": "harmonic", "stroke_mm": 30.0},
+               {"from": "c", "to": "d", "min_deg": 20.0, "name": "rest"}]
+HARMONIC_CA = math.pi**2 / 2     # the simple harmonic law's peak acceleration coefficient (Rothbart, eq. 2.49)
+
+
+def balanced(ops=BALANCE_OPS):
+    return Cyclogram(operations=ops, windows=[{"from": "a", "to": "c", "max_deg": 200.0}],
+                     maximize="least_scaled_angle", least_angle_of=["push", "lift"], speed_rpm=60.0)
+
+
+def test_the_largest_peak_acceleration_is_minimised_in_closed_form():
+    """t1 + t2 = 200 deg with a1 = a2, a_i = Ca_i h_i (6 n)^2 / t_i^2: t_i = 200 r_i / (r_1 + r_2),
+    r_i = sqrt(Ca_i h_i) (h in m); at 60 rpm both peaks are (360 (r_1 + r_2) / 200)^2 m/s^2."""
+    r1, r2 = math.sqrt(CYCLOID_CA * 0.050), math.sqrt(HARMONIC_CA * 0.030)
+    t1, t2 = 200.0 * r1 / (r1 + r2), 200.0 * r2 / (r1 + r2)
+    peak = (360.0 * (r1 + r2) / 200.0) ** 2
+    r = plan_motions(balanced())
+    assert r.status is Status.SOLVED, r.message
+    v = r.values
+    assert v["t_a_b_deg"] == pytest.approx(t1, rel=1e-9) and v["t_b_c_deg"] == pytest.approx(t2, rel=1e-9)
+    assert v["accel_a_b_m_s2"] == pytest.approx(peak, rel=1e-9)
+    assert v["accel_b_c_m_s2"] == pytest.approx(peak, rel=1e-9)
+    assert v["highest_peak_accel_m_s2"] == pytest.approx(peak, rel=1e-9)
+    assert v["least_scaled_angle_deg_per_sqrt_m"] == pytest.approx(200.0 / (r1 + r2), rel=1e-9)
+    # what stops it: the window, named; both motions' rows bind (their peaks equal)
+    assert [row["constraint"] for row in r.diagnostics["limited_by"]] == ["window p(c) - p(a) <= 200 deg"]
+    assert sorted(r.diagnostics["objective_binds"]) == ['"lift"', '"push"']
+    assert "limited by window p(c) - p(a) <= 200 deg" in r.message
+
+
+def test_a_floor_that_binds_leaves_the_others_equal():
+    """The lift at least 120 deg (its floor binds): the push takes the rest, 80 deg, and is the
+    largest peak; the floor is named with the window."""
+    ops = [dict(op) for op in BALANCE_OPS]
+    ops[1]["min_deg"] = 120.0
+    r = plan_motions(balanced(ops))
+    assert r.status is Status.SOLVED, r.message
+    assert r.values["t_a_b_deg"] == pytest.approx(80.0, rel=1e-9)
+    assert r.values["highest_peak_accel_m_s2"] == pytest.approx(CYCLOID_CA * 0.050 * (360.0 / 80.0) ** 2, rel=1e-9)
+    named = [row["constraint"] for row in r.diagnostics["limited_by"]]
+    assert sorted(named) == ['min_angle["lift"] t >= 120 deg', "window p(c) - p(a) <= 200 deg"]
+
+
+@pytest.mark.parametrize("ops, words", [
+    (BALANCE_OPS[:2] + [{"from": "c", "to": "d", "min_deg": 20.0, "name": "rest"}], None),
+    ([BALANCE_OPS[0], {"from": "b", "to": "c", "min_deg": 10.0, "name": "lift", "law": "harmonic"}, BALANCE_OPS[2]],
+     "least_angle_of[1]='lift': maximize = 'least_scaled_angle' needs its motion law and stroke"),
+    ([BALANCE_OPS[0], BALANCE_OPS[1] | {"stroke_mm": None, "stroke_deg": 20.0}, BALANCE_OPS[2]],
+     "compares m/s^2 with rad/s^2"),
+])
+def test_a_scaled_angle_over_motions_it_cannot_compare_is_named(ops, words):
+    ops = [{k: v for k, v in op.items() if v is not None} for op in ops]
+    if words is None:
+        balanced(ops)
+        return
+    with pytest.raises(ModelError) as exc:
+        balanced(ops)
+    assert words in str(exc.value)
