@@ -56,19 +56,21 @@ def plan_motions(task: Cyclogram, *, backend: str = "HIGHS") -> Result:
     index = task.event_index
     first, last = index[task.first_event], index[task.last_event]
     lb, why = task.lower_bounds_deg()
-    rows = _rows(task, names, tails, heads, first, last)
+    rows, meta = _rows(task, names, tails, heads, first, last)
     p = cp.Variable(len(names), name="p_deg")
     z = cp.Variable(name="least_angle_deg")
     cons = [incidence(len(names), tails, heads) @ p >= lb, p[first] == 0]
-    labels = ["operations", "anchor"]
-    for A, rhs, label in rows:           # A p <= rhs, one row each
+    labels, infos = ["operations", "anchor"], [{}, {}]
+    for (A, rhs, label), info in zip(rows, meta):           # A p <= rhs, one row each
         cons.append(A @ p <= rhs)
         labels.append(label)
+        infos.append(info)
     least, weights = task.least_angle_arcs, task.objective_weights
     if task.maximize is not None:
         for k, w in zip(least, weights):
             cons.append(p[heads[k]] - p[tails[k]] >= w * z)
             labels.append(f"least_angle_of {_op(task, k)}")
+            infos.append({"kind": "objective", "ops": [_arc(task, k)]})
         objective = cp.Maximize(z)
     else:
         objective = cp.Minimize(p[last] - p[first])
@@ -102,19 +104,22 @@ def plan_motions(task: Cyclogram, *, backend: str = "HIGHS") -> Result:
             values[f"clearance_{j - _n_plain(rows)}_slack_deg"] = float(rhs - A @ pv)
     values |= task.motion_values(t, task.speed_rpm)
     worst = max([float(np.max(lb - t, initial=-math.inf))] + [float(A @ pv - rhs) for A, rhs, _ in rows])
-    limited = [{"constraint": label, "dual": float(np.max(np.abs(np.atleast_1d(c.dual_value))))}
-               for c, label in zip(cons, labels) if label != "anchor" and c.dual_value is not None
+    limited = [{"constraint": label, "dual": float(np.max(np.abs(np.atleast_1d(c.dual_value))))} | info
+               for c, label, info in zip(cons, labels, infos) if label != "anchor" and c.dual_value is not None
                and np.max(np.abs(np.atleast_1d(c.dual_value))) > DUAL_TOL]
-    limited += [{"constraint": f"{why[k]}[{_op(task, k)}] t >= {lb[k]:.6g} deg", "dual": float(d)}
+    limited += [{"constraint": f"{why[k]}[{_op(task, k)}] t >= {lb[k]:.6g} deg", "dual": float(d),
+                 "kind": "operation", "ops": [_arc(task, k)]}
                 for k, d in enumerate(np.atleast_1d(cons[0].dual_value)) if d > DUAL_TOL]
     # the objective's own rows bind by definition: what stops it are the others
-    at_objective = [row["constraint"][len("least_angle_of "):] for row in limited
-                    if row["constraint"].startswith("least_angle_of")]
+    at_objective = [row["ops"][0] for row in limited if row.get("kind") == "objective"]
     limited = [row for row in limited if row["constraint"] != "operations"
                and not row["constraint"].startswith("least_angle_of")]
     diagnostics = {"limited_by": limited, "backend": backend, "worst_row_deg": worst,
                    "angle_fractions": {row.label: [row.x_a, row.x_b] for row in task.clearance_rows},
-                   "objective_binds": at_objective}
+                   "objective_binds": at_objective,
+                   # each binding row's kind, the operations ("from->to") or events it joins: the chart marks them
+                   "binding_rows": [{k: row[k] for k in ("constraint", "kind", "ops", "events") if k in row}
+                                    for row in limited]}
     objective_text = _objective_text(task, values, least)
     message = f"{objective_text}; limited by {some_of((r['constraint'] for r in limited), sep='; ') or 'nothing'}"
     arrays = {"operation": task.operation_labels, "start_deg": pv[tails], "end_deg": pv[heads], "duration_deg": t}
@@ -163,6 +168,11 @@ def _culprits(n, tails, heads, lb, first, rows, backend) -> tuple[list[str], int
     return out, len(tried)
 
 
+def _arc(task, k) -> str:
+    x, y = task.arcs[k]
+    return f"{x}->{y}"
+
+
 def _op(task, k) -> str:
     x, y = task.arcs[k]
     name = task.arc_data(k)["name"]
@@ -173,10 +183,11 @@ def _n_plain(rows) -> int:
     return sum(1 for *_, label in rows if not label.startswith("clearance"))
 
 
-def _rows(task, names, tails, heads, first, last) -> list:
+def _rows(task, names, tails, heads, first, last) -> tuple[list, list]:
     """Every constraint but the operations' and the anchor as (a row over p, rhs, label): A p <= rhs.
-    Windows, syncs and the cycle first, then the clearances in table order."""
-    n, index, out = len(names), task.event_index, []
+    Windows, syncs and the cycle first, then the clearances in table order; and per row its kind
+    and the events ("window", "sync", "cycle") or operations ("clearance") it joins."""
+    n, index, out, meta = len(names), task.event_index, [], []
 
     def row(pairs):
         a = np.zeros(n)
@@ -186,18 +197,22 @@ def _rows(task, names, tails, heads, first, last) -> list:
 
     for a, b, w in task.window_arcs():
         out.append((row([(index[b], 1.0), (index[a], -1.0)]), w, f"window p({b}) - p({a}) <= {w:.6g} deg"))
+        meta.append({"kind": "window", "events": [a, b]})
     for a, b in task.sync_pairs():
         out += [(row([(index[a], 1.0), (index[b], -1.0)]), 0.0, f"sync p({a}) = p({b})"),
                 (row([(index[b], 1.0), (index[a], -1.0)]), 0.0, f"sync p({b}) = p({a})")]
+        meta += [{"kind": "sync", "events": [a, b]}] * 2
     if task.cycle_deg is not None and task.span_within_cycle:
         out.append((row([(last, 1.0), (first, -1.0)]), task.cycle_deg,
                     f"cycle p({names[last]}) - p({names[first]}) <= {task.cycle_deg:.6g} deg"))
+        meta.append({"kind": "cycle", "events": [names[first], names[last]]})
     for c in task.clearance_rows:
         # s (p_a(x_a) - p_b(x_b)) <= s k cycle, p_k(x) = (1 - x) p(from_k) + x p(to_k)
         shift = c.cycles * (task.cycle_deg or 0.0)
         out.append((c.sign * row([(tails[c.a], 1.0 - c.x_a), (heads[c.a], c.x_a),
                                   (tails[c.b], c.x_b - 1.0), (heads[c.b], -c.x_b)]), c.sign * shift, c.label))
+        meta.append({"kind": "clearance", "ops": [_arc(task, c.a), _arc(task, c.b)]})
     if not out and task.maximize is not None:
         raise ModelError("least_angle_of: with no window, cycle or clearance the angles grow without end",
                          key="least_angle_of")
-    return out
+    return out, meta

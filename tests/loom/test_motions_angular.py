@@ -122,7 +122,7 @@ def test_the_largest_peak_acceleration_is_minimised_in_closed_form():
     assert v["least_scaled_angle_deg_per_sqrt_m"] == pytest.approx(200.0 / (r1 + r2), rel=1e-9)
     # what stops it: the window, named; both motions' rows bind (their peaks equal)
     assert [row["constraint"] for row in r.diagnostics["limited_by"]] == ["window p(c) - p(a) <= 200 deg"]
-    assert sorted(r.diagnostics["objective_binds"]) == ['"lift"', '"push"']
+    assert sorted(r.diagnostics["objective_binds"]) == ["a->b", "b->c"]
     assert "limited by window p(c) - p(a) <= 200 deg" in r.message
 
 

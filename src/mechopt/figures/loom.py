@@ -18,7 +18,10 @@ def gantt(run, headline=None):
     """One bar per operation from p(from) to p(to) over the machine angle, a row per operation:
     rows grouped by the operation's group (its own, else its first event's), groups in the order
     they start, and inside a group by start angle, so the chain reads as a staircase; the
-    critical chain in red, every other operation's total float as a light tail. Past DENSE_ROWS
+    critical chain in red, every other operation's total float as a light tail; where the plan
+    names its binding rows (plan_motions' binding_rows), the operations they bound (a floor, a
+    window on the operation, either side of a clearance) edged in orange, a window between other
+    events as an orange line over its span, the objective's operations at the optimum hatched. Past DENSE_ROWS
     operations (a machine's whole timing table) rows narrow and bars lose their own labels.
     `headline` heads the title (by default the LP's objective: the limiting operation on a machine,
     else the span)."""
@@ -50,11 +53,15 @@ def gantt(run, headline=None):
         end = max(end, values["span_deg"])
     fig = new_figure(figsize=(11, (DENSE_ROW_IN if dense else ROW_IN) * len(arcs) + 1.8))
     ax = fig.subplots()
+    bound, windows, at_objective = _bound_ops(diag, {f"{x}->{y}" for x, y in arcs})
     for row, (x, y) in enumerate(arcs):
         angle = values[f"t_{x}_{y}_deg"]
-        hot = f"{x}->{y}" in critical
+        hot, op = f"{x}->{y}" in critical, f"{x}->{y}"
         ax.barh(row, angle, left=start[x, y], height=0.7 if dense else 0.6, color="tab:red" if hot else "tab:blue",
-                edgecolor="black", linewidth=0.3 if dense else 0.5)
+                edgecolor=BOUND_COLOUR if op in bound else "black",
+                linewidth=BOUND_WIDTH if op in bound else 0.3 if dense else 0.5,
+                hatch="//" if op in at_objective else None,
+                gid=" ".join(["operation", op] + ["binding"] * (op in bound) + ["objective"] * (op in at_objective)))
         slack = floats.get(f"{x}->{y}", 0.0)
         if slack > 1e-9 and not hot:
             ax.barh(row, slack, left=start[x, y] + angle, height=0.25, color="tab:blue", alpha=0.25)
@@ -65,13 +72,21 @@ def gantt(run, headline=None):
                     ha="center" if inside else "left", va="center", fontsize=7,
                     color="white" if inside else "black")
     _group_bands(ax, [group[a] for a in arcs])
+    for a, b in windows:     # a binding window between events no drawn operation joins
+        ax.plot([values[f"p_{a}_deg"], values[f"p_{b}_deg"]], [-0.4, -0.4], color=BOUND_COLOUR,
+                linewidth=BOUND_WIDTH, solid_capstyle="butt", gid=f"window {a}->{b} binding")
     ax.set_yticks(range(len(arcs)))
     ax.set_yticklabels([literal(f"{label[x, y]} ({x}-{y})") for x, y in arcs], fontsize=6 if dense else 7)
     ax.set_ylim(len(arcs) - 0.5, -0.5)
     from matplotlib.patches import Patch
-    ax.legend(handles=[Patch(color="tab:red", label="critical operation (no float)"),
-                       Patch(color="tab:blue", label="operation, at its event times"),
-                       Patch(color="tab:blue", alpha=0.25, label="its total float")],
+    handles = [Patch(color="tab:red", label="critical operation (no float)"),
+               Patch(color="tab:blue", label="operation, at its event times"),
+               Patch(color="tab:blue", alpha=0.25, label="its total float")]
+    if "binding_rows" in diag:
+        handles[0] = Patch(facecolor="tab:blue", edgecolor=BOUND_COLOUR, linewidth=BOUND_WIDTH,
+                           label="bound at the answer (floor, window or clearance)")
+        handles.append(Patch(facecolor="tab:blue", hatch="//", label="the objective's operation, at the optimum"))
+    ax.legend(handles=handles,
               loc="lower left", bbox_to_anchor=(0.0, 1.0), ncols=3, fontsize=8, frameon=False)
     ax.set_xlim(0, end * 1.02 if end > 0 else 1.0)
     ax.set_xlabel("main shaft angle [deg]")
@@ -103,7 +118,9 @@ def motions(run):
     values = run.result.values
     if "span_deg" not in values:
         return {}
+    scaled = next((k for k in values if k.startswith("highest_peak_accel_")), None)
     headline = (f"least angle {values['least_angle_deg']:.2f} deg" if "least_angle_deg" in values
+                else f"largest peak acceleration {values[scaled]:.4g} {scaled.split('_')[-2]}/s^2" if scaled
                 else f"span {values['span_deg']:.2f} deg")
     figures = gantt(run, headline=headline)
     return figures | ({"timing_diagram": timing_diagram(run)} if run.task.motion_arcs else {})
@@ -214,6 +231,25 @@ def repaired(run):
     """The repaired cyclogram, and each exact limit's excess over the LP rounds."""
     figures, rounds = gantt(run), run.result.diagnostics.get("rounds")
     return figures | ({"repair_rounds": _repair_rounds(run, rounds)} if figures and rounds else {})
+
+
+BOUND_COLOUR, BOUND_WIDTH = "tab:orange", 2.5     # a bar a binding row bounds
+
+
+def _bound_ops(diag, drawn) -> tuple[dict, list, set]:
+    """The operations ("from->to") the plan's binding rows bound (op -> the rows' names), the
+    binding windows between events no drawn operation joins ((a, b) each), and the objective's
+    operations whose rows bind at the optimum."""
+    bound, windows = {}, []
+    for row in diag.get("binding_rows", []):
+        ops = row.get("ops") or []
+        if row.get("kind") == "window" and "->".join(row["events"]) in drawn:
+            ops = ["->".join(row["events"])]         # a max_deg window on the operation itself
+        elif row.get("kind") == "window":
+            windows.append(tuple(row["events"]))
+        for op in ops:
+            bound.setdefault(op, []).append(row["constraint"])
+    return bound, windows, set(diag.get("objective_binds", []))
 
 
 def _group_bands(ax, groups):
