@@ -167,7 +167,7 @@ def test_the_cyclogram_marks_the_rows_that_bind():
                     "lift->up": {"binding", "objective"}, "start->top": set(), "stopped->end": set()}
     marked = [p for p in ax.patches if "binding" in (p.get_gid() or "")]
     assert all(p.get_linewidth() == 2.5 for p in marked)
-    assert [t.get_text() for t in ax.get_legend().get_texts()][0].startswith("bound at the answer")
+    assert [t.get_text() for t in ax.get_legend().get_texts()][0] == "bound at the answer"
 
 
 def test_a_binding_window_between_events_is_drawn_over_its_span():

@@ -1,15 +1,19 @@
 """Figures for the loom cyclogram scenes (models/loom.py): the cyclogram as a Gantt chart, and
 for a repaired LP (loom.repair_cyclogram) each exact limit's excess over the rounds."""
+import textwrap
+
 import numpy as np
 
 from mechopt.figures.registry import figure, new_figure
 from mechopt.figures.text import literal
+from mechopt.kit.errors import some_of
 from mechopt.solvers.cyclogram import least_cycle_time, max_machine_speed, plan_cyclogram, plan_motions
 from mechopt.solvers.loom import repair_cyclogram
 
 ROW_IN = 0.35              # inches per operation row on a small network ...
 DENSE_ROWS = 40           # ... past which rows narrow to DENSE_ROW_IN and bars lose their own labels
 DENSE_ROW_IN = 0.17
+TITLE_CHARS = 130         # a title line's width before it wraps
 CHAIN_SHOWN = 12          # events of the critical chain named in the title before it is shortened
 
 
@@ -84,10 +88,10 @@ def gantt(run, headline=None):
                Patch(color="tab:blue", alpha=0.25, label="its total float")]
     if "binding_rows" in diag:
         handles[0] = Patch(facecolor="tab:blue", edgecolor=BOUND_COLOUR, linewidth=BOUND_WIDTH,
-                           label="bound at the answer (floor, window or clearance)")
-        handles.append(Patch(facecolor="tab:blue", hatch="//", label="the objective's operation, at the optimum"))
+                                      label="bound at the answer")
+        handles.append(Patch(facecolor="tab:blue", hatch="//", label="the objective's, at its optimum"))
     ax.legend(handles=handles,
-              loc="lower left", bbox_to_anchor=(0.0, 1.0), ncols=3, fontsize=8, frameon=False)
+              loc="lower left", bbox_to_anchor=(0.0, 1.0), ncols=len(handles), fontsize=8, frameon=False)
     ax.set_xlim(0, end * 1.02 if end > 0 else 1.0)
     ax.set_xlabel("main shaft angle [deg]")
     chain = diag.get("critical_chain") or []
@@ -99,7 +103,9 @@ def gantt(run, headline=None):
     ax.set_title(f"{literal(run.scene.id)}: {headline}, {len(arcs)} operations"
                  + (f" ({len(task.arcs) - len(arcs)} zero-angle link{'s' if len(task.arcs) - len(arcs) > 1 else ''} not drawn)" if len(arcs) < len(task.arcs) else "")
                  + "\n"
-                 f"critical chain (red) {literal(' - '.join(chain))}", fontsize=9, pad=22)
+                 + ("\n".join(textwrap.wrap(f"bound (orange): {literal(some_of((r['constraint'] for r in diag['binding_rows']), sep='; '))}", TITLE_CHARS))
+                    if "binding_rows" in diag else f"critical chain (red) {literal(' - '.join(chain))}"),
+                 fontsize=9, pad=22)
     ax.grid(True, axis="x", alpha=0.3)
     return {"cyclogram": fig}
 
