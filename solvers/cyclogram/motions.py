@@ -42,14 +42,18 @@ CULPRIT_TRIES = 50     # an infeasible LP: rows dropped one at a time, at most t
 
 def plan_motions(task: Cyclogram, *, backend: str = "HIGHS") -> Result:
     """Event times with clearances between motions, maximising the least angle of a named set of
-    operations (`maximize = "least_angle"`, `least_angle_of`) or minimising the span.
+    operations (`maximize = "least_angle"`, `least_angle_of`), minimising the largest peak
+    acceleration of that set (`"least_scaled_angle"`), or minimising the span.
 
-    Returns least_angle_deg (with the objective), span_deg, p_<event>_deg, t_<x>_<y>_deg, per
-    clearance clearance_<j>_slack_deg (how far its instants are apart, >= 0), and at speed_rpm the
-    motions' peak accel_<x>_<y>_m_s2 and velocity_<x>_<y>_m_s; diagnostics limited_by: the
-    constraints whose duals are nonzero (what stops the objective, in the table's words), with
-    their duals [deg per deg]. The LP's status is checked and its answer re-checked row by row
-    (INACCURATE past FEAS_TOL_DEG)."""
+    Returns least_angle_deg ("least_angle") or least_scaled_angle_deg_per_sqrt_m (_rad) and at
+    speed_rpm highest_peak_accel_m_s2 (_rad_s2) ("least_scaled_angle"), span_deg, p_<event>_deg,
+    t_<x>_<y>_deg, per clearance clearance_<j>_slack_deg (how far its instants are apart, >= 0),
+    and at speed_rpm the motions' peak accel_<x>_<y>_m_s2 and velocity_<x>_<y>_m_s (rad_s2, rad_s
+    for stroke_deg); diagnostics limited_by: the constraints whose duals are nonzero (what stops
+    the objective, in the table's words), with their duals [deg per deg], kind and the operations
+    or events they join (also as binding_rows, which the cyclogram marks), objective_binds: the
+    objective's operations whose rows bind. The LP's status is checked and its answer re-checked
+    row by row (INACCURATE past FEAS_TOL_DEG)."""
     task.check_one_cycle("plan_motions")
     clock = Clock()
     names, tails, heads = task.index_arrays
