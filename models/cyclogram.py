@@ -51,6 +51,7 @@ from mechopt.models.cyclogram_motions import (
     OBJECTIVES,
     Clearance,
     clearance_rows,
+    objective_weights,
     operation_index,
 )
 from mechopt.models.cyclogram_network import Network
@@ -104,7 +105,8 @@ class Cyclogram(Network, Views, Bounds):
     Motions (models/cyclogram_motions.py): an operation may carry `law`, `stroke_mm`, `direction` and
     `max_accel_m_s2` / `max_velocity_m_s` (a least duration, folded into its min_ms);
     `clearances` [{operation, at, relation, other, other_at, cycles?}] (a CSV too) between two
-    motions; `maximize = "least_angle"` over `least_angle_of` (operation names or "from->to");
+    motions; `maximize = "least_angle"` over `least_angle_of` (operation names or "from->to"), or
+    `"least_scaled_angle"` (the largest peak acceleration of that set minimised);
     `span_within_cycle` (default true: p(last) - p(first) <= cycle_deg; false when one cycle's
     motions run into the next). These three are rows of cyclogram.plan_motions' LP only.
     """
@@ -183,10 +185,10 @@ class Cyclogram(Network, Views, Bounds):
         _ = self.clearance_rows
         if self.maximize is not None and self.maximize not in OBJECTIVES:
             raise ModelError(f"maximize={self.maximize!r}: allowed {', '.join(OBJECTIVES)}", key="maximize")
-        if (self.maximize == LEAST_ANGLE) != bool(self.least_angle_of):
-            raise ModelError(f"least_angle_of: maximize = {LEAST_ANGLE!r} needs the operations it takes the least "
-                             f"angle of, and they need it", key="least_angle_of")
-        _ = self.least_angle_arcs
+        if (self.maximize in OBJECTIVES) != bool(self.least_angle_of):
+            raise ModelError(f"least_angle_of: maximize = {self.maximize or LEAST_ANGLE!r} needs the operations it "
+                             f"takes the least angle of, and they need it", key="least_angle_of")
+        _ = self.objective_weights
         if not isinstance(self.span_within_cycle, bool):
             raise ModelError(f"span_within_cycle={self.span_within_cycle!r}: allowed true, false", key="span_within_cycle")
         if self.clearance_rows and any(c.cycles for c in self.clearance_rows) and self.cycle_deg is None:
@@ -198,6 +200,11 @@ class Cyclogram(Network, Views, Bounds):
         """The `clearances` table resolved: operations as arc indices, displacements as angle fractions."""
         names = [d["name"] for d in self._arc_data]
         return clearance_rows(self.clearances, self.arcs, names, self.motion_arcs, MAX_CYCLES)
+
+    @cached_property
+    def objective_weights(self) -> tuple[float, ...]:
+        """w_k of each of least_angle_arcs: t_k >= z w_k (models/cyclogram_motions.objective_weights)."""
+        return objective_weights(self.maximize, self.least_angle_arcs, self.motion_arcs, self.least_angle_of)
 
     @cached_property
     def least_angle_arcs(self) -> tuple[int, ...]:

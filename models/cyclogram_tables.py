@@ -24,7 +24,8 @@ OPERATION_KEYS = {"from", "to", "min_deg", "min_ms", "max_deg", "stress", "ampli
 OPERATION_COLUMNS = {"from": str, "to": str, "name": str, "group": str, "mechanism": str, "min_deg": float,
                      "min_ms": float, "max_deg": float, "stress": str, "amplitude": str, "mark": str, "why": str,
                      "cycles": float, "law": str, "stroke_mm": float, "max_accel_m_s2": float,
-                     "max_velocity_m_s": float, "direction": str}
+                     "max_velocity_m_s": float, "direction": str, "stroke_deg": float, "max_accel_rad_s2": float,
+                     "max_velocity_rad_s": float}
 WINDOW_COLUMNS = {"from": str, "to": str, "max_deg": float, "max_ms": float} | {k: str for k in sorted(NOTE_KEYS)}
 SYNC_COLUMNS = {"events": str} | {k: str for k in sorted(NOTE_KEYS)}   # events "a;b;c": one sync per row
 STRESS_KEYS = {"sigma_ref_MPa", "t_ref_deg"} | NOTE_KEYS

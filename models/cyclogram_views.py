@@ -129,14 +129,15 @@ class Views:
         return {k: d["motion"] for k, d in enumerate(self._arc_data) if d["motion"] is not None}
 
     def motion_values(self, t_deg, speed_rpm) -> dict:
-        """Peak acceleration [m/s^2] and velocity [m/s] of every motion with a stroke, its angle
-        t (per arc, `arcs` order) at speed n: accel_<x>_<y>_m_s2, velocity_<x>_<y>_m_s."""
+        """Peak acceleration and velocity of every motion with a stroke, its angle t (per arc,
+        `arcs` order) at speed n: accel_<x>_<y>_m_s2, velocity_<x>_<y>_m_s (stroke_mm) or
+        accel_<x>_<y>_rad_s2, velocity_<x>_<y>_rad_s (stroke_deg, an oscillating output)."""
         out = {}
         for k, motion in self.motion_arcs.items() if speed_rpm else ():
-            if motion.stroke_mm is not None and t_deg[k] > 0:
-                x, y = self.arcs[k]
-                out[f"accel_{x}_{y}_m_s2"] = motion.peak_accel_m_s2(float(t_deg[k]), speed_rpm)
-                out[f"velocity_{x}_{y}_m_s"] = motion.peak_velocity_m_s(float(t_deg[k]), speed_rpm)
+            if motion.stroke is not None and t_deg[k] > 0:
+                (x, y), (_, accel, velocity) = self.arcs[k], motion.units
+                out[f"accel_{x}_{y}_{accel}"] = motion.peak_accel(float(t_deg[k]), speed_rpm)
+                out[f"velocity_{x}_{y}_{velocity}"] = motion.peak_velocity(float(t_deg[k]), speed_rpm)
         return out
 
     def arc_data(self, k: int) -> dict:

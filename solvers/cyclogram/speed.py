@@ -441,7 +441,9 @@ def _speed_report(task, net, lb, why, n_max, tol, sg=None):
     limiting = []
     for k, (x, y) in enumerate(net.arcs):
         if why[k] and f"{x}->{y}" in critical:      # set by a law that grows with n (deg/rpm: its secant)
-            limiting.append({"constraint": f"{why[k]}[{x}->{y}]", "group": group[x] or group[y] or "-",
+            # the operation's own group (a die stroke starting at the turret's stop is the die's), else its events'
+            own = task.graph.edges[x, y].get("group")
+            limiting.append({"constraint": f"{why[k]}[{x}->{y}]", "group": own or group[x] or group[y] or "-",
                              "deg_per_rpm": float(lb[k] / n_max), "deg": float(lb[k])})
     by_group: dict = {}
     for row in limiting:

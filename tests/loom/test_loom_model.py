@@ -122,7 +122,7 @@ OPS = [{"from": "1", "to": "2", "min_deg": 10.0}, {"from": "2", "to": "3", "min_
     (dict(operations=[{"from": "1", "to": "2", "min_deg": 1.0, "amplitude": "linear"}, OPS[1]]),
      r"amplitude='linear' needs amplitude_slope_mm_per_deg, amplitude_intercept_mm, amplitude_limit_mm"),
     (dict(operations=[{"from": "1", "to": "2", "min_deg": 1.0, "colour": "red"}, OPS[1]]),
-     r"operations\[0\]: unknown colour; allowed: amplitude, cycles, direction, from, group, law, mark, max_accel_m_s2, max_deg, max_velocity_m_s, mechanism, min_deg, min_ms, name, stress, stroke_mm, to, what, where, why"),
+     r"operations\[0\]: unknown colour; allowed: amplitude, cycles, direction, from, group, law, mark, max_accel_m_s2, max_accel_rad_s2, max_deg, max_velocity_m_s, max_velocity_rad_s, mechanism, min_deg, min_ms, name, stress, stroke_deg, stroke_mm, to, what, where, why"),
     (dict(operations=[{"from": "1", "min_deg": 1.0}]), r"operations\[0\]: missing to"),
     (dict(operations=OPS + [dict(OPS[0])]), r"operations\[1->2\]: given twice"),
     (dict(operations=[{"from": "1", "to": "1", "min_deg": 1.0}]), r"operations\[1->1\]: an operation must join two different events"),

@@ -151,3 +151,37 @@ def test_an_infeasible_plan_names_the_rows_that_conflict(solved):
     assert r.message.startswith("infeasible: the operations' bounds with the rows ")
     assert "clearance 'turret index' at 1 before 'die down' at 0.6" in r.message
     assert "clearance 'die up' at 0.4 before 'turret index' at 0 of 1 cycle later" in r.message
+
+
+def test_the_cyclogram_marks_the_rows_that_bind():
+    """At the answer the two clearances, the index's fixed 150 deg and the dwell's 100 deg bind:
+    the bars of the turret's index, the dwell and both die strokes (the clearances' other sides)
+    are marked binding, the die strokes also as the objective's; the die's wait is not."""
+    from mechopt.figures.loom import motions
+
+    run = registry.run(registry.find("loom/turret-die-overlap"))
+    ax = motions(run)["cyclogram"].axes[0]
+    gids = {p.get_gid().split()[1]: set(p.get_gid().split()[2:]) for p in ax.patches
+            if (p.get_gid() or "").startswith("operation ")}
+    assert gids == {"start->stopped": {"binding"}, "bottom->lift": {"binding"}, "top->bottom": {"binding", "objective"},
+                    "lift->up": {"binding", "objective"}, "start->top": set(), "stopped->end": set()}
+    marked = [p for p in ax.patches if "binding" in (p.get_gid() or "")]
+    assert all(p.get_linewidth() == 2.5 for p in marked)
+    assert [t.get_text() for t in ax.get_legend().get_texts()][0] == "bound at the answer"
+
+
+def test_a_binding_window_between_events_is_drawn_over_its_span():
+    """A window from the push's start to the lift's end (no operation joins them) binds: an orange
+    line from p(a) to p(c)."""
+    from types import SimpleNamespace
+
+    from mechopt.figures.loom import gantt
+
+    ops = [{"from": "a", "to": "b", "min_deg": 10.0, "name": "push", "law": "cycloidal", "stroke_mm": 50.0},
+           {"from": "b", "to": "c", "min_deg": 10.0, "name": "lift", "law": "harmonic", "stroke_mm": 30.0}]
+    task = Cyclogram(operations=ops, windows=[{"from": "a", "to": "c", "max_deg": 200.0}],
+                     maximize="least_angle", least_angle_of=["push", "lift"])
+    r = plan_motions(task)
+    fig = gantt(SimpleNamespace(task=task, result=r, scene=SimpleNamespace(id="test/window")))["cyclogram"]
+    line = next(ln for ln in fig.axes[0].lines if ln.get_gid() == "window a->c binding")
+    assert list(line.get_xdata()) == pytest.approx([0.0, 200.0])

@@ -112,3 +112,14 @@ def test_a_velocity_limit_is_a_least_duration():
     assert task.arc_data(k)["min_ms"] == pytest.approx(200.0)
     lb, why = task.lower_bounds_deg()
     assert lb[k] == pytest.approx(0.006 * 60.0 * 200.0) and why[k] == "max_velocity"
+
+
+def test_the_limiting_group_is_the_operation_s_own():
+    """The die's strokes start at the turret's stop (an event of group turret): the speed is the
+    die's (its acceleration limit), and the report names group die, the operations' own."""
+    from mechopt import registry
+
+    r = max_machine_speed(registry.find("loom/turret-die-speed").build()[0])
+    assert r.status is Status.SOLVED, r.message
+    assert r.diagnostics["limiting_group"] == "die"
+    assert {row["group"] for row in r.diagnostics["limiting"]} == {"die"}

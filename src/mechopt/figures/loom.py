@@ -1,15 +1,19 @@
 """Figures for the loom cyclogram scenes (models/loom.py): the cyclogram as a Gantt chart, and
 for a repaired LP (loom.repair_cyclogram) each exact limit's excess over the rounds."""
+import textwrap
+
 import numpy as np
 
 from mechopt.figures.registry import figure, new_figure
 from mechopt.figures.text import literal
+from mechopt.kit.errors import some_of
 from mechopt.solvers.cyclogram import least_cycle_time, max_machine_speed, plan_cyclogram, plan_motions
 from mechopt.solvers.loom import repair_cyclogram
 
 ROW_IN = 0.35              # inches per operation row on a small network ...
 DENSE_ROWS = 40           # ... past which rows narrow to DENSE_ROW_IN and bars lose their own labels
 DENSE_ROW_IN = 0.17
+TITLE_CHARS = 130         # a title line's width before it wraps
 CHAIN_SHOWN = 12          # events of the critical chain named in the title before it is shortened
 
 
@@ -18,7 +22,10 @@ def gantt(run, headline=None):
     """One bar per operation from p(from) to p(to) over the machine angle, a row per operation:
     rows grouped by the operation's group (its own, else its first event's), groups in the order
     they start, and inside a group by start angle, so the chain reads as a staircase; the
-    critical chain in red, every other operation's total float as a light tail. Past DENSE_ROWS
+    critical chain in red, every other operation's total float as a light tail; where the plan
+    names its binding rows (plan_motions' binding_rows), the operations they bound (a floor, a
+    window on the operation, either side of a clearance) edged in orange, a window between other
+    events as an orange line over its span, the objective's operations at the optimum hatched. Past DENSE_ROWS
     operations (a machine's whole timing table) rows narrow and bars lose their own labels.
     `headline` heads the title (by default the LP's objective: the limiting operation on a machine,
     else the span)."""
@@ -50,11 +57,15 @@ def gantt(run, headline=None):
         end = max(end, values["span_deg"])
     fig = new_figure(figsize=(11, (DENSE_ROW_IN if dense else ROW_IN) * len(arcs) + 1.8))
     ax = fig.subplots()
+    bound, windows, at_objective = _bound_ops(diag, {f"{x}->{y}" for x, y in arcs})
     for row, (x, y) in enumerate(arcs):
         angle = values[f"t_{x}_{y}_deg"]
-        hot = f"{x}->{y}" in critical
+        hot, op = f"{x}->{y}" in critical, f"{x}->{y}"
         ax.barh(row, angle, left=start[x, y], height=0.7 if dense else 0.6, color="tab:red" if hot else "tab:blue",
-                edgecolor="black", linewidth=0.3 if dense else 0.5)
+                edgecolor=BOUND_COLOUR if op in bound else "black",
+                linewidth=BOUND_WIDTH if op in bound else 0.3 if dense else 0.5,
+                hatch="//" if op in at_objective else None,
+                gid=" ".join(["operation", op] + ["binding"] * (op in bound) + ["objective"] * (op in at_objective)))
         slack = floats.get(f"{x}->{y}", 0.0)
         if slack > 1e-9 and not hot:
             ax.barh(row, slack, left=start[x, y] + angle, height=0.25, color="tab:blue", alpha=0.25)
@@ -65,14 +76,22 @@ def gantt(run, headline=None):
                     ha="center" if inside else "left", va="center", fontsize=7,
                     color="white" if inside else "black")
     _group_bands(ax, [group[a] for a in arcs])
+    for a, b in windows:     # a binding window between events no drawn operation joins
+        ax.plot([values[f"p_{a}_deg"], values[f"p_{b}_deg"]], [-0.4, -0.4], color=BOUND_COLOUR,
+                linewidth=BOUND_WIDTH, solid_capstyle="butt", gid=f"window {a}->{b} binding")
     ax.set_yticks(range(len(arcs)))
     ax.set_yticklabels([literal(f"{label[x, y]} ({x}-{y})") for x, y in arcs], fontsize=6 if dense else 7)
     ax.set_ylim(len(arcs) - 0.5, -0.5)
     from matplotlib.patches import Patch
-    ax.legend(handles=[Patch(color="tab:red", label="critical operation (no float)"),
-                       Patch(color="tab:blue", label="operation, at its event times"),
-                       Patch(color="tab:blue", alpha=0.25, label="its total float")],
-              loc="lower left", bbox_to_anchor=(0.0, 1.0), ncols=3, fontsize=8, frameon=False)
+    handles = [Patch(color="tab:red", label="critical operation (no float)"),
+               Patch(color="tab:blue", label="operation, at its event times"),
+               Patch(color="tab:blue", alpha=0.25, label="its total float")]
+    if "binding_rows" in diag:
+        handles[0] = Patch(facecolor="tab:blue", edgecolor=BOUND_COLOUR, linewidth=BOUND_WIDTH,
+                                      label="bound at the answer")
+        handles.append(Patch(facecolor="tab:blue", hatch="//", label="the objective's, at its optimum"))
+    ax.legend(handles=handles,
+              loc="lower left", bbox_to_anchor=(0.0, 1.0), ncols=len(handles), fontsize=8, frameon=False)
     ax.set_xlim(0, end * 1.02 if end > 0 else 1.0)
     ax.set_xlabel("main shaft angle [deg]")
     chain = diag.get("critical_chain") or []
@@ -84,7 +103,9 @@ def gantt(run, headline=None):
     ax.set_title(f"{literal(run.scene.id)}: {headline}, {len(arcs)} operations"
                  + (f" ({len(task.arcs) - len(arcs)} zero-angle link{'s' if len(task.arcs) - len(arcs) > 1 else ''} not drawn)" if len(arcs) < len(task.arcs) else "")
                  + "\n"
-                 f"critical chain (red) {literal(' - '.join(chain))}", fontsize=9, pad=22)
+                 + ("\n".join(textwrap.wrap(f"bound (orange): {literal(some_of((r['constraint'] for r in diag['binding_rows']), sep='; '))}", TITLE_CHARS))
+                    if "binding_rows" in diag else f"critical chain (red) {literal(' - '.join(chain))}"),
+                 fontsize=9, pad=22)
     ax.grid(True, axis="x", alpha=0.3)
     return {"cyclogram": fig}
 
@@ -103,7 +124,9 @@ def motions(run):
     values = run.result.values
     if "span_deg" not in values:
         return {}
+    scaled = next((k for k in values if k.startswith("highest_peak_accel_")), None)
     headline = (f"least angle {values['least_angle_deg']:.2f} deg" if "least_angle_deg" in values
+                else f"largest peak acceleration {values[scaled]:.4g} {scaled.split('_')[-2]}/s^2" if scaled
                 else f"span {values['span_deg']:.2f} deg")
     figures = gantt(run, headline=headline)
     return figures | ({"timing_diagram": timing_diagram(run)} if run.task.motion_arcs else {})
@@ -115,7 +138,9 @@ CHART_CYCLES = (-2, -1, 0, 1)   # a motion's copies of earlier and later cycles 
 
 def timing_diagram(run):
     """Displacement against shaft angle, one panel per group (mechanism), over one cycle: every
-    motion of the group by its law (cam law S over its angle, stroke in mm, + out, - back), its
+    motion of the group by its law (cam law S over its angle, stroke in mm, + out, - back; an
+    oscillating output's swing in deg on a panel of its own, not a second axis: a panel's curve is
+    the sum of its motions, meaningful in one unit, and a clearance's level is read on it), its
     copies of the cycles before and after folded in, so a stroke that runs into the next index shows
     where it overlaps; each clearance's two instants as dotted lines (the turret stopped before the
     die is 0.6 down, ...), and where a clearance names a displacement inside a stroke, its level
@@ -124,8 +149,10 @@ def timing_diagram(run):
     task, values = run.task, run.result.values
     cycle = task.cycle_deg or values["span_deg"]
     theta = np.linspace(0.0, cycle, CHART_POINTS)
-    group_of = {k: task.arc_data(k)["group"] or task.graph.nodes[task.arcs[k][0]]["group"] or "-"
-                for k in task.motion_arcs}
+    # a panel per group and stroke unit: an oscillating output's swing [deg] is not added to a
+    # slide's travel [mm], so a group with both gets two panels, each with one ordinate
+    group_of = {k: (task.arc_data(k)["group"] or task.graph.nodes[task.arcs[k][0]]["group"] or "-",
+                    m.units[0] if m.stroke is not None else "of stroke") for k, m in task.motion_arcs.items()}
     groups = list(dict.fromkeys(group_of.values()))
     fig = new_figure(figsize=(10, 2.2 * len(groups) + 1.2))
     axes = np.atleast_1d(fig.subplots(len(groups), 1, sharex=True, squeeze=False)[:, 0])
@@ -145,8 +172,7 @@ def timing_diagram(run):
         for mid, name, angle in names:      # each motion named at its middle, its angle beside the name
             ax.annotate(literal(f"{name} {angle:.1f} deg"), (mid, np.interp(mid, theta, total)), fontsize=7,
                         xytext=(4, 4), textcoords="offset points", color="tab:blue")
-        unit = "mm" if all(m.stroke_mm for k, m in task.motion_arcs.items() if group_of[k] == group) else "of stroke"
-        ax.set_ylabel(f"{literal(group)} [{unit}]", fontsize=8)
+        ax.set_ylabel(f"{literal(group[0])} [{group[1]}]", fontsize=8)
         ax.grid(True, alpha=0.3)
     for j, c in enumerate(task.clearance_rows):
         for side, (k, xi, shift) in enumerate(((c.a, c.x_a, 0), (c.b, c.x_b, c.cycles))):
@@ -211,6 +237,25 @@ def repaired(run):
     """The repaired cyclogram, and each exact limit's excess over the LP rounds."""
     figures, rounds = gantt(run), run.result.diagnostics.get("rounds")
     return figures | ({"repair_rounds": _repair_rounds(run, rounds)} if figures and rounds else {})
+
+
+BOUND_COLOUR, BOUND_WIDTH = "tab:orange", 2.5     # a bar a binding row bounds
+
+
+def _bound_ops(diag, drawn) -> tuple[dict, list, set]:
+    """The operations ("from->to") the plan's binding rows bound (op -> the rows' names), the
+    binding windows between events no drawn operation joins ((a, b) each), and the objective's
+    operations whose rows bind at the optimum."""
+    bound, windows = {}, []
+    for row in diag.get("binding_rows", []):
+        ops = row.get("ops") or []
+        if row.get("kind") == "window" and "->".join(row["events"]) in drawn:
+            ops = ["->".join(row["events"])]         # a max_deg window on the operation itself
+        elif row.get("kind") == "window":
+            windows.append(tuple(row["events"]))
+        for op in ops:
+            bound.setdefault(op, []).append(row["constraint"])
+    return bound, windows, set(diag.get("objective_binds", []))
 
 
 def _group_bands(ax, groups):
