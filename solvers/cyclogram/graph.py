@@ -28,7 +28,7 @@ from scipy.sparse.csgraph import breadth_first_order
 
 from mechopt.kit.cache import BuildCache
 from mechopt.kit.result import Status
-from mechopt.solvers.cyclogram.kernel import COMPILED_MIN_ARCS, kernels
+from mechopt.solvers.cyclogram.kernel import COMPILED_AFTER_LEVEL_CALLS, COMPILED_MIN_ARCS, kernels
 
 ROUND_OFF = 1e-12          # relative: an improvement below it (of the largest |w|) is round-off, not a cycle
 
@@ -78,12 +78,22 @@ class Levels:
         self.forward_order, self.forward_segments = level_segments(level, self.heads, n, reverse=False)
         self.backward_order, self.backward_segments = level_segments(level, self.tails, n, reverse=True)
         self._t_fwd, self._h_bwd = self.tails[self.forward_order], self.heads[self.backward_order]
-        # large networks: the compiled passes (kernel.py), each arc in order, when numba imports
-        self._compiled = kernels() if len(self.tails) >= COMPILED_MIN_ARCS else None
-        if self._compiled:      # the arcs' ends in pass order: the loop reads them in sequence
-            self._fwd_run = (self.forward_order, self._t_fwd, self.heads[self.forward_order])
-            bwd = np.ascontiguousarray(self.backward_order[::-1])        # last level first
-            self._bwd_run = (bwd, self.tails[bwd], self.heads[bwd])
+        # large networks: the compiled passes (kernel.py), once the numpy passes have cost about
+        # numba's import (`_level_calls`); a one-off solve of a shallow network never imports it
+        self._compiled, self._level_calls = None, 0
+        self._depth = len(self.forward_segments) + len(self.backward_segments)
+
+    def _passes(self):
+        """The compiled (forward, backward) passes once worth their import, else None (numpy levels)."""
+        if self._compiled is None and len(self.tails) >= COMPILED_MIN_ARCS:
+            self._level_calls += self._depth // 2
+            if self._level_calls >= COMPILED_AFTER_LEVEL_CALLS:
+                self._compiled = kernels() or False
+                if self._compiled:      # the arcs' ends in pass order: the loop reads them in sequence
+                    self._fwd_run = (self.forward_order, self._t_fwd, self.heads[self.forward_order])
+                    bwd = np.ascontiguousarray(self.backward_order[::-1])        # last level first
+                    self._bwd_run = (bwd, self.tails[bwd], self.heads[bwd])
+        return self._compiled
 
     @classmethod
     def of(cls, n, tails, heads) -> "Levels":
@@ -93,14 +103,14 @@ class Levels:
 
     def forward(self, dist: np.ndarray, w: np.ndarray) -> None:
         """dist[v] = max(dist[v], dist[u] + w) over every DAG path, in place."""
-        if self._compiled:
+        if self._passes():
             self._compiled[0](dist, *self._fwd_run, np.asarray(w, dtype=float))
         else:
             _relax(dist, w[self.forward_order], self._t_fwd, self.forward_segments)
 
     def backward(self, dist: np.ndarray, w: np.ndarray) -> None:
         """dist[u] = max(dist[u], w + dist[v]) over every DAG path (distances *to* a target), in place."""
-        if self._compiled:
+        if self._passes():
             self._compiled[1](dist, *self._bwd_run, np.asarray(w, dtype=float))
         else:
             _relax(dist, w[self.backward_order], self._h_bwd, self.backward_segments)
