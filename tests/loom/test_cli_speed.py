@@ -56,3 +56,44 @@ assert abs(r.values["span_deg"] - nx.dag_longest_path_length(g)) <= 1e-9 * r.val
 print("numba" in sys.modules, "cvxpy" in sys.modules)
 """
     assert _run(code).stdout.split() == ["False", "False"]
+
+
+def _plain_ops():
+    """A small plain timing table (angles, names, groups): two chains from s to e."""
+    return [{"from": "s", "to": "a", "min_deg": 10, "name": "feed", "group": "g1"},
+            {"from": "a", "to": "e", "min_deg": 20.5, "why": "a note"},
+            {"from": "s", "to": "b", "min_deg": 0.0},
+            {"from": "b", "to": "e", "min_deg": 31.25, "group": "g2"}]
+
+
+def test_a_plain_table_is_built_at_once_into_the_row_by_row_graph():
+    """Network._add_plain_operations (whole columns) gives the arcs, in order, with the
+    attributes `_add_operations` (row by row) gives them; the span is the longest chain, 31.25 deg."""
+    import networkx as nx
+
+    from mechopt.models.cyclogram import Cyclogram
+    from mechopt.solvers.cyclogram import plan_cyclogram
+    task = Cyclogram(operations=_plain_ops())
+    slow = nx.DiGraph()
+    slow.add_nodes_from(task.graph.nodes(data=True))
+    task._add_operations(slow)
+    assert list(task.graph.edges(data=True)) == list(slow.edges(data=True))
+    assert plan_cyclogram(task).values["span_deg"] == pytest.approx(31.25, abs=1e-12)
+
+
+@pytest.mark.parametrize("bad, message", [
+    ({"min_deg": -1.0}, "operations[s->a].min_deg=-1.0: a minimum phase angle must be >= 0"),
+    ({"min_deg": float("nan")}, "operations[s->a].min_deg=nan: expected a finite number"),
+    ({"min_deg": True}, "operations[s->a].min_deg=True: expected a finite number"),
+    ({"to": "s"}, "operations[s->s]: an operation must join two different events"),
+    ({"to": "e", "from": "a"}, "operations[a->e]: given twice"),
+])
+def test_a_bad_row_of_a_plain_table_is_named_as_row_by_row(bad, message):
+    """A plain table the column checks refuse goes row by row: the error names the first bad row."""
+    from mechopt.kit.errors import ModelError
+    from mechopt.models.cyclogram import Cyclogram
+    ops = _plain_ops()
+    ops[0] = ops[0] | bad
+    with pytest.raises(ModelError) as err:
+        Cyclogram(operations=ops)
+    assert message in str(err.value)
