@@ -99,28 +99,6 @@ def test_a_bad_row_of_a_plain_table_is_named_as_row_by_row(bad, message):
     assert message in str(err.value)
 
 
-@pytest.mark.parametrize("text", [
-    "from,to,min_deg,name\ns,a,10,feed\na,e, 2.5e1 ,\n s ,b,,  fold  \nb,e,-0.0,x\n",     # gaps, spaces, exponent
-    "from,to,min_deg\ns,a,10\na,e\n",                                                       # a short row
-    "from;to;min_deg\ns;a;10,5\n",                                                          # decimal comma
-])
-def test_a_csv_table_read_by_columns_equals_the_row_by_row_reading(tmp_path, text):
-    """tables._typed_columns gives `_typed_rows`' records (values, left-out empty cells, key
-    order), or hands the table over to it (';' with decimal commas)."""
-    from mechopt import tables
-    from mechopt.models.cyclogram_tables import OPERATION_COLUMNS
-    path = tmp_path / "ops.csv"
-    path.write_text(text, encoding="utf-8")
-    header, rows, delimiter = tables.read_rows(path, what="a table", example="from,to")
-    typed = [(c, OPERATION_COLUMNS[c] is not str) for c in header]
-    slow = tables._typed_rows(path, rows, typed, ("from", "to"), delimiter)
-    fast = tables._typed_columns(rows, typed, ("from", "to"), delimiter)
-    assert fast is None if delimiter == ";" else [(n, list(r.items())) for n, r in fast] == \
-        [(n, list(r.items())) for n, r in slow]
-    assert tables.read_records(path, ["from", "to"], OPERATION_COLUMNS, required=("from", "to"), what="a table",
-                               example="from,to") == slow
-
-
 @pytest.mark.parametrize("text, message", [
     ("from,to,min_deg\ns,a,10\na,e,1_0\n", "line 3, column min_deg: expected a number, got '1_0'"),
     ("from,to,min_deg\ns,a,inf\n", "line 2, column min_deg: expected a number, got 'inf'"),
@@ -129,6 +107,7 @@ def test_a_csv_table_read_by_columns_equals_the_row_by_row_reading(tmp_path, tex
     ("from,to,min_deg\ns,a,3,4\n", "line 2: 4 cells, the header names 3"),
 ])
 def test_a_bad_cell_is_named_by_its_line_and_column(tmp_path, text, message):
+    """tables.read_records on a timing table: what it refuses, named by line and column."""
     from mechopt import tables
     from mechopt.kit.errors import ModelError
     from mechopt.models.cyclogram_tables import OPERATION_COLUMNS
