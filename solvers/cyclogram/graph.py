@@ -72,7 +72,10 @@ class Levels:
     Forward: arcs sorted by (level of head, head); per level one `maximum.reduceat` gives every
     head of that level its longest distance. Backward: the same by the level of the tail."""
 
-    def __init__(self, n: int, tails: np.ndarray, heads: np.ndarray):
+    def __init__(self, n: int, tails: np.ndarray, heads: np.ndarray, compiled: bool | None = None):
+        """`compiled`: None, the compiled passes once the numpy ones have cost numba's import
+        (`_passes`); True, at once when numba imports (a process that solves many times, the
+        benchmarks); False, the numpy levels only (the reference)."""
         self.n, self.tails, self.heads = n, np.asarray(tails, np.int64), np.asarray(heads, np.int64)
         level = topological_levels(n, self.tails, self.heads)
         self.forward_order, self.forward_segments = level_segments(level, self.heads, n, reverse=False)
@@ -80,13 +83,17 @@ class Levels:
         self._t_fwd, self._h_bwd = self.tails[self.forward_order], self.heads[self.backward_order]
         # large networks: the compiled passes (kernel.py), once the numpy passes have cost about
         # numba's import (`_level_calls`); a one-off solve of a shallow network never imports it
-        self._compiled, self._level_calls = None, 0
+        self._compiled, self._level_calls = (None if compiled else compiled), 0
         self._depth = len(self.forward_segments) + len(self.backward_segments)
+        if compiled:
+            self._level_calls = COMPILED_AFTER_LEVEL_CALLS
+            self._passes()
 
     def _passes(self):
         """The compiled (forward, backward) passes once worth their import, else None (numpy levels)."""
         if self._compiled is None and len(self.tails) >= COMPILED_MIN_ARCS:
-            self._level_calls += self._depth // 2
+            if self._level_calls < COMPILED_AFTER_LEVEL_CALLS:
+                self._level_calls += self._depth // 2
             if self._level_calls >= COMPILED_AFTER_LEVEL_CALLS:
                 self._compiled = kernels() or False
                 if self._compiled:      # the arcs' ends in pass order: the loop reads them in sequence

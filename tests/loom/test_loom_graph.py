@@ -214,14 +214,13 @@ def test_the_compiled_passes_give_the_numpy_passes_answers_with_windows_and_sync
     """kernel.py (numba) on a network past COMPILED_MIN_ARCS: every distance from the first and
     to the last event, with windows and a sync as back arcs, equals the numpy levels' bit for bit."""
     from mechopt.benchmarks.loom import random_dag
-    from mechopt.solvers.cyclogram.kernel import COMPILED_AFTER_LEVEL_CALLS, COMPILED_MIN_ARCS, kernels
+    from mechopt.solvers.cyclogram.kernel import COMPILED_MIN_ARCS, kernels
     if kernels() is None:
         pytest.skip("numba not installed: the numpy passes are the only ones")
     n = 20_000
     tails, heads, w, (a, b, wmax) = random_dag(n, windows=200, seed=3)
     assert len(tails) >= COMPILED_MIN_ARCS
-    levels = Levels(n, tails, heads)
-    levels._level_calls = COMPILED_AFTER_LEVEL_CALLS      # as after many numpy passes: the compiled ones now
+    levels = Levels(n, tails, heads, compiled=True)
     assert levels._passes()
     back = BackArcs(np.r_[b, 5, 6], np.r_[a, 6, 5], np.r_[-wmax, 0.0, 0.0])
     plain = _numpy_levels(levels)
