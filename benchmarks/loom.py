@@ -120,9 +120,9 @@ def _graph(n, tails, heads, w, back=NO_BACK_ARCS, tol=1e-6):
     and schedule.py): levels (build), then the earliest times with the duals (the arcs' uses on a
     longest path), the latest times and floats, one critical chain; without the per-name report. From
     2 x 10^4 arcs the passes are the compiled ones when numba is installed (solvers/cyclogram/kernel.py;
-    MECHOPT_NO_NUMBA=1: the numpy levels)."""
+    MECHOPT_NO_NUMBA=1: the numpy levels), taken at once as by a process that solves many times."""
     start = time.perf_counter()
-    levels = Levels(n, tails, heads)
+    levels = Levels(n, tails, heads, compiled=True)    # a solving process's steady state (a one-off: cyclogram_cli.py)
     net = Net.of_arrays(n, tails, heads, w)
     build = time.perf_counter() - start
     early, span, uses, _, _ = longest_schedule(net, levels, back, tol)

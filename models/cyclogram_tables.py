@@ -43,19 +43,15 @@ def events_of(operations) -> dict:
     event takes the group (and mechanism) on which every operation ending at it agrees (the motion
     that brings it about), or, with none ending at it (the first event), every one starting at it;
     where they differ (a junction of groups, the last event) it takes none."""
-    into, out = {}, {}                  # event -> [group, mechanism] agreed so far ("" when none)
-    for op in operations:
-        if not isinstance(op, dict) or "from" not in op or "to" not in op:
-            continue                    # reported by the network's checks
-        about = [str(op.get("group", "")), str(op.get("mechanism", ""))]
+    into, out = {}, {}                  # event -> (group, mechanism) agreed so far ("" when none)
+    rows = [op for op in operations if isinstance(op, dict) and "from" in op and "to" in op]   # others: the checks'
+    for op in rows:
+        about = (str(op.get("group", "")), str(op.get("mechanism", "")))
         for side, name in ((out, str(op["from"])), (into, str(op["to"]))):
-            seen = side.get(name)
-            if seen is None:
-                side[name] = list(about)
-            elif seen != about:
-                seen[:] = [s if s == a else "" for s, a in zip(seen, about)]
-    names = dict.fromkeys(name for op in operations if isinstance(op, dict) and "from" in op and "to" in op
-                          for name in (str(op["from"]), str(op["to"])))
+            seen = side.setdefault(name, about)
+            if seen is not about and seen != about:
+                side[name] = tuple(s if s == a else "" for s, a in zip(seen, about))
+    names = dict.fromkeys(name for op in rows for name in (str(op["from"]), str(op["to"])))
     return {name: {k: v for k, v in zip(("group", "mechanism"), into.get(name) or out[name]) if v} for name in names}
 
 

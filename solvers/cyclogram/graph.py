@@ -28,7 +28,7 @@ from scipy.sparse.csgraph import breadth_first_order
 
 from mechopt.kit.cache import BuildCache
 from mechopt.kit.result import Status
-from mechopt.solvers.cyclogram.kernel import COMPILED_MIN_ARCS, kernels
+from mechopt.solvers.cyclogram.kernel import COMPILED_AFTER_LEVEL_CALLS, COMPILED_MIN_ARCS, kernels
 
 ROUND_OFF = 1e-12          # relative: an improvement below it (of the largest |w|) is round-off, not a cycle
 
@@ -72,18 +72,35 @@ class Levels:
     Forward: arcs sorted by (level of head, head); per level one `maximum.reduceat` gives every
     head of that level its longest distance. Backward: the same by the level of the tail."""
 
-    def __init__(self, n: int, tails: np.ndarray, heads: np.ndarray):
+    def __init__(self, n: int, tails: np.ndarray, heads: np.ndarray, compiled: bool | None = None):
+        """`compiled`: None, the compiled passes once the numpy ones have cost numba's import
+        (`_passes`); True, at once when numba imports (a process that solves many times, the
+        benchmarks); False, the numpy levels only (the reference)."""
         self.n, self.tails, self.heads = n, np.asarray(tails, np.int64), np.asarray(heads, np.int64)
         level = topological_levels(n, self.tails, self.heads)
         self.forward_order, self.forward_segments = level_segments(level, self.heads, n, reverse=False)
         self.backward_order, self.backward_segments = level_segments(level, self.tails, n, reverse=True)
         self._t_fwd, self._h_bwd = self.tails[self.forward_order], self.heads[self.backward_order]
-        # large networks: the compiled passes (kernel.py), each arc in order, when numba imports
-        self._compiled = kernels() if len(self.tails) >= COMPILED_MIN_ARCS else None
-        if self._compiled:      # the arcs' ends in pass order: the loop reads them in sequence
-            self._fwd_run = (self.forward_order, self._t_fwd, self.heads[self.forward_order])
-            bwd = np.ascontiguousarray(self.backward_order[::-1])        # last level first
-            self._bwd_run = (bwd, self.tails[bwd], self.heads[bwd])
+        # large networks: the compiled passes (kernel.py), once the numpy passes have cost about
+        # numba's import (`_level_calls`); a one-off solve of a shallow network never imports it
+        self._compiled, self._level_calls = (None if compiled else compiled), 0
+        self._depth = len(self.forward_segments) + len(self.backward_segments)
+        if compiled:
+            self._level_calls = COMPILED_AFTER_LEVEL_CALLS
+            self._passes()
+
+    def _passes(self):
+        """The compiled (forward, backward) passes once worth their import, else None (numpy levels)."""
+        if self._compiled is None and len(self.tails) >= COMPILED_MIN_ARCS:
+            if self._level_calls < COMPILED_AFTER_LEVEL_CALLS:
+                self._level_calls += self._depth // 2
+            if self._level_calls >= COMPILED_AFTER_LEVEL_CALLS:
+                self._compiled = kernels() or False
+                if self._compiled:      # the arcs' ends in pass order: the loop reads them in sequence
+                    self._fwd_run = (self.forward_order, self._t_fwd, self.heads[self.forward_order])
+                    bwd = np.ascontiguousarray(self.backward_order[::-1])        # last level first
+                    self._bwd_run = (bwd, self.tails[bwd], self.heads[bwd])
+        return self._compiled
 
     @classmethod
     def of(cls, n, tails, heads) -> "Levels":
@@ -93,14 +110,14 @@ class Levels:
 
     def forward(self, dist: np.ndarray, w: np.ndarray) -> None:
         """dist[v] = max(dist[v], dist[u] + w) over every DAG path, in place."""
-        if self._compiled:
+        if self._passes():
             self._compiled[0](dist, *self._fwd_run, np.asarray(w, dtype=float))
         else:
             _relax(dist, w[self.forward_order], self._t_fwd, self.forward_segments)
 
     def backward(self, dist: np.ndarray, w: np.ndarray) -> None:
         """dist[u] = max(dist[u], w + dist[v]) over every DAG path (distances *to* a target), in place."""
-        if self._compiled:
+        if self._passes():
             self._compiled[1](dist, *self._bwd_run, np.asarray(w, dtype=float))
         else:
             _relax(dist, w[self.backward_order], self._h_bwd, self.backward_segments)

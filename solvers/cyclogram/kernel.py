@@ -8,7 +8,8 @@ arcs, not memory order). So `graph.Levels` hands its passes to these kernels for
 at least COMPILED_MIN_ARCS arcs when numba imports, and keeps the numpy levels otherwise: numba
 is an optional dependency (`pip install mechopt[fast]`), its import (~0.5 s) is paid only by a
 process that solves a large network, and its compiled code is cached on disk (the first
-compile, ~2 s, happens once per installation). Small networks, every scene of the package
+compile, ~2 s, happens once per installation), and a process imports it only once its numpy
+passes would have cost as much (COMPILED_AFTER_LEVEL_CALLS). Small networks, every scene of the package
 among them, never import it.
 
 Set MECHOPT_NO_NUMBA=1 to keep the numpy passes (the fallback, and the reference the tests
@@ -18,6 +19,11 @@ import os
 import warnings
 
 COMPILED_MIN_ARCS = 20_000      # below: the numpy levels are as fast (few levels) and need no import
+# numba's import and cache load cost ~0.5-0.9 s and ~60 MB in a fresh process (a second process
+# loads the cached code, it does not compile: tests/loom/test_cli_speed.py), about 50,000 numpy
+# level steps at ~10 us: a process takes the compiled passes once its numpy passes have stepped
+# through that many levels (graph.Levels), so a one-off solve of a shallow network never pays it
+COMPILED_AFTER_LEVEL_CALLS = 50_000
 
 _KERNELS = None                 # (forward, backward) once imported; False when numba is missing
 

@@ -206,7 +206,7 @@ def test_two_independent_conflicts_are_both_named():
 def _numpy_levels(levels):
     """The same Levels with the compiled passes switched off (the numpy reference)."""
     plain = Levels.__new__(Levels)
-    plain.__dict__.update(levels.__dict__, _compiled=None)
+    plain.__dict__.update(levels.__dict__, _compiled=False)
     return plain
 
 
@@ -220,8 +220,8 @@ def test_the_compiled_passes_give_the_numpy_passes_answers_with_windows_and_sync
     n = 20_000
     tails, heads, w, (a, b, wmax) = random_dag(n, windows=200, seed=3)
     assert len(tails) >= COMPILED_MIN_ARCS
-    levels = Levels(n, tails, heads)
-    assert levels._compiled
+    levels = Levels(n, tails, heads, compiled=True)
+    assert levels._passes()
     back = BackArcs(np.r_[b, 5, 6], np.r_[a, 6, 5], np.r_[-wmax, 0.0, 0.0])
     plain = _numpy_levels(levels)
     for fast, slow in ((levels.longest_from(0, w, back), plain.longest_from(0, w, back)),
