@@ -117,6 +117,12 @@ def line(row) -> str:
             f"{row['ratio']:.2f}x; span {row['cli_span_deg']} vs {row['networkx_span_deg']}")
 
 
+def cli(repeats, out_dir, progress=None, quick=False) -> str:
+    """`mechopt bench cyclogram_cli`: 10^5 operations, medians of `repeats` (quick: 10^4, one run each)."""
+    size, reps = (10_000, 1) if quick else (100_000, max(1, min(repeats, 3)))
+    return line(compare(size, repeats=reps, progress=progress))
+
+
 if __name__ == "__main__":
     for size in [int(float(a)) for a in sys.argv[1:]] or [100_000]:
         print(line(compare(size)), flush=True)
