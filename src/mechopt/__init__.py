@@ -22,6 +22,7 @@ takes `method=`: `mechopt.solvers.press.simulate`, `mechopt.solvers.cam_cutter.f
 import importlib
 from typing import TYPE_CHECKING
 
+from mechopt.kit import forking  # noqa: F401  (before any fork, HiGHS' workers stop: kit/forking.py)
 from mechopt.kit.errors import MechoptError, ModelError, SceneError, SettingError, SolverError
 
 if TYPE_CHECKING:       # for readers, type checkers and the docs; at run time __getattr__ imports each when used

@@ -241,3 +241,19 @@ def test_a_held_model_whose_run_was_abandoned_solves_again(monkeypatch):
     h.run()
     assert len(calls) == 2 and h.getModelStatus().name == "kOptimal"
     assert h.getInfo().objective_function_value == pytest.approx(-4.0)
+
+
+def test_a_fork_after_a_highs_solve_stops_its_workers_first(monkeypatch):
+    """A child forked while a HiGHS worker held its executor's mutex hangs at exit (the fork of
+    `test_ctrl_c_at_any_moment...` was once found so: HighsTaskExecutor::ExecutorHandle::dispose on a
+    futex, one thread). Before every fork the parent stops HiGHS' workers (kit/forking.py)."""
+    import highspy
+
+    import mechopt  # noqa: F401  (registers the hook)
+    stopped = []
+    monkeypatch.setattr(highspy.Highs, "resetGlobalScheduler", staticmethod(lambda blocking: stopped.append(blocking)))
+    pid = os.fork()
+    if pid == 0:
+        os._exit(0)
+    os.waitpid(pid, 0)
+    assert stopped == [True]
