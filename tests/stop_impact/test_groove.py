@@ -12,7 +12,7 @@ from mechopt.kit.errors import MechoptError
 from mechopt.kit.result import Status
 from mechopt.models.cam_follower import rise_duration_s
 from mechopt.solvers.stop_impact.cam_follower import follow_cam
-from mechopt.solvers.stop_impact.groove import follow_groove, rebound_with_backlash_mm
+from mechopt.solvers.stop_impact.groove import follow_groove, follow_groove_ivp, rebound_with_backlash_mm
 from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
 
 BACKLASH_MM = 0.05
@@ -136,6 +136,30 @@ def test_the_hybrid_rise_with_the_backlash_agrees_with_a_hand_one(groove, speed)
         assert ("outer", "inner")[landed == 1] == hand[2] and impact == pytest.approx(hand[3], rel=1e-6)
     assert real.contact_xi == pytest.approx(contact, abs=1e-9)
     assert real.approach_velocity_m_s == pytest.approx(v0, rel=1e-7)
+
+
+@pytest.mark.parametrize("backlash_mm, closure_N, speed", [(0.05, 1500.0, 400.0), (0.05, 1500.0, 520.0),
+                                                       (0.2, 300.0, 800.0), (0.5, 1500.0, 600.0)])
+def test_the_exact_groove_rise_is_the_dop853_hybrid(groove, backlash_mm, closure_N, speed):
+    """follow_groove (each phase by its exact solution) against follow_groove_ivp (DOP853 with
+    events, here at rtol 1e-13; at its own 1e-11 it errs by ~1e-9 in v0): the same flights, walls
+    landed on, impacts and contact."""
+    task = dataclasses.replace(groove, backlash_mm=backlash_mm, closure_force_N=closure_N)
+    exact, ivp = follow_groove(task, speed), follow_groove_ivp(task, speed, rtol=1e-13)
+    assert exact.status is ivp.status is Status.SOLVED and exact.message == ivp.message
+    assert len(exact.flights) == len(ivp.flights) == (speed > 400.0)
+    for a, b in zip(exact.flights, ivp.flights):
+        assert a[2:4] == b[2:4] and a[:2] == pytest.approx(b[:2], abs=1e-10)
+        assert a[4] == pytest.approx(b[4], rel=1e-8)
+    assert exact.contact_xi == pytest.approx(ivp.contact_xi, abs=1e-11)
+    assert exact.approach_velocity_m_s == pytest.approx(ivp.approach_velocity_m_s, rel=1e-9)
+
+
+def test_the_exact_groove_rise_leaves_what_it_cannot_take_to_dop853(groove):
+    """Past the exact path's limits (here zeta >= 1: no oscillatory Duhamel kernel) follow_groove
+    is the DOP853 hybrid itself."""
+    task = dataclasses.replace(groove, damping_ratio=1.2)
+    assert follow_groove(task, 600.0) == follow_groove_ivp(task, 600.0)
 
 
 def test_the_hybrid_with_a_vanishing_backlash_is_the_chain(groove):
