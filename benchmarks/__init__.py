@@ -12,8 +12,9 @@ from mechopt.mechanisms import mechanisms
 
 SPINE_STUDIES = {"sweep": "mechopt.benchmarks.sweep"}      # of the spine, not of one mechanism
 # a mechanism's further studies (stop-impact's window LP, also run within its first: mechopt bench synthesis;
-# the loom's exact-bound walk and the co-design's whole command: mechopt bench walk)
-MORE_STUDIES = {"synthesis": "mechopt.benchmarks.synthesis", "walk": "mechopt.benchmarks.walk"}
+# the loom's exact-bound walk and the co-design's whole command: mechopt bench walk; the groove's rise: mechopt bench groove)
+MORE_STUDIES = {"synthesis": "mechopt.benchmarks.synthesis", "walk": "mechopt.benchmarks.walk",
+                "groove": "mechopt.benchmarks.groove"}
 
 
 def studies() -> dict[str, str]:
