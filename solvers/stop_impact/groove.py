@@ -46,11 +46,10 @@ from mechopt.solvers.stop_impact.response import closed_form_amplitude_m
 from mechopt.solvers.stop_impact.rise_batch import (
     EXP_LIMIT,
     POINTS,
-    _grid_drive,
-    _grid_integrals,
-    _interval_integrals,
-    _law_parts,
+    interval_integrals,
     law_joins,
+    law_parts,
+    rise_integrals,
 )
 
 MAX_SWITCHES = 200          # phase changes followed in one rise (a count)
@@ -124,12 +123,12 @@ class ExactWalls:
     def __init__(self, law, joins, lam, zeta, phi, gap, dwell):
         self.law, self.joins, self.lam, self.zeta, self.phi, self.gap = law, joins, lam, zeta, phi, gap
         self.mu = np.array([complex(-zeta * lam, lam * math.sqrt(1.0 - zeta * zeta))])
-        self.grid = _grid_drive(law, tuple(joins))[0]
-        I_rise = _grid_integrals(law, joins, self.mu)[0]
+        self.grid, I_rise = rise_integrals(law, joins, self.mu)
+        I_rise = I_rise[0]
         tail = 1.0 + dwell * self.grid[1:]
         self.nodes = np.r_[self.grid, tail]
         self.I_nodes = np.r_[I_rise, np.full(tail.size, I_rise[-1])]
-        self.S_nodes, self.dS_nodes = _law_parts(law, self.nodes)[:2]
+        self.S_nodes, self.dS_nodes = law_parts(law, self.nodes)[:2]
 
     @classmethod
     def of(cls, task, lam, zeta, H, T, dwell):
@@ -146,11 +145,11 @@ class ExactWalls:
         if xi >= 1.0:
             return complex(self.I_nodes[POINTS - 1])
         k = min(int(np.searchsorted(self.grid, xi, side="right")) - 1, POINTS - 2)
-        rest = _interval_integrals(self.law, self.joins, self.mu, self.grid[k:k + 1], np.array([xi]))
+        rest = interval_integrals(self.law, self.joins, self.mu, self.grid[k:k + 1], np.array([xi]))
         return complex(self.I_nodes[k] + rest[0])
 
     def _parts(self, xi: float):
-        S, dS = (float(v[0]) for v in _law_parts(self.law, np.array([xi]))[:2])
+        S, dS = (float(v[0]) for v in law_parts(self.law, np.array([xi]))[:2])
         return S, dS
 
     def force(self, xi, X, dX, wall) -> float:
