@@ -90,7 +90,7 @@ def follow_groove(task: LeverStop, speed_rpm, t_deg=None) -> GrooveRise:
         if wall * walls.force(xi, X, dX, wall) >= 0:          # the wall holds it: driven
             hit = walls.ride(xi, X, dX, wall, target)
             if hit is None:
-                return _ended(True, flights)
+                return _ended(False, flights)
             k, xi, X, dX = hit
             if k == 0:
                 return GrooveRise(xi, dX * H / T, tuple(flights), Status.SOLVED, "C meets its plate")
@@ -100,7 +100,7 @@ def follow_groove(task: LeverStop, speed_rpm, t_deg=None) -> GrooveRise:
             return GrooveRise(reach, (dX - flights_of.phi * (reach - xi)) * H / T, tuple(flights), Status.SOLVED,
                               "C meets its plate in flight")
         if landed is None:
-            return _ended(True, flights)
+            return _ended(False, flights)
         land, new, speed, X, dX = landed
         flights.append((xi, land, wall, new, speed))
         xi, wall = land, new
@@ -234,7 +234,7 @@ def follow_groove_ivp(task: LeverStop, speed_rpm, t_deg=None, *, rtol: float = 1
             off.terminal, off.direction = True, -wall
             run, hit = _run(driven(offset), xi, y, end, (plate, off), rtol)
             if run is None or hit is None:
-                return _ended(run, flights)
+                return _ended(run is None, flights)
             xi, y = hit[1], hit[2]
             if hit[0] == 0:
                 return GrooveRise(xi, float(y[1]) * H / T, tuple(flights), Status.SOLVED, "C meets its plate")
@@ -251,7 +251,7 @@ def follow_groove_ivp(task: LeverStop, speed_rpm, t_deg=None, *, rtol: float = 1
         start = xi
         run, hit = _run(free, xi, z0, end, (plate, other, back), rtol)
         if run is None or hit is None:
-            return _ended(run, flights)
+            return _ended(run is None, flights)
         xi, z = hit[1], hit[2]
         if hit[0] == 0:
             return GrooveRise(xi, float(z[1]) * H / T, tuple(flights), Status.SOLVED, "C meets its plate in flight")
@@ -279,8 +279,9 @@ def _run(rhs, xi0, y0, end, events, rtol):
     return run, None
 
 
-def _ended(run, flights):
-    if run is None:     # (True: the exact path, which cannot fail)
+def _ended(failed, flights):
+    """The rise without a contact: the integrator failed (DOP853 only), or the window ended."""
+    if failed:
         return GrooveRise(None, 0.0, tuple(flights), Status.FAILED, "DOP853 failed")
     return GrooveRise(None, 0.0, tuple(flights), Status.SOLVED, "C does not reach its plate in the followed window")
 
