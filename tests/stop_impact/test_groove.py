@@ -11,6 +11,7 @@ from mechopt import registry
 from mechopt.kit.errors import MechoptError
 from mechopt.kit.result import Status
 from mechopt.models.cam_follower import rise_duration_s
+from mechopt.models.cam_law import SplineBasis
 from mechopt.solvers.stop_impact.cam_follower import follow_cam
 from mechopt.solvers.stop_impact.groove import follow_groove, follow_groove_ivp, rebound_with_backlash_mm
 from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
@@ -138,16 +139,27 @@ def test_the_hybrid_rise_with_the_backlash_agrees_with_a_hand_one(groove, speed)
     assert real.approach_velocity_m_s == pytest.approx(v0, rel=1e-7)
 
 
-@pytest.mark.parametrize("backlash_mm, closure_N, speed", [(0.05, 1500.0, 400.0), (0.05, 1500.0, 520.0),
-                                                       (0.2, 300.0, 800.0), (0.5, 1500.0, 600.0)])
-def test_the_exact_groove_rise_is_the_dop853_hybrid(groove, backlash_mm, closure_N, speed):
+def spline_cycloid():
+    """A synthesised-type law: a cubic B-spline on 16 intervals through the cycloid at its
+    Greville abscissae (S's third derivative jumps at its knots, the batch path's joins)."""
+    basis = SplineBasis(16)
+    t, p, fixed = basis.knots, basis.degree, basis.continuity + 1
+    grev = np.array([t[i + 1:i + p + 1].mean() for i in range(t.size - p - 1)])
+    return basis.law(cycloid(grev)[0][fixed:grev.size - fixed])
+
+
+@pytest.mark.parametrize("backlash_mm, closure_N, speed, spline, flights", [
+    (0.05, 1500.0, 400.0, False, 0), (0.05, 1500.0, 520.0, False, 1), (0.2, 300.0, 800.0, False, 1),
+    (0.5, 1500.0, 600.0, False, 1), (0.05, 1500.0, 520.0, True, 0), (0.05, 1500.0, 600.0, True, 1)])
+def test_the_exact_groove_rise_is_the_dop853_hybrid(groove, backlash_mm, closure_N, speed, spline, flights):
     """follow_groove (each phase by its exact solution) against follow_groove_ivp (DOP853 with
-    events, here at rtol 1e-13; at its own 1e-11 it errs by ~1e-9 in v0): the same flights, walls
-    landed on, impacts and contact."""
-    task = dataclasses.replace(groove, backlash_mm=backlash_mm, closure_force_N=closure_N)
+    events, here at rtol 1e-13; at its own 1e-11 it errs by ~1e-9 in v0, ~1e-6 on a synthesised
+    law): the same flights, walls landed on, impacts and contact, on the cycloid and a spline."""
+    task = dataclasses.replace(groove, backlash_mm=backlash_mm, closure_force_N=closure_N,
+                               **({"law": spline_cycloid()} if spline else {}))
     exact, ivp = follow_groove(task, speed), follow_groove_ivp(task, speed, rtol=1e-13)
     assert exact.status is ivp.status is Status.SOLVED and exact.message == ivp.message
-    assert len(exact.flights) == len(ivp.flights) == (speed > 400.0)
+    assert len(exact.flights) == len(ivp.flights) == flights
     for a, b in zip(exact.flights, ivp.flights):
         assert a[2:4] == b[2:4] and a[:2] == pytest.approx(b[:2], abs=1e-10)
         assert a[4] == pytest.approx(b[4], rel=1e-8)
