@@ -145,7 +145,7 @@ def spline_cycloid():
     basis = SplineBasis(16)
     t, p, fixed = basis.knots, basis.degree, basis.continuity + 1
     grev = np.array([t[i + 1:i + p + 1].mean() for i in range(t.size - p - 1)])
-    return basis.law(cycloid(grev)[0][fixed:grev.size - fixed])
+    return basis.law([cycloid(x)[0] for x in grev[fixed:grev.size - fixed]])
 
 
 @pytest.mark.parametrize("backlash_mm, closure_N, speed, spline, flights", [
