@@ -78,12 +78,18 @@ def follow_groove(task: LeverStop, speed_rpm, t_deg=None) -> GrooveRise:
     """The rise of `task` (closure "groove") at `speed_rpm` and `t_deg` with its backlash, each
     phase by its exact solution (module docstring); `follow_groove_ivp` where that path does not
     apply."""
+    exact = follow_groove_exact(task, speed_rpm, t_deg)
+    return follow_groove_ivp(task, speed_rpm, t_deg) if exact is None else exact
+
+
+def follow_groove_exact(task: LeverStop, speed_rpm, t_deg=None) -> GrooveRise | None:
+    """`follow_groove` by the exact phases alone: None where they do not apply (module docstring)."""
     _check(task)
     t_deg = task.t_deg if t_deg is None else t_deg
     lam, zeta, H, target, T = follower_data(task, speed_rpm, t_deg)
     walls = ExactWalls.of(task, lam, zeta, H, T, dwell_length(lam, t_deg)[0])
     if walls is None:
-        return follow_groove_ivp(task, speed_rpm, t_deg)
+        return None
     flights_of = groove_of(task, lam, zeta, H, T)
     xi, X, dX, wall, flights = 0.0, 0.0, 0.0, 1, []
     for _ in range(MAX_SWITCHES):
