@@ -13,8 +13,13 @@ from mechopt.kit.result import Status
 from mechopt.models.cam_follower import rise_duration_s
 from mechopt.models.cam_law import SplineBasis
 from mechopt.solvers.stop_impact.cam_follower import follow_cam
-from mechopt.solvers.stop_impact.groove import follow_groove, follow_groove_ivp, rebound_with_backlash_mm
-from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
+from mechopt.solvers.stop_impact.groove import (
+    follow_groove,
+    follow_groove_exact,
+    follow_groove_ivp,
+    rebound_with_backlash_mm,
+)
+from mechopt.solvers.stop_impact.law import CHAIN_RELTOL, approach_velocity_m_s, rebound_amplitude_mm
 
 BACKLASH_MM = 0.05
 
@@ -230,3 +235,22 @@ def test_the_synthesis_keeps_the_roller_on_its_driving_wall_in_a_groove_too(forc
     assert np.array_equal(np.where(fam_f == "cam_contact", "held", fam_f), np.where(fam_g == "no_crossover", "held", fam_g))
     assert all(np.array_equal(a, b) for a, b in zip(bounds_f, bounds_g))
     assert solved_f[0] is solved_g[0] is Status.SOLVED and np.array_equal(solved_f[1], solved_g[1])
+
+
+def test_the_chain_takes_a_crossing_rise_from_the_exact_hybrid_where_cvodes_would_send_it():
+    """law._rise_velocity asks the exact hybrid first in a groove: a flight before its contact
+    stands for the chain's crossover before the plate (CVODES, follow_cam), which hands the point
+    to the same hybrid; on stop-impact/cam-dynamics-groove over speeds and phase angles the two
+    tests agree, and v0 is the DOP853 hybrid's where they cross (rtol 1e-13)."""
+    task = registry.find("stop-impact/cam-dynamics-groove").build()[0]
+    crossing = 0
+    for speed in (300.0, 520.0, 700.0):
+        for t in (28.0, task.t_deg, 50.0):
+            rise, exact = follow_cam(task, speed, t, reltol=CHAIN_RELTOL), follow_groove_exact(task, speed, t)
+            chain = bool(rise.crossovers) and (rise.contact_xi is None or rise.crossovers[0].xi < rise.contact_xi)
+            assert chain == bool(exact.flights) and exact.status is rise.status is Status.SOLVED
+            if chain:
+                crossing += 1
+                v0 = follow_groove_ivp(task, speed, t, rtol=1e-13).approach_velocity_m_s
+                assert approach_velocity_m_s(task, speed, t) == pytest.approx(v0, rel=1e-9)
+    assert 0 < crossing < 9, crossing
