@@ -18,8 +18,8 @@ Three phases, C's state (x, x') carried across each switch, in the rise's own ti
   that cannot hold N is a flight again at once.
 
 C meets its plate where X = 1 - preload / H: the approach velocity v0 with the backlash. Each
-phase is linear, so `follow_groove` takes each by its exact solution (`follow_groove_exact`): on a wall the follower's
-error e = X - S - offset by Duhamel's integral from the phase's own start (the batch path's
+phase is linear, so `follow_groove` takes each by its exact solution (`follow_groove_exact`):
+on a wall the follower's error e = X - S - offset by Duhamel's integral from the phase's own start (the batch path's
 integral I, solvers/stop_impact/rise_batch.py: e = -Im(e^{mu xi} (I(xi) - K)) / w, the constant
 K set by C's state at the phase's start), in flight the closed form of
 solvers/stop_impact/crossover.py; each event (N's sign change, the plate, a landing) bracketed
