@@ -185,15 +185,16 @@ class ExactWalls:
         x = np.r_[xi0, self.nodes[later]]
         plate, held = state(x, np.r_[self.integral(xi0), self.I_nodes[later]], np.r_[S0, self.S_nodes[later]],
                             np.r_[dS0, self.dS_nodes[later]])[:2]
+        cells = [(int(np.argmax(h)), k) for k, h in enumerate(((plate[:-1] <= 0) & (plate[1:] >= 0),
+                                                             (held[:-1] >= 0) & (held[1:] <= 0))) if h.any()]
+        if not cells:
+            return None
         found = []
-        for k, hits in enumerate(((plate[:-1] <= 0) & (plate[1:] >= 0), (held[:-1] >= 0) & (held[1:] <= 0))):
-            if hits.any():
-                i = int(np.argmax(hits))
+        for i, k in cells:
+            if i == min(cells)[0]:          # an event in a later cell comes after it: not located
                 g = (lambda u, k=k: at(u)[k])     # noqa: E731
                 found.append((x[i + 1] if g(x[i + 1]) == 0 or g(x[i]) * g(x[i + 1]) > 0
                                else brentq(g, x[i], x[i + 1], xtol=1e-15), k))
-        if not found:
-            return None
         xi, k = min(found)
         _, _, X, dX = at(xi)
         return k, xi, float(X), float(dX)
