@@ -12,10 +12,10 @@ from mechopt.mechanisms import mechanisms
 
 SPINE_STUDIES = {"sweep": "mechopt.benchmarks.sweep"}      # of the spine, not of one mechanism
 # a mechanism's further studies (stop-impact's window LP, also run within its first: mechopt bench synthesis;
-# the loom's exact-bound walk and the co-design's whole command: mechopt bench walk; a big CSV timing table's
-# whole command against a networkx script: mechopt bench cyclogram_cli)
+# the loom's exact-bound walk and the co-design's whole command: mechopt bench walk; the groove's rise: mechopt
+# bench groove; a big CSV timing table's whole command against a networkx script: mechopt bench cyclogram_cli)
 MORE_STUDIES = {"synthesis": "mechopt.benchmarks.synthesis", "walk": "mechopt.benchmarks.walk",
-                "cyclogram_cli": "mechopt.benchmarks.cyclogram_cli"}
+                "groove": "mechopt.benchmarks.groove", "cyclogram_cli": "mechopt.benchmarks.cyclogram_cli"}
 
 
 def studies() -> dict[str, str]:

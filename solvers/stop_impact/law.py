@@ -18,7 +18,7 @@ from mechopt.kit.errors import ModelError, SolverError
 from mechopt.kit.result import Status
 from mechopt.models.stop_impact import Impact, LeverStop
 from mechopt.solvers.stop_impact.cam_follower import follow_cam
-from mechopt.solvers.stop_impact.groove import follow_groove
+from mechopt.solvers.stop_impact.groove import follow_groove, follow_groove_exact
 from mechopt.solvers.stop_impact.response import closed_form_amplitude_m, response_parts
 from mechopt.solvers.stop_impact.rise_batch import ROLLER_LEFT, TAKEN, rise_batch
 
@@ -47,6 +47,12 @@ def approach_velocity_m_s(task: LeverStop, speed_rpm: float, t_deg: float | None
 
 @memoised(maxsize=4096)     # the chain asks for the same rise again (a law's tangent, a walk, its check)
 def _rise_velocity(task: LeverStop, speed_rpm: float, t_deg: float | None) -> float:
+    if task.closure == "groove" and "damping" in task.effects and task.damping_ratio:
+        # the groove's exact rise first (ms, against the chain's CVODES rise): a flight before its
+        # contact is the crossover before the plate below (both ride the driving wall until then)
+        real = follow_groove_exact(task, speed_rpm, t_deg)
+        if real is not None and real.status is Status.SOLVED and real.contact_xi is not None and real.flights:
+            return real.approach_velocity_m_s
     rise = follow_cam(task, speed_rpm, t_deg, reltol=CHAIN_RELTOL)
     if rise.status is not Status.SOLVED:        # (no contact at all: C settles onto the plate, v0 = 0)
         raise RollerLeftCam(f"speed {speed_rpm:g} rpm, t = {rise.t_deg:g} deg: no approach velocity: {rise.message}",

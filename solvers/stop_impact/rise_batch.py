@@ -60,7 +60,7 @@ def _cuts(left, right, joins):
     return np.where(inside < right, inside, left)
 
 
-def _law_parts(law, xi):
+def law_parts(law, xi):
     """(S, S', S'') at xi (any shape): the rise on [0, 1], rest before, the dwell after (as
     `law_values`, from the library's numpy forms)."""
     xi = np.asarray(xi, float)
@@ -85,14 +85,14 @@ def _spline_parts(law: SplineLaw):
     return spline, spline.derivative(1), spline.derivative(2)
 
 
-def _interval_integrals(law, joins, mu, left, right):
+def interval_integrals(law, joins, mu, left, right):
     """integral_left^right e^{-mu s} S''(s) ds per point (mu, left, right: (N,)), by Gauss-Legendre
     on the two pieces either side of a join inside (the first empty without one)."""
     cut = _cuts(left, right, joins)
     starts, ends = np.stack([left, cut], -1), np.stack([cut, right], -1)
     half = 0.5 * (ends - starts)
     nodes = (0.5 * (ends + starts))[..., None] + half[..., None] * _X
-    drive = _law_parts(law, nodes)[2] * _W * half[..., None]
+    drive = law_parts(law, nodes)[2] * _W * half[..., None]
     return (np.exp(-mu[:, None, None] * nodes) * drive).sum(axis=(-2, -1))
 
 
@@ -104,11 +104,11 @@ def _grid_drive(law, joins: tuple):
     grid = np.linspace(0.0, 1.0, POINTS)
     h = 0.5 * (grid[1] - grid[0])
     offsets = h * (_X + 1.0)
-    drive = _law_parts(law, grid[:-1, None] + offsets)[2] * _W * h
+    drive = law_parts(law, grid[:-1, None] + offsets)[2] * _W * h
     split = np.unique(np.searchsorted(grid, np.asarray(joins), side="right") - 1)
     split = split[(split >= 0) & (split < POINTS - 1)]
     drive[split] = 0.0
-    return grid, _law_parts(law, grid)[0], offsets, drive, split
+    return grid, law_parts(law, grid)[0], offsets, drive, split
 
 
 def _grid_integrals(law, joins, mu):
@@ -119,10 +119,16 @@ def _grid_integrals(law, joins, mu):
     sums = shift.real @ drive.T + 1j * (shift.imag @ drive.T)     # (real products: BLAS)
     cells = np.exp(-mu[:, None] * grid[None, :-1]) * sums
     if split.size:              # every (mu, join cell) pair in one call
-        pairs = _interval_integrals(law, joins, np.repeat(mu, split.size), np.tile(grid[split], mu.size),
+        pairs = interval_integrals(law, joins, np.repeat(mu, split.size), np.tile(grid[split], mu.size),
                                     np.tile(grid[split + 1], mu.size))
         cells[:, split] = pairs.reshape(mu.size, split.size)
     return np.concatenate([np.zeros((mu.size, 1), complex), np.cumsum(cells, axis=1)], axis=1)
+
+
+def rise_integrals(law, joins, mu):
+    """(the rise's sample grid (POINTS,), I at each of its nodes for each mu (N, POINTS)): the
+    exact groove's walls (solvers/stop_impact/groove.py) start from these too."""
+    return _grid_drive(law, tuple(joins))[0], _grid_integrals(law, joins, mu)
 
 
 def _state(mu, w, xi, I):
@@ -181,7 +187,7 @@ def rise_batch(task: LeverStop, speed_rpm, t_deg):
     least = np.minimum(least, -damp * de_c - stiff * e_c)
     closure = task.closure_force_N if "cam_drive" in task.effects else 0.0
     left = closure + task.mass_kg * H / T**2 * least < 0
-    dS_c = _law_parts(task.law, xi_c)[1]
+    dS_c = law_parts(task.law, xi_c)[1]
     speed = (dS_c + de_c) * H / T
     good = found & np.isfinite(speed)
     # in a groove N < 0 is a crossover, not a lift-off: its flight across the backlash is the
@@ -196,12 +202,12 @@ def _locate(law, mu, w, joins, lo, hi, I_lo, target):
     """follow_cam's `_locate` for every point at once: where X = S + e reaches `target` in
     [lo, hi], safeguarded Newton from the cell's middle, each iterate's state from I at lo."""
     def at(xi):
-        return _state(mu, w, xi, I_lo + _interval_integrals(law, joins, mu, lo, xi))
+        return _state(mu, w, xi, I_lo + interval_integrals(law, joins, mu, lo, xi))
     a, b, xi = lo.copy(), hi.copy(), 0.5 * (lo + hi)
     e, de = at(xi)
     done = np.zeros(lo.size, bool)
     for _ in range(NEWTON_ITERATIONS):
-        S, dS = _law_parts(law, xi)[:2]
+        S, dS = law_parts(law, xi)[:2]
         gap, slope = S + e - target, dS + de
         a, b = np.where(gap < 0, xi, a), np.where(gap < 0, b, xi)
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -218,4 +224,5 @@ def _locate(law, mu, w, joins, lo, hi, I_lo, target):
     return xi, e, de
 
 
-__all__ = ["NOT_TAKEN", "ROLLER_LEFT", "TAKEN", "law_joins", "rise_batch"]
+__all__ = ["NOT_TAKEN", "ROLLER_LEFT", "TAKEN", "interval_integrals", "law_joins", "law_parts", "rise_batch",
+           "rise_integrals"]

@@ -11,9 +11,15 @@ from mechopt import registry
 from mechopt.kit.errors import MechoptError
 from mechopt.kit.result import Status
 from mechopt.models.cam_follower import rise_duration_s
+from mechopt.models.cam_law import SplineBasis
 from mechopt.solvers.stop_impact.cam_follower import follow_cam
-from mechopt.solvers.stop_impact.groove import follow_groove, rebound_with_backlash_mm
-from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
+from mechopt.solvers.stop_impact.groove import (
+    follow_groove,
+    follow_groove_exact,
+    follow_groove_ivp,
+    rebound_with_backlash_mm,
+)
+from mechopt.solvers.stop_impact.law import CHAIN_RELTOL, approach_velocity_m_s, rebound_amplitude_mm
 
 BACKLASH_MM = 0.05
 
@@ -138,6 +144,41 @@ def test_the_hybrid_rise_with_the_backlash_agrees_with_a_hand_one(groove, speed)
     assert real.approach_velocity_m_s == pytest.approx(v0, rel=1e-7)
 
 
+def spline_cycloid():
+    """A synthesised-type law: a cubic B-spline on 16 intervals through the cycloid at its
+    Greville abscissae (S's third derivative jumps at its knots, the batch path's joins)."""
+    basis = SplineBasis(16)
+    t, p, fixed = basis.knots, basis.degree, basis.continuity + 1
+    grev = np.array([t[i + 1:i + p + 1].mean() for i in range(t.size - p - 1)])
+    return basis.law([cycloid(x)[0] for x in grev[fixed:grev.size - fixed]])
+
+
+@pytest.mark.parametrize("backlash_mm, closure_N, speed, spline, flights", [
+    (0.05, 1500.0, 400.0, False, 0), (0.05, 1500.0, 520.0, False, 1), (0.2, 300.0, 800.0, False, 1),
+    (0.5, 1500.0, 600.0, False, 1), (0.05, 1500.0, 520.0, True, 0), (0.05, 1500.0, 600.0, True, 1)])
+def test_the_exact_groove_rise_is_the_dop853_hybrid(groove, backlash_mm, closure_N, speed, spline, flights):
+    """follow_groove (each phase by its exact solution) against follow_groove_ivp (DOP853 with
+    events, here at rtol 1e-13; at its own 1e-11 it errs by ~1e-9 in v0, ~1e-6 on a synthesised
+    law): the same flights, walls landed on, impacts and contact, on the cycloid and a spline."""
+    task = dataclasses.replace(groove, backlash_mm=backlash_mm, closure_force_N=closure_N,
+                               **({"law": spline_cycloid()} if spline else {}))
+    exact, ivp = follow_groove(task, speed), follow_groove_ivp(task, speed, rtol=1e-13)
+    assert exact.status is ivp.status is Status.SOLVED and exact.message == ivp.message
+    assert len(exact.flights) == len(ivp.flights) == flights
+    for a, b in zip(exact.flights, ivp.flights):
+        assert a[2:4] == b[2:4] and a[:2] == pytest.approx(b[:2], abs=1e-10)
+        assert a[4] == pytest.approx(b[4], rel=1e-8)
+    assert exact.contact_xi == pytest.approx(ivp.contact_xi, abs=1e-10)
+    assert exact.approach_velocity_m_s == pytest.approx(ivp.approach_velocity_m_s, rel=1e-9)
+
+
+def test_the_exact_groove_rise_leaves_what_it_cannot_take_to_dop853(groove):
+    """Past the exact path's limits (here zeta >= 1: no oscillatory Duhamel kernel) follow_groove
+    is the DOP853 hybrid itself."""
+    task = dataclasses.replace(groove, damping_ratio=1.2)
+    assert follow_groove(task, 600.0) == follow_groove_ivp(task, 600.0)
+
+
 def test_the_hybrid_with_a_vanishing_backlash_is_the_chain(groove):
     """The hybrid model (DOP853, walls offset by the backlash) tends to the chain's backlash-free
     approach as the backlash shrinks; at 0.05 mm it moves the approach at 520 rpm."""
@@ -194,3 +235,22 @@ def test_the_synthesis_keeps_the_roller_on_its_driving_wall_in_a_groove_too(forc
     assert np.array_equal(np.where(fam_f == "cam_contact", "held", fam_f), np.where(fam_g == "no_crossover", "held", fam_g))
     assert all(np.array_equal(a, b) for a, b in zip(bounds_f, bounds_g))
     assert solved_f[0] is solved_g[0] is Status.SOLVED and np.array_equal(solved_f[1], solved_g[1])
+
+
+def test_the_chain_takes_a_crossing_rise_from_the_exact_hybrid_where_cvodes_would_send_it():
+    """law._rise_velocity asks the exact hybrid first in a groove: a flight before its contact
+    stands for the chain's crossover before the plate (CVODES, follow_cam), which hands the point
+    to the same hybrid; on stop-impact/cam-dynamics-groove over speeds and phase angles the two
+    tests agree, and v0 is the DOP853 hybrid's where they cross (rtol 1e-13)."""
+    task = registry.find("stop-impact/cam-dynamics-groove").build()[0]
+    crossing = 0
+    for speed in (300.0, 520.0, 700.0):
+        for t in (28.0, task.t_deg, 50.0):
+            rise, exact = follow_cam(task, speed, t, reltol=CHAIN_RELTOL), follow_groove_exact(task, speed, t)
+            chain = bool(rise.crossovers) and (rise.contact_xi is None or rise.crossovers[0].xi < rise.contact_xi)
+            assert chain == bool(exact.flights) and exact.status is rise.status is Status.SOLVED
+            if chain:
+                crossing += 1
+                v0 = follow_groove_ivp(task, speed, t, rtol=1e-13).approach_velocity_m_s
+                assert approach_velocity_m_s(task, speed, t) == pytest.approx(v0, rel=1e-9)
+    assert 0 < crossing < 9, crossing
