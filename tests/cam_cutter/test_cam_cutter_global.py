@@ -61,13 +61,7 @@ def test_each_cell_bound_is_below_the_distance_everywhere_in_its_cell(scene, H0,
     assert first.mean() >= 0.8                        # the first-order bound is the rule, not the exception
     cells = Cells(*(np.array([v]) for v in (H, L, hH, hL, -np.inf)))
     bound = _measure(px, py, cells, np.arange(px.size)[None, :])[0].bound[0]
-    least = np.inf
-    for dH in np.linspace(-hH, hH, 7):
-        for dL in np.linspace(-hL, hL, 7):
-            true = _dense_distance(px, py, H + dH, L + dL)
-            affine = np.where(first, (d0 + gH * dH + gL * dL - E).min(axis=1), -np.inf)
-            assert np.all(true >= zero - 1e-12) and np.all(true >= affine - 1e-12)
-            least = min(least, true.max())
+    least = _least_largest_distance(px, py, (H, L, hH, hL), (zero, d0, gH, gL, E, first), 7)
     assert bound <= least + 1e-12
     if h <= 0.002:                     # and near the optimum within the certificate's 1e-3 mm target
         assert least - bound < 5e-4
@@ -92,13 +86,7 @@ def test_the_bound_is_below_brute_force_on_a_dense_grid_of_its_cell(scene, H0, L
     zero, d0, gH, gL, E, first = cell_bounds(px, py, H, L, hH, hL)
     cells = Cells(*(np.array([v]) for v in (H, L, hH, hL, -np.inf)))
     bound = _measure(px, py, cells, np.arange(px.size)[None, :])[0].bound[0]
-    least = np.inf
-    for dH in np.linspace(-hH, hH, 13):
-        for dL in np.linspace(-hL, hL, 13):
-            true = _dense_distance(px, py, H + dH, L + dL)
-            affine = np.where(first, (d0 + gH * dH + gL * dL - E).min(axis=1), -np.inf)
-            assert np.all(true >= zero - 1e-12) and np.all(true >= affine - 1e-12)
-            least = min(least, true.max())
+    least = _least_largest_distance(px, py, (H, L, hH, hL), (zero, d0, gH, gL, E, first), 13)
     assert bound <= least + 1e-12
     if scene == "cam-cutter/minimax" and away == 0.0 and h <= 0.05:
         assert least - bound < 1e-3
@@ -238,3 +226,17 @@ def test_a_cam_whose_inner_loop_lies_near_a_node_is_still_certified():
     H_lo, H_hi, L_lo, L_hi = d["box_mm"]
     best = min(largest_distance(px, py, H, L) for H in np.arange(H_lo, H_hi, 1.0) for L in np.arange(L_lo, L_hi, 1.0))
     assert d["global_lower_bound_mm"] <= best
+
+
+def _least_largest_distance(px, py, cell, bounds, n):
+    """Brute force on an n x n grid of (H, L) over the cell (corners included): every node's dense
+    distance at least its zero- and first-order bounds; the least over the grid of the largest distance."""
+    (H, L, hH, hL), (zero, d0, gH, gL, E, first) = cell, bounds
+    least = np.inf
+    for dH in np.linspace(-hH, hH, n):
+        for dL in np.linspace(-hL, hL, n):
+            true = _dense_distance(px, py, H + dH, L + dL)
+            affine = np.where(first, (d0 + gH * dH + gL * dL - E).min(axis=1), -np.inf)
+            assert np.all(true >= zero - 1e-12) and np.all(true >= affine - 1e-12)
+            least = min(least, true.max())
+    return least
