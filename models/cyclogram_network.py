@@ -73,9 +73,7 @@ class Network:
         if (len(pairs) != len(ops) or not all(map(g.__contains__, set(xs) | set(ys)))
                 or any(map(str.__eq__, xs, ys))):
             return False
-        g.add_edges_from((x, y, {"min_deg": a, "min_ms": None, "stress": None, "motion": None, "motion_limit": "",
-                                 "amplitude": None, "name": str(op.get("name", "")), "group": str(op.get("group", ""))})
-                         for x, y, a, op in zip(xs, ys, phi.tolist(), ops))
+        g.add_edges_from((x, y, arc_attributes(a, op)) for x, y, a, op in zip(xs, ys, phi.tolist(), ops))
         return True
 
     def _add_operations(self, g):
@@ -103,9 +101,8 @@ class Network:
                 self._check_stress_ref(stress, key)
             if amplitude is not None:
                 self._check_amplitude_ref(amplitude, key)
-            g.add_edge(x, y, min_deg=phi, min_ms=min_ms, stress=stress, motion=motion, motion_limit=motion_limit
-                       if motion_ms and motion_ms == min_ms else "", amplitude=amplitude,
-                       name=str(op.get("name", "")), group=str(op.get("group", "")))
+            g.add_edge(x, y, **arc_attributes(phi, op, min_ms=min_ms, stress=stress, motion=motion, amplitude=amplitude,
+                                              motion_limit=motion_limit if motion_ms and motion_ms == min_ms else ""))
 
     def _check_stress_ref(self, name, key):
         check_table(self.stress_models, "stress_models", dict)
@@ -220,3 +217,9 @@ class Network:
             raise ModelError(f"{key}={op['cycles']}: {solver} schedules one cycle and takes no recurrent "
                              f"operation; the least cycle time of a recurrent network is cyclogram.least_cycle_time",
                              key=key)
+
+
+def arc_attributes(min_deg, op, *, min_ms=None, stress=None, motion=None, motion_limit="", amplitude=None) -> dict:
+    """An operation's arc attributes, one list for the row-by-row build and the plain table's at once."""
+    return {"min_deg": min_deg, "min_ms": min_ms, "stress": stress, "motion": motion, "motion_limit": motion_limit,
+            "amplitude": amplitude, "name": str(op.get("name", "")), "group": str(op.get("group", ""))}
