@@ -1,5 +1,6 @@
 """The loom cyclogram model (paper 004, Podgorny et al. 2018): the loom's scenes as networks, their
-errors named, the stress and amplitude laws (the network's own checks: tests/cyclogram/test_network.py). Published: a(3,7) = -0.003 t(3,7) + 0.208 mm, limit 0.1 mm (Results and discussion; Research methodology)."""
+errors named, the stress and amplitude laws (the network's own checks: tests/cyclogram/test_network.py).
+Published: a(3,7) = -0.003 t(3,7) + 0.208 mm, limit 0.1 mm (Results and discussion; Research methodology)."""
 import dataclasses
 
 import networkx as nx

@@ -1,6 +1,7 @@
 """The whole machine at its highest speed: the graph (the default; its own tests in
-test_loom_speed_graph.py) and the LP in (p, n) against bisection on n with LP feasibility, against the closed form along the critical chain, and the hard cases on the loom's machine (on
-networks of their own: tests/cyclogram/test_speed.py).
+test_loom_speed_graph.py) and the LP in (p, n) against bisection on n with LP feasibility, against
+the closed form along the critical chain, and the hard cases on the loom's machine (on networks of
+their own: tests/cyclogram/test_speed.py).
 
 The scene's lever is the chain (cam -> approach velocity -> impact -> eq. (2)): a(t, n) = h(n / t),
 wavy. Independent references: the chain's crossing T of 0.1 mm at 420 rpm by brentq in [38.6,
