@@ -104,7 +104,7 @@ def _layered_table(folder, n, width, groups=4):
 
 
 def test_timing_diagram_of_about_100_operations_groups_its_rows_and_drops_bar_labels(tmp_path):
-    from mechopt.figures.loom import gantt
+    from mechopt.figures.cyclogram import gantt
     path, arcs = _layered_table(tmp_path, 40, width=6)
     run = registry.run(load(path))
     assert 80 <= arcs <= 120 and run.result.status is Status.SOLVED
