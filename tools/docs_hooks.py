@@ -17,7 +17,6 @@ from mechopt import describe, scenes
 from mechopt.mechanisms import mechanisms
 
 PAGE = "reference/scenes.md"
-MECHANISMS = {m.name: m.title for m in mechanisms()}       # section titles, from the one table
 COLUMNS = ("key", "kind", "unit", "mark", "range", "value", "why")
 LONGEST = 70            # a structure value (a whole network) is cut here: `mechopt describe` shows it all
 
@@ -38,19 +37,32 @@ def scene_table(rows) -> list[str]:
     return lines
 
 
+def row_of(scene, rows) -> str:
+    """The row (its name) a scene belongs to: the one whose solver package its `solver` names
+    (`cyclogram.plan_cyclogram` the cyclogram wing's, `loom.repair_cyclogram` the loom's), so that
+    two rows sharing a cases folder (the cyclogram's scenes live in cases/loom/) each title their
+    own; a solver no row names falls back to the scene id's folder."""
+    package = scene.spec.solver.rpartition(".")[0].removeprefix("mechopt.solvers.").partition(".")[0]
+    return next((m.name for m in rows if m.solvers.rpartition(".")[2] == package), scene.id.split("/")[0])
+
+
 def scene_reference() -> str:
-    """The page: one section per mechanism, one table per scene."""
+    """The page: one section per mechanism (in the table's order), one table per scene."""
     out = ["# Scene keys", "",
            "Every key a scene of the registry lets you change (in the file, with `--set KEY=VALUE` or as a",
            "keyword of `mechopt.solve`), generated from `mechopt.describe` when the site is built: its unit",
            "(read from the key's name), its mark (given, assumed, calibrated, derived, default; a solver",
            "setting is `scene` or `default`), the allowed range declared on the model or solver, and the",
            "scene's value. `mechopt describe SCENE` prints the same table for any scene, yours included.", ""]
-    by_mechanism = {}
+    rows = {m.name: m for m in mechanisms()}          # section titles and order, from the one table
+    by_mechanism = {name: [] for name in rows}
     for scene in scenes():
-        by_mechanism.setdefault(scene.id.split("/")[0], []).append(scene)
-    for mechanism, members in by_mechanism.items():
-        out += [f"## {MECHANISMS.get(mechanism, mechanism)}", ""]
+        by_mechanism.setdefault(row_of(scene, rows.values()), []).append(scene)
+    for mechanism, members in ((name, members) for name, members in by_mechanism.items() if members):
+        row = rows.get(mechanism)
+        out += [f"## {row.title if row else mechanism}", ""]
+        if row and row.folder != row.name:            # a wing whose scenes live in another row's folder
+            out += [f"Its scenes live in `cases/{row.folder}/` (ids `{row.folder}/...`).", ""]
         for scene in members:
             spec = scene.spec
             out += [f"### `{scene.id}`", "", f"{spec.title}", "",

@@ -20,7 +20,7 @@ import warnings
 
 COMPILED_MIN_ARCS = 20_000      # below: the numpy levels are as fast (few levels) and need no import
 # numba's import and cache load cost ~0.5-0.9 s and ~60 MB in a fresh process (a second process
-# loads the cached code, it does not compile: tests/loom/test_cli_speed.py), about 50,000 numpy
+# loads the cached code, it does not compile: tests/cyclogram/test_cli_speed.py), about 50,000 numpy
 # level steps at ~10 us: a process takes the compiled passes once its numpy passes have stepped
 # through that many levels (graph.Levels), so a one-off solve of a shallow network never pays it
 COMPILED_AFTER_LEVEL_CALLS = 50_000

@@ -54,7 +54,7 @@ MECHANISMS = (
               ("mechopt.models.cyclogram", "mechopt.models.cyclogram_network", "mechopt.models.cyclogram_views",
                "mechopt.models.cyclogram_bounds", "mechopt.models.cyclogram_tables", "mechopt.models.cyclogram_motions"),
               "mechopt.solvers.cyclogram",
-              (), "mechopt.benchmarks.loom", (("cyclogram", "loom/packaging"),), cases="loom"),
+              ("mechopt.figures.cyclogram",), "mechopt.benchmarks.loom", (("cyclogram", "loom/packaging"),), cases="loom"),
     # the STB loom, the cyclogram's case: its own limits and solvers (models/loom*.py also keep the
     # cyclogram's old paths for one release)
     Mechanism("loom", "STB loom: the cyclogram's case (paper 004)",

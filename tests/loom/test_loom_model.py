@@ -1,5 +1,8 @@
-"""The loom cyclogram model (paper 004, Podgorny et al. 2018): the network, its validation, the
-stress and amplitude laws. Published: a(3,7) = -0.003 t(3,7) + 0.208 mm, limit 0.1 mm (Results and discussion; Research methodology)."""
+"""The loom cyclogram model (paper 004, Podgorny et al. 2018): the loom's scenes as networks, their
+errors named, the stress and amplitude laws (the network's own checks: tests/cyclogram/test_network.py).
+Published: a(3,7) = -0.003 t(3,7) + 0.208 mm, limit 0.1 mm (Results and discussion; Research methodology)."""
+import dataclasses
+
 import networkx as nx
 import pytest
 from hypothesis import given, settings
@@ -7,18 +10,11 @@ from hypothesis import strategies as st
 
 from mechopt import registry
 from mechopt.kit.errors import ModelError, SceneError
-from mechopt.models.cyclogram import Cyclogram
 from mechopt.models.loom_limits import amplitude_bound_deg, amplitude_mm, stress_bound_deg, stress_MPa
 from mechopt.scene import load
+from mechopt.solvers.cyclogram import least_cycle_time
 
 SLOPE_MM_PER_DEG, INTERCEPT_MM, LIMIT_MM = -0.003, 0.208, 0.1      # Podgorny et al. (2018), Results and discussion; Research methodology
-
-
-def chain(*angles, **kw):
-    """Events 1..n+1 in a row, operation k -> k+1 with min angle angles[k-1]."""
-    events = {str(k): {"mechanism": "m"} for k in range(1, len(angles) + 2)}
-    ops = [{"from": str(k), "to": str(k + 1), "min_deg": a} for k, a in enumerate(angles, start=1)]
-    return Cyclogram(events=events, operations=ops, **kw)
 
 
 def test_published_amplitude_law_gives_36_deg_at_the_transfer_accuracy():
@@ -78,100 +74,12 @@ def test_every_scene_entry_marked_assumed_says_why():
             assert op.get("mark") == "assumed" and op["why"].strip(), op
 
 
-EVENTS = {"1": {}, "2": {}, "3": {}}
-OPS = [{"from": "1", "to": "2", "min_deg": 10.0}, {"from": "2", "to": "3", "min_deg": 5.0}]
-
-
-@pytest.mark.parametrize("change, match", [
-    (dict(operations=[{"from": "1", "to": "9", "min_deg": 1.0}]), r"operations\[1->9\]: unknown event '9'; events: 1, 2, 3"),
-    (dict(operations=OPS + [{"from": "3", "to": "1", "min_deg": 1.0}]), r"operations: precedence cycle 1 -> 2 -> 3 -> 1"),
-    (dict(operations=[{"from": "1", "to": "2", "min_deg": -5.0}, OPS[1]]),
-     r"operations\[1->2\]\.min_deg=-5\.0: a minimum phase angle must be >= 0"),
-    (dict(operations=[{"from": "1", "to": "2", "min_deg": 1e300}, OPS[1]]),
-     r"operations\[1->2\]\.min_deg=1e\+300: a minimum phase angle must be <= 1e\+06 deg"),
-    (dict(operations=OPS, sigma_H_limit_MPa=1e300), r"sigma_H_limit_MPa=1e\+300: allowed > 0 \.\.\. 1e\+06"),
-    (dict(operations=OPS, cycle_deg=float("inf")), r"cycle_deg=inf: expected a finite number"),
-    (dict(operations=[{"from": "1", "to": "2", "min_deg": 1.0, "stress": "cam"}, OPS[1]], sigma_H_limit_MPa=1e-300,
-          stress_models={"cam": {"sigma_ref_MPa": 900.0, "t_ref_deg": 30.0}}),
-     r"operations\[1->2\]: its contact_stress bound 2\.7e\+304 deg \(exact form\), set by stress_models\.cam and "
-     r"sigma_H_limit_MPa, is outside the allowed \+-1e\+06 deg"),
-    (dict(operations=[{"from": "1", "to": "2", "min_deg": 1.0, "amplitude": "linear"}, OPS[1]],
-          amplitude_slope_mm_per_deg=-0.003, amplitude_intercept_mm=1e300, amplitude_limit_mm=0.1),
-     r"operations\[1->2\]: its amplitude bound 3\.33333e\+302 deg \(exact form\), set by amplitude_slope_mm_per_deg, "
-     r"amplitude_intercept_mm and amplitude_limit_mm"),
-    (dict(operations=[{"from": "1", "to": "2", "min_deg": 1.0, "stress": "cam"}, OPS[1]], sigma_H_limit_MPa=800.0,
-          stress_models={"cam": {"sigma_ref_MPa": 900.0, "t_ref_deg": 1e300}}),
-     r"stress_models\.cam\.t_ref_deg=1e\+300 must be in \(0, 1e\+06\]"),
-    (dict(operations=OPS, windows=[{"from": "1", "to": "3", "max_deg": 1e300}]),
-     r"windows\[0\]\.max_deg=1e\+300: allowed within \+-1e\+06 deg"),
-    (dict(operations=OPS, windows=1.0), r"windows: expected a list of tables, got 1\.0"),
-    (dict(operations=OPS, syncs="2,3"), r"syncs: expected a list of tables, got '2,3'"),
-    (dict(operations=[{"from": "1", "to": "2", "min_deg": "ten"}, OPS[1]]), r"operations\[1->2\]\.min_deg='ten': expected a finite number"),
-    (dict(operations=[{"from": "1", "to": "2", "min_deg": 1.0, "stress": "cam"}, OPS[1]], sigma_H_limit_MPa=800.0),
-     r"operations\[1->2\]\.stress='cam': no such stress model; defined: none"),
-    (dict(operations=[{"from": "1", "to": "2", "min_deg": 1.0, "stress": "cam"}, OPS[1]],
-          stress_models={"cam": {"sigma_ref_MPa": 900.0, "t_ref_deg": 30.0}}),
-     r"operations\[1->2\]\.stress='cam' needs sigma_H_limit_MPa \(effect contact_stress\)"),
-    (dict(operations=[{"from": "1", "to": "2", "min_deg": 1.0, "stress": "cam"}, OPS[1]], sigma_H_limit_MPa=800.0,
-          stress_models={"cam": {"sigma_ref_MPa": -900.0, "t_ref_deg": 30.0}}),
-     r"stress_models\.cam\.sigma_ref_MPa=-900\.0 must be in \(0, 1e\+06\]"),
-    (dict(operations=[{"from": "1", "to": "2", "min_deg": 1.0, "stress": "cam"}, OPS[1]], sigma_H_limit_MPa=800.0,
-          stress_models={"cam": {"sigma_ref_MPa": 900.0}}), r"stress_models\.cam: missing t_ref_deg"),
-    (dict(operations=[{"from": "1", "to": "2", "min_deg": 1.0, "amplitude": "cubic"}, OPS[1]]),
-     r"operations\[1->2\]\.amplitude='cubic': no such amplitude model; known: linear"),
-    (dict(operations=[{"from": "1", "to": "2", "min_deg": 1.0, "amplitude": "linear"}, OPS[1]]),
-     r"amplitude='linear' needs amplitude_slope_mm_per_deg, amplitude_intercept_mm, amplitude_limit_mm"),
-    (dict(operations=[{"from": "1", "to": "2", "min_deg": 1.0, "colour": "red"}, OPS[1]]),
-     r"operations\[0\]: unknown colour; allowed: amplitude, cycles, direction, from, group, law, mark, max_accel_m_s2, max_accel_rad_s2, max_deg, max_velocity_m_s, max_velocity_rad_s, mechanism, min_deg, min_ms, name, stress, stroke_deg, stroke_mm, to, what, where, why"),
-    (dict(operations=[{"from": "1", "min_deg": 1.0}]), r"operations\[0\]: missing to"),
-    (dict(operations=OPS + [dict(OPS[0])]), r"operations\[1->2\]: given twice"),
-    (dict(operations=[{"from": "1", "to": "1", "min_deg": 1.0}]), r"operations\[1->1\]: an operation must join two different events"),
-    (dict(operations=[{"from": "1", "to": "2", "min_deg": 1.0, "mark": "assumed"}, OPS[1]]),
-     r"operations\[0\]: marked 'assumed' needs a 'why'"),
-    (dict(operations=[{"from": "1", "to": "2", "min_deg": 1.0, "mark": "guessed", "why": "x"}, OPS[1]]),
-     r"operations\[0\]\.mark='guessed': allowed given, assumed, calibrated"),
-    (dict(operations=OPS + [{"from": "1", "to": "3", "min_deg": 1.0}]), None),      # fine: a second chain
-    (dict(operations=[OPS[0], {"from": "3", "to": "2", "min_deg": 1.0}]),
-     r"a cyclogram needs one first and one last event; found first \['1', '3'\] and last \['2'\]"),
-    (dict(operations=OPS, windows=[{"from": "1", "to": "7", "max_deg": 3.0}]), r"windows\[0\]: unknown event '7'"),
-    (dict(events=EVENTS | {"spare": {}}, operations=OPS, syncs=[{"events": ["1", "spare"]}]),
-     r"syncs\[0\]: event 'spare' has no operation; a window or sync needs events of the network"),
-    (dict(operations=OPS, syncs=[{"events": ["1"]}]), r"syncs\[0\]\.events=\['1'\]: give a list of two or more events"),
-    (dict(operations=OPS, limiting_op=["1", "3"]), r"limiting_op=\['1', '3'\]: must name an operation \[from, to\]"),
-    (dict(operations=OPS, cycle_deg=-360.0), r"cycle_deg=-360\.0: allowed > 0 \.\.\. 1e\+06"),
-    (dict(operations=OPS, amplitude_slope_mm_per_deg=0.003), r"amplitude_slope_mm_per_deg=0\.003: allowed < 0"),
-    (dict(operations=OPS, amplitude_intercept_mm=float("nan")), r"amplitude_intercept_mm=nan: expected a finite number"),
-    # formerly -1 mm gave a -1.09 mm amplitude reported as SOLVED
-    (dict(operations=OPS, amplitude_intercept_mm=-1.0), r"amplitude_intercept_mm=-1\.0: allowed > 0"),
-    (dict(events=[1, 2], operations=OPS), r"events: expected a table, got \[1, 2\]"),
-    (dict(operations={"a": 1}), r"operations: expected a list of tables"),
-    (dict(events={"1": "lift", "2": {}, "3": {}}, operations=OPS), r"events\.1: expected a table, got 'lift'"),
-])
-def test_bad_network_is_refused_naming_the_key(change, match):
-    kwargs = {"events": EVENTS, "operations": OPS} | change
-    if match is None:
-        Cyclogram(**kwargs)
-        return
-    with pytest.raises(ModelError, match=match):
-        Cyclogram(**kwargs)
-
-
 def test_bad_scene_network_is_refused_naming_file_and_key(tmp_path):
     good = registry.cases_dir() / "loom" / "group1.toml"
     bad = tmp_path / "bad.toml"
     bad.write_text(good.read_text().replace('from = "9"\nto = "10"', 'from = "9"\nto = "99"'))
     with pytest.raises(SceneError, match=r"bad\.toml: structure\.operations\[9->99\]: operations\[9->99\]: unknown event '99'"):
         load(bad)
-
-
-def test_isolated_event_is_kept_apart_and_not_a_first_event():
-    task = Cyclogram(events=EVENTS | {"spare": {}}, operations=OPS)
-    assert task.isolated_events == ["spare"] and task.first_event == "1" and task.last_event == "3"
-
-
-def test_chain_helper_lower_bounds_are_the_min_angles():
-    lb, why = chain(3.0, 0.0, 7.5).lower_bounds_deg()
-    assert list(lb) == [3.0, 0.0, 7.5] and why == ["min_angle"] * 3
 
 
 @pytest.mark.parametrize("override, match", [
@@ -197,3 +105,23 @@ def test_a_selector_by_one_key_picks_its_one_operation_and_a_malformed_one_is_re
                         ("operations[from=99].min_deg=50", r"matches 0 entries .*none has those values")):
         with pytest.raises(SceneError, match=match):
             scene.build(parse_overrides([pair]))
+
+
+def test_a_stress_bound_does_not_enter_a_time_based_cycle():
+    task = registry.find("loom/group1").build()[0]
+    assert task.stress_arcs()       # the loom's group 1 names stress models: a duration makes it time-based
+    first, second = task.arcs[0]
+    timed = dataclasses.replace(task, operations=[dict(o) | ({"min_ms": 5.0} if (str(o["from"]), str(o["to"])) ==
+                                                              (first, second) else {}) for o in task.operations],
+                                speed_rpm=None)
+    with pytest.raises(ModelError, match=r"\.stress: the least cycle time of a time-based network"):
+        least_cycle_time(timed)
+
+
+def test_group1_from_its_csv_is_group1():
+    csv_run, toml_run = (registry.run(registry.find(i)) for i in ("loom/group1-csv", "loom/group1"))
+    assert csv_run.result.values["span_deg"] == pytest.approx(toml_run.result.values["span_deg"], abs=1e-12)
+    task = csv_run.task
+    assert task.events["7"] == {"group": "group1", "mechanism": "microshuttle lift"}
+    assert task.events["8"] == {"group": "group1"}      # ends three mechanisms' operations: theirs, no one's
+    assert set(task.arcs) == set(toml_run.task.arcs)

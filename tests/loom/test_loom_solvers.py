@@ -1,23 +1,20 @@
 """The event-time LP of a network cyclogram (paper 004, problem (1)): published and derived values,
-duals against finite differences, the LP certificate, DPP re-solves and the hard cases.
+duals against finite differences, the LP certificate, DPP re-solves and the hard cases on the
+loom's scenes (the engine's on networks of its own: tests/cyclogram/test_event_time.py).
 
 Published: a(3,7) = -0.003 t(3,7) + 0.208 mm and the +-0.1 mm transfer accuracy (Podgorny et al.
 2018, Results and discussion; Research methodology), so t(3,7) >= (0.208 - 0.1) / 0.003 = 36 deg."""
 import dataclasses
 
-import cvxpy as cp
 import networkx as nx
 import numpy as np
 import pytest
+from longest_path import longest_path
 
 from mechopt import registry
-from mechopt.benchmarks.loom import layered
 from mechopt.kit.cache import clear as clear_caches
-from mechopt.kit.errors import SolverError
 from mechopt.kit.result import Status
-from mechopt.models.cyclogram import Cyclogram
 from mechopt.solvers.cyclogram import conflicts, lp_method, plan_cyclogram
-from mechopt.solvers.cyclogram.graph import PositiveCycle
 from mechopt.solvers.cyclogram.net import Net
 
 T_3_7_MIN_DEG = (0.208 - 0.1) / 0.003          # from the published law and limit
@@ -25,28 +22,6 @@ T_3_7_MIN_DEG = (0.208 - 0.1) / 0.003          # from the published law and limi
 
 def scene_task(case):
     return registry.find(case).build()[0]
-
-
-def longest_path(task, lb=None):
-    """Independent longest path first -> last by relaxing arcs in topological order (no networkx)."""
-    lb = task.lower_bounds_deg()[0] if lb is None else lb
-    arcs = task.arcs
-    dist = {task.first_event: 0.0}
-    for _ in range(len(arcs)):                  # Bellman-Ford style: enough passes for any DAG
-        changed = False
-        for (x, y), w in zip(arcs, lb):
-            if x in dist and dist[x] + w > dist.get(y, -np.inf):
-                dist[y], changed = dist[x] + w, True
-        if not changed:
-            break
-    return dist[task.last_event]
-
-
-def net(edges, **kw):
-    """A Cyclogram from (from, to, min_deg) triples."""
-    names = dict.fromkeys(str(v) for e in edges for v in e[:2])
-    return Cyclogram(events={v: {} for v in names} | kw.pop("extra_events", {}),
-                     operations=[{"from": str(x), "to": str(y), "min_deg": float(w)} for x, y, w in edges], **kw)
 
 
 # ---------------------------------------------------------------- scenes
@@ -216,107 +191,7 @@ def test_window_conflict_names_the_positive_cycle():
     assert "t(7->8) >= 10 deg (min_angle)" in r.message and sorted(r.diagnostics["conflict_events"]) == ["3", "7", "8"]
 
 
-def test_an_amplitude_limit_the_cycle_cannot_hold_is_infeasible_and_says_so():
-    task = net([(1, 2, 10), (2, 3, 20)], cycle_deg=60.0, amplitude_slope_mm_per_deg=-0.003,
-               amplitude_intercept_mm=0.208, amplitude_limit_mm=0.01)
-    task = dataclasses.replace(task, operations=[dict(task.operations[0], amplitude="linear"), task.operations[1]])
-    r = plan_cyclogram(task)
-    need = (0.208 - 0.01) / 0.003                          # 66 deg for the amplitude alone, cycle 60
-    assert r.status is Status.INFEASIBLE and not r.values
-    assert f"t(1->2) >= {need:.6g} deg (amplitude)" in r.message and "cycle p(3) - p(1) <= 60 deg" in r.message
-
-
-def test_synchronised_events_and_a_window_shape_the_times():
-    task = net([(1, 2, 10), (1, 3, 25), (2, 4, 10), (3, 4, 1)],
-               syncs=[{"events": ["2", "3"]}], windows=[{"from": "1", "to": "4", "max_deg": 40.0}])
-    r = plan_cyclogram(task)          # without the sync the span would be 26; with it 25 + 10
-    assert r.values["p_2_deg"] == pytest.approx(r.values["p_3_deg"]) == pytest.approx(25.0)
-    assert r.values["span_deg"] == pytest.approx(35.0) == r.values["longest_path_deg"]
-    tight = plan_cyclogram(dataclasses.replace(task, windows=[{"from": "1", "to": "4", "max_deg": 30.0}]))
-    assert tight.status is Status.INFEASIBLE and "sync p(3) = p(2)" in tight.message
-    assert "window p(4) - p(1) <= 30 deg" in tight.message
-
-
-def test_limiting_operation_without_a_cycle_is_unbounded_not_a_number():
-    r = plan_cyclogram(net([(1, 2, 10), (2, 3, 20)], limiting_op=["2", "3"]))
-    assert r.status is Status.UNBOUNDED and r.values == {} and "unbounded" in r.message
-
-
-def test_cross_check_failure_is_inaccurate_not_solved(monkeypatch):
-    monkeypatch.setattr(lp_method, "longest_certificate", lambda net: (-1.0, -1.0))
-    r = plan_cyclogram(net([(1, 2, 10), (2, 3, 20)]), method="lp")
-    assert r.status is Status.INACCURATE and r.values["span_deg"] == pytest.approx(30.0)
-    assert r.message.startswith("cross-check failed: LP span_deg = 30.0 but the longest path on the graph "
-                                "gives -1.0 (tolerance 1e-06 deg per degree above 1)")
-
-
-def test_a_problem_that_would_recompile_is_refused(monkeypatch):
-    clear_caches()
-    monkeypatch.setattr(cp.Problem, "is_dpp", lambda self, *a, **k: False)
-    with pytest.raises(SolverError, match=r"event-time LP is not DPP; what-if re-solves would recompile"):
-        plan_cyclogram(net([(1, 2, 10), (2, 3, 20)]), method="lp")
-
-
-def test_back_end_crash_is_failed_and_inaccurate_is_not_passed_on(monkeypatch):
-    task = net([(1, 2, 10), (2, 3, 20)])
-    plan_cyclogram(task, method="lp")
-
-    def crash(self, *a, **k):
-        raise cp.error.SolverError("HiGHS exploded")
-    with monkeypatch.context() as m:
-        m.setattr(cp.Problem, "solve", crash)
-        r = plan_cyclogram(task, method="lp")
-    assert r.status is Status.FAILED and r.values == {} and "HiGHS exploded" in r.message
-    monkeypatch.setattr(lp_method, "from_cvxpy", lambda status: Status.INACCURATE)
-    r = plan_cyclogram(task, method="lp")
-    assert r.status is Status.INACCURATE and r.values == {}
-
-
 # ---------------------------------------------------------------- hard cases
-
-def test_degenerate_ties_mark_every_critical_chain():
-    task = net([(1, 2, 10), (1, 3, 10), (2, 4, 20), (3, 4, 20), (1, 4, 5)])
-    r = plan_cyclogram(task)
-    assert r.values["span_deg"] == pytest.approx(30.0)
-    assert set(r.diagnostics["critical_ops"]) == {"1->2", "1->3", "2->4", "3->4"}
-    assert r.diagnostics["float_deg"]["1->4"] == pytest.approx(25.0)
-
-
-def test_zero_angle_operations_give_zero_span():
-    r = plan_cyclogram(net([(1, 2, 0), (2, 3, 0), (1, 3, 0)]))
-    assert r.status is Status.SOLVED and r.values["span_deg"] == 0.0 and r.values["t_1_2_deg"] == 0.0
-
-
-def test_huge_and_tiny_angles_in_one_network():
-    edges = [(1, 2, 1e-6), (2, 4, 1e4), (1, 3, 1e4), (3, 4, 2e-6)]
-    task = net(edges)
-    r = plan_cyclogram(task)
-    assert r.values["span_deg"] == pytest.approx(1e4 + 2e-6, rel=1e-12, abs=1e-9)
-    assert r.values["span_deg"] == pytest.approx(longest_path(task), abs=1e-9)
-    assert r.diagnostics["critical_chain"] == ["1", "3", "4"]
-
-
-def test_an_isolated_event_is_reported_and_left_out():
-    task = net([(1, 2, 10), (2, 3, 20)], extra_events={"spare": {}})
-    r = plan_cyclogram(task)
-    assert r.values["span_deg"] == pytest.approx(30.0)
-    assert r.diagnostics["isolated_events"] == ["spare"] and "p_spare_deg" not in r.values
-
-
-@pytest.mark.slow
-def test_a_hundred_thousand_events_solve_once_to_the_longest_path():
-    tails, heads, w = layered(100_000)
-    task = Cyclogram(events={str(v): {} for v in range(100_000)},
-                     operations=[{"from": str(a), "to": str(b), "min_deg": float(c)} for a, b, c in zip(tails, heads, w)])
-    r = plan_cyclogram(task)
-    # independent longest path in numpy, layer by layer (the arcs only go to the next layer or the sink)
-    dist = np.full(100_000, -np.inf)
-    dist[0] = 0.0
-    order = np.argsort(heads, kind="stable")      # heads ascend with the layers
-    for a, b, c in zip(tails[order], heads[order], w[order]):
-        dist[b] = max(dist[b], dist[a] + c)
-    assert r.status is Status.SOLVED and r.values["span_deg"] == pytest.approx(dist[-1], abs=1e-6)
-    assert len(tails) > 250_000
 
 
 def test_gantt_figure_is_written_for_a_solved_scene_and_skipped_for_an_infeasible_one(tmp_path):
@@ -324,17 +199,6 @@ def test_gantt_figure_is_written_for_a_solved_scene_and_skipped_for_an_infeasibl
     paths = plot_run(registry.run(registry.find("loom/group1")), tmp_path)
     assert [p.name for p in paths] == ["loom_group1_cyclogram.png"] and paths[0].stat().st_size > 10_000
     assert plot_run(registry.run(registry.find("loom/group1-window-conflict")), tmp_path) == []
-
-
-def test_an_optimum_contradicting_a_positive_cycle_is_not_solved(monkeypatch):
-    task = net([(1, 2, 10), (2, 3, 20)], windows=[{"from": "1", "to": "3", "max_deg": 40.0}])
-    def cycle(net):
-        raise PositiveCycle
-    monkeypatch.setattr(lp_method, "longest_certificate", cycle)
-    r = plan_cyclogram(task, method="lp")
-    assert r.status is Status.INACCURATE and "longest_path_deg" not in r.values
-    assert r.message.startswith("cross-check failed: the LP reports an optimum but the longest-path passes find a "
-                                "positive cycle that the conflict search")
 
 
 def test_infeasible_without_a_positive_cycle_says_it_may_be_numerical(monkeypatch):
@@ -407,9 +271,3 @@ def test_clarabel_reporting_optimal_on_a_positive_cycle_is_overruled():
     assert r.status is Status.INFEASIBLE
 
 
-def test_positive_cycle_search_finds_tiny_cycles_and_ignores_round_off():
-    arcs = [("a", "b", 0.1, "ab"), ("b", "c", 0.2, "bc"), ("c", "a", -0.3 + 1e-9, "ca")]
-    cycle = conflicts.positive_cycle(arcs)
-    assert sorted(label for *_, label in cycle) == ["ab", "bc", "ca"]
-    zero = [("a", "b", 0.1, "ab"), ("b", "c", 0.2, "bc"), ("c", "a", -(0.1 + 0.2), "ca")]   # 0 up to round-off
-    assert conflicts.positive_cycle(zero) == []

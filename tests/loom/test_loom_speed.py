@@ -1,5 +1,7 @@
 """The whole machine at its highest speed: the graph (the default; its own tests in
-test_loom_speed_graph.py) and the LP in (p, n) against bisection on n with LP feasibility, against the closed form along the critical chain, and the hard cases.
+test_loom_speed_graph.py) and the LP in (p, n) against bisection on n with LP feasibility, against
+the closed form along the critical chain, and the hard cases on the loom's machine (on networks of
+their own: tests/cyclogram/test_speed.py).
 
 The scene's lever is the chain (cam -> approach velocity -> impact -> eq. (2)): a(t, n) = h(n / t),
 wavy. Independent references: the chain's crossing T of 0.1 mm at 420 rpm by brentq in [38.6,
@@ -11,6 +13,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+from longest_path import longest_path
 from scipy.optimize import brentq
 from stop_impact_fitted import FREE, J_A_FITTED_KGM2, LEVER
 
@@ -18,7 +21,6 @@ import mechopt.solvers.loom.repair as loom_solver
 from mechopt import clear_caches, registry
 from mechopt.kit.errors import ModelError
 from mechopt.kit.result import Status
-from mechopt.models.cyclogram import Cyclogram
 from mechopt.models.loom_limits import lever_stop
 from mechopt.solvers.cyclogram import max_machine_speed, plan_cyclogram
 from mechopt.solvers.loom import exact_amplitude_bound
@@ -57,19 +59,6 @@ def chain_T(task):
 def closed_form_rpm(g_amp_deg_per_rpm, span_deg=360.0 - CHAIN_FIXED_DEG):
     """n along the critical chain: [phi] plus n (g_amp + g_stress + g_flight) fills the cycle."""
     return span_deg / (g_amp_deg_per_rpm + STRESS_9_10_DEG_PER_RPM + FLIGHT_DEG_PER_RPM)
-
-
-def longest_path(task, lb):
-    """First -> last over the arcs with bounds lb, by relaxing in repeated passes (no networkx)."""
-    dist = {task.first_event: 0.0}
-    for _ in range(len(task.arcs)):
-        changed = False
-        for (x, y), w in zip(task.arcs, lb):
-            if x in dist and dist[x] + w > dist.get(y, -np.inf):
-                dist[y], changed = dist[x] + w, True
-        if not changed:
-            break
-    return dist[task.last_event]
 
 
 def exact_bounds(task, n_rpm, T_deg):
@@ -190,14 +179,6 @@ def test_a_machine_whose_groups_cannot_fit_any_speed_is_infeasible_naming_the_ch
         assert "needs 120 deg more" in r.message and "flight" in r.diagnostics["conflict_groups"]
 
 
-def test_a_cycle_only_a_machine_at_rest_fits_is_infeasible():
-    ops = [{"from": "a", "to": "b", "min_deg": 10.0}, {"from": "b", "to": "c", "min_deg": 0.0, "min_ms": 10.0}]
-    task = Cyclogram(events={"a": {}, "b": {}, "c": {}}, operations=ops, speed_rpm=100.0, cycle_deg=10.0)
-    for method in ("graph", "lp", "bisection"):
-        r = max_machine_speed(task, method=method)
-        assert r.status is Status.INFEASIBLE and r.message.startswith("no speed fits: conflicting chain t(a->b)")
-
-
 def test_no_limit_growing_with_speed_is_unbounded_or_a_search_limit(task):
     ops = [{k: v for k, v in op.items() if k not in ("stress", "amplitude", "min_ms")} for op in task.operations]
     free = dataclasses.replace(task, operations=ops)
@@ -214,16 +195,6 @@ def test_speed_needs_a_cycle_and_a_time_needs_a_speed(task):
     with pytest.raises(ModelError, match=r"operations\[10\.1->10\.2\]\.min_ms needs speed_rpm") as err:
         dataclasses.replace(task, speed_rpm=None).min_angles_deg()
     assert err.value.key == "speed_rpm"
-
-
-def test_a_time_floor_is_an_angle_at_the_task_s_speed():
-    ops = [{"from": "a", "to": "b", "min_deg": 10.0, "min_ms": 50.0}, {"from": "b", "to": "c", "min_deg": 5.0}]
-    task = Cyclogram(events={"a": {}, "b": {}, "c": {}}, operations=ops, speed_rpm=300.0)
-    r = plan_cyclogram(task)
-    assert r.values["t_a_b_deg"] == pytest.approx(300 / 60 * 360 * 0.050)        # 90 deg in 50 ms
-    assert r.diagnostics["bound_source"]["a->b"] == "min_time"
-    with pytest.raises(ModelError, match=r"min_ms=-1\.0: a minimum duration must be in \[0"):
-        Cyclogram(events={"a": {}, "b": {}}, operations=[{"from": "a", "to": "b", "min_deg": 1.0, "min_ms": -1.0}])
 
 
 def test_held_highs_model_agrees_with_the_cvxpy_lp_and_says_infeasible():
@@ -255,26 +226,3 @@ def test_at_its_highest_speed_the_machine_s_longest_flight_is_the_flight_time(ta
                                                             - 900 * 30 / 800, abs=1e-6)
 
 
-def _flight_machine(windows):
-    """a -> b -> c in 10 ms each (0.06 n deg at n rpm), c -> d 10 deg, a 360 deg cycle."""
-    ops = [{"from": "a", "to": "b", "min_deg": 0.0, "min_ms": 10.0}, {"from": "b", "to": "c", "min_deg": 0.0,
-                                                                      "min_ms": 10.0},
-           {"from": "c", "to": "d", "min_deg": 10.0}]
-    return Cyclogram(events={v: {} for v in "abcd"}, operations=ops, speed_rpm=100.0, cycle_deg=360.0,
-                     windows=windows)
-
-
-@pytest.mark.parametrize("method", ["graph", "lp", "bisection"])
-def test_a_limiting_cycle_closed_by_a_window_gives_no_speed_per_degree_of_cycle(method):
-    """The window p(c) - p(a) <= 70 deg holds the speed at 70 / 0.12 = 583.3 rpm; the cycle
-    (0.12 n + 10 <= 360: 2917 rpm) is far: a longer cycle gives no speed, dn/dcycle = 0 (the slope of
-    the chain, 1 / 0.12 rpm/deg, is dn/dwindow)."""
-    limited = _flight_machine([{"from": "a", "to": "c", "max_deg": 70.0}])
-    r = max_machine_speed(limited, method=method)
-    assert r.values["max_speed_rpm"] == pytest.approx(70.0 / 0.12, rel=1e-6)
-    assert max_machine_speed(dataclasses.replace(limited, cycle_deg=361.0), method=method).values[
-        "max_speed_rpm"] == pytest.approx(r.values["max_speed_rpm"], rel=1e-6)
-    assert r.diagnostics["sens_cycle_rpm_per_deg"] == 0.0
-    free = max_machine_speed(_flight_machine([]), method=method)      # the cycle closes it: 350 / 0.12 rpm
-    assert free.values["max_speed_rpm"] == pytest.approx(350.0 / 0.12, rel=1e-6)
-    assert free.diagnostics["sens_cycle_rpm_per_deg"] == pytest.approx(1.0 / 0.12, rel=1e-6)

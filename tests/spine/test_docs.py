@@ -99,6 +99,19 @@ def test_scene_reference_has_every_scene_with_its_declared_keys():
     assert "| kg m² | assumed |" in row
 
 
+def test_scenes_sharing_a_cases_folder_are_titled_under_the_row_of_their_solver():
+    """cases/loom/ holds two rows' scenes: the cyclogram wing's (task and solver cyclogram.*) under
+    its title, the loom's (loom.*) under the loom's."""
+    from mechopt.mechanisms import mechanisms
+    titles = {m.name: m.title for m in mechanisms()}
+    sections = {s.split("\n")[0]: s for s in load_hooks().scene_reference().split("\n## ")[1:]}
+    wing, loom = sections[titles["cyclogram"]], sections[titles["loom"]]
+    for scene in ("packaging", "recurrent-indexer", "recurrent-maxplus", "recurrent-tasks", "turret-die-overlap",
+                  "turret-die-speed"):
+        assert f"### `loom/{scene}`" in wing and f"### `loom/{scene}`" not in loom
+    assert "### `loom/group1`" in loom and "### `loom/group1`" not in wing
+
+
 def test_a_cell_escapes_pipes_and_cuts_long_values():
     cell = load_hooks().cell
     assert cell("HIGHS | CLARABEL") == "HIGHS \\| CLARABEL"

@@ -157,6 +157,13 @@ def test_every_mechanism_file_is_named_by_exactly_one_row():
                                                                and not p.name.startswith("_"))
 
 
+def test_every_row_has_its_own_test_folder_and_every_test_folder_a_row():
+    """A mechanism's or a wing's tests live in tests/<its row's name, - as _>/ (the cyclogram wing's
+    in tests/cyclogram/, its case the loom's in tests/loom/), the spine's in tests/spine/."""
+    folders = {p.name for p in (ROOT / "tests").iterdir() if p.is_dir() and any(p.glob("test_*.py"))}
+    assert folders == {m.name.replace("-", "_") for m in mechanisms()} | {"spine"}
+
+
 def test_every_row_imports_and_its_templates_are_scenes():
     import importlib
     for m in mechanisms():

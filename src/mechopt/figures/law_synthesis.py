@@ -10,7 +10,7 @@ import numpy as np
 from mechopt.cam_sheet import Phase, sheet_of
 from mechopt.dxf import NothingToExport, shop_drawing
 from mechopt.figures.cam_shape import phase_stated
-from mechopt.figures.loom import gantt
+from mechopt.figures.cyclogram import gantt
 from mechopt.figures.registry import figure, new_figure
 from mechopt.figures.text import literal
 from mechopt.kit.result import Status

@@ -124,7 +124,7 @@ def test_least_angle_needs_its_operations():
 def test_the_timing_diagram_draws_the_overlapped_motions():
     """A panel per mechanism; the die's curve over one cycle is the closed-form cycloid folded from
     the next cycle: 30 mm at the turret's stop (150 deg) and at 0/360 deg, 50 mm at the dwell."""
-    from mechopt.figures.loom import motions
+    from mechopt.figures.cyclogram import motions
 
     run = registry.run(registry.find("loom/turret-die-overlap"))
     figures = motions(run)
@@ -157,7 +157,7 @@ def test_the_cyclogram_marks_the_rows_that_bind():
     """At the answer the two clearances, the index's fixed 150 deg and the dwell's 100 deg bind:
     the bars of the turret's index, the dwell and both die strokes (the clearances' other sides)
     are marked binding, the die strokes also as the objective's; the die's wait is not."""
-    from mechopt.figures.loom import motions
+    from mechopt.figures.cyclogram import motions
 
     run = registry.run(registry.find("loom/turret-die-overlap"))
     ax = motions(run)["cyclogram"].axes[0]
@@ -175,7 +175,7 @@ def test_a_binding_window_between_events_is_drawn_over_its_span():
     line from p(a) to p(c)."""
     from types import SimpleNamespace
 
-    from mechopt.figures.loom import gantt
+    from mechopt.figures.cyclogram import gantt
 
     ops = [{"from": "a", "to": "b", "min_deg": 10.0, "name": "push", "law": "cycloidal", "stroke_mm": 50.0},
            {"from": "b", "to": "c", "min_deg": 10.0, "name": "lift", "law": "harmonic", "stroke_mm": 30.0}]

@@ -82,7 +82,7 @@ def test_an_angular_limit_on_a_slide_is_named():
 
 def test_the_timing_diagram_draws_the_swing_in_deg_on_its_own_panel():
     """One group, a slide [mm] and a lever [deg]: two panels, the lever's curve peaking at its swing."""
-    from mechopt.figures.loom import timing_diagram
+    from mechopt.figures.cyclogram import timing_diagram
 
     task = Cyclogram(operations=ops(), cycle_deg=360.0)
     run = SimpleNamespace(task=task, result=plan_motions(task), scene=SimpleNamespace(id="test/angular"))

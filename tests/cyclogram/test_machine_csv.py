@@ -24,15 +24,6 @@ def _scene(tmp_path, csv_text, columns='["from", "to", "min_deg"]', extra="[para
     return path
 
 
-def test_group1_from_its_csv_is_group1():
-    csv_run, toml_run = (registry.run(registry.find(i)) for i in ("loom/group1-csv", "loom/group1"))
-    assert csv_run.result.values["span_deg"] == pytest.approx(toml_run.result.values["span_deg"], abs=1e-12)
-    task = csv_run.task
-    assert task.events["7"] == {"group": "group1", "mechanism": "microshuttle lift"}
-    assert task.events["8"] == {"group": "group1"}      # ends three mechanisms' operations: theirs, no one's
-    assert set(task.arcs) == set(toml_run.task.arcs)
-
-
 def test_text_event_names_semicolons_decimal_commas_and_an_operation_window(tmp_path):
     path = _scene(tmp_path, "from;to;min_deg;max_deg;group\n"
                             "feed.start;10.1;12,5;;feed\n10.1;10.2;30;40;feed\n10.2;seal.end;5;;seal\n")
@@ -113,7 +104,7 @@ def _layered_table(folder, n, width, groups=4):
 
 
 def test_timing_diagram_of_about_100_operations_groups_its_rows_and_drops_bar_labels(tmp_path):
-    from mechopt.figures.loom import gantt
+    from mechopt.figures.cyclogram import gantt
     path, arcs = _layered_table(tmp_path, 40, width=6)
     run = registry.run(load(path))
     assert 80 <= arcs <= 120 and run.result.status is Status.SOLVED

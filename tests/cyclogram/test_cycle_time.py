@@ -1,7 +1,6 @@
 """The least cycle time of a recurrent machine (solvers/cyclogram/cycle_time.py): recurrent operations
 (cycles = k), the maximum cycle ratio on the graph, its critical circuits and floats, the LP in
 (p, T) as certificate, and a max-plus example from the literature."""
-import dataclasses
 import math
 
 import networkx as nx
@@ -227,17 +226,6 @@ def test_angles_that_overfill_their_window_fit_no_cycle_time():
     r = least_cycle_time(Cyclogram(operations=ops, windows=[{"from": "a", "to": "b", "max_deg": 100.0}]), check=True)
     assert r.status is Status.INFEASIBLE
     assert "asks for 100 deg more than its cycles hold" in r.message and "a->b" in r.message
-
-
-def test_a_stress_bound_does_not_enter_a_time_based_cycle():
-    task = registry.find("loom/group1").build()[0]
-    assert task.stress_arcs()       # the loom's group 1 names stress models: a duration makes it time-based
-    first, second = task.arcs[0]
-    timed = dataclasses.replace(task, operations=[dict(o) | ({"min_ms": 5.0} if (str(o["from"]), str(o["to"])) ==
-                                                              (first, second) else {}) for o in task.operations],
-                                speed_rpm=None)
-    with pytest.raises(ModelError, match=r"\.stress: the least cycle time of a time-based network"):
-        least_cycle_time(timed)
 
 
 def test_a_recurrent_machine_from_its_timing_table():
