@@ -54,7 +54,7 @@ import numpy as np
 from scipy import sparse
 from scipy.optimize import brentq
 
-from mechopt.kit.cache import BuildCache
+from mechopt.kit.cache import BuildCache, memoised
 from mechopt.kit.errors import ModelError, SettingError
 from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Annotated, Interval, NonNegative
@@ -176,6 +176,16 @@ def rebound_envelope(task, v_top):
     v = np.linspace(0.0, v_top, 400)
     keep = np.unique(np.argmax(np.outer(v, g) + p, axis=1))
     return g[keep], p[keep]
+
+
+@memoised(maxsize=64)      # a lever's, whatever the phase angle: the search asks at every step
+def lever_lines(task, limit_mm):
+    """The rebound's lines (`rebound_envelope`) of a lever over v0 up to 4x the v0 that keeps
+    `limit_mm` (at least 1e-3 m/s): what its LP rows hold."""
+    lines = rebound_envelope(task, 4 * max(v0_limit_m_s(task, limit_mm), 1e-3))
+    for each in lines:
+        each.flags.writeable = False        # shared by every LP of the lever
+    return lines
 
 
 def v0_limit_m_s(task, limit_mm):
@@ -494,13 +504,14 @@ def _design(task: LeverStop, t_deg: float, band_rpm: tuple, *, objective="least_
                        f"no law at t = {t_deg:.6g} deg keeps the kinematic bounds: binding: {', '.join(conflict)}",
                        conflict)
     levers = {key: LeverBox.lever(task, key) for key in box.grid_keys(task) + box.corners(task)}
-    lines = {key: rebound_envelope(each, 4 * max(v0_limit_m_s(each, limit), 1e-3)) for key, each in levers.items()}
-    lps, counts, floors = 0, {"given_up": 0, "retried": 0}, None
+    lines = {key: lever_lines(each, limit) for key, each in levers.items()}
+    lps, counts, floors, responses = 0, {"given_up": 0, "retried": 0}, None, {}
     for _ in range(rounds):
         levers |= {p[:2]: LeverBox.lever(task, p[:2]) for p in samples if p[:2] not in levers}
-        lines |= {key: rebound_envelope(each, 4 * max(v0_limit_m_s(each, limit), 1e-3))
-                  for key, each in levers.items() if key not in lines}
-        speeds = [speed_response(levers[p[:2]], lever, p[2], t_deg, lines[p[:2]]) for p in samples]
+        lines |= {key: lever_lines(each, limit) for key, each in levers.items() if key not in lines}
+        responses |= {p: speed_response(levers[p[:2]], lever, p[2], t_deg, lines[p[:2]])
+                      for p in samples if p not in responses}       # a round's samples are the last's and more
+        speeds = [responses[p] for p in samples]
         nominal = lines[box.nominal(task)]
         lp = WindowLP(task, lever, speeds, t_deg, objective=objective, limit_mm=limit, bounds=bounds, lines=nominal,
                       extra=extra)

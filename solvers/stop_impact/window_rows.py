@@ -129,12 +129,19 @@ def equilibrate(A, passes=SCALE_PASSES):
     """(row factors, column factors), powers of two, such that diag(r) A diag(s) has every row's and
     column's largest entry near 1 (Ruiz's passes: each row and column divided by the square root of
     its largest entry; Ruiz, A scaling algorithm to equilibrate both rows and columns norms in
-    matrices, RAL-TR-2001-034)."""
+    matrices, RAL-TR-2001-034). The scaled entries are the nonzeros times their factors (a power of
+    two: exact), no matrix product."""
     A = abs(sparse.csr_matrix(A))
+    A.sum_duplicates()
+    filled = np.diff(A.indptr) > 0
+    row, starts = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr)), A.indptr[:-1][filled]
     r, s = np.ones(A.shape[0]), np.ones(A.shape[1])
     for _ in range(passes):
-        B = sparse.diags(r) @ A @ sparse.diags(s)
-        rows, cols = B.max(axis=1).toarray().ravel(), B.max(axis=0).toarray().ravel()
+        data = A.data * r[row] * s[A.indices]
+        rows, cols = np.zeros(A.shape[0]), np.zeros(A.shape[1])
+        if data.size:
+            rows[filled] = np.maximum.reduceat(data, starts)
+            np.maximum.at(cols, A.indices, data)
         r /= _power_of_two(np.sqrt(np.where(rows > 0, rows, 1.0)))
         s /= _power_of_two(np.sqrt(np.where(cols > 0, cols, 1.0)))
     return r, s
@@ -155,7 +162,8 @@ class HeldLP:
         A = rows.matrix()
         lower, upper, self.col_lower, self.col_upper, cost = rows.bounds()
         self.r, self.s = equilibrate(A)
-        self.A = sparse.csc_matrix(sparse.diags(self.r) @ A @ sparse.diags(self.s))
+        self.A = sparse.csc_matrix(A, copy=True)          # each entry times its row's and column's power of two
+        self.A.data *= self.r[self.A.indices] * np.repeat(self.s, np.diff(self.A.indptr))
         self.A.data[np.abs(self.A.data) <= TINY] = 0.0      # what HiGHS would drop (and warn of): dropped here
         self.A.eliminate_zeros()
         self.columns, self.movable = rows.columns, np.asarray(movable, dtype=np.int32)
@@ -172,9 +180,8 @@ class HeldLP:
         lp.col_cost_ = self.cost
         lp.col_lower_, lp.col_upper_ = self._cols(self.col_lower), self._cols(self.col_upper)
         lp.row_lower_, lp.row_upper_ = self.row_lower, self.row_upper
-        csc = sparse.csc_matrix(self.A)
         lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
-        lp.a_matrix_.start_, lp.a_matrix_.index_, lp.a_matrix_.value_ = csc.indptr, csc.indices, csc.data
+        lp.a_matrix_.start_, lp.a_matrix_.index_, lp.a_matrix_.value_ = self.A.indptr, self.A.indices, self.A.data
         return lp
 
     @staticmethod
