@@ -1,6 +1,6 @@
 """An LP assembled as sparse rows once and held in HiGHS, re-solved with only row bounds changed.
 
-The synthesis' window LP (solvers/stop_impact/synthesis.py) is one matrix per phase angle and
+The synthesis' window LP (solvers/stop_impact/window_lp.py) is one matrix per phase angle and
 sample set; the arrival window moves only which rows hold (their upper bound: a value, or +inf
 where the row is masked). `Rows` collects the columns by name and the rows by family (each
 `a x <= b`, or a tie `a x = b`), `HeldLP` rescales them, passes the model to HiGHS once and changes
