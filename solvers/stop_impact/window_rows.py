@@ -170,7 +170,7 @@ class HeldLP:
         self.row_lower, self.row_upper = self._scaled(lower, self.r), self._scaled(upper, self.r)
         self.cost = cost * self.s
         self.highs = InterruptibleHighs()
-        self.highs.passModel(self.model())
+        self.highs.passModel(*self.arrays())
         self.iterations, self.retried = {}, 0
 
     def model(self):
@@ -183,6 +183,15 @@ class HeldLP:
         lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
         lp.a_matrix_.start_, lp.a_matrix_.index_, lp.a_matrix_.value_ = self.A.indptr, self.A.indices, self.A.data
         return lp
+
+    def arrays(self):
+        """The scaled LP as `Highs.passModel`'s arrays (the same model as `model`, without a HighsLp's
+        copies): columns, rows, nonzeros, column-wise, minimise, no offset, then the vectors."""
+        A = self.A
+        return (A.shape[1], A.shape[0], A.nnz, int(highspy.MatrixFormat.kColwise), int(highspy.ObjSense.kMinimize),
+                0.0, self.cost, self._cols(self.col_lower), self._cols(self.col_upper), self.row_lower,
+                self.row_upper, A.indptr.astype(np.int32), A.indices.astype(np.int32), A.data,
+                np.zeros(A.shape[1], dtype=np.int32))           # every column continuous: an LP
 
     @staticmethod
     def _scaled(bound, factor):
