@@ -51,6 +51,7 @@ from typing import Literal
 
 import numpy as np
 
+from mechopt.kit.cache import memoised
 from mechopt.kit.errors import ModelError, SettingError
 from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Annotated, Interval, check_settings
@@ -224,6 +225,7 @@ def _stress_scale(task, law):
     return math.sqrt(ca_law / ca_own), {"ca_law": ca_law, "ca_own": ca_own}
 
 
+@memoised(maxsize=16)      # one law, both closure readings
 def _peak_acceleration(law) -> float:
     """Ca = max |S''| over the rise: a library law's `peaks`, a spline's on a dense grid with its knots
     (a cubic's S'' is piecewise linear: its peak sits on a knot)."""
