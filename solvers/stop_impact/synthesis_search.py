@@ -40,7 +40,8 @@ __all__ = ["Design", "dense_worst", "design_law", "least_phase", "points_text"]
 
 WINDOW_CANDIDATES = (0.7, 0.8, 0.9)            # xi_a scanned first, then halved steps around the best
 WINDOW_REFINE = 1               # halvings of the scan step around the best window
-BOUND_MARGIN = 1e-6             # a window's lower bound rules it out only this far (relative) above a value found
+BOUND_MARGIN = 1e-3             # a window's bound rules it out only this far (relative) above a value found: the
+                                # LP's tolerances move a window's value with a row more by ~3e-7 (measured), not more
 ROOT_FTOL = 1e-4                # the least phase: r*(t) within this of the limit (relative) ends the search
 MAX_PHASE_STEPS = 40
 ROBUST_ROUNDS = 8               # rounds of the dense check over the box's grid for one LP (each adds every
