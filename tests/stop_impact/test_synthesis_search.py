@@ -75,3 +75,35 @@ def test_the_dense_checks_rebounds_are_eq2s_at_each_speed(lever):
     assert all(p[0] > 0 for p in predicted)
     for mm, _, v0 in predicted:
         assert mm == pytest.approx(W.rebound_of_v0_mm(lever, v0), rel=1e-12)
+
+
+def test_a_held_window_lp_runs_in_the_calling_thread_and_stops_at_ctrl_c(lever, monkeypatch):
+    """A window LP of more than THREADED_ROWS rows starts no worker thread (its presolve takes ms),
+    and Ctrl-C still stops it within an iteration: the callbacks poll it in the main thread, and the
+    KeyboardInterrupt comes when the run returns."""
+    import os
+    import signal
+
+    from highspy._core import _Highs
+
+    from mechopt.kit import highs, interrupt
+    lp = _lp(lever, list(np.linspace(280.0, 420.0, 6)))
+    assert lp.held.A.shape[0] >= highs.THREADED_ROWS
+
+    def no_thread(*args, **kwargs):
+        raise AssertionError("a worker thread for a held window LP")
+    monkeypatch.setattr(highs.threading, "Thread", no_thread)
+    assert lp.solve(0.85)[0] is Status.SOLVED
+    iterations = []
+
+    def interrupted_run(self):              # Ctrl-C arrives as the run starts
+        os.kill(os.getpid(), signal.SIGINT)
+        status = _Highs.run(self)
+        iterations.append(self.getInfo().simplex_iteration_count)
+        return status
+    monkeypatch.setattr(highs.RealHighs, "run", interrupted_run, raising=False)
+    with pytest.raises(KeyboardInterrupt), interrupt.honoured():
+        lp.solve(0.85)
+    with pytest.raises(KeyboardInterrupt):
+        interrupt.check()                   # the spine consumes the Ctrl-C
+    assert iterations and iterations[0] <= 1
