@@ -55,7 +55,8 @@ def plain_rises(repeats=3):
             times[name].append((time.process_time() - start) / len(points))
             if name == "exact":
                 exact = rises
-        worst = max([worst] + [abs(a.approach_velocity_m_s / b.approach_velocity_m_s - 1) for a, b in zip(exact, rises)])
+        worst = max([worst] + [abs(a.approach_velocity_m_s / b.approach_velocity_m_s - 1)
+                               for a, b in zip(exact, rises)])
     return {k: statistics.median(v) for k, v in times.items()} | {"v0_rel": worst, "points": len(points)}
 
 

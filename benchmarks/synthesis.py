@@ -16,7 +16,7 @@ CPU seconds per LP (time.process_time, medians over repeats); the target is pack
 a coefficient over the windows (another vertex of the same optimum can differ).
 
 A dense-check round (`rounds_row`): the window scan of a round with a sample added, from scratch
-and bounded by the round before (synthesis_search._scan's floors): its LPs and CPU seconds, and
+and bounded by the round before (synthesis_search.scan_windows's floors): its LPs and CPU seconds, and
 whether both end on the same coefficients.
 """
 import statistics
@@ -146,16 +146,16 @@ def rounds_row(repeats=3):
     """{"from_scratch": (LPs, CPU s), "bounded": (LPs, CPU s), "same_law": bool}: the scan of a
     round (law-synthesis' 24 coefficients, five speeds and 300 rpm added, t = 31 deg) without and
     with the round before's windows as floors; CPU medians over repeats, interleaved."""
-    from mechopt.solvers.stop_impact.synthesis_search import _scan
+    from mechopt.solvers.stop_impact.synthesis_search import scan_windows
     task = registry.find("stop-impact/amplitude-law").build()[0]
     first = list(CASES[0][2])
-    _, _, floors = _scan(_window_lp(task, 24, first, 31.0), around=0.85)
+    _, _, floors = scan_windows(_window_lp(task, 24, first, 31.0), around=0.85)
     lp = _window_lp(task, 24, sorted(first + [300.0]), 31.0)
     times, out = {"from_scratch": [], "bounded": []}, {}
     for _ in range(repeats):
         for name, given in (("from_scratch", None), ("bounded", floors)):
             start = time.process_time()
-            out[name] = _scan(lp, 0.85, given)
+            out[name] = scan_windows(lp, 0.85, given)
             times[name].append(time.process_time() - start)
     same = np.array_equal(out["from_scratch"][0][1], out["bounded"][0][1])
     return {name: (out[name][1], statistics.median(times[name])) for name in times} | {"same_law": same}

@@ -36,7 +36,7 @@ from mechopt.solvers.stop_impact.window_lp import (
     speed_response,
 )
 
-__all__ = ["Design", "dense_worst", "design_law", "least_phase", "points_text"]
+__all__ = ["Design", "dense_worst", "design_law", "least_phase", "points_text", "scan_windows"]
 
 WINDOW_CANDIDATES = (0.7, 0.8, 0.9)            # xi_a scanned first, then halved steps around the best
 WINDOW_REFINE = 1               # halvings of the scan step around the best window
@@ -78,7 +78,7 @@ def _design(task: LeverStop, t_deg: float, band_rpm: tuple, *, objective="least_
             continuity=2, sample_speeds=5, dense_step_rpm=5.0, bounds=None, rounds=4, samples=None,
             around=None, dense_bar_mm=None, explain=True, box: LeverBox | None = None, extra=None) -> Design:
     """The best law at phase angle `t_deg` over the speed band: the LP over the arrival window
-    (`_scan`), the dense check between the sampled speeds, a failing speed added and the LP solved
+    (`scan_windows`), the dense check between the sampled speeds, a failing speed added and the LP solved
     again (at most `rounds` times). The dense check holds the law to the LP's own value (least
     rebound) or to the limit (`dense_bar_mm`, the least phase's question: is the limit kept?).
     `explain`: when no window is feasible, a slack LP names the limits that bind (the least
@@ -115,7 +115,7 @@ def _design(task: LeverStop, t_deg: float, band_rpm: tuple, *, objective="least_
         nominal = lines[box.nominal(task)]
         lp = WindowLP(task, lever, speeds, t_deg, objective=objective, limit_mm=limit, bounds=bounds, lines=nominal,
                       extra=extra)
-        (status, c, value, xa), count, floors = _scan(lp, around, floors)   # next round: these bound its windows
+        (status, c, value, xa), count, floors = scan_windows(lp, around, floors)   # next round: these bound its windows
         lps = lps + count
         counts = {"given_up": counts["given_up"] + lp.given_up, "retried": counts["retried"] + lp.held.retried}
         if status is Status.INFEASIBLE and not explain:
@@ -124,7 +124,7 @@ def _design(task: LeverStop, t_deg: float, band_rpm: tuple, *, objective="least_
         if status is Status.INFEASIBLE:
             slack = WindowLP(task, lever, speeds, t_deg, objective=objective, limit_mm=limit, bounds=bounds,
                               lines=nominal, slack=True, extra=extra)
-            (_, _, _, xa), count, _ = _scan(slack)
+            (_, _, _, xa), count, _ = scan_windows(slack)
             sl = slack.solve(xa)[3]
             binding = tuple(k for k, v in sl.items() if v > 1e-9)
             return Design(Status.INFEASIBLE, None, math.inf, xa, samples, lps + count,
@@ -165,7 +165,7 @@ def points_text(points):
     return ", ".join(f"(f x{p[0]:g}, zeta {p[1]:g}, {p[2]:g} rpm)" for p in points)
 
 
-def _scan(lp, around=None, floors=None):
+def scan_windows(lp, around=None, floors=None):
     """((status, c, value, xi_a) of the best window, LPs solved, {xi_a: (status, value or its
     lower bound)} of the windows tried): WINDOW_CANDIDATES (or, `around` a window that was best at
     a neighbouring t, it and its neighbours), then steps halved around the best (the value is not
@@ -196,7 +196,7 @@ def _scan(lp, around=None, floors=None):
     if around is not None:
         step /= 2
         if not any(math.isfinite(v[2]) for v in tried.values()):      # lost it: the full scan
-            best, count, seen = _scan(lp, floors=floors)
+            best, count, seen = scan_windows(lp, floors=floors)
             return best, count + len(tried) - len(bounded), seen
     for _ in range(WINDOW_REFINE):
         best = min(tried, key=lambda k: tried[k][2])
@@ -216,7 +216,7 @@ def _scan(lp, around=None, floors=None):
 
 
 def _floor_rules_out(floor, found):
-    """A window's (status, None, value, {}) standing for its LP when its floor (`_scan`) rules it
+    """A window's (status, None, value, {}) standing for its LP when its floor (`scan_windows`) rules it
     out: infeasible there, or a bound above the least value `found` so far; else None."""
     if floor is None:
         return None

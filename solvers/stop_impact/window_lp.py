@@ -276,7 +276,7 @@ class WindowLP:
         goal = "peak" if objective == "least_acceleration" else "r"
         rows.column(goal, cost=0.0 if slack else 1.0)
         kinematic_rows(rows, lever, t_deg, task.stroke_mm, bounds)
-        if extra is not None:           # the cam's geometry linearised at a law, its trust region (synthesis_geometry.geometry_steps)
+        if extra is not None:           # the cam's geometry linearised at a law, its trust region (geometry_steps)
             extra(rows)
         if goal == "peak":
             _, _, (a0, A), _ = lever.bound_kin

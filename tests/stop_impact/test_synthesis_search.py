@@ -8,7 +8,7 @@ from scipy import sparse
 from mechopt import registry
 from mechopt.kit.result import Status
 from mechopt.solvers.stop_impact import window_lp as W
-from mechopt.solvers.stop_impact.synthesis_search import _scan
+from mechopt.solvers.stop_impact.synthesis_search import scan_windows
 from mechopt.solvers.stop_impact.window_rows import HeldLP, equilibrate
 
 ACCEL = 570.0       # mm/rad^2: the scenes' bound
@@ -32,10 +32,11 @@ def test_a_round_bounded_by_the_round_before_finds_the_same_law_with_fewer_lps(l
     infeasible windows stay infeasible (each checked here by solving the window), and the scan
     that skips what they rule out ends on the same window with the same coefficients, bit for bit."""
     first = list(np.linspace(280.0, 420.0, 5))
-    _, _, floors = _scan(_lp(lever, first), around=0.85)
+    _, _, floors = scan_windows(_lp(lever, first), around=0.85)
     more = _lp(lever, sorted(first + [300.0]))
-    (status, c, value, xa), full, _ = _scan(more, around=0.85)
-    (status_b, c_b, value_b, xa_b), bounded, _ = _scan(_lp(lever, sorted(first + [300.0])), around=0.85, floors=floors)
+    (status, c, value, xa), full, _ = scan_windows(more, around=0.85)
+    again = _lp(lever, sorted(first + [300.0]))
+    (status_b, c_b, value_b, xa_b), bounded, _ = scan_windows(again, around=0.85, floors=floors)
     assert status is status_b is Status.SOLVED and xa == xa_b and value == value_b and np.array_equal(c, c_b)
     assert bounded < full
     for window, (was, low) in floors.items():
