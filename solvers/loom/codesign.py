@@ -145,7 +145,8 @@ def codesign_machine_speed(task: Cyclogram, *, coefficients: Annotated[int, Inte
                               band_high_rpm=task.speed_rpm, sample_speeds=sample_speeds,
                               max_acceleration_mm_per_rad2=max_acceleration_mm_per_rad2,
                               phase_from_deg=phase_from_deg, phase_to_deg=phase_to_deg,
-                              phase_tol_deg=phase_tol_deg, compare=False, robust=robust, box=box)
+                              phase_tol_deg=phase_tol_deg, compare=False, robust=robust, box=box,
+                              shop_cam=False)                  # the report cuts its own at t(3,7)
     if geometry:
         synthesis_settings |= dict(geometry=True, max_pressure_angle_deg=max_pressure_angle_deg,
                                    min_curvature_margin_mm=min_curvature_margin_mm,

@@ -104,7 +104,8 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
                    cam_roller_radius_mm: Annotated[float, Interval(gt=0, le=1e4)] = 15.0,
                    cam_centre_distance_mm: Annotated[float, Interval(gt=0, le=1e4)] = 120.0,
                    cam_dwell_deg: Annotated[float, Interval(ge=0, lt=360)] = 60.0,
-                   geometry_steps: Annotated[int, Interval(ge=1, le=50)] = 8) -> Result:
+                   geometry_steps: Annotated[int, Interval(ge=1, le=50)] = 8,
+                   shop_cam: bool = True) -> Result:
     """Synthesise the lift cam's law (module docstring) and check it by the chain.
 
     Parameters
@@ -145,7 +146,8 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
     Whatever `geometry`, the law's cam for the shop (`cam_shape.law_cam`: the lift cam of the cam_*
     settings, the lever's arms and stroke, rise and return over t): arrays `cam_pitch_x_mm` ...,
     diagnostics `cam` (its status, chordal errors, rise-start direction, geometry); the DXF writer
-    draws from them.
+    draws from them. `shop_cam` false: not cut (for a caller that cuts its own, as the co-design at
+    its re-planned t(3,7)); diagnostics `cam` then holds its geometry alone.
     """
     task.need("stroke_mm", "amplitude_limit_mm")
     task.need_effect("cam_drive")
@@ -269,8 +271,9 @@ def synthesise_law(task: LeverStop, *, objective: Literal["least_phase", "least_
     if compare:
         compare_laws(task, law, t_deg, sorted({p[2] for p in design.speeds if p[:2] == box.nominal(task)}), values)
     sampled = [p[2] if box.trivial else list(p) for p in design.speeds]
-    shop, said = law_cam(task, law, t_deg, {"base_radius_mm": cam_base_radius_mm, "roller_radius_mm": cam_roller_radius_mm,
-                                            "centre_distance_mm": cam_centre_distance_mm, "dwell_deg": cam_dwell_deg})
+    shape = {"base_radius_mm": cam_base_radius_mm, "roller_radius_mm": cam_roller_radius_mm,
+             "centre_distance_mm": cam_centre_distance_mm, "dwell_deg": cam_dwell_deg}
+    shop, said = law_cam(task, law, t_deg, shape) if shop_cam else ({}, {"cam": {"geometry": shape}})
     return clock.result(status, values, message=message,
                         arrays=arrays | shop, diagnostics=diagnostics | said | {"sampled_speeds_rpm": sampled,
                                                                   "law_knots": list(law.knots),

@@ -86,11 +86,11 @@ class Rows:
         m = None
         for name, coef in terms:
             start, size = self.columns[name]
-            coef = sparse.coo_matrix(coef.reshape(-1, 1) if np.ndim(coef) == 1 else coef)
-            if coef.shape[1] != size or (m is not None and coef.shape[0] != m):
-                raise ValueError(f"rows of {family}: a term on {name} has shape {coef.shape}")
-            m = coef.shape[0]
-            self.blocks.append((self.rows + coef.row, start + coef.col, coef.data))
+            row, col, data, shape = _entries(coef)
+            if shape[1] != size or (m is not None and shape[0] != m):
+                raise ValueError(f"rows of {family}: a term on {name} has shape {shape}")
+            m = shape[0]
+            self.blocks.append((self.rows + row, start + col, data))
         self.upper.append(np.broadcast_to(np.asarray(upper, float), m))
         self.lower.append(np.broadcast_to(np.asarray(lower, float), m))
         self.family += [family] * m
@@ -120,6 +120,17 @@ class Rows:
         """(row lower, row upper, column lower, column upper, cost) as arrays."""
         return tuple(np.concatenate(parts).astype(float) for parts in
                      (self.lower, self.upper, self.col_lower, self.col_upper, self.cost))
+
+
+def _entries(coef):
+    """(rows, columns, values, shape) of a term's nonzeros, row by row (a vector is a column): a
+    dense array's by `nonzero`, as `coo_matrix` takes them, without building one."""
+    if isinstance(coef, np.ndarray):
+        dense = coef.reshape(-1, 1) if coef.ndim == 1 else coef
+        row, col = np.nonzero(dense)
+        return row, col, dense[row, col], dense.shape
+    coo = sparse.coo_matrix(coef)
+    return coo.row, coo.col, coo.data, coo.shape
 
 
 def _power_of_two(x):
