@@ -169,9 +169,10 @@ def coefficient_range(A):
 class _HeldHighs(InterruptibleHighs):
     """HiGHS for the held LPs: run in the calling thread whatever the rows' count. The worker thread
     `InterruptibleHighs` gives an LP of THREADED_ROWS rows or more is for a presolve of seconds that
-    polls no callback; these LPs' presolve takes milliseconds and their simplex and interior-point
-    iterations call back, so Ctrl-C stops them within an iteration here too, without the thread's
-    start and join on every window (~5 % of a co-design window LP's CPU, measured)."""
+    polls no callback; these LPs' presolve takes milliseconds (well under a second at 10^3
+    coefficients, 11,445 rows: measured) and their simplex and interior-point iterations call back,
+    so Ctrl-C stops them within an iteration here too, without the thread's start and join on
+    every window (~5 % of a co-design window LP's CPU, measured)."""
 
     def run(self):
         with interrupt.polled():
