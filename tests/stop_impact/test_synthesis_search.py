@@ -1,4 +1,4 @@
-"""The synthesis' search spends no LP it does not need: a dense-check round's windows bounded by
+"""The synthesis spends no work it does not need: a dense-check round's windows bounded by
 the round before, the LP's scaling without matrix products, eq. (2) for every speed at once; each
 against the computation it replaces, done here independently."""
 import numpy as np
@@ -108,3 +108,16 @@ def test_a_held_window_lp_runs_in_the_calling_thread_and_stops_at_ctrl_c(lever, 
     with pytest.raises(KeyboardInterrupt):
         interrupt.check()                   # the spine consumes the Ctrl-C
     assert iterations and iterations[0] <= 1
+
+
+def test_a_synthesis_without_its_shop_cam_finds_the_same_law_and_cuts_no_cam(lever):
+    """shop_cam false (the co-design cuts its own cam at its t(3,7)): the same law and values, no
+    cam tables, the cam's geometry alone in diagnostics."""
+    from mechopt.solvers.stop_impact.synthesis import synthesise_law
+    settings = dict(objective="least_rebound", coefficients=12, sample_speeds=2, band_low_rpm=380.0,
+                    verify=False, compare=False, max_acceleration_mm_per_rad2=ACCEL)
+    cut, bare = synthesise_law(lever, **settings), synthesise_law(lever, shop_cam=False, **settings)
+    assert cut.status is bare.status is Status.SOLVED and cut.values == bare.values
+    assert cut.diagnostics["law_coefficients"] == bare.diagnostics["law_coefficients"]
+    assert any(k.startswith("cam_") for k in cut.arrays) and not any(k.startswith("cam_") for k in bare.arrays)
+    assert bare.diagnostics["cam"] == {"geometry": cut.diagnostics["cam"]["geometry"]}
