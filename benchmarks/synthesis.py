@@ -14,6 +14,10 @@ solvers/stop_impact/window_rows.py) and solved at the scan's windows xi_a:
 CPU seconds per LP (time.process_time, medians over repeats); the target is package / raw <= 1.3
 (issue: the LP within 1.3x raw HiGHS on the same rows). Warm against cold: the largest change of
 a coefficient over the windows (another vertex of the same optimum can differ).
+
+A dense-check round (`rounds_row`): the window scan of a round with a sample added, from scratch
+and bounded by the round before (synthesis_search.scan_windows's floors): its LPs and CPU seconds, and
+whether both end on the same coefficients.
 """
 import statistics
 import time
@@ -24,7 +28,7 @@ from mechopt import registry
 from mechopt.kit.highs import RealHighs, quiet_banner, status_of
 from mechopt.kit.result import Status
 
-__all__ = ["CASES", "cli", "lp_rows", "lp_table"]
+__all__ = ["CASES", "cli", "lp_rows", "lp_table", "rounds_row"]
 
 # (label, coefficients, speeds [rpm], phase angle [deg]; None: the lever's own t)
 CASES = (("law-synthesis: 24 coefficients x 5 speeds", 24, (280.0, 315.0, 350.0, 385.0, 420.0), 31.0),
@@ -138,6 +142,30 @@ def lp_table(rows):
     return "\n".join(lines)
 
 
+def rounds_row(repeats=3):
+    """{"from_scratch": (LPs, CPU s), "bounded": (LPs, CPU s), "same_law": bool}: the scan of a
+    round (law-synthesis' 24 coefficients, five speeds and 300 rpm added, t = 31 deg) without and
+    with the round before's windows as floors; CPU medians over repeats, interleaved."""
+    from mechopt.solvers.stop_impact.synthesis_search import scan_windows
+    task = registry.find("stop-impact/amplitude-law").build()[0]
+    first = list(CASES[0][2])
+    _, _, floors = scan_windows(_window_lp(task, 24, first, 31.0), around=0.85)
+    lp = _window_lp(task, 24, sorted(first + [300.0]), 31.0)
+    times, out = {"from_scratch": [], "bounded": []}, {}
+    for _ in range(repeats):
+        for name, given in (("from_scratch", None), ("bounded", floors)):
+            start = time.process_time()
+            out[name] = scan_windows(lp, 0.85, given)
+            times[name].append(time.process_time() - start)
+    same = np.array_equal(out["from_scratch"][0][1], out["bounded"][0][1])
+    return {name: (out[name][1], statistics.median(times[name])) for name in times} | {"same_law": same}
+
+
 def cli(repeats, out_dir, progress=None, quick=False) -> str:
     """The table alone (no figure); part of `mechopt bench stop-impact`."""
-    return lp_table(lp_rows(repeats=1 if quick else repeats, progress=progress, quick=quick))
+    table = lp_table(lp_rows(repeats=1 if quick else repeats, progress=progress, quick=quick))
+    got = rounds_row(repeats=1 if quick else min(repeats, 5))
+    (n_full, s_full), (n_bound, s_bound) = got["from_scratch"], got["bounded"]
+    return table + (f"\na dense-check round (a sample added): {n_full} LPs {s_full:.3f} s from scratch, {n_bound} LPs "
+                    f"{s_bound:.3f} s bounded by the round before ({s_full / s_bound:.1f} x); the same law: "
+                    f"{got['same_law']}")

@@ -7,8 +7,10 @@ Two sources of the approach velocity v0, by the task's effects:
   v0 at the located contact -> impact pulse and eq. (2) -> first rebound. In a groove (closure
   "groove") whose roller crosses to the other wall before C meets its plate, v0 is the hybrid
   model's with the backlash (solvers/stop_impact/groove.py): the crossover comes before the
-  stop impact, and its flight moves the approach (eq. (2) itself starts after the stop impact). v0 is no longer
-  proportional to n / t (the dynamic error grows with speed), so each (n, t) is its own rise.
+  stop impact, and its flight moves the approach (eq. (2) itself starts after the stop impact).
+  Where the groove's exact phases apply (groove.follow_groove_exact), v0 is theirs, crossing or
+  not; elsewhere the CVODES rise decides. v0 is no longer proportional to n / t (the dynamic
+  error grows with speed), so each (n, t) is its own rise.
 * otherwise the fitted proportionality v0 = velocity_factor * stroke * Omega / t.
 """
 import numpy as np
@@ -48,10 +50,12 @@ def approach_velocity_m_s(task: LeverStop, speed_rpm: float, t_deg: float | None
 @memoised(maxsize=4096)     # the chain asks for the same rise again (a law's tangent, a walk, its check)
 def _rise_velocity(task: LeverStop, speed_rpm: float, t_deg: float | None) -> float:
     if task.closure == "groove" and "damping" in task.effects and task.damping_ratio:
-        # the groove's exact rise first (ms, against the chain's CVODES rise): a flight before its
-        # contact is the crossover before the plate below (both ride the driving wall until then)
+        # the groove's exact rise (ms, against the chain's CVODES rise, which it agrees with to
+        # CVODES' error, ~1e-10): a flight before its contact is the crossover before the plate
+        # below (both ride the driving wall until then); without one it is the driving wall's
+        # rise itself, exact, so CVODES is not run at all
         real = follow_groove_exact(task, speed_rpm, t_deg)
-        if real is not None and real.status is Status.SOLVED and real.contact_xi is not None and real.flights:
+        if real is not None and real.status is Status.SOLVED and real.contact_xi is not None:
             return real.approach_velocity_m_s
     rise = follow_cam(task, speed_rpm, t_deg, reltol=CHAIN_RELTOL)
     if rise.status is not Status.SOLVED:        # (no contact at all: C settles onto the plate, v0 = 0)

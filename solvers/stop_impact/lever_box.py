@@ -6,7 +6,8 @@ by the factor and the preload's force with the stiffness; the mass, hence the ro
 unit mass, stays), the damping ratio zeta (of the link and of the plate, as the model has one), and a
 speed margin above the band's top (the machine run faster than planned). A lever of the box is a
 key (frequency factor, zeta); the speed is the band's own axis. The synthesis holds the box's
-corners and its nominal in the LP and checks a grid of it (solvers/stop_impact/synthesis.py).
+corners and its nominal in the LP and checks a grid of it (solvers/stop_impact/synthesis_search.py,
+synthesis_box.py).
 """
 import dataclasses
 import functools

@@ -1,6 +1,6 @@
 """An LP assembled as sparse rows once and held in HiGHS, re-solved with only row bounds changed.
 
-The synthesis' window LP (solvers/stop_impact/synthesis.py) is one matrix per phase angle and
+The synthesis' window LP (solvers/stop_impact/window_lp.py) is one matrix per phase angle and
 sample set; the arrival window moves only which rows hold (their upper bound: a value, or +inf
 where the row is masked). `Rows` collects the columns by name and the rows by family (each
 `a x <= b`, or a tie `a x = b`), `HeldLP` rescales them, passes the model to HiGHS once and changes
@@ -23,7 +23,8 @@ import highspy
 import numpy as np
 from scipy import sparse
 
-from mechopt.kit.highs import InterruptibleHighs, status_of
+from mechopt.kit import interrupt
+from mechopt.kit.highs import InterruptibleHighs, RealHighs, status_of
 from mechopt.kit.result import Status
 
 __all__ = ["HeldLP", "Rows", "IPM_OPTIONS", "SIMPLEX_OPTIONS"]
@@ -85,11 +86,11 @@ class Rows:
         m = None
         for name, coef in terms:
             start, size = self.columns[name]
-            coef = sparse.coo_matrix(coef.reshape(-1, 1) if np.ndim(coef) == 1 else coef)
-            if coef.shape[1] != size or (m is not None and coef.shape[0] != m):
-                raise ValueError(f"rows of {family}: a term on {name} has shape {coef.shape}")
-            m = coef.shape[0]
-            self.blocks.append((self.rows + coef.row, start + coef.col, coef.data))
+            row, col, data, shape = _entries(coef)
+            if shape[1] != size or (m is not None and shape[0] != m):
+                raise ValueError(f"rows of {family}: a term on {name} has shape {shape}")
+            m = shape[0]
+            self.blocks.append((self.rows + row, start + col, data))
         self.upper.append(np.broadcast_to(np.asarray(upper, float), m))
         self.lower.append(np.broadcast_to(np.asarray(lower, float), m))
         self.family += [family] * m
@@ -121,6 +122,17 @@ class Rows:
                      (self.lower, self.upper, self.col_lower, self.col_upper, self.cost))
 
 
+def _entries(coef):
+    """(rows, columns, values, shape) of a term's nonzeros, row by row (a vector is a column): a
+    dense array's by `nonzero`, as `coo_matrix` takes them, without building one."""
+    if isinstance(coef, np.ndarray):
+        dense = coef.reshape(-1, 1) if coef.ndim == 1 else coef
+        row, col = np.nonzero(dense)
+        return row, col, dense[row, col], dense.shape
+    coo = sparse.coo_matrix(coef)
+    return coo.row, coo.col, coo.data, coo.shape
+
+
 def _power_of_two(x):
     return np.exp2(np.round(np.log2(x)))
 
@@ -129,12 +141,19 @@ def equilibrate(A, passes=SCALE_PASSES):
     """(row factors, column factors), powers of two, such that diag(r) A diag(s) has every row's and
     column's largest entry near 1 (Ruiz's passes: each row and column divided by the square root of
     its largest entry; Ruiz, A scaling algorithm to equilibrate both rows and columns norms in
-    matrices, RAL-TR-2001-034)."""
+    matrices, RAL-TR-2001-034). The scaled entries are the nonzeros times their factors (a power of
+    two: exact), no matrix product."""
     A = abs(sparse.csr_matrix(A))
+    A.sum_duplicates()
+    filled = np.diff(A.indptr) > 0
+    row, starts = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr)), A.indptr[:-1][filled]
     r, s = np.ones(A.shape[0]), np.ones(A.shape[1])
     for _ in range(passes):
-        B = sparse.diags(r) @ A @ sparse.diags(s)
-        rows, cols = B.max(axis=1).toarray().ravel(), B.max(axis=0).toarray().ravel()
+        data = A.data * r[row] * s[A.indices]
+        rows, cols = np.zeros(A.shape[0]), np.zeros(A.shape[1])
+        if data.size:
+            rows[filled] = np.maximum.reduceat(data, starts)
+            np.maximum.at(cols, A.indices, data)
         r /= _power_of_two(np.sqrt(np.where(rows > 0, rows, 1.0)))
         s /= _power_of_two(np.sqrt(np.where(cols > 0, cols, 1.0)))
     return r, s
@@ -147,6 +166,19 @@ def coefficient_range(A):
     return (float(data.min()), float(data.max())) if data.size else (0.0, 0.0)
 
 
+class _HeldHighs(InterruptibleHighs):
+    """HiGHS for the held LPs: run in the calling thread whatever the rows' count. The worker thread
+    `InterruptibleHighs` gives an LP of THREADED_ROWS rows or more is for a presolve of seconds that
+    polls no callback; these LPs' presolve takes milliseconds (well under a second at 10^3
+    coefficients, 11,445 rows: measured) and their simplex and interior-point iterations call back,
+    so Ctrl-C stops them within an iteration here too, without the thread's start and join on
+    every window (~5 % of a co-design window LP's CPU, measured)."""
+
+    def run(self):
+        with interrupt.polled():
+            return RealHighs.run(self)
+
+
 class HeldLP:
     """`Rows` scaled and passed to HiGHS once; `solve(upper)` changes the upper bounds of the rows
     `movable` (unscaled values, +inf where a row is masked) and solves (module docstring)."""
@@ -155,14 +187,15 @@ class HeldLP:
         A = rows.matrix()
         lower, upper, self.col_lower, self.col_upper, cost = rows.bounds()
         self.r, self.s = equilibrate(A)
-        self.A = sparse.csc_matrix(sparse.diags(self.r) @ A @ sparse.diags(self.s))
+        self.A = sparse.csc_matrix(A, copy=True)          # each entry times its row's and column's power of two
+        self.A.data *= self.r[self.A.indices] * np.repeat(self.s, np.diff(self.A.indptr))
         self.A.data[np.abs(self.A.data) <= TINY] = 0.0      # what HiGHS would drop (and warn of): dropped here
         self.A.eliminate_zeros()
         self.columns, self.movable = rows.columns, np.asarray(movable, dtype=np.int32)
         self.row_lower, self.row_upper = self._scaled(lower, self.r), self._scaled(upper, self.r)
         self.cost = cost * self.s
-        self.highs = InterruptibleHighs()
-        self.highs.passModel(self.model())
+        self.highs = _HeldHighs()
+        self.highs.passModel(*self.arrays())
         self.iterations, self.retried = {}, 0
 
     def model(self):
@@ -172,10 +205,18 @@ class HeldLP:
         lp.col_cost_ = self.cost
         lp.col_lower_, lp.col_upper_ = self._cols(self.col_lower), self._cols(self.col_upper)
         lp.row_lower_, lp.row_upper_ = self.row_lower, self.row_upper
-        csc = sparse.csc_matrix(self.A)
         lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
-        lp.a_matrix_.start_, lp.a_matrix_.index_, lp.a_matrix_.value_ = csc.indptr, csc.indices, csc.data
+        lp.a_matrix_.start_, lp.a_matrix_.index_, lp.a_matrix_.value_ = self.A.indptr, self.A.indices, self.A.data
         return lp
+
+    def arrays(self):
+        """The scaled LP as `Highs.passModel`'s arrays (the same model as `model`, without a HighsLp's
+        copies): columns, rows, nonzeros, column-wise, minimise, no offset, then the vectors."""
+        A = self.A
+        return (A.shape[1], A.shape[0], A.nnz, int(highspy.MatrixFormat.kColwise), int(highspy.ObjSense.kMinimize),
+                0.0, self.cost, self._cols(self.col_lower), self._cols(self.col_upper), self.row_lower,
+                self.row_upper, A.indptr.astype(np.int32), A.indices.astype(np.int32), A.data,
+                np.zeros(A.shape[1], dtype=np.int32))           # every column continuous: an LP
 
     @staticmethod
     def _scaled(bound, factor):

@@ -254,3 +254,24 @@ def test_the_chain_takes_a_crossing_rise_from_the_exact_hybrid_where_cvodes_woul
                 v0 = follow_groove_ivp(task, speed, t, rtol=1e-13).approach_velocity_m_s
                 assert approach_velocity_m_s(task, speed, t) == pytest.approx(v0, rel=1e-9)
     assert 0 < crossing < 9, crossing
+
+
+def test_a_groove_without_a_crossing_takes_the_exact_rise_and_runs_no_cvodes(monkeypatch):
+    """Where the exact hybrid has no flight before its contact the roller rides its driving wall
+    all the way, the chain's CVODES rise (follow_cam) itself: v0 is the exact rise's, CVODES is
+    not run, and the two agree to CVODES' error (rtol 1e-9; stop-impact/cam-dynamics-groove)."""
+    import mechopt.solvers.stop_impact.law as law
+    task = registry.find("stop-impact/cam-dynamics-groove").build()[0]
+    plain = [(n, t) for n in (300.0, 520.0) for t in (task.t_deg, 50.0) if not follow_groove_exact(task, n, t).flights]
+    assert plain
+    cvodes = {p: follow_cam(task, *p, reltol=CHAIN_RELTOL).approach_velocity_m_s for p in plain}
+    law._rise_velocity.cache.clear()
+
+    def refused(*args, **kwargs):
+        raise AssertionError("CVODES run where the exact rise has no flight")
+    monkeypatch.setattr(law, "follow_cam", refused)
+    for n, t in plain:
+        v0 = approach_velocity_m_s(task, n, t)
+        assert v0 == follow_groove_exact(task, n, t).approach_velocity_m_s
+        assert v0 == pytest.approx(cvodes[(n, t)], rel=1e-9)
+    law._rise_velocity.cache.clear()

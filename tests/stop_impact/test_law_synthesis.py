@@ -60,7 +60,7 @@ def test_the_sparse_basis_matrices_match_scipys_spline_derivatives(continuity):
 def test_the_lps_two_forms_of_the_lever_give_the_same_law(lever, monkeypatch):
     """The dense superposition and the states tied by the exact step are one map: the same LP's
     value in both forms, at a size each form would not pick by itself."""
-    from mechopt.solvers.stop_impact import synthesis as sy
+    from mechopt.solvers.stop_impact import window_lp as sy
     answers = []
     for first in (10**9, 0):                        # dense, then states
         monkeypatch.setattr(sy, "STATE_FORM_FROM", first)
