@@ -29,6 +29,7 @@ from scipy.sparse.csgraph import breadth_first_order
 from mechopt.kit.cache import BuildCache
 from mechopt.kit.result import Status
 from mechopt.solvers.cyclogram.kernel import COMPILED_AFTER_LEVEL_CALLS, COMPILED_MIN_ARCS, kernels
+from mechopt.solvers.cyclogram.plain_pass import SMALL_MAX_ARCS, PlainPass, PositiveCycleFound
 
 ROUND_OFF = 1e-12          # relative: an improvement below it (of the largest |w|) is round-off, not a cycle
 
@@ -278,11 +279,27 @@ class HeldSpan:
     at 10^5 events a compiled pass is ~2 ms (kernel.py), and an incremental update would pay
     only when one limit moves a small cone, which the what-if slider does not promise."""
 
-    def __init__(self, n: int, tails, heads, first: int, last: int, back: BackArcs = NO_BACK_ARCS):
+    def __init__(self, n: int, tails, heads, first: int, last: int, back: BackArcs = NO_BACK_ARCS,
+                 plain: bool | None = None):
+        """`plain`: None, the plain-Python pass up to SMALL_MAX_ARCS constraints (plain_pass.py);
+        False, the numpy levels only (the reference); True, the plain pass at any size."""
         self.levels, self.first, self.last, self.back = Levels.of(n, tails, heads), first, last, back
         self.n = n
         self._tails = np.r_[self.levels.tails, back.tails]        # every constraint p(head) - p(tail) >= w
         self._heads = np.r_[self.levels.heads, back.heads]
+        # a small network: the same passes on Python lists (plain_pass.py; numpy's call overhead is their cost)
+        self._plain = (PlainPass(n, self.levels.forward_order, self.levels.tails, self.levels.heads, back, ROUND_OFF)
+                       if (len(self._tails) <= SMALL_MAX_ARCS if plain is None else plain)
+                       and np.isfinite(back.weights).all() else None)
+
+    def _plain_bounds(self, lb) -> list | None:
+        """lb as a list when the plain pass takes it: a small network, every bound finite (an infinite
+        one, a cut for ranging, keeps numpy's NaN semantics); else None."""
+        if self._plain is None:
+            return None
+        w = lb.tolist()
+        total = sum(w)
+        return w if total - total == 0.0 else None
 
     def solve(self, lb: np.ndarray, tol_deg: float = 1e-9):
         """(status, span [deg], event times) for bounds lb, certified by LP duality: the times
@@ -290,13 +307,17 @@ class HeldSpan:
         leads first -> last with bounds summing to the span (a dual solution of the same value),
         both to tol_deg per degree above 1. SOLVED when both hold, INACCURATE when not (round-off
         past tol_deg), INFEASIBLE (span and times None) on a positive cycle."""
+        w = self._plain_bounds(lb)
+        if w is not None:
+            return self._solve_plain(w, tol_deg)
         try:
             p = self.levels.longest_from(self.first, lb, self.back)
         except PositiveCycle:
             return Status.INFEASIBLE, None, None
         span = float(p[self.last] - p[self.first])
         w = np.r_[lb, self.back.weights]
-        slack = p[self._heads] - p[self._tails] - w
+        with np.errstate(invalid="ignore"):                 # an unreached event: -inf - -inf, NaN
+            slack = p[self._heads] - p[self._tails] - w
         tol = tol_deg * max(1.0, abs(span))
         feasible = bool(np.all(slack >= -tol))            # NaN (an unreached event) fails too
         tight = np.flatnonzero(slack <= tol)
@@ -307,8 +328,33 @@ class HeldSpan:
         ok = dual is not None and abs(dual - span) <= tol
         return (Status.SOLVED if ok else Status.INACCURATE), span, p
 
+    def _solve_plain(self, w: list, tol_deg: float):
+        """`solve` on the plain pass: the same times, span and certificate (plain_pass.py)."""
+        plain = self._plain
+        try:
+            p = plain.longest_from(self.first, w)
+        except PositiveCycleFound:
+            return Status.INFEASIBLE, None, None
+        span = p[self.last] - p[self.first]
+        w = w + plain.back_w
+        tol = tol_deg * max(1.0, abs(span))
+        feasible, chain = plain.certificate(p, w, self.first, self.last, tol)
+        if chain is None and feasible:                      # a zero cycle in the walk: breadth first
+            tight = np.asarray(plain.tight(p, w, tol), dtype=np.int64)
+            path = a_path(self.n, self._tails[tight], self._heads[tight], self.first, self.last)
+            chain = None if path is None else tight[path].tolist()
+        dual = None if chain is None else math.fsum([w[k] for k in chain])
+        ok = dual is not None and abs(dual - span) <= tol
+        return (Status.SOLVED if ok else Status.INACCURATE), span, np.array(p)
+
     def span(self, lb: np.ndarray) -> float:
         """The longest path first -> last with bounds lb [deg]; PositiveCycle when none exists."""
+        w = self._plain_bounds(lb)
+        if w is not None:
+            try:
+                return self._plain.longest_from(self.first, w)[self.last]
+            except PositiveCycleFound:
+                raise PositiveCycle from None
         return float(self.levels.longest_from(self.first, lb, self.back)[self.last])
 
     def certify(self, lb: np.ndarray, lp_span: float | None, tol_deg: float = 1e-9):
