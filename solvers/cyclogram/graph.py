@@ -307,9 +307,14 @@ class HeldSpan:
         leads first -> last with bounds summing to the span (a dual solution of the same value),
         both to tol_deg per degree above 1. SOLVED when both hold, INACCURATE when not (round-off
         past tol_deg), INFEASIBLE (span and times None) on a positive cycle."""
-        w = self._plain_bounds(lb)
-        if w is not None:
-            return self._solve_plain(w, tol_deg)
+        if self._plain is not None:                           # a small network: plain_pass.py
+            w = lb.tolist()
+            total = sum(w)
+            if total - total == 0.0:                          # every bound finite
+                status, span, p, walk = self._plain.solve(self.first, self.last, w, tol_deg)
+                if walk is not None:
+                    return self._walk_failed(span, p, walk, tol_deg)
+                return status, span, (None if p is None else np.array(p))
         try:
             p = self.levels.longest_from(self.first, lb, self.back)
         except PositiveCycle:
@@ -328,23 +333,13 @@ class HeldSpan:
         ok = dual is not None and abs(dual - span) <= tol
         return (Status.SOLVED if ok else Status.INACCURATE), span, p
 
-    def _solve_plain(self, w: list, tol_deg: float):
-        """`solve` on the plain pass: the same times, span and certificate (plain_pass.py)."""
-        plain = self._plain
-        try:
-            p = plain.longest_from(self.first, w)
-        except PositiveCycleFound:
-            return Status.INFEASIBLE, None, None
-        span = p[self.last] - p[self.first]
-        w = w + plain.back_w
+    def _walk_failed(self, span, p, w, tol_deg):
+        """The plain pass's times feasible but its walk back failed (a zero cycle of syncs): the
+        chain breadth first over the tight constraints, as `solve` on the levels does."""
         tol = tol_deg * max(1.0, abs(span))
-        feasible, chain = plain.certificate(p, w, self.first, self.last, tol)
-        if chain is None and feasible:                      # a zero cycle in the walk: breadth first
-            tight = np.asarray(plain.tight(p, w, tol), dtype=np.int64)
-            path = a_path(self.n, self._tails[tight], self._heads[tight], self.first, self.last)
-            chain = None if path is None else tight[path].tolist()
-        dual = None if chain is None else math.fsum([w[k] for k in chain])
-        ok = dual is not None and abs(dual - span) <= tol
+        tight = np.asarray(self._plain.tight(p, w, tol), dtype=np.int64)
+        path = a_path(self.n, self._tails[tight], self._heads[tight], self.first, self.last)
+        ok = path is not None and abs(math.fsum([w[k] for k in tight[path].tolist()]) - span) <= tol
         return (Status.SOLVED if ok else Status.INACCURATE), span, np.array(p)
 
     def span(self, lb: np.ndarray) -> float:

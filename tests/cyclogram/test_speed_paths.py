@@ -22,8 +22,12 @@ def _random_network(rng):
     if not pairs:
         pairs.append((order[0], order[-1]))
     tails, heads = (np.array(x, dtype=np.int64) for x in zip(*pairs))
-    back = BackArcs.of([(int(rng.integers(n)), int(rng.integers(n)),
-                         float(rng.uniform(-40.0, 5.0))) for _ in range(int(rng.integers(0, 5)))])
+    back = [(int(rng.integers(n)), int(rng.integers(n)), float(rng.uniform(-40.0, 5.0)))
+            for _ in range(int(rng.integers(0, 5)))]
+    if rng.random() < 0.3:                  # a sync: p(a) = p(b), a zero cycle the walk back may go round
+        a, b = (int(v) for v in rng.choice(n, 2, replace=False))
+        back += [(a, b, 0.0), (b, a, 0.0)]
+    back = BackArcs.of(back)
     lb = rng.uniform(0.0, 30.0, len(tails))
     lb[rng.random(len(tails)) < 0.1] = 0.0
     first, last = int(order[0]), int(order[-1]) if rng.random() < 0.8 else int(rng.integers(n))
@@ -37,12 +41,18 @@ def _span_or_cycle(held, lb):
         return "positive cycle"
 
 
-def test_the_plain_pass_gives_the_numpy_levels_answers_on_random_small_networks():
+def test_the_plain_pass_gives_the_numpy_levels_answers_on_random_small_networks(monkeypatch):
     """Status, span and every event time equal bit for bit (the same relaxations in the same
-    level order), the span alone and an LP's certificate too; positive cycles, back arcs and
-    unreached events all among the cases."""
+    level order), the span alone and an LP's certificate too; positive cycles, back arcs,
+    unreached events and walks back that go round a sync's zero cycle all among the cases."""
     rng = np.random.default_rng(20261129)
-    seen = {"back solved": 0, "infeasible": 0, "not certified": 0}
+    seen = {"back solved": 0, "infeasible": 0, "not certified": 0, "walk round a sync": 0}
+    walk_failed = HeldSpan._walk_failed
+
+    def counted(self, *args):
+        seen["walk round a sync"] += 1
+        return walk_failed(self, *args)
+    monkeypatch.setattr(HeldSpan, "_walk_failed", counted)
     for _ in range(400):
         n, tails, heads, first, last, back, lb = _random_network(rng)
         plain = HeldSpan(n, tails, heads, first, last, back, plain=True)
@@ -61,7 +71,7 @@ def test_the_plain_pass_gives_the_numpy_levels_answers_on_random_small_networks(
         seen["back solved"] += want[0] is Status.SOLVED and len(back) > 0
         seen["infeasible"] += want[0] is Status.INFEASIBLE
         seen["not certified"] += want[0] is Status.INACCURATE
-    assert all(count >= 5 for count in seen.values()), seen
+    assert min(seen.values()) >= 3, seen
 
 
 def test_a_bound_cut_to_minus_infinity_takes_the_numpy_levels():
