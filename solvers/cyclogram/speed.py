@@ -19,7 +19,10 @@ from mechopt.solvers.cyclogram.graph import Levels, a_path, tight_arcs
 from mechopt.solvers.cyclogram.lp_method import LP_BUILDS
 from mechopt.solvers.cyclogram.net import Net, back_arcs, plan_arrays
 from mechopt.solvers.cyclogram.schedule import graph_floats
+from mechopt.solvers.loom import repair
 from mechopt.solvers.loom.repair import box_amplitude_bound, exact_amplitude_mm
+from mechopt.solvers.stop_impact import walk_store
+from mechopt.solvers.stop_impact.law import chain_rebounds_mm
 from mechopt.solvers.stop_impact.lever_box import LeverBox, takes_box
 
 
@@ -40,18 +43,23 @@ def n_over_t_probe(task: Cyclogram, scan_to_deg: float) -> tuple[bool, float]:
     if not task.amplitude_arcs():
         return True, 0.0
     key = (task.lever_model, float(_reference_rpm(task)), float(scan_to_deg))    # a property of the law alone
-    return _PROBES.get(key, lambda: _probe(task, scan_to_deg))[0]
+    return _PROBES.get(key, lambda: walk_store.stored(                           # on disk too, when on
+        "n_over_t_probe", key, lambda: _probe(task, scan_to_deg), list, lambda d: (bool(d[0]), float(d[1])),
+        enabled=repair.rebound_amplitude_mm is chain_rebounds_mm))[0]
 
 
 _PROBES = BuildCache("cyclogram.n_over_t_probe", maxsize=16)
 
 
 def _probe(task, scan_to_deg):
+    """Every point of the probe in one call of the law (the chain's batch path: each point's value
+    is the one it has alone, a call's overhead paid once instead of six times)."""
     n, worst = _reference_rpm(task), 0.0
-    for t in (scan_to_deg, 0.75 * scan_to_deg):
-        base = float(np.ravel(exact_amplitude_mm(task, t, n, lost=np.nan))[0])
-        for c in N_OVER_T_FACTORS:
-            other = float(np.ravel(exact_amplitude_mm(task, c * t, c * n, lost=np.nan))[0])
+    tops = (scan_to_deg, 0.75 * scan_to_deg)
+    t = np.array([[top, *(c * top for c in N_OVER_T_FACTORS)] for top in tops])
+    speed = np.array([[n, *(c * n for c in N_OVER_T_FACTORS)] for _ in tops])
+    for base, *others in np.asarray(exact_amplitude_mm(task, t, speed, lost=np.nan), dtype=float).tolist():
+        for other in others:
             if np.isnan(base) and np.isnan(other):
                 continue
             worst = max(worst, abs(other - base) / max(abs(base), 1e-300) if np.isfinite(other - base) else math.inf)
