@@ -100,3 +100,95 @@ def test_loom_group1_what_if_takes_the_plain_pass_with_the_levels_answer():
         lb[rows] *= scale
         got, want = held.solve(lb), levels.solve(lb)
         assert got[0] is want[0] is Status.SOLVED and got[1] == want[1] and np.array_equal(got[2], want[2])
+
+
+# -- the highest speed's fresh solve: the probe in one call, the lever's preparation on disk ---------
+
+@pytest.fixture
+def machine():
+    return registry.find("loom/machine-speed").build()[0]
+
+
+def test_the_n_over_t_probe_in_one_call_is_the_probe_point_by_point(machine):
+    """The probe's six points in one call of the chain give the values each has alone (the
+    largest relative change the same to the bit)."""
+    from mechopt.solvers.cyclogram.speed import N_OVER_T_FACTORS, _probe
+    from mechopt.solvers.loom.repair import exact_amplitude_mm
+
+    def alone(t, n):
+        return float(np.ravel(exact_amplitude_mm(machine, t, n, lost=np.nan))[0])
+    worst = 0.0
+    for t in (60.0, 45.0):
+        base = alone(t, 420.0)
+        worst = max([worst] + [abs(alone(c * t, c * 420.0) - base) / abs(base) for c in N_OVER_T_FACTORS])
+    assert _probe(machine, 60.0) == (worst <= 1e-9, worst)
+
+
+def _walk(machine):
+    from mechopt.solvers.loom.repair import cached_amplitude_bound
+    return cached_amplitude_bound(machine, 420.0, 36.0, 60.0, 0.25)
+
+
+def test_the_walk_is_stored_on_disk_and_read_back_whole(machine, tmp_path, monkeypatch):
+    """MECHOPT_CACHE_DIR set: the first walk is written, a walk after the caches are cleared is
+    read (the walk itself not run) and equals it field by field; other code (its fingerprint)
+    or an unreadable file walks anew; unset, nothing is written."""
+    from mechopt.kit.cache import clear as clear_caches
+    from mechopt.solvers.loom import repair
+    from mechopt.solvers.stop_impact import walk_store
+    monkeypatch.delenv(walk_store.ENV, raising=False)
+    clear_caches()
+    walked = _walk(machine)
+    assert not list(tmp_path.iterdir())                     # the store is off without the variable
+    monkeypatch.setenv(walk_store.ENV, str(tmp_path))
+    clear_caches()
+    assert _walk(machine) == walked
+    files = list(tmp_path.glob("walk-*.json"))
+    assert len(files) == 1
+
+    def no_walk(*args):
+        raise AssertionError("walked again")
+    monkeypatch.setattr(repair, "exact_amplitude_bound", no_walk)
+    clear_caches()
+    assert _walk(machine) == walked and walked.from_deg == pytest.approx(38.6655398, rel=1e-8)
+    files[0].write_text("{not json", encoding="utf-8")
+    clear_caches()
+    with pytest.raises(AssertionError, match="walked again"):
+        _walk(machine)
+    monkeypatch.setattr(walk_store, "code_fingerprint", lambda: "edited code")
+    clear_caches()
+    with pytest.raises(AssertionError, match="walked again"):
+        _walk(machine)
+    clear_caches()
+
+
+def test_a_law_put_in_the_chain_s_place_is_not_stored(machine, tmp_path, monkeypatch):
+    from mechopt.kit.cache import clear as clear_caches
+    from mechopt.solvers.loom import repair
+    from mechopt.solvers.stop_impact import walk_store
+    monkeypatch.setenv(walk_store.ENV, str(tmp_path))
+    monkeypatch.setattr(repair, "rebound_amplitude_mm", lambda lever, n, t, lost=None: 0.05 * 40.0 / np.asarray(t))
+    clear_caches()
+    _walk(machine)
+    assert not list(tmp_path.iterdir())
+    clear_caches()
+
+
+def test_the_highest_speed_from_the_store_is_the_fresh_one(machine, tmp_path, monkeypatch):
+    """loom/machine-speed's highest speed and every value the same from a fresh solve, and from
+    one whose walk and probe the store holds."""
+    from mechopt.kit.cache import clear as clear_caches
+    from mechopt.solvers.cyclogram import max_machine_speed
+    from mechopt.solvers.stop_impact import walk_store
+    monkeypatch.delenv(walk_store.ENV, raising=False)
+    clear_caches()
+    fresh = max_machine_speed(machine, check=True)
+    monkeypatch.setenv(walk_store.ENV, str(tmp_path))
+    clear_caches()
+    max_machine_speed(machine, check=True)
+    assert sorted(p.name.split("-")[0] for p in tmp_path.iterdir()) == ["n_over_t_probe", "walk"]
+    clear_caches()
+    stored = max_machine_speed(machine, check=True)
+    assert stored.status is fresh.status is Status.SOLVED
+    assert stored.values == fresh.values and stored.values["max_speed_rpm"] == pytest.approx(469.555918, rel=1e-8)
+    clear_caches()
