@@ -1,7 +1,6 @@
 """The highest speed by an LP: maximise n over (p, n) in cvxpy (method "lp", built once per
 structure, DPP), and bisection on n with the event-time LP's feasibility held in HiGHS (method
 "bisection"), certified by the longest-path certificate at n (1 - tol) and n (1 + tol)."""
-
 import cvxpy as cp
 import numpy as np
 
