@@ -277,7 +277,9 @@ class HeldSpan:
     Why a fresh pass and not an incremental one (only the affected cone moves): on loom/group1
     (11 events) the whole pass is a few tens of microseconds, about what finding the cone costs;
     at 10^5 events a compiled pass is ~2 ms (kernel.py), and an incremental update would pay
-    only when one limit moves a small cone, which the what-if slider does not promise."""
+    only when one limit moves a small cone, which the what-if slider does not promise. Up to
+    plain_pass.SMALL_MAX_ARCS constraints the pass and its certificate run on Python lists
+    (plain_pass.py: numpy's per-call overhead is the whole cost there), with the same answers."""
 
     def __init__(self, n: int, tails, heads, first: int, last: int, back: BackArcs = NO_BACK_ARCS,
                  plain: bool | None = None):
