@@ -1,7 +1,7 @@
 """A lever's preparation for the highest speed kept on disk, shared by fresh processes.
 
 The rebound's exact bound (the walk, `loom.repair.cached_amplitude_bound`) and the n / t probe
-(`cyclogram.speed.n_over_t_probe`) are properties of the lever, its limit and the walk's grid
+(`cyclogram.speed_laws.n_over_t_probe`) are properties of the lever, its limit and the walk's grid
 alone, and cost most of a fresh highest-speed solve (loom/machine-speed: ~30 of ~50 ms CPU, where
 the re-solve, with them kept in the process's build caches, takes ~8 ms). A build cache is gone
 with its process (and with `kit.cache.clear`); this store keeps them in a folder, one small JSON
@@ -9,7 +9,7 @@ file per key, so a second process (or a solve after the caches were cleared) rea
 
 Off unless the variable MECHOPT_CACHE_DIR names a folder (created when missing). An entry is found
 by a SHA-256 of its key's repr and of the code that computes it (`code_fingerprint`: the sources of
-mechopt.models, mechopt.solvers.stop_impact, mechopt.solvers.loom and this wing's speed module, and
+mechopt.models, mechopt.solvers.stop_impact, mechopt.solvers.loom and the probe's module speed_laws, and
 the numpy and scipy versions): edited code misses every old entry, never reads it. A key whose repr
 may stand for another key's (an object's address, a numpy array: `_UNSTABLE`) is not stored. A file that cannot be read is computed
 anew and written over; files are written whole (a temporary file renamed), so readers in other
@@ -25,7 +25,7 @@ from pathlib import Path
 
 ENV = "MECHOPT_CACHE_DIR"
 _PACKAGES = ("mechopt.models", "mechopt.solvers.stop_impact", "mechopt.solvers.loom")
-_MODULES = ("mechopt.solvers.cyclogram.speed",)
+_MODULES = ("mechopt.solvers.cyclogram.speed_laws",)        # the probe
 # a key's repr that may stand for more than one key: an object's address, a numpy array (its repr
 # rounds to 8 digits and elides long ones)
 _UNSTABLE = (" at 0x", "array(", "...")
