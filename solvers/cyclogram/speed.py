@@ -47,9 +47,10 @@ from mechopt.solvers.cyclogram.speed_lp import (  # noqa: F401
     _speed_lp,
 )
 from mechopt.solvers.cyclogram.speed_report import _closed_without_the_cycle, _passes, _speed_report  # noqa: F401
-from mechopt.solvers.stop_impact.lever_box import LeverBox
+from mechopt.solvers.stop_impact.lever_box import LeverBox, takes_box
 
 
+@takes_box
 def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp", "bisection"] = "auto",
                       backend: Literal["HIGHS", "CLARABEL"] = "HIGHS",
                       rtol: Annotated[float, Interval(ge=1e-9, le=1e-2)] = 1e-7,
