@@ -13,9 +13,11 @@ from mechopt.mechanisms import mechanisms
 SPINE_STUDIES = {"sweep": "mechopt.benchmarks.sweep"}      # of the spine, not of one mechanism
 # a mechanism's further studies (stop-impact's window LP, also run within its first: mechopt bench synthesis;
 # the loom's exact-bound walk and the co-design's whole command: mechopt bench walk; the groove's rise: mechopt
-# bench groove; a big CSV timing table's whole command against a networkx script: mechopt bench cyclogram_cli)
+# bench groove; a big CSV timing table's whole command against a networkx script: mechopt bench cyclogram_cli;
+# the least cycle time of a 10^5-event recurrent network against its LP: mechopt bench cycle_time)
 MORE_STUDIES = {"synthesis": "mechopt.benchmarks.synthesis", "walk": "mechopt.benchmarks.walk",
-                "groove": "mechopt.benchmarks.groove", "cyclogram_cli": "mechopt.benchmarks.cyclogram_cli"}
+                "groove": "mechopt.benchmarks.groove", "cyclogram_cli": "mechopt.benchmarks.cyclogram_cli",
+                "cycle_time": "mechopt.benchmarks.cycle_time"}
 
 
 def studies() -> dict[str, str]:

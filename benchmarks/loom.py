@@ -58,6 +58,7 @@ TARGETS = {"cvxpy_highs_1e5_s": 1.5, "cvxpy_over_networkx_1e5": 2.0,
            "machine_speed_10x100_s": 1.0,        # max_machine_speed, fresh (LP built, compiled and solved)
            # the graph's speed, walk held (chain) or no walk (fitted), its speed the LP's
            "what_if_graph_s": 2e-4,               # a what-if: one limit moved on loom/group1, graph pass + certificate
+           "what_if_over_plain": 2.0,             # that what-if against a plain-Python pass in topological order
            "machine_speed_graph_s": 0.05, "lp_over_graph_speed": 1.0, "graph_lp_speed_rel": 1e-9,
            # the graph solve with floats, critical chain and duals; against cvxpy + HiGHS in the same run
            "graph_solve_1e5_s": 0.02, "cvxpy_over_graph": 50.0, "graph_solve_1e6_s": 0.3}
@@ -365,9 +366,48 @@ def sigma_what_if(task, fresh_lp_s, repeats):
         verdict, _ = graph.certify(new, None if p is None else float(p[net.last] - p[net.first]))
         if verdict.value != "SOLVED":
             raise RuntimeError(f"held HiGHS re-solve: {status.value}, certificate {verdict.value}")
-    runs = max(repeats, 200)              # microseconds: many runs for a stable median
+    plain = _plain_pass(net)
+
+    def plain_pass():                     # the floor: the same bounds, one loop over the arcs, no certificate
+        p, span = plain(bounds(next(sigmas)))
+        return span
+    sigma = 777.0
+    if plain(bounds(sigma))[1] != graph.solve(bounds(sigma))[1]:
+        raise RuntimeError("the plain-Python pass and the held graph give different spans")
+    runs = max(repeats, 2000)             # microseconds: many single-call timings for a stable median
+    graph_s, plain_s = [], []
+    for _ in range(5):                    # interleaved blocks: the load of the shared machine hits both
+        graph_s.append(_median_time(graph_pass, runs // 5))
+        plain_s.append(_median_time(plain_pass, runs // 5))
     return {"case": "loom/group1 [sigma_H] (graph + cert. | held + cert.)", "fresh_s": fresh_lp_s,
-            "resolve_cold_s": _median_time(graph_pass, runs), "resolve_warm_s": _median_time(certified_resolve, runs)}
+            "resolve_cold_s": statistics.median(graph_s), "resolve_warm_s": _median_time(certified_resolve, runs // 10),
+            "plain_pass_s": statistics.median(plain_s)}
+
+
+def _plain_pass(net):
+    """A plain-Python longest-path pass a designer would write for a small DAG (the issue's
+    floor for a what-if): events in topological order (graphlib), each arc relaxed once from the
+    bounds as a list; returns (the event times as an array, the span). No back arcs."""
+    import graphlib
+    if net.window_idx or net.sync_idx:
+        raise ValueError("the plain reference pass takes a DAG (no windows, no syncs)")
+    tails, heads = net.tails.tolist(), net.heads.tolist()
+    sorter = graphlib.TopologicalSorter({h: set() for h in range(len(net.names))})
+    for t, h in zip(tails, heads):
+        sorter.add(h, t)
+    rank = {v: i for i, v in enumerate(sorter.static_order())}
+    arcs = sorted(zip(tails, heads, range(len(tails))), key=lambda a: rank[a[0]])
+    n, first, last = len(net.names), net.first, net.last
+
+    def run(lb):
+        w, dist = lb.tolist(), [-np.inf] * n
+        dist[first] = 0.0
+        for t, h, k in arcs:
+            c = dist[t] + w[k]
+            if c > dist[h]:
+                dist[h] = c
+        return np.array(dist), dist[last] - dist[first]
+    return run
 
 
 FITTED_LEVER = {"E_GPa": 210.0, "J_x_mm4": 13020.8, "a_mm": 80.0, "b_mm": 120.0, "a_stop_mm": 80.0,
@@ -487,6 +527,7 @@ def table(rows, whatif, speed=None):
     # the lever: a held HiGHS model re-solved on changed bounds (row 3), against the cvxpy fresh build
     verdicts.append(("group1_fresh_over_resolve", whatif[2]["fresh_s"] / whatif[2]["resolve_cold_s"]))
     verdicts.append(("what_if_graph_s", whatif[3]["resolve_cold_s"]))      # fresh LP / it: the row's last column
+    verdicts.append(("what_if_over_plain", whatif[3]["resolve_cold_s"] / whatif[3]["plain_pass_s"]))
     lines += ["", f"{'target':<28}{'measured':>10}{'target':>10}  verdict"]
     for key, got in verdicts:
         want = TARGETS[key]

@@ -24,218 +24,35 @@ practice a handful; counted, never timed). A positive circuit with K(C) <= 0 sta
 every larger T: no cycle fits (INFEASIBLE). The last circuit is critical; at T* the arcs tight for
 the pass's times hold every critical circuit (each is a zero circuit there), so ties are named.
 The LP in (p, T), minimise T, is the certificate (check = true), solved by cvxpy and HiGHS.
+
+Here the solver and Dinkelbach's iteration; the uniform constraints (cycle_uniform), the pass
+that finds a positive circuit (cycle_circuits), the report's critical circuits, floats and tasks
+(cycle_report) and the LP certificate (cycle_lp) are their own modules, their names kept here too.
 """
 import math
-from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import connected_components
 
-from mechopt.kit.errors import NAMED, ModelError, some_of
-from mechopt.kit.result import Clock, Result, Status, from_cvxpy
+from mechopt.kit.errors import NAMED
+from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import check_settings
 from mechopt.models.cyclogram import Cyclogram
-from mechopt.models.cyclogram_bounds import time_floor_deg
-from mechopt.solvers.cyclogram.certify import certified
-from mechopt.solvers.cyclogram.graph import ROUND_OFF, a_path, level_segments, topological_levels
+from mechopt.solvers.cyclogram.cycle_circuits import Circuits, _StepLimit, _Undecided
+from mechopt.solvers.cyclogram.cycle_lp import CHECK_RTOL, _checked, cycle_time_lp  # noqa: F401  (the old names)
+from mechopt.solvers.cyclogram.cycle_report import (
+    _circuit_text,
+    _critical,
+    _describe,
+    _floats,
+    _per_task,
+    _why_no_cycle,
+)
+from mechopt.solvers.cyclogram.cycle_uniform import Uniform, uniform_constraints  # noqa: F401
 
 MAX_STEPS = 10_000           # Dinkelbach steps (each one Bellman-Ford pass): LIMIT past it
 FLOAT_MAX_EVENTS = 500       # floats by a max-plus Floyd-Warshall (n^3) for networks up to this many events
 PER_NAME_MAX_EVENTS = 10_000  # event times p_* among the values up to this many events
-CHECK_RTOL = 1e-9            # the LP's least T against the graph's, relative (per unit above 1)
-
-
-@dataclass(frozen=True)
-class Uniform:
-    """The cyclogram's constraints p(heads) - p(tails) >= d - k T as arrays over every event."""
-    names: list
-    tails: np.ndarray
-    heads: np.ndarray
-    d: np.ndarray
-    k: np.ndarray
-    labels: np.ndarray       # how the designer names each arc ("a->b", "a->b[+1]", "window ...", "sync ...")
-    operations: int          # arcs [0, operations) are operations (ordinary, then recurrent); windows and syncs follow
-    unit: str                # "ms" (time-based operations) or "deg"
-
-    def weights(self, T: float) -> np.ndarray:
-        return self.d - self.k * T
-
-
-def uniform_constraints(task: Cyclogram) -> Uniform:
-    """The task's operations, recurrent operations, windows and syncs as uniform constraints. Time-
-    based when an operation gives min_ms and the task no speed_rpm (T in ms; an angle a fraction
-    phi / 360 of the cycle, module docstring; no stress or amplitude, whose angles are not
-    fractions of T); else angle-based, each operation at its bound of every limit (a min_ms as the
-    angle the shaft turns in it at speed_rpm)."""
-    dag_names, dag_tails, dag_heads = task.index_arrays     # cached on the task: the one cycle's operations
-    names = list(dag_names) + task.isolated_events             # events of recurrent operations alone come last
-    index = task.event_index | {v: len(dag_names) + i for i, v in enumerate(task.isolated_events)}
-    rec = task.recurrences
-    timed = (bool(task.time_arcs()) or any(op["min_ms"] is not None for op in rec)) and task.speed_rpm is None
-    if timed:
-        _check_time_based(task)
-        d_ops, k_ops, more = _time_based_operations(task)
-        windows = [(str(w["from"]), str(w["to"]), *((-float(w["max_ms"]), 0.0) if "max_ms" in w
-                                                     else (0.0, float(w["max_deg"]) / 360.0)),
-                    f"{w.get('max_ms', w.get('max_deg')):.6g} {'ms' if 'max_ms' in w else 'deg'}")
-                   for w in task.windows]
-    else:
-        d_ops, k_ops = task.lower_bounds_deg("exact")[0], np.zeros(len(dag_tails))
-        d_rec = [op["min_deg"] if op["min_ms"] is None else max(op["min_deg"], time_floor_deg(op["min_ms"], task.speed_rpm))
-                 for op in rec]
-        more = [(op["from"], op["to"], d, op["cycles"], _recurrent_label(op)) for op, d in zip(rec, d_rec)]
-        windows = [(a, b, -w, 0.0, f"{w:.6g} deg") for a, b, w in task.window_arcs()]
-    operations = len(dag_tails) + len(more)
-    more += [(b, a, d, k, f"window p({b}) - p({a}) <= {text}") for a, b, d, k, text in windows]
-    more += [(u, v, 0.0, 0, f"sync p({a}) = p({b})") for a, b in task.sync_pairs() for u, v in ((a, b), (b, a))]
-    tails = np.r_[dag_tails, np.array([index[m[0]] for m in more], dtype=np.int64)]
-    heads = np.r_[dag_heads, np.array([index[m[1]] for m in more], dtype=np.int64)]
-    d = np.r_[d_ops, np.array([m[2] for m in more], dtype=float)]
-    k = np.r_[k_ops, np.array([m[3] for m in more], dtype=float)]
-    labels = np.concatenate([task.operation_labels, np.array([m[4] for m in more], dtype=str)])
-    return Uniform(names, tails, heads, d, k, labels, operations, "ms" if timed else "deg")
-
-
-def _recurrent_label(op) -> str:
-    return f"{op['from']}->{op['to']}[+{op['cycles']}]"
-
-
-def _time_based_operations(task):
-    """(d, k of the one cycle's operations, [recurrent and extra arcs]) in ms: a duration is d = min_ms,
-    an angle phi is d = 0, k = cycles - phi / 360; an operation with both gets a second arc (its floor
-    is the larger of the two at every T)."""
-    d_ops, k_ops, more = [], [], []
-    for x, y, data in task.graph.edges(data=True):      # `arcs` order
-        phi, ms = data["min_deg"], data["min_ms"]
-        d_ops.append(0.0 if ms is None else ms)
-        k_ops.append(-phi / 360.0 if ms is None else 0.0)
-        if ms is not None and phi > 0:
-            more.append((x, y, 0.0, -phi / 360.0, f"{x}->{y}"))
-    for op in task.recurrences:
-        label, k = _recurrent_label(op), float(op["cycles"])
-        if op["min_ms"] is not None:
-            more.append((op["from"], op["to"], op["min_ms"], k, label))
-        if op["min_ms"] is None or op["min_deg"] > 0:
-            more.append((op["from"], op["to"], 0.0, k - op["min_deg"] / 360.0, label))
-    return np.array(d_ops, dtype=float), np.array(k_ops, dtype=float), more
-
-
-def _check_time_based(task):
-    """A time-based network's angles are fractions of its cycle; a stress or rebound bound is an angle
-    at a speed, not a fraction of T: refused, named."""
-    mixed = [f"operations[{x}->{y}].stress" for x, y in (task.arcs[k] for k in task.stress_arcs())]
-    mixed += [f"operations[{x}->{y}].amplitude" for x, y in (task.arcs[k] for k in task.amplitude_arcs())]
-    if mixed:
-        raise ModelError(f"{mixed[0]}: the least cycle time of a time-based network (min_ms) takes durations "
-                         f"and angles (fractions of the cycle), not a bound set at a speed (also "
-                         f"{some_of(mixed[1:], sep=', ') or 'nothing else'}); give speed_rpm, or use "
-                         f"cyclogram.max_machine_speed", key=mixed[0].split(".")[0])
-
-
-class Circuits:
-    """Longest paths on the uniform constraints at a given T from a virtual root (every time
-    starts at 0), the predecessor arcs watched for a circuit. A round is one pass over the
-    operations of one cycle (a DAG) in topological order, a level at a time (`graph.Levels`'s
-    grouping), then the other arcs (recurrent operations, windows, syncs) relaxed together: a
-    DAG settles in one pass, so the rounds number about the back arcs on a longest path, not the
-    events. Every update must gain more than ROUND_OFF of the largest |weight|; with such strict
-    updates a circuit of predecessor arcs has a positive sum (Cormen et al., Introduction to
-    Algorithms, lemma 24.16: the arc into the circuit's last-updated event was set from an
-    older, smaller time of its tail), so the first one seen is returned."""
-
-    def __init__(self, u: Uniform, dag: int):
-        self.u, self.n, self.dag = u, len(u.names), dag
-        tails, heads = u.tails[:dag], u.heads[:dag]
-        self.order, segments = level_segments(topological_levels(self.n, tails, heads), heads, self.n, reverse=False)
-        self.t_fwd = tails[self.order]
-        # per level: its slice, reduce starts, targets and each arc's group (its target's place)
-        self.segments = [(a, b, starts, targets, np.repeat(np.arange(len(starts)), np.diff(np.r_[starts, b - a])))
-                         for a, b, starts, targets in segments]
-        self.back = np.arange(dag, len(u.tails))
-        self.passes = 0
-
-    def longest(self, T: float):
-        """(times p, None) when no circuit is positive at T; else (None, a positive circuit's arcs in order)."""
-        self.passes += 1
-        u, n = self.u, self.n
-        w = u.weights(T)
-        dist, pred = np.zeros(n), np.full(n, -1, dtype=np.int64)
-        if not len(w):
-            return dist, None
-        eps = ROUND_OFF * max(1.0, float(np.abs(w).max()))
-        w_fwd = w[:self.dag][self.order]
-        back, bt, bh = self.back, u.tails[self.back], u.heads[self.back]
-        for _ in range(len(back) + n + 2):
-            gained = False
-            for a, b, starts, targets, group in self.segments:
-                gained |= _relax(dist, pred, self.t_fwd[a:b], w_fwd[a:b], starts, targets, group,
-                                 self.order[a:b], eps)
-            if len(back):
-                cand = dist[bt] + w[back]
-                gain = cand > dist[bh] + eps
-                if gain.any():
-                    # the best gaining arc into each event: sorted by (event, value), the last of each event
-                    idx = np.flatnonzero(gain)
-                    idx = idx[np.lexsort((cand[idx], bh[idx]))]
-                    last = np.r_[bh[idx][1:] != bh[idx][:-1], True]
-                    dist[bh[idx[last]]] = cand[idx[last]]
-                    pred[bh[idx[last]]] = back[idx[last]]
-                    gained = True
-            if not gained:
-                return dist, None
-            circuit = _predecessor_circuit(n, u.tails, pred)
-            if circuit is not None:
-                return None, circuit
-        raise _Undecided(f"longest paths still improving after {len(back) + n + 2} rounds without a circuit "
-                         f"of predecessors")
-
-
-def _relax(dist, pred, ends, w, starts, targets, group, arcs, eps) -> bool:
-    """One level: each target takes the best of its arcs' tail time + weight when that gains more
-    than eps, its predecessor the first arc reaching it; whether any did."""
-    cand = dist[ends] + w
-    best = np.maximum.reduceat(cand, starts)
-    gain = best > dist[targets] + eps
-    if not gain.any():
-        return False
-    at_best = np.flatnonzero((cand == best[group]) & gain[group])
-    first = at_best[np.r_[True, group[at_best][1:] != group[at_best][:-1]]]
-    dist[targets[gain]] = best[gain]
-    pred[targets[gain]] = arcs[first]
-    return True
-
-
-class _Undecided(Exception):
-    """Round-off stopped the iteration: no answer to trust."""
-
-
-class _StepLimit(_Undecided):
-    """The iteration's count of steps ran out (LIMIT)."""
-
-
-def _predecessor_circuit(n, tails, pred) -> list[int] | None:
-    """The arcs of a circuit of predecessor arcs (pred[v]: the arc into v), in order; None when none."""
-    has = np.flatnonzero(pred >= 0)
-    if not len(has):
-        return None
-    src = tails[pred[has]]
-    graph = csr_matrix((np.ones(len(has)), (src, has)), shape=(n, n))
-    count, label = connected_components(graph, directed=True, connection="strong")
-    sizes = np.bincount(label, minlength=count)
-    self_loop = has[src == has]
-    cyclic = np.flatnonzero(sizes[label] > 1)
-    start = int(cyclic[0]) if len(cyclic) else (int(self_loop[0]) if len(self_loop) else None)
-    if start is None:
-        return None
-    arcs, v = [], start
-    while True:                         # back along the predecessors until the start comes round
-        k = int(pred[v])
-        arcs.append(k)
-        v = int(tails[k])
-        if v == start:
-            return arcs[::-1]
 
 
 def least_cycle_time(task: Cyclogram, *, check: bool = False,
@@ -322,126 +139,3 @@ def _dinkelbach(u, bf):
             raise _Undecided(f"a positive circuit at T = {T!r} whose ratio does not rise above it")
         T, critical = D / K, circuit
     raise _StepLimit(f"no answer after {MAX_STEPS} Dinkelbach steps")
-
-
-def _why_no_cycle(u, circuit) -> str:
-    D, K = math.fsum(u.d[circuit]), math.fsum(u.k[circuit])
-    if K == 0:
-        return f" spans no cycle (height 0) yet needs {D:.6g} {u.unit}"
-    if D < 0:               # D - K T <= 0 holds for T <= D / K only
-        return (f" holds at a cycle time of at most {D / K:.6g} {u.unit} (its angles grow with the cycle), less "
-                f"than the machine's other circuits ask for")
-    return (f" asks for {-K * 360:.6g} deg more than its cycles hold (height {K:.6g})"
-            + (f" and {D:.6g} {u.unit} besides" if D > 0 else "") + ": a longer cycle only lengthens its angles")
-
-
-def _describe(u, circuit) -> dict:
-    events = [u.names[u.tails[a]] for a in circuit]
-    ops = [str(u.labels[a]) for a in circuit]
-    return {"events": events[:NAMED], "operations": ops[:NAMED], "arcs": len(circuit),
-            "cycles": _height(u, circuit), f"length_{u.unit}": math.fsum(u.d[circuit])}
-
-
-def _height(u, circuit) -> int | float:
-    """K(C): whole cycles, or (angles in a time-based network) a real number of them."""
-    K = math.fsum(u.k[circuit])
-    return int(round(K)) if abs(K - round(K)) <= 1e-12 else K
-
-
-def _circuit_text(u, circuit) -> str:
-    return some_of((u.labels[a] for a in circuit), sep=", ")
-
-
-def _critical(u, p, T, circuit) -> dict:
-    """The critical circuits at T*: the arcs tight for the times p (every critical circuit is a
-    zero circuit there, so all of its arcs are tight) grouped in strongly connected components;
-    a component holding a recurrent arc holds a critical circuit, one named per component."""
-    if circuit is None:
-        return {"critical_circuit": None, "critical_circuits": [], "critical_ops": []}
-    w = u.weights(T)
-    tol = 1e-9 * max(1.0, abs(T), float(np.abs(u.d).max(initial=0.0)))
-    tight = np.flatnonzero(p[u.heads] - p[u.tails] - w <= tol)
-    t_tails, t_heads = u.tails[tight], u.heads[tight]
-    n = len(u.names)
-    _, label = connected_components(csr_matrix((np.ones(len(tight)), (t_tails, t_heads)), shape=(n, n)),
-                                    directed=True, connection="strong")
-    inside = tight[label[t_tails] == label[t_heads]]
-    components = list(dict.fromkeys(int(label[u.tails[a]]) for a in inside if u.k[a] > 0))
-    first = int(label[u.tails[circuit[0]]])
-    circuits = [_describe(u, circuit)]
-    for c in components:
-        if c == first:
-            continue
-        arcs = inside[label[u.tails[inside]] == c]
-        closing = int(arcs[u.k[arcs] > 0][0])
-        back = a_path(n, u.tails[arcs], u.heads[arcs], int(u.heads[closing]), int(u.tails[closing]))
-        circuits.append(_describe(u, [closing] + [int(arcs[j]) for j in back]))
-    ops = [str(u.labels[a]) for a in inside if a < u.operations and label[u.tails[a]] in components]
-    return {"critical_circuit": circuits[0], "critical_circuits": circuits, "critical_ops": ops}
-
-
-def _floats(u, T) -> dict:
-    """Per operation, -(its weight + the longest path back from its head to its tail) at T*: how
-    far its duration may grow before a circuit through it closes (T rises, or, on a circuit of
-    height 0, no T fits); None when no path leads back (on no circuit). A max-plus Floyd-Warshall."""
-    n, w = len(u.names), u.weights(T)
-    L = np.full((n, n), -np.inf)
-    np.maximum.at(L, (u.tails, u.heads), w)
-    np.fill_diagonal(L, np.maximum(np.diag(L), 0.0))          # the empty path (a station's own recurrence)
-    for m in range(n):
-        L = np.maximum(L, L[:, m, None] + L[None, m, :])
-    out = {}
-    for a in range(u.operations):
-        back = L[u.heads[a], u.tails[a]]
-        out[str(u.labels[a])] = None if not np.isfinite(back) else max(0.0, -(w[a] + back)) + 0.0
-    return out
-
-
-def _per_task(task, u, p, floats, critical) -> dict:
-    """Per task of a task table (`task_operations`): its start in the earliest schedule repeating
-    every T*, its float (how far its duration may grow with T* unchanged; None: on no circuit, or
-    not computed past FLOAT_MAX_EVENTS) and whether it lies on a critical circuit."""
-    at = {v: i for i, v in enumerate(u.names)}
-    out = {}
-    for row in task.tasks:
-        name = str(row["task"]).strip()
-        op = f"{name}.start->{name}.end"
-        out[name] = {f"start_{u.unit}": float(p[at[f"{name}.start"]]),
-                     f"float_{u.unit}": None if floats is None else floats.get(op), "critical": op in critical}
-    return out
-
-
-def cycle_time_lp(u: Uniform, backend: str = "HIGHS"):
-    """(status, least T or None): minimise T over (p, T) s.t. D p >= d - k T, T >= 0, p(0) = 0."""
-    import cvxpy as cp  # the certificate alone needs it: the graph does not wait for it
-
-    from mechopt.solvers.cyclogram.event_time import incidence
-    n = len(u.names)
-    p, T = cp.Variable(n, name="p"), cp.Variable(nonneg=True, name="T")
-    cons = [p[0] == 0]
-    if len(u.tails):
-        cons.append(incidence(n, u.tails, u.heads) @ p + T * u.k >= u.d)
-    problem = cp.Problem(cp.Minimize(T), cons)
-    try:
-        problem.solve(solver=backend)
-    except cp.error.SolverError as exc:
-        return Status.FAILED, None, str(exc)
-    status = from_cvxpy(problem.status)
-    return status, (float(T.value) if status is Status.SOLVED else None), problem.status
-
-
-def _checked(result: Result, u: Uniform, name: str, backend: str) -> Result:
-    """`result` with the LP's answer beside it: the same status and T to CHECK_RTOL (per unit above 1)."""
-    status, T, said = cycle_time_lp(u, backend)
-    diagnostics = result.diagnostics | {"check": {"method": f"lp ({backend})", "status": status.value,
-                                                  "solver_status": said}}
-    values, problems = result.values, []
-    if status is not result.status:
-        problems.append(f"the LP says {status.value} ({said})")
-    elif status is Status.SOLVED:
-        rel = abs(result.values[name] - T) / max(1.0, abs(T))
-        values = values | {"check_rel": rel}
-        diagnostics["check"] |= {name: T, "rel": rel}
-        if not rel <= CHECK_RTOL:
-            problems.append(f"{name} {result.values[name]!r} against the LP's {T!r}")
-    return certified(result, values, diagnostics, problems, by=f"the LP ({backend})")

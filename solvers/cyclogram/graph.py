@@ -29,6 +29,7 @@ from scipy.sparse.csgraph import breadth_first_order
 from mechopt.kit.cache import BuildCache
 from mechopt.kit.result import Status
 from mechopt.solvers.cyclogram.kernel import COMPILED_AFTER_LEVEL_CALLS, COMPILED_MIN_ARCS, kernels
+from mechopt.solvers.cyclogram.plain_pass import SMALL_MAX_ARCS, PlainPass, PositiveCycleFound
 
 ROUND_OFF = 1e-12          # relative: an improvement below it (of the largest |w|) is round-off, not a cycle
 
@@ -276,13 +277,31 @@ class HeldSpan:
     Why a fresh pass and not an incremental one (only the affected cone moves): on loom/group1
     (11 events) the whole pass is a few tens of microseconds, about what finding the cone costs;
     at 10^5 events a compiled pass is ~2 ms (kernel.py), and an incremental update would pay
-    only when one limit moves a small cone, which the what-if slider does not promise."""
+    only when one limit moves a small cone, which the what-if slider does not promise. Up to
+    plain_pass.SMALL_MAX_ARCS constraints the pass and its certificate run on Python lists
+    (plain_pass.py: numpy's per-call overhead is the whole cost there), with the same answers."""
 
-    def __init__(self, n: int, tails, heads, first: int, last: int, back: BackArcs = NO_BACK_ARCS):
+    def __init__(self, n: int, tails, heads, first: int, last: int, back: BackArcs = NO_BACK_ARCS,
+                 plain: bool | None = None):
+        """`plain`: None, the plain-Python pass up to SMALL_MAX_ARCS constraints (plain_pass.py);
+        False, the numpy levels only (the reference); True, the plain pass at any size."""
         self.levels, self.first, self.last, self.back = Levels.of(n, tails, heads), first, last, back
         self.n = n
         self._tails = np.r_[self.levels.tails, back.tails]        # every constraint p(head) - p(tail) >= w
         self._heads = np.r_[self.levels.heads, back.heads]
+        # a small network: the same passes on Python lists (plain_pass.py; numpy's call overhead is their cost)
+        self._plain = (PlainPass(n, self.levels.forward_order, self.levels.tails, self.levels.heads, back, ROUND_OFF)
+                       if (len(self._tails) <= SMALL_MAX_ARCS if plain is None else plain)
+                       and np.isfinite(back.weights).all() else None)
+
+    def _plain_bounds(self, lb) -> list | None:
+        """lb as a list when the plain pass takes it: a small network, every bound finite (an infinite
+        one, a cut for ranging, keeps numpy's NaN semantics); else None."""
+        if self._plain is None:
+            return None
+        w = lb.tolist()
+        total = sum(w)
+        return w if total - total == 0.0 else None
 
     def solve(self, lb: np.ndarray, tol_deg: float = 1e-9):
         """(status, span [deg], event times) for bounds lb, certified by LP duality: the times
@@ -290,13 +309,22 @@ class HeldSpan:
         leads first -> last with bounds summing to the span (a dual solution of the same value),
         both to tol_deg per degree above 1. SOLVED when both hold, INACCURATE when not (round-off
         past tol_deg), INFEASIBLE (span and times None) on a positive cycle."""
+        if self._plain is not None:                           # a small network: plain_pass.py
+            w = lb.tolist()
+            total = sum(w)
+            if total - total == 0.0:                          # every bound finite
+                status, span, p, walk = self._plain.solve(self.first, self.last, w, tol_deg)
+                if walk is not None:
+                    return self._walk_failed(span, p, walk, tol_deg)
+                return status, span, (None if p is None else np.array(p))
         try:
             p = self.levels.longest_from(self.first, lb, self.back)
         except PositiveCycle:
             return Status.INFEASIBLE, None, None
         span = float(p[self.last] - p[self.first])
         w = np.r_[lb, self.back.weights]
-        slack = p[self._heads] - p[self._tails] - w
+        with np.errstate(invalid="ignore"):                 # an unreached event: -inf - -inf, NaN
+            slack = p[self._heads] - p[self._tails] - w
         tol = tol_deg * max(1.0, abs(span))
         feasible = bool(np.all(slack >= -tol))            # NaN (an unreached event) fails too
         tight = np.flatnonzero(slack <= tol)
@@ -307,8 +335,23 @@ class HeldSpan:
         ok = dual is not None and abs(dual - span) <= tol
         return (Status.SOLVED if ok else Status.INACCURATE), span, p
 
+    def _walk_failed(self, span, p, w, tol_deg):
+        """The plain pass's times feasible but its walk back failed (a zero cycle of syncs): the
+        chain breadth first over the tight constraints, as `solve` on the levels does."""
+        tol = tol_deg * max(1.0, abs(span))
+        tight = np.asarray(self._plain.tight(p, w, tol), dtype=np.int64)
+        path = a_path(self.n, self._tails[tight], self._heads[tight], self.first, self.last)
+        ok = path is not None and abs(math.fsum([w[k] for k in tight[path].tolist()]) - span) <= tol
+        return (Status.SOLVED if ok else Status.INACCURATE), span, np.array(p)
+
     def span(self, lb: np.ndarray) -> float:
         """The longest path first -> last with bounds lb [deg]; PositiveCycle when none exists."""
+        w = self._plain_bounds(lb)
+        if w is not None:
+            try:
+                return self._plain.longest_from(self.first, w)[self.last]
+            except PositiveCycleFound:
+                raise PositiveCycle from None
         return float(self.levels.longest_from(self.first, lb, self.back)[self.last])
 
     def certify(self, lb: np.ndarray, lp_span: float | None, tol_deg: float = 1e-9):

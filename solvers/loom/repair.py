@@ -17,6 +17,7 @@ from mechopt.kit.settings import Interval, Tolerance
 from mechopt.models.cyclogram import Cyclogram
 from mechopt.models.loom_limits import stress_bound_deg, stress_MPa
 from mechopt.solvers.cyclogram.plan import plan_cyclogram
+from mechopt.solvers.stop_impact import walk_store
 from mechopt.solvers.stop_impact.cam_follower import dwell_length, follower_data
 from mechopt.solvers.stop_impact.law import chain_rebounds_mm
 from mechopt.solvers.stop_impact.lever_box import LeverBox
@@ -341,8 +342,9 @@ def cached_amplitude_bound(task: Cyclogram, speed_rpm: float, lo_deg: float, to_
     check_walk(to_deg, step_deg)
     n, floor = float(speed_rpm), min(WALK_FLOOR_DEG, to_deg)
     key = (walk_lever(task), task.amplitude_limit_mm, float(to_deg) / n, float(step_deg) / n)
-    (walk, walked_rpm), _ = _AMPLITUDE_BOUNDS.get(
-        key, lambda: (exact_amplitude_bound(task, n, floor, to_deg, step_deg), n))
+    (walk, walked_rpm), _ = _AMPLITUDE_BOUNDS.get(key, lambda: walk_store.stored(     # on disk too, when on
+        "walk", key, lambda: (exact_amplitude_bound(task, n, floor, to_deg, step_deg), n), _encode_walk, _decode_walk,
+        enabled=rebound_amplitude_mm is chain_rebounds_mm))
     if walked_rpm != n:
         c = n / walked_rpm
         if walk.why == "range" or not (_n_over_t(task, walked_rpm, walk.to_deg) and _n_over_t(task, n, to_deg)):
@@ -354,6 +356,17 @@ def cached_amplitude_bound(task: Cyclogram, speed_rpm: float, lo_deg: float, to_
         return dataclasses.replace(walk, from_deg=lo_deg, lo_deg=lo_deg, why="range",
                                    amplitude_mm=float(np.ravel(exact_amplitude_mm(task, lo_deg, speed_rpm))[0]))
     return dataclasses.replace(walk, lo_deg=lo_deg)
+
+
+def _encode_walk(kept):
+    walk, walked_rpm = kept
+    return {"walk": dataclasses.asdict(walk), "walked_rpm": walked_rpm}
+
+
+def _decode_walk(data):
+    walk = dict(data["walk"])
+    walk["lever"] = None if walk["lever"] is None else tuple(walk["lever"])
+    return AmplitudeBound(**walk), float(data["walked_rpm"])
 
 
 # the lever's inputs the rebound a(t, n) does not read (the angle and speeds a scene reports at,

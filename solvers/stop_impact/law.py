@@ -160,8 +160,9 @@ def _amplitude_or(lost, task, speed_rpm, t_deg):
 def upper_envelope(slopes, offsets):
     """Lines y = slope * r + offset: (indices of the lines on the upper envelope, in order of r,
     and the r where each hands over to the next)."""
-    order = np.lexsort((offsets, slopes))            # by slope, then offset: the last of equals wins
-    hull, breaks = [], []
+    order = np.lexsort((offsets, slopes)).tolist()   # by slope, then offset: the last of equals wins
+    slopes, offsets = np.asarray(slopes, float).tolist(), np.asarray(offsets, float).tolist()   # Python floats:
+    hull, breaks = [], []                            # the same arithmetic, without numpy's per-scalar cost
     for i in order:
         if hull and slopes[hull[-1]] == slopes[i]:
             hull.pop()
