@@ -11,8 +11,8 @@ Off unless the variable MECHOPT_CACHE_DIR names a folder (created when missing).
 by a SHA-256 of its key's repr and of the code that computes it (`code_fingerprint`: the sources of
 mechopt.models, mechopt.solvers.stop_impact, mechopt.solvers.loom and the probe's module speed_laws, and
 the numpy and scipy versions): edited code misses every old entry, never reads it. A key whose repr
-may stand for another key's (an object's address, a numpy array: `_UNSTABLE`) is not stored. A file that cannot be read is computed
-anew and written over; files are written whole (a temporary file renamed), so readers in other
+may stand for another key's (an object's address, a numpy array: `_UNSTABLE`) is not stored. A file that cannot be read is named
+(StoreWarning), computed anew and written over; files are written whole (a temporary file renamed), so readers in other
 processes see an entry complete or not at all.
 """
 import functools
@@ -20,10 +20,17 @@ import hashlib
 import json
 import os
 import tempfile
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 
 ENV = "MECHOPT_CACHE_DIR"
+
+
+class StoreWarning(UserWarning):
+    """A stored entry could not be read (damaged): named, recomputed and written over."""
+
+
 _PACKAGES = ("mechopt.models", "mechopt.solvers.stop_impact", "mechopt.solvers.loom")
 _MODULES = ("mechopt.solvers.cyclogram.speed_laws",)        # the probe
 # a key's repr that may stand for more than one key: an object's address, a numpy array (its repr
@@ -69,8 +76,11 @@ def stored(kind: str, key, compute: Callable[[], object], encode: Callable[[obje
     path = where / f"{kind}-{name}.json"
     try:
         return decode(json.loads(path.read_text(encoding="utf-8")))
-    except (OSError, ValueError, TypeError, KeyError):      # none yet, or unreadable: computed anew
+    except FileNotFoundError:
         pass
+    except (OSError, ValueError, TypeError, KeyError) as exc:      # damaged: named, computed anew
+        warnings.warn(f"{path}: unreadable stored {kind} ({type(exc).__name__}: {exc}); recomputed and "
+                      "written over", StoreWarning, stacklevel=2)
     value = compute()
     where.mkdir(parents=True, exist_ok=True)
     with tempfile.NamedTemporaryFile("w", dir=where, suffix=".tmp", delete=False, encoding="utf-8") as f:

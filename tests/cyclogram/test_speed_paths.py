@@ -132,7 +132,7 @@ def _walk(machine):
 def test_the_walk_is_stored_on_disk_and_read_back_whole(machine, tmp_path, monkeypatch):
     """MECHOPT_CACHE_DIR set: the first walk is written, a walk after the caches are cleared is
     read (the walk itself not run) and equals it field by field; other code (its fingerprint)
-    or an unreadable file walks anew; unset, nothing is written."""
+    or an unreadable file (named in a warning) walks anew; unset, nothing is written."""
     from mechopt.kit.cache import clear as clear_caches
     from mechopt.solvers.loom import repair
     from mechopt.solvers.stop_impact import walk_store
@@ -153,8 +153,9 @@ def test_the_walk_is_stored_on_disk_and_read_back_whole(machine, tmp_path, monke
     assert _walk(machine) == walked and walked.from_deg == pytest.approx(38.6655398, rel=1e-8)
     files[0].write_text("{not json", encoding="utf-8")
     clear_caches()
-    with pytest.raises(AssertionError, match="walked again"):
-        _walk(machine)
+    with pytest.warns(walk_store.StoreWarning, match=files[0].name), \
+            pytest.raises(AssertionError, match="walked again"):
+        _walk(machine)                                      # the damaged file named, walked anew
     monkeypatch.setattr(walk_store, "code_fingerprint", lambda: "edited code")
     clear_caches()
     with pytest.raises(AssertionError, match="walked again"):
