@@ -1,16 +1,18 @@
 """The event-time LP as matrices (incidence rows per kind of limit) and `HeldLP`, the LP held in
 HiGHS with its basis for many solves that change bounds only (bisection on the speed, re-solves)."""
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-import cvxpy as cp
 import highspy
 import numpy as np
 import scipy.sparse as sp
-from cvxpy.reductions.solvers.conic_solvers.highs_conif import HIGHS as HIGHS_SOLVER
 
 from mechopt.kit.errors import SolverError
-from mechopt.kit.highs import InterruptibleHighs, interruptible_everywhere
-from mechopt.kit.result import Status, from_cvxpy
+from mechopt.kit.highs import InterruptibleHighs, interruptible_everywhere, status_of
+from mechopt.kit.result import Status
+
+if TYPE_CHECKING:
+    import cvxpy as cp
 
 interruptible_everywhere()  # every HiGHS model, ours or cvxpy's: no banner, and Ctrl-C stops an LP at its next iteration
 
@@ -18,8 +20,8 @@ interruptible_everywhere()  # every HiGHS model, ours or cvxpy's: no banner, and
 @dataclass
 class EventTimeLP:
     """A built, DPP-compiled event-time LP: the problem, its Parameters and its constraint blocks."""
-    problem: cp.Problem
-    p: cp.Variable
+    problem: "cp.Problem"
+    p: "cp.Variable"
     params: dict            # name -> cp.Parameter
     blocks: dict            # name -> cvxpy constraint (vector rows) or None
     stress_coeffs: tuple    # linear: (c0, c1) with rhs = c0 + c1 sigma_H; exact: (K,) with rhs = K / sigma_H
@@ -45,6 +47,7 @@ def build_event_time_lp(n, tails, heads, *, first, last, stress_rows=(), stress_
     Parameters: min_deg (per arc), sigma_H_MPa or inv_sigma_H_per_MPa, amplitude slope,
     intercept and limit, window_deg, cycle_deg.
     """
+    import cvxpy as cp  # here: seconds to import, and a held LP or a graph run never needs it
     tails, heads = np.asarray(tails, dtype=np.int64), np.asarray(heads, dtype=np.int64)
     D = incidence(n, tails, heads)
     p = cp.Variable(n, name="p_deg")
@@ -97,7 +100,8 @@ class HeldLP:
 
     Rows: arcs p(y) - p(x) >= lb, windows <= w, syncs = 0, the cycle p(last) - p(first) <=
     cycle; p(first) = 0 as a column bound. Minimises the span. HiGHS's status words are read
-    through cvxpy's own table (HIGHS.STATUS_MAP) and `from_cvxpy`: one table of them.
+    by `kit.highs.status_of` (the statuses cvxpy's HIGHS.STATUS_MAP and `from_cvxpy` give: no
+    cvxpy import for a held LP).
     """
 
     def __init__(self, n, tails, heads, *, first, last, window_arcs=(), sync_arcs=(), with_cycle=False):
@@ -138,5 +142,5 @@ class HeldLP:
             self.upper[-1] = cycle_deg
         self.highs.changeRowsBounds(len(self.index), self.index, self.lower, self.upper)
         self.highs.run()
-        status = from_cvxpy(HIGHS_SOLVER.STATUS_MAP.get(self.highs.getModelStatus().name, "unknown"))
+        status = status_of(self.highs)
         return status, (np.array(self.highs.getSolution().col_value) if status is Status.SOLVED else None)

@@ -1,7 +1,6 @@
 """The highest speed by an LP: maximise n over (p, n) in cvxpy (method "lp", built once per
 structure, DPP), and bisection on n with the event-time LP's feasibility held in HiGHS (method
 "bisection"), certified by the longest-path certificate at n (1 - tol) and n (1 + tol)."""
-import cvxpy as cp
 import numpy as np
 
 from mechopt.kit.result import Clock, Status, from_cvxpy
@@ -16,6 +15,7 @@ MIN_RPM = 1e-6                   # bisection: below it the machine is at rest
 
 def _speed_lp(task, net, phi, g, backend):
     """maximise n over (p, n): the LP of the docstring, built once per structure (DPP)."""
+    import cvxpy as cp  # here: the graph and bisection methods never need it
     rows = np.flatnonzero(g > 0)
     key = ("speed", backend, len(net.names), net.tails.tobytes(), net.heads.tobytes(), net.first, net.last,
            rows.tobytes(), tuple(net.window_idx), tuple(net.sync_idx))
