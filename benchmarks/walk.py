@@ -5,7 +5,7 @@ In one process, CPU seconds (time.process_time), medians over repeats, interleav
 * ``fresh``          `mechopt run loom/machine-speed` as a scene run with every build cache
                      cleared (the walk, the n / t probe, the speed LP's compile all done anew);
 * ``fresh, stored``  the same with the lever's walk and n / t probe read from the on-disk store
-                     (MECHOPT_CACHE_DIR, solvers/stop_impact/walk_store.py; a temporary folder
+                     (MECHOPT_CACHE_DIR, src/mechopt/kit/store.py; a temporary folder
                      filled by one run first): a fresh process's solve of a lever seen before;
 * ``re-solve``       the same run again (walk, probe and compiled LP kept): the issue's target is
                      fresh / re-solve <= 3 (the preparation shared between fresh solves of the
@@ -94,7 +94,7 @@ def in_process(repeats=3, progress=None):
 def _stored_fresh():
     """(CPU s, run): a fresh run (caches cleared) whose lever's walk and probe the on-disk store
     holds (filled by a first fresh run in a temporary folder)."""
-    from mechopt.solvers.stop_impact.walk_store import ENV
+    from mechopt.kit.store import ENV
     before = os.environ.get(ENV)
     with tempfile.TemporaryDirectory() as folder:
         os.environ[ENV] = folder

@@ -62,7 +62,7 @@ class Circuits:
             circuit = _predecessor_circuit(n, u.tails, pred)
             if circuit is not None:
                 return None, circuit
-        raise _Undecided(f"longest paths still improving after {len(back) + n + 2} rounds without a circuit "
+        raise Undecided(f"longest paths still improving after {len(back) + n + 2} rounds without a circuit "
                          f"of predecessors")
 
 
@@ -81,11 +81,11 @@ def _relax(dist, pred, ends, w, starts, targets, group, arcs, eps) -> bool:
     return True
 
 
-class _Undecided(Exception):
+class Undecided(Exception):
     """Round-off stopped the iteration: no answer to trust."""
 
 
-class _StepLimit(_Undecided):
+class StepLimit(Undecided):
     """The iteration's count of steps ran out (LIMIT)."""
 
 

@@ -7,7 +7,6 @@ from mechopt.solvers.cyclogram.cycle_uniform import Uniform
 CHECK_RTOL = 1e-9            # the LP's least T against the graph's, relative (per unit above 1)
 
 
-
 def cycle_time_lp(u: Uniform, backend: str = "HIGHS"):
     """(status, least T or None): minimise T over (p, T) s.t. D p >= d - k T, T >= 0, p(0) = 0."""
     import cvxpy as cp  # the certificate alone needs it: the graph does not wait for it
@@ -27,7 +26,7 @@ def cycle_time_lp(u: Uniform, backend: str = "HIGHS"):
     return status, (float(T.value) if status is Status.SOLVED else None), problem.status
 
 
-def _checked(result: Result, u: Uniform, name: str, backend: str) -> Result:
+def checked_by_lp(result: Result, u: Uniform, name: str, backend: str) -> Result:
     """`result` with the LP's answer beside it: the same status and T to CHECK_RTOL (per unit above 1)."""
     status, T, said = cycle_time_lp(u, backend)
     diagnostics = result.diagnostics | {"check": {"method": f"lp ({backend})", "status": status.value,

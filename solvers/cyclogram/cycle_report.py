@@ -10,7 +10,7 @@ from mechopt.kit.errors import NAMED, some_of
 from mechopt.solvers.cyclogram.graph import a_path
 
 
-def _why_no_cycle(u, circuit) -> str:
+def why_no_cycle(u, circuit) -> str:
     D, K = math.fsum(u.d[circuit]), math.fsum(u.k[circuit])
     if K == 0:
         return f" spans no cycle (height 0) yet needs {D:.6g} {u.unit}"
@@ -21,7 +21,7 @@ def _why_no_cycle(u, circuit) -> str:
             + (f" and {D:.6g} {u.unit} besides" if D > 0 else "") + ": a longer cycle only lengthens its angles")
 
 
-def _describe(u, circuit) -> dict:
+def describe_circuit(u, circuit) -> dict:
     events = [u.names[u.tails[a]] for a in circuit]
     ops = [str(u.labels[a]) for a in circuit]
     return {"events": events[:NAMED], "operations": ops[:NAMED], "arcs": len(circuit),
@@ -34,11 +34,11 @@ def _height(u, circuit) -> int | float:
     return int(round(K)) if abs(K - round(K)) <= 1e-12 else K
 
 
-def _circuit_text(u, circuit) -> str:
+def circuit_text(u, circuit) -> str:
     return some_of((u.labels[a] for a in circuit), sep=", ")
 
 
-def _critical(u, p, T, circuit) -> dict:
+def critical_of(u, p, T, circuit) -> dict:
     """The critical circuits at T*: the arcs tight for the times p (every critical circuit is a
     zero circuit there, so all of its arcs are tight) grouped in strongly connected components;
     a component holding a recurrent arc holds a critical circuit, one named per component."""
@@ -54,19 +54,19 @@ def _critical(u, p, T, circuit) -> dict:
     inside = tight[label[t_tails] == label[t_heads]]
     components = list(dict.fromkeys(int(label[u.tails[a]]) for a in inside if u.k[a] > 0))
     first = int(label[u.tails[circuit[0]]])
-    circuits = [_describe(u, circuit)]
+    circuits = [describe_circuit(u, circuit)]
     for c in components:
         if c == first:
             continue
         arcs = inside[label[u.tails[inside]] == c]
         closing = int(arcs[u.k[arcs] > 0][0])
         back = a_path(n, u.tails[arcs], u.heads[arcs], int(u.heads[closing]), int(u.tails[closing]))
-        circuits.append(_describe(u, [closing] + [int(arcs[j]) for j in back]))
+        circuits.append(describe_circuit(u, [closing] + [int(arcs[j]) for j in back]))
     ops = [str(u.labels[a]) for a in inside if a < u.operations and label[u.tails[a]] in components]
     return {"critical_circuit": circuits[0], "critical_circuits": circuits, "critical_ops": ops}
 
 
-def _floats(u, T) -> dict:
+def floats_of(u, T) -> dict:
     """Per operation, -(its weight + the longest path back from its head to its tail) at T*: how
     far its duration may grow before a circuit through it closes (T rises, or, on a circuit of
     height 0, no T fits); None when no path leads back (on no circuit). A max-plus Floyd-Warshall."""
@@ -83,7 +83,7 @@ def _floats(u, T) -> dict:
     return out
 
 
-def _per_task(task, u, p, floats, critical) -> dict:
+def per_task(task, u, p, floats, critical) -> dict:
     """Per task of a task table (`task_operations`): its start in the earliest schedule repeating
     every T*, its float (how far its duration may grow with T* unchanged; None: on no circuit, or
     not computed past cycle_time.FLOAT_MAX_EVENTS) and whether it lies on a critical circuit."""

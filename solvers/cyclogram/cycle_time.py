@@ -38,15 +38,15 @@ from mechopt.kit.errors import NAMED
 from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import check_settings
 from mechopt.models.cyclogram import Cyclogram
-from mechopt.solvers.cyclogram.cycle_circuits import Circuits, _StepLimit, _Undecided
-from mechopt.solvers.cyclogram.cycle_lp import CHECK_RTOL, _checked, cycle_time_lp  # noqa: F401  (the old names)
+from mechopt.solvers.cyclogram.cycle_circuits import Circuits, StepLimit, Undecided
+from mechopt.solvers.cyclogram.cycle_lp import CHECK_RTOL, checked_by_lp, cycle_time_lp  # noqa: F401  (the old names)
 from mechopt.solvers.cyclogram.cycle_report import (
-    _circuit_text,
-    _critical,
-    _describe,
-    _floats,
-    _per_task,
-    _why_no_cycle,
+    circuit_text,
+    critical_of,
+    describe_circuit,
+    floats_of,
+    per_task,
+    why_no_cycle,
 )
 from mechopt.solvers.cyclogram.cycle_uniform import Uniform, uniform_constraints  # noqa: F401
 
@@ -84,37 +84,37 @@ def least_cycle_time(task: Cyclogram, *, check: bool = False,
                    "operations": u.operations, "recurrent_operations": len(task.recurrences)}
     try:
         T, circuit, steps, p = _dinkelbach(u, bf)
-    except _StepLimit as exc:
+    except StepLimit as exc:
         return clock.result(Status.LIMIT, {}, message=f"graph: {exc}", diagnostics=diagnostics)
-    except _Undecided as exc:
+    except Undecided as exc:
         return clock.result(Status.FAILED, {}, message=f"graph: {exc} (round-off)", diagnostics=diagnostics)
     diagnostics |= {"dinkelbach_steps": steps, "passes": bf.passes}
     if T is None:
-        diagnostics |= {"conflict_circuit": _describe(u, circuit)}
+        diagnostics |= {"conflict_circuit": describe_circuit(u, circuit)}
         result = clock.result(Status.INFEASIBLE, {}, diagnostics=diagnostics,
                               violated=tuple(str(u.labels[a]) for a in circuit[:NAMED]),
-                              message="infeasible at every cycle time: the circuit " + _circuit_text(u, circuit)
-                              + _why_no_cycle(u, circuit))
-        return _checked(result, u, name, backend) if check else result
+                              message="infeasible at every cycle time: the circuit " + circuit_text(u, circuit)
+                              + why_no_cycle(u, circuit))
+        return checked_by_lp(result, u, name, backend) if check else result
     values = {name: T}
     if len(u.names) <= PER_NAME_MAX_EVENTS:
         values |= {f"p_{v}_{u.unit}": float(p[i]) for i, v in enumerate(u.names)}
-    critical = _critical(u, p, T, circuit)
+    critical = critical_of(u, p, T, circuit)
     diagnostics |= critical
     if len(u.names) <= FLOAT_MAX_EVENTS:
-        diagnostics[f"float_{u.unit}"] = _floats(u, T)
+        diagnostics[f"float_{u.unit}"] = floats_of(u, T)
     if task.tasks and len(u.names) <= PER_NAME_MAX_EVENTS:
-        diagnostics["tasks"] = _per_task(task, u, p, diagnostics.get(f"float_{u.unit}"), set(critical["critical_ops"]))
+        diagnostics["tasks"] = per_task(task, u, p, diagnostics.get(f"float_{u.unit}"), set(critical["critical_ops"]))
     if circuit is None:
         message = f"{name} = 0: no recurrent circuit needs time (any cycle time fits)"
     else:
         ties = len(critical["critical_circuits"])
-        message = (f"{name} = {T:.9g}: critical circuit {_circuit_text(u, circuit)}"
+        message = (f"{name} = {T:.9g}: critical circuit {circuit_text(u, circuit)}"
                    + (f"; {ties} circuits tie for critical" if ties > 1 else "")
                    + f" (graph, {steps} Dinkelbach steps)")
     result = clock.result(Status.SOLVED, values, message=message, diagnostics=diagnostics,
                           arrays={f"start_{u.unit}": np.asarray(p, dtype=float)})   # by event, in `names` order
-    return _checked(result, u, name, backend) if check else result
+    return checked_by_lp(result, u, name, backend) if check else result
 
 
 def _dinkelbach(u, bf):
@@ -125,7 +125,7 @@ def _dinkelbach(u, bf):
         _, zero = bf.longest(big)
         if zero is not None:
             if u.k[zero].any() or not math.fsum(u.d[zero]) > 0:
-                raise _Undecided(f"a circuit taken as positive at T = {big!r} that is not one of height 0")
+                raise Undecided(f"a circuit taken as positive at T = {big!r} that is not one of height 0")
             return None, zero, 0, None
     T, critical = 0.0, None
     for step in range(MAX_STEPS + 1):
@@ -136,6 +136,6 @@ def _dinkelbach(u, bf):
         if K <= 0:          # D - K T > 0 here stays so at every larger T, and T may not fall: no cycle fits
             return None, circuit, step, None
         if not D / K > T:
-            raise _Undecided(f"a positive circuit at T = {T!r} whose ratio does not rise above it")
+            raise Undecided(f"a positive circuit at T = {T!r} whose ratio does not rise above it")
         T, critical = D / K, circuit
-    raise _StepLimit(f"no answer after {MAX_STEPS} Dinkelbach steps")
+    raise StepLimit(f"no answer after {MAX_STEPS} Dinkelbach steps")

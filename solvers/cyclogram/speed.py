@@ -21,32 +21,32 @@ from mechopt.solvers.cyclogram.speed_graph import (  # noqa: F401  (kept here: t
     RANGING_MAX_LIMITS,
     UNBOUNDED_RPM,
     SpeedGraph,
-    _certify_on_graph,
-    _speed_graph,
-    _Undecided,
+    Undecided,
+    certify_on_graph,
+    speed_on_graph,
 )
 from mechopt.solvers.cyclogram.speed_laws import (  # noqa: F401
     N_OVER_T_FACTORS,
     N_OVER_T_RTOL,
-    _angle_floors_deg,
-    _exact_amplitude_bounds,
-    _exact_bounds_at,
-    _lp_bounds_at,
-    _probe,
-    _reference_rpm,
-    _time_law,
+    angle_floors_deg,
+    exact_amplitude_bounds,
+    exact_bounds_at,
+    lp_bounds_at,
     n_over_t_probe,
+    n_over_t_probe_at,
+    reference_rpm,
     speed_coeffs_deg_per_rpm,
+    time_law,
 )
 from mechopt.solvers.cyclogram.speed_lp import (  # noqa: F401
     MIN_RPM,
-    _arcs_at,
-    _certify_speed,
-    _conflict_at,
-    _speed_bisection,
-    _speed_lp,
+    arcs_at,
+    certify_speed,
+    conflict_at,
+    speed_bisection,
+    speed_by_lp,
 )
-from mechopt.solvers.cyclogram.speed_report import _closed_without_the_cycle, _passes, _speed_report  # noqa: F401
+from mechopt.solvers.cyclogram.speed_report import closed_without_the_cycle, speed_passes, speed_report_of  # noqa: F401
 from mechopt.solvers.stop_impact.lever_box import LeverBox, takes_box
 
 
@@ -116,7 +116,7 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp",
                          f"time of a time-based network)", key=f"windows[{k}].max_ms")
     clock = Clock()
     net = Net.structure(task)        # the speed LP has its own bounds
-    phi = _angle_floors_deg(task)
+    phi = angle_floors_deg(task)
     g, why, amp_bounds = speed_coeffs_deg_per_rpm(task, scan_to_deg, scan_step_deg, box)
     scales, probe = n_over_t_probe(task, scan_to_deg)
     chosen = ("graph" if scales else "bisection") if method == "auto" else method
@@ -132,14 +132,14 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp",
         return clock.result(Status.LIMIT, {}, message=f"the rebound's bound is not on the stated range: "
                             f"{unreached[0].statement()} (raise scan_to_deg)", diagnostics=diagnostics)
     if chosen == "graph":
-        n_max, status, message, clock.build_s, extra = _speed_graph(task, net, phi, g, why)
-        bounds_at = functools.partial(_lp_bounds_at, phi, g, why)
+        n_max, status, message, clock.build_s, extra = speed_on_graph(task, net, phi, g, why)
+        bounds_at = functools.partial(lp_bounds_at, phi, g, why)
     elif chosen == "lp":
-        n_max, status, message, clock.build_s, extra = _speed_lp(task, net, phi, g, backend)
-        bounds_at = functools.partial(_lp_bounds_at, phi, g, why)
+        n_max, status, message, clock.build_s, extra = speed_by_lp(task, net, phi, g, backend)
+        bounds_at = functools.partial(lp_bounds_at, phi, g, why)
     else:
-        bounds_at = functools.partial(_exact_bounds_at, task, box, phi, scan_to_deg, scan_step_deg)
-        n_max, status, message, clock.build_s, extra = _speed_bisection(task, net, bounds_at, rtol)
+        bounds_at = functools.partial(exact_bounds_at, task, box, phi, scan_to_deg, scan_step_deg)
+        n_max, status, message, clock.build_s, extra = speed_bisection(task, net, bounds_at, rtol)
     sg = extra.pop("graph", None)
     cycle = extra.pop("limiting_cycle_arcs", None)
     diagnostics |= {"speed_coeffs_deg_per_rpm":
@@ -147,7 +147,7 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp",
     if status is Status.SOLVED and n_max * g.max(initial=0.0) <= 1e-6:   # below a micro-degree: at rest
         status = Status.INFEASIBLE
     if status is Status.INFEASIBLE:
-        chain = _conflict_at(task, net, phi) or _conflict_at(task, net, np.maximum(phi, g * rtol))
+        chain = conflict_at(task, net, phi) or conflict_at(task, net, np.maximum(phi, g * rtol))
         groups = list(dict.fromkeys(task.graph.nodes[v]["group"] or "-" for v, _, _ in chain))
         diagnostics |= {"conflict_groups": groups[:NAMED], "conflict_length": len(chain)}
         message = ("no speed fits: conflicting chain " + some_of(label for _, label, _ in chain)
@@ -162,9 +162,9 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp",
     if status is not Status.SOLVED:
         return clock.result(status, {}, message=message, diagnostics=diagnostics)
     lb, why_at = bounds_at(n_max)
-    certified = _certify_on_graph(sg, n_max, rtol) if sg else _certify_speed(task, net, bounds_at, n_max, rtol)
-    values, more = _speed_report(task, net, lb, why_at, n_max, rtol, sg)
-    if _closed_without_the_cycle(net, bounds_at(n_max * (1 + rtol))[0], sg):
+    certified = certify_on_graph(sg, n_max, rtol) if sg else certify_speed(task, net, bounds_at, n_max, rtol)
+    values, more = speed_report_of(task, net, lb, why_at, n_max, rtol, sg)
+    if closed_without_the_cycle(net, bounds_at(n_max * (1 + rtol))[0], sg):
         more["sens_cycle_rpm_per_deg"] = 0.0
     if sg:
         more["ranging_at_max_speed"] = sg.ranging(cycle, n_max, why)
@@ -172,7 +172,7 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp",
         certified = _check_by_other(chosen, task, net, phi, g, why, backend, n_max, more)
         if "rel" in more["check"]:
             values["check_rel"] = more["check"]["rel"]        # validate's certificate (the scenes: < 1e-9)
-    held = amp_bounds if chosen in ("lp", "graph") else _exact_amplitude_bounds(task, box, phi, scan_to_deg,
+    held = amp_bounds if chosen in ("lp", "graph") else exact_amplitude_bounds(task, box, phi, scan_to_deg,
                                                                                   scan_step_deg, n_max)
     for k, b in amp_bounds.items():      # the range of t on which the rebound was shown to hold, at n_max
         x, y = task.arcs[k]
@@ -193,7 +193,6 @@ def max_machine_speed(task: Cyclogram, *, method: Literal["auto", "graph", "lp",
     return clock.result(Status.SOLVED, values, message=message, diagnostics=diagnostics, arrays=arrays)
 
 
-
 CHECK_RTOL = 1e-9                # the graph's speed against the LP's (check = true)
 
 
@@ -201,7 +200,7 @@ def _check_by_other(chosen, task, net, phi, g, why, backend, n_max, more):
     """'' when the other method (the LP in (p, n) for the graph, the graph for the LP) gives the
     same speed to CHECK_RTOL, else why not (its figures in `more`)."""
     other = "LP in (p, n)" if chosen == "graph" else "graph"
-    solve = _speed_lp(task, net, phi, g, backend) if chosen == "graph" else _speed_graph(task, net, phi, g, why)
+    solve = speed_by_lp(task, net, phi, g, backend) if chosen == "graph" else speed_on_graph(task, net, phi, g, why)
     n_other, status, message = solve[:3]
     more["check"] = {"method": other, "status": status.value, "max_speed_rpm": n_other}
     if status is not Status.SOLVED:

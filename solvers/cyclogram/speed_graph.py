@@ -11,9 +11,8 @@ from mechopt.solvers.cyclogram.graph import Levels, a_path, tight_arcs
 from mechopt.solvers.cyclogram.net import back_arcs
 
 
-class _Undecided(Exception):
+class Undecided(Exception):
     """A feasibility LP that was neither optimal nor infeasible: bisection cannot go on."""
-
 
 
 GRAPH_TOL = 1e-10            # relative to the cycle [deg/deg]: a chain closing the cycle within it fits
@@ -105,19 +104,19 @@ class SpeedGraph:
             return None, [], 0
         while steps < NEWTON_MAX_STEPS:
             if not cycle:
-                raise _Undecided(f"graph: a positive cycle at n = {n:.12g} rpm that Bellman-Ford cannot name "
+                raise Undecided(f"graph: a positive cycle at n = {n:.12g} rpm that Bellman-Ford cannot name "
                                  f"(round-off at the answer)")
             root = self.root(cycle, n, g)
             steps += 1
             if not root < n:
-                raise _Undecided(f"graph: the cycle found at n = {n:.12g} rpm does not close below it "
+                raise Undecided(f"graph: the cycle found at n = {n:.12g} rpm does not close below it "
                                  f"(round-off at the answer)")
             following = self.positive_cycle_at(root, g)
             n = root
             if following is None:
                 return n, cycle, steps
             cycle = following
-        raise _Undecided(f"graph: no answer after {NEWTON_MAX_STEPS} steps")
+        raise Undecided(f"graph: no answer after {NEWTON_MAX_STEPS} steps")
 
     def describe(self, cycle, n_rpm: float, why) -> list[str]:
         """The cycle in the designer's words: each operation with the law that sets it at n."""
@@ -162,7 +161,7 @@ class SpeedGraph:
         return rows
 
 
-def _speed_graph(task, net, phi, g, why):
+def speed_on_graph(task, net, phi, g, why):
     """maximise n on the graph (SpeedGraph): INFEASIBLE when n = 0 does not fit."""
     clock = Clock()
     sg = SpeedGraph(task, net, phi, g)
@@ -171,7 +170,7 @@ def _speed_graph(task, net, phi, g, why):
         return None, Status.INFEASIBLE, "", build_s, {"graph": sg}
     try:
         n_max, cycle, steps = sg.highest_speed()
-    except _Undecided as exc:
+    except Undecided as exc:
         return None, Status.FAILED, str(exc), build_s, {"graph": sg}
     if n_max is None:
         return None, Status.UNBOUNDED, f"graph: n = {UNBOUNDED_RPM:g} rpm still fits", build_s, {"graph": sg}
@@ -180,7 +179,7 @@ def _speed_graph(task, net, phi, g, why):
     return n_max, Status.SOLVED, "", build_s, extra
 
 
-def _certify_on_graph(sg, n_max, tol):
+def certify_on_graph(sg, n_max, tol):
     """'' when the graph says n_max (1 - tol) fits and n_max (1 + tol) does not; else why not."""
     if sg.positive_cycle_at(n_max * (1 - tol)) is not None:
         return f"certificate failed: n = {n_max * (1 - tol):.9g} rpm (just under the answer) does not fit the cycle"

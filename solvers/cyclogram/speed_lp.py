@@ -8,12 +8,12 @@ from mechopt.models.cyclogram_tables import MAX_RPM
 from mechopt.solvers.cyclogram.conflicts import constraint_arcs, positive_cycle
 from mechopt.solvers.cyclogram.event_time import HeldLP, incidence
 from mechopt.solvers.cyclogram.lp_method import LP_BUILDS
-from mechopt.solvers.cyclogram.speed_graph import _Undecided
+from mechopt.solvers.cyclogram.speed_graph import Undecided
 
 MIN_RPM = 1e-6                   # bisection: below it the machine is at rest
 
 
-def _speed_lp(task, net, phi, g, backend):
+def speed_by_lp(task, net, phi, g, backend):
     """maximise n over (p, n): the LP of the docstring, built once per structure (DPP)."""
     import cvxpy as cp  # here: the graph and bisection methods never need it
     rows = np.flatnonzero(g > 0)
@@ -61,8 +61,7 @@ def _speed_lp(task, net, phi, g, backend):
         return None, status, f"{backend}: {problem.status}", build_s, extra
 
 
-
-def _speed_bisection(task, net, bounds_at, rtol):
+def speed_bisection(task, net, bounds_at, rtol):
     """Bisection on n: feasible when the event-time LP with the exact bounds at n fits the cycle
     (one HiGHS model held through the steps, `HeldLP`; `backend` is the LP method's)."""
     clock = Clock()
@@ -80,7 +79,7 @@ def _speed_bisection(task, net, bounds_at, rtol):
         status, _ = lp.solve(lb, windows, task.cycle_deg)
         steps.append((n_rpm, status.value))
         if status not in (Status.SOLVED, Status.INFEASIBLE):
-            raise _Undecided(f"HiGHS: {status.value} at n = {n_rpm:.9g} rpm")
+            raise Undecided(f"HiGHS: {status.value} at n = {n_rpm:.9g} rpm")
         return status is Status.SOLVED
     try:
         if not feasible(0.0):
@@ -94,15 +93,13 @@ def _speed_bisection(task, net, bounds_at, rtol):
         while hi - lo > 0.25 * rtol * hi and hi > MIN_RPM:   # a quarter: the certificate's margin is rtol
             mid = 0.5 * (lo + hi)
             lo, hi = (mid, hi) if feasible(mid) else (lo, mid)
-    except _Undecided as exc:
+    except Undecided as exc:
         return None, Status.FAILED, str(exc), build_s, {"bisection_steps": len(steps)}
     return (lo if hi > MIN_RPM else 0.0), Status.SOLVED, "", build_s, {"bisection_steps": len(steps),
                                                                      "bisection_bracket_rpm": [lo, hi]}
 
 
-
-
-def _arcs_at(task, net, lb):
+def arcs_at(task, net, lb):
     """The difference constraints with the arcs' bounds `lb` and the cycle, for `positive_cycle`."""
     first, last = net.names[net.first], net.names[net.last]
     names = task.operation_names
@@ -110,17 +107,17 @@ def _arcs_at(task, net, lb):
     return arcs + [(last, first, -task.cycle_deg, f"cycle p({last}) - p({first}) <= {task.cycle_deg:.6g} deg")]
 
 
-def _conflict_at(task, net, lb):
-    return [(u, label, w) for u, _, w, label in positive_cycle(_arcs_at(task, net, lb))]
+def conflict_at(task, net, lb):
+    return [(u, label, w) for u, _, w, label in positive_cycle(arcs_at(task, net, lb))]
 
 
-def _certify_speed(task, net, bounds_at, n_max, tol):
+def certify_speed(task, net, bounds_at, n_max, tol):
     """'' when the bounds at n_max (1 - tol) leave no positive cycle and those at n_max (1 + tol)
     do (so n_max is the largest speed to tol); else why not."""
     below, above = n_max * (1 - tol), n_max * (1 + tol)
     lb_below, lb_above = bounds_at(below)[0], bounds_at(above)[0]
-    if not np.all(np.isfinite(lb_below)) or _conflict_at(task, net, lb_below):
+    if not np.all(np.isfinite(lb_below)) or conflict_at(task, net, lb_below):
         return f"certificate failed: n = {below:.9g} rpm (just under the answer) does not fit the cycle"
-    if np.all(np.isfinite(lb_above)) and not _conflict_at(task, net, lb_above):
+    if np.all(np.isfinite(lb_above)) and not conflict_at(task, net, lb_above):
         return f"certificate failed: n = {above:.9g} rpm (just over the answer) still fits the cycle"
     return ""

@@ -11,7 +11,7 @@ from mechopt.solvers.cyclogram.schedule import graph_floats
 from mechopt.solvers.loom.repair import exact_amplitude_mm
 
 
-def _passes(net, sg=None):
+def speed_passes(net, sg=None):
     """The longest-path passes over the operations and the back arcs without the machine cycle
     (windows, syncs): `sg`'s (a SpeedGraph) when given, else built (Levels: once per structure)."""
     if sg is not None:
@@ -19,18 +19,18 @@ def _passes(net, sg=None):
     return Levels.of(len(net.names), net.tails, net.heads), back_arcs(net, with_cycle=False)[0]
 
 
-def _closed_without_the_cycle(net, lb_above, sg=None) -> bool:
+def closed_without_the_cycle(net, lb_above, sg=None) -> bool:
     """Whether the bounds just above the highest speed hold a positive cycle of operations, windows
     and syncs alone: then a window, not the machine's cycle, limits the speed, and a longer cycle
     gives none (dn/dcycle = 0; the critical chain's slope is dn/dwindow)."""
-    levels, back = _passes(net, sg)
+    levels, back = speed_passes(net, sg)
     return bool(len(back)) and bool(np.all(np.isfinite(lb_above))) and levels.has_positive_cycle(lb_above, back)
 
 
-def _speed_report(task, net, lb, why, n_max, tol, sg=None):
+def speed_report_of(task, net, lb, why, n_max, tol, sg=None):
     """Event times at max speed (earliest start), exact readings, and which constraints limit it
     (times and floats by the longest-path passes: `sg`'s, a SpeedGraph, when given)."""
-    levels, back = _passes(net, sg)
+    levels, back = speed_passes(net, sg)
     p = levels.longest_from(net.first, lb, back)
     t = p[net.heads] - p[net.tails]
     values = {"max_speed_rpm": n_max, "cycle_time_ms": 60_000.0 / n_max, "span_deg": float(p[net.last] - p[net.first])}

@@ -10,6 +10,7 @@ from typing import Annotated, Literal
 import numpy as np
 from scipy.optimize import brentq
 
+from mechopt.kit import store
 from mechopt.kit.cache import BuildCache
 from mechopt.kit.errors import ModelError, SettingError
 from mechopt.kit.result import Clock, Result, Status
@@ -17,7 +18,6 @@ from mechopt.kit.settings import Interval, Tolerance
 from mechopt.models.cyclogram import Cyclogram
 from mechopt.models.loom_limits import stress_bound_deg, stress_MPa
 from mechopt.solvers.cyclogram.plan import plan_cyclogram
-from mechopt.solvers.stop_impact import walk_store
 from mechopt.solvers.stop_impact.cam_follower import dwell_length, follower_data
 from mechopt.solvers.stop_impact.law import chain_rebounds_mm
 from mechopt.solvers.stop_impact.lever_box import LeverBox
@@ -317,6 +317,10 @@ def _repaired(task, result, laws, history, clock, status, message, violated=()):
 
 
 _AMPLITUDE_BOUNDS = BuildCache("loom.amplitude_bound", maxsize=64)
+# the code a stored walk or n / t probe depends on (kit.store's fingerprint): the models, the
+# lever's chain, the walk, and the probe's module
+WALK_SOURCES = ("mechopt.models", "mechopt.solvers.stop_impact", "mechopt.solvers.loom",
+                "mechopt.solvers.cyclogram.speed_laws")
 
 
 def cached_amplitude_bound(task: Cyclogram, speed_rpm: float, lo_deg: float, to_deg: float,
@@ -342,9 +346,9 @@ def cached_amplitude_bound(task: Cyclogram, speed_rpm: float, lo_deg: float, to_
     check_walk(to_deg, step_deg)
     n, floor = float(speed_rpm), min(WALK_FLOOR_DEG, to_deg)
     key = (walk_lever(task), task.amplitude_limit_mm, float(to_deg) / n, float(step_deg) / n)
-    (walk, walked_rpm), _ = _AMPLITUDE_BOUNDS.get(key, lambda: walk_store.stored(     # on disk too, when on
+    (walk, walked_rpm), _ = _AMPLITUDE_BOUNDS.get(key, lambda: store.stored(          # on disk too, when on
         "walk", key, lambda: (exact_amplitude_bound(task, n, floor, to_deg, step_deg), n), _encode_walk, _decode_walk,
-        enabled=rebound_amplitude_mm is chain_rebounds_mm))
+        sources=WALK_SOURCES, enabled=rebound_amplitude_mm is chain_rebounds_mm))
     if walked_rpm != n:
         c = n / walked_rpm
         if walk.why == "range" or not (_n_over_t(task, walked_rpm, walk.to_deg) and _n_over_t(task, n, to_deg)):

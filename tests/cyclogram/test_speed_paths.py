@@ -112,7 +112,7 @@ def machine():
 def test_the_n_over_t_probe_in_one_call_is_the_probe_point_by_point(machine):
     """The probe's six points in one call of the chain give the values each has alone (the
     largest relative change the same to the bit)."""
-    from mechopt.solvers.cyclogram.speed import N_OVER_T_FACTORS, _probe
+    from mechopt.solvers.cyclogram.speed import N_OVER_T_FACTORS, n_over_t_probe_at
     from mechopt.solvers.loom.repair import exact_amplitude_mm
 
     def alone(t, n):
@@ -121,7 +121,7 @@ def test_the_n_over_t_probe_in_one_call_is_the_probe_point_by_point(machine):
     for t in (60.0, 45.0):
         base = alone(t, 420.0)
         worst = max([worst] + [abs(alone(c * t, c * 420.0) - base) / abs(base) for c in N_OVER_T_FACTORS])
-    assert _probe(machine, 60.0) == (worst <= 1e-9, worst)
+    assert n_over_t_probe_at(machine, 60.0) == (worst <= 1e-9, worst)
 
 
 def _walk(machine):
@@ -133,9 +133,9 @@ def test_the_walk_is_stored_on_disk_and_read_back_whole(machine, tmp_path, monke
     """MECHOPT_CACHE_DIR set: the first walk is written, a walk after the caches are cleared is
     read (the walk itself not run) and equals it field by field; other code (its fingerprint)
     or an unreadable file (named in a warning) walks anew; unset, nothing is written."""
+    from mechopt.kit import store as walk_store
     from mechopt.kit.cache import clear as clear_caches
     from mechopt.solvers.loom import repair
-    from mechopt.solvers.stop_impact import walk_store
     monkeypatch.delenv(walk_store.ENV, raising=False)
     clear_caches()
     walked = _walk(machine)
@@ -156,7 +156,7 @@ def test_the_walk_is_stored_on_disk_and_read_back_whole(machine, tmp_path, monke
     with pytest.warns(walk_store.StoreWarning, match=files[0].name), \
             pytest.raises(AssertionError, match="walked again"):
         _walk(machine)                                      # the damaged file named, walked anew
-    monkeypatch.setattr(walk_store, "code_fingerprint", lambda: "edited code")
+    monkeypatch.setattr(walk_store, "code_fingerprint", lambda sources: "edited code")
     clear_caches()
     with pytest.raises(AssertionError, match="walked again"):
         _walk(machine)
@@ -164,9 +164,9 @@ def test_the_walk_is_stored_on_disk_and_read_back_whole(machine, tmp_path, monke
 
 
 def test_a_law_put_in_the_chain_s_place_is_not_stored(machine, tmp_path, monkeypatch):
+    from mechopt.kit import store as walk_store
     from mechopt.kit.cache import clear as clear_caches
     from mechopt.solvers.loom import repair
-    from mechopt.solvers.stop_impact import walk_store
     monkeypatch.setenv(walk_store.ENV, str(tmp_path))
     monkeypatch.setattr(repair, "rebound_amplitude_mm", lambda lever, n, t, lost=None: 0.05 * 40.0 / np.asarray(t))
     clear_caches()
@@ -178,9 +178,9 @@ def test_a_law_put_in_the_chain_s_place_is_not_stored(machine, tmp_path, monkeyp
 def test_the_highest_speed_from_the_store_is_the_fresh_one(machine, tmp_path, monkeypatch):
     """loom/machine-speed's highest speed and every value the same from a fresh solve, and from
     one whose walk and probe the store holds."""
+    from mechopt.kit import store as walk_store
     from mechopt.kit.cache import clear as clear_caches
     from mechopt.solvers.cyclogram import max_machine_speed
-    from mechopt.solvers.stop_impact import walk_store
     monkeypatch.delenv(walk_store.ENV, raising=False)
     clear_caches()
     fresh = max_machine_speed(machine, check=True)

@@ -93,12 +93,12 @@ def test_a_window_that_limits_the_speed_is_on_the_named_cycle(task):
 
 def test_a_check_that_disagrees_is_inaccurate(task, monkeypatch):
     import mechopt.solvers.cyclogram.speed as speed
-    real = speed._speed_lp
+    real = speed.speed_by_lp
 
     def off(*args):
         n, *rest = real(*args)
         return (n * (1 + 1e-6), *rest)
-    monkeypatch.setattr(speed, "_speed_lp", off)
+    monkeypatch.setattr(speed, "speed_by_lp", off)
     r = max_machine_speed(task, check=True)
     assert r.status is Status.INACCURATE and "check failed: the LP in (p, n) gives" in r.message
 
