@@ -6,7 +6,10 @@ import csv
 import io
 import re
 from collections import Counter
+from collections.abc import Sequence
 from pathlib import Path
+
+import numpy as np
 
 from mechopt.files import read_regular
 from mechopt.kit.errors import ModelError, quote, some_of
@@ -25,15 +28,7 @@ def read_rows(path, *, what, example, max_bytes=MAX_BYTES, max_rows=MAX_ROWS, ma
     record in a size error ("a load-travel record"), `example` the header it should have. A cell
     holding a line break or a NUL character is refused (a name is one line of text)."""
     path = Path(path)
-    try:
-        raw = read_regular(path, max_bytes=max_bytes, what=what)
-    except OSError as exc:
-        raise ModelError(f"{path}: cannot read: {exc.strerror}", key="path") from None
-    except ValueError as exc:
-        raise ModelError(str(exc), key="path") from None
-    rows = _rows_below_header(raw)
-    if rows > max_rows:
-        raise ModelError(f"{path}: {rows:,} rows; {what} has at most {max_rows:,} rows", key="path")
+    raw = _read_bytes(path, what, max_bytes, max_rows)
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
@@ -47,6 +42,20 @@ def read_rows(path, *, what, example, max_bytes=MAX_BYTES, max_rows=MAX_ROWS, ma
     _refuse_nul(path, text, rows)
     header = [h.strip() for h in rows[0][1]]
     return header, rows[1:], delimiter
+
+
+def _read_bytes(path, what, max_bytes, max_rows) -> bytes:
+    """The file's bytes, refused (naming it) unless a regular file within max_bytes and max_rows."""
+    try:
+        raw = read_regular(path, max_bytes=max_bytes, what=what)
+    except OSError as exc:
+        raise ModelError(f"{path}: cannot read: {exc.strerror}", key="path") from None
+    except ValueError as exc:
+        raise ModelError(str(exc), key="path") from None
+    rows = _rows_below_header(raw)
+    if rows > max_rows:
+        raise ModelError(f"{path}: {rows:,} rows; {what} has at most {max_rows:,} rows", key="path")
+    return raw
 
 
 def _rows_below_header(raw: bytes) -> int:
@@ -119,13 +128,8 @@ def number(cell, delimiter) -> float:
 MAX_TEXT = 200               # a name cell in a timing table: an event or an operation, not a paragraph
 
 
-def read_records(path, columns, kinds, *, required=(), what, example, max_rows=MAX_ROWS):
-    """[(line number, {column: value})] of the CSV file `path`, whose header must hold every name
-    in `columns` and no name outside `kinds` ({column: str or float}, which types the cells: text
-    stripped and at most MAX_TEXT characters, numbers as `number` reads them). An empty cell is
-    left out of its row (an optional value not given), unless its column is in `required`.
-    Errors name the file, the line and the column, and quote a cell short."""
-    header, rows, delimiter = read_rows(path, what=what, example=example, max_rows=max_rows)
+def _check_columns(path, header, columns, kinds, example, delimiter):
+    """A records table's header: every name of `columns` in it, none outside `kinds`, none twice."""
     check_header(path, header, kinds, example)
     counts = Counter(header)                 # one pass: header.count per name was quadratic
     problems = [f"lacks {c}" for c in columns if c not in counts]
@@ -134,6 +138,16 @@ def read_records(path, columns, kinds, *, required=(), what, example, max_rows=M
     if problems:
         raise ModelError(f"{path}: header {some_of(header, 12, delimiter)}: {'; '.join(problems)} "
                          f"(allowed columns: {', '.join(kinds)})", key="path")
+
+
+def read_records(path, columns, kinds, *, required=(), what, example, max_rows=MAX_ROWS):
+    """[(line number, {column: value})] of the CSV file `path`, whose header must hold every name
+    in `columns` and no name outside `kinds` ({column: str or float}, which types the cells: text
+    stripped and at most MAX_TEXT characters, numbers as `number` reads them). An empty cell is
+    left out of its row (an optional value not given), unless its column is in `required`.
+    Errors name the file, the line and the column, and quote a cell short."""
+    header, rows, delimiter = read_rows(path, what=what, example=example, max_rows=max_rows)
+    _check_columns(path, header, columns, kinds, example, delimiter)
     out = []
     typed = [(column, kinds[column] is not str) for column in header]
     read = lambda cell: number(cell, delimiter)        # noqa: E731
@@ -161,3 +175,123 @@ def read_records(path, columns, kinds, *, required=(), what, example, max_rows=M
             raise ModelError(f"{path}: line {line}: empty {', '.join(absent)} (required)", key="path")
         out.append((line, row))
     return out
+
+
+_SPACE = np.array([chr(b).isspace() for b in range(256)])         # what str.strip() takes off a cell's ends
+_NUMBER_BYTE = np.zeros(256, dtype=bool)
+_NUMBER_BYTE[np.frombuffer(_PLAIN_NUMBER.encode(), np.uint8)] = True
+_NUMBER_BYTE[0] = True                                            # a narrower cell's padding
+
+
+class Columns(Sequence):
+    """A CSV table held as whole columns, {column: array} in the header's order: text cells as an
+    ASCII bytes array (b"" where empty), numbers as a float array (NaN where empty: a cell that
+    says nan is no plain number, so NaN only ever means not given). Read as a sequence it is
+    `read_records`' rows ({column: value}, an empty cell left out), built on first use, for a
+    reader that needs rows; a reader of whole columns takes `columns`."""
+
+    def __init__(self, columns: dict[str, np.ndarray]):
+        self.columns = columns
+        self._rows = None
+
+    def __len__(self):
+        return len(next(iter(self.columns.values()), ()))
+
+    def __getitem__(self, k):
+        return self.rows()[k]
+
+    def rows(self) -> list[dict]:
+        """The table row by row, as read_records reads it."""
+        if self._rows is None:
+            text = [name for name, a in self.columns.items() if a.dtype.kind == "S"]
+            cells = [[(name, v.decode()) if v else None for v in self.columns[name].tolist()] if name in text
+                     else [(name, v) if v == v else None for v in self.columns[name].tolist()]
+                     for name in self.columns]
+            self._rows = [dict(c for c in row if c is not None) for row in zip(*cells)]
+        return self._rows
+
+    def __eq__(self, other):
+        if isinstance(other, Columns):
+            return list(self.columns) == list(other.columns) and all(
+                np.array_equal(a, other.columns[k], equal_nan=a.dtype.kind == "f") for k, a in self.columns.items())
+        return self.rows() == other if isinstance(other, list) else NotImplemented
+
+    __hash__ = None
+
+    def __repr__(self):
+        return f"<{len(self):,} rows of {', '.join(self.columns)} read from a CSV file>"
+
+
+def read_columns(path, columns, kinds, *, required=(), what, example, max_rows=MAX_ROWS) -> Columns | None:
+    """`read_records`' table as whole columns (`Columns`), read with no Python object per row,
+    when the file is plain: ASCII, no quoted cell, no blank line, every row as many cells as the
+    header, no cell with spaces around it, every number a plain literal and every required cell
+    given; None otherwise (then read_records reads it row by row and names any fault). The size
+    and the header are refused here as there."""
+    path = Path(path)
+    raw = _read_bytes(path, what, MAX_BYTES, max_rows).removeprefix(b"\xef\xbb\xbf")
+    if b'"' in raw or b"\x00" in raw or raw.count(b"\r") != raw.count(b"\r\n"):
+        return None
+    raw = raw.replace(b"\r\n", b"\n") + (b"" if raw.endswith(b"\n") else b"\n")
+    buf = np.frombuffer(raw, np.uint8)
+    if buf.max() >= 0x80:                   # text beyond ASCII: strip and widths count characters
+        return None
+    line = raw[:raw.index(b"\n")].decode("ascii")
+    delimiter = ";" if line.count(";") > line.count(",") else ","
+    header = [h.strip() for h in line.split(delimiter)]
+    if not "".join(header) or len(header) > MAX_COLUMNS:
+        return None
+    _check_columns(path, header, columns, kinds, example, delimiter)
+    body = buf[len(line) + 1:]
+    ends = np.flatnonzero((body == ord(delimiter)) | (body == ord("\n")))
+    if not ends.size or ends.size % len(header):
+        return None
+    ends = ends.reshape(-1, len(header))
+    if (body[ends[:, -1]] != ord("\n")).any() or (body[ends[:, :-1]] == ord("\n")).any():
+        return None                          # a row of more or fewer cells than the header
+    starts = np.empty_like(ends)
+    starts[0, 0], starts[1:, 0], starts[:, 1:] = 0, ends[:-1, -1] + 1, ends[:, :-1] + 1
+    size = ends - starts
+    filled = size > 0
+    if not filled.any(axis=1).all() or _SPACE[body[starts[filled]]].any() or _SPACE[body[ends[filled] - 1]].any():
+        return None                          # a blank row, or a cell with spaces around it
+    out = {}
+    for j, name in enumerate(header):
+        if name in required and not filled[:, j].all():
+            return None
+        cells = _cells(body, starts[:, j], size[:, j])
+        if kinds[name] is str:
+            if size[:, j].max() > MAX_TEXT:
+                return None
+            out[name] = cells
+        else:
+            out[name] = _numbers(cells, filled[:, j], delimiter)
+            if out[name] is None:
+                return None
+    return Columns(out)
+
+
+def _cells(body, starts, size) -> np.ndarray:
+    """The cells at `starts` of `size` bytes as one fixed-width bytes array (b"" where empty),
+    gathered one byte position at a time (temporaries of the row count, not rows x width)."""
+    width = max(int(size.max(initial=0)), 1)
+    grid = np.zeros((len(starts), width), np.uint8)
+    for i in range(width):
+        rows = np.flatnonzero(size > i) if i else np.flatnonzero(size)
+        grid[rows, i] = body[starts[rows] + i]
+    return grid.view(f"S{width}").ravel()
+
+
+def _numbers(cells, filled, delimiter) -> np.ndarray | None:
+    """The cells as `number` reads them (NaN where empty), or None where one is no plain number."""
+    grid = cells.view(np.uint8).reshape(len(cells), -1)
+    if delimiter == ";":                     # a decimal comma
+        grid = np.where(grid == ord(","), np.uint8(ord(".")), grid)
+    if not _NUMBER_BYTE[grid].all():
+        return None
+    values = np.full(len(cells), np.nan)
+    try:
+        values[filled] = grid.view(cells.dtype).ravel()[filled].astype(float)
+    except ValueError:                       # "1.2.3", "+-1", "e": float() refuses them too
+        return None
+    return values
