@@ -26,7 +26,6 @@ from functools import lru_cache
 from typing import Annotated
 
 from annotated_types import Ge, Gt, Le
-from scipy.optimize import brentq
 
 from mechopt.kit.errors import MechoptError, ModelError
 from mechopt.models.cam_laws import law as cam_law
@@ -121,6 +120,8 @@ class Motion:
 def _angle_fraction(name: str, c: float) -> float:
     if c <= 0.0 or c >= 1.0:
         return min(max(c, 0.0), 1.0)
+    # imported here: scipy's import (~0.5 s) is paid by a clearance alone, not by every cyclogram
+    from scipy.optimize import brentq
     law = cam_law(name)
     # S rises monotonically from 0 to 1 (every library law: S' >= 0); brentq brackets the one root
     return brentq(lambda x: float(law.values([x])[0][0]) - c, 0.0, 1.0, xtol=FRACTION_XTOL)

@@ -2,8 +2,8 @@
 (precedence without a cycle, one first and one last event), windows, syncs, the limiting
 operation, the recurrent operations (those ending k cycles later) and the laws an operation names."""
 from functools import cached_property
+from typing import TYPE_CHECKING
 
-import networkx as nx
 import numpy as np
 
 from mechopt.kit.errors import ModelError, some_of
@@ -28,6 +28,9 @@ from mechopt.models.cyclogram_tables import (
 )
 from mechopt.models.loom_limits import AMPLITUDE_LAWS
 from mechopt.tables import Columns
+
+if TYPE_CHECKING:       # imported where the graph is built: a plain table's run never builds it
+    import networkx as nx
 
 # an operation row solved as given, no law to evaluate (no stress, amplitude, motion, time, cycles, mark)
 PLAIN_OPERATION_KEYS = frozenset({"from", "to", "min_deg", "name", "group", "mechanism", "why", "where", "what"})
@@ -57,8 +60,9 @@ class Network:
             _ = self.graph
 
     @cached_property
-    def graph(self) -> nx.DiGraph:
+    def graph(self) -> "nx.DiGraph":
         """Events as nodes (mechanism, group), operations as arcs (min_deg, stress, amplitude)."""
+        import networkx as nx
         g = nx.DiGraph()
         plain = self._columnar
         if plain is not None:

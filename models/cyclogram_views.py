@@ -2,13 +2,16 @@
 groups, windows and syncs as pairs, each operation's attributes and motion (cached: the task is
 frozen, and a walk over 10^5 events costs ~0.1 s)."""
 from functools import cached_property
+from typing import TYPE_CHECKING
 
-import networkx as nx
 import numpy as np
 
 from mechopt.kit.errors import ModelError
 from mechopt.models.cyclogram_bounds import time_floor_deg
 from mechopt.models.cyclogram_columns import Arcs
+
+if TYPE_CHECKING:
+    import networkx as nx
 
 
 class Views:
@@ -115,7 +118,7 @@ class Views:
                 out.setdefault(group, []).append(v)
         return {group: tuple(events) for group, events in out.items()}
 
-    def group_graph(self, group: str) -> nx.DiGraph:
+    def group_graph(self, group: str) -> "nx.DiGraph":
         """The subgraph of one group's events and the operations between them."""
         if group not in self.groups:
             raise ModelError(f"group={group!r}: no such group; known: {', '.join(self.groups) or 'none'}", key="group")
