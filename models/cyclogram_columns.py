@@ -45,27 +45,28 @@ class PlainNetwork:
                 return None
         ends = np.empty(2 * len(table), dtype=np.result_type(cols["from"], cols["to"]))
         ends[0::2], ends[1::2] = cols["from"], cols["to"]              # first mention: from, to, from, to, ...
-        if not ends.all():                                             # an empty name
+        if not _filled(ends).all():                                    # an empty name
             return None
-        unique, first, inverse = np.unique(ends, return_index=True, return_inverse=True)
+        unique, first, inverse = np.unique(_keys(ends), return_index=True, return_inverse=True)
+        unique = ends[first]
         order = np.argsort(first, kind="stable")
         rank = np.empty_like(order)
         rank[order] = np.arange(len(order))
         ids = rank[inverse]
         t, h, n = ids[0::2], ids[1::2], len(unique)
-        if (t == h).any() or len(np.unique(t * n + h)) != len(t):      # an event joined to itself; a pair twice
+        pairs = np.sort(t * n + h)
+        if (t == h).any() or (pairs[1:] == pairs[:-1]).any():         # an event joined to itself; a pair twice
             return None
-        if not _acyclic(n, t, h):
-            return None
+        if not (t < h).all() and not _acyclic(n, t, h):   # numbered by first mention, a table in
+            return None                                     # precedence order has every arc forward
         indeg, outdeg = np.bincount(h, minlength=n), np.bincount(t, minlength=n)
         if (indeg == 0).sum() != 1 or (outdeg == 0).sum() != 1:
             return None
         arcs = np.argsort(t, kind="stable")       # networkx's edge order: by tail, each tail's in row order
         blank = np.zeros(len(table), dtype="S1")
-        column = lambda key: _text(cols.get(key, blank))               # noqa: E731
-        group, mechanism = column("group"), column("mechanism")
+        group, mechanism = cols.get("group", blank), cols.get("mechanism", blank)
         out = cls(names=_text(unique[order]), tails=t[arcs], heads=h[arcs], min_deg=phi[arcs],
-                  arc_name=column("name")[arcs], arc_group=group[arcs],
+                  arc_name=_text(cols.get("name", blank)[arcs]), arc_group=_text(group[arcs]),
                   event_group=_agreed(group, t, h, n), event_mechanism=_agreed(mechanism, t, h, n))
         for a in vars(out).values():
             a.flags.writeable = False
@@ -82,15 +83,30 @@ def _acyclic(n, tails, heads) -> bool:
     return True
 
 
+def _keys(names) -> np.ndarray:
+    """Names as sort keys: names of up to 8 bytes as one integer each (a sort of integers, not of
+    strings: only equality matters, the events are then put in order of first mention)."""
+    return names.astype("S8").view(np.uint64) if names.dtype.itemsize <= 8 else names
+
+
+def _filled(cells) -> np.ndarray:
+    """Per bytes cell whether it holds text (its first byte: no cell holds a NUL)."""
+    return cells.view(np.uint8).reshape(len(cells), -1)[:, 0] != 0
+
+
 def _text(cells) -> np.ndarray:
     """ASCII bytes cells as a str array."""
     return cells.astype(str)
 
 
 def _agreed(values, tails, heads, n) -> np.ndarray:
-    """Per event the value on which every operation ending at it agrees, or, with none ending at
-    it, every one starting at it; "" where they differ (`cyclogram_tables.events_of`, per column)."""
-    kinds, code = np.unique(values, return_inverse=True)
+    """Per event the value (bytes cells) on which every operation ending at it agrees, or, with
+    none ending at it, every one starting at it; "" where they differ (`cyclogram_tables.events_of`,
+    per column); a str array."""
+    if not _filled(values).any():               # no such column: "" everywhere
+        return np.full(n, "")
+    _, first, code = np.unique(_keys(values), return_index=True, return_inverse=True)
+    kinds = _text(values[first])
     into, out = _agree(code, heads, n), _agree(code, tails, n)
     pick = np.where(np.bincount(heads, minlength=n) > 0, into, out)
     return np.append(kinds, "")[pick]           # -1: the "" appended
