@@ -284,9 +284,13 @@ def _cells(body, starts, size) -> np.ndarray:
     gathered one byte position at a time (temporaries of the row count, not rows x width)."""
     width = max(int(size.max(initial=0)), 1)
     grid = np.zeros((len(starts), width), np.uint8)
+    full = int(size.min(initial=0))
     for i in range(width):
-        rows = np.flatnonzero(size > i) if i else np.flatnonzero(size)
-        grid[rows, i] = body[starts[rows] + i]
+        if i < full:                         # every cell this long: no rows to pick
+            grid[:, i] = body[starts + i]
+        else:
+            rows = np.flatnonzero(size > i)
+            grid[rows, i] = body[starts[rows] + i]
     return grid.view(f"S{width}").ravel()
 
 
@@ -298,8 +302,30 @@ def _numbers(cells, filled, delimiter) -> np.ndarray | None:
     if not _NUMBER_BYTE[grid].all():
         return None
     values = np.full(len(cells), np.nan)
+    fast = _short_decimals(grid, values) & filled
+    rest = filled & ~fast
     try:
-        values[filled] = grid.view(cells.dtype).ravel()[filled].astype(float)
+        values[rest] = grid[rest].view(cells.dtype).ravel().astype(float)
     except ValueError:                       # "1.2.3", "+-1", "e": float() refuses them too
         return None
     return values
+
+
+def _short_decimals(grid, values) -> np.ndarray:
+    """Cells [+-]digits[.digits] of at most 15 digits read into `values` exactly as float() reads
+    them: m / 10^k with the integer m < 2^53 and 10^k (k <= 15) both exact floats, one correctly
+    rounded division (Clinger's fast path, as strtod's); per cell whether it was one such."""
+    digit = (grid >= ord("0")) & (grid <= ord("9"))
+    dot, sign = grid == ord("."), (grid[:, 0] == ord("+")) | (grid[:, 0] == ord("-"))
+    count = digit.sum(axis=1)
+    ok = (dot.sum(axis=1) <= 1) & (count >= 1) & (count <= 15)
+    ok &= (digit | dot | (grid == 0)).sum(axis=1) + sign == grid.shape[1]     # nothing else (no exponent)
+    mantissa, places, after = np.zeros(len(grid), np.int64), np.zeros(len(grid), np.int64), np.zeros(len(grid), bool)
+    for j in range(grid.shape[1]):
+        d = digit[:, j]
+        mantissa = np.where(d, mantissa * 10 + (grid[:, j].astype(np.int64) - ord("0")), mantissa)
+        after |= dot[:, j]
+        places += d & after
+    got = mantissa[ok] / 10.0 ** places[ok]
+    values[ok] = np.where(grid[ok, 0] == ord("-"), -got, got)
+    return ok
