@@ -85,15 +85,24 @@ class Views:
         return labels
 
     @cached_property
+    def end_indices(self) -> tuple[int, int]:
+        """(first, last): the indices (as `event_index`) of the first and the last event."""
+        plain = self._columnar
+        if plain is None:
+            return self.event_index[self.first_event], self.event_index[self.last_event]
+        n = len(plain.names)
+        return tuple(int(np.flatnonzero(np.bincount(ends, minlength=n) == 0)[0]) for ends in (plain.heads, plain.tails))
+
+    @cached_property
     def first_event(self) -> str:
         if self._columnar is not None:
-            return self._event_names[int(np.setdiff1d(self._columnar.tails, self._columnar.heads)[0])]
+            return str(self._columnar.names[self.end_indices[0]])
         return next(v for v in self.graph if self.graph.in_degree(v) == 0 and self.graph.out_degree(v) > 0)
 
     @cached_property
     def last_event(self) -> str:
         if self._columnar is not None:
-            return self._event_names[int(np.setdiff1d(self._columnar.heads, self._columnar.tails)[0])]
+            return str(self._columnar.names[self.end_indices[1]])
         return next(v for v in self.graph if self.graph.out_degree(v) == 0 and self.graph.in_degree(v) > 0)
 
     @property
