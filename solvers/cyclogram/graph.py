@@ -195,7 +195,9 @@ def topological_levels(n: int, tails: np.ndarray, heads: np.ndarray) -> np.ndarr
         np.subtract.at(indeg, reached, 1)
         # the events freed, sorted, once each (np.unique's hash costs ~0.1 ms a level, and imports numpy.ma)
         reached = np.sort(reached[indeg[reached] == 0])
-        frontier, depth = reached[np.concatenate(([True], reached[1:] != reached[:-1]))], depth + 1
+        first = np.ones(reached.size, dtype=bool)
+        first[1:] = reached[1:] != reached[:-1]
+        frontier, depth = reached[first], depth + 1
     if (level < 0).any():
         raise ValueError("the operations hold a precedence cycle")
     return level

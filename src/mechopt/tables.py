@@ -131,6 +131,7 @@ def number(cell, delimiter) -> float:
 
 
 MAX_TEXT = 200               # a name cell in a timing table: an event or an operation, not a paragraph
+MAX_NUMBER = 40              # read_columns' widest number cell (a longer one: read row by row)
 
 
 def _check_columns(path, header, columns, kinds, example, delimiter):
@@ -266,14 +267,17 @@ def read_columns(path, columns, kinds, *, required=(), what, example, max_rows=M
     filled = size > 0
     if not filled.any(axis=1).all() or _SPACE[body[starts[filled]]].any() or _SPACE[body[ends[filled] - 1]].any():
         return None                          # a blank row, or a cell with spaces around it
-    out = {}
+    out, padded = {}, None
     for j, name in enumerate(header):
-        if name in required and not filled[:, j].all():
+        width = int(size[:, j].max())
+        if (name in required and not filled[:, j].all()) or width > (MAX_TEXT if kinds[name] is str else MAX_NUMBER) \
+                or width * len(size) > 2 * len(body) + 2**20:   # a few wide cells: the rows hold them in less memory
             return None
-        cells = _cells(body, starts[:, j], size[:, j])
+        if padded is None:                   # the body and room for its last cell's window
+            padded = np.zeros(len(body) + int(size.max()), np.uint8)
+            padded[:len(body)] = body
+        cells = _cells(padded, starts[:, j], size[:, j])
         if kinds[name] is str:
-            if size[:, j].max() > MAX_TEXT:
-                return None
             out[name] = cells
         else:
             out[name] = _numbers(cells, filled[:, j], delimiter)
@@ -282,18 +286,13 @@ def read_columns(path, columns, kinds, *, required=(), what, example, max_rows=M
     return Columns(out)
 
 
-def _cells(body, starts, size) -> np.ndarray:
-    """The cells at `starts` of `size` bytes as one fixed-width bytes array (b"" where empty),
-    gathered one byte position at a time (temporaries of the row count, not rows x width)."""
+def _cells(padded, starts, size) -> np.ndarray:
+    """The cells at `starts` of `size` bytes as one fixed-width bytes array (b"" where empty): the
+    window of the widest cell's width at each start (a view of the body, `padded` past its end by
+    that width), its bytes past the cell's end set to 0."""
     width = max(int(size.max(initial=0)), 1)
-    grid = np.zeros((len(starts), width), np.uint8)
-    full = int(size.min(initial=0))
-    for i in range(width):
-        if i < full:                         # every cell this long: no rows to pick
-            grid[:, i] = body[starts + i]
-        else:
-            rows = np.flatnonzero(size > i)
-            grid[rows, i] = body[starts[rows] + i]
+    grid = np.lib.stride_tricks.sliding_window_view(padded, width)[starts]
+    grid[np.arange(width) >= size[:, None]] = 0
     return grid.view(f"S{width}").ravel()
 
 
@@ -318,17 +317,20 @@ def _short_decimals(grid, values) -> np.ndarray:
     """Cells [+-]digits[.digits] of at most 15 digits read into `values` exactly as float() reads
     them: m / 10^k with the integer m < 2^53 and 10^k (k <= 15) both exact floats, one correctly
     rounded division (Clinger's fast path, as strtod's); per cell whether it was one such."""
-    digit = (grid >= ord("0")) & (grid <= ord("9"))
-    dot, sign = grid == ord("."), (grid[:, 0] == ord("+")) | (grid[:, 0] == ord("-"))
-    count = digit.sum(axis=1)
-    ok = (dot.sum(axis=1) <= 1) & (count >= 1) & (count <= 15)
-    ok &= (digit | dot | (grid == 0)).sum(axis=1) + sign == grid.shape[1]     # nothing else (no exponent)
-    mantissa, places, after = np.zeros(len(grid), np.int64), np.zeros(len(grid), np.int64), np.zeros(len(grid), bool)
-    for j in range(grid.shape[1]):
-        d = digit[:, j]
-        mantissa = np.where(d, mantissa * 10 + (grid[:, j].astype(np.int64) - ord("0")), mantissa)
-        after |= dot[:, j]
-        places += d & after
+    by_place = np.ascontiguousarray(grid.T)         # a byte position a row: the sums below run along rows
+    digit = (by_place >= ord("0")) & (by_place <= ord("9"))
+    dot, sign = by_place == ord("."), (grid[:, 0] == ord("+")) | (grid[:, 0] == ord("-"))
+    count = digit.sum(axis=0, dtype=np.int32)
+    ok = (dot.sum(axis=0, dtype=np.int32) <= 1) & (count >= 1) & (count <= 15)
+    ok &= (digit | dot | (by_place == 0)).sum(axis=0, dtype=np.int32) + sign == len(by_place)   # nothing else
+    scale = np.where(digit, np.uint8(10), np.uint8(1))
+    value = np.where(digit, by_place - np.uint8(ord("0")), np.uint8(0))
+    mantissa, places, after = np.zeros(len(grid), np.int64), np.zeros(len(grid), np.int32), np.zeros(len(grid), bool)
+    for j in range(len(by_place)):          # m = 10 m + digit, and the digits after the dot, a byte position at a time
+        mantissa *= scale[j]
+        mantissa += value[j]
+        after |= dot[j]
+        places += digit[j] & after
     got = mantissa[ok] / 10.0 ** places[ok]
     values[ok] = np.where(grid[ok, 0] == ord("-"), -got, got)
     return ok

@@ -270,3 +270,25 @@ def test_a_broken_plain_table_is_refused_naming_the_scene(tmp_path):
     path = _scene(tmp_path, BROKEN["a precedence cycle"])
     with pytest.raises(MechoptError, match="precedence cycle"):
         registry.find(str(path))
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_topological_levels_are_each_events_longest_chain_of_arcs(seed):
+    """The Kahn levels (solvers/cyclogram/graph.py), which the columnar build's acyclicity check and
+    the graph method share, against a plain-Python pass; an arc closing a cycle is refused."""
+    from mechopt.solvers.cyclogram.graph import topological_levels
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(2, 60))
+    order = rng.permutation(n)                       # a hidden precedence order, events numbered at random
+    pairs = {(int(order[a]), int(order[b])) for a, b in rng.integers(0, n, (3 * n, 2)) if a < b}
+    tails, heads = (np.array(side, dtype=np.int64) for side in zip(*pairs)) if pairs else (np.zeros(0, int),) * 2
+    level = {int(v): 0 for v in order}
+    for v in order:                                  # in precedence order: every arc into v is settled
+        for t, h in pairs:
+            if h == v:
+                level[h] = max(level[h], level[t] + 1)
+    assert topological_levels(n, tails, heads).tolist() == [level[v] for v in range(n)]
+    if pairs:
+        t, h = next(iter(pairs))
+        with pytest.raises(ValueError, match="precedence cycle"):
+            topological_levels(n, np.r_[tails, h], np.r_[heads, t])
