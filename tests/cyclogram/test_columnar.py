@@ -292,3 +292,17 @@ def test_topological_levels_are_each_events_longest_chain_of_arcs(seed):
         t, h = next(iter(pairs))
         with pytest.raises(ValueError, match="precedence cycle"):
             topological_levels(n, np.r_[tails, h], np.r_[heads, t])
+
+
+@pytest.mark.parametrize("extra", [
+    {"windows": [{"from": "feed.end", "to": "cut.end", "max_deg": 45.0}]},
+    {"syncs": [{"events": ["cut.start", "clamp.end"]}]},
+    {"limiting_op": ["feed.start", "feed.end"], "cycle_deg": 150.0},
+    {"windows": [{"from": "feed.start", "to": "done", "max_deg": 60.0}]},          # infeasible: named alike
+], ids=["window", "sync", "machine", "conflict"])
+def test_windows_syncs_and_a_limiting_operation_on_a_columnar_table(tmp_path, extra):
+    """They name events, so the graph is built to check them; the plan is still the rows' plan."""
+    columns, rows = _csv(tmp_path, _junction_rows())
+    fast, slow = (plan_cyclogram(Cyclogram(operations=ops, **extra)) for ops in (columns, rows))
+    assert fast.status == slow.status and fast.values == slow.values and fast.message == slow.message
+    assert json.dumps(fast.diagnostics, sort_keys=True) == json.dumps(slow.diagnostics, sort_keys=True)
