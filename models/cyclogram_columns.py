@@ -21,8 +21,9 @@ PLAIN_COLUMNS = frozenset({"from", "to", "min_deg", "name", "group", "mechanism"
 @dataclass(frozen=True, eq=False)
 class PlainNetwork:
     """Events and operations as arrays: `names` the events (str array, graph order), `tails`,
-    `heads` (int64, arc order), `min_deg` [deg] and, per operation, its `arc_name` and `arc_group`;
-    per event its `event_group` and `event_mechanism` ("" where none). Read-only."""
+    `heads` (int64, arc order), `min_deg` [deg] and, per operation, its `arc_name` and `arc_group`
+    (ASCII bytes, b"" where none: read as text where asked, a graph's or a message's); per event
+    its `event_group` and `event_mechanism` (str, "" where none). Read-only."""
     names: np.ndarray
     tails: np.ndarray
     heads: np.ndarray
@@ -66,7 +67,7 @@ class PlainNetwork:
         blank = np.zeros(len(table), dtype="S1")
         group, mechanism = cols.get("group", blank), cols.get("mechanism", blank)
         out = cls(names=_text(unique[order]), tails=t[arcs], heads=h[arcs], min_deg=phi[arcs],
-                  arc_name=_text(cols.get("name", blank)[arcs]), arc_group=_text(group[arcs]),
+                  arc_name=cols.get("name", blank)[arcs], arc_group=group[arcs],
                   event_group=_agreed(group, t, h, n), event_mechanism=_agreed(mechanism, t, h, n))
         for a in vars(out).values():
             a.flags.writeable = False

@@ -70,7 +70,8 @@ class Network:
                              zip(plain.names.tolist(), plain.event_mechanism.tolist(), plain.event_group.tolist()))
             g.add_edges_from((x, y, arc_attributes(a, {"name": name, "group": group})) for x, y, a, name, group in
                              zip(*(plain.names[ends].tolist() for ends in (plain.tails, plain.heads)),
-                                 plain.min_deg.tolist(), plain.arc_name.tolist(), plain.arc_group.tolist()))
+                                 plain.min_deg.tolist(), *(text.astype(str).tolist() for text in
+                                                           (plain.arc_name, plain.arc_group))))
         else:
             check_table(self.events, "events", dict)
             for name, attrs in self.events.items():

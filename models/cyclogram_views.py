@@ -169,8 +169,9 @@ class Views:
         """(from, to) -> ' "name"' for the operations the table names (the conflict messages' words)."""
         plain = self._columnar
         if plain is not None:
-            named = np.flatnonzero(plain.arc_name != "")
-            return {self.arcs[k]: f' "{name}"' for k, name in zip(named.tolist(), plain.arc_name[named].tolist())}
+            named = np.flatnonzero(plain.arc_name != b"")
+            return {self.arcs[k]: f' "{name}"' for k, name in zip(named.tolist(),
+                                                                  plain.arc_name[named].astype(str).tolist())}
         return {(x, y): f' "{name}"' for x, y, name in self.graph.edges(data="name") if name}
 
     @cached_property
