@@ -6,6 +6,7 @@ created is ever removed by it."""
 import errno
 import os
 import re
+import secrets
 import stat
 from contextlib import contextmanager
 from contextvars import ContextVar
@@ -83,7 +84,7 @@ def _create_temporary(path):
     flags = (os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_BINARY", 0)
              | getattr(os, "O_CLOEXEC", 0))
     for _ in range(100):
-        tmp = path.with_name(f".{path.name[:NAME_ROOM]}.{os.urandom(8).hex()}.tmp")
+        tmp = path.with_name(f".{path.name[:NAME_ROOM]}.{secrets.token_hex(8)}.tmp")
         try:
             return os.open(tmp, flags, 0o666), tmp
         except FileExistsError:
