@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mechopt.kit.errors import ModelError, some_of
-from mechopt.models.cyclogram_columns import PlainNetwork
+from mechopt.models.cyclogram_columns import PlainNetwork, ascii_text
 from mechopt.models.cyclogram_motions import MOTION_KEYS, motion_of
 from mechopt.models.cyclogram_tables import (
     EVENT_KEYS,
@@ -70,7 +70,7 @@ class Network:
                              zip(plain.names.tolist(), plain.event_mechanism.tolist(), plain.event_group.tolist()))
             g.add_edges_from((x, y, arc_attributes(a, {"name": name, "group": group})) for x, y, a, name, group in
                              zip(*(plain.names[ends].tolist() for ends in (plain.tails, plain.heads)),
-                                 plain.min_deg.tolist(), *(text.astype(str).tolist() for text in
+                                 plain.min_deg.tolist(), *(ascii_text(text).tolist() for text in
                                                            (plain.arc_name, plain.arc_group))))
         else:
             check_table(self.events, "events", dict)

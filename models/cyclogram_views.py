@@ -8,7 +8,7 @@ import numpy as np
 
 from mechopt.kit.errors import ModelError
 from mechopt.models.cyclogram_bounds import time_floor_deg
-from mechopt.models.cyclogram_columns import Arcs
+from mechopt.models.cyclogram_columns import Arcs, ascii_text
 
 if TYPE_CHECKING:
     import networkx as nx
@@ -80,7 +80,7 @@ class Views:
             labels = np.array([f"{x}->{y}" for x, y in self.arcs], dtype=str)
         else:                   # joined as ASCII bytes (a plain table's names are), a quarter of str's memory
             names = plain.names.astype("S")
-            labels = np.strings.add(np.strings.add(names[plain.tails], b"->"), names[plain.heads]).astype(str)
+            labels = ascii_text(np.strings.add(np.strings.add(names[plain.tails], b"->"), names[plain.heads]))
         labels.flags.writeable = False
         return labels
 
@@ -171,7 +171,7 @@ class Views:
         if plain is not None:
             named = np.flatnonzero(plain.arc_name != b"")
             return {self.arcs[k]: f' "{name}"' for k, name in zip(named.tolist(),
-                                                                  plain.arc_name[named].astype(str).tolist())}
+                                                                  ascii_text(plain.arc_name[named]).tolist())}
         return {(x, y): f' "{name}"' for x, y, name in self.graph.edges(data="name") if name}
 
     @cached_property
