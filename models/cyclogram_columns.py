@@ -63,7 +63,8 @@ class PlainNetwork:
         indeg, outdeg = np.bincount(h, minlength=n), np.bincount(t, minlength=n)
         if (indeg == 0).sum() != 1 or (outdeg == 0).sum() != 1:
             return None
-        arcs = np.argsort(t, kind="stable")       # networkx's edge order: by tail, each tail's in row order
+        # networkx's edge order: by tail, each tail's in row order (a table in tail order already is)
+        arcs = np.arange(len(t)) if (t[1:] >= t[:-1]).all() else np.argsort(t, kind="stable")
         blank = np.zeros(len(table), dtype="S1")
         group, mechanism = cols.get("group", blank), cols.get("mechanism", blank)
         out = cls(names=ascii_text(unique[order]), tails=t[arcs], heads=h[arcs], min_deg=phi[arcs],
