@@ -239,21 +239,33 @@ def a_path(n, tails, heads, source, target) -> list[int] | None:
         path = _walk_back(n, tails, heads, source, target)
         if path is not None:
             return path
-    # scipy's sparse graphs (~0.3 s to import) only where the walk back does not answer
-    import scipy.sparse as sp
-    from scipy.sparse.csgraph import breadth_first_order
     pair = tails * n + heads
     pairs, first = np.unique(pair, return_index=True)
-    graph = sp.csr_matrix((np.ones(first.size), (tails[first], heads[first])), shape=(n, n))
-    _, pred = breadth_first_order(graph, source, directed=True, return_predecessors=True)
+    pred = breadth_first_predecessors(n, pairs // n, pairs % n, source)
     if target != source and pred[target] < 0:
         return None
-    pred, nodes, v = pred.tolist(), [target], target
+    nodes, v = [target], target
     while v != source:
         v = pred[v]
         nodes.append(v)
     nodes = np.array(nodes[::-1], dtype=np.int64)
     return first[np.searchsorted(pairs, nodes[:-1] * n + nodes[1:])].tolist()
+
+
+def breadth_first_predecessors(n, tails, heads, source) -> list[int]:
+    """Each event's predecessor breadth first from `source` (-9999: unreached, and the source),
+    over distinct arcs sorted by (tail, head), an event's successors in increasing order: what
+    scipy.sparse.csgraph.breadth_first_order gives on their CSR matrix, without scipy's import
+    (~0.3 s of a small network's run)."""
+    starts, succ = np.searchsorted(tails, np.arange(n + 1)).tolist(), heads.tolist()
+    pred, seen, queue = [-9999] * n, [False] * n, [source]
+    seen[source] = True
+    for v in queue:                     # the list grows as it is walked: a FIFO queue
+        for w in succ[starts[v]:starts[v + 1]]:
+            if not seen[w]:
+                seen[w], pred[w] = True, v
+                queue.append(w)
+    return pred
 
 
 def _walk_back(n, tails, heads, source, target) -> list[int] | None:

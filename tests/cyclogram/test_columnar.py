@@ -306,3 +306,22 @@ def test_windows_syncs_and_a_limiting_operation_on_a_columnar_table(tmp_path, ex
     fast, slow = (plan_cyclogram(Cyclogram(operations=ops, **extra)) for ops in (columns, rows))
     assert fast.status == slow.status and fast.values == slow.values and fast.message == slow.message
     assert json.dumps(fast.diagnostics, sort_keys=True) == json.dumps(slow.diagnostics, sort_keys=True)
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_the_breadth_first_predecessors_are_scipys(seed):
+    """a_path's breadth-first search without scipy: the predecessors scipy's breadth_first_order
+    gives on the same arcs' CSR matrix (so the critical chain named on a small network is unchanged)."""
+    sparse = pytest.importorskip("scipy.sparse")
+    from scipy.sparse.csgraph import breadth_first_order
+
+    from mechopt.solvers.cyclogram.graph import breadth_first_predecessors
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(2, 80))
+    pairs = np.unique(rng.integers(0, n, size=int(rng.integers(1, 4 * n))) * n + rng.integers(0, n, 1))
+    pairs = np.unique(np.r_[pairs, rng.integers(0, n * n, size=3 * n)])
+    tails, heads = pairs // n, pairs % n
+    source = int(rng.integers(0, n))
+    graph = sparse.csr_matrix((np.ones(pairs.size), (tails, heads)), shape=(n, n))
+    _, want = breadth_first_order(graph, source, directed=True, return_predecessors=True)
+    assert breadth_first_predecessors(n, tails, heads, source) == want.tolist()
