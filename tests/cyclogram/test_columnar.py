@@ -253,9 +253,9 @@ def test_a_scene_builds_its_plain_table_once_as_columns(tmp_path, monkeypatch):
 
 
 def test_a_plain_table_run_imports_no_graph_library_and_no_back_end(tmp_path):
-    """`mechopt run` on a plain table: neither networkx (the graph is not built) nor scipy, cvxpy,
-    numba (from WALK_MIN_EVENTS events the critical path is walked back, no sparse graph's search)."""
-    path = _scene(tmp_path, _layered_rows(10_200))
+    """`mechopt run` on a plain table: neither networkx (the graph is not built) nor scipy (the
+    critical path's breadth-first search is Python's), cvxpy or numba."""
+    path = _scene(tmp_path, _layered_rows(300))
     code = (f"import sys\nfrom mechopt.cli import main\n"
             f"assert main(['run', {str(path)!r}, '--json', {str(tmp_path / 'out.json')!r}]) == 0\n"
             "print([m for m in ('networkx', 'scipy', 'cvxpy', 'numba') if m in sys.modules])")
