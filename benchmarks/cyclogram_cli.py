@@ -66,20 +66,34 @@ def _timed(argv, env=None) -> tuple[float, int, str]:
     return float(wall), int(rss_kib) // 1024, out.stdout
 
 
+def user_env(folder: Path) -> dict:
+    """The environment of a user's process: Python's bytecode cached (an installed package's is;
+    here in a temporary folder, not the checkout), whatever the calling session said
+    (PYTHONDONTWRITEBYTECODE would have every mechopt module compiled in every timed run)."""
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    return env | {"PYTHONPYCACHEPREFIX": str(folder / "pycache")}
+
+
 def compare(operations: int, repeats=3, progress=print) -> dict:
-    """The CLI and the networkx script on the same generated CSV, interleaved; medians and peaks."""
+    """The CLI and the networkx script on the same generated CSV, interleaved after one untimed run
+    of each (which writes the bytecode caches); medians and peaks."""
     mechopt = shutil.which("mechopt", path=os.path.dirname(sys.executable)) or "mechopt"
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         arcs = write_scene(folder, operations)
         (folder / "nx_script.py").write_text(NETWORKX_SCRIPT, encoding="utf-8")
+        env = user_env(folder)
+        cli_argv = [mechopt, "run", str(folder / "big.toml"), "--json", str(folder / "out.json")]
+        nx_argv = [sys.executable, str(folder / "nx_script.py"), str(folder / "ops.csv")]
+        for argv in (cli_argv, nx_argv):
+            _timed(argv, env)
         runs = {"cli": [], "networkx": []}
         span = {}
         for _ in range(repeats):
-            wall, rss, _out = _timed([mechopt, "run", str(folder / "big.toml"), "--json", str(folder / "out.json")])
+            wall, rss, _out = _timed(cli_argv, env)
             runs["cli"].append((wall, rss))
             span["cli"] = json.loads((folder / "out.json").read_text())
-            wall, rss, out = _timed([sys.executable, str(folder / "nx_script.py"), str(folder / "ops.csv")])
+            wall, rss, out = _timed(nx_argv, env)
             runs["networkx"].append((wall, rss))
             span["networkx"] = float(out.split()[-1])
             if progress:

@@ -146,6 +146,9 @@ class Cyclogram(Network, Views, Bounds):
 
     # structure tables a scene may read from a CSV file as rows of named, typed columns
     # tables a scene may read from a CSV beside it, any length (an inline list holds at most 100 rows)
+    # a plain operations table (names, angles, notes) is read as whole columns: its network as arrays
+    # (models/cyclogram_columns.py), no object per row; any other as rows
+    COLUMNAR_TABLES: ClassVar[frozenset] = frozenset({"operations"})
     CSV_TABLES: ClassVar[dict] = {"operations": (("from", "to"), OPERATION_COLUMNS),
                                   "windows": (("from", "to"), WINDOW_COLUMNS),
                                   "syncs": (("events",), SYNC_COLUMNS), "tasks": (("task",), TASK_COLUMNS),
@@ -153,6 +156,7 @@ class Cyclogram(Network, Views, Bounds):
 
     def __post_init__(self):
         check_fields(self)
+        self._take_columns()            # a plain CSV table: its network straight from the columns
         if self.tasks:                  # a task table becomes the operations it stands for
             ops = task_operations(self.tasks)
             if self.operations and self.operations != ops:
@@ -160,9 +164,10 @@ class Cyclogram(Network, Views, Bounds):
             object.__setattr__(self, "operations", ops)
         elif not self.operations:
             raise ModelError("operations: missing (give the operations, or a task table `tasks`)", key="operations")
-        check_table(self.operations, "operations", list)
+        if self._columnar is None:
+            check_table(self.operations, "operations", list)
         check_table(self.events, "events", dict)
-        if not self.events:             # events named by the operations need no table of their own
+        if not self.events and self._columnar is None:  # events named by the operations need no table of their own
             object.__setattr__(self, "events", events_of(self.operations))
         if isinstance(self.syncs, list) and any(isinstance(s, dict) and isinstance(s.get("events"), str)
                                                 for s in self.syncs):      # a CSV row names its events "a;b"
@@ -170,13 +175,13 @@ class Cyclogram(Network, Views, Bounds):
                                                if isinstance(s, dict) and isinstance(s.get("events"), str) else s
                                                for s in self.syncs])
         _ = self.recurrences    # checked before a window is split off an operation (none on a recurrent one)
-        if any(isinstance(op, dict) and "max_deg" in op for op in self.operations):
+        if self._columnar is None and any(isinstance(op, dict) and "max_deg" in op for op in self.operations):
             operations, windows = split_windows(self.operations)
             object.__setattr__(self, "operations", operations)
             object.__setattr__(self, "windows", list(self.windows) + windows)
         if self.lever is not None:
             _ = self.lever_model    # builds and validates the lever (cached)
-        self.graph          # builds and validates the network (cached)
+        self._check_network()           # builds and validates the network (cached)
         self._check_bounds()
         self._check_motions()
 
@@ -198,6 +203,8 @@ class Cyclogram(Network, Views, Bounds):
     @cached_property
     def clearance_rows(self) -> tuple[Clearance, ...]:
         """The `clearances` table resolved: operations as arc indices, displacements as angle fractions."""
+        if isinstance(self.clearances, list) and not self.clearances:
+            return ()
         names = [d["name"] for d in self._arc_data]
         return clearance_rows(self.clearances, self.arcs, names, self.motion_arcs, MAX_CYCLES)
 
@@ -212,6 +219,8 @@ class Cyclogram(Network, Views, Bounds):
         if not isinstance(self.least_angle_of, list):
             raise ModelError(f"least_angle_of={self.least_angle_of!r}: a list of operations (names or from->to)",
                              key="least_angle_of")
+        if not self.least_angle_of:
+            return ()
         names = [d["name"] for d in self._arc_data]
         return tuple(operation_index(self.arcs, names, ref, f"least_angle_of[{j}]")
                      for j, ref in enumerate(self.least_angle_of))

@@ -24,7 +24,8 @@ class Bounds:
 
     @cached_property
     def _min_angles(self) -> np.ndarray:
-        phi = np.fromiter((d["min_deg"] for d in self._arc_data), dtype=float, count=len(self._arc_data))
+        phi = (self._columnar.min_deg.copy() if self._columnar is not None else   # a plain table's column
+               np.fromiter((d["min_deg"] for d in self._arc_data), dtype=float, count=len(self._arc_data)))
         timed = self.time_arcs()
         if timed and self.speed_rpm is None:
             x, y = self.arcs[timed[0]]
@@ -40,7 +41,8 @@ class Bounds:
 
     @cached_property
     def _time_arcs(self) -> tuple[int, ...]:
-        return tuple(k for k, d in enumerate(self._arc_data) if d["min_ms"] is not None)
+        return () if self._columnar is not None else tuple(k for k, d in enumerate(self._arc_data)
+                                                          if d["min_ms"] is not None)
 
     def time_coeffs_deg_per_rpm(self) -> np.ndarray:
         """Per arc, the angle its `min_ms` asks for per rpm of main-shaft speed [deg/rpm] (0: none)."""
@@ -80,7 +82,7 @@ class Bounds:
 
     @cached_property
     def _model_arcs(self):
-        data = self._arc_data
+        data = () if self._columnar is not None else self._arc_data      # a plain table names no law
         return ([k for k, d in enumerate(data) if d["stress"] is not None],
                 [k for k, d in enumerate(data) if d["amplitude"] is not None])
 

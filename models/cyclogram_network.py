@@ -2,11 +2,12 @@
 (precedence without a cycle, one first and one last event), windows, syncs, the limiting
 operation, the recurrent operations (those ending k cycles later) and the laws an operation names."""
 from functools import cached_property
+from typing import TYPE_CHECKING
 
-import networkx as nx
 import numpy as np
 
 from mechopt.kit.errors import ModelError, some_of
+from mechopt.models.cyclogram_columns import PlainNetwork, ascii_text
 from mechopt.models.cyclogram_motions import MOTION_KEYS, motion_of
 from mechopt.models.cyclogram_tables import (
     EVENT_KEYS,
@@ -26,6 +27,10 @@ from mechopt.models.cyclogram_tables import (
     floors_of,
 )
 from mechopt.models.loom_limits import AMPLITUDE_LAWS
+from mechopt.tables import Columns
+
+if TYPE_CHECKING:       # imported where the graph is built: a plain table's run never builds it
+    import networkx as nx
 
 # an operation row solved as given, no law to evaluate (no stress, amplitude, motion, time, cycles, mark)
 PLAIN_OPERATION_KEYS = frozenset({"from", "to", "min_deg", "name", "group", "mechanism", "why", "where", "what"})
@@ -34,17 +39,47 @@ PLAIN_OPERATION_KEYS = frozenset({"from", "to", "min_deg", "name", "group", "mec
 class Network:
     """The `graph` of a Cyclogram (a part of it: the dataclass's fields are the task's) and its checks."""
 
+    # the network as arrays when the operations came as a plain CSV table (models/cyclogram_columns.py);
+    # then the views read the arrays and `graph` is built from them only when asked
+    _columnar: PlainNetwork | None = None
+
+    def _take_columns(self):
+        """A plain table's network from its columns (`_columnar`); any other table as its rows."""
+        if not isinstance(self.operations, Columns):
+            return
+        plain = None if self.tasks or self.events else PlainNetwork.of(self.operations)
+        if plain is None:
+            object.__setattr__(self, "operations", list(self.operations.rows()))
+        else:
+            object.__setattr__(self, "_columnar", plain)
+
+    def _check_network(self):
+        """The network built and checked: the rows' graph; or the plain table's arrays, checked as
+        they were built, and the graph too where windows, syncs or a limiting operation name events."""
+        if self._columnar is None or self.windows or self.syncs or self.limiting_op is not None:
+            _ = self.graph
+
     @cached_property
-    def graph(self) -> nx.DiGraph:
+    def graph(self) -> "nx.DiGraph":
         """Events as nodes (mechanism, group), operations as arcs (min_deg, stress, amplitude)."""
-        check_table(self.events, "events", dict)
+        import networkx as nx
         g = nx.DiGraph()
-        for name, attrs in self.events.items():
-            check_entry(attrs, f"events.{name}", EVENT_KEYS, required=())
-            g.add_node(str(name), mechanism=str(attrs.get("mechanism", "")), group=str(attrs.get("group", "")))
-        check_table(self.operations, "operations", list)
-        if not self._add_plain_operations(g):
-            self._add_operations(g)
+        plain = self._columnar
+        if plain is not None:
+            g.add_nodes_from((v, {"mechanism": m, "group": group}) for v, m, group in
+                             zip(plain.names.tolist(), plain.event_mechanism.tolist(), plain.event_group.tolist()))
+            g.add_edges_from((x, y, arc_attributes(a, {"name": name, "group": group})) for x, y, a, name, group in
+                             zip(*(plain.names[ends].tolist() for ends in (plain.tails, plain.heads)),
+                                 plain.min_deg.tolist(), *(ascii_text(text).tolist() for text in
+                                                           (plain.arc_name, plain.arc_group))))
+        else:
+            check_table(self.events, "events", dict)
+            for name, attrs in self.events.items():
+                check_entry(attrs, f"events.{name}", EVENT_KEYS, required=())
+                g.add_node(str(name), mechanism=str(attrs.get("mechanism", "")), group=str(attrs.get("group", "")))
+            check_table(self.operations, "operations", list)
+            if not self._add_plain_operations(g):
+                self._add_operations(g)
         if not nx.is_directed_acyclic_graph(g):
             cycle = nx.find_cycle(g)
             chain = some_of([cycle[0][0]] + [v for _, v in cycle], sep=" -> ")
@@ -177,6 +212,8 @@ class Network:
         again). They carry a floor only (min_deg or min_ms): no window, stress or amplitude. The
         least cycle time over them is `cyclogram.least_cycle_time`; a one-cycle solver refuses them
         (`check_one_cycle`). Rows with cycles = 0 are ordinary operations."""
+        if self._columnar is not None:
+            return ()               # a plain table has no cycles column
         check_table(self.operations, "operations", list)
         out, seen = [], set()
         for op in self.operations:

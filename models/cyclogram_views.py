@@ -2,12 +2,16 @@
 groups, windows and syncs as pairs, each operation's attributes and motion (cached: the task is
 frozen, and a walk over 10^5 events costs ~0.1 s)."""
 from functools import cached_property
+from typing import TYPE_CHECKING
 
-import networkx as nx
 import numpy as np
 
 from mechopt.kit.errors import ModelError
 from mechopt.models.cyclogram_bounds import time_floor_deg
+from mechopt.models.cyclogram_columns import Arcs, ascii_text
+
+if TYPE_CHECKING:
+    import networkx as nx
 
 
 class Views:
@@ -15,12 +19,18 @@ class Views:
 
     @property
     def event_names(self) -> list[str]:
-        return list(self.graph.nodes)
+        return list(self._event_names) if self._columnar is not None else list(self.graph.nodes)
+
+    @cached_property
+    def _event_names(self) -> tuple[str, ...]:
+        return tuple(self._columnar.names.tolist())
 
     @cached_property
     def arcs(self) -> list[tuple[str, str]]:
-        """Operations as (from, to), in the order every per-arc array uses."""
-        return list(self.graph.edges)
+        """Operations as (from, to), in the order every per-arc array uses (a plain table's: a
+        sequence read off its index arrays)."""
+        plain = self._columnar
+        return list(self.graph.edges) if plain is None else Arcs(self._event_names, plain.tails, plain.heads)
 
     # the views below are cached (the task is frozen): a solve asks for them several times, and a
     # walk over the graph's nodes or edges costs ~0.1 s at 10^5 events
@@ -29,6 +39,9 @@ class Views:
     def index_arrays(self) -> tuple[tuple[str, ...], np.ndarray, np.ndarray]:
         """(events in graph order without the isolated ones, tails, heads): the operations as
         index arrays into those events, in `arcs` order (read-only; the solvers' view)."""
+        plain = self._columnar
+        if plain is not None:                   # every event has an operation: none isolated
+            return self._event_names, plain.tails, plain.heads
         names, index = tuple(self.event_index), self.event_index
         tails = np.fromiter((index[x] for x, _ in self.arcs), dtype=np.int64, count=len(self.arcs))
         heads = np.fromiter((index[y] for _, y in self.arcs), dtype=np.int64, count=len(self.arcs))
@@ -38,29 +51,58 @@ class Views:
     @cached_property
     def event_index(self) -> dict[str, int]:
         """Event -> its index in `index_arrays` (graph order, isolated events left out); not to be changed."""
+        if self._columnar is not None:
+            return {v: i for i, v in enumerate(self._event_names)}
         isolated = set(self._isolated)
         return {v: i for i, v in enumerate(v for v in self.graph if v not in isolated)}
 
     @cached_property
     def group_indices(self) -> dict[str, np.ndarray]:
         """Group -> the indices (as `event_index`) of its events that have an operation."""
+        plain = self._columnar
+        if plain is not None:
+            return {group: np.flatnonzero(plain.event_group == group) for group in self._group_order}
         index = self.event_index
         return {group: np.array([index[v] for v in events if v in index], dtype=np.int64)
                 for group, events in self._groups.items()}
 
     @cached_property
+    def _group_order(self) -> list[str]:
+        """A plain table's groups in order of their first event."""
+        kinds, first = np.unique(self._columnar.event_group, return_index=True)
+        return [str(kinds[j]) for j in np.argsort(first) if kinds[j]]
+
+    @cached_property
     def operation_labels(self) -> np.ndarray:
         """Each operation as "from->to", in `arcs` order (read-only)."""
-        labels = np.array([f"{x}->{y}" for x, y in self.arcs], dtype=str)
+        plain = self._columnar
+        if plain is None:
+            labels = np.array([f"{x}->{y}" for x, y in self.arcs], dtype=str)
+        else:                   # joined as ASCII bytes (a plain table's names are), a quarter of str's memory
+            names = plain.names.astype("S")
+            labels = ascii_text(np.strings.add(np.strings.add(names[plain.tails], b"->"), names[plain.heads]))
         labels.flags.writeable = False
         return labels
 
     @cached_property
+    def end_indices(self) -> tuple[int, int]:
+        """(first, last): the indices (as `event_index`) of the first and the last event."""
+        plain = self._columnar
+        if plain is None:
+            return self.event_index[self.first_event], self.event_index[self.last_event]
+        n = len(plain.names)
+        return tuple(int(np.flatnonzero(np.bincount(ends, minlength=n) == 0)[0]) for ends in (plain.heads, plain.tails))
+
+    @cached_property
     def first_event(self) -> str:
+        if self._columnar is not None:
+            return str(self._columnar.names[self.end_indices[0]])
         return next(v for v in self.graph if self.graph.in_degree(v) == 0 and self.graph.out_degree(v) > 0)
 
     @cached_property
     def last_event(self) -> str:
+        if self._columnar is not None:
+            return str(self._columnar.names[self.end_indices[1]])
         return next(v for v in self.graph if self.graph.out_degree(v) == 0 and self.graph.in_degree(v) > 0)
 
     @property
@@ -69,6 +111,8 @@ class Views:
 
     @cached_property
     def _isolated(self) -> tuple[str, ...]:
+        if self._columnar is not None:
+            return ()
         return tuple(v for v, d in self.graph.degree if d == 0)
 
     @property
@@ -79,12 +123,14 @@ class Views:
     @cached_property
     def _groups(self) -> dict[str, tuple[str, ...]]:
         out: dict[str, list[str]] = {}
-        for v, group in self.graph.nodes(data="group"):
+        plain = self._columnar
+        for v, group in (self.graph.nodes(data="group") if plain is None
+                         else zip(self._event_names, plain.event_group.tolist())):
             if group:
                 out.setdefault(group, []).append(v)
         return {group: tuple(events) for group, events in out.items()}
 
-    def group_graph(self, group: str) -> nx.DiGraph:
+    def group_graph(self, group: str) -> "nx.DiGraph":
         """The subgraph of one group's events and the operations between them."""
         if group not in self.groups:
             raise ModelError(f"group={group!r}: no such group; known: {', '.join(self.groups) or 'none'}", key="group")
@@ -121,11 +167,18 @@ class Views:
     @cached_property
     def operation_names(self) -> dict[tuple[str, str], str]:
         """(from, to) -> ' "name"' for the operations the table names (the conflict messages' words)."""
+        plain = self._columnar
+        if plain is not None:
+            named = np.flatnonzero(plain.arc_name != b"")
+            return {self.arcs[k]: f' "{name}"' for k, name in zip(named.tolist(),
+                                                                  ascii_text(plain.arc_name[named]).tolist())}
         return {(x, y): f' "{name}"' for x, y, name in self.graph.edges(data="name") if name}
 
     @cached_property
     def motion_arcs(self) -> dict:
         """Arc index (in `arcs` order) -> its Motion (models/cyclogram_motions.py), for the operations with a law."""
+        if self._columnar is not None:
+            return {}               # a plain table has no law column
         return {k: d["motion"] for k, d in enumerate(self._arc_data) if d["motion"] is not None}
 
     def motion_values(self, t_deg, speed_rpm) -> dict:

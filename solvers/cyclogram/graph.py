@@ -23,8 +23,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.csgraph import breadth_first_order
 
 from mechopt.kit.cache import BuildCache
 from mechopt.kit.result import Status
@@ -196,8 +194,11 @@ def topological_levels(n: int, tails: np.ndarray, heads: np.ndarray) -> np.ndarr
         offsets = np.repeat(start[frontier] - np.r_[0, np.cumsum(counts)[:-1]], counts) + np.arange(total)
         reached = succ[offsets]
         np.subtract.at(indeg, reached, 1)
-        reached = np.unique(reached)
-        frontier, depth = reached[indeg[reached] == 0], depth + 1
+        # the events freed, sorted, once each (np.unique's hash costs ~0.1 ms a level, and imports numpy.ma)
+        reached = np.sort(reached[indeg[reached] == 0])
+        first = np.ones(reached.size, dtype=bool)
+        first[1:] = reached[1:] != reached[:-1]
+        frontier, depth = reached[first], depth + 1
     if (level < 0).any():
         raise ValueError("the operations hold a precedence cycle")
     return level
@@ -241,16 +242,31 @@ def a_path(n, tails, heads, source, target) -> list[int] | None:
             return path
     pair = tails * n + heads
     pairs, first = np.unique(pair, return_index=True)
-    graph = sp.csr_matrix((np.ones(first.size), (tails[first], heads[first])), shape=(n, n))
-    _, pred = breadth_first_order(graph, source, directed=True, return_predecessors=True)
+    pred = breadth_first_predecessors(n, pairs // n, pairs % n, source)
     if target != source and pred[target] < 0:
         return None
-    pred, nodes, v = pred.tolist(), [target], target
+    nodes, v = [target], target
     while v != source:
         v = pred[v]
         nodes.append(v)
     nodes = np.array(nodes[::-1], dtype=np.int64)
     return first[np.searchsorted(pairs, nodes[:-1] * n + nodes[1:])].tolist()
+
+
+def breadth_first_predecessors(n, tails, heads, source) -> list[int]:
+    """Each event's predecessor breadth first from `source` (-9999: unreached, and the source),
+    over distinct arcs sorted by (tail, head), an event's successors in increasing order: what
+    scipy.sparse.csgraph.breadth_first_order gives on their CSR matrix, without scipy's import
+    (~0.3 s of a small network's run)."""
+    starts, succ = np.searchsorted(tails, np.arange(n + 1)).tolist(), heads.tolist()
+    pred, seen, queue = [-9999] * n, [False] * n, [source]
+    seen[source] = True
+    for v in queue:                     # the list grows as it is walked: a FIFO queue
+        for w in succ[starts[v]:starts[v + 1]]:
+            if not seen[w]:
+                seen[w], pred[w] = True, v
+                queue.append(w)
+    return pred
 
 
 def _walk_back(n, tails, heads, source, target) -> list[int] | None:

@@ -46,13 +46,18 @@ class Net:
         self.task = task
         names, self.tails, self.heads = task.index_arrays       # cached on the task: built once per network
         self.names = list(names)
-        self.index = index = task.event_index                   # shared with the task: read only
         self.arcs = task.arcs
-        self.first, self.last = index[task.first_event], index[task.last_event]
+        self.first, self.last = task.end_indices
+        index = self.index if task.windows or task.syncs or task.limiting_op is not None else {}
         self.window_idx = [(index[a], index[b]) for a, b, _ in task.window_arcs()]
         self.sync_idx = [(index[a], index[b]) for a, b in task.sync_pairs()]
         lim = task.limiting_op
         self.limiting = None if lim is None else (index[str(lim[0])], index[str(lim[1])])
+
+    @property
+    def index(self) -> dict[str, int]:
+        """Event -> its index, shared with the task (read only); built when a name is looked up."""
+        return self.task.event_index
 
     def signature(self):
         """What the compiled problem depends on (everything except the Parameters' values)."""

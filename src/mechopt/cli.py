@@ -21,7 +21,7 @@ import threading
 import warnings
 from pathlib import Path
 
-from mechopt import __version__, registry, verdicts
+from mechopt import registry, verdicts
 from mechopt.benchmarks import studies, study
 from mechopt.drivers import set_mostly_by, steps_of
 from mechopt.files import NotWritten, name_problem, output_problem, write_text_atomic
@@ -116,10 +116,23 @@ def short(message) -> str:
     return f"{text[:MAX_MESSAGE]}... (and {len(text) - MAX_MESSAGE:,} more characters)"
 
 
+class _Version(argparse.Action):
+    """--version, the installed version looked up when asked (importlib.metadata: ~30 ms a run)."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, **kwargs):
+        super().__init__(option_strings, dest=dest, default=argparse.SUPPRESS, nargs=0,
+                         help="show program's version number and exit")
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        import mechopt
+        print(f"mechopt {mechopt.__version__}")
+        parser.exit()
+
+
 def _parser():
     parser = argparse.ArgumentParser(prog="mechopt", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--version", action="version", version=f"mechopt {__version__}")
+    parser.add_argument("--version", action=_Version)
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("--cases", action="append", default=[], type=Path, metavar="DIR",
                         help="a folder of your own scenes (*.toml, searched recursively) added to the registry; "
@@ -547,13 +560,21 @@ def arrays_csv(arrays, where) -> str:
     lengths = {len(a) for a in arrays.values()}
     if len(lengths) != 1:
         raise SceneError(f"--csv {where}: the arrays have different lengths {sorted(lengths)}; use --json")
+    import numpy as np
     names = list(arrays)
-    cell = lambda x: text_cell(x) if isinstance(x, str) else f"{x:.12g}"       # noqa: E731  (a label column: text)
+    columns = [np.asarray(arrays[n]) for n in names]
+    # a label column is text, the others numbers; each formatted a block of rows at a time, column by
+    # column from Python values (tolist), not numpy scalars: ~3x faster at 10^5 rows, memory of a block
+    cells = [text_cell if a.dtype.kind == "U" else "{:.12g}".format for a in columns]
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")       # quotes a cell holding a comma, quote or line break
     writer.writerow(map(text_cell, names))
-    writer.writerows(map(cell, row) for row in zip(*(arrays[n] for n in names)))
+    for start in range(0, lengths.pop(), CSV_BLOCK):
+        writer.writerows(zip(*(list(map(cell, a[start:start + CSV_BLOCK].tolist())) for a, cell in zip(columns, cells))))
     return out.getvalue()
+
+
+CSV_BLOCK = 8192            # rows formatted at once by arrays_csv
 
 
 FORMULA_START = ("=", "+", "-", "@", "\t", "\r")     # a spreadsheet reads a cell starting so as a formula

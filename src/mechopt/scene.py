@@ -26,7 +26,7 @@ from mechopt.kit.errors import MechoptError, ModelError, SceneError, SettingErro
 from mechopt.kit.result import Status
 from mechopt.kit.settings import declared_range, describe_range, field_problem, range_fault, setting_problem
 from mechopt.models.provenance import provenance_problem
-from mechopt.tables import check_header, number, read_records, read_rows
+from mechopt.tables import Columns, check_header, number, read_columns, read_records, read_rows
 from mechopt.units import unit_of
 
 Number = int | float
@@ -326,7 +326,8 @@ def loads(text: str, path: Path) -> Scene:
     task_class = _resolve(path, "task", spec.task, "mechopt.models")
     with _reading(path):
         spec = spec.model_copy(update={"structure": _read_tables(path, spec.structure,
-                                                                 getattr(task_class, "CSV_TABLES", {}))})
+                                                                 getattr(task_class, "CSV_TABLES", {}),
+                                                                 getattr(task_class, "COLUMNAR_TABLES", ()))})
     solver = _resolve(path, "solver", spec.solver, "mechopt.solvers")
     fields = task_fields(task_class)
     for key, ref in spec.derive.items():
@@ -448,7 +449,7 @@ def _set_paths(path, structure, assignments):
             if selector:
                 if last:
                     raise SceneError(f"{path}: {key}: name the entry to change after the selector", key=key)
-                node[name] = items = list(node[name]) if isinstance(node[name], list) else node[name]
+                node[name] = items = list(node[name]) if isinstance(node[name], (list, Columns)) else node[name]
                 pairs = _selector_pairs(path, key, name, selector, items)
                 matches = [j for j, item in enumerate(items) if isinstance(item, dict)
                            and all(str(item.get(k)) == v for k, v in pairs.items())]
@@ -504,14 +505,15 @@ def _reading(path):
         _READING.reset(token)
 
 
-def _read_tables(path, structure, records=None):
+def _read_tables(path, structure, records=None, columnar=()):
     """Structure entries that name a file, read when the scene loads (paths relative to the scene
     file's folder):
     * `{ csv = "file.csv", columns = ["x_mm", "y_mm"] }`: the file's rows of those columns, so a
       designer's point table stays in the CSV their CAD system wrote (errors name line and column);
       for a key of the task's `CSV_TABLES` ({key: (required cells, {column: str or float})}), the
       rows as tables of the columns the file has (text or numbers by column; `columns` the ones
-      it must have), as a machine's timing table of operations between named events;
+      it must have), as a machine's timing table of operations between named events; for a key
+      of its `COLUMNAR_TABLES`, a plain file as whole columns (tables.Columns, no object per row);
     * `{ scene = "../other/scene.toml", drop = [...] }`: that scene's model as a table: its params
       (with their marks), structure entries and effects, less the names dropped. One mechanism's
       data then lives in one place when another's model needs it (the loom takes the lift lever)."""
@@ -528,20 +530,25 @@ def _read_tables(path, structure, records=None):
             raise SceneError(f'{path}: structure.{key}: a table from a file is {{ csv = "file.csv", '
                              f'columns = ["x_mm", "y_mm"] }}; got {value!r}', key=key)
         if key in (records or {}):
-            out[key] = _csv_records(path, value["csv"], value["columns"], key, *records[key])
+            out[key] = _csv_records(path, value["csv"], value["columns"], key, *records[key], key in columnar)
         else:
             out[key] = _csv_rows(path.parent / value["csv"], value["columns"], key)
     return out
 
 
-def _csv_records(path, csv_name, columns, key, required, kinds):
+def _csv_records(path, csv_name, columns, key, required, kinds, columnar=False):
     """The CSV `csv_name` beside the scene `path` as a list of tables (column: text or number by
-    `kinds`), every name of `columns` in its header and every cell of `required` in each row."""
+    `kinds`), every name of `columns` in its header and every cell of `required` in each row;
+    `columnar`: a plain file as tables.Columns (read_columns), the same rows when read as a list."""
     unknown = [c for c in columns if c not in kinds]
     if unknown:
         raise SceneError(f"{path}: structure.{key}.columns: unknown {', '.join(map(quote, unknown))}; "
                          f"allowed: {', '.join(kinds)}", key=key)
     try:
+        table = read_columns(path.parent / csv_name, columns, kinds, required=required, what=f"a table of {key}",
+                             example=",".join(columns)) if columnar else None
+        if table is not None:
+            return table
         rows = read_records(path.parent / csv_name, columns, kinds, required=required, what=f"a table of {key}",
                             example=",".join(columns))
     except ModelError as exc:
