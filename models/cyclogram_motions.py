@@ -123,9 +123,7 @@ def _angle_fraction(name: str, c: float) -> float:
     # imported here: scipy's import (~0.5 s) is paid by a clearance alone, not by every cyclogram
     from scipy.optimize import brentq
     law = cam_law(name)
-    # S rises monotonically from 0 to 1 (every library law: S' >= 0); brentq brackets the one root.
-    # Imported here: scipy.optimize costs ~0.3 s, and most cyclogram runs never ask for a fraction.
-    from scipy.optimize import brentq
+    # S rises monotonically from 0 to 1 (every library law: S' >= 0); brentq brackets the one root
     return brentq(lambda x: float(law.values([x])[0][0]) - c, 0.0, 1.0, xtol=FRACTION_XTOL)
 
 
