@@ -112,8 +112,8 @@ def least_cycle_time(task: Cyclogram, *, check: bool = False,
         message = (f"{name} = {T:.9g}: critical circuit {circuit_text(u, circuit)}"
                    + (f"; {ties} circuits tie for critical" if ties > 1 else "")
                    + f" (graph, {steps} Dinkelbach steps)")
-    result = clock.result(Status.SOLVED, values, message=message, diagnostics=diagnostics,
-                          arrays={f"start_{u.unit}": np.asarray(p, dtype=float)})   # by event, in `names` order
+    arrays = {"event": list(u.names), f"start_{u.unit}": np.asarray(p, dtype=float)}     # `--csv`: a row per event
+    result = clock.result(Status.SOLVED, values, message=message, diagnostics=diagnostics, arrays=arrays)
     return checked_by_lp(result, u, name, backend) if check else result
 
 

@@ -337,3 +337,18 @@ def test_the_least_cycle_time_refuses_a_clearance_by_name():
     assert task.clearances
     with pytest.raises(ModelError, match=r"clearances: not solved by cyclogram\.least_cycle_time .* cyclogram\.plan_motions"):
         least_cycle_time(task)
+
+
+def test_the_least_cycle_time_s_csv_names_each_event_beside_its_start(tmp_path):
+    """`--csv` of a cycle time: a row per event, its name and its start (a file that reads alone)."""
+    import csv
+
+    from mechopt.cli import main
+    out = tmp_path / "indexer.csv"
+    assert main(["run", "loom/recurrent-indexer", "--csv", str(out)]) == 0
+    with out.open(newline="") as f:
+        rows = list(csv.DictReader(f))
+    run = registry.run(registry.find("loom/recurrent-indexer"))
+    assert list(rows[0]) == ["event", "start_ms"] and len(rows) == len(run.arrays["event"])
+    by_name = {r["event"]: float(r["start_ms"]) for r in rows}
+    assert by_name == pytest.approx({v: run.values[f"p_{v}_ms"] for v in by_name}, rel=1e-12, abs=1e-9)
