@@ -68,7 +68,7 @@ def float_array(net, levels, back, lb, span, early=None):
         late = -levels.longest_to(net.first, lb, closed)
     except PositiveCycle:
         return None
-    return late[net.heads] - early[net.tails] - lb
+    return late[net.heads] - early[net.tails] - lb + 0.0        # + 0.0: a zero float is 0, never -0 (late is negated)
 
 
 def critical_path(net, floats, tol) -> tuple[np.ndarray, list[int] | None]:

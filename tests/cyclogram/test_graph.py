@@ -2,12 +2,14 @@
 syncs solved at once (block-diagonal), positive cycles against Bellman-Ford, the compiled passes
 against numpy's, a million events certified by duality, and the hard cases."""
 import dataclasses
+import math
 
 import numpy as np
 import pytest
 import scipy.sparse as sp
 from scipy.optimize import linprog
 
+from mechopt import registry
 from mechopt.kit.result import Status
 from mechopt.models.cyclogram import Cyclogram
 from mechopt.solvers.cyclogram import plan_cyclogram
@@ -254,3 +256,12 @@ def test_a_conflict_the_limiting_operation_cannot_reach_is_infeasible_not_unboun
         r = plan_cyclogram(task, method=method)
         assert r.status is Status.INFEASIBLE, (method, r.message)
     assert "t(3->4)" in plan_cyclogram(task, method="graph").message
+
+
+def test_a_zero_float_is_reported_as_zero_not_minus_zero():
+    """loom/packaging: start->feed.start has no float; the report says 0, not -0 (the latest
+    times are negated longest paths)."""
+    run = registry.run(registry.find("loom/packaging"))
+    floats = run.diagnostics["float_deg"]
+    assert floats["start->feed.start"] == 0.0
+    assert not [op for op, f in floats.items() if f == 0.0 and math.copysign(1.0, f) < 0]
