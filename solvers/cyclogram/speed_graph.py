@@ -127,8 +127,9 @@ class SpeedGraph:
                 x, y = net.arcs[k]
                 speed_set = self.g[k] * n_rpm > self.phi[k]
                 law = why[k] if speed_set else "min_angle"
+                own = self.task.graph.edges[x, y].get("group")      # the operation's own, else its events'
                 out.append(f"{law}[{x}->{y}] t >= {max(self.phi[k], self.g[k] * n_rpm):.6g} deg "
-                           f"({group[x] or group[y] or '-'}"
+                           f"({own or group[x] or group[y] or '-'}"
                            + (f", {self.g[k]:.6g} deg/rpm)" if speed_set else ")")
                            + self.task.operation_names.get((x, y), ""))
             elif kind == "back":

@@ -116,10 +116,12 @@ def test_a_velocity_limit_is_a_least_duration():
 
 def test_the_limiting_group_is_the_operation_s_own():
     """The die's strokes start at the turret's stop (an event of group turret): the speed is the
-    die's (its acceleration limit), and the report names group die, the operations' own."""
+    die's (its acceleration limit), and the report and the limiting cycle name group die, the operations' own."""
     from mechopt import registry
 
     r = max_machine_speed(registry.find("loom/turret-die-speed").build()[0])
     assert r.status is Status.SOLVED, r.message
     assert r.diagnostics["limiting_group"] == "die"
     assert {row["group"] for row in r.diagnostics["limiting"]} == {"die"}
+    down = [line for line in r.diagnostics["limiting_cycle"] if '"die down"' in line]
+    assert len(down) == 1 and "(die, " in down[0]            # the limiting cycle's words say so too
