@@ -27,7 +27,6 @@ from mechopt.models.cyclogram_tables import (
     floors_of,
 )
 from mechopt.models.loom_limits import AMPLITUDE_LAWS
-from mechopt.tables import Columns
 
 if TYPE_CHECKING:       # imported where the graph is built: a plain table's run never builds it
     import networkx as nx
@@ -45,7 +44,7 @@ class Network:
 
     def _take_columns(self):
         """A plain table's network from its columns (`_columnar`); any other table as its rows."""
-        if not isinstance(self.operations, Columns):
+        if not isinstance(getattr(self.operations, "columns", None), dict):     # not a Columns table
             return
         plain = None if self.tasks or self.events else PlainNetwork.of(self.operations)
         if plain is None:

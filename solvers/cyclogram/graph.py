@@ -26,6 +26,7 @@ import numpy as np
 
 from mechopt.kit.cache import BuildCache
 from mechopt.kit.result import Status
+from mechopt.models.cyclogram_columns import topological_levels     # Kahn's levels: the model checks acyclicity by them too
 from mechopt.solvers.cyclogram.kernel import COMPILED_AFTER_LEVEL_CALLS, COMPILED_MIN_ARCS, kernels
 from mechopt.solvers.cyclogram.plain_pass import SMALL_MAX_ARCS, PlainPass, PositiveCycleFound
 
@@ -174,34 +175,6 @@ def _largest_finite(a) -> float:
         return max(abs(top), abs(low))
     finite = np.abs(a[np.isfinite(a)])
     return float(finite.max(initial=0.0))
-
-
-def topological_levels(n: int, tails: np.ndarray, heads: np.ndarray) -> np.ndarray:
-    """Each event's level: 0 without predecessors, else 1 + the largest level of one (Kahn's
-    algorithm a whole level at a time). ValueError when the arcs hold a cycle."""
-    by_tail = np.argsort(tails, kind="stable")
-    start = np.r_[0, np.cumsum(np.bincount(tails, minlength=n))]
-    succ = heads[by_tail]
-    indeg = np.bincount(heads, minlength=n)
-    level = np.full(n, -1, dtype=np.int64)
-    frontier, depth = np.flatnonzero(indeg == 0), 0
-    while frontier.size:
-        level[frontier] = depth
-        counts = start[frontier + 1] - start[frontier]
-        total = int(counts.sum())
-        if not total:
-            break
-        offsets = np.repeat(start[frontier] - np.r_[0, np.cumsum(counts)[:-1]], counts) + np.arange(total)
-        reached = succ[offsets]
-        np.subtract.at(indeg, reached, 1)
-        # the events freed, sorted, once each (np.unique's hash costs ~0.1 ms a level, and imports numpy.ma)
-        reached = np.sort(reached[indeg[reached] == 0])
-        first = np.ones(reached.size, dtype=bool)
-        first[1:] = reached[1:] != reached[:-1]
-        frontier, depth = reached[first], depth + 1
-    if (level < 0).any():
-        raise ValueError("the operations hold a precedence cycle")
-    return level
 
 
 def level_segments(level, ends, n, reverse):

@@ -52,7 +52,8 @@ MECHANISMS = (
     # the engine of any cyclic machine; its scenes keep their loom/ ids (cases/loom) for one release
     Mechanism("cyclogram", "Cyclogram of a cyclic machine (paper 004's network)",
               ("mechopt.models.cyclogram", "mechopt.models.cyclogram_network", "mechopt.models.cyclogram_views",
-               "mechopt.models.cyclogram_bounds", "mechopt.models.cyclogram_tables", "mechopt.models.cyclogram_motions"),
+               "mechopt.models.cyclogram_bounds", "mechopt.models.cyclogram_tables", "mechopt.models.cyclogram_motions",
+               "mechopt.models.cyclogram_columns"),
               "mechopt.solvers.cyclogram",
               ("mechopt.figures.cyclogram",), "mechopt.benchmarks.loom", (("cyclogram", "loom/packaging"),), cases="loom"),
     # the STB loom, the cyclogram's case: its own limits and solvers (models/loom*.py also keep the

@@ -37,6 +37,8 @@ NO_RANGE = {
     "ShapeSummary": "a computed result (radii and angles of a cam shape)",
     "PointTable": "a computed result (a shop's point table)",
     "Effect": "a description of an effect, no number",
+    "PlainNetwork": "a plain timing table as index arrays, made by PlainNetwork.of from a Columns table whose cells "
+                    "tables.read_columns checked (else the row path, which checks each row)",
     "Law": "a library law: its forms and breaks are the library's own; end_order is derived, not given",
     "_Piece": "a piece of a library law (SCCA, trapezoid), built by the library from its checked b, c, cv",
     "Segment": "a row of CamMotion.segments, checked by `cam_motion._segment` (kind, angle in (0, 360] deg, the "
