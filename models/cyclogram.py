@@ -45,6 +45,7 @@ from annotated_types import Gt, Le, Lt
 from mechopt.kit.errors import ModelError
 from mechopt.kit.settings import check_fields
 from mechopt.models.cyclogram_bounds import Bounds
+from mechopt.models.cyclogram_columns import PLAIN_COLUMNS
 from mechopt.models.cyclogram_motions import (
     CLEARANCE_COLUMNS,
     LEAST_ANGLE,
@@ -146,9 +147,10 @@ class Cyclogram(Network, Views, Bounds):
 
     # structure tables a scene may read from a CSV file as rows of named, typed columns
     # tables a scene may read from a CSV beside it, any length (an inline list holds at most 100 rows)
-    # a plain operations table (names, angles, notes) is read as whole columns: its network as arrays
-    # (models/cyclogram_columns.py), no object per row; any other as rows
-    COLUMNAR_TABLES: ClassVar[frozenset] = frozenset({"operations"})
+    # a plain operations table (names, angles, notes: no column beyond PLAIN_COLUMNS, so no marked
+    # input) is read as whole columns: its network as arrays (models/cyclogram_columns.py), no object
+    # per row; any other as rows
+    COLUMNAR_TABLES: ClassVar[dict] = {"operations": PLAIN_COLUMNS}
     CSV_TABLES: ClassVar[dict] = {"operations": (("from", "to"), OPERATION_COLUMNS),
                                   "windows": (("from", "to"), WINDOW_COLUMNS),
                                   "syncs": (("events",), SYNC_COLUMNS), "tasks": (("task",), TASK_COLUMNS),

@@ -80,7 +80,7 @@ class Views:
             labels = np.array([f"{x}->{y}" for x, y in self.arcs], dtype=str)
         else:                   # joined as ASCII bytes (a plain table's names are), a quarter of str's memory
             names = plain.names.astype("S")
-            labels = ascii_text(np.strings.add(np.strings.add(names[plain.tails], b"->"), names[plain.heads]))
+            labels = ascii_text(np.char.add(np.char.add(names[plain.tails], b"->"), names[plain.heads]))  # numpy 1.26 too
         labels.flags.writeable = False
         return labels
 

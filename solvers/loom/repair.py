@@ -318,9 +318,9 @@ def _repaired(task, result, laws, history, clock, status, message, violated=()):
 
 _AMPLITUDE_BOUNDS = BuildCache("loom.amplitude_bound", maxsize=64)
 # the code a stored walk or n / t probe depends on (kit.store's fingerprint): the models, the
-# lever's chain, the walk, and the probe's module
+# lever's chain, the walk, the probe's module, and the kit (results, caches, settings)
 WALK_SOURCES = ("mechopt.models", "mechopt.solvers.stop_impact", "mechopt.solvers.loom",
-                "mechopt.solvers.cyclogram.speed_laws")
+                "mechopt.solvers.cyclogram.speed_laws", "mechopt.kit")
 
 
 def cached_amplitude_bound(task: Cyclogram, speed_rpm: float, lo_deg: float, to_deg: float,

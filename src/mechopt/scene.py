@@ -327,7 +327,7 @@ def loads(text: str, path: Path) -> Scene:
     with _reading(path):
         spec = spec.model_copy(update={"structure": _read_tables(path, spec.structure,
                                                                  getattr(task_class, "CSV_TABLES", {}),
-                                                                 getattr(task_class, "COLUMNAR_TABLES", ()))})
+                                                                 getattr(task_class, "COLUMNAR_TABLES", {}))})
     solver = _resolve(path, "solver", spec.solver, "mechopt.solvers")
     fields = task_fields(task_class)
     for key, ref in spec.derive.items():
@@ -505,7 +505,7 @@ def _reading(path):
         _READING.reset(token)
 
 
-def _read_tables(path, structure, records=None, columnar=()):
+def _read_tables(path, structure, records=None, columnar=None):
     """Structure entries that name a file, read when the scene loads (paths relative to the scene
     file's folder):
     * `{ csv = "file.csv", columns = ["x_mm", "y_mm"] }`: the file's rows of those columns, so a
@@ -513,7 +513,8 @@ def _read_tables(path, structure, records=None, columnar=()):
       for a key of the task's `CSV_TABLES` ({key: (required cells, {column: str or float})}), the
       rows as tables of the columns the file has (text or numbers by column; `columns` the ones
       it must have), as a machine's timing table of operations between named events; for a key
-      of its `COLUMNAR_TABLES`, a plain file as whole columns (tables.Columns, no object per row);
+      of its `COLUMNAR_TABLES` ({key: the columns a whole-column table may have}), a plain file
+      of those columns only as whole columns (tables.Columns, no object per row);
     * `{ scene = "../other/scene.toml", drop = [...] }`: that scene's model as a table: its params
       (with their marks), structure entries and effects, less the names dropped. One mechanism's
       data then lives in one place when another's model needs it (the loom takes the lift lever)."""
@@ -530,23 +531,24 @@ def _read_tables(path, structure, records=None, columnar=()):
             raise SceneError(f'{path}: structure.{key}: a table from a file is {{ csv = "file.csv", '
                              f'columns = ["x_mm", "y_mm"] }}; got {value!r}', key=key)
         if key in (records or {}):
-            out[key] = _csv_records(path, value["csv"], value["columns"], key, *records[key], key in columnar)
+            out[key] = _csv_records(path, value["csv"], value["columns"], key, *records[key], (columnar or {}).get(key))
         else:
             out[key] = _csv_rows(path.parent / value["csv"], value["columns"], key)
     return out
 
 
-def _csv_records(path, csv_name, columns, key, required, kinds, columnar=False):
+def _csv_records(path, csv_name, columns, key, required, kinds, columnar=None):
     """The CSV `csv_name` beside the scene `path` as a list of tables (column: text or number by
     `kinds`), every name of `columns` in its header and every cell of `required` in each row;
-    `columnar`: a plain file as tables.Columns (read_columns), the same rows when read as a list."""
+    `columnar` (a set of columns): a plain file of those columns only as tables.Columns
+    (read_columns), the same rows when read as a list; any other file as a list of rows."""
     unknown = [c for c in columns if c not in kinds]
     if unknown:
         raise SceneError(f"{path}: structure.{key}.columns: unknown {', '.join(map(quote, unknown))}; "
                          f"allowed: {', '.join(kinds)}", key=key)
     try:
         table = read_columns(path.parent / csv_name, columns, kinds, required=required, what=f"a table of {key}",
-                             example=",".join(columns)) if columnar else None
+                             example=",".join(columns), only=columnar) if columnar else None
         if table is not None:
             return table
         rows = read_records(path.parent / csv_name, columns, kinds, required=required, what=f"a table of {key}",

@@ -229,12 +229,13 @@ class Columns(Sequence):
         return f"<{len(self):,} rows of {', '.join(self.columns)} read from a CSV file>"
 
 
-def read_columns(path, columns, kinds, *, required=(), what, example, max_rows=MAX_ROWS) -> Columns | None:
+def read_columns(path, columns, kinds, *, required=(), what, example, max_rows=MAX_ROWS,
+                 only=None) -> Columns | None:
     """`read_records`' table as whole columns (`Columns`), read with no Python object per row,
     when the file is plain: ASCII, no quoted cell, no blank line, every row as many cells as the
     header, no cell with spaces around it, every number a plain literal and every required cell
-    given; None otherwise (then read_records reads it row by row and names any fault). The size
-    and the header are refused here as there."""
+    given, no column beyond `only` (where given); None otherwise (then read_records reads it row
+    by row and names any fault). The size and the header are refused here as there."""
     path = Path(path)
     raw = _read_bytes(path, what, MAX_BYTES, max_rows).removeprefix(b"\xef\xbb\xbf")
     if b'"' in raw or b"\x00" in raw or (b"\r" in raw and raw.count(b"\r") != raw.count(b"\r\n")):
@@ -252,6 +253,8 @@ def read_columns(path, columns, kinds, *, required=(), what, example, max_rows=M
     if not "".join(header) or len(header) > MAX_COLUMNS:
         return None
     _check_columns(path, header, columns, kinds, example, delimiter)
+    if only is not None and not set(header) <= only:
+        return None
     body = buf[len(line) + 1:]
     cuts = np.frombuffer(raw.translate(_CUTS[delimiter]), np.uint8)[len(line) + 1:]    # 1 at a cell's end
     ends = np.flatnonzero(cuts).astype(np.int32)          # positions in a file of at most MAX_BYTES

@@ -325,3 +325,17 @@ def test_the_breadth_first_predecessors_are_scipys(seed):
     graph = sparse.csr_matrix((np.ones(pairs.size), (tails, heads)), shape=(n, n))
     _, want = breadth_first_order(graph, source, directed=True, return_predecessors=True)
     assert breadth_first_predecessors(n, tails, heads, source) == want.tolist()
+
+
+def test_a_table_with_marked_rows_is_read_as_rows_and_its_marks_reach_the_inputs(tmp_path):
+    """A `mark` column (an assumed angle, say) is beyond a plain table's columns: the file is read
+    row by row, so the marked angle is one of the scene's uncertain inputs (what elasticities vary)."""
+    from mechopt import registry
+    from mechopt.drivers import uncertain_inputs
+    (tmp_path / "ops.csv").write_text("from,to,min_deg,mark,why\na,b,10,assumed,a guess\nb,c,20,,\n", encoding="utf-8")
+    (tmp_path / "marked.toml").write_text(SCENE.replace('["from", "to", "min_deg"]', '["from", "to", "min_deg", "mark"]'),
+                                          encoding="utf-8")
+    scene = registry.load(tmp_path / "marked.toml")
+    assert isinstance(scene.spec.structure["operations"], list)
+    assert [(i.key, i.value, i.mark) for i in uncertain_inputs(scene)] == [
+        ("operations[from=a,to=b].min_deg", 10.0, "assumed")]

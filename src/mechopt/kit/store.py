@@ -23,6 +23,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 ENV = "MECHOPT_CACHE_DIR"
+LIBRARIES = ("numpy", "scipy", "casadi")      # what a stored result's numbers also depend on (CVODES: casadi)
 
 
 class StoreWarning(UserWarning):
@@ -37,12 +38,11 @@ _UNSTABLE = (" at 0x", "array(", "...")
 @functools.cache            # the installed code's identity, not a build: kept through kit.cache.clear
 def code_fingerprint(sources: tuple[str, ...]) -> str:
     """SHA-256 of the sources the stored results depend on (`sources`: packages, every .py file in
-    them, or modules, by import name), and of numpy's and scipy's versions."""
+    them, or modules, by import name), and of the numeric libraries' versions (`LIBRARIES`)."""
+    import importlib.metadata
     import importlib.util
 
-    import numpy
-    import scipy
-    digest = hashlib.sha256(f"numpy {numpy.__version__} scipy {scipy.__version__}".encode())
+    digest = hashlib.sha256(" ".join(f"{lib} {importlib.metadata.version(lib)}" for lib in LIBRARIES).encode())
     files = []
     for name in sources:
         spec = importlib.util.find_spec(name)
@@ -78,12 +78,25 @@ def stored(kind: str, key, compute: Callable[[], object], encode: Callable[[obje
         return decode(json.loads(path.read_text(encoding="utf-8")))
     except FileNotFoundError:
         pass
-    except (OSError, ValueError, TypeError, KeyError) as exc:      # damaged: named, computed anew
+    except Exception as exc:        # damaged (unreadable, not JSON, or not the shape decode takes): named
         warnings.warn(f"{path}: unreadable stored {kind} ({type(exc).__name__}: {exc}); recomputed and "
                       "written over", StoreWarning, stacklevel=2)
     value = compute()
-    where.mkdir(parents=True, exist_ok=True)
-    with tempfile.NamedTemporaryFile("w", dir=where, suffix=".tmp", delete=False, encoding="utf-8") as f:
-        json.dump(encode(value), f)
-    os.replace(f.name, path)
+    _write(path, encode(value))
     return value
+
+
+def _write(path: Path, data) -> None:
+    """`data` as JSON at `path`, whole or not at all (a temporary file renamed); a store that cannot
+    be written (full, read-only, data JSON cannot hold) is named in a warning, the answer unchanged."""
+    tmp = None
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile("w", dir=path.parent, suffix=".tmp", delete=False, encoding="utf-8") as f:
+            tmp = f.name
+            json.dump(data, f)
+        os.replace(tmp, path)
+    except (OSError, TypeError, ValueError) as exc:
+        if tmp is not None:
+            Path(tmp).unlink(missing_ok=True)
+        warnings.warn(f"{path}: not stored ({type(exc).__name__}: {exc})", StoreWarning, stacklevel=3)
