@@ -26,7 +26,7 @@ import numpy as np
 
 from mechopt.kit.cache import BuildCache
 from mechopt.kit.result import Status
-from mechopt.models.cyclogram_columns import topological_levels     # Kahn's levels: the model checks acyclicity by them too
+from mechopt.models.cyclogram_columns import topological_levels  # Kahn's levels (the model's check too)
 from mechopt.solvers.cyclogram.kernel import COMPILED_AFTER_LEVEL_CALLS, COMPILED_MIN_ARCS, kernels
 from mechopt.solvers.cyclogram.plain_pass import SMALL_MAX_ARCS, PlainPass, PositiveCycleFound
 
