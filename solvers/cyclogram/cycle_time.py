@@ -16,7 +16,7 @@ therefore the maximum cycle ratio D(C) / K(C) over the circuits with K(C) > 0 (a
 and no T fits when a circuit with K(C) <= 0 is positive at a T the other circuits ask for (a
 height 0 with D(C) > 0, or angles that fill more than their cycles: INFEASIBLE, that circuit named).
 
-Solved exactly on the graph by Dinkelbach's (Lawler's) iteration, as `speed.SpeedGraph` solves the
+Solved exactly on the graph by Dinkelbach's (Lawler's) iteration, as `speed_graph.SpeedGraph` solves the
 highest speed: from T = 0, a Bellman-Ford pass at T either finds no positive circuit (T is the
 answer) or a positive circuit C, whose ratio D(C) / K(C) > T is the next T. T rises strictly and
 takes a circuit's ratio each time, so it ends at the maximum ratio after finitely many passes (in

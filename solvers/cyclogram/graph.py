@@ -298,14 +298,12 @@ class HeldSpan:
         leads first -> last with bounds summing to the span (a dual solution of the same value),
         both to tol_deg per degree above 1. SOLVED when both hold, INACCURATE when not (round-off
         past tol_deg), INFEASIBLE (span and times None) on a positive cycle."""
-        if self._plain is not None:                           # a small network: plain_pass.py
-            w = lb.tolist()
-            total = sum(w)
-            if total - total == 0.0:                          # every bound finite
-                status, span, p, walk = self._plain.solve(self.first, self.last, w, tol_deg)
-                if walk is not None:
-                    return self._walk_failed(span, p, walk, tol_deg)
-                return status, span, (None if p is None else np.array(p))
+        w = self._plain_bounds(lb)
+        if w is not None:                                     # a small network: plain_pass.py
+            status, span, p, walk = self._plain.solve(self.first, self.last, w, tol_deg)
+            if walk is not None:
+                return self._walk_failed(span, p, walk, tol_deg)
+            return status, span, (None if p is None else np.array(p))
         try:
             p = self.levels.longest_from(self.first, lb, self.back)
         except PositiveCycle:

@@ -60,16 +60,17 @@ def test_the_sparse_basis_matrices_match_scipys_spline_derivatives(continuity):
 def test_the_lps_two_forms_of_the_lever_give_the_same_law(lever, monkeypatch):
     """The dense superposition and the states tied by the exact step are one map: the same LP's
     value in both forms, at a size each form would not pick by itself."""
-    from mechopt.solvers.stop_impact import window_lp as sy
+    from mechopt.solvers.stop_impact import window_lp
     answers = []
     for first in (10**9, 0):                        # dense, then states
-        monkeypatch.setattr(sy, "STATE_FORM_FROM", first)
-        sy.BASES.clear()
-        lp_lever = sy.linear_lever(250, 2)
-        speed = sy.speed_response(lever, lp_lever, 420.0, lever.t_deg)
-        lines = sy.rebound_envelope(lever, 4 * sy.v0_limit_m_s(lever, lever.amplitude_limit_mm))
-        lp = sy.WindowLP(lever, lp_lever, [speed], lever.t_deg, objective="least_rebound",
-                         limit_mm=lever.amplitude_limit_mm, bounds={"max_acceleration_mm_per_rad2": ACCEL}, lines=lines)
+        monkeypatch.setattr(window_lp, "STATE_FORM_FROM", first)
+        window_lp.BASES.clear()
+        lp_lever = window_lp.linear_lever(250, 2)
+        speed = window_lp.speed_response(lever, lp_lever, 420.0, lever.t_deg)
+        lines = window_lp.rebound_envelope(lever, 4 * window_lp.v0_limit_m_s(lever, lever.amplitude_limit_mm))
+        lp = window_lp.WindowLP(lever, lp_lever, [speed], lever.t_deg, objective="least_rebound",
+                                limit_mm=lever.amplitude_limit_mm, bounds={"max_acceleration_mm_per_rad2": ACCEL},
+                                lines=lines)
         answers.append(lp.solve(0.85))
     assert [a[0] for a in answers] == [Status.SOLVED, Status.SOLVED]
     assert answers[1][2] == pytest.approx(answers[0][2], rel=1e-7)
