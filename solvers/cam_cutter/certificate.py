@@ -47,6 +47,8 @@ KEEP = 5                # nodes a cell's bound mixes, and its children are first
 SECTORS = 8             # gradient directions `_diverse` picks nodes from (SECTORS + 1 >= KEEP)
 REACH = 3               # and the nodes highest at a corner (the dual mixes both)
 SCREEN = 4              # the first cells are screened on every SCREEN-th node
+import os
+DIRECT_PAIRS = int(os.environ.get("DP", "0"))
 
 
 @dataclass(frozen=True)
@@ -208,24 +210,16 @@ def _measure(px, py, cells: Cells, nodes, target=np.inf):
     most promising nodes (`_diverse`). The bound: for any weights w on the simplex,
     max_i d_i >= sum_i w_i d_i >= sum_i w_i lb_i, lb_i a node's first-order bound (the least of its
     runs' affine bounds: concave in (dH, dL)), so the sum is concave and least at a corner; the
-    largest over `_dual` of that least corner (the linear program's dual). The costly
-    tangent-segment bound (`bound.tangent_bound`) of the pairs with no first-order bound is taken
-    only in the cells still below `target` without it (any bound of a node is a bound)."""
+    largest over `_dual` of that least corner (the linear program's dual). The costlier bounds
+    (first order; the tangent-segment bound of the pairs with no first-order one) are taken only in
+    the cells the zero-order bound leaves below `target` (any bound of a node is a bound)."""
     count, width = nodes.shape
     pairs = (px[nodes.ravel()], py[nodes.ravel()], *(np.repeat(v, width) for v in (cells.H, cells.L, cells.hH, cells.hL)))
-    zero, d0, gH, gL, E, first = cell_bounds(*pairs, fine=False, width=width, target=target)
+    zero, d0, gH, gL, E, first = cell_bounds(*pairs, width=width, target=target)
     bound = np.maximum(cells.bound, zero.reshape(count, width).max(axis=1))
     pick = np.zeros((count, KEEP + REACH), dtype=int)               # a closed cell's: never used
-    for stage in range(2):
-        rows = np.flatnonzero(bound < target)
-        if stage:               # the tangent-segment bound, in the cells the others left open
-            fine = np.zeros((count, width), dtype=bool)
-            fine[rows] = ~first.reshape(count, width)[rows]
-            rows = np.flatnonzero(fine.any(axis=1))
-            if rows.size == 0:
-                break
-            fine = fine.ravel()
-            zero[fine] = np.maximum(zero[fine], tangent_bound(*(v[fine] for v in pairs)))
+    rows = np.flatnonzero(bound < target)
+    if rows.size:
         part = (rows[:, None] * width + np.arange(width)).ravel()
         bound[rows], pick[rows] = _combined(cells.take(rows), *(v[part] for v in (zero, d0, gH, gL, E, first)), width)
     return Cells(cells.H, cells.L, cells.hH, cells.hL, bound), np.take_along_axis(nodes, pick, axis=1)
@@ -297,7 +291,11 @@ def box_lower_bound(px, py, box, upper, *, gap, max_cells=20_000, grid=(16, 8), 
         if open_.size == 0 or room == 0:
             break
         open_ = open_[np.argsort(cells.bound[open_], kind="stable")[:room]]   # the lowest first when short
-        children, child_top = _screened(px, py, _split(cells.take(open_)), np.repeat(top[open_], 4, axis=0), target)
+        children = _split(cells.take(open_))
+        if children.H.size * px.size <= DIRECT_PAIRS:      # few: every node at once, one call
+            children, child_top = _measure(px, py, children, np.tile(np.arange(px.size), (children.H.size, 1)), target)
+        else:
+            children, child_top = _screened(px, py, children, np.repeat(top[open_], 4, axis=0), target)
         keep = np.ones(cells.H.size, dtype=bool)
         keep[open_] = False
         cells, top = _joined(cells.take(keep), children), np.vstack([top[keep], child_top])
