@@ -97,14 +97,21 @@ def _squared(px, py, H, L):
     return size[:, None] + features @ _TERMS, 1e-13 * (size + 4 * (np.abs(L) + np.abs(H)) ** 2)
 
 
+# vertex k's offset from vertex j on the circle, -N/2 .. N/2 - 1 (a row a j), and the offsets after
+# and before j, N where on the other side (tables: one gather a call where the arithmetic took five)
+_OFFSET = ((np.arange(POLYLINE) - np.arange(POLYLINE)[:, None] + POLYLINE // 2) % POLYLINE - POLYLINE // 2).astype(np.int16)
+_FAR = np.int16(POLYLINE)
+_AFTER, _BEFORE = np.where(_OFFSET > 0, _OFFSET, _FAR), np.where(_OFFSET <= 0, -_OFFSET, _FAR)
+
+
 def _run(near, j):
     """The run of `near` vertices (a row a pair, circular) around vertex j: the mask of its members
     and sigma [rad], the farthest a member lies from j plus half a spacing; the run is the whole
     circle (sigma = inf) where every vertex is near."""
-    offset = ((np.arange(POLYLINE) - j[:, None] + POLYLINE // 2) & (POLYLINE - 1)) - POLYLINE // 2
-    right = np.where(near | (offset <= 0), POLYLINE, offset).min(axis=1)      # first vertex not near
-    left = np.where(near | (offset > 0), POLYLINE, -offset).min(axis=1)
-    whole = ~(~near).any(axis=1)
+    offset = _OFFSET[j]
+    right = np.where(near, _FAR, _AFTER[j]).min(axis=1)      # the first vertex not near, either side
+    left = np.where(near, _FAR, _BEFORE[j]).min(axis=1)
+    whole = near.all(axis=1)
     member = ((offset > -left[:, None]) & (offset < right[:, None])) | whole[:, None]
     sigma = np.where(whole, np.inf, (np.maximum(left, right) - 0.5) * (2 * np.pi / POLYLINE))
     return member, sigma
