@@ -44,29 +44,33 @@ def _grid(texts, side):
 
 
 def _timed(case, grid, chunk, scheduler=None, workers=1):
-    """Seconds for one sweep to a fresh Parquet file, and its status counts."""
+    """Wall seconds for one sweep to a fresh Parquet file, its status counts, and the CPU seconds
+    of this process meanwhile (the whole work of an in-process sweep: what it takes on a quiet
+    machine, whatever the load)."""
     with tempfile.TemporaryDirectory() as folder:
-        start = time.perf_counter()
+        start, cpu = time.perf_counter(), time.process_time()
         table = sweep(registry.find(case), grid, out=Path(folder) / "s.parquet", chunk=chunk,
                       scheduler=scheduler, workers=workers, progress=False)
-        seconds = time.perf_counter() - start
+        seconds, cpu = time.perf_counter() - start, time.process_time() - cpu
     statuses = table.column("status").to_pylist()
-    return seconds, {s: statuses.count(s) for s in sorted(set(statuses))}
+    return seconds, {s: statuses.count(s) for s in sorted(set(statuses))}, cpu
 
 
 def in_process(case, texts, side, *, chunk=1000, repeats=3, workers=1, progress=None):
     """Median wall time [s] of a side x side sweep in this process (after one small warm-up sweep),
     or on `workers` local processes (spawned by the sweep: their start-up is in the time), the
-    status counts of the last run and the number of variants."""
+    status counts of the last run, the number of variants and the median CPU seconds of this
+    process (None on several processes: the work is theirs)."""
     _timed(case, _grid(texts, 2), chunk)
-    times, counts = [], {}
+    times, cpus, counts = [], [], {}
     for r in range(repeats):
-        seconds, counts = _timed(case, _grid(texts, side), chunk, workers=workers)
+        seconds, counts, cpu = _timed(case, _grid(texts, side), chunk, workers=workers)
         times.append(seconds)
+        cpus.append(cpu)
         if progress:
             progress(f"{case}: {side * side} variants on {workers} process(es) in {seconds:.1f} s "
-                     f"(run {r + 1}/{repeats})")
-    return statistics.median(times), counts, side * side
+                     + (f"({cpu:.1f} s CPU) " if workers == 1 else "") + f"(run {r + 1}/{repeats})")
+    return statistics.median(times), counts, side * side, statistics.median(cpus) if workers == 1 else None
 
 
 def solve_loop(case, texts, side, *, samples=LOOP_SAMPLES):
@@ -120,18 +124,19 @@ def dask_overhead(*, side=DASK_SIDE, repeats=3, progress=None):
 def table(loom, cam, cam_pool, dask, dask_side=DASK_SIDE, loops=None):
     """The throughput and its verdicts: ratios to baselines timed in the same run (`TARGETS`)."""
     loops = loops or {}
-    lines = ["sweep throughput (medians; wall time including the Parquet table)",
-             f"{'sweep':<34}{'variants':>9}{'median s':>10}{'ms/variant':>12}{'baseline ms':>13}{'ratio':>7}"
-             f"{'target':>8}  verdict  statuses"]
+    lines = ["sweep throughput (medians; wall time including the Parquet table; CPU: this process's)",
+             f"{'sweep':<34}{'variants':>9}{'median s':>10}{'ms/variant':>12}{'CPU ms':>8}{'baseline ms':>13}"
+             f"{'ratio':>7}{'target':>8}  verdict  statuses"]
     rows = (("loom/group1 in-process", loom, loops.get("loom"), "one by one", TARGETS["sweep_over_solve_loop"]),
             ("cam-cutter/minimax in-process", cam, loops.get("cam"), "one by one", TARGETS["sweep_over_solve_loop"]),
             ("cam-cutter/minimax --workers 2", cam_pool, cam[0] / cam[2], "in-process",
              TARGETS["workers_2_over_in_process"]))
-    for name, (seconds, counts, n), base, _, target in rows:
+    for name, (seconds, counts, n, cpu), base, _, target in rows:
         per = seconds / n
         verdict = "" if base is None else ("met" if per / base < target else "MISSED")
         ratio = f"{per / base:>7.2f}" if base else f"{'-':>7}"
-        lines.append(f"{name:<34}{n:>9}{seconds:>10.1f}{per * 1e3:>12.2f}{(base or 0) * 1e3:>13.2f}{ratio}"
+        cpu = f"{cpu / n * 1e3:>8.2f}" if cpu is not None else f"{'-':>8}"
+        lines.append(f"{name:<34}{n:>9}{seconds:>10.1f}{per * 1e3:>12.2f}{cpu}{(base or 0) * 1e3:>13.2f}{ratio}"
                      f"{'< ' + format(target, 'g'):>8}  {verdict:<7}  {counts}")
     lines.append("baselines: the same grid's variants solved one by one by registry.run "
                  f"({LOOP_SAMPLES} of them); --workers 2 against the in-process sweep")
@@ -194,7 +199,7 @@ def plot(loom, cam, cam_pool, dask, out_dir):
     fig = new_figure(figsize=(11, 4.5))
     left, right = fig.subplots(1, 2)
     names = ["loom/group1\nin-process", "cam-cutter/minimax\nin-process", "cam-cutter/minimax\n--workers 2"]
-    rates = [n / seconds for seconds, _, n in (loom, cam, cam_pool)]
+    rates = [n / seconds for seconds, _, n, _ in (loom, cam, cam_pool)]
     left.bar(names, rates, color=["tab:blue", "tab:orange", "tab:green"])
     for i, rate in enumerate(rates):
         left.annotate(f"{rate:.0f}", (i, rate), ha="center", va="bottom", fontsize=9)

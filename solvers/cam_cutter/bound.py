@@ -102,6 +102,8 @@ def _squared(px, py, H, L):
 _OFFSET = ((np.arange(POLYLINE) - np.arange(POLYLINE)[:, None] + POLYLINE // 2) % POLYLINE - POLYLINE // 2).astype(np.int16)
 _FAR = np.int16(POLYLINE)
 _AFTER, _BEFORE = np.where(_OFFSET > 0, _OFFSET, _FAR), np.where(_OFFSET <= 0, -_OFFSET, _FAR)
+for _table in (_OFFSET, _AFTER, _BEFORE):
+    _table.flags.writeable = False       # shared by every call and thread: read only
 
 
 def _run(near, j):
@@ -181,6 +183,8 @@ def _tangents(px, py, H, L, reach, spacing, squared, tol):
 _SUB_OFFSET = (2 * np.arange(SUBARCS) + 1 - SUBARCS) * np.pi / (POLYLINE * SUBARCS)   # sub-arc centres from s_j
 _SUB_COS, _SUB_SIN = np.cos(_SUB_OFFSET), np.sin(_SUB_OFFSET)
 _COS, _SIN = np.cos(_GRID), np.sin(_GRID)
+for _table in (_SUB_COS, _SUB_SIN, _COS, _SIN):
+    _table.flags.writeable = False
 
 
 def _foot(px, py, H, L, s):

@@ -257,3 +257,22 @@ def _least_largest_distance(px, py, cell, bounds, n):
             assert np.all(true >= zero - 1e-12) and np.all(true >= affine - 1e-12)
             least = min(least, true.max())
     return least
+
+
+def test_certificates_on_four_threads_match_serial_ones():
+    """The bound's tables (vertex offsets, sub-arc angles) are shared read-only by every call: the
+    certificates of eight cams, four threads at a time, are the serial ones to the last bit."""
+    from concurrent.futures import ThreadPoolExecutor
+    task, _ = registry.find("cam-cutter/minimax").build()
+    box = (57.0, 62.0, 45.0, 50.0)
+    px, py = task.path_point(np.linspace(0.0, task.t_end_rad, 27))
+    paths = [(px * (1 + 0.002 * k), py * (1 + 0.002 * k)) for k in range(8)]      # cams 0.2 % apart
+
+    def certify(path):
+        got = box_lower_bound(*path, box, upper=0.0609, gap=1e-3)
+        return got.lower, got.cells, got.leaves.bound.tobytes()
+
+    serial = [certify(p) for p in paths]
+    with ThreadPoolExecutor(4) as pool:
+        threaded = list(pool.map(certify, paths))
+    assert threaded == serial and len({s[0] for s in serial}) > 1
