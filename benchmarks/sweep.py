@@ -34,7 +34,7 @@ TARGETS = {"sweep_over_solve_loop": 1.20, "workers_2_over_in_process": 0.75, "da
 LOOP_SAMPLES = 100               # variants of the grid solved one by one for the baseline
 LOOM_GRID = ("amplitude_limit_mm=0.05:0.2:{n}", "sigma_H_limit_MPa=600:1000:{n}")
 CAM_GRID = ("a_mm=20:30:{n}", "h_mm=0:3:{n}")
-CAM_REPEATS_MAX = 3               # a 10^4 cam sweep takes ~10 min: at most 3 runs for the median
+CAM_REPEATS_MAX = 3               # a 10^4 cam sweep takes ~6 min: at most 3 runs for the median
 DASK_CHUNKS = (100, 500, 2000)
 DASK_SIDE = 45                   # 2 025 variants per Dask sweep
 
@@ -154,11 +154,16 @@ def table(loom, cam, cam_pool, dask, dask_side=DASK_SIDE, loops=None):
 
 QUICK_SIDE, QUICK_DASK_SIDE = 30, 20          # --quick: 900 and 400 variants, one run each
 WARM_UP_S = 25.0                 # imports, clusters started, warm-up sweeps
-# per 10^4 variants / per run; cam: the scene certifies every answer (certify = "on"), re-measured
-# with the second-order certificate (--quick on a 2-core machine shared by six sessions, load ~5:
-# 71 ms a variant in-process, 69 ms one by one, 74 ms on 2 processes; 46 ms of CPU a variant,
-# 12.5 ms uncertified; quick mode 3 min 1 s in all, 1 min 58 s of CPU in the main process)
-MEASURED_S = {"loom": 27.0, "cam": 710.0, "cam_pool": 740.0, "dask_chunk": 3.0}
+# Per 10^4 variants / per run [s] on a quiet 2-core machine: an in-process sweep takes its CPU time
+# (the table's CPU column). Re-measured with the certificate at about one and a half solves (--quick,
+# 900 variants, on a 2-core machine shared by six sessions at load ~7.5, where wall times are 2-4x
+# the CPU): loom 5.1 ms of CPU a variant; cam (cam-cutter/minimax, every answer certified: a_mm
+# 20..30 x h_mm 0..3, neighbours too far apart for a warm start) 36 ms (9.7 ms uncertified; it was
+# 46 ms); on 2 processes half of it plus ~5 s of spawn and imports; a Dask run of 2 025 variants ~3 s.
+# The quick mode there: 4 min 32 s wall, 53 s of CPU in this process (loom 19 s wall, cam in-process
+# 95 s, on 2 processes 78 s, Dask 57 s with its clusters' start, the one-by-one baselines and the
+# plot 18 s); on a quiet machine these budgets give about 1.5 min
+MEASURED_S = {"loom": 51.0, "cam": 364.0, "cam_pool": 200.0, "dask_chunk": 3.0}
 
 
 def expected_s(repeats, quick=False) -> float:
@@ -174,13 +179,15 @@ def expected_s(repeats, quick=False) -> float:
 
 def cli(repeats, out_dir, progress=None, quick=False) -> str:
     """What `mechopt bench sweep` prints, and its figure in out_dir. The 10^4 cam sweeps run at most
-    CAM_REPEATS_MAX times (minutes each); `quick` runs 900-variant sweeps once (about a minute)."""
+    CAM_REPEATS_MAX times (minutes each); `quick` runs 900-variant sweeps once (about 1.5 min on a
+    quiet 2-core machine: the cam sweeps in-process and on two processes are two thirds of it, and
+    fewer variants would leave the two processes' start-up, ~5 s, deciding their verdict)."""
     side, dask_side = (QUICK_SIDE, QUICK_DASK_SIDE) if quick else (100, DASK_SIDE)
     repeats = 1 if quick else repeats
     if progress:
         seconds = expected_s(repeats, quick)
         progress(f"sweep benchmark: expect about {f'{seconds / 60:.0f} min' if seconds > 120 else f'{seconds:.0f} s'} "
-                 "on 2 cores" + ("" if quick else " (--quick: about a minute)"))
+                 "on a quiet 2-core machine" + ("" if quick else f" (--quick: about {expected_s(1, True) / 60:.1f} min)"))
     loom = in_process("loom/group1", LOOM_GRID, side, repeats=repeats, progress=progress)
     cam_repeats = min(repeats, CAM_REPEATS_MAX)
     cam = in_process("cam-cutter/minimax", CAM_GRID, side, repeats=cam_repeats, progress=progress)
