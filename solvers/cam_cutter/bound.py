@@ -230,7 +230,8 @@ def cell_bounds(px, py, H, L, hH, hL, *, fine=True, width=None, target=np.inf):
     that bound's worst corner and, with `fine`, where not `first`, `tangent_bound` (computed here
     from the same squared vertex distances). Given `width` (the pairs come `width` a cell, cell by
     cell), a cell whose zero-order bound on one of its nodes reaches `target` [mm] is closed: its
-    pairs keep that bound alone (`first` False, no tangent-segment bound)."""
+    pairs keep that bound alone (`first` False, no tangent-segment bound); and one that a node's
+    worst corner closes takes no tangent-segment bound."""
     px, py, H, L, hH, hL = (np.ravel(v).astype(float) for v in np.broadcast_arrays(px, py, H, L, hH, hL))
     r = lipschitz_radius(hH, hL)
     V, M = np.abs(L) + np.abs(H), np.abs(L) + 2 * np.abs(H)
@@ -260,6 +261,8 @@ def cell_bounds(px, py, H, L, hH, hL, *, fine=True, width=None, target=np.inf):
     worst = (d0 - np.abs(gH) * hH[:, None] - np.abs(gL) * hL[:, None] - E).min(axis=1)
     zero = np.where(first, np.maximum(zero, worst), zero)
     other = one[~first[one]] if fine else one[:0]
+    if width is not None and other.size:  # not in cells a node's worst corner has closed
+        other = other[np.repeat(zero.reshape(-1, width).max(axis=1) < target, width)[other]]
     if other.size:                        # more branches near the node: the tangent-segment bound
         zero[other] = np.maximum(zero[other], _tangents(px[other], py[other], H[other], L[other],
                                                         (high + 2 * r + spacing)[other], spacing[other],
