@@ -15,8 +15,9 @@ the cell, each from `bound.cell_bounds` (one call for every (cell, node) pair of
   about their optima this is the linear program's optimum over every node (the test compares).
   Near the answer, whose active nodes' gradients cancel, it loses only second-order terms.
 
-The costly bounds are taken only where they can close a cell: the first-order and tangent-segment
-bounds in cells the zero-order one left open (`_measure`). The first grid is measured on every
+The costly bounds are taken only where they can close a cell: the first-order bound in cells the
+zero-order one left open, the tangent-segment bound in those a node's worst corner leaves open too
+(`_measure`, `bound.cell_bounds`). The first grid is measured on every
 SCREEN-th node and split without a recheck (a coarse cell seldom closes on the rest); a cell's
 children are measured on its KEEP + REACH nodes first, and those still below the target on every
 node: any subset of the nodes gives a lower bound, and a child's bound is at least its parent's.
@@ -219,7 +220,7 @@ def _measure(px, py, cells: Cells, nodes, target=np.inf):
     runs' affine bounds: concave in (dH, dL)), so the sum is concave and least at a corner; the
     largest over `_dual` of that least corner (the linear program's dual). The costlier bounds
     (first order; the tangent-segment bound of the pairs with no first-order one) are taken only in
-    the cells the zero-order bound leaves below `target` (any bound of a node is a bound)."""
+    the cells the cheaper ones leave below `target` (any bound of a node is a bound)."""
     count, width = nodes.shape
     pairs = (px[nodes.ravel()], py[nodes.ravel()], *(np.repeat(v, width) for v in (cells.H, cells.L, cells.hH, cells.hL)))
     zero, d0, gH, gL, E, first = cell_bounds(*pairs, width=width, target=target)
