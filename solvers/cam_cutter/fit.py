@@ -190,7 +190,7 @@ def minimax(task: LinkageFit | ProfileFit, *, count: Nodes = 1000, slots: Annota
     (`ProfileFit`: several basins, searched from several starts) and not the cardioid
     (`LinkageFit`: one start from its matched linkage, exact for h = 0), whose answer then says
     `global_certified` False, "not checked" (`cam-cutter/minimax` asks "on": the certificate
-    costs some one and a half of its solves, `mechopt bench cam-cutter`).
+    costs less than two of its solves, `mechopt bench cam-cutter`).
     """
     _check_count(count)
     check_settings(minimax, slots=slots, max_rounds=max_rounds, nlp=nlp, widen=widen, starts=starts, certify=certify,
