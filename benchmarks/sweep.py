@@ -155,15 +155,16 @@ def table(loom, cam, cam_pool, dask, dask_side=DASK_SIDE, loops=None):
 QUICK_SIDE, QUICK_DASK_SIDE = 30, 20          # --quick: 900 and 400 variants, one run each
 WARM_UP_S = 25.0                 # imports, clusters started, warm-up sweeps
 # Per 10^4 variants / per run [s] on a quiet 2-core machine: an in-process sweep takes its CPU time
-# (the table's CPU column). Re-measured with the certificate at about one and a half solves (--quick,
-# 900 variants, on a 2-core machine shared by six sessions at load ~7.5, where wall times are 2-4x
-# the CPU): loom 5.1 ms of CPU a variant; cam (cam-cutter/minimax, every answer certified: a_mm
-# 20..30 x h_mm 0..3, neighbours too far apart for a warm start) 36 ms (9.7 ms uncertified; it was
-# 46 ms); on 2 processes half of it plus ~5 s of spawn and imports; a Dask run of 2 025 variants ~3 s.
-# The quick mode there: 4 min 32 s wall, 53 s of CPU in this process (loom 19 s wall, cam in-process
-# 95 s, on 2 processes 78 s, Dask 57 s with its clusters' start, the one-by-one baselines and the
-# plot 18 s); on a quiet machine these budgets give about 1.5 min
-MEASURED_S = {"loom": 51.0, "cam": 364.0, "cam_pool": 200.0, "dask_chunk": 3.0}
+# (the table's CPU column). Re-measured with the certificate at under two solves (--quick, 900
+# variants, on a 2-core machine shared by six sessions, load 3-7.5, where wall times are 1.3-3x the
+# CPU): loom 4.1 ms of CPU a variant; cam (cam-cutter/minimax, every answer certified: a_mm 20..30 x
+# h_mm 0..3, neighbours too far apart for a warm start) 34 ms (9.7 ms uncertified; it was 46 ms);
+# on 2 processes half of it plus ~5 s of spawn and imports; a Dask run of 2 025 variants ~3 s. The
+# quick mode at load ~3.5: 2 min 19 s wall, 47.5 s of CPU in this process (loom 5 s with the
+# imports, cam in-process 46 s, on 2 processes 52 s: the other sessions held the second core, Dask
+# 29 s with its clusters' start, the one-by-one baselines and the plot 7 s); at load ~7.5 4 min 32 s.
+# On a quiet machine these budgets give about 1.5 min
+MEASURED_S = {"loom": 41.0, "cam": 340.0, "cam_pool": 190.0, "dask_chunk": 3.0}
 
 
 def expected_s(repeats, quick=False) -> float:
