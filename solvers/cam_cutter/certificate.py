@@ -55,7 +55,7 @@ KEEP = 5                # nodes a cell's bound mixes, and its children are first
 SECTORS = 8             # gradient directions `_diverse` picks nodes from (SECTORS + 1 >= KEEP)
 REACH = 3               # and the nodes highest at a corner (the dual mixes both)
 SCREEN = 4              # the first cells are screened on every SCREEN-th node
-GRID = (20, 20)         # the first cells over (H, L): 16 x 8 took as long on the cardioid scene, 1.3-1.6x on the others
+GRID = (20, 20)         # the first cells over (H, L): 20 x 10 took as long on the cardioid scene, 1.3-1.4x on the others
 DIRECT_PAIRS = 500      # children x nodes up to which a level is measured on every node in one call
 
 
