@@ -156,15 +156,13 @@ QUICK_SIDE, QUICK_DASK_SIDE = 30, 20          # --quick: 900 and 400 variants, o
 WARM_UP_S = 25.0                 # imports, clusters started, warm-up sweeps
 # Per 10^4 variants / per run [s] on a quiet 2-core machine: an in-process sweep takes its CPU time
 # (the table's CPU column). Re-measured with the certificate at under two solves (--quick, 900
-# variants, on a 2-core machine shared by six sessions, load 3-7.5, where wall times are 1.3-3x the
-# CPU): loom 4.1 ms of CPU a variant; cam (cam-cutter/minimax, every answer certified: a_mm 20..30 x
-# h_mm 0..3, neighbours too far apart for a warm start) 34 ms (9.7 ms uncertified; it was 46 ms);
-# on 2 processes half of it plus ~5 s of spawn and imports; a Dask run of 2 025 variants ~3 s. The
-# quick mode at load ~3.5: 2 min 19 s wall, 47.5 s of CPU in this process (loom 5 s with the
-# imports, cam in-process 46 s, on 2 processes 52 s: the other sessions held the second core, Dask
-# 29 s with its clusters' start, the one-by-one baselines and the plot 7 s); at load ~7.5 4 min 32 s.
-# On a quiet machine these budgets give about 1.5 min
-MEASURED_S = {"loom": 41.0, "cam": 340.0, "cam_pool": 190.0, "dask_chunk": 3.0}
+# variants, on a 2-core machine shared by six sessions): loom 3.7 ms of CPU a variant; cam
+# (cam-cutter/minimax, every answer certified: a_mm 20..30 x h_mm 0..3, neighbours too far apart
+# for a warm start) 30 ms (9.7 ms uncertified; it was 46 ms); on 2 processes half of it plus ~5 s of
+# spawn and imports; a Dask run of 2 025 variants ~3 s. The quick mode: 1 min 35 s wall at load
+# ~2 (47 s of CPU in this process; cam in-process 27 s, on 2 processes 31 s: the other sessions held
+# the second core; Dask 24 s with its clusters' start), 2 min 19 s at load ~3.5, 4 min 32 s at ~7.5
+MEASURED_S = {"loom": 37.0, "cam": 300.0, "cam_pool": 170.0, "dask_chunk": 3.0}
 
 
 def expected_s(repeats, quick=False) -> float:
