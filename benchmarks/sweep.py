@@ -34,7 +34,7 @@ TARGETS = {"sweep_over_solve_loop": 1.20, "workers_2_over_in_process": 0.75, "da
 LOOP_SAMPLES = 100               # variants of the grid solved one by one for the baseline
 LOOM_GRID = ("amplitude_limit_mm=0.05:0.2:{n}", "sigma_H_limit_MPa=600:1000:{n}")
 CAM_GRID = ("a_mm=20:30:{n}", "h_mm=0:3:{n}")
-CAM_REPEATS_MAX = 3               # a 10^4 cam sweep takes ~10 min: at most 3 runs for the median
+CAM_REPEATS_MAX = 3               # a 10^4 cam sweep takes ~6 min: at most 3 runs for the median
 DASK_CHUNKS = (100, 500, 2000)
 DASK_SIDE = 45                   # 2 025 variants per Dask sweep
 
@@ -44,29 +44,33 @@ def _grid(texts, side):
 
 
 def _timed(case, grid, chunk, scheduler=None, workers=1):
-    """Seconds for one sweep to a fresh Parquet file, and its status counts."""
+    """Wall seconds for one sweep to a fresh Parquet file, its status counts, and the CPU seconds
+    of this process meanwhile (the whole work of an in-process sweep: what it takes on a quiet
+    machine, whatever the load)."""
     with tempfile.TemporaryDirectory() as folder:
-        start = time.perf_counter()
+        start, cpu = time.perf_counter(), time.process_time()
         table = sweep(registry.find(case), grid, out=Path(folder) / "s.parquet", chunk=chunk,
                       scheduler=scheduler, workers=workers, progress=False)
-        seconds = time.perf_counter() - start
+        seconds, cpu = time.perf_counter() - start, time.process_time() - cpu
     statuses = table.column("status").to_pylist()
-    return seconds, {s: statuses.count(s) for s in sorted(set(statuses))}
+    return seconds, {s: statuses.count(s) for s in sorted(set(statuses))}, cpu
 
 
 def in_process(case, texts, side, *, chunk=1000, repeats=3, workers=1, progress=None):
     """Median wall time [s] of a side x side sweep in this process (after one small warm-up sweep),
     or on `workers` local processes (spawned by the sweep: their start-up is in the time), the
-    status counts of the last run and the number of variants."""
+    status counts of the last run, the number of variants and the median CPU seconds of this
+    process (None on several processes: the work is theirs)."""
     _timed(case, _grid(texts, 2), chunk)
-    times, counts = [], {}
+    times, cpus, counts = [], [], {}
     for r in range(repeats):
-        seconds, counts = _timed(case, _grid(texts, side), chunk, workers=workers)
+        seconds, counts, cpu = _timed(case, _grid(texts, side), chunk, workers=workers)
         times.append(seconds)
+        cpus.append(cpu)
         if progress:
             progress(f"{case}: {side * side} variants on {workers} process(es) in {seconds:.1f} s "
-                     f"(run {r + 1}/{repeats})")
-    return statistics.median(times), counts, side * side
+                     + (f"({cpu:.1f} s CPU) " if workers == 1 else "") + f"(run {r + 1}/{repeats})")
+    return statistics.median(times), counts, side * side, statistics.median(cpus) if workers == 1 else None
 
 
 def solve_loop(case, texts, side, *, samples=LOOP_SAMPLES):
@@ -120,18 +124,19 @@ def dask_overhead(*, side=DASK_SIDE, repeats=3, progress=None):
 def table(loom, cam, cam_pool, dask, dask_side=DASK_SIDE, loops=None):
     """The throughput and its verdicts: ratios to baselines timed in the same run (`TARGETS`)."""
     loops = loops or {}
-    lines = ["sweep throughput (medians; wall time including the Parquet table)",
-             f"{'sweep':<34}{'variants':>9}{'median s':>10}{'ms/variant':>12}{'baseline ms':>13}{'ratio':>7}"
-             f"{'target':>8}  verdict  statuses"]
+    lines = ["sweep throughput (medians; wall time including the Parquet table; CPU: this process's)",
+             f"{'sweep':<34}{'variants':>9}{'median s':>10}{'ms/variant':>12}{'CPU ms':>8}{'baseline ms':>13}"
+             f"{'ratio':>7}{'target':>8}  verdict  statuses"]
     rows = (("loom/group1 in-process", loom, loops.get("loom"), "one by one", TARGETS["sweep_over_solve_loop"]),
             ("cam-cutter/minimax in-process", cam, loops.get("cam"), "one by one", TARGETS["sweep_over_solve_loop"]),
             ("cam-cutter/minimax --workers 2", cam_pool, cam[0] / cam[2], "in-process",
              TARGETS["workers_2_over_in_process"]))
-    for name, (seconds, counts, n), base, _, target in rows:
+    for name, (seconds, counts, n, cpu), base, _, target in rows:
         per = seconds / n
         verdict = "" if base is None else ("met" if per / base < target else "MISSED")
         ratio = f"{per / base:>7.2f}" if base else f"{'-':>7}"
-        lines.append(f"{name:<34}{n:>9}{seconds:>10.1f}{per * 1e3:>12.2f}{(base or 0) * 1e3:>13.2f}{ratio}"
+        cpu = f"{cpu / n * 1e3:>8.2f}" if cpu is not None else f"{'-':>8}"
+        lines.append(f"{name:<34}{n:>9}{seconds:>10.1f}{per * 1e3:>12.2f}{cpu}{(base or 0) * 1e3:>13.2f}{ratio}"
                      f"{'< ' + format(target, 'g'):>8}  {verdict:<7}  {counts}")
     lines.append("baselines: the same grid's variants solved one by one by registry.run "
                  f"({LOOP_SAMPLES} of them); --workers 2 against the in-process sweep")
@@ -149,11 +154,15 @@ def table(loom, cam, cam_pool, dask, dask_side=DASK_SIDE, loops=None):
 
 QUICK_SIDE, QUICK_DASK_SIDE = 30, 20          # --quick: 900 and 400 variants, one run each
 WARM_UP_S = 25.0                 # imports, clusters started, warm-up sweeps
-# per 10^4 variants / per run; cam: the scene certifies every answer (certify = "on"), re-measured
-# with the second-order certificate (--quick on a 2-core machine shared by six sessions, load ~5:
-# 71 ms a variant in-process, 69 ms one by one, 74 ms on 2 processes; 46 ms of CPU a variant,
-# 12.5 ms uncertified; quick mode 3 min 1 s in all, 1 min 58 s of CPU in the main process)
-MEASURED_S = {"loom": 27.0, "cam": 710.0, "cam_pool": 740.0, "dask_chunk": 3.0}
+# Per 10^4 variants / per run [s] on a quiet 2-core machine: an in-process sweep takes its CPU time
+# (the table's CPU column). Re-measured with the certificate at under two solves (--quick, 900
+# variants, on a 2-core machine shared by six sessions): loom 3.7 ms of CPU a variant; cam
+# (cam-cutter/minimax, every answer certified: a_mm 20..30 x h_mm 0..3, neighbours too far apart
+# for a warm start) 30 ms (9.7 ms uncertified; it was 46 ms); on 2 processes half of it plus ~5 s of
+# spawn and imports; a Dask run of 2 025 variants ~3 s. The quick mode: 1 min 35 s wall at load
+# ~2 (47 s of CPU in this process; cam in-process 27 s, on 2 processes 31 s: the other sessions held
+# the second core; Dask 24 s with its clusters' start), 2 min 19 s at load ~3.5, 4 min 32 s at ~7.5
+MEASURED_S = {"loom": 37.0, "cam": 300.0, "cam_pool": 170.0, "dask_chunk": 3.0}
 
 
 def expected_s(repeats, quick=False) -> float:
@@ -169,13 +178,15 @@ def expected_s(repeats, quick=False) -> float:
 
 def cli(repeats, out_dir, progress=None, quick=False) -> str:
     """What `mechopt bench sweep` prints, and its figure in out_dir. The 10^4 cam sweeps run at most
-    CAM_REPEATS_MAX times (minutes each); `quick` runs 900-variant sweeps once (about a minute)."""
+    CAM_REPEATS_MAX times (minutes each); `quick` runs 900-variant sweeps once (about 1.5 min on a
+    quiet 2-core machine: the cam sweeps in-process and on two processes are two thirds of it, and
+    fewer variants would leave the two processes' start-up, ~5 s, deciding their verdict)."""
     side, dask_side = (QUICK_SIDE, QUICK_DASK_SIDE) if quick else (100, DASK_SIDE)
     repeats = 1 if quick else repeats
     if progress:
         seconds = expected_s(repeats, quick)
         progress(f"sweep benchmark: expect about {f'{seconds / 60:.0f} min' if seconds > 120 else f'{seconds:.0f} s'} "
-                 "on 2 cores" + ("" if quick else " (--quick: about a minute)"))
+                 "on a quiet 2-core machine" + ("" if quick else f" (--quick: about {expected_s(1, True) / 60:.1f} min)"))
     loom = in_process("loom/group1", LOOM_GRID, side, repeats=repeats, progress=progress)
     cam_repeats = min(repeats, CAM_REPEATS_MAX)
     cam = in_process("cam-cutter/minimax", CAM_GRID, side, repeats=cam_repeats, progress=progress)
@@ -194,7 +205,7 @@ def plot(loom, cam, cam_pool, dask, out_dir):
     fig = new_figure(figsize=(11, 4.5))
     left, right = fig.subplots(1, 2)
     names = ["loom/group1\nin-process", "cam-cutter/minimax\nin-process", "cam-cutter/minimax\n--workers 2"]
-    rates = [n / seconds for seconds, _, n in (loom, cam, cam_pool)]
+    rates = [n / seconds for seconds, _, n, _ in (loom, cam, cam_pool)]
     left.bar(names, rates, color=["tab:blue", "tab:orange", "tab:green"])
     for i, rate in enumerate(rates):
         left.annotate(f"{rate:.0f}", (i, rate), ha="center", va="bottom", fontsize=9)

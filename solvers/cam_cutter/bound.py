@@ -97,14 +97,23 @@ def _squared(px, py, H, L):
     return size[:, None] + features @ _TERMS, 1e-13 * (size + 4 * (np.abs(L) + np.abs(H)) ** 2)
 
 
+# vertex k's offset from vertex j on the circle, -N/2 .. N/2 - 1 (a row a j), and the offsets after
+# and before j, N where on the other side (tables: one gather a call where the arithmetic took five)
+_OFFSET = ((np.arange(POLYLINE) - np.arange(POLYLINE)[:, None] + POLYLINE // 2) % POLYLINE - POLYLINE // 2).astype(np.int16)
+_FAR = np.int16(POLYLINE)
+_AFTER, _BEFORE = np.where(_OFFSET > 0, _OFFSET, _FAR), np.where(_OFFSET <= 0, -_OFFSET, _FAR)
+for _table in (_OFFSET, _AFTER, _BEFORE):
+    _table.flags.writeable = False       # shared by every call and thread: read only
+
+
 def _run(near, j):
     """The run of `near` vertices (a row a pair, circular) around vertex j: the mask of its members
     and sigma [rad], the farthest a member lies from j plus half a spacing; the run is the whole
     circle (sigma = inf) where every vertex is near."""
-    offset = ((np.arange(POLYLINE) - j[:, None] + POLYLINE // 2) & (POLYLINE - 1)) - POLYLINE // 2
-    right = np.where(near | (offset <= 0), POLYLINE, offset).min(axis=1)      # first vertex not near
-    left = np.where(near | (offset > 0), POLYLINE, -offset).min(axis=1)
-    whole = ~(~near).any(axis=1)
+    offset = _OFFSET[j]
+    right = np.where(near, _FAR, _AFTER[j]).min(axis=1)      # the first vertex not near, either side
+    left = np.where(near, _FAR, _BEFORE[j]).min(axis=1)
+    whole = near.all(axis=1)
     member = ((offset > -left[:, None]) & (offset < right[:, None])) | whole[:, None]
     sigma = np.where(whole, np.inf, (np.maximum(left, right) - 0.5) * (2 * np.pi / POLYLINE))
     return member, sigma
@@ -139,40 +148,43 @@ def _scan(squared, tol, high, slack):
     return (_GRID[j], sigma1), (_GRID[j2], sigma2), covered
 
 
-def _tangents(px, py, H, L, reach, spacing):
+def _tangents(px, py, H, L, reach, spacing, squared, tol):
     """A lower bound [mm] on the distance from P to the limaçon where the first-order bound does
     not apply (several branches near P): every polyline vertex farther than `reach` [mm] bounds its
     arc's points at reach less the spacing error V pi / N [mm]; the arcs of the
     nearer ones (at most NEAR_ARCS, else the bound is -inf) are cut in SUBARCS, and the distance to
     each sub-arc is at least that to its centre's tangent segment Q_k + Q'_k t, |t| <= pi/(N SUBARCS),
-    less M (pi/(N SUBARCS))^2 / 2, the farthest the arc strays from it (Taylor: |Q''| <= M)."""
+    less M (pi/(N SUBARCS))^2 / 2, the farthest the arc strays from it (Taylor: |Q''| <= M).
+    `squared`, `tol`: the squared distances to the vertices and their allowance (`_nearest`)."""
     half = np.pi / (POLYLINE * SUBARCS)
-    offset = (2 * np.arange(SUBARCS) + 1 - SUBARCS) * half
-    co, so = np.cos(offset), np.sin(offset)
-    out = np.full(px.size, -np.inf)
-    for k in range(0, px.size, CHUNK):
-        part = np.arange(k, min(k + CHUNK, px.size))
-        squared, tol = _squared(px[part], py[part], H[part], L[part])
-        near = squared < (reach[part] ** 2 + tol)[:, None]
-        count = near.sum(axis=1)
-        few = count <= NEAR_ARCS                          # more near arcs: no bound (-inf)
-        if not few.any():
-            continue
-        part, near = part[few], near[few]
-        order = np.argsort(~near, axis=1, kind="stable")[:, :count[few].max()]     # the near vertices first
-        # cos and sin of s_j + offset by the sum formulas: a product where np.cos would cost 20x
-        cj, nj = np.cos(_GRID)[order][..., None], np.sin(_GRID)[order][..., None]
-        c, n = (cj * co - nj * so).reshape(part.size, -1), (nj * co + cj * so).reshape(part.size, -1)
-        Hp, Lp = H[part, None], L[part, None]
-        c2, n2 = 2 * c * c - 1, 2 * n * c
-        x, y = Lp * (c - 1) + Hp * (c2 - 1) / 2, n * (Lp + Hp * c)
-        vx, vy = -Lp * n - Hp * n2, Lp * c + Hp * c2
-        wx, wy = px[part, None] - x, py[part, None] - y
-        t = np.clip((wx * vx + wy * vy) / np.maximum(vx * vx + vy * vy, 1e-300), -half, half)
-        gap = np.hypot(wx - t * vx, wy - t * vy) - (np.abs(L[part]) + 2 * np.abs(H[part]))[:, None] * half * half / 2
-        used = np.repeat(np.take_along_axis(near, order, axis=1), SUBARCS, axis=1)
-        out[part] = np.minimum(np.where(used, gap, np.inf).min(axis=1), reach[part] - spacing[part])
+    near = squared < (reach * reach + tol)[:, None]
+    count = near.sum(axis=1)
+    near &= (count <= NEAR_ARCS)[:, None]                 # more near arcs: no bound (-inf)
+    out = np.where(count == 0, reach - spacing, -np.inf)
+    pair, vertex = np.nonzero(near)                      # the near arcs, pair by pair
+    if pair.size == 0:
+        return out
+    # cos and sin of s_j + offset by the sum formulas: a product where np.cos would cost 20x
+    cj, nj = _COS[vertex][:, None], _SIN[vertex][:, None]
+    c, n = cj * _SUB_COS - nj * _SUB_SIN, nj * _SUB_COS + cj * _SUB_SIN
+    Hp, Lp = H[pair, None], L[pair, None]
+    c2, n2 = 2 * c * c - 1, 2 * n * c
+    x, y = Lp * (c - 1) + Hp * (c2 - 1) / 2, n * (Lp + Hp * c)
+    vx, vy = -Lp * n - Hp * n2, Lp * c + Hp * c2
+    wx, wy = px[pair, None] - x, py[pair, None] - y
+    t = np.clip((wx * vx + wy * vy) / np.maximum(vx * vx + vy * vy, 1e-300), -half, half)
+    gap = (np.hypot(wx - t * vx, wy - t * vy) - (np.abs(L[pair]) + 2 * np.abs(H[pair]))[:, None] * half * half / 2).min(axis=1)
+    first = np.flatnonzero(np.r_[True, pair[1:] != pair[:-1]])      # each pair's first arc
+    has = pair[first]
+    out[has] = np.minimum(np.minimum.reduceat(gap, first), reach[has] - spacing[has])
     return out
+
+
+_SUB_OFFSET = (2 * np.arange(SUBARCS) + 1 - SUBARCS) * np.pi / (POLYLINE * SUBARCS)   # sub-arc centres from s_j
+_SUB_COS, _SUB_SIN = np.cos(_SUB_OFFSET), np.sin(_SUB_OFFSET)
+_COS, _SIN = np.cos(_GRID), np.sin(_GRID)
+for _table in (_SUB_COS, _SUB_SIN, _COS, _SIN):
+    _table.flags.writeable = False
 
 
 def _foot(px, py, H, L, s):
@@ -215,10 +227,11 @@ def cell_bounds(px, py, H, L, hH, hL, *, fine=True, width=None, target=np.inf):
     docstring). Returns (zero, d0, gH, gL, E, first): `zero` a constant bound over the cell; where
     `first`, the distance at (H + dH, L + dL) is at least min_b (d0 + gH dH + gL dL - E)[b] over the
     two runs b of arcs near the node (the last axis; one run is given twice). `zero` is at least
-    that bound's worst corner and, with `fine`, where not `first`, `tangent_bound` (which a caller
-    may ask for later, for the pairs whose cells are still open). Given `width` (the pairs come
-    `width` a cell, cell by cell), a cell whose zero-order bound on one of its nodes reaches
-    `target` [mm] is closed: its pairs keep that bound alone (`first` False)."""
+    that bound's worst corner and, with `fine`, where not `first`, `tangent_bound` (computed here
+    from the same squared vertex distances). Given `width` (the pairs come `width` a cell, cell by
+    cell), a cell whose zero-order bound on one of its nodes reaches `target` [mm] is closed: its
+    pairs keep that bound alone (`first` False, no tangent-segment bound); and one that a node's
+    worst corner closes takes no tangent-segment bound."""
     px, py, H, L, hH, hL = (np.ravel(v).astype(float) for v in np.broadcast_arrays(px, py, H, L, hH, hL))
     r = lipschitz_radius(hH, hL)
     V, M = np.abs(L) + np.abs(H), np.abs(L) + 2 * np.abs(H)
@@ -230,11 +243,13 @@ def cell_bounds(px, py, H, L, hH, hL, *, fine=True, width=None, target=np.inf):
     ok, covered = np.zeros((px.size, 2), dtype=bool), np.zeros(px.size, dtype=bool)
     wanted = np.ones(px.size, dtype=bool) if width is None else \
         np.repeat(zero.reshape(-1, width).max(axis=1) < target, width)      # cells still open
-    runs = _scan(squared[wanted], tol[wanted], high[wanted], (2 * r + spacing)[wanted])
-    covered[wanted] = runs[2]
+    one = np.flatnonzero(wanted)
+    if one.size == 0:                     # every cell closed by the zero-order bound
+        return zero, d0, gH, gL, E, covered
+    runs = _scan(squared[one], tol[one], high[one], (2 * r + spacing)[one])
+    covered[one] = runs[2]
     # both runs' branches in one call: the first run of every wanted pair, the second where there
     # is one (else the first stands for both)
-    one = np.flatnonzero(wanted)
     two = runs[1][0] != runs[0][0]
     rows = np.r_[one, one[two]]
     got = _branch(*(v[rows] for v in (px, py, H, L, hH, hL, r, M)), np.r_[runs[0][0], runs[1][0][two]],
@@ -245,9 +260,13 @@ def cell_bounds(px, py, H, L, hH, hL, *, fine=True, width=None, target=np.inf):
     first = covered & ok.all(axis=1) & (d0[:, 0] <= high)   # beyond both runs every point is farther than high + r
     worst = (d0 - np.abs(gH) * hH[:, None] - np.abs(gL) * hL[:, None] - E).min(axis=1)
     zero = np.where(first, np.maximum(zero, worst), zero)
-    if fine and not first.all():          # more branches near the node: the tangent-segment bound
-        other = ~first
-        zero[other] = np.maximum(zero[other], tangent_bound(*(v[other] for v in (px, py, H, L, hH, hL))))
+    other = one[~first[one]] if fine else one[:0]
+    if width is not None and other.size:  # not in cells a node's worst corner has closed
+        other = other[np.repeat(zero.reshape(-1, width).max(axis=1) < target, width)[other]]
+    if other.size:                        # more branches near the node: the tangent-segment bound
+        zero[other] = np.maximum(zero[other], _tangents(px[other], py[other], H[other], L[other],
+                                                        (high + 2 * r + spacing)[other], spacing[other],
+                                                        squared[other], tol[other]) - r[other] - margin[other])
     return zero, d0, gH, gL, E, first
 
 
@@ -259,8 +278,8 @@ def tangent_bound(px, py, H, L, hH, hL):
     r = lipschitz_radius(hH, hL)
     V = np.abs(L) + np.abs(H)
     spacing = V * np.pi / POLYLINE
-    high = _nearest(px, py, H, L)[1]
-    return _tangents(px, py, H, L, high + 2 * r + spacing, spacing) - r - ROUNDING * (1.0 + V)
+    _, high, squared, tol = _nearest(px, py, H, L)
+    return _tangents(px, py, H, L, high + 2 * r + spacing, spacing, squared, tol) - r - ROUNDING * (1.0 + V)
 
 
 def _branch(px, py, H, L, hH, hL, r, M, sj, sigma, margin):

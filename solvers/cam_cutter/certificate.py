@@ -16,13 +16,21 @@ the cell, each from `bound.cell_bounds` (one call for every (cell, node) pair of
   Near the answer, whose active nodes' gradients cancel, it loses only second-order terms.
 
 The costly bounds are taken only where they can close a cell: the first-order bound in cells the
-zero-order one left open, the tangent-segment bound in cells still open after the first order
-(`_measure`). The first grid is measured on every SCREEN-th node and split without a recheck (a
-coarse cell seldom closes on the rest); a cell's children are measured on its KEEP + REACH nodes
-first, and those still below the target on every node: any subset of the nodes gives a lower
-bound, and a child's bound is at least its parent's. Cells are split level by level (all of a
-level in one call) until every cell's bound is within `gap` of `upper` (an achieved deviation: the
-early stop) or `max_cells` cells have been measured.
+zero-order one left open, the tangent-segment bound in those a node's worst corner leaves open too
+(`_measure`, `bound.cell_bounds`). The first grid is measured on every
+SCREEN-th node and split without a recheck (a coarse cell seldom closes on the rest); a cell's
+children are measured on its KEEP + REACH nodes first, and those still below the target on every
+node: any subset of the nodes gives a lower bound, and a child's bound is at least its parent's.
+A level of few children (DIRECT_PAIRS) is measured on every node at once: a measuring call costs
+a fixed ~1 ms of numpy calls, as much as some 300 (cell, node) pairs. Cells are split level by
+level (all of a level in one call) until every cell's bound is within `gap` of `upper` (an
+achieved deviation: the early stop) or `max_cells` cells have been measured.
+
+Every node can bind: a node's distance varies over a cell by up to its first-order move
+|gH| hH + |gL| hL, which at the certificate's finest cells (~0.05 mm about the cardioid's optimum)
+is of the order of the deviation itself, so an upper bound d0 + that move is below the cell's
+lower bound for only 4-6 of 27 nodes even at the last level (and d0 + r for none): a node set
+pruned per cell would save little.
 
 Warm start (`box_lower_bound(start=...)`, `warm_cells`): the leaves of an earlier certificate
 meeting this box (and grid cells for any part of the box they miss), each bound lowered by how far
@@ -36,7 +44,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mechopt.solvers.cam_cutter.bound import cell_bounds, lipschitz_radius, tangent_bound
+from mechopt.solvers.cam_cutter.bound import cell_bounds, lipschitz_radius
 from mechopt.solvers.cam_cutter.deviation import foot_points
 from mechopt.solvers.cam_cutter.problem import ROUND_VERTICES
 
@@ -47,6 +55,8 @@ KEEP = 5                # nodes a cell's bound mixes, and its children are first
 SECTORS = 8             # gradient directions `_diverse` picks nodes from (SECTORS + 1 >= KEEP)
 REACH = 3               # and the nodes highest at a corner (the dual mixes both)
 SCREEN = 4              # the first cells are screened on every SCREEN-th node
+GRID = (20, 20)         # the first cells over (H, L): 20 x 10 took as long on the cardioid scene, 1.3-1.4x on the others
+DIRECT_PAIRS = 500      # children x nodes up to which a level is measured on every node in one call
 
 
 @dataclass(frozen=True)
@@ -147,7 +157,7 @@ def _dual(gH, gL, corner):
 CORNERS = np.array([(-1, -1), (-1, 1), (1, -1), (1, 1)], dtype=float)
 
 
-def warm_cells(leaves: Cells, moved, box, grid=(16, 8), finest=0.0) -> Cells:
+def warm_cells(leaves: Cells, moved, box, grid=GRID, finest=0.0) -> Cells:
     """The start of a warm certificate over `box`: the earlier `leaves` that meet the box, each
     bound less `moved` [mm] (`moved_bound`), and the grid cells of the box that the leaves' box does
     not hold, unmeasured. Leaves narrower than `finest` [mm] (the fine ones about the earlier
@@ -208,24 +218,16 @@ def _measure(px, py, cells: Cells, nodes, target=np.inf):
     most promising nodes (`_diverse`). The bound: for any weights w on the simplex,
     max_i d_i >= sum_i w_i d_i >= sum_i w_i lb_i, lb_i a node's first-order bound (the least of its
     runs' affine bounds: concave in (dH, dL)), so the sum is concave and least at a corner; the
-    largest over `_dual` of that least corner (the linear program's dual). The costly
-    tangent-segment bound (`bound.tangent_bound`) of the pairs with no first-order bound is taken
-    only in the cells still below `target` without it (any bound of a node is a bound)."""
+    largest over `_dual` of that least corner (the linear program's dual). The costlier bounds
+    (first order; the tangent-segment bound of the pairs with no first-order one) are taken only in
+    the cells the cheaper ones leave below `target` (any bound of a node is a bound)."""
     count, width = nodes.shape
     pairs = (px[nodes.ravel()], py[nodes.ravel()], *(np.repeat(v, width) for v in (cells.H, cells.L, cells.hH, cells.hL)))
-    zero, d0, gH, gL, E, first = cell_bounds(*pairs, fine=False, width=width, target=target)
+    zero, d0, gH, gL, E, first = cell_bounds(*pairs, width=width, target=target)
     bound = np.maximum(cells.bound, zero.reshape(count, width).max(axis=1))
     pick = np.zeros((count, KEEP + REACH), dtype=int)               # a closed cell's: never used
-    for stage in range(2):
-        rows = np.flatnonzero(bound < target)
-        if stage:               # the tangent-segment bound, in the cells the others left open
-            fine = np.zeros((count, width), dtype=bool)
-            fine[rows] = ~first.reshape(count, width)[rows]
-            rows = np.flatnonzero(fine.any(axis=1))
-            if rows.size == 0:
-                break
-            fine = fine.ravel()
-            zero[fine] = np.maximum(zero[fine], tangent_bound(*(v[fine] for v in pairs)))
+    rows = np.flatnonzero(bound < target)
+    if rows.size:
         part = (rows[:, None] * width + np.arange(width)).ravel()
         bound[rows], pick[rows] = _combined(cells.take(rows), *(v[part] for v in (zero, d0, gH, gL, E, first)), width)
     return Cells(cells.H, cells.L, cells.hH, cells.hL, bound), np.take_along_axis(nodes, pick, axis=1)
@@ -271,7 +273,7 @@ def _split(cells: Cells) -> Cells:
                  np.repeat(hH, 4), np.repeat(hL, 4), np.repeat(cells.bound, 4))
 
 
-def box_lower_bound(px, py, box, upper, *, gap, max_cells=20_000, grid=(16, 8), start: Cells | None = None) -> Bound:
+def box_lower_bound(px, py, box, upper, *, gap, max_cells=20_000, grid=GRID, start: Cells | None = None) -> Bound:
     """A lower bound [mm] on the largest distance from the points (px, py) to the limaçon, over
     every (H, L) in box = (H_lo, H_hi, L_lo, L_hi): the cells of a grid (or `start`, an earlier
     certificate's leaves covering the box, `moved_bound`), split in four level by level until every
@@ -294,10 +296,14 @@ def box_lower_bound(px, py, box, upper, *, gap, max_cells=20_000, grid=(16, 8), 
     while True:
         open_ = np.flatnonzero(cells.bound < target)
         room = (max_cells - measured) // 4
-        if open_.size == 0 or room == 0:
+        if open_.size == 0 or room <= 0:      # the first grid alone may exceed max_cells
             break
         open_ = open_[np.argsort(cells.bound[open_], kind="stable")[:room]]   # the lowest first when short
-        children, child_top = _screened(px, py, _split(cells.take(open_)), np.repeat(top[open_], 4, axis=0), target)
+        children = _split(cells.take(open_))
+        if children.H.size * px.size <= DIRECT_PAIRS:      # few: every node at once, one call
+            children, child_top = _measure(px, py, children, np.tile(np.arange(px.size), (children.H.size, 1)), target)
+        else:
+            children, child_top = _screened(px, py, children, np.repeat(top[open_], 4, axis=0), target)
         keep = np.ones(cells.H.size, dtype=bool)
         keep[open_] = False
         cells, top = _joined(cells.take(keep), children), np.vstack([top[keep], child_top])

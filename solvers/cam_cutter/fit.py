@@ -190,7 +190,7 @@ def minimax(task: LinkageFit | ProfileFit, *, count: Nodes = 1000, slots: Annota
     (`ProfileFit`: several basins, searched from several starts) and not the cardioid
     (`LinkageFit`: one start from its matched linkage, exact for h = 0), whose answer then says
     `global_certified` False, "not checked" (`cam-cutter/minimax` asks "on": the certificate
-    costs some four of its solves, `mechopt bench cam-cutter`).
+    costs less than two of its solves, `mechopt bench cam-cutter`).
     """
     _check_count(count)
     check_settings(minimax, slots=slots, max_rounds=max_rounds, nlp=nlp, widen=widen, starts=starts, certify=certify,
@@ -229,7 +229,8 @@ def minimax(task: LinkageFit | ProfileFit, *, count: Nodes = 1000, slots: Annota
     deviation, where = got["deviation"], got["where"]
     where_xy = [float(v[0]) for v in task.path_point(np.array([where]))]
     certify = certify == "on" or (certify == "auto" and general)
-    certificate = _certify(task, px * scale, py * scale, box, H, L, deviation, gap_per_size, max_cells) \
+    certificate = _certify(task, px * scale, py * scale, got["node_distances"] * scale, box, deviation, gap_per_size,
+                           max_cells) \
         if certify else {"global_certified": False, "global_note": "not checked (certify = \"on\" checks it)"}
     nodes_max = got["nodes_max"] * scale
     message = (f"{status_word} after {rounds} exchange round(s) ({', '.join(back_ends)}), "
@@ -292,10 +293,11 @@ WARM_COARSEN = 2.0         # earlier leaves narrower than this many node moves g
 WARM_KEEP_PER_GAP = 10.0   # a warm start only when the nodes moved at most this many gap targets
 
 
-def _certify(task, px, py, box, H, L, deviation, gap_per_size, max_cells):
-    """The certificate of `minimax`'s answer (H, L) [mm]: a lower bound on the deviation over the
-    box from a node set (`certificate.box_lower_bound`), the gap, and whether it is within
-    gap_per_size cam sizes. Node coordinates in mm. In a sweep (`kit.warm`) it starts from the
+def _certify(task, px, py, dist, box, deviation, gap_per_size, max_cells):
+    """The certificate of `minimax`'s answer: a lower bound on the deviation over the box from a
+    node set (`certificate.box_lower_bound`), the gap, and whether it is within gap_per_size cam
+    sizes. Node coordinates and `dist`, every node's distance to the answer's limaçon (the last
+    exchange round's), in mm. In a sweep (`kit.warm`) it starts from the
     previous variant's leaves (`certificate.warm_cells`), their bounds less how far its nodes are
     from this path's nearest nodes, which join this node set; only where that move is at most
     WARM_KEEP_PER_GAP gap targets. The leaves narrower than WARM_COARSEN times that move (the fine
@@ -305,7 +307,6 @@ def _certify(task, px, py, box, H, L, deviation, gap_per_size, max_cells):
     more than the cold grid on a what-if map of the cardioid (`mechopt bench cam-cutter`: 8 x 8,
     neighbours 0.1 mm apart, 24 821 cells against 16 120). `global_warm_reused_cells` counts the
     cells a warm start starts from, `global_warm_coarsened_mm` is that width."""
-    dist = foot_points(px, py, H, L, vertices=ROUND_VERTICES)[0]
     padded = np.r_[-np.inf, dist, -np.inf]        # the answer's peaks, one node each: its active nodes
     peaks = np.flatnonzero((dist >= padded[:-2]) & (dist >= padded[2:]))
     worst = peaks[np.argsort(dist[peaks])[::-1][:CERTIFY_WORST]]
@@ -375,6 +376,7 @@ def _exchange_rounds(px, py, a, box, H, L, count, slots, max_rounds, nlp):
     return {"H": H, "L": L, "status": status, "status_word": status_word, "rounds": rounds,
             "back_ends": back_ends, "unsolved": unsolved, "build_s": build_s,
             "nodes_max": float(every.max()) if status is not Status.FAILED else float("nan"),
+            "node_distances": every,
             "nlp_nodes": len(chosen), "kept_nodes": len(kept)}
 
 

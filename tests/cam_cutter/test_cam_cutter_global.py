@@ -5,7 +5,7 @@ import pytest
 
 from mechopt import registry
 from mechopt.kit.result import Status
-from mechopt.solvers.cam_cutter.bound import cell_bounds
+from mechopt.solvers.cam_cutter.bound import cell_bounds, tangent_bound
 from mechopt.solvers.cam_cutter.certificate import (
     Cells,
     _measure,
@@ -103,6 +103,23 @@ def test_the_first_order_bound_holds_at_the_double_point_node():
         for dL in (-0.01, 0.0, 0.01):
             true = _dense_distance(px, py, 59.6 + dH, 47.43 + dL)[0]
             assert true >= (d0[0] + gH[0] * dH + gL[0] * dL - E[0]).min() - 1e-12
+
+
+def test_the_tangent_bound_of_pairs_in_one_call_is_each_pairs_own():
+    """The tangent-segment bound takes every pair's near arcs in one flat array: pairs with one near
+    arc and with many (nodes by the cardioid's double point, where two branches pass, and along
+    the path; small and large cells) give in one call what each gives alone, and each is below the
+    dense distance over its cell's corners and centre."""
+    task, _ = registry.find("cam-cutter/minimax").build()
+    px, py = task.path_point(np.linspace(0.0, task.t_end_rad, 9))
+    h = np.array([0.002, 0.05, 0.4, 1.5, 0.01, 0.2, 3.0, 0.1, 0.8])
+    H, L = 59.6 + h, 47.43 - h / 2
+    together = tangent_bound(px, py, H, L, h, 2 * h)
+    alone = [tangent_bound(px[k:k + 1], py[k:k + 1], H[k], L[k], h[k], 2 * h[k])[0] for k in range(px.size)]
+    assert np.array_equal(together, alone) and np.isfinite(together).all()
+    for k in range(px.size):
+        for dH, dL in ((0, 0), (-1, -1), (-1, 1), (1, -1), (1, 1)):
+            assert together[k] <= _dense_distance(px[k:k + 1], py[k:k + 1], H[k] + dH * h[k], L[k] + 2 * dL * h[k])[0]
 
 
 def test_a_warm_start_is_a_bound_for_the_moved_nodes():
@@ -240,3 +257,22 @@ def _least_largest_distance(px, py, cell, bounds, n):
             assert np.all(true >= zero - 1e-12) and np.all(true >= affine - 1e-12)
             least = min(least, true.max())
     return least
+
+
+def test_certificates_on_four_threads_match_serial_ones():
+    """The bound's tables (vertex offsets, sub-arc angles) are shared read-only by every call: the
+    certificates of eight cams, four threads at a time, are the serial ones to the last bit."""
+    from concurrent.futures import ThreadPoolExecutor
+    task, _ = registry.find("cam-cutter/minimax").build()
+    box = (57.0, 62.0, 45.0, 50.0)
+    px, py = task.path_point(np.linspace(0.0, task.t_end_rad, 27))
+    paths = [(px * (1 + 0.002 * k), py * (1 + 0.002 * k)) for k in range(8)]      # cams 0.2 % apart
+
+    def certify(path):
+        got = box_lower_bound(*path, box, upper=0.0609, gap=1e-3)
+        return got.lower, got.cells, got.leaves.bound.tobytes()
+
+    serial = [certify(p) for p in paths]
+    with ThreadPoolExecutor(4) as pool:
+        threaded = list(pool.map(certify, paths))
+    assert threaded == serial and len({s[0] for s in serial}) > 1
