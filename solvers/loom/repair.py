@@ -18,7 +18,6 @@ from mechopt.kit.settings import Interval, Tolerance
 from mechopt.models.cyclogram import Cyclogram
 from mechopt.models.loom_limits import stress_bound_deg, stress_MPa
 from mechopt.solvers.cyclogram.plan import plan_cyclogram
-from mechopt.solvers.stop_impact.cam_follower import dwell_length, follower_data
 from mechopt.solvers.stop_impact.law import chain_rebounds_mm
 from mechopt.solvers.stop_impact.lever_box import LeverBox
 
@@ -325,52 +324,44 @@ WALK_SOURCES = ("mechopt.models", "mechopt.solvers.stop_impact", "mechopt.solver
 
 def cached_amplitude_bound(task: Cyclogram, speed_rpm: float, lo_deg: float, to_deg: float,
                            step_deg: float) -> AmplitudeBound:
-    """`exact_amplitude_bound` on [lo_deg, to_deg], from one walk per lever, limit and grid of n / t
-    (kept). The walk goes down to WALK_FLOOR_DEG; an arc whose [phi] lies above its crossing is
-    shown to hold from [phi] on (the walk saw a <= limit on all of [phi, to_deg]), so arcs with
-    different [phi] share it.
+    """`exact_amplitude_bound` on [lo_deg, to_deg] at speed n, from one walk per lever, limit, n,
+    to_deg and step_deg (kept, and on disk when the store is on). The walk goes down to
+    WALK_FLOOR_DEG; an arc whose [phi] lies above its crossing is shown to hold from [phi] on (the
+    walk saw a <= limit on all of [phi, to_deg]), so arcs with different [phi] share it, as do
+    machines (or scenes) with one lever (`walk_lever`: the chain's inputs, not the angle, speeds or
+    limit a scene reports at).
 
-    What determines a walk: the lever as the chain reads it (`walk_lever`: not the angle, speeds
-    or limit a scene reports at), the limit, and its points r_i = n / t_i, t_i = to - i step, i.e.
-    (to / n, step / n). The rebound is a function of r = n / t alone where the law's shape is
-    fixed: the rise in its own time xi depends on lambda = omega t / (6 n) and the roller's force
-    N = F_closure + m H X'' / T^2 on T = t / (6 n) only, and eq. (2) on v0 = X'(contact) H / T
-    (models/cam_follower.py, models/stop_impact.py) -- except where the cycle cuts the dwell
-    (360 / t - 1 below the dwell's periods: it depends on t and n apart; it is checked at the
-    walks' tops, where it binds first since it cuts only above t = 360 - 48 pi n / omega). So a walk
-    at speed n1 is the walk at n2 = c n1 on the range and step scaled by c, every bound scaled
-    by c (tests/loom/test_walk.py checks it against a fresh walk at n2). A walk that ran down to
-    its floor is not scaled (the floor is an angle)."""
+    The walk is the one at n itself, whatever ran before (in the process, another thread, or the
+    store): not a walk at another speed rescaled. The rebound is a function of n / t alone (the
+    chain's rise depends on lambda = omega t / (6 n) and T = t / (6 n) only, eq. (2) on v0 = X' H / T:
+    models/cam_follower.py, models/stop_impact.py) except where the cycle cuts the dwell after the
+    rise (360 / t - 1 below the dwell's periods: t and n apart), so a walk at n1 would give the walk
+    at n2 = c n1 on the range and step scaled by c -- but only to the root's tolerance (brentq's
+    last bits), and not where the floor (an angle) ends it; a result would then depend on which
+    speed walked first (tests/loom/test_walk.py). No scene shares a walk across speeds: at fixed
+    scan_to_deg each speed is another grid of n / t anyway."""
     if speed_rpm is None:
         raise ModelError("speed_rpm: the exact rebound law needs the main shaft's speed", key="speed_rpm")
     check_walk(to_deg, step_deg)
-    n, floor = float(speed_rpm), min(WALK_FLOOR_DEG, to_deg)
-    key = (walk_lever(task), task.amplitude_limit_mm, float(to_deg) / n, float(step_deg) / n)
-    (walk, walked_rpm), _ = _AMPLITUDE_BOUNDS.get(key, lambda: store.stored(          # on disk too, when on
-        "walk", key, lambda: (exact_amplitude_bound(task, n, floor, to_deg, step_deg), n), _encode_walk, _decode_walk,
-        sources=WALK_SOURCES, enabled=rebound_amplitude_mm is chain_rebounds_mm))
-    if walked_rpm != n:
-        c = n / walked_rpm
-        if walk.why == "range" or not (_n_over_t(task, walked_rpm, walk.to_deg) and _n_over_t(task, n, to_deg)):
-            walk = exact_amplitude_bound(task, n, floor, to_deg, step_deg)
-        else:
-            walk = dataclasses.replace(walk, speed_rpm=n, from_deg=None if walk.from_deg is None else walk.from_deg * c,
-                                       lo_deg=floor, to_deg=to_deg, step_deg=step_deg)
+    n, to, step = float(speed_rpm), float(to_deg), float(step_deg)
+    key = (walk_lever(task), task.amplitude_limit_mm, n, to, step)
+    walk, _ = _AMPLITUDE_BOUNDS.get(key, lambda: store.stored(          # on disk too, when on
+        "walk", key, lambda: exact_amplitude_bound(task, n, min(WALK_FLOOR_DEG, to), to, step), _encode_walk,
+        _decode_walk, sources=WALK_SOURCES, enabled=rebound_amplitude_mm is chain_rebounds_mm))
     if walk.from_deg is not None and walk.from_deg <= lo_deg:
         return dataclasses.replace(walk, from_deg=lo_deg, lo_deg=lo_deg, why="range",
                                    amplitude_mm=float(np.ravel(exact_amplitude_mm(task, lo_deg, speed_rpm))[0]))
     return dataclasses.replace(walk, lo_deg=lo_deg)
 
 
-def _encode_walk(kept):
-    walk, walked_rpm = kept
-    return {"walk": dataclasses.asdict(walk), "walked_rpm": walked_rpm}
+def _encode_walk(walk):
+    return {"walk": dataclasses.asdict(walk)}
 
 
 def _decode_walk(data):
     walk = dict(data["walk"])
     walk["lever"] = None if walk["lever"] is None else tuple(walk["lever"])
-    return AmplitudeBound(**walk), float(data["walked_rpm"])
+    return AmplitudeBound(**walk)
 
 
 # the lever's inputs the rebound a(t, n) does not read (the angle and speeds a scene reports at,
@@ -384,16 +375,6 @@ def walk_lever(task: Cyclogram) -> tuple:
     lever = task.lever_model
     return tuple((f.name, getattr(lever, f.name)) for f in dataclasses.fields(lever)
                  if f.name not in _NOT_READ_BY_THE_CHAIN)
-
-
-def _n_over_t(task: Cyclogram, speed_rpm: float, top_deg: float) -> bool:
-    """Whether the rebound is a function of n / t on a walk from top_deg down at speed n: always
-    for the fitted law (v0 proportional to n / t); for the chain while the cycle does not cut the
-    dwell after the rise, which it would first at the top."""
-    lever = task.lever_model
-    if "cam_drive" not in lever.effects:
-        return True
-    return not dwell_length(follower_data(lever, speed_rpm, top_deg)[0], top_deg)[1]
 
 
 def box_amplitude_bound(task: Cyclogram, box: LeverBox | None, speed_rpm: float, lo_deg: float, to_deg: float,

@@ -1,6 +1,7 @@
 """The rebound's exact bound made cheap: the chain's batch path (rises by their exact solution,
 many t in one pass) against CVODES' per-point rise, the batched walk against a walk stepped point
-by point, one walk shared across speeds by n / t and between machines with one lever.
+by point, one walk shared between machines with one lever, and a bound that does not depend on
+what ran before (another speed on the same grid of n / t, other threads).
 
 Independent references: follow_cam (CVODES, the chain's own integrator) at reltol 1e-12 (the
 chain's) and 1e-13; the crossing found by brentq on the CVODES chain in the walk's last cell; a
@@ -115,8 +116,9 @@ def test_the_batched_walk_is_the_walk_point_by_point_and_the_cvodes_chains_cross
 
 def test_a_walk_at_twice_the_speed_over_twice_the_range_is_the_walk_scaled(task, monkeypatch):
     """a(t, n) = h(n / t): the walk at 2 n on [2, 120] deg in steps of 0.5 meets the points n / t
-    of the walk at n on [1, 60] in steps of 0.25, so its bound is twice the other's; the cache
-    gives it from the first walk (no second walk), equal to a fresh one."""
+    of the walk at n on [1, 60] in steps of 0.25, so its bound is twice the other's. The cache
+    walks each speed itself (one walk a speed, none for a second call) and gives the fresh walk's
+    bound."""
     clear_caches()
     fresh = repair.exact_amplitude_bound(task, 2 * N_RPM, 1.0, 120.0, 0.5)
     clear_caches()
@@ -125,12 +127,14 @@ def test_a_walk_at_twice_the_speed_over_twice_the_range_is_the_walk_scaled(task,
     monkeypatch.setattr(repair, "exact_amplitude_bound", lambda *a: walks.append(a[1:]) or real(*a))
     at_n = repair.cached_amplitude_bound(task, N_RPM, 30.0, 60.0, 0.25)
     at_2n = repair.cached_amplitude_bound(task, 2 * N_RPM, 60.0, 120.0, 0.5)
-    assert len(walks) == 1
+    assert [w[0] for w in walks] == [N_RPM, 2 * N_RPM]
     assert fresh.from_deg == pytest.approx(2 * at_n.from_deg, rel=1e-12)
-    assert at_2n.from_deg == pytest.approx(fresh.from_deg, rel=1e-12)
+    assert at_2n.from_deg == fresh.from_deg and at_2n.amplitude_mm == fresh.amplitude_mm
     assert at_2n.speed_rpm == 2 * N_RPM and at_2n.to_deg == 120.0 and at_2n.step_deg == 0.5
+    assert repair.cached_amplitude_bound(task, 2 * N_RPM, 70.0, 120.0, 0.5).from_deg == at_2n.from_deg
+    assert len(walks) == 2
     other = repair.cached_amplitude_bound(task, 2 * N_RPM, 60.0, 60.0, 0.25)      # another grid of n / t: a walk
-    assert len(walks) == 2 and other.why == "none" and other.from_deg is None       # 60 deg < 2 x 38.67 deg
+    assert len(walks) == 3 and other.why == "none" and other.from_deg is None       # 60 deg < 2 x 38.67 deg
 
 
 def test_machines_with_one_lever_share_its_walk_and_another_lever_walks_anew(task, monkeypatch):
@@ -174,3 +178,72 @@ def test_in_a_groove_the_batch_leaves_a_crossover_to_the_per_point_chain(task):
     assert list(outcome[crossing]) == [NOT_TAKEN] * int(crossing.sum())
     a = chain_rebounds_mm(groove, N_RPM, t[crossing])
     assert np.all(np.isfinite(a)) and np.all(a > 0)
+
+
+# -- a result that does not depend on what ran before ------------------------------------------------
+
+# speeds c N over [30 c, 60 c] deg in steps of 0.25 c: one grid of n / t (c a short binary fraction:
+# the same (to / n, step / n) to the bit), so a cache keyed by n / t alone would hand each the walk of
+# whichever speed came first, rescaled (it did: 1.5 N's crossing then moved by 5.5e-13 deg)
+SCALED = (1.0, 1.25, 0.75, 1.5)
+
+
+def _at(task, c):
+    return repair.cached_amplitude_bound(task, c * N_RPM, 30.0 * c, 60.0 * c, 0.25 * c)
+
+
+@pytest.fixture(scope="module")
+def alone(task):
+    """Each speed's bound with nothing before it in the process (the caches cleared each time)."""
+    out = {}
+    for c in SCALED:
+        clear_caches()
+        out[c] = _at(task, c)
+    clear_caches()
+    return out
+
+
+def test_a_solve_after_one_at_another_speed_is_the_solve_alone_bit_for_bit(task, alone):
+    """The bound at 1.25 N (0.75 N, 1.5 N) after the one at N, same grid of n / t, equals the bound at
+    that speed alone, every field; and alone it is the walk at that speed (`exact_amplitude_bound`),
+    whose crossing is c times N's to the root's tolerance (a = h(n / t))."""
+    clear_caches()
+    _at(task, 1.0)
+    for c in SCALED[1:]:
+        assert _at(task, c) == alone[c]
+        assert alone[c].from_deg == repair.exact_amplitude_bound(task, c * N_RPM, 1.0, 60.0 * c, 0.25 * c).from_deg
+        assert alone[c].from_deg == pytest.approx(c * alone[1.0].from_deg, rel=1e-11)
+    clear_caches()
+
+
+def test_four_threads_racing_for_one_grid_each_get_their_speeds_bound_alone(task, alone):
+    """Four threads, each at its own speed on one grid of n / t, started together and in turn in
+    another order: each gets its speed's bound alone, bit for bit."""
+    import threading
+    from concurrent.futures import ThreadPoolExecutor
+    for order in (SCALED, SCALED[::-1]):
+        clear_caches()
+        start = threading.Barrier(len(order))
+
+        def solve(c):
+            start.wait()
+            return c, _at(task, c)
+        with ThreadPoolExecutor(len(order)) as pool:
+            got = dict(pool.map(solve, order))
+        assert got == alone
+    clear_caches()
+
+
+def test_a_walk_stored_by_a_run_at_another_speed_is_not_read_at_this_one(task, alone, tmp_path, monkeypatch):
+    """MECHOPT_CACHE_DIR set (another process's walks on disk): the bound at 1.25 N after N's walk
+    was stored, the caches cleared, is 1.25 N's alone; each speed its own file."""
+    from mechopt.kit import store
+    monkeypatch.setenv(store.ENV, str(tmp_path))
+    clear_caches()
+    _at(task, 1.0)
+    clear_caches()
+    assert _at(task, 1.25) == alone[1.25]
+    assert len(list(tmp_path.glob("walk-*.json"))) == 2
+    clear_caches()
+    assert _at(task, 1.25) == alone[1.25]          # read back from its own file, the same bits
+    clear_caches()
