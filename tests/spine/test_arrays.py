@@ -13,7 +13,7 @@ WITHOUT_ARRAYS = {
     "loom/group1-window-conflict": "INFEASIBLE: no plan exists, the answer is the conflicting chain (its message)",
     "stop-impact/frequencies": "closed-form scalars (stiffnesses, frequencies, contact time): no series to sample",
 }
-LABEL_COLUMNS = {"parameter", "operation"}       # text naming a table's rows
+LABEL_COLUMNS = {"parameter", "operation", "event"}       # text naming a table's rows
 # numbers with no unit: a flag, counts and indices, a ratio, and a column whose rows each have their
 # parameter's unit (the sensitivity's `parameter_value`)
 UNITLESS = {"cutting", "condition_number", "row", "code", "ratio", "parameter_value"}
