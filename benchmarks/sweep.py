@@ -62,6 +62,8 @@ def in_process(case, texts, side, *, chunk=1000, repeats=3, workers=1, progress=
     status counts of the last run, the number of variants and the median CPU seconds of this
     process (None on several processes: the work is theirs)."""
     _timed(case, _grid(texts, 2), chunk)
+    if workers > 1:     # every process gets chunks to take (a quick 900-variant sweep was one chunk: one process)
+        chunk = min(chunk, -(-side * side // (4 * workers)))
     times, cpus, counts = [], [], {}
     for r in range(repeats):
         seconds, counts, cpu = _timed(case, _grid(texts, side), chunk, workers=workers)
