@@ -195,16 +195,16 @@ def synthesis_rows(repeats=3, progress=None, quick=False):
     given DE_SECONDS, one run: its best rebound and time beside the LP's."""
     from scipy.optimize import differential_evolution
 
-    from mechopt.solvers.stop_impact import synthesis as sy
+    from mechopt.solvers.stop_impact import window_lp
     task = registry.find("stop-impact/amplitude-law").build()[0]
     rows = []
     for k in SYNTH_COEFFICIENTS[:1] if quick else SYNTH_COEFFICIENTS:
         def cold():
-            sy.BASES.clear()
-            lever = sy.linear_lever(k, 2)
-            speed = sy.speed_response(task, lever, 420.0, task.t_deg)
-            lines = sy.rebound_envelope(task, 4 * sy.v0_limit_m_s(task, task.amplitude_limit_mm))
-            lp = sy.WindowLP(task, lever, [speed], task.t_deg, objective="least_rebound",
+            window_lp.BASES.clear()
+            lever = window_lp.linear_lever(k, 2)
+            speed = window_lp.speed_response(task, lever, 420.0, task.t_deg)
+            lines = window_lp.rebound_envelope(task, 4 * window_lp.v0_limit_m_s(task, task.amplitude_limit_mm))
+            lp = window_lp.WindowLP(task, lever, [speed], task.t_deg, objective="least_rebound",
                               limit_mm=task.amplitude_limit_mm, bounds={"max_acceleration_mm_per_rad2": 570.0},
                               lines=lines)
             return lp.solve(0.85)
@@ -213,8 +213,8 @@ def synthesis_rows(repeats=3, progress=None, quick=False):
         if progress:
             progress(f"LP {k}: {seconds:.3g} s")
     k = SYNTH_COEFFICIENTS[0]
-    lever = sy.linear_lever(k, 2)
-    speed = sy.speed_response(task, lever, 420.0, task.t_deg)
+    lever = window_lp.linear_lever(k, 2)
+    speed = window_lp.speed_response(task, lever, 420.0, task.t_deg)
     (X0, XB), (dX0, dXB), _ = lever.response(speed.lam, speed.zeta)
     H = task.stroke_mm * 1e-3
     target = 1.0 - task.preload_mm / task.stroke_mm
@@ -225,7 +225,7 @@ def synthesis_rows(repeats=3, progress=None, quick=False):
     def objective(c):      # the LP's problem as a penalty: the rebound of the window's peak X'
         X, dX = X0 + XB @ c, dX0 + dXB @ c
         over = max(0.0, (X[~window] - target).max()) + max(0.0, target - X[-1]) + max(0.0, np.abs(a0 + A @ c).max() - acc)
-        return sy.rebound_of_v0_mm(task, max(dX[window].max(), 0.0) * H / speed.T) + 1e3 * over
+        return window_lp.rebound_of_v0_mm(task, max(dX[window].max(), 0.0) * H / speed.T) + 1e3 * over
     start = time.perf_counter()
     de = differential_evolution(objective, [(-0.5, 1.5)] * k, maxiter=100000, tol=0, seed=1, polish=False,
                                 callback=lambda *a, **kw: time.perf_counter() - start > (5.0 if quick else DE_SECONDS))

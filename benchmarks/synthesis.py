@@ -40,11 +40,11 @@ ACCEL = 570.0                                   # mm/rad^2, the scenes' bound
 
 
 def _window_lp(task, coefficients, speeds, t_deg):
-    from mechopt.solvers.stop_impact import synthesis as sy
-    lever = sy.linear_lever(coefficients, 2)
-    responses = [sy.speed_response(task, lever, n, t_deg) for n in speeds]
-    lines = sy.rebound_envelope(task, 4 * sy.v0_limit_m_s(task, task.amplitude_limit_mm))
-    return sy.WindowLP(task, lever, responses, t_deg, objective="least_rebound", limit_mm=task.amplitude_limit_mm,
+    from mechopt.solvers.stop_impact import window_lp
+    lever = window_lp.linear_lever(coefficients, 2)
+    responses = [window_lp.speed_response(task, lever, n, t_deg) for n in speeds]
+    lines = window_lp.rebound_envelope(task, 4 * window_lp.v0_limit_m_s(task, task.amplitude_limit_mm))
+    return window_lp.WindowLP(task, lever, responses, t_deg, objective="least_rebound", limit_mm=task.amplitude_limit_mm,
                        bounds={"max_acceleration_mm_per_rad2": ACCEL}, lines=lines)
 
 

@@ -10,7 +10,8 @@ from mechopt.solvers.stop_impact.cam_shape import law_cam, without_cam
 from mechopt.solvers.stop_impact.groove import rebound_with_backlash_mm
 from mechopt.solvers.stop_impact.law import CHAIN_RELTOL, rebound_amplitude_mm
 from mechopt.solvers.stop_impact.response import closed_form_amplitude_m
-from mechopt.solvers.stop_impact.synthesis import box_values, linear_lever
+from mechopt.solvers.stop_impact.synthesis_box import box_values
+from mechopt.solvers.stop_impact.window_lp import linear_lever
 
 __all__ = ["READINGS", "report"]
 

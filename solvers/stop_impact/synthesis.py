@@ -6,7 +6,7 @@ the lever's response linear in its coefficients, the arrival window that makes t
 linear, the rebound's envelope as rows), the search (synthesis_search.py: the windows scanned at
 one phase angle, the dense check, the least phase), the cam's geometry (synthesis_geometry.py),
 the lever's box (synthesis_box.py) and the library laws beside it (synthesis_compare.py). This
-module is the solver a scene names, and the door to those names.
+module is the solver a scene names.
 
 Objectives (`objective`):
 * "least_rebound"      min over c of the largest rebound at the sampled speeds, at t = t_deg;
@@ -50,24 +50,9 @@ from mechopt.solvers.stop_impact.synthesis_box import beside, box_values, box_wo
 from mechopt.solvers.stop_impact.synthesis_compare import analogues, compare_laws, library_least_phase
 from mechopt.solvers.stop_impact.synthesis_geometry import geometry_values, least_angle
 from mechopt.solvers.stop_impact.synthesis_search import ROBUST_ROUNDS, design_law, least_phase, points_text
-from mechopt.solvers.stop_impact.window_lp import (
-    BASES,
-    LinearLever,
-    SpeedResponse,
-    WindowLP,
-    band_speeds,
-    kinematic_conflict,
-    linear_lever,
-    predicted_rebounds_mm,
-    rebound_envelope,
-    rebound_of_v0_mm,
-    speed_response,
-    v0_limit_m_s,
-)
+from mechopt.solvers.stop_impact.window_lp import band_speeds, linear_lever, predicted_rebounds_mm
 
-__all__ = ["BASES", "LinearLever", "box_values", "SpeedResponse", "WindowLP", "band_speeds", "design_law",
-           "kinematic_conflict", "law_of", "linear_lever", "predicted_rebounds_mm", "rebound_envelope",
-           "speed_response", "v0_limit_m_s", "rebound_of_v0_mm", "synthesise_law"]
+__all__ = ["law_of", "synthesise_law"]
 
 
 def law_of(result: Result) -> SplineLaw:

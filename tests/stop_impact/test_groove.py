@@ -220,13 +220,13 @@ def test_the_synthesis_keeps_the_roller_on_its_driving_wall_in_a_groove_too(forc
     """The window LP's rows holding N >= 5 % of the closure are the same under both closures,
     named for what they prevent (lift-off / a crossover, whose flight the LP's linear lever does
     not hold): one LP, one law."""
-    from mechopt.solvers.stop_impact import synthesis as sy
-    lp_lever = sy.linear_lever(16, 2)
-    lines = sy.rebound_envelope(force, 4 * sy.v0_limit_m_s(dataclasses.replace(force, amplitude_limit_mm=0.1), 0.1))
+    from mechopt.solvers.stop_impact import window_lp
+    lp_lever = window_lp.linear_lever(16, 2)
+    lines = window_lp.rebound_envelope(force, 4 * window_lp.v0_limit_m_s(dataclasses.replace(force, amplitude_limit_mm=0.1), 0.1))
     built = {}
     for task in (force, groove):
-        speeds = [sy.speed_response(task, lp_lever, n, 31.0) for n in (280.0, 420.0)]
-        lp = sy.WindowLP(task, lp_lever, speeds, 31.0, objective="least_rebound", limit_mm=0.1,
+        speeds = [window_lp.speed_response(task, lp_lever, n, 31.0) for n in (280.0, 420.0)]
+        lp = window_lp.WindowLP(task, lp_lever, speeds, 31.0, objective="least_rebound", limit_mm=0.1,
                          bounds={"max_acceleration_mm_per_rad2": 570.0}, lines=lines)
         built[task.closure] = (np.array(lp.rows.family), lp.rows.bounds(), lp.solve(0.85))
     (fam_f, bounds_f, solved_f), (fam_g, bounds_g, solved_g) = built["force"], built["groove"]

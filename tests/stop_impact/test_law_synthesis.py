@@ -11,7 +11,9 @@ from mechopt.kit.result import Status
 from mechopt.models.cam_follower import law_values
 from mechopt.models.cam_law import SplineBasis, elastic_response
 from mechopt.solvers.stop_impact.cam_follower import follow_cam, follower_data
-from mechopt.solvers.stop_impact.synthesis import design_law, law_of, predicted_rebounds_mm, synthesise_law
+from mechopt.solvers.stop_impact.synthesis import law_of, synthesise_law
+from mechopt.solvers.stop_impact.synthesis_search import design_law
+from mechopt.solvers.stop_impact.window_lp import predicted_rebounds_mm
 
 ACCEL = 570.0       # mm/rad^2: the cycloid's peak at the chain's t = 35.59 deg
 
@@ -166,7 +168,7 @@ def test_the_kinematic_conflict_names_only_the_bound_that_binds(lever):
     """Below the kinematic minimum with a generous velocity bound beside the acceleration's: one
     small LP refuses the angle before any window, and names the acceleration alone (a rise over
     20 deg needs ~100 mm/rad on average, far below 1000; its |S''| >= 4 needs 1150 mm/rad^2, twice 570)."""
-    from mechopt.solvers.stop_impact.synthesis import kinematic_conflict, linear_lever
+    from mechopt.solvers.stop_impact.window_lp import kinematic_conflict, linear_lever
     both = {"max_velocity_mm_per_rad": 1000.0, "max_acceleration_mm_per_rad2": ACCEL}
     assert kinematic_conflict(linear_lever(16, 2), 20.0, lever.stroke_mm, both) == ("acceleration",)
     assert kinematic_conflict(linear_lever(16, 2), 40.0, lever.stroke_mm, both) == ()
@@ -176,11 +178,11 @@ def test_the_kinematic_conflict_names_only_the_bound_that_binds(lever):
 
 @pytest.fixture(scope="module")
 def window_lp(lever):
-    from mechopt.solvers.stop_impact import synthesis as sy
-    lp_lever = sy.linear_lever(24, 2)
-    speeds = [sy.speed_response(lever, lp_lever, n, 31.0) for n in (280.0, 420.0)]
-    lines = sy.rebound_envelope(lever, 4 * sy.v0_limit_m_s(lever, lever.amplitude_limit_mm))
-    return lambda: sy.WindowLP(lever, lp_lever, speeds, 31.0, objective="least_rebound",
+    from mechopt.solvers.stop_impact import window_lp
+    lp_lever = window_lp.linear_lever(24, 2)
+    speeds = [window_lp.speed_response(lever, lp_lever, n, 31.0) for n in (280.0, 420.0)]
+    lines = window_lp.rebound_envelope(lever, 4 * window_lp.v0_limit_m_s(lever, lever.amplitude_limit_mm))
+    return lambda: window_lp.WindowLP(lever, lp_lever, speeds, 31.0, objective="least_rebound",
                                limit_mm=lever.amplitude_limit_mm, bounds={"max_acceleration_mm_per_rad2": ACCEL},
                                lines=lines)
 

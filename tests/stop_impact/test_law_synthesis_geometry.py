@@ -17,7 +17,8 @@ from mechopt.kit.result import Status
 from mechopt.models.cam_shape import summarise
 from mechopt.solvers.stop_impact import cam_rows
 from mechopt.solvers.stop_impact.law import rebound_amplitude_mm
-from mechopt.solvers.stop_impact.synthesis import law_of, linear_lever, synthesise_law
+from mechopt.solvers.stop_impact.synthesis import law_of, synthesise_law
+from mechopt.solvers.stop_impact.window_lp import linear_lever
 
 SCENE = "stop-impact/law-synthesis-geometry"
 CAM = ("base_radius_mm", "roller_radius_mm", "centre_distance_mm", "dwell_deg")
