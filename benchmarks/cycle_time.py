@@ -10,7 +10,7 @@ In one process, interleaved, medians of `repeats` (CPU seconds of the process, t
 
 * ``graph``  `cyclogram.least_cycle_time(task)`: the uniform constraints, Dinkelbach's
              iteration on the graph, the critical circuits (the whole solver, as a scene runs it);
-* ``LP``     `cycle_time.cycle_time_lp(u)`: the LP in (p, T), minimise T, by cvxpy and HiGHS
+* ``LP``     `cycle_lp.cycle_time_lp(u)`: the LP in (p, T), minimise T, by cvxpy and HiGHS
              (the certificate `check = true` solves beside the graph), on the same constraints.
 
 The issue's target: graph >= 20x faster than the LP, the same T to 1e-9 relative (asserted: a
@@ -72,7 +72,8 @@ def compare(n: int = EVENTS, repeats: int = 3, progress=None, lp_repeats: int | 
     times (default: once from LP_ONCE_EVENTS events, where one solve takes minutes, else `repeats`)."""
     lp_repeats = (1 if n >= LP_ONCE_EVENTS else repeats) if lp_repeats is None else lp_repeats
     from mechopt.solvers.cyclogram import least_cycle_time
-    from mechopt.solvers.cyclogram.cycle_time import cycle_time_lp, uniform_constraints
+    from mechopt.solvers.cyclogram.cycle_lp import cycle_time_lp
+    from mechopt.solvers.cyclogram.cycle_uniform import uniform_constraints
     build_s, task = _timed(lambda: recurrent_network(n))
     u = uniform_constraints(task)
     graph, lp = [], []

@@ -45,7 +45,8 @@ from mechopt.solvers.cyclogram.graph_method import longest_schedule
 from mechopt.solvers.cyclogram.lp_method import set_parameters
 from mechopt.solvers.cyclogram.net import Net, back_arcs
 from mechopt.solvers.cyclogram.schedule import critical_path, float_array
-from mechopt.solvers.cyclogram.speed import SpeedGraph, speed_coeffs_deg_per_rpm
+from mechopt.solvers.cyclogram.speed_graph import SpeedGraph
+from mechopt.solvers.cyclogram.speed_laws import speed_coeffs_deg_per_rpm
 
 __all__ = ["TARGETS", "cli", "graph_targets", "layered", "machine", "machine_speed", "random_dag", "scale",
            "sigma_what_if", "speed_verdicts", "what_if"]

@@ -27,7 +27,7 @@ The LP in (p, T), minimise T, is the certificate (check = true), solved by cvxpy
 
 Here the solver and Dinkelbach's iteration; the uniform constraints (cycle_uniform), the pass
 that finds a positive circuit (cycle_circuits), the report's critical circuits, floats and tasks
-(cycle_report) and the LP certificate (cycle_lp) are their own modules, their names kept here too.
+(cycle_report) and the LP certificate (cycle_lp) are their own modules.
 """
 import math
 from typing import Literal
@@ -39,7 +39,7 @@ from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import check_settings
 from mechopt.models.cyclogram import Cyclogram
 from mechopt.solvers.cyclogram.cycle_circuits import Circuits, StepLimit, Undecided
-from mechopt.solvers.cyclogram.cycle_lp import CHECK_RTOL, checked_by_lp, cycle_time_lp  # noqa: F401  (the old names)
+from mechopt.solvers.cyclogram.cycle_lp import checked_by_lp
 from mechopt.solvers.cyclogram.cycle_report import (
     circuit_text,
     critical_of,
@@ -48,7 +48,7 @@ from mechopt.solvers.cyclogram.cycle_report import (
     per_task,
     why_no_cycle,
 )
-from mechopt.solvers.cyclogram.cycle_uniform import Uniform, uniform_constraints  # noqa: F401
+from mechopt.solvers.cyclogram.cycle_uniform import uniform_constraints
 
 MAX_STEPS = 10_000           # Dinkelbach steps (each one Bellman-Ford pass): LIMIT past it
 FLOAT_MAX_EVENTS = 500       # floats by a max-plus Floyd-Warshall (n^3) for networks up to this many events

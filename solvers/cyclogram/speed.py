@@ -3,7 +3,7 @@ function of n / t (a probe checks), bisection on n with LP feasibility otherwise
 
 The driver and the check of one method by the other; the laws as t >= g n (speed_laws), the
 graph method (speed_graph), the LP and bisection (speed_lp) and the report (speed_report) are
-their own modules, their names kept here too."""
+their own modules."""
 import functools
 import math
 from typing import Annotated, Literal
@@ -15,38 +15,25 @@ from mechopt.kit.result import Clock, Result, Status
 from mechopt.kit.settings import Interval, check_settings
 from mechopt.models.cyclogram import Cyclogram
 from mechopt.solvers.cyclogram.net import Net, plan_arrays
-from mechopt.solvers.cyclogram.speed_graph import (  # noqa: F401  (kept here: the old paths)
-    GRAPH_TOL,
-    NEWTON_MAX_STEPS,
-    RANGING_MAX_LIMITS,
-    UNBOUNDED_RPM,
-    SpeedGraph,
-    Undecided,
+from mechopt.solvers.cyclogram.speed_graph import (
     certify_on_graph,
     speed_on_graph,
 )
-from mechopt.solvers.cyclogram.speed_laws import (  # noqa: F401
-    N_OVER_T_FACTORS,
-    N_OVER_T_RTOL,
+from mechopt.solvers.cyclogram.speed_laws import (
     angle_floors_deg,
     exact_amplitude_bounds,
     exact_bounds_at,
     lp_bounds_at,
     n_over_t_probe,
-    n_over_t_probe_at,
-    reference_rpm,
     speed_coeffs_deg_per_rpm,
-    time_law,
 )
-from mechopt.solvers.cyclogram.speed_lp import (  # noqa: F401
-    MIN_RPM,
-    arcs_at,
+from mechopt.solvers.cyclogram.speed_lp import (
     certify_speed,
     conflict_at,
     speed_bisection,
     speed_by_lp,
 )
-from mechopt.solvers.cyclogram.speed_report import closed_without_the_cycle, speed_passes, speed_report_of  # noqa: F401
+from mechopt.solvers.cyclogram.speed_report import closed_without_the_cycle, speed_report_of
 from mechopt.solvers.stop_impact.lever_box import LeverBox, takes_box
 
 

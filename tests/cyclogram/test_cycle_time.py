@@ -12,7 +12,7 @@ from mechopt.kit.errors import ModelError
 from mechopt.kit.result import Status
 from mechopt.models.cyclogram import Cyclogram
 from mechopt.solvers.cyclogram import least_cycle_time, plan_cyclogram
-from mechopt.solvers.cyclogram.cycle_time import uniform_constraints
+from mechopt.solvers.cyclogram.cycle_uniform import uniform_constraints
 
 
 def op(x, y, d, k=0, unit="min_ms"):

@@ -112,7 +112,7 @@ def machine():
 def test_the_n_over_t_probe_in_one_call_is_the_probe_point_by_point(machine):
     """The probe's six points in one call of the chain give the values each has alone (the
     largest relative change the same to the bit)."""
-    from mechopt.solvers.cyclogram.speed import N_OVER_T_FACTORS, n_over_t_probe_at
+    from mechopt.solvers.cyclogram.speed_laws import N_OVER_T_FACTORS, n_over_t_probe_at
     from mechopt.solvers.loom.repair import exact_amplitude_mm
 
     def alone(t, n):
