@@ -1,5 +1,6 @@
 """The wheel holds every module of the repository's mapped folders and every scene: built from the
 checkout, put first on the path of a fresh interpreter, each module imports from the wheel itself."""
+import shutil
 import subprocess
 import sys
 import zipfile
@@ -24,10 +25,14 @@ def _modules():
 
 @pytest.fixture(scope="module")
 def wheel(tmp_path_factory):
+    """Built from a copy of the checkout: setuptools builds in the source's build/,
+    which another build of the checkout at the same time (a `pip install .`) would share."""
     out = tmp_path_factory.mktemp("wheel")
-    build = tmp_path_factory.mktemp("build")
-    done = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", str(out), str(ROOT)],
-                          cwd=build, capture_output=True, text=True)
+    source = tmp_path_factory.mktemp("source") / "mechopt"
+    shutil.copytree(ROOT, source, ignore=shutil.ignore_patterns(".git", "build", "dist", "site", "out", "*.egg-info",
+                                                               "__pycache__", ".pytest_cache", ".hypothesis"))
+    done = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", str(out), str(source)],
+                          cwd=source, capture_output=True, text=True)
     assert done.returncode == 0, f"pip wheel exited {done.returncode}: {done.stderr[-3000:]}"     # say why
     return next(out.glob("mechopt-*.whl"))
 
