@@ -4,8 +4,9 @@ import numpy as np
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import connected_components
 
+from mechopt.models.cyclogram_columns import topological_levels
 from mechopt.solvers.cyclogram.cycle_uniform import Uniform
-from mechopt.solvers.cyclogram.graph import ROUND_OFF, level_segments, topological_levels
+from mechopt.solvers.cyclogram.graph import ROUND_OFF, level_segments
 
 
 class Circuits:

@@ -276,7 +276,7 @@ def test_a_broken_plain_table_is_refused_naming_the_scene(tmp_path):
 def test_topological_levels_are_each_events_longest_chain_of_arcs(seed):
     """The Kahn levels (solvers/cyclogram/graph.py), which the columnar build's acyclicity check and
     the graph method share, against a plain-Python pass; an arc closing a cycle is refused."""
-    from mechopt.solvers.cyclogram.graph import topological_levels
+    from mechopt.models.cyclogram_columns import topological_levels
     rng = np.random.default_rng(seed)
     n = int(rng.integers(2, 60))
     order = rng.permutation(n)                       # a hidden precedence order, events numbered at random
